@@ -1,0 +1,19 @@
+// Articulated-body algorithm (Featherstone 2008, table 7.1): forward dynamics in O(n).
+#pragma once
+
+#include "featherdrive/algorithm/data.hpp"
+
+namespace featherdrive {
+
+/// qdd = M(q)^-1 (tau - c(q, v) + g(q)) under the model's gravity, armature included.
+/// Leaves IA, pA, U, D^-1 of this configuration in data. Returns data.qdd.
+const VecX& aba(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& tau);
+
+/// The second and third ABA passes on the kinematics already in data (forward_kinematics with
+/// velocities must have run). Returns data.qdd.
+const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau);
+
+/// Only the articulated inertias IA, U and D^-1 (no bias forces), on kinematics already in data.
+void articulated_inertias(const Model& model, Data& data);
+
+}  // namespace featherdrive

@@ -1,0 +1,14 @@
+// Forward kinematics: link poses, spatial velocities and velocity-product accelerations, O(n).
+#pragma once
+
+#include "featherdrive/algorithm/data.hpp"
+
+namespace featherdrive {
+
+/// Fills data.parent_transform, world_rotation, world_position from q (nq).
+void forward_kinematics(const Model& model, Data& data, const VecX& q);
+
+/// As above, and data.velocity and data.bias_acceleration from v (nv).
+void forward_kinematics(const Model& model, Data& data, const VecX& q, const VecX& v);
+
+}  // namespace featherdrive

@@ -1,0 +1,65 @@
+// The implicit PD joint drive of one dof, as PhysX solves it: coefficients computed once per step
+// (spec eq. 20-24 for force drives, 35-39 for acceleration drives, ERRATA 1-5) and a pure impulse
+// update shared by PGS (eq. 18/34) and TGS (eq. 44/45). docs/math/implicit_drives.md.
+#pragma once
+
+#include <limits>
+#include <string>
+
+namespace featherdrive {
+
+enum class DriveType {
+  none,          ///< no drive on this dof
+  force,         ///< stiffness in N/m or Nm/rad, damping in Ns/m or Nms/rad
+  acceleration,  ///< stiffness in 1/s^2, damping in 1/s: the drive's response is mass-free
+};
+
+const char* to_string(DriveType type);
+
+/// A drive's settings; all of them may change between steps.
+struct Drive {
+  DriveType type = DriveType::none;
+  double stiffness = 0.0;
+  double damping = 0.0;
+  /// Largest drive force (N or Nm): the step's impulse is limited to max_force * dt.
+  double max_force = std::numeric_limits<double>::infinity();
+  double target_position = 0.0;
+  double target_velocity = 0.0;
+};
+
+/// Throws std::invalid_argument naming the joint, the field and the value for negative or
+/// non-finite gains, max_force <= 0 or non-finite targets.
+void validate_drive(const Drive& drive, const std::string& joint);
+
+/// One step's drive row: the members of PhysX's ArticulationInternalConstraint, named after the
+/// spec. lambda_new = target_vel_plus_initial_bias + vel_multiplier * v
+///                    + impulse_multiplier * lambda - bias_coefficient * delta_x
+///                    - target_pos_bias * time_to_step_end, clamped to +-max_impulse.
+struct DriveRow {
+  double target_vel_plus_initial_bias = 0.0;  ///< eq. (20)/(35) [Ns]
+  double vel_multiplier = 0.0;                ///< eq. (21)/(36) [kg]
+  double impulse_multiplier = 1.0;            ///< eq. (22)/(37); 1 in TGS
+  double bias_coefficient = 0.0;              ///< eq. (23)/(38) [Ns/m]
+  double target_pos_bias = 0.0;               ///< eq. (24)/(39) [N], TGS only
+  double max_impulse = std::numeric_limits<double>::infinity();  ///< ERRATA 8
+};
+
+/// Row coefficients for a drive on a dof with unit response r = (M^-1)_jj at start-of-step
+/// position x0. h is the time step of one solve: tau for PGS, rho = tau / n for TGS
+/// (ERRATA 4); tgs selects driveImpulseMultiplier = 1 and the target interpolation.
+/// step_dt is the whole step tau (the impulse limit is max_force * tau for the whole step).
+DriveRow setup_drive_row(const Drive& drive, double unit_response, double x0, double h,
+                         double step_dt, bool tgs);
+
+/// The new accumulated impulse of the step after one update at joint velocity v.
+inline double drive_impulse(const DriveRow& row, double v, double accumulated, double delta_x,
+                            double time_to_step_end) {
+  double lambda = row.target_vel_plus_initial_bias + row.vel_multiplier * v +
+                  row.impulse_multiplier * accumulated - row.bias_coefficient * delta_x -
+                  row.target_pos_bias * time_to_step_end;
+  if (lambda > row.max_impulse) lambda = row.max_impulse;
+  if (lambda < -row.max_impulse) lambda = -row.max_impulse;
+  return lambda;
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,75 @@
+// Builds a Model from link descriptions with URDF's conventions, validating everything once.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "featherdrive/model/model.hpp"
+
+namespace featherdrive {
+
+/// Bad model input: the message names the link or joint, the field and the value.
+class ModelError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// The inbound joint of a link, as in URDF: the joint frame's pose in the parent link frame is
+/// (origin_xyz, origin_rpy); the axis is in the joint frame; the child link frame is the joint frame
+/// moved by the joint's motion.
+struct JointSpec {
+  std::string name;
+  JointType type = JointType::fixed;
+  Vec3 origin_xyz = Vec3::Zero();
+  Vec3 origin_rpy = Vec3::Zero();
+  Vec3 axis = Vec3::UnitX();       ///< need not be unit length; must not be zero
+  /// Armature: empty (none), one value (every dof of the joint) or one value per dof.
+  std::vector<double> armature;
+  double lower_limit = -std::numeric_limits<double>::infinity();
+  double upper_limit = std::numeric_limits<double>::infinity();
+  double effort_limit = std::numeric_limits<double>::infinity();
+  double velocity_limit = std::numeric_limits<double>::infinity();
+  double damping = 0.0;
+  double friction = 0.0;
+};
+
+/// A link with its inertial (URDF <inertial>: mass, origin of the centre of mass in the link frame,
+/// full inertia tensor about the centre of mass in link axes) and its inbound joint.
+struct LinkSpec {
+  std::string name;
+  std::string parent;             ///< empty for the root link
+  double mass = 0.0;
+  Vec3 com = Vec3::Zero();
+  Mat3 inertia = Mat3::Zero();
+  JointSpec joint;
+};
+
+/// Shorthands for the joint of each type.
+JointSpec fixed_joint(std::string name, const Vec3& xyz = Vec3::Zero(), const Vec3& rpy = Vec3::Zero());
+JointSpec revolute_joint(std::string name, const Vec3& axis, const Vec3& xyz = Vec3::Zero(),
+                         const Vec3& rpy = Vec3::Zero());
+JointSpec prismatic_joint(std::string name, const Vec3& axis, const Vec3& xyz = Vec3::Zero(),
+                          const Vec3& rpy = Vec3::Zero());
+JointSpec spherical_joint(std::string name, const Vec3& xyz = Vec3::Zero(),
+                          const Vec3& rpy = Vec3::Zero());
+JointSpec floating_joint(std::string name);
+
+/// A link description in one call.
+LinkSpec make_link(std::string name, std::string parent, double mass, const Vec3& com,
+                   const Mat3& inertia, JointSpec joint);
+
+class ModelBuilder {
+ public:
+  ModelBuilder& set_gravity(const Vec3& gravity);
+  ModelBuilder& add_link(LinkSpec link);
+  /// Validates everything and returns the model; throws ModelError naming the offending link or
+  /// joint, field and value.
+  Model build() const;
+
+ private:
+  Vec3 gravity_{0.0, 0.0, -9.81};
+  std::vector<LinkSpec> links_;
+};
+
+}  // namespace featherdrive

@@ -1,0 +1,106 @@
+// One simulation of a Model: its state, its inputs (applied forces, drives), its outputs (drive
+// forces) and the workspace a step writes. Many simulations may share one Model across threads.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/solver/gauss_seidel.hpp"
+
+namespace featherdrive {
+
+enum class SolverType { pgs, tgs };
+const char* to_string(SolverType type);
+
+struct SimulationOptions {
+  double dt = 1.0 / 60.0;           ///< time step tau [s]
+  SolverType solver = SolverType::pgs;
+  int position_iterations = 4;      ///< >= 1
+  int velocity_iterations = 1;      ///< >= 0
+};
+
+/// Throws std::invalid_argument naming the field and value for dt <= 0 or non-finite,
+/// position_iterations < 1, velocity_iterations < 0.
+void validate_options(const SimulationOptions& options);
+
+/// A step that would leave a non-finite position, velocity or force. The simulation keeps the
+/// state it had before that step.
+class DivergenceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Simulation {
+ public:
+  explicit Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options = {});
+
+  const Model& model() const { return *model_; }
+  const std::shared_ptr<const Model>& model_ptr() const { return model_; }
+  const SimulationOptions& options() const { return options_; }
+  void set_options(const SimulationOptions& options);
+
+  // State.
+  const VecX& q() const { return q_; }    ///< configuration (nq)
+  const VecX& qd() const { return qd_; }  ///< joint velocities (nv)
+  void set_q(const VecX& q);              ///< quaternions are normalised
+  void set_qd(const VecX& qd);
+  double time() const { return time_; }
+  long step_count() const { return step_count_; }
+
+  // Inputs.
+  /// Joint forces applied through the whole step (nv), e.g. feed-forward torques.
+  void set_applied_force(const VecX& tau);
+  const VecX& applied_force() const { return applied_force_; }
+  void set_drive(int dof, const Drive& drive);
+  void set_drive(const std::string& joint, const Drive& drive);
+  const Drive& drive(int dof) const { return drives_.at(static_cast<size_t>(check_dof(dof))); }
+  void set_drive_target(int dof, double position, double velocity);
+  void set_drive_target(const std::string& joint, double position, double velocity);
+
+  // Outputs of the last step.
+  /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
+  const VecX& drive_force() const { return drive_force_; }
+
+  /// Advances by one step of options().dt; throws DivergenceError (state unchanged) if it would
+  /// produce a non-finite value.
+  void step();
+  void step(int count);
+
+  /// The algorithms' workspace after the last step (kinematics are those of the step's start).
+  const Data& data() const { return data_; }
+
+ private:
+  int check_dof(int dof) const;
+  int driven_dof(const std::string& joint) const;
+  void setup_drive_rows(double h, bool tgs);
+  void solve_pgs();
+  void solve_tgs();
+  void check_finite_or_restore();
+
+  std::shared_ptr<const Model> model_;
+  SimulationOptions options_;
+  Data data_;
+  SweepWorkspace sweep_;
+
+  VecX q_, qd_;
+  double time_ = 0.0;
+  long step_count_ = 0;
+  VecX applied_force_;
+  std::vector<Drive> drives_;
+  VecX drive_force_;
+
+  // Per-step scratch.
+  VecX q_start_, qd_start_;
+  VecX drive_force_start_;
+  std::vector<DriveRow> drive_rows_;
+  VecX drive_impulse_;  ///< accumulated drive impulse of the step per dof
+  VecX delta_x_;        ///< TGS: position change accumulated over the sub-steps per dof
+  VecX qd_saved_;       ///< PGS: velocity after the position iterations
+  VecX q_scratch_;
+};
+
+}  // namespace featherdrive

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian packages the build and the tests need. Idempotent: when everything is
+# already installed it only runs dpkg-query and returns.
+set -euo pipefail
+packages=(
+  build-essential cmake make pkg-config
+  libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libyaml-cpp-dev liburdfdom-dev libcli11-dev libtbb-dev
+  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
+  libmujoco-dev libbullet-dev
+  clang libclang-rt-14-dev
+  nodejs
+)
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+# npm may come from Debian's package or with nodejs itself.
+if ! command -v npm >/dev/null 2>&1; then missing+=(npm); fi
+if [ ${#missing[@]} -eq 0 ]; then exit 0; fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,63 @@
+#include "featherdrive/algorithm/joint_motion.hpp"
+
+namespace featherdrive {
+namespace {
+
+Quat quat_at(const double* q) { return Quat(q[0], q[1], q[2], q[3]).normalized(); }
+
+void store_quat(const Quat& Q, double* q) {
+  q[0] = Q.w();
+  q[1] = Q.x();
+  q[2] = Q.y();
+  q[3] = Q.z();
+}
+
+}  // namespace
+
+Transform joint_transform(const Link& link, const double* q) {
+  switch (link.joint_type) {
+    case JointType::fixed: return Transform::identity();
+    case JointType::revolute: return {rotation_about(link.axis, q[0]).transpose(), Vec3::Zero()};
+    case JointType::prismatic: return {Mat3::Identity(), link.axis * q[0]};
+    case JointType::spherical: return Transform::from_pose(quat_at(q).toRotationMatrix(), Vec3::Zero());
+    case JointType::floating:
+      return Transform::from_pose(quat_at(q + 3).toRotationMatrix(), Vec3(q[0], q[1], q[2]));
+  }
+  return Transform::identity();
+}
+
+void integrate_configuration(const Model& model, const VecX& q, const VecX& v, double dt,
+                             VecX& q_out) {
+  for (const Link& link : model.links) {
+    const int iq = link.q_index;
+    const int iv = link.v_index;
+    switch (link.joint_type) {
+      case JointType::fixed: break;
+      case JointType::revolute:
+      case JointType::prismatic: q_out[iq] = q[iq] + dt * v[iv]; break;
+      case JointType::spherical: {
+        const Quat Q = integrate_body_rotation(quat_at(&q[iq]), v.segment<3>(iv), dt);
+        store_quat(Q, &q_out[iq]);
+        break;
+      }
+      case JointType::floating: {
+        const Quat Q0 = quat_at(&q[iq + 3]);
+        const Vec3 p = Vec3(q[iq], q[iq + 1], q[iq + 2]) + dt * (Q0 * Vec3(v.segment<3>(iv + 3)));
+        const Quat Q = integrate_body_rotation(Q0, v.segment<3>(iv), dt);
+        q_out.segment<3>(iq) = p;
+        store_quat(Q, &q_out[iq + 3]);
+        break;
+      }
+    }
+  }
+}
+
+void normalize_configuration(const Model& model, VecX& q) {
+  for (const Link& link : model.links) {
+    if (link.joint_type == JointType::spherical) store_quat(quat_at(&q[link.q_index]), &q[link.q_index]);
+    if (link.joint_type == JointType::floating)
+      store_quat(quat_at(&q[link.q_index + 3]), &q[link.q_index + 3]);
+  }
+}
+
+}  // namespace featherdrive

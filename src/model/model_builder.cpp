@@ -1,0 +1,298 @@
+#include "featherdrive/model/model_builder.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+namespace featherdrive {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+std::string fmt(const Vec3& v) { return "[" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + "]"; }
+
+[[noreturn]] void fail(const std::string& what) { throw ModelError("model: " + what); }
+
+int dof_count(JointType t) {
+  switch (t) {
+    case JointType::fixed: return 0;
+    case JointType::revolute:
+    case JointType::prismatic: return 1;
+    case JointType::spherical: return 3;
+    case JointType::floating: return 6;
+  }
+  return 0;
+}
+
+int config_count(JointType t) {
+  switch (t) {
+    case JointType::spherical: return 4;
+    case JointType::floating: return 7;
+    default: return dof_count(t);
+  }
+}
+
+void check_finite(const std::string& who, const char* field, double v) {
+  if (!std::isfinite(v)) fail(who + ": " + field + " = " + fmt(v) + " is not finite");
+}
+void check_finite(const std::string& who, const char* field, const Vec3& v) {
+  if (!v.allFinite()) fail(who + ": " + field + " = " + fmt(v) + " is not finite");
+}
+
+void check_inertia(const std::string& who, const Mat3& I) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(I(r, c)))
+        fail(who + ": inertia(" + std::to_string(r) + "," + std::to_string(c) + ") = " +
+             fmt(I(r, c)) + " is not finite");
+  const double scale = std::max(I.cwiseAbs().maxCoeff(), 1e-300);
+  for (int r = 0; r < 3; ++r)
+    for (int c = r + 1; c < 3; ++c)
+      if (std::abs(I(r, c) - I(c, r)) > 1e-9 * scale)
+        fail(who + ": inertia is not symmetric: inertia(" + std::to_string(r) + "," +
+             std::to_string(c) + ") = " + fmt(I(r, c)) + " but inertia(" + std::to_string(c) +
+             "," + std::to_string(r) + ") = " + fmt(I(c, r)));
+  const Mat3 sym = 0.5 * (I + I.transpose());
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(sym);
+  const Vec3 p = eig.eigenvalues();  // ascending
+  if (!(p[0] > 0.0))
+    fail(who + ": inertia is not positive definite: principal moments " + fmt(p));
+  // Triangle inequality of the principal moments (a physical mass distribution needs it).
+  if (p[0] + p[1] < p[2] * (1.0 - 1e-9))
+    fail(who + ": inertia breaks the triangle inequality: principal moments " + fmt(p) +
+         " (" + fmt(p[0]) + " + " + fmt(p[1]) + " < " + fmt(p[2]) + ")");
+}
+
+}  // namespace
+
+namespace {
+JointSpec joint_of(std::string name, JointType type, const Vec3& axis, const Vec3& xyz,
+                   const Vec3& rpy) {
+  JointSpec j;
+  j.name = std::move(name);
+  j.type = type;
+  j.axis = axis;
+  j.origin_xyz = xyz;
+  j.origin_rpy = rpy;
+  return j;
+}
+}  // namespace
+
+JointSpec fixed_joint(std::string name, const Vec3& xyz, const Vec3& rpy) {
+  return joint_of(std::move(name), JointType::fixed, Vec3::UnitX(), xyz, rpy);
+}
+JointSpec revolute_joint(std::string name, const Vec3& axis, const Vec3& xyz, const Vec3& rpy) {
+  return joint_of(std::move(name), JointType::revolute, axis, xyz, rpy);
+}
+JointSpec prismatic_joint(std::string name, const Vec3& axis, const Vec3& xyz, const Vec3& rpy) {
+  return joint_of(std::move(name), JointType::prismatic, axis, xyz, rpy);
+}
+JointSpec spherical_joint(std::string name, const Vec3& xyz, const Vec3& rpy) {
+  return joint_of(std::move(name), JointType::spherical, Vec3::UnitX(), xyz, rpy);
+}
+JointSpec floating_joint(std::string name) {
+  return joint_of(std::move(name), JointType::floating, Vec3::UnitX(), Vec3::Zero(), Vec3::Zero());
+}
+
+LinkSpec make_link(std::string name, std::string parent, double mass, const Vec3& com,
+                   const Mat3& inertia, JointSpec joint) {
+  LinkSpec l;
+  l.name = std::move(name);
+  l.parent = std::move(parent);
+  l.mass = mass;
+  l.com = com;
+  l.inertia = inertia;
+  l.joint = std::move(joint);
+  return l;
+}
+
+ModelBuilder& ModelBuilder::set_gravity(const Vec3& gravity) {
+  gravity_ = gravity;
+  return *this;
+}
+
+ModelBuilder& ModelBuilder::add_link(LinkSpec link) {
+  links_.push_back(std::move(link));
+  return *this;
+}
+
+Model ModelBuilder::build() const {
+  if (!gravity_.allFinite()) fail("gravity = " + fmt(gravity_) + " is not finite");
+  if (links_.empty()) fail("the model has no links");
+
+  // Names and the tree.
+  std::map<std::string, int> by_name;
+  std::map<std::string, int> joint_names;
+  for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
+    const LinkSpec& l = links_[i];
+    if (l.name.empty()) fail("link #" + std::to_string(i) + ": name is empty");
+    if (!by_name.emplace(l.name, i).second) fail("link '" + l.name + "': duplicate link name");
+    if (l.joint.name.empty()) fail("link '" + l.name + "': joint name is empty");
+    if (!joint_names.emplace(l.joint.name, i).second)
+      fail("joint '" + l.joint.name + "': duplicate joint name");
+  }
+  int root = -1;
+  std::vector<int> parent(links_.size(), -1);
+  for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
+    const LinkSpec& l = links_[i];
+    if (l.parent.empty()) {
+      if (root >= 0)
+        fail("more than one root: links '" + links_[root].name + "' and '" + l.name +
+             "' have no parent");
+      root = i;
+      continue;
+    }
+    auto it = by_name.find(l.parent);
+    if (it == by_name.end())
+      fail("link '" + l.name + "': parent = '" + l.parent + "' is not a link of the model");
+    parent[i] = it->second;
+  }
+  for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
+    // Walking up from any link must reach the root within n steps.
+    int j = i;
+    for (size_t n = 0; j >= 0 && n <= links_.size(); ++n) j = parent[j];
+    if (j >= 0) fail("link '" + links_[i].name + "': the parent chain has a cycle");
+  }
+  if (root < 0) fail("the model has no root link (every link names a parent)");
+
+  // Children in insertion order; depth-first preorder from the root.
+  std::vector<std::vector<int>> children(links_.size());
+  for (int i = 0; i < static_cast<int>(links_.size()); ++i)
+    if (parent[i] >= 0) children[parent[i]].push_back(i);
+  std::vector<int> order;
+  std::vector<int> stack{root};
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    order.push_back(i);
+    for (auto c = children[i].rbegin(); c != children[i].rend(); ++c) stack.push_back(*c);
+  }
+  std::vector<int> new_index(links_.size());
+  for (int k = 0; k < static_cast<int>(order.size()); ++k) new_index[order[k]] = k;
+
+  Model model;
+  model.gravity = gravity_;
+  model.links.resize(order.size());
+  std::vector<double> armature, lower, upper, effort, velocity, damping, friction;
+  std::vector<bool> can_move(order.size(), false);
+  for (int k = 0; k < static_cast<int>(order.size()); ++k) {
+    const LinkSpec& s = links_[order[k]];
+    const JointSpec& j = s.joint;
+    const std::string who_link = "link '" + s.name + "'";
+    const std::string who_joint = "joint '" + j.name + "'";
+    Link& link = model.links[k];
+    link.name = s.name;
+    link.joint_name = j.name;
+    link.parent = parent[order[k]] >= 0 ? new_index[parent[order[k]]] : -1;
+    if (link.parent >= 0) model.links[link.parent].children.push_back(k);
+    link.joint_type = j.type;
+    if (j.type == JointType::floating && link.parent >= 0)
+      fail(who_joint + ": type = floating is allowed only for the root link's joint");
+    link.nq = config_count(j.type);
+    link.nv = dof_count(j.type);
+    link.q_index = model.nq;
+    link.v_index = model.nv;
+    model.nq += link.nq;
+    model.nv += link.nv;
+    can_move[k] = link.nv > 0 || (link.parent >= 0 && can_move[link.parent]);
+
+    // Joint geometry.
+    check_finite(who_joint, "origin_xyz", j.origin_xyz);
+    check_finite(who_joint, "origin_rpy", j.origin_rpy);
+    check_finite(who_joint, "axis", j.axis);
+    link.tree_transform = Transform::from_pose(rotation_from_rpy(j.origin_rpy), j.origin_xyz);
+    if (j.type == JointType::revolute || j.type == JointType::prismatic) {
+      const double n = j.axis.norm();
+      if (!(n > 1e-12)) fail(who_joint + ": axis = " + fmt(j.axis) + " is zero");
+      link.axis = j.axis / n;
+    }
+    link.motion_subspace = Mat6N::Zero(6, link.nv);
+    switch (j.type) {
+      case JointType::revolute: link.motion_subspace.col(0).head<3>() = link.axis; break;
+      case JointType::prismatic: link.motion_subspace.col(0).tail<3>() = link.axis; break;
+      case JointType::spherical: link.motion_subspace.topRows<3>().setIdentity(); break;
+      case JointType::floating: link.motion_subspace.setIdentity(); break;
+      case JointType::fixed: break;
+    }
+
+    // Inertial.
+    check_finite(who_link, "mass", s.mass);
+    check_finite(who_link, "com", s.com);
+    if (can_move[k] || s.mass != 0.0) {
+      if (!(s.mass > 0.0))
+        fail(who_link + ": mass = " + fmt(s.mass) + " must be > 0 for a link that can move");
+      check_inertia(who_link, s.inertia);
+    } else if (!s.inertia.allFinite() || !s.inertia.isZero(0.0)) {
+      fail(who_link + ": inertia must be zero for a massless link");
+    }
+    link.mass = s.mass;
+    link.com = s.com;
+    link.inertia_com = 0.5 * (s.inertia + s.inertia.transpose());
+    link.inertia = spatial_inertia(s.mass, s.com, link.inertia_com);
+
+    // Per-dof parameters.
+    if (!j.armature.empty() && static_cast<int>(j.armature.size()) != 1 &&
+        static_cast<int>(j.armature.size()) != link.nv)
+      fail(who_joint + ": armature has " + std::to_string(j.armature.size()) +
+           " values, expected 1 or " + std::to_string(link.nv));
+    for (double a : j.armature)
+      if (!std::isfinite(a) || a < 0.0)
+        fail(who_joint + ": armature = " + fmt(a) + " must be finite and >= 0");
+    if (std::isnan(j.lower_limit)) fail(who_joint + ": lower_limit is NaN");
+    if (std::isnan(j.upper_limit)) fail(who_joint + ": upper_limit is NaN");
+    if (j.lower_limit > j.upper_limit)
+      fail(who_joint + ": lower_limit = " + fmt(j.lower_limit) + " is above upper_limit = " +
+           fmt(j.upper_limit));
+    if (std::isnan(j.effort_limit) || j.effort_limit < 0.0)
+      fail(who_joint + ": effort_limit = " + fmt(j.effort_limit) + " must be >= 0");
+    if (std::isnan(j.velocity_limit) || j.velocity_limit < 0.0)
+      fail(who_joint + ": velocity_limit = " + fmt(j.velocity_limit) + " must be >= 0");
+    if (!std::isfinite(j.damping) || j.damping < 0.0)
+      fail(who_joint + ": damping = " + fmt(j.damping) + " must be finite and >= 0");
+    if (!std::isfinite(j.friction) || j.friction < 0.0)
+      fail(who_joint + ": friction = " + fmt(j.friction) + " must be finite and >= 0");
+    const bool bounded = link.nv == 1;
+    for (int d = 0; d < link.nv; ++d) {
+      armature.push_back(j.armature.empty() ? 0.0
+                         : j.armature.size() == 1 ? j.armature[0]
+                                                  : j.armature[d]);
+      lower.push_back(bounded ? j.lower_limit : -std::numeric_limits<double>::infinity());
+      upper.push_back(bounded ? j.upper_limit : std::numeric_limits<double>::infinity());
+      effort.push_back(j.effort_limit);
+      velocity.push_back(j.velocity_limit);
+      damping.push_back(j.damping);
+      friction.push_back(j.friction);
+      model.dof_link.push_back(k);
+    }
+    static const char* const kSpherical[] = {"wx", "wy", "wz"};
+    static const char* const kFloating[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
+    for (int d = 0; d < link.nv; ++d) {
+      if (link.nv == 1) model.dof_names.push_back(j.name);
+      else if (link.nv == 3) model.dof_names.push_back(j.name + ":" + kSpherical[d]);
+      else model.dof_names.push_back(j.name + ":" + kFloating[d]);
+    }
+  }
+  for (int k = static_cast<int>(order.size()) - 1; k >= 0; --k) {
+    Link& link = model.links[k];
+    link.subtree_end = link.children.empty() ? k + 1 : model.links[link.children.back()].subtree_end;
+  }
+  auto to_vec = [](const std::vector<double>& v) {
+    return VecX(Eigen::Map<const VecX>(v.data(), static_cast<Eigen::Index>(v.size())));
+  };
+  model.armature = to_vec(armature);
+  model.lower_limit = to_vec(lower);
+  model.upper_limit = to_vec(upper);
+  model.effort_limit = to_vec(effort);
+  model.velocity_limit = to_vec(velocity);
+  model.damping = to_vec(damping);
+  model.friction = to_vec(friction);
+  return model;
+}
+
+}  // namespace featherdrive

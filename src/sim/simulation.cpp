@@ -1,0 +1,160 @@
+#include "featherdrive/sim/simulation.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "featherdrive/algorithm/joint_motion.hpp"
+
+namespace featherdrive {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+void check_vector(const VecX& x, Eigen::Index expected, const char* what) {
+  if (x.size() != expected)
+    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(expected) +
+                                " values, got " + std::to_string(x.size()));
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    if (!std::isfinite(x[i]))
+      throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) + "] = " +
+                                  fmt(x[i]) + " is not finite");
+}
+
+}  // namespace
+
+const char* to_string(SolverType type) { return type == SolverType::pgs ? "pgs" : "tgs"; }
+
+void validate_options(const SimulationOptions& o) {
+  if (!std::isfinite(o.dt) || o.dt <= 0.0)
+    throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) + " must be finite and > 0");
+  if (o.position_iterations < 1)
+    throw std::invalid_argument("simulation options: position_iterations = " +
+                                std::to_string(o.position_iterations) + " must be >= 1");
+  if (o.velocity_iterations < 0)
+    throw std::invalid_argument("simulation options: velocity_iterations = " +
+                                std::to_string(o.velocity_iterations) + " must be >= 0");
+}
+
+Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options)
+    : model_(model ? std::move(model) : throw std::invalid_argument("Simulation: model is null")),
+      options_(options),
+      data_(*model_),
+      sweep_(*model_) {
+  validate_options(options_);
+  const int nv = model_->nv;
+  q_ = model_->neutral_configuration();
+  qd_ = VecX::Zero(nv);
+  applied_force_ = VecX::Zero(nv);
+  drives_.assign(static_cast<size_t>(nv), Drive{});
+  drive_force_ = VecX::Zero(nv);
+  q_start_ = q_;
+  qd_start_ = qd_;
+  drive_force_start_ = drive_force_;
+  drive_rows_.assign(static_cast<size_t>(nv), DriveRow{});
+  drive_impulse_ = VecX::Zero(nv);
+  delta_x_ = VecX::Zero(nv);
+  qd_saved_ = VecX::Zero(nv);
+  q_scratch_ = q_;
+}
+
+void Simulation::set_options(const SimulationOptions& options) {
+  validate_options(options);
+  options_ = options;
+}
+
+void Simulation::set_q(const VecX& q) {
+  check_vector(q, model_->nq, "q");
+  q_ = q;
+  normalize_configuration(*model_, q_);
+}
+
+void Simulation::set_qd(const VecX& qd) {
+  check_vector(qd, model_->nv, "qd");
+  qd_ = qd;
+}
+
+void Simulation::set_applied_force(const VecX& tau) {
+  check_vector(tau, model_->nv, "applied_force");
+  applied_force_ = tau;
+}
+
+int Simulation::check_dof(int dof) const {
+  if (dof < 0 || dof >= model_->nv)
+    throw std::invalid_argument("dof index " + std::to_string(dof) + " is out of range [0, " +
+                                std::to_string(model_->nv) + ")");
+  return dof;
+}
+
+int Simulation::driven_dof(const std::string& joint) const {
+  const Link& link = model_->links[model_->joint_link_index(joint)];
+  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+    throw std::invalid_argument("joint '" + joint + "' is " + to_string(link.joint_type) +
+                                ": drives act on revolute and prismatic joints only");
+  return link.v_index;
+}
+
+void Simulation::set_drive(int dof, const Drive& drive) {
+  check_dof(dof);
+  const Link& link = model_->links[model_->dof_link[dof]];
+  if (drive.type != DriveType::none && link.joint_type != JointType::revolute &&
+      link.joint_type != JointType::prismatic)
+    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
+                                to_string(link.joint_type) +
+                                ": drives act on revolute and prismatic joints only");
+  validate_drive(drive, link.joint_name);
+  drives_[static_cast<size_t>(dof)] = drive;
+}
+
+void Simulation::set_drive(const std::string& joint, const Drive& drive) {
+  set_drive(driven_dof(joint), drive);
+}
+
+void Simulation::set_drive_target(int dof, double position, double velocity) {
+  Drive d = drive(dof);
+  d.target_position = position;
+  d.target_velocity = velocity;
+  set_drive(dof, d);
+}
+
+void Simulation::set_drive_target(const std::string& joint, double position, double velocity) {
+  set_drive_target(driven_dof(joint), position, velocity);
+}
+
+void Simulation::step(int count) {
+  if (count < 0) throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
+  for (int i = 0; i < count; ++i) step();
+}
+
+void Simulation::check_finite_or_restore() {
+  const Model& model = *model_;
+  auto fail = [&](const char* quantity, int dof, double value) {
+    const std::string joint = model.links[model.dof_link[dof]].joint_name;
+    const long step = step_count_ + 1;
+    const double t = time_;
+    q_ = q_start_;
+    qd_ = qd_start_;
+    drive_force_ = drive_force_start_;
+    std::ostringstream s;
+    s.precision(6);
+    s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint
+      << "' " << quantity << " = " << value
+      << "; the state is left as it was before this step (lower dt or the gains)";
+    throw DivergenceError(s.str());
+  };
+  for (const Link& link : model.links)
+    for (int k = 0; k < link.nq; ++k)
+      if (!std::isfinite(q_[link.q_index + k])) {
+        if (link.nv > 0) fail("position q", link.v_index + std::min(k, link.nv - 1), q_[link.q_index + k]);
+      }
+  for (int d = 0; d < model.nv; ++d) {
+    if (!std::isfinite(qd_[d])) fail("velocity qd", d, qd_[d]);
+    if (!std::isfinite(drive_force_[d])) fail("drive force", d, drive_force_[d]);
+  }
+}
+
+}  // namespace featherdrive
