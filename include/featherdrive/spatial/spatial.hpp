@@ -114,9 +114,10 @@ inline Mat3 rotation_about(const Vec3& unit_axis, double angle) {
 
 /// q * exp(w dt / 2): a quaternion advanced by a body-frame angular velocity w over dt, normalised.
 inline Quat integrate_body_rotation(const Quat& q, const Vec3& w, double dt) {
-  const double angle = w.norm() * dt;
+  const Vec3 rotation = w * dt;
+  const double angle = rotation.norm();
   Quat dq = Quat::Identity();
-  if (angle > 0.0) dq = Quat(Eigen::AngleAxisd(angle, w.normalized()));
+  if (angle > 0.0) dq = Quat(Eigen::AngleAxisd(angle, rotation / angle));
   Quat out = q * dq;
   out.normalize();
   return out;
