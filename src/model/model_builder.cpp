@@ -1,6 +1,7 @@
 #include "featherdrive/model/model_builder.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <charconv>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -9,10 +10,9 @@ namespace featherdrive {
 namespace {
 
 std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
+  return std::string(buffer, result.ptr);
 }
 
 std::string fmt(const Vec3& v) { return "[" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + "]"; }
@@ -134,8 +134,9 @@ Model ModelBuilder::build() const {
     if (l.name.empty()) fail("link #" + std::to_string(i) + ": name is empty");
     if (!by_name.emplace(l.name, i).second) fail("link '" + l.name + "': duplicate link name");
     if (l.joint.name.empty()) fail("link '" + l.name + "': joint name is empty");
-    if (!joint_names.emplace(l.joint.name, i).second)
-      fail("joint '" + l.joint.name + "': duplicate joint name");
+    if (auto [it, added] = joint_names.emplace(l.joint.name, i); !added)
+      fail("joint '" + l.joint.name + "': duplicate joint name (links '" + links_[it->second].name +
+           "' and '" + l.name + "')");
   }
   int root = -1;
   std::vector<int> parent(links_.size(), -1);
@@ -153,13 +154,20 @@ Model ModelBuilder::build() const {
       fail("link '" + l.name + "': parent = '" + l.parent + "' is not a link of the model");
     parent[i] = it->second;
   }
+  if (root < 0) fail("the model has no root link (every link names a parent)");
   for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
     // Walking up from any link must reach the root within n steps.
     int j = i;
     for (size_t n = 0; j >= 0 && n <= links_.size(); ++n) j = parent[j];
-    if (j >= 0) fail("link '" + links_[i].name + "': the parent chain has a cycle");
+    if (j >= 0) {
+      // Name the cycle itself: walk n steps to be on it, then once around.
+      for (size_t n = 0; n < links_.size(); ++n) j = parent[j];
+      if (parent[j] == j) fail("link '" + links_[j].name + "': parent = '" + links_[j].name + "' is the link itself");
+      std::string cycle = "'" + links_[j].name + "'";
+      for (int k = parent[j]; k != j; k = parent[k]) cycle += " -> '" + links_[k].name + "'";
+      fail("links " + cycle + " -> '" + links_[j].name + "' form a cycle (each names the next as parent)");
+    }
   }
-  if (root < 0) fail("the model has no root link (every link names a parent)");
 
   // Children in insertion order; depth-first preorder from the root.
   std::vector<std::vector<int>> children(links_.size());
@@ -226,10 +234,13 @@ Model ModelBuilder::build() const {
     check_finite(who_link, "com", s.com);
     if (can_move[k] || s.mass != 0.0) {
       if (!(s.mass > 0.0))
-        fail(who_link + ": mass = " + fmt(s.mass) + " must be > 0 for a link that can move");
+        fail(who_link + ": mass = " + fmt(s.mass) +
+             (can_move[k] ? " must be > 0 for a link that can move" : " must be >= 0"));
       check_inertia(who_link, s.inertia);
     } else if (!s.inertia.allFinite() || !s.inertia.isZero(0.0)) {
-      fail(who_link + ": inertia must be zero for a massless link");
+      check_inertia(who_link, s.inertia);  // names a non-finite entry first
+      fail(who_link + ": inertia must be zero for a massless link (mass = 0), got principal moments " +
+           fmt(Eigen::SelfAdjointEigenSolver<Mat3>(0.5 * (s.inertia + s.inertia.transpose())).eigenvalues()));
     }
     link.mass = s.mass;
     link.com = s.com;
@@ -237,10 +248,12 @@ Model ModelBuilder::build() const {
     link.inertia = spatial_inertia(s.mass, s.com, link.inertia_com);
 
     // Per-dof parameters.
+    if (!j.armature.empty() && link.nv == 0)
+      fail(who_joint + ": armature is set but a fixed joint has no degree of freedom");
     if (!j.armature.empty() && static_cast<int>(j.armature.size()) != 1 &&
         static_cast<int>(j.armature.size()) != link.nv)
-      fail(who_joint + ": armature has " + std::to_string(j.armature.size()) +
-           " values, expected 1 or " + std::to_string(link.nv));
+      fail(who_joint + ": armature has " + std::to_string(j.armature.size()) + " values, expected " +
+           (link.nv == 1 ? std::string("1") : "1 or " + std::to_string(link.nv)) + " (one per dof)");
     for (double a : j.armature)
       if (!std::isfinite(a) || a < 0.0)
         fail(who_joint + ": armature = " + fmt(a) + " must be finite and >= 0");

@@ -115,7 +115,7 @@ TEST(ModelBuilderValidation, DuplicateJointName) {
   other.name = "forearm";
   other.parent = "arm";
   b.add_link(other);  // joint "shoulder" again
-  EXPECT_EQ(build_error(b), "model: joint 'shoulder': duplicate joint name");
+  EXPECT_EQ(build_error(b), "model: joint 'shoulder': duplicate joint name (links 'arm' and 'forearm')");
 }
 
 TEST(ModelBuilderValidation, UnknownParent) {
@@ -147,17 +147,16 @@ TEST(ModelBuilderValidation, CycleBesideTheRoot) {
   c.joint.name = "jb";
   b.add_link(a);
   b.add_link(c);
-  EXPECT_EQ(build_error(b), "model: link 'a': the parent chain has a cycle");
+  EXPECT_EQ(build_error(b), "model: links 'b' -> 'a' -> 'b' form a cycle (each names the next as parent)");
 }
 
 TEST(ModelBuilderValidation, LinkIsItsOwnParent) {
   EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.parent = "arm"; })),
-            "model: link 'arm': the parent chain has a cycle");
+            "model: link 'arm': parent = 'arm' is the link itself");
 }
 
 TEST(ModelBuilderValidation, CycleAndNoRoot) {
-  // Every link names a parent, so there is no root; the parent chains then necessarily cycle, and
-  // the cycle is what build() reports.
+  // Every link names a parent: there is no root (checked before the cycle it implies).
   LinkSpec a = arm_link();
   a.name = "a";
   a.parent = "b";
@@ -169,7 +168,7 @@ TEST(ModelBuilderValidation, CycleAndNoRoot) {
   ModelBuilder b;
   b.add_link(a);
   b.add_link(c);
-  EXPECT_EQ(build_error(b), "model: link 'a': the parent chain has a cycle");
+  EXPECT_EQ(build_error(b), "model: the model has no root link (every link names a parent)");
 }
 
 TEST(ModelBuilderValidation, FloatingJointNotAtTheRoot) {
@@ -263,7 +262,7 @@ TEST(ModelBuilderValidation, MasslessLinksWeldedToTheWorld) {
   ModelBuilder bad;
   bad.add_link(make_link("world_frame", "", 0.0, Vec3::Zero(), Mat3::Identity(), fixed_joint("w")));
   EXPECT_EQ(build_error(bad),
-            "model: link 'world_frame': inertia must be zero for a massless link");
+            "model: link 'world_frame': inertia must be zero for a massless link (mass = 0), got principal moments [1, 1, 1]");
   // A negative mass is rejected even where the link cannot move.
   ModelBuilder negative;
   negative.add_link(
@@ -312,7 +311,7 @@ TEST(ModelBuilderValidation, ArmatureSize) {
               l.joint = spherical_joint("shoulder");
               l.joint.armature = {0.1, 0.2};
             })),
-            "model: joint 'shoulder': armature has 2 values, expected 1 or 3");
+            "model: joint 'shoulder': armature has 2 values, expected 1 or 3 (one per dof)");
   EXPECT_THAT(build_error(base_and_arm([](LinkSpec& l) {
                 l.joint.armature = {0.1, 0.2};
               })),
