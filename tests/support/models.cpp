@@ -85,7 +85,7 @@ std::shared_ptr<const Model> make_random_tree(unsigned seed, int n, bool floatin
       l.joint.origin_rpy = Vec3(u(rng), u(rng), u(rng)) * 3.0;
       l.joint.axis = Vec3(u(rng), u(rng), u(rng));
     }
-    if (armature > 0.0) l.joint.armature = {armature * pos(rng)};
+    if (armature > 0.0 && l.joint.type != JointType::fixed) l.joint.armature = {armature * pos(rng)};
     b.add_link(l);
   }
   return std::make_shared<const Model>(b.build());
