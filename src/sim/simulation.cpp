@@ -52,6 +52,18 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   applied_force_ = VecX::Zero(nv);
   drives_.assign(static_cast<size_t>(nv), Drive{});
   drive_force_ = VecX::Zero(nv);
+  limit_force_ = VecX::Zero(nv);
+  friction_force_ = VecX::Zero(nv);
+  lower_limit_ = model_->lower_limit;
+  upper_limit_ = model_->upper_limit;
+  max_velocity_ = model_->velocity_limit;
+  friction_.assign(static_cast<size_t>(nv), JointFriction{});
+  envelopes_.assign(static_cast<size_t>(nv), ActuatorEnvelope{});
+  for (int d = 0; d < nv; ++d) {
+    const JointType type = model_->links[model_->dof_link[d]].joint_type;
+    if (type != JointType::revolute && type != JointType::prismatic) continue;
+    friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
+  }
   q_start_ = q_;
   qd_start_ = qd_;
   drive_force_start_ = drive_force_;
@@ -94,7 +106,7 @@ int Simulation::driven_dof(const std::string& joint) const {
   const Link& link = model_->links[model_->joint_link_index(joint)];
   if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
     throw std::invalid_argument("joint '" + joint + "' is " + to_string(link.joint_type) +
-                                ": drives act on revolute and prismatic joints only");
+                                ": this setting acts on revolute and prismatic joints only");
   return link.v_index;
 }
 
@@ -123,6 +135,53 @@ void Simulation::set_drive_target(int dof, double position, double velocity) {
 
 void Simulation::set_drive_target(const std::string& joint, double position, double velocity) {
   set_drive_target(driven_dof(joint), position, velocity);
+}
+
+int Simulation::one_dof_joint(int dof) const {
+  check_dof(dof);
+  const Link& link = model_->links[model_->dof_link[dof]];
+  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+    throw std::invalid_argument("joint '" + link.joint_name + "' is " + to_string(link.joint_type) +
+                                ": limits, friction and velocity limits act on revolute and "
+                                "prismatic joints only");
+  return dof;
+}
+
+void Simulation::set_joint_limits(int dof, double lower, double upper) {
+  one_dof_joint(dof);
+  validate_limits(lower, upper, model_->links[model_->dof_link[dof]].joint_name);
+  lower_limit_[dof] = lower;
+  upper_limit_[dof] = upper;
+}
+void Simulation::set_joint_limits(const std::string& joint, double lower, double upper) {
+  set_joint_limits(driven_dof(joint), lower, upper);
+}
+
+void Simulation::set_joint_friction(int dof, const JointFriction& friction) {
+  one_dof_joint(dof);
+  validate_friction(friction, model_->links[model_->dof_link[dof]].joint_name);
+  friction_[static_cast<size_t>(dof)] = friction;
+}
+void Simulation::set_joint_friction(const std::string& joint, const JointFriction& friction) {
+  set_joint_friction(driven_dof(joint), friction);
+}
+
+void Simulation::set_max_joint_velocity(int dof, double max_velocity) {
+  one_dof_joint(dof);
+  validate_max_velocity(max_velocity, model_->links[model_->dof_link[dof]].joint_name);
+  max_velocity_[dof] = max_velocity;
+}
+void Simulation::set_max_joint_velocity(const std::string& joint, double max_velocity) {
+  set_max_joint_velocity(driven_dof(joint), max_velocity);
+}
+
+void Simulation::set_actuator_envelope(int dof, const ActuatorEnvelope& envelope) {
+  one_dof_joint(dof);
+  validate_envelope(envelope, model_->links[model_->dof_link[dof]].joint_name);
+  envelopes_[static_cast<size_t>(dof)] = envelope;
+}
+void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope) {
+  set_actuator_envelope(driven_dof(joint), envelope);
 }
 
 void Simulation::step(int count) {

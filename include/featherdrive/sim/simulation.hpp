@@ -9,6 +9,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/constraint/joint_constraints.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 
 namespace featherdrive {
@@ -61,9 +62,31 @@ class Simulation {
   void set_drive_target(int dof, double position, double velocity);
   void set_drive_target(const std::string& joint, double position, double velocity);
 
+  // Joint constraints per dof of revolute and prismatic joints. Initialised from the model: limits
+  // from lower_limit/upper_limit (enforced where finite), friction static = dynamic =
+  // model.friction with viscous = model.damping, max velocity = model.velocity_limit.
+  void set_joint_limits(int dof, double lower, double upper);
+  void set_joint_limits(const std::string& joint, double lower, double upper);
+  double lower_limit(int dof) const { return lower_limit_[check_dof(dof)]; }
+  double upper_limit(int dof) const { return upper_limit_[check_dof(dof)]; }
+  void set_joint_friction(int dof, const JointFriction& friction);
+  void set_joint_friction(const std::string& joint, const JointFriction& friction);
+  const JointFriction& joint_friction(int dof) const { return friction_.at(static_cast<size_t>(check_dof(dof))); }
+  /// Largest |qd| (m/s or rad/s); +inf for none.
+  void set_max_joint_velocity(int dof, double max_velocity);
+  void set_max_joint_velocity(const std::string& joint, double max_velocity);
+  double max_joint_velocity(int dof) const { return max_velocity_[check_dof(dof)]; }
+  void set_actuator_envelope(int dof, const ActuatorEnvelope& envelope);
+  void set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope);
+  const ActuatorEnvelope& actuator_envelope(int dof) const { return envelopes_.at(static_cast<size_t>(check_dof(dof))); }
+
   // Outputs of the last step.
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
   const VecX& drive_force() const { return drive_force_; }
+  /// The position-limit force of each dof (impulse / dt; positive pushes towards +q).
+  const VecX& limit_force() const { return limit_force_; }
+  /// The joint-friction force of each dof (impulse / dt).
+  const VecX& friction_force() const { return friction_force_; }
 
   /// Advances by one step of options().dt; throws DivergenceError (state unchanged) if it would
   /// produce a non-finite value.
@@ -75,6 +98,7 @@ class Simulation {
 
  private:
   int check_dof(int dof) const;
+  int one_dof_joint(int dof) const;
   int driven_dof(const std::string& joint) const;
   void setup_drive_rows(double h, bool tgs);
   void solve_pgs();
@@ -91,7 +115,10 @@ class Simulation {
   long step_count_ = 0;
   VecX applied_force_;
   std::vector<Drive> drives_;
-  VecX drive_force_;
+  VecX lower_limit_, upper_limit_, max_velocity_;
+  std::vector<JointFriction> friction_;
+  std::vector<ActuatorEnvelope> envelopes_;
+  VecX drive_force_, limit_force_, friction_force_;
 
   // Per-step scratch.
   VecX q_start_, qd_start_;
