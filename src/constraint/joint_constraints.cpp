@@ -29,9 +29,6 @@ void validate_friction(const JointFriction& f, const std::string& joint) {
   non_negative("friction", joint, "static_effort", f.static_effort);
   non_negative("friction", joint, "dynamic_effort", f.dynamic_effort);
   non_negative("friction", joint, "viscous", f.viscous);
-  if (f.dynamic_effort > f.static_effort && f.static_effort > 0.0)
-    reject("friction", joint, "dynamic_effort", f.dynamic_effort,
-           "must not exceed static_effort (a joint that slips must keep slipping)");
 }
 
 void validate_envelope(const ActuatorEnvelope& e, const std::string& joint) {

@@ -67,11 +67,10 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   q_start_ = q_;
   qd_start_ = qd_;
   drive_force_start_ = drive_force_;
-  drive_rows_.assign(static_cast<size_t>(nv), DriveRow{});
-  drive_impulse_ = VecX::Zero(nv);
+  limit_force_start_ = limit_force_;
+  friction_force_start_ = friction_force_;
+  rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
-  qd_saved_ = VecX::Zero(nv);
-  q_scratch_ = q_;
 }
 
 void Simulation::set_options(const SimulationOptions& options) {
@@ -198,6 +197,8 @@ void Simulation::check_finite_or_restore() {
     q_ = q_start_;
     qd_ = qd_start_;
     drive_force_ = drive_force_start_;
+    limit_force_ = limit_force_start_;
+    friction_force_ = friction_force_start_;
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint
@@ -213,6 +214,8 @@ void Simulation::check_finite_or_restore() {
   for (int d = 0; d < model.nv; ++d) {
     if (!std::isfinite(qd_[d])) fail("velocity qd", d, qd_[d]);
     if (!std::isfinite(drive_force_[d])) fail("drive force", d, drive_force_[d]);
+    if (!std::isfinite(limit_force_[d])) fail("limit force", d, limit_force_[d]);
+    if (!std::isfinite(friction_force_[d])) fail("friction force", d, friction_force_[d]);
   }
 }
 

@@ -1,5 +1,7 @@
 // The step, as a table of contents. PGS and TGS follow the spec and ../shared/physx/NOTES.md
 // ("One step, PGS" / "One step, TGS"); docs/math/implicit_drives.md has the math.
+#include <cmath>
+
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/algorithm/joint_motion.hpp"
@@ -7,6 +9,15 @@
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
+namespace {
+
+// Share of a limit violation corrected per solve in position iterations: PhysX's articulation
+// bias coefficients (0.8 for PGS; 2 sqrt(1 / n) for TGS with n sub-steps).
+double limit_erp(SolverType solver, int position_iterations) {
+  return solver == SolverType::pgs ? 0.8 : 2.0 * std::sqrt(1.0 / position_iterations);
+}
+
+}  // namespace
 
 void Simulation::step() {
   const Model& model = *model_;
@@ -14,6 +25,8 @@ void Simulation::step() {
   q_start_ = q_;  // kept to restore the state if the step diverges
   qd_start_ = qd_;
   drive_force_start_ = drive_force_;
+  limit_force_start_ = limit_force_;
+  friction_force_start_ = friction_force_;
 
   // Poses and velocities at the start of the step.
   forward_kinematics(model, data_, q_, qd_);
@@ -22,73 +35,107 @@ void Simulation::step() {
   qd_ += dt * data_.qdd;
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);
-  // Drive rows, position iterations, position update, velocity iterations.
+  // Rows, position iterations, position update, velocity iterations.
   if (options_.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
-  // Outputs: the drive force is the step's accumulated impulse / dt (ERRATA 7).
-  drive_force_ = drive_impulse_ / dt;
+  // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
+  for (int d = 0; d < model.nv; ++d) {
+    const DofRows& r = rows_[static_cast<size_t>(d)];
+    drive_force_[d] = r.drive_impulse / dt;
+    limit_force_[d] = (r.low_impulse + r.high_impulse) / dt;
+    friction_force_[d] = r.friction_impulse / dt;
+  }
   check_finite_or_restore();
   time_ += dt;
   ++step_count_;
 }
 
-void Simulation::setup_drive_rows(double h, bool tgs) {
+// Every dof's rows, set up once per step from the start-of-step configuration (eq. 20-24, 35-39).
+void Simulation::setup_rows(double h, bool tgs) {
   const Model& model = *model_;
+  const double dt = options_.dt;
+  any_rows_ = false;
   for (int d = 0; d < model.nv; ++d) {
+    DofRows& rows = rows_[static_cast<size_t>(d)];
+    rows = DofRows{};
+    const Link& link = model.links[model.dof_link[d]];
+    if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic) {
+      sweep_.has_rows[d] = 0;
+      continue;
+    }
+    const double r = data_.inverse_mass_diagonal[d];
+    const double x0 = q_[link.q_index];
+    rows.response = r;
+    rows.recip_response = 1.0 / r;
     const Drive& drive = drives_[static_cast<size_t>(d)];
-    sweep_.has_rows[d] = drive.type != DriveType::none;
-    if (!sweep_.has_rows[d]) continue;
-    const double x0 = q_[model.links[model.dof_link[d]].q_index];
-    drive_rows_[static_cast<size_t>(d)] = setup_drive_row(
-        drive, data_.inverse_mass_diagonal[d], x0, h, options_.dt, tgs);
+    rows.has_drive = drive.type != DriveType::none;
+    if (rows.has_drive) rows.drive = setup_drive_row(drive, r, x0, h, dt, tgs);
+    const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
+    rows.has_envelope = rows.has_drive && envelope.active();
+    rows.envelope = envelope;
+    rows.external_impulse = applied_force_[d] * dt;
+    const JointFriction& friction = friction_[static_cast<size_t>(d)];
+    rows.has_friction = friction.active();
+    rows.static_friction_impulse = friction.static_effort * dt;
+    rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
+    rows.viscous_friction = friction.viscous * dt;
+    rows.has_limit = std::isfinite(lower_limit_[d]) || std::isfinite(upper_limit_[d]);
+    rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
+    rows.error_high = upper_limit_[d] - x0;
+    rows.max_velocity = max_velocity_[d];
+    sweep_.has_rows[d] = rows.active() ? 1 : 0;
+    any_rows_ = any_rows_ || rows.active();
   }
-  drive_impulse_.setZero();
   delta_x_.setZero();
 }
 
-// PGS: the rows converge on the coupled implicit step; positions move with the velocity after the
-// position iterations; velocity iterations continue the same update (spec "PGS Velocity
-// Iteration").
-void Simulation::solve_pgs() {
-  const Model& model = *model_;
-  const double dt = options_.dt;
-  setup_drive_rows(dt, /*tgs=*/false);
-  auto drive_row = [this](int dof, double v) {
-    const double before = drive_impulse_[dof];
-    const double after = drive_impulse(drive_rows_[static_cast<size_t>(dof)], v, before, 0.0, 0.0);
-    drive_impulse_[dof] = after;
-    return after - before;
-  };
-  for (int it = 0; it < options_.position_iterations; ++it)
-    gauss_seidel_sweep(model, data_, sweep_, qd_, drive_row);
-  integrate_configuration(model, q_, qd_, dt, q_);
-  for (int it = 0; it < options_.velocity_iterations; ++it)
-    gauss_seidel_sweep(model, data_, sweep_, qd_, drive_row);
+void Simulation::sweep(const RowPhase& phase) {
+  if (!any_rows_) return;
+  gauss_seidel_sweep(*model_, data_, sweep_, qd_, [this, &phase](int dof, double v) {
+    RowPhase p = phase;
+    p.delta_x = delta_x_[dof];
+    return solve_dof_rows(rows_[static_cast<size_t>(dof)], v, p);
+  });
 }
 
-// TGS: each position iteration is a sub-step of rho = dt / n with a fresh impulse, the target
-// interpolated (eq. 41) and the position change tracked (eq. 42-45); the inertia stays that of the
-// step's start. Drive impulses are frozen in the velocity iterations (spec "TGS Velocity
-// Iteration"), so with drives as the only rows they change nothing.
+// PGS: the rows converge on the coupled implicit step; positions move with the velocity after the
+// position iterations; velocity iterations continue the same update without new position error
+// (spec "PGS Velocity Iteration").
+void Simulation::solve_pgs() {
+  const double dt = options_.dt;
+  setup_rows(dt, /*tgs=*/false);
+  RowPhase phase;
+  phase.dt = dt;
+  phase.h = dt;
+  phase.limit_erp = limit_erp(SolverType::pgs, options_.position_iterations);
+  for (int it = 0; it < options_.position_iterations; ++it) sweep(phase);
+  integrate_configuration(*model_, q_, qd_, dt, q_);
+  phase.velocity_iteration = true;
+  for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+}
+
+// TGS: each position iteration is a sub-step of rho = dt / n with a fresh drive impulse, the
+// target interpolated (eq. 41) and the position change tracked (eq. 42-45); the inertia stays that
+// of the step's start. Drive impulses are frozen in the velocity iterations (spec "TGS Velocity
+// Iteration"); friction, limits and velocity limits keep acting there.
 void Simulation::solve_tgs() {
-  const Model& model = *model_;
   const double dt = options_.dt;
   const int n = options_.position_iterations;
   const double rho = dt / n;
-  setup_drive_rows(rho, /*tgs=*/true);
+  setup_rows(rho, /*tgs=*/true);
+  RowPhase phase;
+  phase.dt = dt;
+  phase.h = rho;
+  phase.tgs = true;
+  phase.limit_erp = limit_erp(SolverType::tgs, n);
   for (int i = 1; i <= n; ++i) {
-    const double time_to_step_end = dt - i * rho;
-    auto drive_row = [this, time_to_step_end](int dof, double v) {
-      const double before = drive_impulse_[dof];
-      const double after = drive_impulse(drive_rows_[static_cast<size_t>(dof)], v, before,
-                                         delta_x_[dof], time_to_step_end);
-      drive_impulse_[dof] = after;
-      return after - before;
-    };
-    gauss_seidel_sweep(model, data_, sweep_, qd_, drive_row);
-    integrate_configuration(model, q_, qd_, rho, q_);
+    phase.time_to_step_end = dt - i * rho;
+    sweep(phase);
+    integrate_configuration(*model_, q_, qd_, rho, q_);
     delta_x_ += rho * qd_;
   }
+  phase.velocity_iteration = true;
+  for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
 }
 
 }  // namespace featherdrive

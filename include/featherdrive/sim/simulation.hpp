@@ -8,8 +8,7 @@
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
-#include "featherdrive/constraint/drive.hpp"
-#include "featherdrive/constraint/joint_constraints.hpp"
+#include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 
 namespace featherdrive {
@@ -100,7 +99,8 @@ class Simulation {
   int check_dof(int dof) const;
   int one_dof_joint(int dof) const;
   int driven_dof(const std::string& joint) const;
-  void setup_drive_rows(double h, bool tgs);
+  void setup_rows(double h, bool tgs);
+  void sweep(const RowPhase& phase);
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_restore();
@@ -122,12 +122,10 @@ class Simulation {
 
   // Per-step scratch.
   VecX q_start_, qd_start_;
-  VecX drive_force_start_;
-  std::vector<DriveRow> drive_rows_;
-  VecX drive_impulse_;  ///< accumulated drive impulse of the step per dof
-  VecX delta_x_;        ///< TGS: position change accumulated over the sub-steps per dof
-  VecX qd_saved_;       ///< PGS: velocity after the position iterations
-  VecX q_scratch_;
+  VecX drive_force_start_, limit_force_start_, friction_force_start_;
+  std::vector<DofRows> rows_;  ///< every dof's rows for this step
+  bool any_rows_ = false;
+  VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
 };
 
 }  // namespace featherdrive

@@ -1,0 +1,68 @@
+// All rows of one dof, solved together in PhysX's order (../shared/physx/NOTES.md, "Several rows
+// on one dof"): drive -> friction -> position limit -> velocity limit. Each sees the joint velocity
+// the previous one left (v += r * impulse), and their impulse changes are applied as one.
+// docs/math/joint_constraints.md.
+#pragma once
+
+#include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/constraint/joint_constraints.hpp"
+
+namespace featherdrive {
+
+/// One dof's rows for one step: set up once, updated every iteration.
+struct DofRows {
+  double response = 0.0;        ///< r = (M^-1)_jj (ERRATA 6)
+  double recip_response = 0.0;  ///< 1 / r
+
+  bool has_drive = false;
+  DriveRow drive;
+  bool has_envelope = false;
+  ActuatorEnvelope envelope;
+  double external_impulse = 0.0;  ///< applied joint force * dt, part of the actuator's effort
+
+  bool has_friction = false;
+  double static_friction_impulse = 0.0;   ///< static effort * dt
+  double dynamic_friction_impulse = 0.0;  ///< dynamic effort * dt
+  double viscous_friction = 0.0;          ///< viscous coefficient * dt
+
+  bool has_limit = false;
+  double error_low = 0.0;   ///< q0 - lower (negative: violated)
+  double error_high = 0.0;  ///< upper - q0
+
+  double max_velocity = 0.0;  ///< +inf for none
+
+  // Accumulated over the step.
+  double drive_impulse = 0.0;
+  double friction_impulse = 0.0;
+  double low_impulse = 0.0;   ///< >= 0
+  double high_impulse = 0.0;  ///< <= 0
+  double velocity_limit_impulse = 0.0;
+
+  bool active() const {
+    return has_drive || has_friction || has_limit || max_velocity < kNoVelocityLimit;
+  }
+  static constexpr double kNoVelocityLimit = std::numeric_limits<double>::infinity();
+};
+
+/// Where in the step an update happens.
+struct RowPhase {
+  double dt = 0.0;              ///< the whole step tau
+  double h = 0.0;               ///< the step of one solve: tau (PGS) or rho = tau / n (TGS)
+  bool tgs = false;
+  bool velocity_iteration = false;
+  double delta_x = 0.0;         ///< TGS: position change accumulated over the sub-steps
+  double time_to_step_end = 0.0;  ///< TGS: tau - i rho (eq. 41)
+  double limit_erp = 0.8;       ///< share of a limit violation corrected per (sub-)step
+};
+
+/// Updates every row of the dof at joint velocity v; returns the impulse change to apply.
+double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase);
+
+/// The accumulated drive impulse clamped to what the actuator envelope allows (the effort of the
+/// step, drive plus external, within |E| <= max_effort - resistance |v| and
+/// |v| <= max_actuator_velocity - gradient |E|, at the velocity v(lambda) the impulse leads to).
+/// The envelope only ever scales the effort down, never reverses it.
+double clamp_to_envelope(const ActuatorEnvelope& envelope, double unclamped, double accumulated,
+                         double v, double response, double external_impulse, double dt);
+
+}  // namespace featherdrive
