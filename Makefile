@@ -19,11 +19,17 @@ configure: deps $(BUILD)/CMakeCache.txt
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
+# The demo: the 7-dof arm of examples/arm7.urdf tracking sine trajectories with stiff drives,
+# under PGS and then TGS; trajectories and plots go to out/.
 run: build
-	./$(BUILD)/tools/featherdrive-demo
+	@mkdir -p out
+	@echo
+	@./$(BUILD)/tools/featherdrive simulate examples/arm7_pgs.yaml --out out/arm7_pgs.csv --plot out/arm7_pgs.png
+	@echo
+	@./$(BUILD)/tools/featherdrive simulate examples/arm7_tgs.yaml --out out/arm7_tgs.csv --plot out/arm7_tgs.png
 
 $(ASAN_BUILD)/CMakeCache.txt: | deps
-	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DFEATHERDRIVE_SANITIZE=ON \
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFEATHERDRIVE_SANITIZE=ON \
 	  -DFEATHERDRIVE_PEER_TESTS=OFF $(CMAKE_FLAGS)
 
 # The sanitizer build runs first so that the suite's last lines are the main build's ctest summary.

@@ -1,5 +1,6 @@
 #include "featherdrive/constraint/drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -32,6 +33,12 @@ void validate_drive(const Drive& d, const std::string& joint) {
     reject(joint, "damping", d.damping, "must be finite and >= 0");
   if (std::isnan(d.max_force) || d.max_force <= 0.0)
     reject(joint, "max_force", d.max_force, "must be > 0");
+  if (std::isnan(d.max_impulse) || d.max_impulse <= 0.0)
+    reject(joint, "max_impulse", d.max_impulse, "must be > 0");
+  if (std::isfinite(d.max_force) && std::isfinite(d.max_impulse))
+    throw std::invalid_argument("drive on joint '" + joint +
+                                "': set max_force (a force) or max_impulse (an impulse per step), "
+                                "not both");
   if (!std::isfinite(d.target_position))
     reject(joint, "target_position", d.target_position, "must be finite");
   if (!std::isfinite(d.target_velocity))
@@ -57,7 +64,7 @@ DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h, doub
   row.impulse_multiplier = tgs ? 1.0 : 1.0 - x;
   row.bias_coefficient = scale * h * kp;
   row.target_pos_bias = tgs ? scale * h * kp * drive.target_velocity : 0.0;
-  row.max_impulse = drive.max_force * step_dt;
+  row.max_impulse = std::min(drive.max_force * step_dt, drive.max_impulse);
   return row;
 }
 

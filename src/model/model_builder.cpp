@@ -15,7 +15,16 @@ std::string fmt(double v) {
   return std::string(buffer, result.ptr);
 }
 
-std::string fmt(const Vec3& v) { return "[" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + "]"; }
+std::string fmt(const Vec3& v) {
+  std::string s = "[";
+  s += fmt(v.x());
+  s += ", ";
+  s += fmt(v.y());
+  s += ", ";
+  s += fmt(v.z());
+  s += "]";
+  return s;
+}
 
 [[noreturn]] void fail(const std::string& what) { throw ModelError("model: " + what); }
 

@@ -54,6 +54,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   drive_force_ = VecX::Zero(nv);
   limit_force_ = VecX::Zero(nv);
   friction_force_ = VecX::Zero(nv);
+  velocity_limit_force_ = VecX::Zero(nv);
   lower_limit_ = model_->lower_limit;
   upper_limit_ = model_->upper_limit;
   max_velocity_ = model_->velocity_limit;
@@ -69,6 +70,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   drive_force_start_ = drive_force_;
   limit_force_start_ = limit_force_;
   friction_force_start_ = friction_force_;
+  velocity_limit_force_start_ = velocity_limit_force_;
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
 }
@@ -199,6 +201,7 @@ void Simulation::check_finite_or_restore() {
     drive_force_ = drive_force_start_;
     limit_force_ = limit_force_start_;
     friction_force_ = friction_force_start_;
+    velocity_limit_force_ = velocity_limit_force_start_;
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint

@@ -27,6 +27,7 @@ void Simulation::step() {
   drive_force_start_ = drive_force_;
   limit_force_start_ = limit_force_;
   friction_force_start_ = friction_force_;
+  velocity_limit_force_start_ = velocity_limit_force_;
 
   // Poses and velocities at the start of the step.
   forward_kinematics(model, data_, q_, qd_);
@@ -44,6 +45,7 @@ void Simulation::step() {
     drive_force_[d] = r.drive_impulse / dt;
     limit_force_[d] = (r.low_impulse + r.high_impulse) / dt;
     friction_force_[d] = r.friction_impulse / dt;
+    velocity_limit_force_[d] = r.velocity_limit_impulse / dt;
   }
   check_finite_or_restore();
   time_ += dt;

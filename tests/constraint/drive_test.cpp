@@ -115,6 +115,17 @@ TEST(DriveRow, RejectsBadSettings) {
   EXPECT_EQ(message({DriveType::force, 1, 1, 1, inf, 0}),
             "drive on joint 'elbow': target_position = inf must be finite");
   EXPECT_EQ(message({DriveType::force, 1, 1, inf, 0, 0}), "no error");
+  EXPECT_EQ(message({DriveType::force, 1, 1, inf, 0, 0, 0.0}),
+            "drive on joint 'elbow': max_impulse = 0 must be > 0");
+  EXPECT_EQ(message({DriveType::force, 1, 1, 10, 0, 0, 0.5}),
+            "drive on joint 'elbow': set max_force (a force) or max_impulse (an impulse per step), "
+            "not both");
+}
+
+TEST(DriveRow, MaxImpulseBoundsTheStepImpulseDirectly) {
+  Drive d{DriveType::force, 1e6, 10, std::numeric_limits<double>::infinity(), 1.0, 0.0};
+  d.max_impulse = 0.3;
+  EXPECT_DOUBLE_EQ(drive_impulse(setup_drive_row(d, 1.0, 0.0, 0.01, 0.01, false), 0.0, 0.0, 0.0, 0.0), 0.3);
 }
 
 }  // namespace

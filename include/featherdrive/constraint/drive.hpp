@@ -21,14 +21,19 @@ struct Drive {
   DriveType type = DriveType::none;
   double stiffness = 0.0;
   double damping = 0.0;
-  /// Largest drive force (N or Nm): the step's impulse is limited to max_force * dt.
+  /// Largest drive force (N or Nm): the step's impulse is limited to max_force * dt (PhysX with
+  /// eDRIVE_LIMITS_ARE_FORCES).
   double max_force = std::numeric_limits<double>::infinity();
   double target_position = 0.0;
   double target_velocity = 0.0;
+  /// Largest drive impulse of a step (N s or Nm s; PhysX's maxForce without
+  /// eDRIVE_LIMITS_ARE_FORCES). Set at most one of max_force and max_impulse. In TGS it bounds the
+  /// impulse summed over the sub-steps.
+  double max_impulse = std::numeric_limits<double>::infinity();
 };
 
 /// Throws std::invalid_argument naming the joint, the field and the value for negative or
-/// non-finite gains, max_force <= 0 or non-finite targets.
+/// non-finite gains, max_force or max_impulse <= 0, both of them set, or non-finite targets.
 void validate_drive(const Drive& drive, const std::string& joint);
 
 /// One step's drive row: the members of PhysX's ArticulationInternalConstraint, named after the

@@ -86,6 +86,8 @@ class Simulation {
   const VecX& limit_force() const { return limit_force_; }
   /// The joint-friction force of each dof (impulse / dt).
   const VecX& friction_force() const { return friction_force_; }
+  /// The force the joint velocity limit applied on each dof (impulse / dt).
+  const VecX& velocity_limit_force() const { return velocity_limit_force_; }
 
   /// Advances by one step of options().dt; throws DivergenceError (state unchanged) if it would
   /// produce a non-finite value.
@@ -118,11 +120,11 @@ class Simulation {
   VecX lower_limit_, upper_limit_, max_velocity_;
   std::vector<JointFriction> friction_;
   std::vector<ActuatorEnvelope> envelopes_;
-  VecX drive_force_, limit_force_, friction_force_;
+  VecX drive_force_, limit_force_, friction_force_, velocity_limit_force_;
 
   // Per-step scratch.
   VecX q_start_, qd_start_;
-  VecX drive_force_start_, limit_force_start_, friction_force_start_;
+  VecX drive_force_start_, limit_force_start_, friction_force_start_, velocity_limit_force_start_;
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof

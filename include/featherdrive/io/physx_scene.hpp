@@ -1,0 +1,25 @@
+// Export of a simulation to the PhysX comparison harness's JSON description
+// (tests/physx/README.md, format "featherdrive-physx/1"), so that PhysX 5.6.1 can run the same
+// robot, drives, solver settings and initial state.
+#pragma once
+
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+
+/// Drive targets (position, velocity) by joint name, set before one step.
+using TargetsByJoint = std::map<std::string, std::pair<double, double>>;
+
+/// The JSON scene for the harness: the model, the current state, drives, limits, velocity
+/// limits and armature of `sim`, its solver options, `steps` steps and `targets[k]` applied
+/// before step k + 1. Throws std::invalid_argument for what the harness cannot represent (a root
+/// joint other than fixed or floating, spherical joints, joint friction, actuator envelopes).
+std::string physx_scene_json(const Simulation& sim, int steps,
+                             const std::vector<TargetsByJoint>& targets = {});
+
+}  // namespace featherdrive

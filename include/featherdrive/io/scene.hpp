@@ -1,0 +1,79 @@
+// Scene files (YAML, or JSON, read by yaml-cpp): a URDF robot, the simulation options, the initial
+// state, drives with constant or sine targets and per-joint settings. README.md lists the keys.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "featherdrive/io/error.hpp"
+#include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+
+/// target position = offset + amplitude sin(2 pi frequency t + phase), target velocity its
+/// derivative.
+struct SineTarget {
+  double amplitude = 0.0;
+  double frequency = 0.0;  ///< Hz
+  double phase = 0.0;      ///< rad
+  double offset = 0.0;
+  double position(double t) const;
+  double velocity(double t) const;
+};
+
+struct DriveSpec {
+  std::string joint;
+  int dof = 0;
+  Drive drive;                     ///< the targets in it hold for a constant target
+  std::optional<SineTarget> sine;  ///< replaces the drive's targets at every step
+  std::optional<ActuatorEnvelope> envelope;
+  /// The target position and velocity at time t.
+  std::pair<double, double> target_at(double t) const;
+};
+
+/// Settings of one joint that override what the URDF says.
+struct JointSettings {
+  std::string joint;
+  int dof = 0;
+  std::optional<double> lower, upper, max_velocity, armature;
+  std::optional<JointFriction> friction;
+};
+
+struct Scene {
+  std::filesystem::path path;        ///< the scene file
+  std::filesystem::path model_path;  ///< the URDF, resolved against the scene's folder
+  UrdfRobot robot;                   ///< robot.model is the model, armature applied
+  SimulationOptions options;
+  int steps = 0;
+  VecX q0, qd0;                       ///< initial state; joints the file omits start at 0
+  std::vector<DriveSpec> drives;      ///< in URDF joint order
+  std::vector<JointSettings> joints;  ///< in URDF joint order
+
+  const std::shared_ptr<const Model>& model() const { return robot.model; }
+};
+
+/// Reads a scene file. Throws InputError naming the file, the key path and the value for unknown
+/// keys, missing or unknown joints, wrong types and bad values; errors of the URDF name the URDF.
+Scene load_scene(const std::filesystem::path& path);
+/// The same from text; `path` names the file in messages and anchors the relative model path.
+Scene parse_scene(const std::string& text, const std::filesystem::path& path);
+
+/// A simulation in the scene's initial state with its drives and joint settings; the drives'
+/// targets are those of the first step.
+Simulation make_simulation(const Scene& scene);
+
+/// Sets the time-varying targets for step k (0-based): the sine targets at that step's end time,
+/// t = (k + 1) dt.
+void apply_targets(const Scene& scene, Simulation& sim, int step_index);
+
+/// Runs the scene: on_state(sim, 0) for the initial state, then for each step k apply_targets,
+/// sim.step() and on_state(sim, k + 1). Returns the simulation at the end.
+Simulation run_scene(const Scene& scene,
+                     const std::function<void(const Simulation&, int)>& on_state);
+
+}  // namespace featherdrive

@@ -1,0 +1,75 @@
+// URDF import (urdfdom): links, inertials, fixed / revolute / continuous / prismatic joints,
+// limits, dynamics and mimic tags. Fixed joints are merged into their parent's inertia, so the
+// Model holds the root and the links behind moving joints only.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "featherdrive/io/error.hpp"
+#include "featherdrive/model/model_builder.hpp"
+
+namespace featherdrive {
+
+struct UrdfOptions {
+  /// true: the root link is welded to the world; false: it gets a floating joint.
+  bool fixed_base = true;
+  Vec3 gravity{0.0, 0.0, -9.81};
+};
+
+/// A <mimic> tag: joint = multiplier * leader + offset. Read and reported, not simulated.
+struct UrdfMimic {
+  std::string joint;
+  std::string leader;
+  double multiplier = 1.0;
+  double offset = 0.0;
+};
+
+/// A link merged into an ancestor through fixed joints: its frame's pose in the ancestor's frame.
+struct MergedLink {
+  std::string into;
+  Vec3 xyz = Vec3::Zero();
+  Mat3 rotation = Mat3::Identity();
+};
+
+struct UrdfRobot {
+  std::filesystem::path path;
+  std::string name;  ///< <robot name>
+  std::string root_link;
+  std::string root_joint;  ///< the name given to the root's joint (fixed or floating)
+  UrdfOptions options;
+  /// The builder's input after merging, in URDF document order; edit and call rebuild() to change
+  /// what URDF cannot say (armature).
+  std::vector<LinkSpec> links;
+  std::shared_ptr<const Model> model;
+  /// Every <joint> in document order, fixed ones included.
+  std::vector<std::string> joint_order;
+  /// The model dofs in URDF document order: the floating root's first, then one per moving joint.
+  std::vector<int> dof_order;
+  std::vector<UrdfMimic> mimics;
+  std::map<std::string, MergedLink> merged;  ///< merged link name -> where it went
+  std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
+  /// The URDF effort limit of each moving joint (informative; drives need their own max_force).
+  std::map<std::string, double> effort_limits;
+
+  /// Builds model from links again; throws InputError naming the file.
+  void rebuild();
+};
+
+/// Reads a URDF file. Throws InputError naming the file, the element and the value for a
+/// malformed file, an unsupported joint type (floating, planar) or a moving link without
+/// <inertial>.
+UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options = {});
+
+/// The same from a string; `name` stands for the file in messages.
+UrdfRobot parse_urdf(const std::string& xml, const std::string& name,
+                     const UrdfOptions& options = {});
+
+/// Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (the inverse of rotation_from_rpy), for
+/// joint origins composed through merged fixed joints.
+Vec3 rpy_from_rotation(const Mat3& R);
+
+}  // namespace featherdrive

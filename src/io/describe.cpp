@@ -1,0 +1,92 @@
+#include "featherdrive/io/describe.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace featherdrive {
+namespace {
+
+// Six significant digits: for reading, not for reading back.
+std::string num(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
+std::string vec(const Vec3& v) {
+  return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+}
+
+std::string inertia(const Mat3& I) {
+  const bool diagonal = I(0, 1) == 0.0 && I(0, 2) == 0.0 && I(1, 2) == 0.0;
+  if (diagonal) return "diag " + vec(I.diagonal());
+  return "ixx " + num(I(0, 0)) + ", iyy " + num(I(1, 1)) + ", izz " + num(I(2, 2)) + ", ixy " +
+         num(I(0, 1)) + ", ixz " + num(I(0, 2)) + ", iyz " + num(I(1, 2));
+}
+
+void link_lines(std::ostringstream& out, const UrdfRobot& robot, const Model& model, int i,
+                int depth) {
+  const Link& link = model.links[i];
+  const std::string pad(2 * depth, ' ');
+  const std::string more = pad + "      ";
+  const bool angular = link.joint_type == JointType::revolute;
+  const char* pos_unit = angular ? "rad" : "m";
+  const char* force_unit = angular ? "Nm" : "N";
+  out << pad << "- " << link.name;
+  if (link.parent < 0) {
+    out << "  (root, "
+        << (link.joint_type == JointType::floating ? "floating" : "welded to the world") << ")\n";
+  } else {
+    const Vec3 xyz = link.tree_transform.r;
+    out << "  <- " << link.joint_name << ": " << to_string(link.joint_type);
+    if (link.nv == 1) out << " about " << (angular ? "" : "along ") << vec(link.axis);
+    out << ", origin " << vec(xyz) << " m\n";
+    if (link.nv == 1) {
+      const int d = link.v_index;
+      out << more << "dof " << d << ", limits ";
+      if (std::isinf(model.lower_limit[d]) && std::isinf(model.upper_limit[d]))
+        out << "none (continuous)";
+      else
+        out << "[" << num(model.lower_limit[d]) << ", " << num(model.upper_limit[d]) << "] "
+            << pos_unit;
+      out << ", effort " << num(model.effort_limit[d]) << " " << force_unit << ", velocity "
+          << num(model.velocity_limit[d]) << " " << pos_unit << "/s";
+      if (model.damping[d] != 0.0 || model.friction[d] != 0.0)
+        out << ", damping " << num(model.damping[d]) << ", friction " << num(model.friction[d]);
+      out << "\n";
+    }
+  }
+  out << more << "mass " << num(link.mass) << " kg, com " << vec(link.com) << " m, inertia "
+      << inertia(link.inertia_com) << " kg m^2\n";
+  std::string merged;
+  for (const auto& [name, m] : robot.merged)
+    if (m.into == link.name) merged += (merged.empty() ? "" : ", ") + name;
+  if (!merged.empty()) out << more << "merged through fixed joints: " << merged << "\n";
+  for (int c : link.children) link_lines(out, robot, model, c, depth + 1);
+}
+
+}  // namespace
+
+std::string describe(const UrdfRobot& robot) {
+  const Model& model = *robot.model;
+  double total = 0.0;
+  for (const Link& l : model.links) total += l.mass;
+  std::ostringstream out;
+  out << "robot '" << robot.name << "' from " << robot.path.string() << "\n";
+  out << "  " << robot.joint_order.size() << " URDF joints, " << model.num_links()
+      << " links after merging " << robot.merged.size() << " fixed, " << model.nv << " dofs, "
+      << (model.floating_base() ? "floating base" : "fixed base") << ", total mass " << num(total)
+      << " kg\n\ntree (inertia about the centre of mass, link axes):\n";
+  link_lines(out, robot, model, 0, 0);
+  out << "\ndofs in URDF order:";
+  for (int d : robot.dof_order) out << " " << model.dof_names[d];
+  out << "\n";
+  for (const UrdfMimic& m : robot.mimics)
+    out << "mimic: " << m.joint << " = " << num(m.multiplier) << " * " << m.leader << " + "
+        << num(m.offset) << " (not simulated)\n";
+  return out.str();
+}
+
+}  // namespace featherdrive

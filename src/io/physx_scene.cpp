@@ -1,0 +1,150 @@
+#include "featherdrive/io/physx_scene.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "featherdrive/algorithm/kinematics.hpp"
+
+namespace featherdrive {
+namespace {
+
+// JSON has no infinity: the harness reads 1e30 as "none".
+std::string num(double v) {
+  if (std::isinf(v)) v = v > 0 ? 1e30 : -1e30;
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
+  return std::string(buffer, result.ptr);
+}
+
+std::string vec(const Vec3& v) {
+  return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+}
+
+std::string quat(const Mat3& R) {
+  const Quat q(R);
+  return "[" + num(q.w()) + ", " + num(q.x()) + ", " + num(q.y()) + ", " + num(q.z()) + "]";
+}
+
+std::string str(const std::string& s) {
+  return "\"" + s + "\"";
+}
+
+}  // namespace
+
+std::string physx_scene_json(const Simulation& sim, int steps,
+                             const std::vector<TargetsByJoint>& targets) {
+  const Model& model = sim.model();
+  const SimulationOptions& o = sim.options();
+  const JointType root_type = model.links[0].joint_type;
+  if (root_type != JointType::fixed && root_type != JointType::floating)
+    throw std::invalid_argument("physx export: the root joint '" + model.links[0].joint_name +
+                                "' is " + to_string(root_type) +
+                                "; PhysX needs a fixed or floating root");
+  Data data(model);
+  forward_kinematics(model, data, sim.q(), sim.qd());
+
+  std::ostringstream js;
+  js << "{\n  \"format\": \"featherdrive-physx/1\",\n";
+  js << "  \"dt\": " << num(o.dt) << ",\n  \"steps\": " << steps << ",\n";
+  js << "  \"gravity\": " << vec(model.gravity) << ",\n";
+  js << "  \"solver\": {\"type\": " << str(to_string(o.solver))
+     << ", \"position_iterations\": " << o.position_iterations
+     << ", \"velocity_iterations\": " << o.velocity_iterations << "},\n";
+  // PhysX has one flag per articulation: max_force values are forces, or all are impulses.
+  bool any_force_limit = false, any_impulse_limit = false;
+  for (int d = 0; d < model.nv; ++d) {
+    any_force_limit = any_force_limit || std::isfinite(sim.drive(d).max_force);
+    any_impulse_limit = any_impulse_limit || std::isfinite(sim.drive(d).max_impulse);
+  }
+  if (any_force_limit && any_impulse_limit)
+    throw std::invalid_argument(
+        "physx export: PhysX cannot mix max_force and max_impulse drives in one articulation");
+  js << "  \"drive_limits_are_forces\": " << (any_impulse_limit ? "false" : "true") << ",\n";
+  js << "  \"floating_base\": " << (model.floating_base() ? "true" : "false") << ",\n";
+  {
+    const Mat3& R = data.world_rotation[0];
+    const Vec6& v = data.velocity[0];  // body frame
+    js << "  \"root\": {\"position\": " << vec(data.world_position[0]) << ", \"quat\": " << quat(R)
+       << ", \"angular_velocity\": " << vec(R * v.head<3>())
+       << ", \"linear_velocity\": " << vec(R * v.tail<3>()) << "},\n";
+  }
+  js << "  \"links\": [\n";
+  for (int i = 0; i < model.num_links(); ++i) {
+    const Link& l = model.links[i];
+    const Mat3& I = l.inertia_com;
+    js << "    {\"name\": " << str(l.name) << ", \"parent\": " << l.parent
+       << ", \"mass\": " << num(l.mass) << ", \"com\": " << vec(l.com) << ", \"inertia\": ["
+       << num(I(0, 0)) << ", " << num(I(1, 1)) << ", " << num(I(2, 2)) << ", " << num(I(0, 1))
+       << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     \"joint\": ";
+    if (i == 0) {
+      js << "null}";
+    } else {
+      if (l.joint_type == JointType::spherical)
+        throw std::invalid_argument("physx export: joint '" + l.joint_name +
+                                    "' is spherical, which the harness does not build");
+      const char* type = l.joint_type == JointType::revolute    ? "revolute"
+                         : l.joint_type == JointType::prismatic ? "prismatic"
+                                                                : "fixed";
+      js << "{\"name\": " << str(l.joint_name) << ", \"type\": " << str(type)
+         << ", \"origin\": {\"xyz\": " << vec(l.tree_transform.r)
+         << ", \"quat\": " << quat(l.tree_transform.E.transpose())
+         << "}, \"axis\": " << vec(l.axis);
+      if (l.nv == 1) {
+        const int d = l.v_index;
+        if (sim.joint_friction(d).active())
+          throw std::invalid_argument("physx export: joint '" + l.joint_name +
+                                      "' has static/dynamic/viscous friction, which the harness "
+                                      "cannot set");
+        if (sim.actuator_envelope(d).active())
+          throw std::invalid_argument("physx export: joint '" + l.joint_name +
+                                      "' has an actuator envelope, which the harness cannot set");
+        js << ", \"armature\": " << num(model.armature[d])
+           << ", \"max_velocity\": " << num(sim.max_joint_velocity(d));
+        if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
+          js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
+             << ", \"upper\": " << num(sim.upper_limit(d)) << "}";
+        const Drive& drive = sim.drive(d);
+        if (drive.type != DriveType::none)
+          js << ", \"drive\": {\"type\": " << str(to_string(drive.type))
+             << ", \"stiffness\": " << num(drive.stiffness)
+             << ", \"damping\": " << num(drive.damping) << ", \"max_force\": "
+             << num(std::isfinite(drive.max_impulse) ? drive.max_impulse : drive.max_force)
+             << ", \"target_position\": " << num(drive.target_position)
+             << ", \"target_velocity\": " << num(drive.target_velocity) << "}";
+      }
+      js << "}}";
+    }
+    js << (i + 1 < model.num_links() ? ",\n" : "\n");
+  }
+  js << "  ],\n  \"initial\": {\"q\": {";
+  bool first = true;
+  for (const Link& l : model.links) {
+    if (l.nv != 1) continue;
+    js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.q()[l.q_index]);
+    first = false;
+  }
+  js << "}, \"qd\": {";
+  first = true;
+  for (const Link& l : model.links) {
+    if (l.nv != 1) continue;
+    js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.qd()[l.v_index]);
+    first = false;
+  }
+  js << "}},\n  \"targets\": [";
+  for (size_t k = 0; k < targets.size(); ++k) {
+    js << (k ? ",\n    {" : "\n    {");
+    first = true;
+    for (const auto& [joint, target] : targets[k]) {
+      js << (first ? "" : ", ") << str(joint) << ": [" << num(target.first) << ", "
+         << num(target.second) << "]";
+      first = false;
+    }
+    js << "}";
+  }
+  js << "]\n}\n";
+  return js.str();
+}
+
+}  // namespace featherdrive

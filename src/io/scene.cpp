@@ -1,0 +1,463 @@
+#include "featherdrive/io/scene.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "featherdrive/io/format.hpp"
+
+namespace featherdrive {
+namespace {
+
+// Reads YAML nodes and names the file, the key path and the value in every error.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& why) const {
+    throw InputError(file_ + ": " + path + ": " + why);
+  }
+  [[noreturn]] void fail(const std::string& path, const YAML::Node& value,
+                         const std::string& why) const {
+    throw InputError(file_ + ": " + path + " = " + show(value) + ": " + why);
+  }
+
+  static std::string show(const YAML::Node& node) {
+    if (!node.IsDefined() || node.IsNull()) return "null";
+    if (node.IsScalar()) return node.Scalar();
+    YAML::Emitter out;
+    out.SetMapFormat(YAML::Flow);
+    out.SetSeqFormat(YAML::Flow);
+    out << node;
+    return out.c_str();
+  }
+
+  /// A map whose keys are all in `allowed` (no check when `allowed` is empty) and appear once.
+  void map(const YAML::Node& node, const std::string& path,
+           const std::vector<std::string>& allowed) const {
+    if (!node.IsMap()) fail(path, node, "must be a map (key: value, ...)");
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+      if (!kv.first.IsScalar()) fail(path, kv.first, "keys must be names");
+      const std::string key = kv.first.Scalar();
+      const std::string at = join(path, key);
+      if (!seen.insert(key).second) fail(at, "the key appears twice");
+      if (allowed.empty()) continue;
+      bool known = false;
+      for (const std::string& a : allowed) known = known || a == key;
+      if (!known) {
+        std::string list;
+        for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(at, "unknown key (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  double number(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) fail(path, node, "must be a number");
+    try {
+      return node.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(path, node, "must be a number");
+    }
+  }
+  double finite(const YAML::Node& node, const std::string& path) const {
+    const double v = number(node, path);
+    if (!std::isfinite(v)) fail(path, node, "must be finite");
+    return v;
+  }
+  double non_negative(const YAML::Node& node, const std::string& path) const {
+    const double v = number(node, path);
+    if (!std::isfinite(v) || v < 0.0) fail(path, node, "must be finite and >= 0");
+    return v;
+  }
+  /// > 0; .inf allowed.
+  double positive(const YAML::Node& node, const std::string& path) const {
+    const double v = number(node, path);
+    if (std::isnan(v) || v <= 0.0) fail(path, node, "must be > 0");
+    return v;
+  }
+  long integer(const YAML::Node& node, const std::string& path, long min) const {
+    if (!node.IsScalar()) fail(path, node, "must be an integer");
+    long v = 0;
+    try {
+      v = node.as<long>();
+    } catch (const YAML::Exception&) {
+      fail(path, node, "must be an integer");
+    }
+    if (v < min) fail(path, node, "must be >= " + std::to_string(min));
+    return v;
+  }
+  bool boolean(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) fail(path, node, "must be true or false");
+    try {
+      return node.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(path, node, "must be true or false");
+    }
+  }
+  std::string text(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar() || node.Scalar().empty()) fail(path, node, "must be a non-empty string");
+    return node.Scalar();
+  }
+  Vec3 vec3(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence() || node.size() != 3) fail(path, node, "must be a list of 3 numbers");
+    Vec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = finite(node[i], path + "[" + std::to_string(i) + "]");
+    return v;
+  }
+
+  static std::string join(const std::string& path, const std::string& key) {
+    return path.empty() ? key : path + "." + key;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+};
+
+const std::vector<std::string> kDriveKeys = {"type",      "stiffness",       "damping",
+                                             "max_force", "target_position", "target_velocity",
+                                             "target",    "envelope"};
+
+DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string& path,
+                     DriveSpec spec) {
+  r.map(node, path, kDriveKeys);
+  const auto at = [&](const char* key) { return Reader::join(path, key); };
+  if (node["type"]) {
+    const std::string type = r.text(node["type"], at("type"));
+    if (type == "force")
+      spec.drive.type = DriveType::force;
+    else if (type == "acceleration")
+      spec.drive.type = DriveType::acceleration;
+    else if (type == "none")
+      spec.drive.type = DriveType::none;
+    else
+      r.fail(at("type"), node["type"], "must be force, acceleration or none");
+  }
+  if (node["stiffness"]) spec.drive.stiffness = r.non_negative(node["stiffness"], at("stiffness"));
+  if (node["damping"]) spec.drive.damping = r.non_negative(node["damping"], at("damping"));
+  if (node["max_force"]) spec.drive.max_force = r.positive(node["max_force"], at("max_force"));
+  const bool constant = node["target_position"] || node["target_velocity"];
+  if (constant && node["target"])
+    r.fail(path,
+           "give either target (a trajectory) or target_position / target_velocity, not both");
+  if (constant) spec.sine.reset();
+  if (node["target_position"])
+    spec.drive.target_position = r.finite(node["target_position"], at("target_position"));
+  if (node["target_velocity"])
+    spec.drive.target_velocity = r.finite(node["target_velocity"], at("target_velocity"));
+  if (node["target"]) {
+    const std::string tpath = at("target");
+    r.map(node["target"], tpath, {"sine"});
+    if (!node["target"]["sine"]) r.fail(tpath, node["target"], "must name a trajectory (sine)");
+    const std::string spath = tpath + ".sine";
+    const YAML::Node s = node["target"]["sine"];
+    r.map(s, spath, {"amplitude", "frequency", "phase", "offset"});
+    SineTarget sine;
+    if (s["amplitude"]) sine.amplitude = r.finite(s["amplitude"], spath + ".amplitude");
+    if (s["frequency"]) sine.frequency = r.non_negative(s["frequency"], spath + ".frequency");
+    if (s["phase"]) sine.phase = r.finite(s["phase"], spath + ".phase");
+    if (s["offset"]) sine.offset = r.finite(s["offset"], spath + ".offset");
+    spec.sine = sine;
+  }
+  if (node["envelope"]) {
+    const std::string epath = at("envelope");
+    const YAML::Node e = node["envelope"];
+    r.map(e, epath,
+          {"max_effort", "max_actuator_velocity", "speed_effort_gradient",
+           "velocity_dependent_resistance"});
+    ActuatorEnvelope env = spec.envelope.value_or(ActuatorEnvelope{});
+    if (e["max_effort"]) env.max_effort = r.non_negative(e["max_effort"], epath + ".max_effort");
+    if (e["max_actuator_velocity"])
+      env.max_actuator_velocity =
+          r.positive(e["max_actuator_velocity"], epath + ".max_actuator_velocity");
+    if (e["speed_effort_gradient"])
+      env.speed_effort_gradient =
+          r.non_negative(e["speed_effort_gradient"], epath + ".speed_effort_gradient");
+    if (e["velocity_dependent_resistance"])
+      env.velocity_dependent_resistance = r.non_negative(e["velocity_dependent_resistance"],
+                                                         epath + ".velocity_dependent_resistance");
+    spec.envelope = env;
+  }
+  return spec;
+}
+
+std::string read_text_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the file: " + std::strerror(errno));
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The one-dof joint a scene entry names, or an error that lists the joints there are.
+int joint_dof(const Reader& r, const UrdfRobot& robot, const std::string& joint,
+              const std::string& path) {
+  const Model& model = *robot.model;
+  for (const Link& link : model.links) {
+    if (link.joint_name != joint) continue;
+    if (link.nv == 1) return link.v_index;
+    r.fail(path, "joint '" + joint + "' is " + to_string(link.joint_type) +
+                     ": this setting acts on revolute and prismatic joints only");
+  }
+  for (const std::string& name : robot.joint_order)
+    if (name == joint)
+      r.fail(path, "joint '" + joint +
+                       "' is fixed (merged into its parent): it has no degree of freedom");
+  std::string list;
+  for (int d : robot.dof_order)
+    if (model.links[model.dof_link[d]].nv == 1)
+      list += (list.empty() ? "" : ", ") + model.dof_names[d];
+  r.fail(path, "no joint named '" + joint + "' in " + robot.path.filename().string() +
+                   " (moving joints: " + list + ")");
+}
+
+}  // namespace
+
+double SineTarget::position(double t) const {
+  return offset + amplitude * std::sin(2.0 * std::numbers::pi * frequency * t + phase);
+}
+double SineTarget::velocity(double t) const {
+  const double w = 2.0 * std::numbers::pi * frequency;
+  return amplitude * w * std::cos(w * t + phase);
+}
+
+std::pair<double, double> DriveSpec::target_at(double t) const {
+  if (sine) return {sine->position(t), sine->velocity(t)};
+  return {drive.target_position, drive.target_velocity};
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  return parse_scene(read_text_file(path), path);
+}
+
+Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
+  const Reader r(path.string());
+  YAML::Node loaded;
+  try {
+    loaded = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path.string() + ": line " + std::to_string(e.mark.line + 1) + ", column " +
+                     std::to_string(e.mark.column + 1) + ": malformed YAML: " + e.msg);
+  }
+  const YAML::Node& root = loaded;  // const: lookups must not insert keys
+  if (!root.IsMap())
+    throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
+  r.map(root, "",
+        {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "initial",
+         "drive_defaults", "drives", "joints"});
+
+  Scene scene;
+  scene.path = path;
+  if (root["description"]) r.text(root["description"], "description");
+  if (!root["model"]) r.fail("model", "missing: the URDF file of the robot");
+  const std::string model = r.text(root["model"], "model");
+  scene.model_path = std::filesystem::path(model).is_absolute() ? std::filesystem::path(model)
+                                                                : path.parent_path() / model;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(scene.model_path, ec))
+    r.fail("model", root["model"],
+           "no such file (looked for " +
+               std::filesystem::absolute(scene.model_path).lexically_normal().string() + ")");
+  UrdfOptions urdf;
+  if (root["fixed_base"]) urdf.fixed_base = r.boolean(root["fixed_base"], "fixed_base");
+  if (root["gravity"]) urdf.gravity = r.vec3(root["gravity"], "gravity");
+  scene.robot = load_urdf(scene.model_path, urdf);
+  const Model* m = scene.robot.model.get();
+
+  if (root["dt"]) {
+    scene.options.dt = r.number(root["dt"], "dt");
+    if (!std::isfinite(scene.options.dt) || scene.options.dt <= 0.0)
+      r.fail("dt", root["dt"], "must be finite and > 0");
+  }
+  if (!root["steps"]) r.fail("steps", "missing: the number of steps to simulate");
+  const long steps = r.integer(root["steps"], "steps", 0);
+  if (steps > 1'000'000'000L) r.fail("steps", root["steps"], "must be <= 1000000000");
+  scene.steps = static_cast<int>(steps);
+
+  if (const YAML::Node s = root["solver"]) {
+    r.map(s, "solver", {"type", "position_iterations", "velocity_iterations"});
+    if (s["type"]) {
+      const std::string type = r.text(s["type"], "solver.type");
+      if (type == "pgs")
+        scene.options.solver = SolverType::pgs;
+      else if (type == "tgs")
+        scene.options.solver = SolverType::tgs;
+      else
+        r.fail("solver.type", s["type"], "must be pgs or tgs");
+    }
+    if (s["position_iterations"])
+      scene.options.position_iterations =
+          static_cast<int>(r.integer(s["position_iterations"], "solver.position_iterations", 1));
+    if (s["velocity_iterations"])
+      scene.options.velocity_iterations =
+          static_cast<int>(r.integer(s["velocity_iterations"], "solver.velocity_iterations", 0));
+  }
+
+  // Joint settings first: armature changes the model.
+  std::map<int, JointSettings> settings;
+  if (const YAML::Node joints = root["joints"]) {
+    r.map(joints, "joints", {});
+    for (const auto& kv : joints) {
+      const std::string name = kv.first.Scalar();
+      const std::string path_j = "joints." + name;
+      JointSettings js;
+      js.joint = name;
+      js.dof = joint_dof(r, scene.robot, name, path_j);
+      const YAML::Node j = kv.second;
+      r.map(j, path_j, {"lower", "upper", "max_velocity", "friction", "armature"});
+      if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
+      if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
+      if (js.lower && std::isnan(*js.lower))
+        r.fail(path_j + ".lower", j["lower"], "must be a number");
+      if (js.upper && std::isnan(*js.upper))
+        r.fail(path_j + ".upper", j["upper"], "must be a number");
+      const double lower = js.lower.value_or(m->lower_limit[js.dof]);
+      const double upper = js.upper.value_or(m->upper_limit[js.dof]);
+      if (lower > upper)
+        r.fail(path_j,
+               "lower = " + format_double(lower) + " is above upper = " + format_double(upper));
+      if (j["max_velocity"])
+        js.max_velocity = r.positive(j["max_velocity"], path_j + ".max_velocity");
+      if (j["armature"]) js.armature = r.non_negative(j["armature"], path_j + ".armature");
+      if (const YAML::Node f = j["friction"]) {
+        const std::string fp = path_j + ".friction";
+        r.map(f, fp, {"static", "dynamic", "viscous"});
+        JointFriction fr{m->friction[js.dof], m->friction[js.dof], m->damping[js.dof]};
+        if (f["static"]) fr.static_effort = r.non_negative(f["static"], fp + ".static");
+        if (f["dynamic"]) fr.dynamic_effort = r.non_negative(f["dynamic"], fp + ".dynamic");
+        if (f["viscous"]) fr.viscous = r.non_negative(f["viscous"], fp + ".viscous");
+        try {
+          validate_friction(fr, name);
+        } catch (const std::invalid_argument& e) {
+          r.fail(fp, e.what());
+        }
+        js.friction = fr;
+      }
+      settings[js.dof] = js;
+    }
+    bool rebuild = false;
+    for (LinkSpec& link : scene.robot.links)
+      for (const auto& [dof, js] : settings)
+        if (js.armature && link.joint.name == js.joint) {
+          link.joint.armature = {*js.armature};
+          rebuild = true;
+        }
+    if (rebuild) scene.robot.rebuild();
+    m = scene.robot.model.get();
+  }
+
+  scene.q0 = m->neutral_configuration();
+  scene.qd0 = VecX::Zero(m->nv);
+  if (const YAML::Node init = root["initial"]) {
+    r.map(init, "initial", {"q", "qd"});
+    for (const char* which : {"q", "qd"}) {
+      const YAML::Node values = init[which];
+      if (!values) continue;
+      const std::string p = std::string("initial.") + which;
+      r.map(values, p, {});
+      for (const auto& kv : values) {
+        const std::string name = kv.first.Scalar();
+        const int dof = joint_dof(r, scene.robot, name, p + "." + name);
+        const double v = r.finite(kv.second, p + "." + name);
+        if (std::string(which) == "q")
+          scene.q0[m->links[m->dof_link[dof]].q_index] = v;
+        else
+          scene.qd0[dof] = v;
+      }
+    }
+  }
+
+  std::optional<DriveSpec> defaults;
+  if (const YAML::Node d = root["drive_defaults"]) {
+    defaults = read_drive(r, d, "drive_defaults", DriveSpec{});
+    if (d.IsMap() && !d["type"])
+      r.fail("drive_defaults.type", "missing (force, acceleration or none)");
+  }
+  std::map<int, DriveSpec> drives;
+  if (defaults)
+    for (int dof : scene.robot.dof_order)
+      if (m->links[m->dof_link[dof]].nv == 1) {
+        DriveSpec spec = *defaults;
+        spec.joint = m->dof_names[dof];
+        spec.dof = dof;
+        drives[dof] = spec;
+      }
+  if (const YAML::Node ds = root["drives"]) {
+    r.map(ds, "drives", {});
+    for (const auto& kv : ds) {
+      const std::string name = kv.first.Scalar();
+      const std::string p = "drives." + name;
+      const int dof = joint_dof(r, scene.robot, name, p);
+      DriveSpec base = defaults.value_or(DriveSpec{});
+      if (!defaults && kv.second.IsMap() && !kv.second["type"])
+        r.fail(p + ".type", "missing (force, acceleration or none)");
+      DriveSpec spec = read_drive(r, kv.second, p, base);
+      spec.joint = name;
+      spec.dof = dof;
+      drives[dof] = spec;
+    }
+  }
+  for (int dof : scene.robot.dof_order) {
+    if (auto it = drives.find(dof); it != drives.end() && it->second.drive.type != DriveType::none)
+      scene.drives.push_back(it->second);
+    if (auto it = settings.find(dof); it != settings.end()) scene.joints.push_back(it->second);
+  }
+  // A last check with the simulation's own rules, so a scene that loads also runs.
+  (void)make_simulation(scene);
+  return scene;
+}
+
+Simulation make_simulation(const Scene& scene) {
+  try {
+    Simulation sim(scene.model(), scene.options);
+    sim.set_q(scene.q0);
+    sim.set_qd(scene.qd0);
+    for (const JointSettings& js : scene.joints) {
+      if (js.lower || js.upper)
+        sim.set_joint_limits(js.dof, js.lower.value_or(sim.lower_limit(js.dof)),
+                             js.upper.value_or(sim.upper_limit(js.dof)));
+      if (js.max_velocity) sim.set_max_joint_velocity(js.dof, *js.max_velocity);
+      if (js.friction) sim.set_joint_friction(js.dof, *js.friction);
+    }
+    for (const DriveSpec& d : scene.drives) {
+      sim.set_drive(d.dof, d.drive);
+      if (d.envelope) sim.set_actuator_envelope(d.dof, *d.envelope);
+    }
+    apply_targets(scene, sim, 0);
+    return sim;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(scene.path.string() + ": " + e.what());
+  }
+}
+
+void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
+  const double t = (step_index + 1) * sim.options().dt;
+  for (const DriveSpec& d : scene.drives)
+    if (d.sine) sim.set_drive_target(d.dof, d.sine->position(t), d.sine->velocity(t));
+}
+
+Simulation run_scene(const Scene& scene,
+                     const std::function<void(const Simulation&, int)>& on_state) {
+  Simulation sim = make_simulation(scene);
+  if (on_state) on_state(sim, 0);
+  for (int k = 0; k < scene.steps; ++k) {
+    apply_targets(scene, sim, k);
+    sim.step();
+    if (on_state) on_state(sim, k + 1);
+  }
+  return sim;
+}
+
+}  // namespace featherdrive

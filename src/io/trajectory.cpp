@@ -1,0 +1,63 @@
+#include "featherdrive/io/trajectory.hpp"
+
+#include "featherdrive/io/format.hpp"
+
+namespace featherdrive {
+namespace {
+
+// q entries of each dof column in URDF order; a floating root's q (7) comes first.
+std::vector<int> q_order(const UrdfRobot& robot) {
+  const Model& model = *robot.model;
+  std::vector<int> order;
+  if (model.floating_base())
+    for (int k = 0; k < model.links[0].nq; ++k) order.push_back(model.links[0].q_index + k);
+  for (int d : robot.dof_order) {
+    const Link& link = model.links[model.dof_link[d]];
+    if (link.nv == 1) order.push_back(link.q_index);
+  }
+  return order;
+}
+
+}  // namespace
+
+std::vector<std::string> trajectory_columns(const UrdfRobot& robot) {
+  const Model& model = *robot.model;
+  std::vector<std::string> columns;
+  if (model.floating_base())
+    for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz"})
+      columns.push_back("q:" + model.links[0].joint_name + ":" + c);
+  for (int d : robot.dof_order)
+    if (model.links[model.dof_link[d]].nv == 1) columns.push_back("q:" + model.dof_names[d]);
+  for (const char* prefix : {"qd:", "f:"})
+    for (int d : robot.dof_order) columns.push_back(prefix + model.dof_names[d]);
+  return columns;
+}
+
+TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot)
+    : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order) {
+  out_ << "step,t";
+  for (const std::string& c : trajectory_columns(robot)) out_ << ',' << c;
+  out_ << '\n';
+}
+
+void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
+  out_ << step << ',' << format_double(sim.time());
+  for (int i : q_order_) out_ << ',' << format_double(sim.q()[i]);
+  for (int d : v_order_) out_ << ',' << format_double(sim.qd()[d]);
+  for (int d : v_order_) out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d]);
+  out_ << '\n';
+}
+
+TargetWriter::TargetWriter(std::ostream& out, const Scene& scene) : out_(out), scene_(scene) {
+  out_ << "step,t";
+  for (const DriveSpec& d : scene.drives) out_ << ",target:" << d.joint;
+  out_ << '\n';
+}
+
+void TargetWriter::write(long step, double t) {
+  out_ << step << ',' << format_double(t);
+  for (const DriveSpec& d : scene_.drives) out_ << ',' << format_double(d.target_at(t).first);
+  out_ << '\n';
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,419 @@
+#include "featherdrive/io/urdf.hpp"
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+#include "featherdrive/io/format.hpp"
+
+namespace featherdrive {
+namespace {
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  throw InputError(file + ": " + what);
+}
+
+// urdfdom reports why a parse failed through console_bridge only; collect those messages so the
+// error we throw carries them. console_bridge's handler is global, hence the lock.
+class CollectMessages : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR)
+      errors.push_back(text);
+    else if (level == console_bridge::CONSOLE_BRIDGE_LOG_WARN)
+      warnings.push_back(text);
+  }
+  std::vector<std::string> errors, warnings;
+};
+
+std::mutex console_mutex;
+
+urdf::ModelInterfaceSharedPtr parse_with_urdfdom(const std::string& xml, const std::string& file,
+                                                 std::vector<std::string>& warnings) {
+  std::lock_guard<std::mutex> lock(console_mutex);
+  CollectMessages collect;
+  console_bridge::useOutputHandler(&collect);
+  urdf::ModelInterfaceSharedPtr model;
+  std::string exception;
+  try {
+    model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    exception = e.what();
+  }
+  console_bridge::restorePreviousOutputHandler();
+  for (const std::string& w : collect.warnings) warnings.push_back("urdfdom: " + w);
+  // urdfdom logs some errors (bad numbers in <inertial>) and still returns a model; take any as
+  // fatal.
+  if (!model || !collect.errors.empty()) {
+    std::string why;
+    for (const std::string& e : collect.errors) why += (why.empty() ? "" : "; ") + e;
+    if (!exception.empty()) why += (why.empty() ? "" : "; ") + exception;
+    if (why.empty()) why = "urdfdom rejected the file";
+    fail(file, "invalid URDF: " + why);
+  }
+  return model;
+}
+
+struct Pose {
+  Mat3 R = Mat3::Identity();
+  Vec3 p = Vec3::Zero();
+  bool identity_rotation = true;  // exactly the identity: keeps joint rpy bit for bit
+  Vec3 rpy = Vec3::Zero();        // of R; exact copy where R came straight from a URDF origin
+};
+
+Pose pose_of(const urdf::Pose& u) {
+  Pose pose;
+  pose.p = Vec3(u.position.x, u.position.y, u.position.z);
+  const urdf::Rotation& r = u.rotation;
+  if (!(r.x == 0.0 && r.y == 0.0 && r.z == 0.0 && r.w == 1.0)) {
+    pose.R = Quat(r.w, r.x, r.y, r.z).normalized().toRotationMatrix();
+    pose.identity_rotation = false;
+    pose.rpy = rpy_from_rotation(pose.R);
+  }
+  return pose;
+}
+
+// a * b: b's frame given in a's frame, expressed in the frame a is given in.
+Pose compose(const Pose& a, const Pose& b) {
+  Pose c;
+  c.p = a.identity_rotation ? Vec3(a.p + b.p) : Vec3(a.p + a.R * b.p);
+  if (a.identity_rotation) {
+    c.R = b.R;
+    c.identity_rotation = b.identity_rotation;
+    c.rpy = b.rpy;
+  } else if (b.identity_rotation) {
+    c.R = a.R;
+    c.identity_rotation = false;
+    c.rpy = a.rpy;
+  } else {
+    c.R = a.R * b.R;
+    c.identity_rotation = false;
+    c.rpy = rpy_from_rotation(c.R);
+  }
+  return c;
+}
+
+struct Body {
+  double mass = 0.0;
+  Vec3 com = Vec3::Zero();
+  Mat3 inertia = Mat3::Zero();  // about com, in the frame's axes
+  bool has_inertial = false;
+};
+
+// Two rigid bodies as one: masses add, the centre of mass is the weighted mean and each inertia
+// moves to the common centre of mass by the parallel axis theorem.
+Body combine(const Body& a, const Body& b) {
+  // A massless frame adds nothing; keep the other body's numbers exactly.
+  if (a.mass == 0.0 && a.inertia.isZero(0.0))
+    return {b.mass, b.com, b.inertia, a.has_inertial || b.has_inertial};
+  if (b.mass == 0.0 && b.inertia.isZero(0.0))
+    return {a.mass, a.com, a.inertia, a.has_inertial || b.has_inertial};
+  Body c;
+  c.has_inertial = a.has_inertial || b.has_inertial;
+  c.mass = a.mass + b.mass;
+  if (c.mass <= 0.0) {
+    c.inertia = a.inertia + b.inertia;
+    return c;
+  }
+  c.com = (a.mass * a.com + b.mass * b.com) / c.mass;
+  auto shift = [&](const Body& x) {
+    const Vec3 d = x.com - c.com;
+    return Mat3(x.inertia + x.mass * (d.squaredNorm() * Mat3::Identity() - d * d.transpose()));
+  };
+  c.inertia = shift(a) + shift(b);
+  return c;
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path.string(), std::string("cannot open the file: ") + std::strerror(errno));
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string joint_type_name(int type) {
+  switch (type) {
+    case urdf::Joint::REVOLUTE:
+      return "revolute";
+    case urdf::Joint::CONTINUOUS:
+      return "continuous";
+    case urdf::Joint::PRISMATIC:
+      return "prismatic";
+    case urdf::Joint::FLOATING:
+      return "floating";
+    case urdf::Joint::PLANAR:
+      return "planar";
+    case urdf::Joint::FIXED:
+      return "fixed";
+    default:
+      return "unknown";
+  }
+}
+
+}  // namespace
+
+Vec3 rpy_from_rotation(const Mat3& R) {
+  // R = Rz(yaw) Ry(pitch) Rx(roll): R(2,0) = -sin(pitch), R(1,0)/R(0,0) = tan(yaw) and
+  // R(2,1)/R(2,2) = tan(roll) while cos(pitch) != 0.
+  const double c = std::hypot(R(0, 0), R(1, 0));
+  const double pitch = std::atan2(-R(2, 0), c);
+  if (c > 1e-6) return Vec3(std::atan2(R(2, 1), R(2, 2)), pitch, std::atan2(R(1, 0), R(0, 0)));
+  // Gimbal lock: only roll -/+ yaw is defined; put it all in roll.
+  return Vec3(std::atan2(-R(1, 2), R(1, 1)), pitch, 0.0);
+}
+
+void UrdfRobot::rebuild() {
+  ModelBuilder builder;
+  builder.set_gravity(options.gravity);
+  for (const LinkSpec& l : links) builder.add_link(l);
+  try {
+    model = std::make_shared<const Model>(builder.build());
+  } catch (const ModelError& e) {
+    std::string what = e.what();
+    if (what.rfind("model: ", 0) == 0) what = what.substr(7);
+    fail(path.string(), what);
+  }
+}
+
+UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options) {
+  UrdfRobot robot = parse_urdf(read_file(path), path.string(), options);
+  robot.path = path;
+  return robot;
+}
+
+UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const UrdfOptions& options) {
+  UrdfRobot robot;
+  robot.path = file;
+  robot.options = options;
+  if (!options.gravity.allFinite())
+    fail(file, "gravity = " + format_vec3(options.gravity) + ": must be finite");
+
+  // TinyXML (urdfdom's own XML reader) for the XML error position and the document order that
+  // urdfdom's maps do not keep.
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error())
+    fail(file, "line " + std::to_string(doc.ErrorRow()) + ", column " +
+                   std::to_string(doc.ErrorCol()) + ": malformed XML: " + doc.ErrorDesc());
+  const TiXmlElement* robot_xml = doc.RootElement();
+  if (!robot_xml || std::string(robot_xml->Value()) != "robot")
+    fail(file, std::string("the root element is <") + (robot_xml ? robot_xml->Value() : "") +
+                   ">, expected <robot>");
+  std::vector<std::string> link_order;
+  for (const TiXmlElement* e = robot_xml->FirstChildElement(); e; e = e->NextSiblingElement()) {
+    const char* name = e->Attribute("name");
+    const std::string tag = e->Value();
+    if (tag == "link" && name) link_order.push_back(name);
+    if (tag == "joint" && name) robot.joint_order.push_back(name);
+  }
+
+  const urdf::ModelInterfaceSharedPtr urdf_model = parse_with_urdfdom(xml, file, robot.warnings);
+  robot.name = urdf_model->getName();
+  const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
+  robot.root_link = root->name;
+
+  // Joint types first: an unsupported type is the clearest message for such a file.
+  for (const std::string& name : robot.joint_order) {
+    const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
+    if (!j) continue;
+    const std::string type = joint_type_name(j->type);
+    if (j->type == urdf::Joint::FLOATING || j->type == urdf::Joint::PLANAR)
+      fail(file, "joint '" + name + "' type = " + type +
+                     ": not supported (featherdrive imports fixed, revolute, continuous and "
+                     "prismatic joints; a floating root comes from fixed_base: false)");
+    if (j->type == urdf::Joint::UNKNOWN) fail(file, "joint '" + name + "' has an unknown type");
+  }
+
+  // Inertials, checked where they are written.
+  std::map<std::string, Body> own;
+  for (const std::string& name : link_order) {
+    const urdf::LinkConstSharedPtr link = urdf_model->getLink(name);
+    Body b;
+    if (link && link->inertial) {
+      const urdf::Inertial& in = *link->inertial;
+      const std::string where = "link '" + name + "' <inertial>";
+      if (!std::isfinite(in.mass) || in.mass < 0.0)
+        fail(file,
+             where + "<mass value> = " + format_double(in.mass) + ": must be finite and >= 0");
+      const double entries[] = {in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz};
+      const char* names[] = {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"};
+      for (int k = 0; k < 6; ++k)
+        if (!std::isfinite(entries[k]))
+          fail(file, where + "<inertia " + names[k] + "> = " + format_double(entries[k]) +
+                         ": must be finite");
+      const Pose origin = pose_of(in.origin);
+      if (!origin.p.allFinite())
+        fail(file, where + "<origin xyz> = " + format_vec3(origin.p) + ": must be finite");
+      Mat3 I;
+      I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+      b.mass = in.mass;
+      b.com = origin.p;
+      b.inertia = origin.identity_rotation ? I : Mat3(origin.R * I * origin.R.transpose());
+      b.has_inertial = true;
+    }
+    own[name] = b;
+  }
+
+  // Each link's anchor: itself when it is the root or behind a moving joint, else its parent's
+  // anchor; and its frame's pose in the anchor's frame. Parents first (walk from the root).
+  std::map<std::string, std::string> anchor;
+  std::map<std::string, Pose> in_anchor;
+  std::map<std::string, Pose> joint_origin;  // of each kept non-root link, in its anchor parent
+  std::map<std::string, Body> body;          // per kept link, merged
+  std::vector<urdf::LinkConstSharedPtr> stack{root};
+  anchor[root->name] = root->name;
+  in_anchor[root->name] = Pose{};
+  while (!stack.empty()) {
+    const urdf::LinkConstSharedPtr link = stack.back();
+    stack.pop_back();
+    const std::string& a = anchor[link->name];
+    Body& target = body[a];
+    if (a == link->name) {
+      target = combine(target, own[link->name]);
+    } else {
+      const Pose& p = in_anchor[link->name];
+      Body moved = own[link->name];
+      moved.com = p.identity_rotation ? Vec3(p.p + moved.com) : Vec3(p.p + p.R * moved.com);
+      if (!p.identity_rotation) moved.inertia = p.R * moved.inertia * p.R.transpose();
+      target = combine(target, moved);
+    }
+    for (const urdf::JointSharedPtr& j : link->child_joints) {
+      const urdf::LinkConstSharedPtr child = urdf_model->getLink(j->child_link_name);
+      if (!child) continue;
+      const Pose origin =
+          compose(in_anchor[link->name], pose_of(j->parent_to_joint_origin_transform));
+      if (!origin.p.allFinite())
+        fail(file, "joint '" + j->name + "' <origin xyz> = " + format_vec3(origin.p) +
+                       ": must be finite");
+      if (j->type == urdf::Joint::FIXED) {
+        anchor[child->name] = a;
+        in_anchor[child->name] = origin;
+        robot.merged[child->name] = MergedLink{a, origin.p, origin.R};
+      } else {
+        anchor[child->name] = child->name;
+        in_anchor[child->name] = Pose{};
+        joint_origin[child->name] = origin;
+      }
+      stack.push_back(child);
+    }
+  }
+
+  // The root's joint needs a name no URDF joint has.
+  robot.root_joint = "root_joint";
+  {
+    const std::set<std::string> taken(robot.joint_order.begin(), robot.joint_order.end());
+    while (taken.count(robot.root_joint)) robot.root_joint += "_";
+  }
+
+  for (const std::string& name : link_order) {
+    if (!anchor.count(name) || anchor[name] != name) continue;
+    const urdf::LinkConstSharedPtr link = urdf_model->getLink(name);
+    const Body& b = body[name];
+    const bool is_root = name == root->name;
+    const bool moves = !is_root || !options.fixed_base;
+    if (moves && !b.has_inertial)
+      fail(file, "link '" + name + "' has no <inertial> (mass and inertia)" +
+                     (is_root ? ": a floating root needs one (or use fixed_base: true)"
+                              : ": a link behind a moving joint needs one"));
+    if (moves && !(b.mass > 0.0))
+      fail(file, "link '" + name + "' <inertial><mass value> = " + format_double(b.mass) +
+                     ": must be > 0 for a link that moves");
+    LinkSpec spec;
+    spec.name = name;
+    spec.mass = b.mass;
+    spec.com = b.com;
+    spec.inertia = b.inertia;
+    if (is_root) {
+      spec.joint =
+          options.fixed_base ? fixed_joint(robot.root_joint) : floating_joint(robot.root_joint);
+    } else {
+      const urdf::JointConstSharedPtr j = link->parent_joint;
+      spec.parent = anchor[j->parent_link_name];
+      const Pose& origin = joint_origin[name];
+      spec.joint.name = j->name;
+      spec.joint.origin_xyz = origin.p;
+      spec.joint.origin_rpy = origin.rpy;
+      spec.joint.axis = Vec3(j->axis.x, j->axis.y, j->axis.z);
+      const std::string where = "joint '" + j->name + "' <limit";
+      switch (j->type) {
+        case urdf::Joint::REVOLUTE:
+        case urdf::Joint::PRISMATIC:
+          spec.joint.type =
+              j->type == urdf::Joint::REVOLUTE ? JointType::revolute : JointType::prismatic;
+          if (j->limits) {
+            spec.joint.lower_limit = j->limits->lower;
+            spec.joint.upper_limit = j->limits->upper;
+            if (j->limits->lower > j->limits->upper)
+              fail(file, where + " lower> = " + format_double(j->limits->lower) +
+                             ": is above upper = " + format_double(j->limits->upper));
+            if (j->limits->lower == j->limits->upper)
+              robot.warnings.push_back("joint '" + j->name + "': <limit> lower = upper = " +
+                                       format_double(j->limits->lower) + ": the joint cannot move");
+          }
+          break;
+        case urdf::Joint::CONTINUOUS:
+          spec.joint.type = JointType::revolute;
+          break;
+        default:
+          fail(file,
+               "joint '" + j->name + "' type = " + joint_type_name(j->type) + ": not supported");
+      }
+      if (j->limits) {
+        // URDF requires effort and velocity; 0 is commonly written for "unknown".
+        const double effort = j->limits->effort, velocity = j->limits->velocity;
+        if (!(effort >= 0.0))
+          fail(file, where + " effort> = " + format_double(effort) + ": must be >= 0");
+        if (!(velocity >= 0.0))
+          fail(file, where + " velocity> = " + format_double(velocity) + ": must be >= 0");
+        if (effort > 0.0) spec.joint.effort_limit = effort;
+        if (velocity > 0.0)
+          spec.joint.velocity_limit = velocity;
+        else
+          robot.warnings.push_back("joint '" + j->name +
+                                   "': <limit velocity> = 0 read as no velocity limit");
+      }
+      robot.effort_limits[j->name] = spec.joint.effort_limit;
+      if (j->dynamics) {
+        const std::string d = "joint '" + j->name + "' <dynamics ";
+        if (!std::isfinite(j->dynamics->damping) || j->dynamics->damping < 0.0)
+          fail(file, d + "damping> = " + format_double(j->dynamics->damping) +
+                         ": must be finite and >= 0");
+        if (!std::isfinite(j->dynamics->friction) || j->dynamics->friction < 0.0)
+          fail(file, d + "friction> = " + format_double(j->dynamics->friction) +
+                         ": must be finite and >= 0");
+        spec.joint.damping = j->dynamics->damping;
+        spec.joint.friction = j->dynamics->friction;
+      }
+    }
+    robot.links.push_back(std::move(spec));
+  }
+
+  // Mimic tags, in document order.
+  for (const std::string& name : robot.joint_order) {
+    const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
+    if (!j || !j->mimic) continue;
+    robot.mimics.push_back({name, j->mimic->joint_name, j->mimic->multiplier, j->mimic->offset});
+    robot.warnings.push_back("joint '" + name + "': <mimic joint='" + j->mimic->joint_name +
+                             "'> is read but not simulated; '" + name + "' moves on its own");
+  }
+
+  robot.rebuild();
+  const Model& model = *robot.model;
+  if (model.floating_base())
+    for (int d = 0; d < model.links[0].nv; ++d) robot.dof_order.push_back(d);
+  for (const std::string& name : robot.joint_order) {
+    const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
+    if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(model.dof_index(name));
+  }
+  return robot;
+}
+
+}  // namespace featherdrive

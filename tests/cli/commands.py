@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""The command line itself: info, option overrides, exit codes 0 / 1 / 2, warnings.
+
+usage: commands.py FEATHERDRIVE SOURCE_DIR OUT_DIR
+"""
+import csv
+import os
+import subprocess
+import sys
+
+failures = []
+
+
+def run(*args):
+    return subprocess.run(list(args), capture_output=True, text=True, timeout=120)
+
+
+def check(condition, what, result=None):
+    if not condition:
+        detail = f"\n  rc={result.returncode} stdout={result.stdout!r} stderr={result.stderr!r}" if result else ""
+        failures.append(what + detail)
+
+
+def one_line_error(result, code, text):
+    check(result.returncode == code, f"exit code {code} for {text!r}", result)
+    check(len(result.stderr.strip().splitlines()) == 1, f"one stderr line for {text!r}", result)
+    check(text in result.stderr, f"stderr holds {text!r}", result)
+
+
+def main():
+    cli, source, out_dir = sys.argv[1:4]
+    os.makedirs(out_dir, exist_ok=True)
+    ex = lambda name: os.path.join(source, "examples", name)  # noqa: E731
+    data = lambda name: os.path.join(source, "tests", "data", name)  # noqa: E731
+
+    r = run(cli, "info", ex("arm7.urdf"))
+    check(r.returncode == 0 and r.stderr == "", "info arm7 succeeds quietly", r)
+    for text in ("robot 'arm7'", "7 dofs", "fixed base", "total mass 19.6 kg", "joint7: revolute",
+                 "limits [-2.8, 2.8] rad", "effort 150 Nm", "merged through fixed joints: hand, tcp"):
+        check(text in r.stdout, f"info arm7 shows {text!r}", r)
+    r = run(cli, "info", ex("chain3.urdf"), "--floating")
+    check(r.returncode == 0 and "floating base" in r.stdout and "9 dofs" in r.stdout, "info --floating", r)
+    r = run(cli, "info", data("branches.urdf"))
+    check(r.returncode == 0, "info branches", r)
+    check("warning: joint 'left': <mimic joint='right1'> is read but not simulated" in r.stderr,
+          "the mimic warning is printed", r)
+    check("dofs in URDF order: right1 left right2" in r.stdout, "info lists dofs in URDF order", r)
+
+    # Overrides: steps, solver, iterations.
+    out = os.path.join(out_dir, "chain3_override.csv")
+    r = run(cli, "simulate", ex("chain3.yaml"), "--steps", "7", "--solver", "pgs",
+            "--position-iterations", "2", "--velocity-iterations", "0", "--out", out)
+    check(r.returncode == 0, "simulate with overrides", r)
+    check("pgs" in r.stdout and "2 position / 0 velocity iterations" in r.stdout and "7 steps" in r.stdout,
+          "the summary shows the overrides", r)
+    with open(out, newline="") as f:
+        rows = list(csv.reader(f))
+    check(len(rows) == 1 + 8, f"--steps 7 gives 8 rows, got {len(rows) - 1}")
+    check(rows[1][2:] == ["0"] * 9, f"row 0 is the initial state at rest with f = 0: {rows[1]}")
+    r = run(cli, "simulate", ex("chain3.yaml"), "--steps", "0")
+    check(r.returncode == 0, "--steps 0 runs", r)
+
+    # Bad command lines and inputs: exit 2, one line.
+    one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--solver", "sor"), 2, "--solver")
+    one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--position-iterations", "0"), 2,
+                   "--position-iterations")
+    one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--steps", "-3"), 2, "--steps")
+    one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--steps", "many"), 2, "--steps")
+    one_line_error(run(cli, "simulate", ex("missing.yaml")), 2, "missing.yaml: cannot open the file")
+    one_line_error(run(cli, "info", ex("missing.urdf")), 2, "missing.urdf: cannot open the file")
+    one_line_error(run(cli, "fly"), 2, "fly")
+    one_line_error(run(cli), 2, "subcommand")
+    one_line_error(run(cli, "simulate"), 2, "scene")
+    r = run(cli, "--help")
+    check(r.returncode == 0 and "simulate" in r.stdout, "--help", r)
+
+    # A simulation that blows up: exit 1 with the DivergenceError's message.
+    diverge = os.path.join(out_dir, "diverge.yaml")
+    with open(diverge, "w") as f:
+        f.write(f"model: {ex('slider.urdf')}\ngravity: [0, 0, -1e307]\ndt: 1\nsteps: 100\n"
+                "joints: {slide: {lower: -.inf, upper: .inf, max_velocity: .inf}}\n")
+    one_line_error(run(cli, "simulate", diverge), 1, "simulation diverged")
+
+    # An output that cannot be written: exit 1.
+    r = run(cli, "simulate", ex("chain3.yaml"), "--out", "/proc/featherdrive/x.csv")
+    check(r.returncode == 1, "an unwritable --out exits 1", r)
+
+    if failures:
+        for f in failures:
+            print("FAIL:", f)
+        sys.exit(1)
+    print("ok")
+
+
+if __name__ == "__main__":
+    main()

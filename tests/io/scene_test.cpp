@@ -1,0 +1,224 @@
+// Scene files: every key reaches the simulation, sine targets are those of each step's end, and
+// bad values name the key path.
+#include "featherdrive/io/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "featherdrive/io/trajectory.hpp"
+
+namespace featherdrive {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const std::string kSource = FEATHERDRIVE_SOURCE_DIR;
+const std::string kExamples = kSource + "/examples/";
+
+// A scene given as text, placed in examples/ so that model paths resolve there.
+Scene scene_from(const std::string& text) {
+  return parse_scene(text, kExamples + "inline.yaml");
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    scene_from(text);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(Scene, SliderSceneHasTheFilesValues) {
+  const Scene s = load_scene(kExamples + "slider.yaml");
+  EXPECT_EQ(s.options.dt, 0.016666666666666666);
+  EXPECT_EQ(s.options.solver, SolverType::pgs);
+  EXPECT_EQ(s.options.position_iterations, 4);
+  EXPECT_EQ(s.options.velocity_iterations, 1);
+  EXPECT_EQ(s.steps, 240);
+  EXPECT_EQ(s.model()->gravity, Vec3(0, 0, -9.81));
+  EXPECT_EQ(s.model_path.filename(), "slider.urdf");
+  ASSERT_EQ(s.q0.size(), 1);
+  EXPECT_EQ(s.q0[0], 0.05);
+  EXPECT_EQ(s.qd0[0], 0.0);
+  ASSERT_EQ(s.drives.size(), 1u);
+  const DriveSpec& d = s.drives[0];
+  EXPECT_EQ(d.joint, "slide");
+  EXPECT_EQ(d.drive.type, DriveType::force);
+  EXPECT_EQ(d.drive.stiffness, 400.0);
+  EXPECT_EQ(d.drive.damping, 40.0);
+  EXPECT_EQ(d.drive.max_force, kInf);
+  ASSERT_TRUE(d.sine.has_value());
+  EXPECT_EQ(d.sine->amplitude, 0.2);
+  EXPECT_EQ(d.sine->frequency, 0.5);
+  EXPECT_EQ(d.sine->phase, 0.3);
+  EXPECT_EQ(d.sine->offset, 0.1);
+}
+
+TEST(Scene, SineTargetsAreThoseOfEachStepsEndTime) {
+  const Scene s = load_scene(kExamples + "slider.yaml");
+  const double dt = s.options.dt, w = 2 * std::numbers::pi * 0.5;
+  auto position = [&](double t) { return 0.1 + 0.2 * std::sin(w * t + 0.3); };
+  auto velocity = [&](double t) { return 0.2 * w * std::cos(w * t + 0.3); };
+  Simulation sim = make_simulation(s);
+  EXPECT_EQ(sim.q()[0], 0.05);
+  EXPECT_NEAR(sim.drive(0).target_position, position(dt), 1e-15);  // ready for step 0
+  EXPECT_NEAR(sim.drive(0).target_velocity, velocity(dt), 1e-15);
+  for (int k : {1, 5, 239}) {
+    apply_targets(s, sim, k);
+    EXPECT_NEAR(sim.drive(0).target_position, position((k + 1) * dt), 1e-15) << k;
+    EXPECT_NEAR(sim.drive(0).target_velocity, velocity((k + 1) * dt), 1e-14) << k;
+  }
+}
+
+TEST(Scene, DriveDefaultsApplyToEveryJointAndEntriesOverrideThem) {
+  const Scene s = load_scene(kExamples + "chain3.yaml");
+  ASSERT_EQ(s.drives.size(), 3u);
+  for (const DriveSpec& d : s.drives) {
+    SCOPED_TRACE(d.joint);
+    EXPECT_EQ(d.drive.type, DriveType::acceleration);
+    EXPECT_EQ(d.drive.stiffness, 400.0);
+    EXPECT_EQ(d.drive.damping, 40.0);
+    EXPECT_EQ(d.drive.max_force, 50.0);
+  }
+  EXPECT_EQ(s.drives[0].joint, "joint1");
+  EXPECT_EQ(s.drives[0].sine->amplitude, 0.6);
+  EXPECT_EQ(s.drives[1].sine->phase, 1.0);
+  EXPECT_FALSE(s.drives[2].sine.has_value());
+  EXPECT_EQ(s.drives[2].drive.target_position, 0.5);
+
+  // type: none removes a default drive; a joint not named keeps the default.
+  const Scene t = scene_from(
+      "model: chain3.urdf\nsteps: 1\ndrive_defaults: {type: force, stiffness: 10}\n"
+      "drives: {joint2: {type: none}, joint3: {stiffness: 20, target_position: 0.1}}\n");
+  ASSERT_EQ(t.drives.size(), 2u);
+  EXPECT_EQ(t.drives[0].joint, "joint1");
+  EXPECT_EQ(t.drives[0].drive.stiffness, 10.0);
+  EXPECT_EQ(t.drives[1].joint, "joint3");
+  EXPECT_EQ(t.drives[1].drive.type, DriveType::force);
+  EXPECT_EQ(t.drives[1].drive.stiffness, 20.0);
+}
+
+TEST(Scene, JointSettingsEnvelopesAndArmatureReachTheSimulation) {
+  const Scene s = scene_from(R"(
+model: chain3.urdf
+fixed_base: true
+gravity: [0.5, 0, -9.8]
+dt: 0.005
+steps: 3
+solver: {type: tgs, position_iterations: 8, velocity_iterations: 2}
+initial: {q: {joint2: 0.25}, qd: {joint3: -1.5}}
+joints:
+  joint1: {lower: -0.5, upper: 0.75, max_velocity: 4, armature: 0.02,
+           friction: {static: 0.3, dynamic: 0.2, viscous: 0.1}}
+  joint3: {upper: 2}
+drives:
+  joint1: {type: force, stiffness: 100, damping: 2, max_force: 7,
+           envelope: {max_effort: 6, max_actuator_velocity: 3, speed_effort_gradient: 0.5,
+                      velocity_dependent_resistance: 0.25}}
+)");
+  const Model& m = *s.model();
+  EXPECT_EQ(m.gravity, Vec3(0.5, 0, -9.8));
+  EXPECT_EQ(s.options.solver, SolverType::tgs);
+  EXPECT_EQ(s.options.position_iterations, 8);
+  EXPECT_EQ(s.options.velocity_iterations, 2);
+  EXPECT_EQ(s.options.dt, 0.005);
+  const int j1 = m.dof_index("joint1"), j2 = m.dof_index("joint2"), j3 = m.dof_index("joint3");
+  EXPECT_EQ(m.armature[j1], 0.02);
+  EXPECT_EQ(m.armature[j2], 0.0);
+  const Simulation sim = make_simulation(s);
+  EXPECT_EQ(sim.q()[j2], 0.25);
+  EXPECT_EQ(sim.qd()[j3], -1.5);
+  EXPECT_EQ(sim.lower_limit(j1), -0.5);
+  EXPECT_EQ(sim.upper_limit(j1), 0.75);
+  EXPECT_EQ(sim.lower_limit(j3), -3.0);  // from the URDF
+  EXPECT_EQ(sim.upper_limit(j3), 2.0);
+  EXPECT_EQ(sim.max_joint_velocity(j1), 4.0);
+  EXPECT_EQ(sim.max_joint_velocity(j2), 5.0);  // from the URDF
+  EXPECT_EQ(sim.joint_friction(j1).static_effort, 0.3);
+  EXPECT_EQ(sim.joint_friction(j1).dynamic_effort, 0.2);
+  EXPECT_EQ(sim.joint_friction(j1).viscous, 0.1);
+  EXPECT_EQ(sim.drive(j1).max_force, 7.0);
+  EXPECT_EQ(sim.actuator_envelope(j1).max_effort, 6.0);
+  EXPECT_EQ(sim.actuator_envelope(j1).max_actuator_velocity, 3.0);
+  EXPECT_EQ(sim.actuator_envelope(j1).speed_effort_gradient, 0.5);
+  EXPECT_EQ(sim.actuator_envelope(j1).velocity_dependent_resistance, 0.25);
+  EXPECT_EQ(sim.drive(j2).type, DriveType::none);
+}
+
+TEST(Scene, JsonAndYamlGiveTheSameScene) {
+  const Scene yaml = scene_from(
+      "model: slider.urdf\ndt: 0.01\nsteps: 5\ndrives: {slide: {type: acceleration, stiffness: 9, "
+      "target: {sine: {amplitude: 0.1, frequency: 2}}}}\n");
+  const Scene json = scene_from(
+      R"({"model": "slider.urdf", "dt": 0.01, "steps": 5, "drives": {"slide": {"type": "acceleration",
+          "stiffness": 9, "target": {"sine": {"amplitude": 0.1, "frequency": 2}}}}})");
+  EXPECT_EQ(yaml.options.dt, json.options.dt);
+  EXPECT_EQ(yaml.steps, json.steps);
+  ASSERT_EQ(json.drives.size(), 1u);
+  EXPECT_EQ(json.drives[0].drive.type, DriveType::acceleration);
+  EXPECT_EQ(json.drives[0].drive.stiffness, 9.0);
+  EXPECT_EQ(json.drives[0].sine->frequency, 2.0);
+  EXPECT_EQ(yaml.drives[0].sine->frequency, 2.0);
+}
+
+TEST(Scene, RunSceneReportsEveryStateAndMatchesAManualLoop) {
+  const Scene s = load_scene(kExamples + "chain3.yaml");
+  int calls = 0;
+  const Simulation end = run_scene(s, [&](const Simulation& sim, int k) {
+    EXPECT_EQ(sim.step_count(), k);
+    ++calls;
+  });
+  EXPECT_EQ(calls, s.steps + 1);
+  Simulation manual = make_simulation(s);
+  for (int k = 0; k < s.steps; ++k) {
+    apply_targets(s, manual, k);
+    manual.step();
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(end.q()[i], manual.q()[i]);
+}
+
+TEST(Scene, BadValuesNameTheFileTheKeyPathAndTheValue) {
+  const std::string head = "model: chain3.urdf\nsteps: 1\n";
+  EXPECT_EQ(error_of(head + "drives: {joint1: {type: force, stiffness: -5}}"),
+            kExamples + "inline.yaml: drives.joint1.stiffness = -5: must be finite and >= 0");
+  EXPECT_EQ(error_of(head + "drives: {joint1: {type: force, damping: .nan}}"),
+            kExamples + "inline.yaml: drives.joint1.damping = .nan: must be finite and >= 0");
+  EXPECT_EQ(error_of(head + "solver: {type: tgs, position_iterations: 0}"),
+            kExamples + "inline.yaml: solver.position_iterations = 0: must be >= 1");
+  EXPECT_NE(error_of(head + "drives: {joint9: {type: force}}")
+                .find("drives.joint9: no joint named 'joint9'"),
+            std::string::npos);
+  EXPECT_NE(error_of(head + "drive_defaults: {stiffness: 3}").find("drive_defaults.type: missing"),
+            std::string::npos);
+  EXPECT_NE(error_of(head + "initial: {q: {joint1: [1]}}")
+                .find("initial.q.joint1 = [1]: must be a number"),
+            std::string::npos);
+  EXPECT_NE(error_of(head + "joints: {joint1: {friction: {kinetic: 1}}}")
+                .find("joints.joint1.friction.kinetic: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("model: slider.urdf\nsteps: 1\nfixed_base: false\n")
+                .find("slider.urdf: link 'base' has no <inertial>"),
+            std::string::npos);
+  EXPECT_THROW(load_scene(kExamples + "no_such_scene.yaml"), InputError);
+}
+
+TEST(Scene, TrajectoryHeaderFollowsTheUrdfJointOrder) {
+  const Scene s = scene_from("model: ../tests/data/branches.urdf\nsteps: 1\n");
+  std::ostringstream out;
+  TrajectoryWriter writer(out, s.robot);
+  EXPECT_EQ(
+      out.str(),
+      "step,t,q:right1,q:left,q:right2,qd:right1,qd:left,qd:right2,f:right1,f:left,f:right2\n");
+  Simulation sim = make_simulation(s);
+  VecX q(3);
+  q << 0.125, -0.5, 0.1;  // model order: right1, right2, left
+  sim.set_q(q);
+  writer.write(0, sim, true);
+  EXPECT_EQ(out.str().substr(out.str().find('\n') + 1), "0,0,0.125,0.1,-0.5,0,0,0,0,0,0\n");
+}
+
+}  // namespace
+}  // namespace featherdrive

@@ -1,0 +1,372 @@
+// featherdrive against PhysX 5.6.1 itself (tests/physx/harness.js on npm physx-js-webidl@2.7.3,
+// float32): the same robots, drives and solver settings, compared two ways (docs/physx_parity.md):
+//  - restarted from PhysX's state before every step (the step function itself): within 1e-5 of the
+//    run's largest |q| and |qd| (and |f| for drive forces);
+//  - free-running for 240 steps: within 1e-4.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "featherdrive/io/physx_scene.hpp"
+#include "support/models.hpp"
+
+namespace featherdrive {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Trajectory {
+  std::vector<std::string> joints;               // dof joints, model order
+  std::vector<std::vector<double>> q, qd, f;     // [step][dof]
+};
+
+// The harness reports the force of every row on the dof (PhysX's incoming joint force projected on
+// the axis): drive, limit, friction and velocity limit together.
+double joint_force(const Simulation& sim, int dof) {
+  return sim.drive_force()[dof] + sim.limit_force()[dof] + sim.friction_force()[dof] +
+         sim.velocity_limit_force()[dof];
+}
+
+Trajectory read_csv(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  {
+    std::stringstream s(line);
+    std::string cell;
+    while (std::getline(s, cell, ',')) header.push_back(cell);
+  }
+  Trajectory t;
+  for (const auto& h : header)
+    if (h.rfind("q:", 0) == 0) t.joints.push_back(h.substr(2));
+  const size_t n = t.joints.size();
+  while (std::getline(in, line)) {
+    std::stringstream s(line);
+    std::string cell;
+    std::vector<double> row;
+    while (std::getline(s, cell, ',')) row.push_back(std::stod(cell));
+    t.q.emplace_back(row.begin() + 2, row.begin() + 2 + n);
+    t.qd.emplace_back(row.begin() + 2 + n, row.begin() + 2 + 2 * n);
+    t.f.emplace_back(row.begin() + 2 + 2 * n, row.begin() + 2 + 3 * n);
+  }
+  return t;
+}
+
+Trajectory run_physx(const Simulation& sim, int steps, const std::vector<TargetsByJoint>& targets) {
+  static int counter = 0;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("featherdrive_physx_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string stem = (dir / ("scene" + std::to_string(counter++))).string();
+  std::ofstream(stem + ".json") << physx_scene_json(sim, steps, targets);
+  const std::string command = std::string(FEATHERDRIVE_NODE) + " " + FEATHERDRIVE_PHYSX_DIR +
+                              "/harness.js " + stem + ".json " + stem + ".csv";
+  const int rc = std::system(command.c_str());
+  if (rc != 0) throw std::runtime_error("harness failed: " + command);
+  return read_csv(stem + ".csv");
+}
+
+// Sets the targets of step k+1 (the same rule as the harness: entry k before step k + 1).
+void apply_targets(Simulation& sim, const std::vector<TargetsByJoint>& targets, int k) {
+  if (targets.empty()) return;
+  const auto& t = targets[std::min<size_t>(k, targets.size() - 1)];
+  for (const auto& [joint, target] : t) sim.set_drive_target(joint, target.first, target.second);
+}
+
+struct Scale {
+  double q = 0, qd = 0, f = 0;
+};
+
+Scale scale_of(const Trajectory& t) {
+  Scale s;
+  for (size_t k = 0; k < t.q.size(); ++k)
+    for (size_t j = 0; j < t.joints.size(); ++j) {
+      s.q = std::max(s.q, std::abs(t.q[k][j]));
+      s.qd = std::max(s.qd, std::abs(t.qd[k][j]));
+      s.f = std::max(s.f, std::abs(t.f[k][j]));
+    }
+  return s;
+}
+
+struct Errors {
+  double q = 0, qd = 0, f = 0;  // relative to the run's scale
+};
+
+// A parity case: a model and a way to set up its simulation.
+struct Case {
+  std::string name;
+  std::function<std::shared_ptr<const Model>()> model;
+  std::function<void(Simulation&)> setup;
+  std::function<std::vector<TargetsByJoint>(int)> targets = [](int) { return std::vector<TargetsByJoint>{}; };
+};
+
+struct Solver {
+  SolverType type;
+  int position_iterations, velocity_iterations;
+};
+
+std::string solver_name(const Solver& s) {
+  return std::string(to_string(s.type)) + "_" + std::to_string(s.position_iterations) + "_" +
+         std::to_string(s.velocity_iterations);
+}
+
+void compare(const Case& c, const Solver& solver, int steps, double restart_tol, double free_tol) {
+  auto model = c.model();
+  SimulationOptions o;
+  o.solver = solver.type;
+  o.position_iterations = solver.position_iterations;
+  o.velocity_iterations = solver.velocity_iterations;
+  Simulation initial(model, o);
+  c.setup(initial);
+  const auto targets = c.targets(steps);
+  const Trajectory px = run_physx(initial, steps, targets);
+  const Scale scale = scale_of(px);
+  const int nv = model->nv;
+  ASSERT_EQ(static_cast<int>(px.joints.size()), nv);
+  ASSERT_EQ(static_cast<int>(px.q.size()), steps + 1);
+  std::vector<int> dof(nv);
+  for (int j = 0; j < nv; ++j) dof[j] = model->dof_index(px.joints[j]);
+
+  Errors restart, free;
+  int restart_worst_step = 0, free_worst_step = 0;
+  // Restarted from PhysX's state before every step.
+  {
+    Simulation sim = initial;
+    for (int k = 0; k < steps; ++k) {
+      VecX q = sim.q(), qd = sim.qd();
+      for (int j = 0; j < nv; ++j) {
+        q[model->links[model->dof_link[dof[j]]].q_index] = px.q[k][j];
+        qd[dof[j]] = px.qd[k][j];
+      }
+      sim.set_q(q);
+      sim.set_qd(qd);
+      apply_targets(sim, targets, k);
+      sim.step();
+      for (int j = 0; j < nv; ++j) {
+        const double eq = std::abs(sim.q()[model->links[model->dof_link[dof[j]]].q_index] - px.q[k + 1][j]) / scale.q;
+        const double ev = std::abs(sim.qd()[dof[j]] - px.qd[k + 1][j]) / scale.qd;
+        const double ef = scale.f > 0 ? std::abs(joint_force(sim, dof[j]) - px.f[k + 1][j]) / scale.f : 0.0;
+        if (std::max({eq, ev, ef}) > std::max({restart.q, restart.qd, restart.f})) restart_worst_step = k + 1;
+        restart.q = std::max(restart.q, eq);
+        restart.qd = std::max(restart.qd, ev);
+        restart.f = std::max(restart.f, ef);
+      }
+    }
+  }
+  // Free-running.
+  {
+    Simulation sim = initial;
+    for (int k = 0; k < steps; ++k) {
+      apply_targets(sim, targets, k);
+      sim.step();
+      for (int j = 0; j < nv; ++j) {
+        const double eq = std::abs(sim.q()[model->links[model->dof_link[dof[j]]].q_index] - px.q[k + 1][j]) / scale.q;
+        const double ev = std::abs(sim.qd()[dof[j]] - px.qd[k + 1][j]) / scale.qd;
+        const double ef = scale.f > 0 ? std::abs(joint_force(sim, dof[j]) - px.f[k + 1][j]) / scale.f : 0.0;
+        if (std::getenv("FEATHERDRIVE_PARITY_DUMP"))
+          std::printf("free %d %s q %.9g %.9g qd %.9g %.9g f %.9g %.9g\n", k + 1, px.joints[j].c_str(),
+                      sim.q()[model->links[model->dof_link[dof[j]]].q_index], px.q[k + 1][j],
+                      sim.qd()[dof[j]], px.qd[k + 1][j], joint_force(sim, dof[j]), px.f[k + 1][j]);
+        if (std::max({eq, ev, ef}) > std::max({free.q, free.qd, free.f})) free_worst_step = k + 1;
+        free.q = std::max(free.q, eq);
+        free.qd = std::max(free.qd, ev);
+        free.f = std::max(free.f, ef);
+      }
+    }
+  }
+  std::printf("%-28s %-10s restart q %.1e qd %.1e f %.1e (step %d) | free q %.1e qd %.1e f %.1e (step %d) | scale q %.3g qd %.3g f %.3g\n",
+              c.name.c_str(), solver_name(solver).c_str(), restart.q, restart.qd, restart.f,
+              restart_worst_step, free.q, free.qd, free.f, free_worst_step, scale.q, scale.qd, scale.f);
+  EXPECT_LT(restart.q, restart_tol);
+  EXPECT_LT(restart.qd, restart_tol);
+  EXPECT_LT(restart.f, restart_tol);
+  EXPECT_LT(free.q, free_tol);
+  EXPECT_LT(free.qd, free_tol);
+  EXPECT_LT(free.f, free_tol);
+}
+
+std::vector<TargetsByJoint> sine_targets(const std::vector<std::string>& joints, int steps,
+                                         double dt, double amplitude) {
+  std::vector<TargetsByJoint> out(steps);
+  for (int k = 0; k < steps; ++k) {
+    const double t = (k + 1) * dt;
+    for (size_t j = 0; j < joints.size(); ++j) {
+      const double w = 2.0 + 0.7 * j;
+      out[k][joints[j]] = {amplitude * std::sin(w * t + j), amplitude * w * std::cos(w * t + j)};
+    }
+  }
+  return out;
+}
+
+std::shared_ptr<const Model> branched_tree(bool prismatic_on_moving_parent) {
+  ModelBuilder b;
+  b.set_gravity(Vec3(0, 0, -9.81));
+  b.add_link(make_link("base", "", 3.0, Vec3::Zero(), test::box_inertia(3.0, Vec3(0.3, 0.3, 0.1)),
+                       fixed_joint("fix")));
+  auto box = [](double m, const Vec3& s) { return test::box_inertia(m, s); };
+  b.add_link(make_link("torso", "base", 2.0, Vec3(0, 0, 0.15), box(2.0, Vec3(0.2, 0.15, 0.3)),
+                       revolute_joint("yaw", Vec3(0, 0, 1), Vec3(0, 0, 0.1))));
+  b.add_link(make_link("left_upper", "torso", 1.2, Vec3(0, 0.1, 0), box(1.2, Vec3(0.05, 0.2, 0.05)),
+                       revolute_joint("left_shoulder", Vec3(1, 0, 0), Vec3(0, 0.12, 0.25), Vec3(0.2, 0, 0))));
+  b.add_link(make_link("left_lower", "left_upper", 0.8, Vec3(0, 0.1, 0), box(0.8, Vec3(0.04, 0.2, 0.04)),
+                       revolute_joint("left_elbow", Vec3(0, 0.6, 0.8), Vec3(0, 0.2, 0))));
+  b.add_link(make_link("right_upper", "torso", 1.2, Vec3(0, -0.1, 0), box(1.2, Vec3(0.05, 0.2, 0.05)),
+                       revolute_joint("right_shoulder", Vec3(1, 0, 0), Vec3(0, -0.12, 0.25), Vec3(-0.2, 0, 0.1))));
+  if (prismatic_on_moving_parent) {
+    b.add_link(make_link("right_slide", "right_upper", 0.5, Vec3(0, -0.05, 0), box(0.5, Vec3(0.04, 0.1, 0.04)),
+                         prismatic_joint("right_extend", Vec3(0, -1, 0.2), Vec3(0, -0.2, 0))));
+  } else {
+    b.add_link(make_link("right_lower", "right_upper", 0.8, Vec3(0, -0.1, 0), box(0.8, Vec3(0.04, 0.2, 0.04)),
+                         revolute_joint("right_elbow", Vec3(0.3, 0, 1), Vec3(0, -0.2, 0))));
+  }
+  b.add_link(make_link("lift", "base", 1.0, Vec3(0.05, 0, 0), box(1.0, Vec3(0.1, 0.1, 0.1)),
+                       prismatic_joint("lift_slide", Vec3(0, 0, 1), Vec3(0.3, 0, 0))));
+  b.add_link(make_link("head", "torso", 0.7, Vec3(0, 0, 0.05), box(0.7, Vec3(0.1, 0.1, 0.1)),
+                       revolute_joint("neck", Vec3(0, 1, 0), Vec3(0, 0, 0.32), Vec3(0, 0.1, 0))));
+  return std::make_shared<const Model>(b.build());
+}
+
+void drive_all(Simulation& sim, double kp, double kd, DriveType type = DriveType::force,
+               double max_force = kInf) {
+  for (const Link& l : sim.model().links)
+    if (l.nv == 1) sim.set_drive(l.v_index, Drive{type, kp, kd, max_force, 0.0, 0.0});
+}
+
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  const double dt = 1.0 / 60.0;
+  auto slider = [] { return test::make_slider(2.0, Vec3(0, 0, 1), Vec3(0, 0, -9.81)); };
+  auto slider_level = [] { return test::make_slider(1.5, Vec3(1, 0, 0), Vec3(0, 0, -9.81)); };
+  out.push_back({"slider_force", slider, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 400, 20, kInf, 0.5, 0.0});
+                 }});
+  out.push_back({"slider_acceleration", slider, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::acceleration, 200, 15, kInf, 0.5, 0.0});
+                 }});
+  // A stiff drive tracking a small motion from where it stands (a jump of the target by 0.5 m at
+  // 1e8 N/m passes through float32 intermediate velocities of 100 m/s in PhysX, whose rounding
+  // then dominates the reported velocity).
+  out.push_back({"slider_stiff_1e8", slider_level, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 1e8, 2e4, kInf, 0.0, 0.0});
+                 },
+                 [dt](int steps) { return sine_targets({"slide"}, steps, dt, 0.05); }});
+  out.push_back({"slider_max_force", slider_level, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 1000, 300, 30.0, 1.0, 0.0});
+                 }});
+  out.push_back({"slider_max_impulse", slider_level, [](Simulation& s) {
+                   Drive d{DriveType::force, 1000, 300, kInf, 1.0, 0.0};
+                   d.max_impulse = 0.4;  // N s per step
+                   s.set_drive("slide", d);
+                 }});
+  out.push_back({"slider_velocity_drive", slider_level, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 0, 40, kInf, 0.0, 0.8});
+                 }});
+  out.push_back({"slider_moving_target", slider, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 900, 30, kInf, 0.0, 0.0});
+                 },
+                 [dt](int steps) { return sine_targets({"slide"}, steps, dt, 0.3); }});
+  out.push_back({"slider_limit", slider_level, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 500, 30, kInf, 1.0, 0.0});
+                   // Limits that float32 holds exactly: PhysX compares float32 positions with them.
+                   s.set_joint_limits("slide", -0.25, 0.375);
+                 }});
+  out.push_back({"slider_velocity_limit", slider_level, [](Simulation& s) {
+                   s.set_drive("slide", Drive{DriveType::force, 500, 10, kInf, 3.0, 0.0});
+                   s.set_max_joint_velocity("slide", 0.6);
+                 }});
+  out.push_back({"pendulum", [] { return test::make_pendulum(1.3, 0.7, 2e-3); }, [](Simulation& s) {
+                   VecX q(1);
+                   q << 0.9;
+                   s.set_q(q);
+                 }});
+  out.push_back({"pendulum_driven", [] { return test::make_pendulum(1.3, 0.7, 2e-3); }, [](Simulation& s) {
+                   s.set_drive("hinge", Drive{DriveType::force, 100, 5, kInf, 1.0, 0.0});
+                 }});
+  auto chain = [] { return test::make_planar_chain(3, 1.0, 0.5); };
+  out.push_back({"chain3", chain, [](Simulation& s) {
+                   drive_all(s, 500, 20);
+                   VecX q(3);
+                   q << 0.3, -0.2, 0.4;
+                   s.set_q(q);
+                 }});
+  out.push_back({"chain3_moving_targets", chain, [](Simulation& s) { drive_all(s, 2000, 60); },
+                 [dt](int steps) { return sine_targets({"joint1", "joint2", "joint3"}, steps, dt, 0.5); }});
+  out.push_back({"chain3_acceleration_armature", [] {
+                   ModelBuilder b;
+                   b.add_link(make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity() * 1e-2, fixed_joint("fix")));
+                   std::string parent = "base";
+                   for (int i = 0; i < 3; ++i) {
+                     JointSpec j = revolute_joint("j" + std::to_string(i), Vec3(0, 1, 0.2 * i),
+                                                  i ? Vec3(0, 0, -0.5) : Vec3::Zero());
+                     j.armature = {0.05 * (i + 1)};
+                     b.add_link(make_link("l" + std::to_string(i), parent, 1.0, Vec3(0, 0, -0.25),
+                                          Vec3(0.02, 0.02, 1e-3).asDiagonal(), j));
+                     parent = "l" + std::to_string(i);
+                   }
+                   return std::make_shared<const Model>(b.build());
+                 },
+                 [](Simulation& s) {
+                   drive_all(s, 300, 25, DriveType::acceleration);
+                   s.set_drive_target("j0", 0.6, 0.0);
+                 }});
+  out.push_back({"branched_tree", [] { return branched_tree(false); }, [](Simulation& s) {
+                   drive_all(s, 800, 40);
+                   VecX q = s.q();
+                   q.setConstant(0.2);
+                   s.set_q(q);
+                 },
+                 [](int steps) {
+                   return sine_targets({"yaw", "left_shoulder", "left_elbow", "right_shoulder",
+                                        "right_elbow", "lift_slide", "neck"},
+                                       steps, 1.0 / 60.0, 0.4);
+                 }});
+  return out;
+}
+
+struct ParityCase {
+  Case c;
+  Solver solver;
+};
+
+class PhysxParity : public ::testing::TestWithParam<ParityCase> {};
+
+TEST_P(PhysxParity, MatchesPhysx) {
+  const ParityCase& p = GetParam();
+  double restart_tol = 1e-5;
+  if (p.c.name == "slider_stiff_1e8" && p.solver.type == SolverType::tgs &&
+      p.solver.position_iterations == 32) {
+    // Named limit, not a behaviour difference: at 1e8 N/m each TGS sub-step sets the velocity
+    // from the position error / rho, so PhysX's float32 position (ulp 3.7e-9 m at 0.05 m) puts a
+    // floor of ulp / rho = 7e-6 m/s under its velocity, 7e-5 of this run's largest |qd|
+    // (docs/physx_parity.md). Observed: 3.0e-5.
+    restart_tol = 7e-5;
+  }
+  compare(p.c, p.solver, 240, restart_tol, 1e-4);
+}
+
+std::vector<ParityCase> parity_cases() {
+  std::vector<ParityCase> out;
+  const std::vector<Solver> solvers = {{SolverType::pgs, 1, 0}, {SolverType::pgs, 4, 1},
+                                       {SolverType::pgs, 32, 4}, {SolverType::tgs, 1, 0},
+                                       {SolverType::tgs, 4, 1}, {SolverType::tgs, 32, 4}};
+  for (const Case& c : cases())
+    for (const Solver& s : solvers) out.push_back({c, s});
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, PhysxParity, ::testing::ValuesIn(parity_cases()),
+                         [](const auto& info) {
+                           return info.param.c.name + "_" + solver_name(info.param.solver);
+                         });
+
+}  // namespace
+}  // namespace featherdrive

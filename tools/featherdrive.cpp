@@ -1,0 +1,282 @@
+// The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
+// a URDF robot. Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else.
+#include <CLI/CLI.hpp>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "featherdrive/io/describe.hpp"
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/trajectory.hpp"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using namespace featherdrive;
+
+namespace {
+
+struct SimulateArgs {
+  std::string scene;
+  std::string out;
+  std::string plot;
+  std::optional<int> steps;
+  std::string solver;
+  std::optional<int> position_iterations;
+  std::optional<int> velocity_iterations;
+};
+
+// Failures that are not the input's fault (files that cannot be written, the plot script).
+struct RunError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void print_warnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::cerr << "featherdrive: warning: " << w << "\n";
+}
+
+std::ofstream open_output(const fs::path& path) {
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+  }
+  std::ofstream out(path);
+  if (!out) throw RunError("cannot write " + path.string());
+  return out;
+}
+
+// Runs /usr/bin/python3 (or $FEATHERDRIVE_PYTHON) on the plot script shipped with the project.
+void run_plot(const fs::path& trajectory, const fs::path& targets, const fs::path& png,
+              const std::string& title) {
+  const char* python_env = std::getenv("FEATHERDRIVE_PYTHON");
+  const char* script_env = std::getenv("FEATHERDRIVE_PLOT_SCRIPT");
+  const std::string python = python_env ? python_env : "/usr/bin/python3";
+  const std::string script = script_env ? script_env : FEATHERDRIVE_PLOT_SCRIPT;
+  std::vector<std::string> args = {
+      python, script, trajectory.string(), targets.string(), png.string(), "--title", title};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
+    throw RunError("cannot start " + python + " to plot");
+  int status = 0;
+  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw RunError("plotting failed: " + python + " " + script + " did not succeed");
+}
+
+class Progress {
+ public:
+  explicit Progress(int steps) : steps_(steps), enabled_(steps >= 1000 && isatty(STDERR_FILENO)) {}
+  void update(int step) {
+    if (!enabled_) return;
+    const int percent = static_cast<int>(100LL * step / steps_);
+    if (percent == last_) return;
+    last_ = percent;
+    const int filled = percent * 40 / 100;
+    std::fprintf(stderr, "\r[%s%s] %3d%%", std::string(filled, '#').c_str(),
+                 std::string(40 - filled, ' ').c_str(), percent);
+    std::fflush(stderr);
+  }
+  void done() {
+    if (enabled_) std::fprintf(stderr, "\r\033[K");
+  }
+
+ private:
+  int steps_;
+  bool enabled_;
+  int last_ = -1;
+};
+
+int simulate(const SimulateArgs& args) {
+  Scene scene = load_scene(args.scene);
+  print_warnings(scene.robot.warnings);
+  if (args.steps) scene.steps = *args.steps;
+  if (!args.solver.empty())
+    scene.options.solver = args.solver == "tgs" ? SolverType::tgs : SolverType::pgs;
+  if (args.position_iterations) scene.options.position_iterations = *args.position_iterations;
+  if (args.velocity_iterations) scene.options.velocity_iterations = *args.velocity_iterations;
+  validate_options(scene.options);
+  const Model& model = *scene.model();
+  const double dt = scene.options.dt;
+
+  // The trajectory goes to --out, or to a temporary file when only a plot is wanted.
+  std::vector<fs::path> temporary;
+  fs::path csv_path = args.out;
+  fs::path targets_path;
+  const std::string tag = "featherdrive-" + std::to_string(getpid());
+  if (!args.plot.empty()) {
+    if (csv_path.empty()) {
+      csv_path = fs::temp_directory_path() / (tag + "-trajectory.csv");
+      temporary.push_back(csv_path);
+    }
+    targets_path = fs::temp_directory_path() / (tag + "-targets.csv");
+    temporary.push_back(targets_path);
+  }
+  struct Cleanup {
+    std::vector<fs::path>& files;
+    ~Cleanup() {
+      std::error_code ec;
+      for (const fs::path& f : files) fs::remove(f, ec);
+    }
+  } cleanup{temporary};
+
+  std::optional<std::ofstream> csv_file, targets_file;
+  std::optional<TrajectoryWriter> csv;
+  std::optional<TargetWriter> targets;
+  if (!csv_path.empty()) {
+    csv_file.emplace(open_output(csv_path));
+    csv.emplace(*csv_file, scene.robot);
+  }
+  if (!targets_path.empty()) {
+    targets_file.emplace(open_output(targets_path));
+    targets.emplace(*targets_file, scene);
+  }
+
+  const size_t n = scene.drives.size();
+  std::vector<double> max_force(n, 0.0), sum_sq(n, 0.0);
+  Progress progress(scene.steps);
+  const auto start = std::chrono::steady_clock::now();
+  Simulation sim = make_simulation(scene);
+  if (csv) csv->write(0, sim, true);
+  if (targets) targets->write(0, 0.0);
+  for (int k = 0; k < scene.steps; ++k) {
+    apply_targets(scene, sim, k);
+    sim.step();
+    const double t = (k + 1) * dt;
+    for (size_t i = 0; i < n; ++i) {
+      const DriveSpec& d = scene.drives[i];
+      const double e = d.target_at(t).first - sim.q()[model.links[model.dof_link[d.dof]].q_index];
+      sum_sq[i] += e * e;
+      max_force[i] = std::max(max_force[i], std::abs(sim.drive_force()[d.dof]));
+    }
+    if (csv) csv->write(k + 1, sim);
+    if (targets) targets->write(k + 1, t);
+    progress.update(k + 1);
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  progress.done();
+  for (auto* f : {&csv_file, &targets_file})
+    if (*f) {
+      (*f)->close();
+      if (!**f) throw RunError("writing the trajectory failed");
+    }
+
+  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s)\n", args.scene.c_str(),
+              scene.robot.name.c_str(), model.nv, dt, scene.steps, scene.steps * dt);
+  std::printf("  solver %s: %d position / %d velocity iterations\n",
+              to_string(scene.options.solver), scene.options.position_iterations,
+              scene.options.velocity_iterations);
+  if (n > 0) {
+    std::printf("  %-16s %-12s %14s %14s %14s\n", "joint", "drive", "final error", "rms error",
+                "max |force|");
+    const double t_end = scene.steps * dt;
+    for (size_t i = 0; i < n; ++i) {
+      const DriveSpec& d = scene.drives[i];
+      const double final_error =
+          d.target_at(t_end).first - sim.q()[model.links[model.dof_link[d.dof]].q_index];
+      const double rms = scene.steps > 0 ? std::sqrt(sum_sq[i] / scene.steps) : 0.0;
+      std::printf("  %-16s %-12s %14.3e %14.3e %14.4g\n", d.joint.c_str(), to_string(d.drive.type),
+                  final_error, rms, max_force[i]);
+    }
+  }
+  std::printf("  wall time %.3f s, %.0f steps/s\n", wall, wall > 0.0 ? scene.steps / wall : 0.0);
+  if (!args.out.empty()) std::printf("  trajectory: %s\n", args.out.c_str());
+  if (!args.plot.empty()) {
+    std::fflush(stdout);
+    fs::path png = args.plot;
+    if (png.has_parent_path()) {
+      std::error_code ec;
+      fs::create_directories(png.parent_path(), ec);
+    }
+    run_plot(csv_path, targets_path, png,
+             scene.robot.name + " - " + to_string(scene.options.solver) + " (" +
+                 fs::path(args.scene).filename().string() + ")");
+    std::printf("  plot: %s\n", png.c_str());
+  }
+  return 0;
+}
+
+int info(const std::string& urdf, bool floating) {
+  UrdfOptions options;
+  options.fixed_base = !floating;
+  const UrdfRobot robot = load_urdf(urdf, options);
+  print_warnings(robot.warnings);
+  std::cout << describe(robot);
+  return 0;
+}
+
+// One line on stderr, whatever the message holds.
+void report(const std::string& message) {
+  std::string line = message;
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  std::cerr << "featherdrive: " << line << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "featherdrive: articulated robots with implicit PD joint drives (PhysX-style PGS and TGS)"};
+  app.require_subcommand(1);
+
+  SimulateArgs sim_args;
+  CLI::App* sim_cmd = app.add_subcommand("simulate", "Run a scene file and write its trajectory");
+  sim_cmd->add_option("scene", sim_args.scene, "Scene file (YAML or JSON)")->required();
+  sim_cmd->add_option("--out", sim_args.out,
+                      "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...");
+  sim_cmd->add_option("--plot", sim_args.plot, "PNG of positions against targets and drive forces");
+  sim_cmd->add_option("--steps", sim_args.steps, "Number of steps (overrides the scene)")
+      ->check(CLI::NonNegativeNumber);
+  sim_cmd->add_option("--solver", sim_args.solver, "pgs or tgs (overrides the scene)")
+      ->check(CLI::IsMember({"pgs", "tgs"}));
+  sim_cmd->add_option("--position-iterations", sim_args.position_iterations, "Overrides the scene")
+      ->check(CLI::Range(1, 1000000));
+  sim_cmd->add_option("--velocity-iterations", sim_args.velocity_iterations, "Overrides the scene")
+      ->check(CLI::Range(0, 1000000));
+
+  std::string urdf;
+  bool floating = false;
+  CLI::App* info_cmd =
+      app.add_subcommand("info", "Show a URDF robot: tree, dofs, masses, inertias, limits");
+  info_cmd->add_option("robot", urdf, "URDF file")->required();
+  info_cmd->add_flag("--floating", floating, "Import with a floating root instead of a fixed base");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    const std::string first = argc > 1 ? argv[1] : "";
+    if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info")
+      report("unknown command '" + first +
+             "' (expected simulate or info; see featherdrive --help)");
+    else
+      report(std::string(e.what()) + " (see featherdrive --help)");
+    return 2;
+  }
+
+  try {
+    if (*sim_cmd) return simulate(sim_args);
+    return info(urdf, floating);
+  } catch (const std::invalid_argument& e) {  // bad input: InputError and the core's validation
+    report(e.what());
+    return 2;
+  } catch (const std::exception& e) {  // DivergenceError, files that cannot be written, ...
+    report(e.what());
+    return 1;
+  }
+}
