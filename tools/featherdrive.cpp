@@ -13,8 +13,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 
+#include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/trajectory.hpp"
@@ -34,6 +36,8 @@ struct SimulateArgs {
   std::string solver;
   std::optional<int> position_iterations;
   std::optional<int> velocity_iterations;
+  std::string save_state;
+  std::string load_state;
 };
 
 // Failures that are not the input's fault (files that cannot be written, the plot script).
@@ -108,7 +112,25 @@ int simulate(const SimulateArgs& args) {
   if (args.velocity_iterations) scene.options.velocity_iterations = *args.velocity_iterations;
   validate_options(scene.options);
   const Model& model = *scene.model();
-  const double dt = scene.options.dt;
+
+  // The simulation: the scene's, or the scene's model with the state and settings of a
+  // checkpoint; the command line's solver settings apply on top of either.
+  Simulation sim = make_simulation(scene);
+  if (!args.load_state.empty()) {
+    load_checkpoint(args.load_state, sim);
+    SimulationOptions o = sim.options();
+    if (!args.solver.empty()) o.solver = scene.options.solver;
+    if (args.position_iterations) o.position_iterations = *args.position_iterations;
+    if (args.velocity_iterations) o.velocity_iterations = *args.velocity_iterations;
+    sim.set_options(o);
+    if (sim.step_count() + scene.steps > std::numeric_limits<int>::max())
+      throw std::invalid_argument(args.load_state + ": step count " +
+                                  std::to_string(sim.step_count()) + " + " +
+                                  std::to_string(scene.steps) + " steps is too large");
+  }
+  const SimulationOptions& options = sim.options();
+  const double dt = options.dt;
+  const int first = static_cast<int>(sim.step_count());  // 0 unless resumed
 
   // The trajectory goes to --out, or to a temporary file when only a plot is wanted.
   std::vector<fs::path> temporary;
@@ -147,10 +169,9 @@ int simulate(const SimulateArgs& args) {
   std::vector<double> max_force(n, 0.0), sum_sq(n, 0.0);
   Progress progress(scene.steps);
   const auto start = std::chrono::steady_clock::now();
-  Simulation sim = make_simulation(scene);
-  if (csv) csv->write(0, sim, true);
-  if (targets) targets->write(0, 0.0);
-  for (int k = 0; k < scene.steps; ++k) {
+  if (csv) csv->write(first, sim, /*initial=*/args.load_state.empty());
+  if (targets) targets->write(first, first * dt);
+  for (int k = first; k < first + scene.steps; ++k) {
     apply_targets(scene, sim, k);
     sim.step();
     const double t = (k + 1) * dt;
@@ -162,7 +183,7 @@ int simulate(const SimulateArgs& args) {
     }
     if (csv) csv->write(k + 1, sim);
     if (targets) targets->write(k + 1, t);
-    progress.update(k + 1);
+    progress.update(k + 1 - first);
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -172,16 +193,18 @@ int simulate(const SimulateArgs& args) {
       (*f)->close();
       if (!**f) throw RunError("writing the trajectory failed");
     }
+  if (!args.save_state.empty()) save_checkpoint(sim, args.save_state);
 
   std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s)\n", args.scene.c_str(),
               scene.robot.name.c_str(), model.nv, dt, scene.steps, scene.steps * dt);
-  std::printf("  solver %s: %d position / %d velocity iterations\n",
-              to_string(scene.options.solver), scene.options.position_iterations,
-              scene.options.velocity_iterations);
+  if (!args.load_state.empty())
+    std::printf("  resumed from %s at step %d\n", args.load_state.c_str(), first);
+  std::printf("  solver %s: %d position / %d velocity iterations\n", to_string(options.solver),
+              options.position_iterations, options.velocity_iterations);
   if (n > 0) {
     std::printf("  %-16s %-12s %14s %14s %14s\n", "joint", "drive", "final error", "rms error",
                 "max |force|");
-    const double t_end = scene.steps * dt;
+    const double t_end = (first + scene.steps) * dt;
     for (size_t i = 0; i < n; ++i) {
       const DriveSpec& d = scene.drives[i];
       const double final_error =
@@ -193,6 +216,7 @@ int simulate(const SimulateArgs& args) {
   }
   std::printf("  wall time %.3f s, %.0f steps/s\n", wall, wall > 0.0 ? scene.steps / wall : 0.0);
   if (!args.out.empty()) std::printf("  trajectory: %s\n", args.out.c_str());
+  if (!args.save_state.empty()) std::printf("  state: %s\n", args.save_state.c_str());
   if (!args.plot.empty()) {
     std::fflush(stdout);
     fs::path png = args.plot;
@@ -201,7 +225,7 @@ int simulate(const SimulateArgs& args) {
       fs::create_directories(png.parent_path(), ec);
     }
     run_plot(csv_path, targets_path, png,
-             scene.robot.name + " - " + to_string(scene.options.solver) + " (" +
+             scene.robot.name + " - " + to_string(options.solver) + " (" +
                  fs::path(args.scene).filename().string() + ")");
     std::printf("  plot: %s\n", png.c_str());
   }
@@ -245,6 +269,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000000));
   sim_cmd->add_option("--velocity-iterations", sim_args.velocity_iterations, "Overrides the scene")
       ->check(CLI::Range(0, 1000000));
+  sim_cmd->add_option("--save-state", sim_args.save_state,
+                      "Write a checkpoint of the final state and settings (written atomically)");
+  sim_cmd->add_option("--load-state", sim_args.load_state,
+                      "Resume from a checkpoint of the scene's model: it replaces the scene's "
+                      "initial state, drives, joint settings and solver options; the command "
+                      "line's overrides still apply; --steps counts the steps after it");
 
   std::string urdf;
   bool floating = false;

@@ -1,18 +1,17 @@
 #include "featherdrive/constraint/drive.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 namespace featherdrive {
 namespace {
 
 void reject(const std::string& joint, const char* field, double value, const char* expected) {
-  std::ostringstream s;
-  s.precision(17);
-  s << "drive on joint '" << joint << "': " << field << " = " << value << " " << expected;
-  throw std::invalid_argument(s.str());
+  throw std::invalid_argument("drive on joint '" + joint + "': " + field + " = " +
+                              format_double(value) + " " + expected);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "featherdrive/constraint/joint_constraints.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -7,11 +9,7 @@
 namespace featherdrive {
 namespace {
 
-std::string fmt(double v) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
-  return std::string(buffer, result.ptr);
-}
+std::string fmt(double v) { return format_double(v); }
 
 void reject(const char* what, const std::string& joint, const char* field, double value,
             const char* expected) {

@@ -1,5 +1,7 @@
 #include "featherdrive/io/physx_scene.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -13,9 +15,7 @@ namespace {
 // JSON has no infinity: the harness reads 1e30 as "none".
 std::string num(double v) {
   if (std::isinf(v)) v = v > 0 ? 1e30 : -1e30;
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
-  return std::string(buffer, result.ptr);
+  return format_double(v);
 }
 
 std::string vec(const Vec3& v) {

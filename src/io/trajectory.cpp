@@ -1,6 +1,6 @@
 #include "featherdrive/io/trajectory.hpp"
 
-#include "featherdrive/io/format.hpp"
+#include "featherdrive/core/format.hpp"
 
 namespace featherdrive {
 namespace {

@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "featherdrive/io/format.hpp"
+#include "featherdrive/core/format.hpp"
 
 namespace featherdrive {
 namespace {

@@ -1,5 +1,7 @@
 #include "featherdrive/model/model_builder.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <charconv>
 #include <cmath>
@@ -9,22 +11,8 @@
 namespace featherdrive {
 namespace {
 
-std::string fmt(double v) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), v);
-  return std::string(buffer, result.ptr);
-}
-
-std::string fmt(const Vec3& v) {
-  std::string s = "[";
-  s += fmt(v.x());
-  s += ", ";
-  s += fmt(v.y());
-  s += ", ";
-  s += fmt(v.z());
-  s += "]";
-  return s;
-}
+std::string fmt(double v) { return format_double(v); }
+std::string fmt(const Vec3& v) { return format_vec3(v); }
 
 [[noreturn]] void fail(const std::string& what) { throw ModelError("model: " + what); }
 

@@ -1,5 +1,7 @@
 #include "featherdrive/sim/simulation.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -8,12 +10,7 @@
 namespace featherdrive {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
+std::string fmt(double v) { return format_double(v); }
 
 void check_vector(const VecX& x, Eigen::Index expected, const char* what) {
   if (x.size() != expected)
@@ -23,6 +20,22 @@ void check_vector(const VecX& x, Eigen::Index expected, const char* what) {
     if (!std::isfinite(x[i]))
       throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) + "] = " +
                                   fmt(x[i]) + " is not finite");
+}
+
+// Quaternions of spherical and floating joints: a norm of 0 (or one that under- or overflows)
+// has no rotation; with `unit`, the norm must be 1 within 1e-9.
+void check_quaternions(const Model& model, const VecX& q, bool unit) {
+  for (const Link& link : model.links) {
+    if (link.joint_type != JointType::spherical && link.joint_type != JointType::floating) continue;
+    const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
+    const double norm = q.segment<4>(iq).norm();
+    const bool ok = unit ? std::abs(norm - 1.0) <= 1e-9 : (norm > 1e-150 && std::isfinite(norm));
+    if (!ok)
+      throw std::invalid_argument("q: the quaternion of joint '" + link.joint_name + "' (q[" +
+                                  std::to_string(iq) + "..." + std::to_string(iq + 3) +
+                                  "]) has norm " + fmt(norm) +
+                                  (unit ? ", expected 1" : ": it must not be zero"));
+  }
 }
 
 }  // namespace
@@ -82,8 +95,34 @@ void Simulation::set_options(const SimulationOptions& options) {
 
 void Simulation::set_q(const VecX& q) {
   check_vector(q, model_->nq, "q");
+  check_quaternions(*model_, q, /*unit=*/false);
   q_ = q;
   normalize_configuration(*model_, q_);
+}
+
+void Simulation::set_clock(double time, long step_count) {
+  if (!std::isfinite(time) || time < 0.0)
+    throw std::invalid_argument("clock: time = " + fmt(time) + " must be finite and >= 0");
+  if (step_count < 0)
+    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
+                                " must be >= 0");
+  time_ = time;
+  step_count_ = step_count;
+}
+
+void Simulation::restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
+                               const VecX& friction_force, const VecX& velocity_limit_force) {
+  check_vector(q, model_->nq, "q");
+  check_quaternions(*model_, q, /*unit=*/true);
+  check_vector(drive_force, model_->nv, "drive_force");
+  check_vector(limit_force, model_->nv, "limit_force");
+  check_vector(friction_force, model_->nv, "friction_force");
+  check_vector(velocity_limit_force, model_->nv, "velocity_limit_force");
+  q_ = q;
+  drive_force_ = drive_force;
+  limit_force_ = limit_force;
+  friction_force_ = friction_force;
+  velocity_limit_force_ = velocity_limit_force;
 }
 
 void Simulation::set_qd(const VecX& qd) {
@@ -209,16 +248,35 @@ void Simulation::check_finite_or_restore() {
       << "; the state is left as it was before this step (lower dt or the gains)";
     throw DivergenceError(s.str());
   };
-  for (const Link& link : model.links)
-    for (int k = 0; k < link.nq; ++k)
-      if (!std::isfinite(q_[link.q_index + k])) {
-        if (link.nv > 0) fail("position q", link.v_index + std::min(k, link.nv - 1), q_[link.q_index + k]);
-      }
+  // Velocities and forces first: a non-finite velocity also makes the position non-finite, and
+  // the velocity is the nearer cause.
   for (int d = 0; d < model.nv; ++d) {
     if (!std::isfinite(qd_[d])) fail("velocity qd", d, qd_[d]);
     if (!std::isfinite(drive_force_[d])) fail("drive force", d, drive_force_[d]);
     if (!std::isfinite(limit_force_[d])) fail("limit force", d, limit_force_[d]);
     if (!std::isfinite(friction_force_[d])) fail("friction force", d, friction_force_[d]);
+    if (!std::isfinite(velocity_limit_force_[d]))
+      fail("velocity limit force", d, velocity_limit_force_[d]);
+  }
+  for (const Link& link : model.links)
+    for (int k = 0; k < link.nq; ++k)
+      if (!std::isfinite(q_[link.q_index + k])) {
+        if (link.nv > 0) fail("position q", link.v_index + std::min(k, link.nv - 1), q_[link.q_index + k]);
+      }
+  // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
+  if (!std::isfinite(time_ + options_.dt)) {
+    q_ = q_start_;
+    qd_ = qd_start_;
+    drive_force_ = drive_force_start_;
+    limit_force_ = limit_force_start_;
+    friction_force_ = friction_force_start_;
+    velocity_limit_force_ = velocity_limit_force_start_;
+    std::ostringstream s;
+    s.precision(6);
+    s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_
+      << " s): time t + dt = " << time_ + options_.dt
+      << " is not finite; the state is left as it was before this step (lower dt)";
+    throw DivergenceError(s.str());
   }
 }
 

@@ -1,5 +1,6 @@
 // The step, as a table of contents. PGS and TGS follow the spec and ../shared/physx/NOTES.md
 // ("One step, PGS" / "One step, TGS"); docs/math/implicit_drives.md has the math.
+#include <algorithm>
 #include <cmath>
 
 #include "featherdrive/algorithm/aba.hpp"
@@ -29,6 +30,8 @@ void Simulation::step() {
   friction_force_start_ = friction_force_;
   velocity_limit_force_start_ = velocity_limit_force_;
 
+  // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
+  scale_to_velocity_limits();
   // Poses and velocities at the start of the step.
   forward_kinematics(model, data_, q_, qd_);
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1).
@@ -50,6 +53,16 @@ void Simulation::step() {
   check_finite_or_restore();
   time_ += dt;
   ++step_count_;
+}
+
+// Rows later in a sweep can push a dof already clamped by its velocity limit past it again. Like
+// PhysX (computeLinkStates), the step starts by scaling every joint velocity by the one ratio that
+// brings the worst offender back to its limit, which keeps the direction of motion.
+void Simulation::scale_to_velocity_limits() {
+  double ratio = 1.0;
+  for (int d = 0; d < model_->nv; ++d)
+    if (std::abs(qd_[d]) > max_velocity_[d]) ratio = std::min(ratio, max_velocity_[d] / std::abs(qd_[d]));
+  if (ratio < 1.0) qd_ *= ratio;
 }
 
 // Every dof's rows, set up once per step from the start-of-step configuration (eq. 20-24, 35-39).

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "featherdrive/io/physx_scene.hpp"
+#include "featherdrive/io/urdf.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -327,6 +328,18 @@ std::vector<Case> cases() {
                  [](int steps) {
                    return sine_targets({"yaw", "left_shoulder", "left_elbow", "right_shoulder",
                                         "right_elbow", "lift_slide", "neck"},
+                                       steps, 1.0 / 60.0, 0.4);
+                 }});
+  // The 7-dof arm of examples/ (URDF limits and velocity limits kept; its joint friction off,
+  // since the harness cannot set PhysX's static/dynamic/viscous friction).
+  out.push_back({"arm7", [] { return load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/arm7.urdf").model; },
+                 [](Simulation& s) {
+                   for (const Link& l : s.model().links)
+                     if (l.nv == 1) s.set_joint_friction(l.v_index, JointFriction{});
+                   drive_all(s, 2e4, 300);
+                 },
+                 [](int steps) {
+                   return sine_targets({"joint1", "joint2", "joint3", "joint4", "joint5", "joint6", "joint7"},
                                        steps, 1.0 / 60.0, 0.4);
                  }});
   return out;

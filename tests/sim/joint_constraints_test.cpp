@@ -143,6 +143,27 @@ TEST_P(BothSolvers, MaxJointVelocityIsNeverExceeded) {
   EXPECT_NEAR(sim.qd()[0], 0.7, 1e-12);
 }
 
+// Velocities above their limits at the start of a step are scaled down together, keeping the
+// direction of motion (PhysX 5.6.1). Two orthogonal sliders in series have a constant, diagonal
+// M and no velocity-product terms, so without gravity the step keeps the scaled velocities.
+TEST_P(BothSolvers, VelocitiesAboveTheirLimitsAreScaledTogether) {
+  ModelBuilder b;
+  b.set_gravity(Vec3::Zero());
+  b.add_link(make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity() * 0.01, fixed_joint("fix")));
+  b.add_link(make_link("a", "base", 1.0, Vec3::Zero(), Mat3::Identity() * 0.01,
+                       prismatic_joint("x", Vec3::UnitX())));
+  b.add_link(make_link("b", "a", 2.0, Vec3::Zero(), Mat3::Identity() * 0.01,
+                       prismatic_joint("y", Vec3::UnitY())));
+  Simulation sim(std::make_shared<const Model>(b.build()), options());
+  sim.set_max_joint_velocity("x", 2.0);
+  VecX qd(2);
+  qd << 3.0, -1.5;  // x is 1.5 times over its limit; y has none
+  sim.set_qd(qd);
+  sim.step();
+  EXPECT_NEAR(sim.qd()[0], 2.0, 1e-15);
+  EXPECT_NEAR(sim.qd()[1], -1.0, 1e-15);
+}
+
 // Envelope, speed-effort curve |v| <= v_max - gradient |E|: a velocity drive asking for more
 // than the motor can give against a load L settles where the curve meets the load:
 // v = v_max - gradient L.

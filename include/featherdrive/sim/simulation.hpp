@@ -50,6 +50,14 @@ class Simulation {
   void set_qd(const VecX& qd);
   double time() const { return time_; }
   long step_count() const { return step_count_; }
+  /// Sets the clock (for resuming from a checkpoint); throws std::invalid_argument for a time
+  /// that is not finite or < 0, or a step count < 0.
+  void set_clock(double time, long step_count);
+  /// Restores q exactly as given (no normalisation, unlike set_q; quaternions must have unit norm
+  /// within 1e-9) and the outputs of the last step, for resuming from a checkpoint bit for bit.
+  /// Sizes and finiteness are checked; nothing changes if a check fails.
+  void restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
+                     const VecX& friction_force, const VecX& velocity_limit_force);
 
   // Inputs.
   /// Joint forces applied through the whole step (nv), e.g. feed-forward torques.
@@ -101,6 +109,7 @@ class Simulation {
   int check_dof(int dof) const;
   int one_dof_joint(int dof) const;
   int driven_dof(const std::string& joint) const;
+  void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
   void sweep(const RowPhase& phase);
   void solve_pgs();

@@ -1,4 +1,4 @@
-#include "featherdrive/io/format.hpp"
+#include "featherdrive/core/format.hpp"
 
 #include <charconv>
 
@@ -11,8 +11,14 @@ std::string format_double(double value) {
 }
 
 std::string format_vec3(const Vec3& v) {
-  return "[" + format_double(v.x()) + ", " + format_double(v.y()) + ", " + format_double(v.z()) +
-         "]";
+  std::string s = "[";  // built in steps: GCC 12 -O3 misreports -Wrestrict on a + chain
+  s += format_double(v.x());
+  s += ", ";
+  s += format_double(v.y());
+  s += ", ";
+  s += format_double(v.z());
+  s += "]";
+  return s;
 }
 
 }  // namespace featherdrive

@@ -1,0 +1,54 @@
+// Checkpoints: the whole state of a Simulation in a file, restored bit for bit, so that a run
+// interrupted by a checkpoint and resumed equals the uninterrupted run.
+//
+// The file (all integers little-endian, doubles as their IEEE-754 bits):
+//   "FDCKPT\r\n"  magic, 8 bytes
+//   u32           format version (kCheckpointVersion)
+//   u64           model fingerprint (model_fingerprint)
+//   u32, u32      nq, nv of the model
+//   u64           payload size in bytes
+//   payload       time, step count, solver options, q, qd, applied forces, per dof the drive,
+//                 limits, friction, max velocity and envelope, then the last step's drive, limit,
+//                 friction and velocity-limit forces
+//   u64           FNV-1a 64 checksum of everything before it
+// docs/testing.md lists the errors a bad file gets.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "featherdrive/io/error.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+
+inline constexpr std::uint32_t kCheckpointVersion = 1;
+
+/// A checkpoint that cannot be read or does not fit the simulation: the message names the file
+/// and what is wrong (truncated, corrupt, another format version, another model).
+class CheckpointError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
+/// A hash of what makes a model: per link its name, parent, joint name and type, mass, centre of
+/// mass, inertia, joint frame and axis, and the model's nq, nv, gravity, armature and joint limits.
+/// Computed from the bits of the doubles, so it is the same on every run and machine.
+std::uint64_t model_fingerprint(const Model& model);
+
+/// The checkpoint of `sim` as bytes.
+std::string checkpoint_bytes(const Simulation& sim);
+
+/// Restores `sim` from checkpoint bytes; `name` stands for the file in messages. Throws
+/// CheckpointError and leaves `sim` unchanged when the bytes are not a checkpoint of sim's model.
+void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::string& name);
+
+/// Writes the checkpoint atomically: a temporary file in the same folder, fsync, rename (and an
+/// fsync of the folder). Throws std::runtime_error when the file cannot be written.
+void save_checkpoint(const Simulation& sim, const std::filesystem::path& path);
+
+/// Reads a checkpoint file into `sim` (see restore_checkpoint).
+void load_checkpoint(const std::filesystem::path& path, Simulation& sim);
+
+}  // namespace featherdrive

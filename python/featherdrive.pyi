@@ -1,0 +1,367 @@
+"""Typed stubs of the featherdrive module (python/featherdrive_py.cpp): articulated robots in
+reduced coordinates with implicit PD joint drives solved as NVIDIA PhysX 5 does (PGS or TGS).
+
+Vectors read from a Simulation are read-only numpy views onto its state that follow later steps;
+copy them (numpy.array(sim.q)) to keep a snapshot. Bad input raises ValueError, a diverging step
+RuntimeError (DivergenceError), with the C++ message."""
+
+import enum
+import os
+from typing import Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+Vector = npt.NDArray[np.float64]
+PathLike = Union[str, os.PathLike[str]]
+Joint = Union[str, int]
+"""A joint name, or a dof index."""
+
+class DivergenceError(RuntimeError):
+    """A step would produce a non-finite value; the state is that before the step."""
+
+class ModelError(ValueError):
+    """Bad model input (ModelBuilder): names the link or joint, field and value."""
+
+class InputError(ValueError):
+    """A bad input file (URDF, scene): names the file, element or key and value."""
+
+class JointType(enum.Enum):
+    """The type of a link's inbound joint."""
+    fixed = 0
+    revolute = 1
+    prismatic = 2
+    spherical = 3
+    floating = 4
+
+class DriveType(enum.Enum):
+    """The kind of a joint drive."""
+    none = 0
+    force = 1
+    acceleration = 2
+
+class SolverType(enum.Enum):
+    """The constraint solver."""
+    pgs = 0
+    tgs = 1
+
+class Drive:
+    """A drive's settings (all of them may change between steps)."""
+    type: DriveType
+    stiffness: float
+    damping: float
+    max_force: float
+    target_position: float
+    target_velocity: float
+    max_impulse: float
+    def __init__(self, type: Union[DriveType, str] = DriveType.force, stiffness: float = 0.0,
+                 damping: float = 0.0, max_force: float = ..., target_position: float = 0.0,
+                 target_velocity: float = 0.0, max_impulse: float = ...) -> None:
+        """A drive; max_force and max_impulse default to inf (unlimited)."""
+
+class JointFriction:
+    """Joint friction: static and dynamic efforts and viscous friction."""
+    static_effort: float
+    dynamic_effort: float
+    viscous: float
+    def __init__(self, static_effort: float = 0.0, dynamic_effort: float = 0.0,
+                 viscous: float = 0.0) -> None: ...
+    def active(self) -> bool:
+        """Whether any friction is set."""
+
+class ActuatorEnvelope:
+    """A DC-motor-like limit on a drive's effort (none while max_effort = 0)."""
+    max_effort: float
+    max_actuator_velocity: float
+    speed_effort_gradient: float
+    velocity_dependent_resistance: float
+    def __init__(self, max_effort: float = 0.0, max_actuator_velocity: float = ...,
+                 speed_effort_gradient: float = 0.0,
+                 velocity_dependent_resistance: float = 0.0) -> None: ...
+    def active(self) -> bool:
+        """Whether the envelope limits the drive."""
+
+class SimulationOptions:
+    """Time step and solver settings."""
+    dt: float
+    solver: SolverType
+    position_iterations: int
+    velocity_iterations: int
+    def __init__(self, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
+                 position_iterations: int = 4, velocity_iterations: int = 1) -> None:
+        """ValueError for dt <= 0, position_iterations < 1 or velocity_iterations < 0."""
+
+def validate_options(options: SimulationOptions) -> None:
+    """Raises ValueError naming the field and value for bad options."""
+
+class Link:
+    """A link of a Model and its inbound joint (read-only)."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def parent(self) -> int: ...
+    @property
+    def children(self) -> list[int]: ...
+    @property
+    def mass(self) -> float: ...
+    @property
+    def com(self) -> Vector: ...
+    @property
+    def inertia_com(self) -> Vector: ...
+    @property
+    def joint_name(self) -> str: ...
+    @property
+    def joint_type(self) -> JointType: ...
+    @property
+    def axis(self) -> Vector: ...
+    @property
+    def q_index(self) -> int: ...
+    @property
+    def v_index(self) -> int: ...
+    @property
+    def nq(self) -> int: ...
+    @property
+    def nv(self) -> int: ...
+    @property
+    def subtree_end(self) -> int: ...
+
+class Model:
+    """The immutable description of an articulation; one Model serves many simulations."""
+    @property
+    def nq(self) -> int: ...
+    @property
+    def nv(self) -> int: ...
+    @property
+    def gravity(self) -> Vector: ...
+    @property
+    def links(self) -> list[Link]: ...
+    @property
+    def armature(self) -> Vector: ...
+    @property
+    def lower_limit(self) -> Vector: ...
+    @property
+    def upper_limit(self) -> Vector: ...
+    @property
+    def effort_limit(self) -> Vector: ...
+    @property
+    def velocity_limit(self) -> Vector: ...
+    @property
+    def damping(self) -> Vector: ...
+    @property
+    def friction(self) -> Vector: ...
+    @property
+    def dof_link(self) -> list[int]: ...
+    @property
+    def dof_names(self) -> list[str]: ...
+    def floating_base(self) -> bool: ...
+    def num_links(self) -> int: ...
+    def link_index(self, name: str) -> int: ...
+    def joint_link_index(self, joint_name: str) -> int: ...
+    def dof_index(self, joint_name: str) -> int: ...
+    def neutral_configuration(self) -> Vector: ...
+
+class JointSpec:
+    """The inbound joint of a link, as in URDF."""
+    name: str
+    type: JointType
+    origin_xyz: ArrayLike
+    origin_rpy: ArrayLike
+    axis: ArrayLike
+    armature: list[float]
+    lower_limit: float
+    upper_limit: float
+    effort_limit: float
+    velocity_limit: float
+    damping: float
+    friction: float
+    def __init__(self) -> None: ...
+
+class LinkSpec:
+    """A link description for ModelBuilder."""
+    name: str
+    parent: str
+    mass: float
+    com: ArrayLike
+    inertia: ArrayLike
+    joint: JointSpec
+    def __init__(self) -> None: ...
+
+def fixed_joint(name: str, xyz: ArrayLike = ..., rpy: ArrayLike = ...) -> JointSpec: ...
+def revolute_joint(name: str, axis: ArrayLike, xyz: ArrayLike = ...,
+                   rpy: ArrayLike = ...) -> JointSpec: ...
+def prismatic_joint(name: str, axis: ArrayLike, xyz: ArrayLike = ...,
+                    rpy: ArrayLike = ...) -> JointSpec: ...
+def spherical_joint(name: str, xyz: ArrayLike = ..., rpy: ArrayLike = ...) -> JointSpec: ...
+def floating_joint(name: str) -> JointSpec: ...
+def make_link(name: str, parent: str, mass: float, com: ArrayLike, inertia: ArrayLike,
+              joint: JointSpec) -> LinkSpec:
+    """A LinkSpec; parent '' for the root."""
+
+class ModelBuilder:
+    """Builds a Model from LinkSpecs, validating once."""
+    def __init__(self) -> None: ...
+    def set_gravity(self, gravity: ArrayLike) -> ModelBuilder: ...
+    def add_link(self, link: LinkSpec) -> ModelBuilder: ...
+    def build(self) -> Model:
+        """Raises ModelError (a ValueError)."""
+
+class Simulation:
+    """One simulation of a Model: state, drives, joint settings and the last step's forces."""
+    def __init__(self, model: Model, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
+                 position_iterations: int = 4, velocity_iterations: int = 1) -> None: ...
+    def copy(self) -> Simulation: ...
+    @property
+    def model(self) -> Model: ...
+    @property
+    def options(self) -> SimulationOptions: ...
+    def set_options(self, options: SimulationOptions) -> None: ...
+    @property
+    def q(self) -> Vector:
+        """Configuration (nq,), a read-only view."""
+    @property
+    def qd(self) -> Vector:
+        """Joint velocities (nv,), a read-only view."""
+    def set_q(self, q: ArrayLike) -> None: ...
+    def set_qd(self, qd: ArrayLike) -> None: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def step_count(self) -> int: ...
+    def set_applied_force(self, tau: ArrayLike) -> None: ...
+    @property
+    def applied_force(self) -> Vector: ...
+    def set_drive(self, joint: Joint, drive: Drive) -> None: ...
+    def drive(self, joint: Joint) -> Drive: ...
+    def set_drive_target(self, joint: Joint, position: float, velocity: float = 0.0) -> None: ...
+    def set_drive_targets(self, positions: ArrayLike, velocities: ArrayLike | None = None) -> None:
+        """Every dof's targets (nv,) each; velocities default to 0."""
+    def set_drive_gains(self, stiffness: ArrayLike, damping: ArrayLike,
+                        type: Union[DriveType, str] = DriveType.force) -> None:
+        """Every dof's stiffness and damping ((nv,) or a scalar)."""
+    def set_joint_limits(self, joint: Joint, lower: float, upper: float) -> None: ...
+    def lower_limit(self, joint: Joint) -> float: ...
+    def upper_limit(self, joint: Joint) -> float: ...
+    def set_joint_friction(self, joint: Joint, friction: JointFriction) -> None: ...
+    def joint_friction(self, joint: Joint) -> JointFriction: ...
+    def set_max_joint_velocity(self, joint: Joint, max_velocity: float) -> None: ...
+    def max_joint_velocity(self, joint: Joint) -> float: ...
+    def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
+    def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
+    @property
+    def drive_force(self) -> Vector: ...
+    @property
+    def limit_force(self) -> Vector: ...
+    @property
+    def friction_force(self) -> Vector: ...
+    @property
+    def velocity_limit_force(self) -> Vector: ...
+    def step(self, count: int = 1) -> None:
+        """Advances count steps (GIL released); DivergenceError on a non-finite step."""
+
+def set_drive_targets(sim: Simulation, positions: ArrayLike, velocities: ArrayLike) -> None: ...
+def set_drive_gains(sim: Simulation, stiffness: ArrayLike, damping: ArrayLike,
+                    type: Union[DriveType, str] = DriveType.force) -> None: ...
+
+class Batch:
+    """N independent copies of one Model stepped together on all cores, bit-identical to
+    stepping each alone for any num_threads."""
+    num_threads: int
+    def __init__(self, model: Model, count: int, dt: float = 1.0 / 60.0,
+                 solver: Union[str, SolverType] = "pgs", position_iterations: int = 4,
+                 velocity_iterations: int = 1) -> None: ...
+    def __len__(self) -> int: ...
+    def size(self) -> int: ...
+    @property
+    def model(self) -> Model: ...
+    def sim(self, i: int) -> Simulation: ...
+    def set_num_threads(self, threads: int) -> None: ...
+    def effective_num_threads(self) -> int: ...
+    def set_options(self, options: SimulationOptions) -> None: ...
+    @property
+    def q(self) -> Vector:
+        """(N, nq), a read-only copy."""
+    @property
+    def qd(self) -> Vector: ...
+    @property
+    def drive_force(self) -> Vector: ...
+    @property
+    def limit_force(self) -> Vector: ...
+    @property
+    def friction_force(self) -> Vector: ...
+    @property
+    def velocity_limit_force(self) -> Vector: ...
+    def set_q(self, q: ArrayLike) -> None: ...
+    def set_qd(self, qd: ArrayLike) -> None: ...
+    def set_applied_force(self, tau: ArrayLike) -> None: ...
+    def set_drive_targets(self, positions: ArrayLike, velocities: ArrayLike | None = None) -> None: ...
+    def set_drive_gains(self, stiffness: ArrayLike, damping: ArrayLike,
+                        type: Union[DriveType, str] = DriveType.force) -> None: ...
+    def set_drive(self, joint: str, drive: Drive) -> None: ...
+    def step(self, count: int = 1) -> None:
+        """Steps every copy (GIL released); DivergenceError names the lowest diverged copy."""
+
+class UrdfOptions:
+    fixed_base: bool
+    gravity: ArrayLike
+    def __init__(self, fixed_base: bool = True, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> None: ...
+
+class UrdfMimic:
+    joint: str
+    leader: str
+    multiplier: float
+    offset: float
+
+class UrdfRobot:
+    """A robot read from URDF and its Model."""
+    path: os.PathLike[str]
+    name: str
+    root_link: str
+    root_joint: str
+    options: UrdfOptions
+    links: list[LinkSpec]
+    joint_order: list[str]
+    dof_order: list[int]
+    mimics: list[UrdfMimic]
+    warnings: list[str]
+    effort_limits: dict[str, float]
+    @property
+    def model(self) -> Model: ...
+    def rebuild(self) -> None: ...
+
+def load_urdf(path: PathLike, options: UrdfOptions = ...) -> UrdfRobot:
+    """Raises InputError (a ValueError) naming the file."""
+def parse_urdf(xml: str, name: str, options: UrdfOptions = ...) -> UrdfRobot: ...
+
+class SineTarget:
+    amplitude: float
+    frequency: float
+    phase: float
+    offset: float
+    def position(self, t: float) -> float: ...
+    def velocity(self, t: float) -> float: ...
+
+class DriveSpec:
+    joint: str
+    dof: int
+    drive: Drive
+    sine: SineTarget | None
+    def target_at(self, t: float) -> tuple[float, float]: ...
+
+class Scene:
+    path: os.PathLike[str]
+    model_path: os.PathLike[str]
+    robot: UrdfRobot
+    options: SimulationOptions
+    steps: int
+    q0: Vector
+    qd0: Vector
+    drives: list[DriveSpec]
+    @property
+    def model(self) -> Model: ...
+
+def load_scene(path: PathLike) -> Scene:
+    """Raises InputError (a ValueError) naming the file, key and value."""
+def parse_scene(text: str, path: PathLike) -> Scene: ...
+def make_simulation(scene: Scene) -> Simulation: ...
+def apply_targets(scene: Scene, sim: Simulation, step_index: int) -> None: ...

@@ -1,0 +1,754 @@
+// The Python module `featherdrive`: thin pybind11 bindings over the C++ API with the same names.
+// Vectors come back as read-only numpy views onto the Simulation's Eigen vectors (no copy; the
+// view keeps the Simulation alive); arrays going in are checked for shape and dtype here so that
+// a wrong one raises ValueError naming it. C++ std::invalid_argument (ModelError, InputError) ->
+// ValueError, DivergenceError (std::runtime_error) -> RuntimeError, with the C++ message.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/urdf.hpp"
+#include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/sim/batch.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace py = pybind11;
+using namespace featherdrive;
+
+namespace {
+
+using ModelPtr = std::shared_ptr<Model>;
+
+// Python holds models as shared_ptr<Model> (pybind11 needs a non-const holder); the bindings
+// expose no way to change one, so it stays as immutable as the C++ shared_ptr<const Model>.
+ModelPtr to_python(const std::shared_ptr<const Model>& model) {
+  return std::const_pointer_cast<Model>(model);
+}
+
+std::string shape_of(const py::array& a) {
+  std::ostringstream s;
+  s << "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i) << (a.ndim() == 1 ? "," : "");
+  s << ")";
+  return s.str();
+}
+
+/// obj as a C-contiguous float64 array; ValueError naming `what` unless its dtype is real numbers.
+py::array_t<double, py::array::c_style> as_float_array(py::handle obj, const std::string& what) {
+  py::array a = py::module_::import("numpy").attr("asarray")(obj);
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw std::invalid_argument(what + " has dtype " + py::str(a.dtype()).cast<std::string>() +
+                                ": expected real numbers (float64)");
+  return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+/// A vector of n values: an array of shape (n,), or a scalar for all n.
+VecX to_vector(py::handle obj, Eigen::Index n, const std::string& what, bool scalar_ok = false) {
+  const auto a = as_float_array(obj, what);
+  if (scalar_ok && a.ndim() == 0) return VecX::Constant(n, *a.data());
+  if (a.ndim() != 1 || a.shape(0) != n)
+    throw std::invalid_argument(what + " has shape " + shape_of(a) + ", expected (" +
+                                std::to_string(n) + ",)");
+  VecX v(n);
+  if (n > 0) std::memcpy(v.data(), a.data(), sizeof(double) * static_cast<size_t>(n));
+  return v;
+}
+
+Vec3 to_vec3(py::handle obj, const std::string& what) { return to_vector(obj, 3, what); }
+
+Mat3 to_mat3(py::handle obj, const std::string& what) {
+  const auto a = as_float_array(obj, what);
+  if (a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) != 3)
+    throw std::invalid_argument(what + " has shape " + shape_of(a) + ", expected (3, 3)");
+  Mat3 m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) = a.at(i, j);
+  return m;
+}
+
+/// A (rows, cols) matrix: an array of that shape, or one row of shape (cols,) for every row.
+RowMatrix to_matrix(py::handle obj, Eigen::Index rows, Eigen::Index cols, const std::string& what) {
+  const auto a = as_float_array(obj, what);
+  if (a.ndim() == 1 && a.shape(0) == cols) {
+    RowMatrix m(rows, cols);
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (Eigen::Index j = 0; j < cols; ++j) m(i, j) = a.data()[j];
+    return m;
+  }
+  if (a.ndim() != 2 || a.shape(0) != rows || a.shape(1) != cols)
+    throw std::invalid_argument(what + " has shape " + shape_of(a) + ", expected (" +
+                                std::to_string(rows) + ", " + std::to_string(cols) + ") or (" +
+                                std::to_string(cols) + ",)");
+  RowMatrix m(rows, cols);
+  if (m.size() > 0) std::memcpy(m.data(), a.data(), sizeof(double) * static_cast<size_t>(m.size()));
+  return m;
+}
+
+/// A (rows, cols) numpy array that owns a copy of m and is read-only (writing to it would not
+/// reach the batch).
+py::array read_only(RowMatrix m) {
+  py::array a = py::cast(std::move(m));
+  a.attr("flags").attr("writeable") = false;
+  return a;
+}
+
+SolverType to_solver(py::handle obj) {
+  if (py::isinstance<SolverType>(obj)) return obj.cast<SolverType>();
+  if (py::isinstance<py::str>(obj)) {
+    const auto s = obj.cast<std::string>();
+    if (s == "pgs") return SolverType::pgs;
+    if (s == "tgs") return SolverType::tgs;
+    throw std::invalid_argument("solver = '" + s + "': must be 'pgs' or 'tgs'");
+  }
+  throw std::invalid_argument("solver = " + py::repr(obj).cast<std::string>() +
+                              ": must be 'pgs', 'tgs' or a SolverType");
+}
+
+DriveType to_drive_type(py::handle obj) {
+  if (py::isinstance<DriveType>(obj)) return obj.cast<DriveType>();
+  if (py::isinstance<py::str>(obj)) {
+    const auto s = obj.cast<std::string>();
+    if (s == "none") return DriveType::none;
+    if (s == "force") return DriveType::force;
+    if (s == "acceleration") return DriveType::acceleration;
+    throw std::invalid_argument("drive type = '" + s + "': must be 'none', 'force' or 'acceleration'");
+  }
+  throw std::invalid_argument("drive type = " + py::repr(obj).cast<std::string>() +
+                              ": must be 'none', 'force', 'acceleration' or a DriveType");
+}
+
+SimulationOptions make_options(double dt, py::handle solver, int position_iterations,
+                               int velocity_iterations) {
+  SimulationOptions o;
+  o.dt = dt;
+  o.solver = to_solver(solver);
+  o.position_iterations = position_iterations;
+  o.velocity_iterations = velocity_iterations;
+  validate_options(o);
+  return o;
+}
+
+/// The dof of a joint given by name (its first dof) or by dof index.
+int dof_of(const Model& model, py::handle joint) {
+  if (py::isinstance<py::str>(joint)) return model.dof_index(joint.cast<std::string>());
+  if (py::isinstance<py::int_>(joint) && !py::isinstance<py::bool_>(joint)) {
+    const long dof = joint.cast<long>();
+    if (dof < 0 || dof >= model.nv)
+      throw std::invalid_argument("dof index " + std::to_string(dof) + " is out of range [0, " +
+                                  std::to_string(model.nv) + ")");
+    return static_cast<int>(dof);
+  }
+  throw std::invalid_argument("joint = " + py::repr(joint).cast<std::string>() +
+                              ": expected a joint name (str) or a dof index (int)");
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr auto ref = py::return_value_policy::reference_internal;
+
+// Docstrings shared by Simulation and Batch.
+constexpr const char* kSolverDoc = "'pgs' or 'tgs' (or a SolverType)";
+
+}  // namespace
+
+PYBIND11_MODULE(featherdrive, m) {
+  m.doc() =
+      "featherdrive: articulated robots in reduced coordinates with implicit PD joint drives "
+      "solved as NVIDIA PhysX 5 does (PGS or TGS).\n\n"
+      "Vectors read from a Simulation (q, qd, drive_force, ...) are read-only numpy views onto "
+      "its state: they follow later steps; copy them (numpy.array(sim.q)) to keep a snapshot. "
+      "Bad input raises ValueError, a diverging step RuntimeError (DivergenceError), with the "
+      "C++ message.";
+
+  // Errors: subclasses of the Python exceptions the C++ base classes map to.
+  py::register_exception<DivergenceError>(m, "DivergenceError", PyExc_RuntimeError)
+      .doc() = "A step would produce a non-finite value; the simulation keeps its state from "
+               "before that step. A RuntimeError.";
+  py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError).doc() =
+      "Bad model input (ModelBuilder): names the link or joint, field and value. A ValueError.";
+  py::register_exception<InputError>(m, "InputError", PyExc_ValueError).doc() =
+      "A bad input file (URDF, scene): names the file, element or key and value. A ValueError.";
+
+  // ---- enums ----------------------------------------------------------------------------------
+  py::enum_<JointType>(m, "JointType", "The type of a link's inbound joint.")
+      .value("fixed", JointType::fixed, "welds the link to its parent, 0 dofs")
+      .value("revolute", JointType::revolute, "rotation about the axis, 1 dof")
+      .value("prismatic", JointType::prismatic, "translation along the axis, 1 dof")
+      .value("spherical", JointType::spherical, "free rotation: nq = 4 (quaternion), nv = 3")
+      .value("floating", JointType::floating, "root only: nq = 7, nv = 6");
+  py::enum_<DriveType>(m, "DriveType", "The kind of a joint drive.")
+      .value("none", DriveType::none, "no drive on this dof")
+      .value("force", DriveType::force, "stiffness in N/m or Nm/rad, damping in Ns/m or Nms/rad")
+      .value("acceleration", DriveType::acceleration,
+             "stiffness in 1/s^2, damping in 1/s: a mass-free response");
+  py::enum_<SolverType>(m, "SolverType", "The constraint solver.")
+      .value("pgs", SolverType::pgs, "projected Gauss-Seidel")
+      .value("tgs", SolverType::tgs, "temporal Gauss-Seidel (sub-stepped)");
+
+  // ---- settings structs -----------------------------------------------------------------------
+  py::class_<Drive>(m, "Drive", "A drive's settings (all of them may change between steps).")
+      .def(py::init([](py::handle type, double stiffness, double damping, double max_force,
+                       double target_position, double target_velocity, double max_impulse) {
+             Drive d;
+             d.type = to_drive_type(type);
+             d.stiffness = stiffness;
+             d.damping = damping;
+             d.max_force = max_force;
+             d.target_position = target_position;
+             d.target_velocity = target_velocity;
+             d.max_impulse = max_impulse;
+             return d;
+           }),
+           py::arg("type") = DriveType::force, py::arg("stiffness") = 0.0,
+           py::arg("damping") = 0.0, py::arg("max_force") = kInf,
+           py::arg("target_position") = 0.0, py::arg("target_velocity") = 0.0,
+           py::arg("max_impulse") = kInf,
+           "A drive; type is a DriveType or 'none' | 'force' | 'acceleration'. Checked when "
+           "given to Simulation.set_drive.")
+      .def_readwrite("type", &Drive::type, "DriveType")
+      .def_readwrite("stiffness", &Drive::stiffness, "N/m or Nm/rad (force), 1/s^2 (acceleration)")
+      .def_readwrite("damping", &Drive::damping, "Ns/m or Nms/rad (force), 1/s (acceleration)")
+      .def_readwrite("max_force", &Drive::max_force,
+                     "largest drive force; the step's impulse is limited to max_force * dt")
+      .def_readwrite("target_position", &Drive::target_position, "target position (m or rad)")
+      .def_readwrite("target_velocity", &Drive::target_velocity, "target velocity (m/s or rad/s)")
+      .def_readwrite("max_impulse", &Drive::max_impulse,
+                     "largest drive impulse of a step; set at most one of max_force, max_impulse")
+      .def("__repr__", [](const Drive& d) {
+        return std::string("Drive(type='") + to_string(d.type) + "', stiffness=" + fmt(d.stiffness) +
+               ", damping=" + fmt(d.damping) + ", max_force=" + fmt(d.max_force) +
+               ", target_position=" + fmt(d.target_position) + ", target_velocity=" +
+               fmt(d.target_velocity) + ", max_impulse=" + fmt(d.max_impulse) + ")";
+      });
+
+  py::class_<JointFriction>(m, "JointFriction",
+                            "Joint friction: static and dynamic efforts (N or Nm) and viscous "
+                            "friction (Ns/m or Nms/rad).")
+      .def(py::init([](double s, double d, double v) { return JointFriction{s, d, v}; }),
+           py::arg("static_effort") = 0.0, py::arg("dynamic_effort") = 0.0,
+           py::arg("viscous") = 0.0, "Joint friction settings.")
+      .def_readwrite("static_effort", &JointFriction::static_effort, "N or Nm")
+      .def_readwrite("dynamic_effort", &JointFriction::dynamic_effort, "N or Nm")
+      .def_readwrite("viscous", &JointFriction::viscous, "Ns/m or Nms/rad")
+      .def("active", &JointFriction::active, "Whether any friction is set.");
+
+  py::class_<ActuatorEnvelope>(m, "ActuatorEnvelope",
+                               "A DC-motor-like limit on a drive's effort (none while "
+                               "max_effort = 0).")
+      .def(py::init([](double max_effort, double max_actuator_velocity, double gradient,
+                       double resistance) {
+             return ActuatorEnvelope{max_effort, max_actuator_velocity, gradient, resistance};
+           }),
+           py::arg("max_effort") = 0.0, py::arg("max_actuator_velocity") = kInf,
+           py::arg("speed_effort_gradient") = 0.0, py::arg("velocity_dependent_resistance") = 0.0,
+           "An actuator envelope.")
+      .def_readwrite("max_effort", &ActuatorEnvelope::max_effort, "N or Nm; 0 = no envelope")
+      .def_readwrite("max_actuator_velocity", &ActuatorEnvelope::max_actuator_velocity,
+                     "m/s or rad/s")
+      .def_readwrite("speed_effort_gradient", &ActuatorEnvelope::speed_effort_gradient,
+                     "effort lost per unit speed")
+      .def_readwrite("velocity_dependent_resistance",
+                     &ActuatorEnvelope::velocity_dependent_resistance,
+                     "opposing effort per unit speed")
+      .def("active", &ActuatorEnvelope::active, "Whether the envelope limits the drive.");
+
+  py::class_<SimulationOptions>(m, "SimulationOptions", "Time step and solver settings.")
+      .def(py::init(&make_options), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
+           py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
+           "Options; solver is 'pgs' or 'tgs'. Raises ValueError for dt <= 0, "
+           "position_iterations < 1 or velocity_iterations < 0.")
+      .def_readwrite("dt", &SimulationOptions::dt, "time step [s]")
+      .def_readwrite("solver", &SimulationOptions::solver, "SolverType")
+      .def_readwrite("position_iterations", &SimulationOptions::position_iterations, ">= 1")
+      .def_readwrite("velocity_iterations", &SimulationOptions::velocity_iterations, ">= 0")
+      .def("__repr__", [](const SimulationOptions& o) {
+        return "SimulationOptions(dt=" + fmt(o.dt) + ", solver='" + to_string(o.solver) +
+               "', position_iterations=" + std::to_string(o.position_iterations) +
+               ", velocity_iterations=" + std::to_string(o.velocity_iterations) + ")";
+      });
+  m.def("validate_options", &validate_options, py::arg("options"),
+        "Raises ValueError naming the field and value for bad options.");
+
+  // ---- model ----------------------------------------------------------------------------------
+  py::class_<Link>(m, "Link", "A link of a Model and its inbound joint (read-only).")
+      .def_readonly("name", &Link::name, "link name")
+      .def_readonly("parent", &Link::parent, "index of the parent link, -1 for the world")
+      .def_readonly("children", &Link::children, "indices of the child links")
+      .def_readonly("mass", &Link::mass, "kg")
+      .def_readonly("com", &Link::com, "centre of mass in the link frame (3,)")
+      .def_readonly("inertia_com", &Link::inertia_com, "inertia about the centre of mass (3, 3)")
+      .def_readonly("joint_name", &Link::joint_name, "name of the inbound joint")
+      .def_readonly("joint_type", &Link::joint_type, "JointType of the inbound joint")
+      .def_readonly("axis", &Link::axis, "unit joint axis in the joint frame (3,)")
+      .def_readonly("q_index", &Link::q_index, "first entry of this joint in q")
+      .def_readonly("v_index", &Link::v_index, "first entry of this joint in qd")
+      .def_readonly("nq", &Link::nq, "entries of this joint in q")
+      .def_readonly("nv", &Link::nv, "dofs of this joint")
+      .def_readonly("subtree_end", &Link::subtree_end, "links [index, subtree_end) are its subtree")
+      .def("__repr__", [](const Link& l) {
+        return "Link('" + l.name + "', joint='" + l.joint_name + "', " + to_string(l.joint_type) + ")";
+      });
+
+  py::class_<Model, ModelPtr>(m, "Model",
+                              "The immutable description of an articulation; one Model serves "
+                              "many simulations.")
+      .def_readonly("nq", &Model::nq, "size of the configuration vector q")
+      .def_readonly("nv", &Model::nv, "number of dofs (size of qd)")
+      .def_readonly("gravity", &Model::gravity, "gravity (3,) [m/s^2]")
+      .def_readonly("links", &Model::links, "the links in depth-first preorder (list of Link)")
+      .def_readonly("armature", &Model::armature, "per dof (nv,)")
+      .def_readonly("lower_limit", &Model::lower_limit, "per dof (nv,); -inf where unbounded")
+      .def_readonly("upper_limit", &Model::upper_limit, "per dof (nv,); +inf where unbounded")
+      .def_readonly("effort_limit", &Model::effort_limit, "per dof (nv,); informative")
+      .def_readonly("velocity_limit", &Model::velocity_limit, "per dof (nv,)")
+      .def_readonly("damping", &Model::damping, "viscous joint damping per dof (nv,)")
+      .def_readonly("friction", &Model::friction, "Coulomb joint friction per dof (nv,)")
+      .def_readonly("dof_link", &Model::dof_link, "the link owning each dof")
+      .def_readonly("dof_names", &Model::dof_names,
+                    "joint name of each dof ('joint:wx' etc. for multi-dof joints)")
+      .def("floating_base", &Model::floating_base, "Whether the root has a floating joint.")
+      .def("num_links", &Model::num_links, "Number of links.")
+      .def("link_index", &Model::link_index, py::arg("name"),
+           "Index of the named link; ValueError if there is none.")
+      .def("joint_link_index", &Model::joint_link_index, py::arg("joint_name"),
+           "Index of the link whose inbound joint has this name; ValueError if there is none.")
+      .def("dof_index", &Model::dof_index, py::arg("joint_name"),
+           "First dof of the named joint; ValueError if there is none or it has no dofs.")
+      .def("neutral_configuration", &Model::neutral_configuration,
+           "q with every joint at its reference (nq,).")
+      .def("__repr__", [](const Model& mo) {
+        return "Model(links=" + std::to_string(mo.num_links()) + ", nq=" + std::to_string(mo.nq) +
+               ", nv=" + std::to_string(mo.nv) + ")";
+      });
+
+  py::class_<JointSpec>(m, "JointSpec",
+                        "The inbound joint of a link, as in URDF (see revolute_joint etc.).")
+      .def(py::init<>(), "A fixed joint at the parent's origin.")
+      .def_readwrite("name", &JointSpec::name, "joint name")
+      .def_readwrite("type", &JointSpec::type, "JointType")
+      .def_property(
+          "origin_xyz", [](const JointSpec& j) { return j.origin_xyz; },
+          [](JointSpec& j, py::handle v) { j.origin_xyz = to_vec3(v, "origin_xyz"); },
+          "joint frame position in the parent link frame (3,)")
+      .def_property(
+          "origin_rpy", [](const JointSpec& j) { return j.origin_rpy; },
+          [](JointSpec& j, py::handle v) { j.origin_rpy = to_vec3(v, "origin_rpy"); },
+          "joint frame roll, pitch, yaw in the parent link frame (3,)")
+      .def_property(
+          "axis", [](const JointSpec& j) { return j.axis; },
+          [](JointSpec& j, py::handle v) { j.axis = to_vec3(v, "axis"); },
+          "axis in the joint frame (3,), not zero")
+      .def_readwrite("armature", &JointSpec::armature,
+                     "[] (none), [a] (every dof) or one value per dof")
+      .def_readwrite("lower_limit", &JointSpec::lower_limit, "m or rad; -inf for none")
+      .def_readwrite("upper_limit", &JointSpec::upper_limit, "m or rad; +inf for none")
+      .def_readwrite("effort_limit", &JointSpec::effort_limit, "N or Nm (informative)")
+      .def_readwrite("velocity_limit", &JointSpec::velocity_limit, "m/s or rad/s")
+      .def_readwrite("damping", &JointSpec::damping, "viscous joint damping")
+      .def_readwrite("friction", &JointSpec::friction, "Coulomb joint friction");
+
+  py::class_<LinkSpec>(m, "LinkSpec", "A link description for ModelBuilder (see make_link).")
+      .def(py::init<>(), "An empty link description.")
+      .def_readwrite("name", &LinkSpec::name, "link name")
+      .def_readwrite("parent", &LinkSpec::parent, "parent link name, '' for the root")
+      .def_readwrite("mass", &LinkSpec::mass, "kg")
+      .def_property(
+          "com", [](const LinkSpec& l) { return l.com; },
+          [](LinkSpec& l, py::handle v) { l.com = to_vec3(v, "com"); },
+          "centre of mass in the link frame (3,)")
+      .def_property(
+          "inertia", [](const LinkSpec& l) { return l.inertia; },
+          [](LinkSpec& l, py::handle v) { l.inertia = to_mat3(v, "inertia"); },
+          "inertia tensor about the centre of mass, link axes (3, 3)")
+      .def_readwrite("joint", &LinkSpec::joint, "the inbound JointSpec");
+
+  const auto zero3 = py::make_tuple(0.0, 0.0, 0.0);
+  m.def("fixed_joint",
+        [](std::string name, py::handle xyz, py::handle rpy) {
+          return fixed_joint(std::move(name), to_vec3(xyz, "xyz"), to_vec3(rpy, "rpy"));
+        },
+        py::arg("name"), py::arg("xyz") = zero3, py::arg("rpy") = zero3, "A fixed JointSpec.");
+  m.def("revolute_joint",
+        [](std::string name, py::handle axis, py::handle xyz, py::handle rpy) {
+          return revolute_joint(std::move(name), to_vec3(axis, "axis"), to_vec3(xyz, "xyz"),
+                                to_vec3(rpy, "rpy"));
+        },
+        py::arg("name"), py::arg("axis"), py::arg("xyz") = zero3, py::arg("rpy") = zero3,
+        "A revolute JointSpec about axis (3,) at origin (xyz, rpy).");
+  m.def("prismatic_joint",
+        [](std::string name, py::handle axis, py::handle xyz, py::handle rpy) {
+          return prismatic_joint(std::move(name), to_vec3(axis, "axis"), to_vec3(xyz, "xyz"),
+                                 to_vec3(rpy, "rpy"));
+        },
+        py::arg("name"), py::arg("axis"), py::arg("xyz") = zero3, py::arg("rpy") = zero3,
+        "A prismatic JointSpec along axis (3,) at origin (xyz, rpy).");
+  m.def("spherical_joint",
+        [](std::string name, py::handle xyz, py::handle rpy) {
+          return spherical_joint(std::move(name), to_vec3(xyz, "xyz"), to_vec3(rpy, "rpy"));
+        },
+        py::arg("name"), py::arg("xyz") = zero3, py::arg("rpy") = zero3, "A spherical JointSpec.");
+  m.def("floating_joint", &floating_joint, py::arg("name"), "A floating JointSpec (root only).");
+  m.def("make_link",
+        [](std::string name, std::string parent, double mass, py::handle com, py::handle inertia,
+           JointSpec joint) {
+          return make_link(std::move(name), std::move(parent), mass, to_vec3(com, "com"),
+                           to_mat3(inertia, "inertia"), std::move(joint));
+        },
+        py::arg("name"), py::arg("parent"), py::arg("mass"), py::arg("com"), py::arg("inertia"),
+        py::arg("joint"),
+        "A LinkSpec: mass, centre of mass (3,), inertia about it (3, 3) and inbound joint; "
+        "parent '' for the root.");
+
+  py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model from LinkSpecs, validating once.")
+      .def(py::init<>(), "An empty builder; gravity (0, 0, -9.81).")
+      .def(
+          "set_gravity",
+          [](ModelBuilder& b, py::handle g) -> ModelBuilder& {
+            return b.set_gravity(to_vec3(g, "gravity"));
+          },
+          py::arg("gravity"), ref, "Sets gravity (3,); returns the builder.")
+      .def("add_link", &ModelBuilder::add_link, py::arg("link"), ref,
+           "Adds a LinkSpec; returns the builder.")
+      .def(
+          "build", [](const ModelBuilder& b) { return std::make_shared<Model>(b.build()); },
+          "Validates everything and returns the Model; ModelError (a ValueError) naming the "
+          "link or joint, field and value.");
+
+  // ---- simulation -----------------------------------------------------------------------------
+  py::class_<Simulation>(m, "Simulation",
+                         "One simulation of a Model: state, drives, joint settings and the "
+                         "forces of the last step.")
+      .def(py::init([](ModelPtr model, double dt, py::handle solver, int pi, int vi) {
+             return Simulation(std::move(model), make_options(dt, solver, pi, vi));
+           }),
+           py::arg("model"), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
+           py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
+           (std::string("A simulation at the neutral configuration, at rest, without drives; "
+                         "solver ") + kSolverDoc + ".").c_str())
+      .def(py::init([](ModelPtr model, const SimulationOptions& o) {
+             return Simulation(std::move(model), o);
+           }),
+           py::arg("model"), py::arg("options"), "A simulation with these options.")
+      .def("copy", [](const Simulation& s) { return Simulation(s); },
+           "An independent copy (same model, state and settings).")
+      .def_property_readonly("model", [](const Simulation& s) { return to_python(s.model_ptr()); },
+                             "The Model.")
+      .def_property_readonly("options", &Simulation::options, "The SimulationOptions (a copy).")
+      .def("set_options", &Simulation::set_options, py::arg("options"),
+           "Replaces the options; ValueError for bad ones.")
+      .def_property_readonly("q", &Simulation::q, ref, "Configuration (nq,), read-only view.")
+      .def_property_readonly("qd", &Simulation::qd, ref, "Joint velocities (nv,), read-only view.")
+      .def(
+          "set_q", [](Simulation& s, py::handle q) { s.set_q(to_vector(q, s.model().nq, "q")); },
+          py::arg("q"), "Sets the configuration (nq,); quaternions are normalised.")
+      .def(
+          "set_qd", [](Simulation& s, py::handle qd) { s.set_qd(to_vector(qd, s.model().nv, "qd")); },
+          py::arg("qd"), "Sets the joint velocities (nv,).")
+      .def_property_readonly("time", &Simulation::time, "Simulated time [s].")
+      .def_property_readonly("step_count", &Simulation::step_count, "Steps made.")
+      .def(
+          "set_applied_force",
+          [](Simulation& s, py::handle tau) {
+            s.set_applied_force(to_vector(tau, s.model().nv, "applied_force"));
+          },
+          py::arg("tau"), "Joint forces applied through each step (nv,), e.g. feed-forward.")
+      .def_property_readonly("applied_force", &Simulation::applied_force, ref,
+                             "Applied joint forces (nv,), read-only view.")
+      .def(
+          "set_drive",
+          [](Simulation& s, py::handle joint, const Drive& d) { s.set_drive(dof_of(s.model(), joint), d); },
+          py::arg("joint"), py::arg("drive"),
+          "Sets the Drive of a joint (name) or dof (index); ValueError naming the joint and "
+          "field for bad values.")
+      .def(
+          "drive", [](const Simulation& s, py::handle joint) { return s.drive(dof_of(s.model(), joint)); },
+          py::arg("joint"), "The Drive (a copy) of a joint (name) or dof (index).")
+      .def(
+          "set_drive_target",
+          [](Simulation& s, py::handle joint, double position, double velocity) {
+            s.set_drive_target(dof_of(s.model(), joint), position, velocity);
+          },
+          py::arg("joint"), py::arg("position"), py::arg("velocity") = 0.0,
+          "Sets one joint's drive target position and velocity.")
+      .def(
+          "set_drive_targets",
+          [](Simulation& s, py::handle positions, py::object velocities) {
+            const int nv = s.model().nv;
+            const VecX p = to_vector(positions, nv, "positions");
+            const VecX v = velocities.is_none() ? VecX::Zero(nv) : to_vector(velocities, nv, "velocities");
+            set_drive_targets(s, p, v);
+          },
+          py::arg("positions"), py::arg("velocities") = py::none(),
+          "Sets every dof's target position and velocity (nv,) each; velocities default to 0. "
+          "Nothing changes on a ValueError.")
+      .def(
+          "set_drive_gains",
+          [](Simulation& s, py::handle stiffness, py::handle damping, py::handle type) {
+            const int nv = s.model().nv;
+            set_drive_gains(s, to_vector(stiffness, nv, "stiffness", true),
+                            to_vector(damping, nv, "damping", true), to_drive_type(type));
+          },
+          py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
+          "Sets every dof's stiffness and damping ((nv,) each, or a scalar for all) and makes "
+          "the drives of revolute and prismatic joints `type` (default force), keeping "
+          "max_force and targets. Other joints' dofs must get 0. Nothing changes on a ValueError.")
+      .def(
+          "set_joint_limits",
+          [](Simulation& s, py::handle joint, double lower, double upper) {
+            s.set_joint_limits(dof_of(s.model(), joint), lower, upper);
+          },
+          py::arg("joint"), py::arg("lower"), py::arg("upper"),
+          "Position limits of a revolute or prismatic joint (name or dof); +-inf for none.")
+      .def(
+          "lower_limit", [](const Simulation& s, py::handle j) { return s.lower_limit(dof_of(s.model(), j)); },
+          py::arg("joint"), "Lower position limit of a joint (name or dof).")
+      .def(
+          "upper_limit", [](const Simulation& s, py::handle j) { return s.upper_limit(dof_of(s.model(), j)); },
+          py::arg("joint"), "Upper position limit of a joint (name or dof).")
+      .def(
+          "set_joint_friction",
+          [](Simulation& s, py::handle joint, const JointFriction& f) {
+            s.set_joint_friction(dof_of(s.model(), joint), f);
+          },
+          py::arg("joint"), py::arg("friction"), "JointFriction of a joint (name or dof).")
+      .def(
+          "joint_friction",
+          [](const Simulation& s, py::handle j) { return s.joint_friction(dof_of(s.model(), j)); },
+          py::arg("joint"), "The JointFriction (a copy) of a joint (name or dof).")
+      .def(
+          "set_max_joint_velocity",
+          [](Simulation& s, py::handle joint, double v) {
+            s.set_max_joint_velocity(dof_of(s.model(), joint), v);
+          },
+          py::arg("joint"), py::arg("max_velocity"),
+          "Largest |qd| of a joint (name or dof); inf for none.")
+      .def(
+          "max_joint_velocity",
+          [](const Simulation& s, py::handle j) { return s.max_joint_velocity(dof_of(s.model(), j)); },
+          py::arg("joint"), "Largest |qd| of a joint (name or dof).")
+      .def(
+          "set_actuator_envelope",
+          [](Simulation& s, py::handle joint, const ActuatorEnvelope& e) {
+            s.set_actuator_envelope(dof_of(s.model(), joint), e);
+          },
+          py::arg("joint"), py::arg("envelope"), "ActuatorEnvelope of a joint (name or dof).")
+      .def(
+          "actuator_envelope",
+          [](const Simulation& s, py::handle j) { return s.actuator_envelope(dof_of(s.model(), j)); },
+          py::arg("joint"), "The ActuatorEnvelope (a copy) of a joint (name or dof).")
+      .def_property_readonly("drive_force", &Simulation::drive_force, ref,
+                             "Drive force of each dof in the last step (nv,), read-only view.")
+      .def_property_readonly("limit_force", &Simulation::limit_force, ref,
+                             "Position-limit force of each dof in the last step (nv,), view.")
+      .def_property_readonly("friction_force", &Simulation::friction_force, ref,
+                             "Joint-friction force of each dof in the last step (nv,), view.")
+      .def_property_readonly("velocity_limit_force", &Simulation::velocity_limit_force, ref,
+                             "Velocity-limit force of each dof in the last step (nv,), view.")
+      .def("step", py::overload_cast<int>(&Simulation::step), py::arg("count") = 1,
+           py::call_guard<py::gil_scoped_release>(),
+           "Advances count steps of options.dt (the GIL is released). DivergenceError (a "
+           "RuntimeError) if a step would give a non-finite value: the state is that before the "
+           "step that diverged, the steps before it are kept.");
+
+  m.def(
+      "set_drive_targets",
+      [](Simulation& s, py::handle positions, py::handle velocities) {
+        const int nv = s.model().nv;
+        set_drive_targets(s, to_vector(positions, nv, "positions"), to_vector(velocities, nv, "velocities"));
+      },
+      py::arg("sim"), py::arg("positions"), py::arg("velocities"),
+      "The C++ free function; the same as sim.set_drive_targets(positions, velocities).");
+  m.def(
+      "set_drive_gains",
+      [](Simulation& s, py::handle stiffness, py::handle damping, py::handle type) {
+        const int nv = s.model().nv;
+        set_drive_gains(s, to_vector(stiffness, nv, "stiffness", true),
+                        to_vector(damping, nv, "damping", true), to_drive_type(type));
+      },
+      py::arg("sim"), py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
+      "The C++ free function; the same as sim.set_drive_gains(stiffness, damping, type).");
+
+  // ---- batch ----------------------------------------------------------------------------------
+  py::class_<Batch>(m, "Batch",
+                    "N independent copies of one Model stepped together on all cores. Each "
+                    "copy's result is bit-identical to stepping it alone, for any num_threads. "
+                    "States read as (N, nq) / (N, nv) arrays (read-only copies).")
+      .def(py::init([](ModelPtr model, int count, double dt, py::handle solver, int pi, int vi) {
+             return std::make_unique<Batch>(std::move(model), count, make_options(dt, solver, pi, vi));
+           }),
+           py::arg("model"), py::arg("count"), py::arg("dt") = 1.0 / 60.0,
+           py::arg("solver") = "pgs", py::arg("position_iterations") = 4,
+           py::arg("velocity_iterations") = 1,
+           "count copies of a new Simulation of model (as Simulation(model, dt, solver, ...)).")
+      .def(py::init([](const Simulation& prototype, int count) {
+             return std::make_unique<Batch>(prototype, count);
+           }),
+           py::arg("prototype"), py::arg("count"),
+           "count copies of prototype: its state, drives, limits and other settings.")
+      .def("__len__", &Batch::size, "Number of copies.")
+      .def("size", &Batch::size, "Number of copies.")
+      .def_property_readonly("model", [](const Batch& b) { return to_python(b.model_ptr()); },
+                             "The shared Model.")
+      .def("sim", py::overload_cast<int>(&Batch::sim), py::arg("i"), ref,
+           "Copy i as a Simulation (a reference into the batch, for per-copy settings).")
+      .def_property("num_threads", &Batch::num_threads, &Batch::set_num_threads,
+                    "Threads step() uses: 0 = all cores (default), 1 = serial.")
+      .def("set_num_threads", &Batch::set_num_threads, py::arg("threads"),
+           "Threads step() uses: 0 = all cores, 1 = serial; ValueError if < 0.")
+      .def("effective_num_threads", &Batch::effective_num_threads,
+           "The threads step() will use.")
+      .def("set_options", &Batch::set_options, py::arg("options"), "Sets every copy's options.")
+      .def_property_readonly("q", [](const Batch& b) { return read_only(b.q()); },
+                             "Configurations (N, nq), a read-only copy.")
+      .def_property_readonly("qd", [](const Batch& b) { return read_only(b.qd()); },
+                             "Joint velocities (N, nv), a read-only copy.")
+      .def_property_readonly("drive_force", [](const Batch& b) { return read_only(b.drive_force()); },
+                             "Drive forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly("limit_force", [](const Batch& b) { return read_only(b.limit_force()); },
+                             "Position-limit forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly("friction_force",
+                             [](const Batch& b) { return read_only(b.friction_force()); },
+                             "Joint-friction forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly("velocity_limit_force",
+                             [](const Batch& b) { return read_only(b.velocity_limit_force()); },
+                             "Velocity-limit forces of the last step (N, nv), a read-only copy.")
+      .def(
+          "set_q", [](Batch& b, py::handle q) { b.set_q(to_matrix(q, b.size(), b.model().nq, "q")); },
+          py::arg("q"), "Sets the configurations (N, nq), or (nq,) for all copies.")
+      .def(
+          "set_qd", [](Batch& b, py::handle qd) { b.set_qd(to_matrix(qd, b.size(), b.model().nv, "qd")); },
+          py::arg("qd"), "Sets the joint velocities (N, nv), or (nv,) for all copies.")
+      .def(
+          "set_applied_force",
+          [](Batch& b, py::handle tau) {
+            b.set_applied_force(to_matrix(tau, b.size(), b.model().nv, "applied_force"));
+          },
+          py::arg("tau"), "Sets the applied joint forces (N, nv), or (nv,) for all copies.")
+      .def(
+          "set_drive_targets",
+          [](Batch& b, py::handle positions, py::object velocities) {
+            const int n = b.size(), nv = b.model().nv;
+            const RowMatrix p = to_matrix(positions, n, nv, "positions");
+            const RowMatrix v = velocities.is_none() ? RowMatrix::Zero(n, nv)
+                                                     : to_matrix(velocities, n, nv, "velocities");
+            b.set_drive_targets(p, v);
+          },
+          py::arg("positions"), py::arg("velocities") = py::none(),
+          "Per-copy target positions and velocities, (N, nv) or (nv,) for all copies; "
+          "velocities default to 0. Nothing changes on a ValueError.")
+      .def(
+          "set_drive_gains",
+          [](Batch& b, py::handle stiffness, py::handle damping, py::handle type) {
+            const int n = b.size(), nv = b.model().nv;
+            b.set_drive_gains(to_matrix(stiffness, n, nv, "stiffness"),
+                              to_matrix(damping, n, nv, "damping"), to_drive_type(type));
+          },
+          py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
+          "Per-copy stiffness and damping, (N, nv) or (nv,) for all copies, as "
+          "Simulation.set_drive_gains. Nothing changes on a ValueError.")
+      .def("set_drive", &Batch::set_drive, py::arg("joint"), py::arg("drive"),
+           "The same Drive on one joint (name) of every copy.")
+      .def("step", &Batch::step, py::arg("count") = 1, py::call_guard<py::gil_scoped_release>(),
+           "Steps every copy count times, in parallel, without the GIL. A copy that diverges "
+           "stops at that step with its state from before it; the others make all their steps; "
+           "then DivergenceError names the lowest diverged copy (sim(i).step_count tells how far "
+           "each got).");
+
+  // ---- io -------------------------------------------------------------------------------------
+  py::class_<UrdfOptions>(m, "UrdfOptions", "How to import a URDF.")
+      .def(py::init([](bool fixed_base, py::handle gravity) {
+             UrdfOptions o;
+             o.fixed_base = fixed_base;
+             o.gravity = to_vec3(gravity, "gravity");
+             return o;
+           }),
+           py::arg("fixed_base") = true, py::arg("gravity") = py::make_tuple(0.0, 0.0, -9.81),
+           "fixed_base False gives the root a floating joint.")
+      .def_readwrite("fixed_base", &UrdfOptions::fixed_base, "root welded to the world")
+      .def_property(
+          "gravity", [](const UrdfOptions& o) { return o.gravity; },
+          [](UrdfOptions& o, py::handle g) { o.gravity = to_vec3(g, "gravity"); }, "gravity (3,)");
+
+  py::class_<UrdfMimic>(m, "UrdfMimic", "A <mimic> tag (read, not simulated).")
+      .def_readonly("joint", &UrdfMimic::joint, "the mimicking joint")
+      .def_readonly("leader", &UrdfMimic::leader, "the joint it follows")
+      .def_readonly("multiplier", &UrdfMimic::multiplier, "joint = multiplier * leader + offset")
+      .def_readonly("offset", &UrdfMimic::offset, "joint = multiplier * leader + offset");
+
+  py::class_<UrdfRobot>(m, "UrdfRobot", "A robot read from URDF and its Model.")
+      .def_readonly("path", &UrdfRobot::path, "the file")
+      .def_readonly("name", &UrdfRobot::name, "<robot name>")
+      .def_readonly("root_link", &UrdfRobot::root_link, "root link name")
+      .def_readonly("root_joint", &UrdfRobot::root_joint, "name of the root's joint")
+      .def_readonly("options", &UrdfRobot::options, "the UrdfOptions")
+      .def_readwrite("links", &UrdfRobot::links,
+                     "the LinkSpecs after merging (a copy; assign an edited list and call "
+                     "rebuild())")
+      .def_property_readonly("model", [](const UrdfRobot& r) { return to_python(r.model); },
+                             "The Model.")
+      .def_readonly("joint_order", &UrdfRobot::joint_order, "every <joint> in document order")
+      .def_readonly("dof_order", &UrdfRobot::dof_order, "model dofs in URDF document order")
+      .def_readonly("mimics", &UrdfRobot::mimics, "list of UrdfMimic")
+      .def_readonly("warnings", &UrdfRobot::warnings, "messages for the user")
+      .def_readonly("effort_limits", &UrdfRobot::effort_limits, "URDF effort limit per joint")
+      .def("rebuild", &UrdfRobot::rebuild, "Builds model from links again.");
+
+  m.def("load_urdf", &load_urdf, py::arg("path"), py::arg("options") = UrdfOptions{},
+        "Reads a URDF file; InputError (a ValueError) naming the file, element and value.");
+  m.def("parse_urdf", &parse_urdf, py::arg("xml"), py::arg("name"),
+        py::arg("options") = UrdfOptions{},
+        "Reads URDF text; name stands for the file in messages.");
+
+  py::class_<SineTarget>(m, "SineTarget", "offset + amplitude sin(2 pi frequency t + phase).")
+      .def_readonly("amplitude", &SineTarget::amplitude, "amplitude")
+      .def_readonly("frequency", &SineTarget::frequency, "Hz")
+      .def_readonly("phase", &SineTarget::phase, "rad")
+      .def_readonly("offset", &SineTarget::offset, "offset")
+      .def("position", &SineTarget::position, py::arg("t"), "Target position at t.")
+      .def("velocity", &SineTarget::velocity, py::arg("t"), "Target velocity at t.");
+
+  py::class_<DriveSpec>(m, "DriveSpec", "A scene's drive on one joint.")
+      .def_readonly("joint", &DriveSpec::joint, "joint name")
+      .def_readonly("dof", &DriveSpec::dof, "dof index")
+      .def_readonly("drive", &DriveSpec::drive, "the Drive")
+      .def_readonly("sine", &DriveSpec::sine, "SineTarget or None")
+      .def("target_at", &DriveSpec::target_at, py::arg("t"), "(position, velocity) at t.");
+
+  py::class_<Scene>(m, "Scene", "A scene file: robot, options, initial state and drives.")
+      .def_readonly("path", &Scene::path, "the scene file")
+      .def_readonly("model_path", &Scene::model_path, "the URDF")
+      .def_readonly("robot", &Scene::robot, "the UrdfRobot")
+      .def_readonly("options", &Scene::options, "the SimulationOptions")
+      .def_readonly("steps", &Scene::steps, "number of steps")
+      .def_readonly("q0", &Scene::q0, "initial q (nq,)")
+      .def_readonly("qd0", &Scene::qd0, "initial qd (nv,)")
+      .def_readonly("drives", &Scene::drives, "list of DriveSpec in URDF joint order")
+      .def_property_readonly("model", [](const Scene& s) { return to_python(s.model()); },
+                             "The Model.");
+
+  m.def("load_scene", &load_scene, py::arg("path"),
+        "Reads a scene file (YAML or JSON); InputError (a ValueError) naming the file, key and "
+        "value.");
+  m.def("parse_scene", &parse_scene, py::arg("text"), py::arg("path"),
+        "Reads scene text; path names the file and anchors the model path.");
+  m.def("make_simulation", &make_simulation, py::arg("scene"),
+        "A Simulation in the scene's initial state with its drives and joint settings.");
+  m.def("apply_targets", &apply_targets, py::arg("scene"), py::arg("sim"), py::arg("step_index"),
+        "Sets the sine targets for step k (0-based): those at t = (k + 1) dt.");
+}

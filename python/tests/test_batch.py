@@ -1,0 +1,119 @@
+"""A Batch of N copies equals N separate simulations bit for bit, whatever the thread count; a
+divergence names the copy."""
+import numpy as np
+import pytest
+
+import featherdrive as fd
+
+N = 64
+STEPS = 30
+
+
+def targets(n, nv):
+    """Different targets for every copy."""
+    i = np.arange(n)[:, None]
+    d = np.arange(nv)[None, :]
+    return 0.6 * np.sin(0.37 * i + 1.1 * d), 0.2 * np.cos(0.23 * i - 0.5 * d)
+
+
+def gains(n, nv):
+    i = np.arange(n)[:, None]
+    d = np.arange(nv)[None, :]
+    return 200.0 + 150.0 * i + 10.0 * d, 5.0 + 0.5 * i + 1.0 * d
+
+
+def separate(model, solver, pos, vel, kp, kd):
+    """Each copy simulated on its own, one Simulation at a time."""
+    q, qd, f = [], [], []
+    for i in range(pos.shape[0]):
+        sim = fd.Simulation(model, dt=1.0 / 60.0, solver=solver, position_iterations=4,
+                            velocity_iterations=1)
+        sim.set_q(model.neutral_configuration() + 0.01 * i)
+        sim.set_drive_gains(kp[i], kd[i])
+        sim.set_drive_targets(pos[i], vel[i])
+        sim.step(STEPS)
+        q.append(np.array(sim.q))
+        qd.append(np.array(sim.qd))
+        f.append(np.array(sim.drive_force))
+    return np.array(q), np.array(qd), np.array(f)
+
+
+def bits(a):
+    return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+@pytest.mark.parametrize("solver", ["pgs", "tgs"])
+def test_batch_equals_separate_simulations_for_any_thread_count(arm, solver):
+    pos, vel = targets(N, arm.nv)
+    kp, kd = gains(N, arm.nv)
+    expected = separate(arm, solver, pos, vel, kp, kd)
+    for threads in (1, 0, 3):
+        batch = fd.Batch(arm, N, dt=1.0 / 60.0, solver=solver, position_iterations=4,
+                         velocity_iterations=1)
+        batch.num_threads = threads
+        assert batch.effective_num_threads() >= 1
+        batch.set_q(arm.neutral_configuration()[None, :] + 0.01 * np.arange(N)[:, None])
+        batch.set_drive_gains(kp, kd)
+        batch.set_drive_targets(pos, vel)
+        batch.step(STEPS)
+        assert batch.q.shape == (N, arm.nq) and batch.qd.shape == (N, arm.nv)
+        assert batch.drive_force.shape == (N, arm.nv) and batch.limit_force.shape == (N, arm.nv)
+        for got, want in zip((batch.q, batch.qd, batch.drive_force), expected):
+            np.testing.assert_array_equal(bits(got), bits(want), err_msg=f"threads={threads}")
+        assert all(batch.sim(i).step_count == STEPS for i in range(N))
+    # The copies really differ.
+    assert len({row.tobytes() for row in expected[0]}) == N
+
+
+def test_batch_from_prototype_and_per_copy_access(arm):
+    proto = fd.Simulation(arm, solver="tgs")
+    proto.set_drive_gains(800.0, 30.0)
+    proto.set_drive_targets(np.full(arm.nv, 0.4), np.zeros(arm.nv))
+    batch = fd.Batch(proto, 4)
+    assert len(batch) == 4 and batch.size() == 4
+    batch.sim(2).set_drive_target("joint2", -0.3, 0.0)
+    batch.step(10)
+    alone = proto.copy()
+    alone.set_drive_target("joint2", -0.3, 0.0)
+    alone.step(10)
+    proto.step(10)
+    np.testing.assert_array_equal(batch.q[2], alone.q)
+    np.testing.assert_array_equal(batch.q[0], proto.q)
+    assert not np.array_equal(batch.q[0], batch.q[2])
+    assert not batch.q.flags.writeable
+    # sim(i) views into the batch: they see the batch's later steps.
+    view = batch.sim(1).q
+    batch.step()
+    np.testing.assert_array_equal(view, batch.q[1])
+
+
+def test_divergence_names_the_copy_and_leaves_the_others_stepping(arm):
+    batch = fd.Batch(arm, 8, dt=0.01)
+    batch.num_threads = 0
+    # Stiffness times position error overflows to inf at the first step of copy 5.
+    batch.sim(5).set_drive("joint4", fd.Drive(stiffness=1e300, target_position=1e300))
+    q0 = np.array(batch.q)
+    with pytest.raises(fd.DivergenceError, match=r"batch copy 5 \(1 of 8 copies diverged\)") as err:
+        batch.step(5)
+    assert isinstance(err.value, RuntimeError)
+    assert "simulation diverged at step 1" in str(err.value)
+    # The diverged copy keeps the state from before the step that diverged ...
+    assert batch.sim(5).step_count == 0
+    np.testing.assert_array_equal(batch.q[5], q0[5])
+    # ... and every other copy made all its steps, as it would have alone.
+    alone = fd.Simulation(arm, dt=0.01)
+    alone.step(5)
+    for i in (0, 1, 2, 3, 4, 6, 7):
+        assert batch.sim(i).step_count == 5
+        np.testing.assert_array_equal(batch.q[i], alone.q)
+
+
+def test_simulation_divergence_is_runtime_error(arm):
+    sim = fd.Simulation(arm, dt=0.01)
+    sim.step(2)
+    q = np.array(sim.q)
+    sim.set_drive("joint2", fd.Drive(stiffness=1e300, target_position=1e300))
+    with pytest.raises(RuntimeError, match="diverged at step 3"):
+        sim.step()
+    assert sim.step_count == 2
+    np.testing.assert_array_equal(sim.q, q)

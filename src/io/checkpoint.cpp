@@ -1,0 +1,357 @@
+#include "featherdrive/io/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace featherdrive {
+namespace {
+
+constexpr char kMagic[8] = {'F', 'D', 'C', 'K', 'P', 'T', '\r', '\n'};
+constexpr size_t kHeaderSize = 8 + 4 + 8 + 4 + 4 + 8;
+
+std::uint64_t fnv1a(const char* data, size_t size) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (size_t i = 0; i < size; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+std::string hex(std::uint64_t v) {
+  std::ostringstream s;
+  s << "0x" << std::hex << v;
+  return s.str();
+}
+
+// Little-endian writer.
+class Writer {
+ public:
+  void u8(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) u8(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) u8(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+  void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+  void vec(const VecX& v) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) f64(v[i]);
+  }
+  void bytes(const char* data, size_t size) { out_.append(data, size); }
+  void text(const std::string& s) {
+    u64(s.size());
+    out_ += s;
+  }
+  std::string& str() { return out_; }
+
+ private:
+  std::string out_;
+};
+
+// Little-endian reader over a payload whose size has already been checked; reading past the end
+// still throws rather than reading out of bounds.
+class Reader {
+ public:
+  Reader(const std::string& data, size_t begin, size_t end, const std::string& name)
+      : data_(data), pos_(begin), end_(end), name_(name) {}
+  std::uint8_t u8() {
+    need(1);
+    return static_cast<std::uint8_t>(data_[pos_++]);
+  }
+  std::uint32_t u32() {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(u8()) << (8 * i);
+    return v;
+  }
+  std::uint64_t u64() {
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(u8()) << (8 * i);
+    return v;
+  }
+  std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
+  double f64() { return std::bit_cast<double>(u64()); }
+  VecX vec(int n) {
+    VecX v(n);
+    for (int i = 0; i < n; ++i) v[i] = f64();
+    return v;
+  }
+  size_t pos() const { return pos_; }
+
+ private:
+  void need(size_t n) {
+    if (end_ - pos_ < n)
+      throw CheckpointError(name_ + ": corrupt checkpoint: the payload ends early at byte " +
+                            std::to_string(pos_));
+  }
+  const std::string& data_;
+  size_t pos_, end_;
+  const std::string& name_;
+};
+
+void hash_double(Writer& w, double v) { w.f64(v); }
+
+[[noreturn]] void fail(const std::string& name, const std::string& why) {
+  throw CheckpointError(name + ": " + why);
+}
+
+}  // namespace
+
+std::uint64_t model_fingerprint(const Model& model) {
+  Writer w;
+  w.u32(static_cast<std::uint32_t>(model.nq));
+  w.u32(static_cast<std::uint32_t>(model.nv));
+  w.u32(static_cast<std::uint32_t>(model.links.size()));
+  for (int i = 0; i < 3; ++i) hash_double(w, model.gravity[i]);
+  for (const Link& link : model.links) {
+    w.text(link.name);
+    w.i64(link.parent);
+    w.text(link.joint_name);
+    w.u8(static_cast<std::uint8_t>(link.joint_type));
+    hash_double(w, link.mass);
+    for (int i = 0; i < 3; ++i) hash_double(w, link.com[i]);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) hash_double(w, link.inertia_com(r, c));
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) hash_double(w, link.tree_transform.E(r, c));
+    for (int i = 0; i < 3; ++i) hash_double(w, link.tree_transform.r[i]);
+    for (int i = 0; i < 3; ++i) hash_double(w, link.axis[i]);
+    w.i64(link.q_index);
+    w.i64(link.v_index);
+  }
+  for (const VecX* v : {&model.armature, &model.lower_limit, &model.upper_limit}) w.vec(*v);
+  return fnv1a(w.str().data(), w.str().size());
+}
+
+std::string checkpoint_bytes(const Simulation& sim) {
+  const Model& model = sim.model();
+  const int nv = model.nv;
+  Writer p;  // payload
+  p.f64(sim.time());
+  p.i64(sim.step_count());
+  const SimulationOptions& o = sim.options();
+  p.f64(o.dt);
+  p.u8(static_cast<std::uint8_t>(o.solver));
+  p.i64(o.position_iterations);
+  p.i64(o.velocity_iterations);
+  p.vec(sim.q());
+  p.vec(sim.qd());
+  p.vec(sim.applied_force());
+  for (int d = 0; d < nv; ++d) {
+    const Drive& drive = sim.drive(d);
+    p.u8(static_cast<std::uint8_t>(drive.type));
+    for (double v : {drive.stiffness, drive.damping, drive.max_force, drive.max_impulse,
+                     drive.target_position, drive.target_velocity})
+      p.f64(v);
+    p.f64(sim.lower_limit(d));
+    p.f64(sim.upper_limit(d));
+    p.f64(sim.max_joint_velocity(d));
+    const JointFriction& f = sim.joint_friction(d);
+    for (double v : {f.static_effort, f.dynamic_effort, f.viscous}) p.f64(v);
+    const ActuatorEnvelope& e = sim.actuator_envelope(d);
+    for (double v : {e.max_effort, e.max_actuator_velocity, e.speed_effort_gradient,
+                     e.velocity_dependent_resistance})
+      p.f64(v);
+  }
+  p.vec(sim.drive_force());
+  p.vec(sim.limit_force());
+  p.vec(sim.friction_force());
+  p.vec(sim.velocity_limit_force());
+
+  Writer w;
+  w.bytes(kMagic, sizeof(kMagic));
+  w.u32(kCheckpointVersion);
+  w.u64(model_fingerprint(model));
+  w.u32(static_cast<std::uint32_t>(model.nq));
+  w.u32(static_cast<std::uint32_t>(model.nv));
+  w.u64(p.str().size());
+  w.bytes(p.str().data(), p.str().size());
+  w.u64(fnv1a(w.str().data(), w.str().size()));
+  return std::move(w.str());
+}
+
+void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::string& name) {
+  if (std::memcmp(bytes.data(), kMagic, std::min(bytes.size(), sizeof(kMagic))) != 0)
+    fail(name, "not a featherdrive checkpoint (the file does not start with the checkpoint magic)");
+  if (bytes.size() < kHeaderSize + 8)
+    fail(name, "truncated checkpoint: " + std::to_string(bytes.size()) +
+                   " bytes, shorter than the header");
+  Reader h(bytes, sizeof(kMagic), kHeaderSize, name);
+  const std::uint32_t version = h.u32();
+  if (version != kCheckpointVersion)
+    fail(name, "checkpoint format version " + std::to_string(version) +
+                   " is not supported (this build reads version " +
+                   std::to_string(kCheckpointVersion) + ")");
+  const std::uint64_t fingerprint = h.u64();
+  const std::uint32_t nq = h.u32();
+  const std::uint32_t nv = h.u32();
+  const std::uint64_t payload = h.u64();
+  if (payload > bytes.size())
+    fail(name, "truncated checkpoint: the header announces a payload of " +
+                   std::to_string(payload) + " bytes, the file has " +
+                   std::to_string(bytes.size()));
+  const std::uint64_t expected = kHeaderSize + payload + 8;
+  if (bytes.size() != expected)
+    fail(name, std::string(bytes.size() < expected ? "truncated" : "corrupt") +
+                   " checkpoint: the header announces " + std::to_string(expected) +
+                   " bytes, the file has " + std::to_string(bytes.size()));
+  Reader tail(bytes, bytes.size() - 8, bytes.size(), name);
+  const std::uint64_t stored = tail.u64();
+  const std::uint64_t computed = fnv1a(bytes.data(), bytes.size() - 8);
+  if (stored != computed)
+    fail(name, "corrupt checkpoint: checksum " + hex(computed) + " does not match the stored " +
+                   hex(stored));
+
+  const Model& model = sim.model();
+  const std::uint64_t ours = model_fingerprint(model);
+  if (fingerprint != ours || nq != static_cast<std::uint32_t>(model.nq) ||
+      nv != static_cast<std::uint32_t>(model.nv))
+    fail(name, "the checkpoint is of a different model (nq " + std::to_string(nq) + ", nv " +
+                   std::to_string(nv) + ", fingerprint " + hex(fingerprint) +
+                   "; this model: nq " + std::to_string(model.nq) + ", nv " +
+                   std::to_string(model.nv) + ", fingerprint " + hex(ours) + ")");
+
+  // Restore into a copy, so that sim stays as it was if any value is refused.
+  Simulation next = sim;
+  Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
+  try {
+    const double time = r.f64();
+    const long step_count = static_cast<long>(r.i64());
+    SimulationOptions o;
+    o.dt = r.f64();
+    const std::uint8_t solver = r.u8();
+    if (solver > static_cast<std::uint8_t>(SolverType::tgs))
+      fail(name, "corrupt checkpoint: solver = " + std::to_string(solver));
+    o.solver = static_cast<SolverType>(solver);
+    const std::int64_t pos = r.i64(), vel = r.i64();
+    if (pos < 0 || pos > 1'000'000'000 || vel < 0 || vel > 1'000'000'000)
+      fail(name, "corrupt checkpoint: iterations " + std::to_string(pos) + " / " +
+                     std::to_string(vel));
+    o.position_iterations = static_cast<int>(pos);
+    o.velocity_iterations = static_cast<int>(vel);
+    next.set_options(o);
+    next.set_clock(time, step_count);
+    const VecX q = r.vec(model.nq);
+    next.set_qd(r.vec(model.nv));
+    next.set_applied_force(r.vec(model.nv));
+    for (int d = 0; d < model.nv; ++d) {
+      Drive drive;
+      const std::uint8_t type = r.u8();
+      if (type > static_cast<std::uint8_t>(DriveType::acceleration))
+        fail(name, "corrupt checkpoint: drive type " + std::to_string(type) + " of dof " +
+                       std::to_string(d));
+      drive.type = static_cast<DriveType>(type);
+      drive.stiffness = r.f64();
+      drive.damping = r.f64();
+      drive.max_force = r.f64();
+      drive.max_impulse = r.f64();
+      drive.target_position = r.f64();
+      drive.target_velocity = r.f64();
+      const double lower = r.f64(), upper = r.f64(), max_velocity = r.f64();
+      JointFriction f;
+      f.static_effort = r.f64();
+      f.dynamic_effort = r.f64();
+      f.viscous = r.f64();
+      ActuatorEnvelope e;
+      e.max_effort = r.f64();
+      e.max_actuator_velocity = r.f64();
+      e.speed_effort_gradient = r.f64();
+      e.velocity_dependent_resistance = r.f64();
+      next.set_drive(d, drive);
+      // The per-joint settings exist for revolute and prismatic joints only; elsewhere the
+      // model's values stand (the fingerprint matched), and a setter is called only to change a
+      // value, so what the model itself allows (e.g. a velocity limit of 0) is kept as it is.
+      const JointType jt = model.links[model.dof_link[d]].joint_type;
+      if (jt != JointType::revolute && jt != JointType::prismatic) continue;
+      const auto same = [](double a, double b) {
+        return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+      };
+      if (!same(lower, next.lower_limit(d)) || !same(upper, next.upper_limit(d)))
+        next.set_joint_limits(d, lower, upper);
+      if (!same(max_velocity, next.max_joint_velocity(d)))
+        next.set_max_joint_velocity(d, max_velocity);
+      next.set_joint_friction(d, f);
+      next.set_actuator_envelope(d, e);
+    }
+    const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
+               friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
+    if (r.pos() != bytes.size() - 8)
+      fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
+                     " bytes left over after the payload");
+    next.restore_state(q, drive_force, limit_force, friction_force, velocity_limit_force);
+  } catch (const CheckpointError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    fail(name, std::string("bad value in the checkpoint: ") + e.what());
+  }
+  sim = std::move(next);
+}
+
+void save_checkpoint(const Simulation& sim, const std::filesystem::path& path) {
+  const std::string bytes = checkpoint_bytes(sim);
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  std::string tmpl = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
+  std::vector<char> name(tmpl.begin(), tmpl.end());
+  name.push_back('\0');
+  const int fd = mkstemp(name.data());
+  if (fd < 0)
+    throw std::runtime_error(path.string() + ": cannot write the checkpoint: " +
+                             std::strerror(errno));
+  const std::string tmp(name.data());
+  auto abandon = [&](const char* what) {
+    const int err = errno;
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(path.string() + ": cannot write the checkpoint (" + what +
+                             "): " + std::strerror(err));
+  };
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      abandon("write");
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) abandon("fsync");
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(path.string() + ": cannot write the checkpoint (close): " +
+                             std::strerror(err));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(path.string() + ": cannot write the checkpoint (rename): " +
+                             std::strerror(err));
+  }
+  // The rename itself reaches the disk with an fsync of the folder (best effort).
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+void load_checkpoint(const std::filesystem::path& path, Simulation& sim) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw CheckpointError(path.string() + ": cannot open the checkpoint: " + std::strerror(errno));
+  std::ostringstream s;
+  s << in.rdbuf();
+  restore_checkpoint(s.str(), sim, path.string());
+}
+
+}  // namespace featherdrive
