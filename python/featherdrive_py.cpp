@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 
+#include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/model/model_builder.hpp"
@@ -751,4 +752,13 @@ PYBIND11_MODULE(featherdrive, m) {
         "A Simulation in the scene's initial state with its drives and joint settings.");
   m.def("apply_targets", &apply_targets, py::arg("scene"), py::arg("sim"), py::arg("step_index"),
         "Sets the sine targets for step k (0-based): those at t = (k + 1) dt.");
+
+  py::register_exception<CheckpointError>(m, "CheckpointError", PyExc_ValueError).doc() =
+      "A file that is not a checkpoint of this model (truncated, corrupt, other version or "
+      "model); a ValueError.";
+  m.def("save_checkpoint", &save_checkpoint, py::arg("sim"), py::arg("path"),
+        "Writes the full simulation state (state, clock, inputs, settings, last forces) "
+        "atomically, bit-exact.");
+  m.def("load_checkpoint", &load_checkpoint, py::arg("path"), py::arg("sim"),
+        "Restores a checkpoint into sim (same model); CheckpointError and sim unchanged otherwise.");
 }
