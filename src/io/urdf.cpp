@@ -208,11 +208,31 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     fail(file, std::string("the root element is <") + (robot_xml ? robot_xml->Value() : "") +
                    ">, expected <robot>");
   std::vector<std::string> link_order;
+  std::map<std::string, std::string> parent_of;  // child link -> parent link, from <joint>s
   for (const TiXmlElement* e = robot_xml->FirstChildElement(); e; e = e->NextSiblingElement()) {
     const char* name = e->Attribute("name");
     const std::string tag = e->Value();
     if (tag == "link" && name) link_order.push_back(name);
-    if (tag == "joint" && name) robot.joint_order.push_back(name);
+    if (tag == "joint" && name) {
+      robot.joint_order.push_back(name);
+      const TiXmlElement* parent = e->FirstChildElement("parent");
+      const TiXmlElement* child = e->FirstChildElement("child");
+      const char* p = parent ? parent->Attribute("link") : nullptr;
+      const char* c = child ? child->Attribute("link") : nullptr;
+      if (p && c && std::string(p) == c)
+        fail(file, "joint '" + std::string(name) + "': parent and child are both link '" + c + "'");
+      if (p && c) parent_of.emplace(c, p);
+    }
+  }
+  // A cycle of joints is refused here: urdfdom would build it from shared pointers and leak it.
+  for (const auto& [start, unused] : parent_of) {
+    std::string link = start;
+    for (size_t n = 0; n <= parent_of.size(); ++n) {
+      auto it = parent_of.find(link);
+      if (it == parent_of.end()) break;
+      link = it->second;
+      if (link == start) fail(file, "the joints form a cycle through link '" + start + "'");
+    }
   }
 
   const urdf::ModelInterfaceSharedPtr urdf_model = parse_with_urdfdom(xml, file, robot.warnings);
