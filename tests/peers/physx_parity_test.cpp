@@ -139,6 +139,23 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
 
   Errors restart, free;
   int restart_worst_step = 0, free_worst_step = 0;
+  // Folds featherdrive's state after step k into the largest relative differences from PhysX's
+  // row k (FEATHERDRIVE_PARITY_DUMP=1 prints every value).
+  auto record = [&](const Simulation& sim, int k, Errors& e, int& worst_step, const char* mode) {
+    for (int j = 0; j < nv; ++j) {
+      const double q = sim.q()[model->links[model->dof_link[dof[j]]].q_index];
+      const double eq = std::abs(q - px.q[k][j]) / scale.q;
+      const double ev = std::abs(sim.qd()[dof[j]] - px.qd[k][j]) / scale.qd;
+      const double ef = scale.f > 0 ? std::abs(joint_force(sim, dof[j]) - px.f[k][j]) / scale.f : 0.0;
+      if (std::getenv("FEATHERDRIVE_PARITY_DUMP"))
+        std::printf("%s %d %s q %.9g %.9g qd %.9g %.9g f %.9g %.9g\n", mode, k, px.joints[j].c_str(),
+                    q, px.q[k][j], sim.qd()[dof[j]], px.qd[k][j], joint_force(sim, dof[j]), px.f[k][j]);
+      if (std::max({eq, ev, ef}) > std::max({e.q, e.qd, e.f})) worst_step = k;
+      e.q = std::max(e.q, eq);
+      e.qd = std::max(e.qd, ev);
+      e.f = std::max(e.f, ef);
+    }
+  };
   // Restarted from PhysX's state before every step.
   {
     Simulation sim = initial;
@@ -152,15 +169,7 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
       sim.set_qd(qd);
       apply_targets(sim, targets, k);
       sim.step();
-      for (int j = 0; j < nv; ++j) {
-        const double eq = std::abs(sim.q()[model->links[model->dof_link[dof[j]]].q_index] - px.q[k + 1][j]) / scale.q;
-        const double ev = std::abs(sim.qd()[dof[j]] - px.qd[k + 1][j]) / scale.qd;
-        const double ef = scale.f > 0 ? std::abs(joint_force(sim, dof[j]) - px.f[k + 1][j]) / scale.f : 0.0;
-        if (std::max({eq, ev, ef}) > std::max({restart.q, restart.qd, restart.f})) restart_worst_step = k + 1;
-        restart.q = std::max(restart.q, eq);
-        restart.qd = std::max(restart.qd, ev);
-        restart.f = std::max(restart.f, ef);
-      }
+      record(sim, k + 1, restart, restart_worst_step, "restart");
     }
   }
   // Free-running.
@@ -169,19 +178,7 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
     for (int k = 0; k < steps; ++k) {
       apply_targets(sim, targets, k);
       sim.step();
-      for (int j = 0; j < nv; ++j) {
-        const double eq = std::abs(sim.q()[model->links[model->dof_link[dof[j]]].q_index] - px.q[k + 1][j]) / scale.q;
-        const double ev = std::abs(sim.qd()[dof[j]] - px.qd[k + 1][j]) / scale.qd;
-        const double ef = scale.f > 0 ? std::abs(joint_force(sim, dof[j]) - px.f[k + 1][j]) / scale.f : 0.0;
-        if (std::getenv("FEATHERDRIVE_PARITY_DUMP"))
-          std::printf("free %d %s q %.9g %.9g qd %.9g %.9g f %.9g %.9g\n", k + 1, px.joints[j].c_str(),
-                      sim.q()[model->links[model->dof_link[dof[j]]].q_index], px.q[k + 1][j],
-                      sim.qd()[dof[j]], px.qd[k + 1][j], joint_force(sim, dof[j]), px.f[k + 1][j]);
-        if (std::max({eq, ev, ef}) > std::max({free.q, free.qd, free.f})) free_worst_step = k + 1;
-        free.q = std::max(free.q, eq);
-        free.qd = std::max(free.qd, ev);
-        free.f = std::max(free.f, ef);
-      }
+      record(sim, k + 1, free, free_worst_step, "free");
     }
   }
   std::printf("%-28s %-10s restart q %.1e qd %.1e f %.1e (step %d) | free q %.1e qd %.1e f %.1e (step %d) | scale q %.3g qd %.3g f %.3g\n",
