@@ -45,8 +45,8 @@ test-main: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test: deps
-	$(MAKE) test-asan
-	$(MAKE) test-main
+	@$(MAKE) --no-print-directory test-asan
+	@$(MAKE) --no-print-directory test-main
 
 # libFuzzer targets (tests/fuzz) built with clang, ASan and UBSan in $(FUZZ_BUILD); each runs for
 # FUZZ_SECONDS from its seed corpus in tests/fuzz/corpus/<target>/ (read only: new inputs go to
@@ -71,10 +71,16 @@ fuzz: fuzz-build
 	  grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$$t.log || true; \
 	done
 
+# Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
+# the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.
+BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
 	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON $(CMAKE_FLAGS)
 	cmake --build build-bench -j $(JOBS) --target featherdrive_bench
-	./build-bench/bench/featherdrive_bench
+	./build-bench/bench/featherdrive_bench $(BENCH_FLAGS) \
+	  --benchmark_out=build-bench/bench.json --benchmark_out_format=json
+	/usr/bin/python3 bench/plot_benchmarks.py build-bench/bench.json \
+	  --plot build-bench/benchmarks_per_dof.png
 
 format:
 	find include src tests tools bench -name '*.hpp' -o -name '*.cpp' | xargs clang-format -i
