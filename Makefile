@@ -4,6 +4,10 @@ BUILD ?= build
 ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
+# FUZZ_RUNS=N runs each target for N inputs from seed FUZZ_SEED instead: the same inputs every run
+# (what .ci/run does, so CI never fails on a random draw; exploration is `make fuzz`).
+FUZZ_RUNS ?=
+FUZZ_SEED ?= 1
 FUZZ_TARGETS = urdf scene step
 CMAKE_FLAGS ?=
 
@@ -49,7 +53,7 @@ test: deps
 	@$(MAKE) --no-print-directory test-main
 
 # libFuzzer targets (tests/fuzz) built with clang, ASan and UBSan in $(FUZZ_BUILD); each runs for
-# FUZZ_SECONDS from its seed corpus in tests/fuzz/corpus/<target>/ (read only: new inputs go to
+# FUZZ_SECONDS (or FUZZ_RUNS inputs) from its seed corpus in tests/fuzz/corpus/<target>/ (read only: new inputs go to
 # $(FUZZ_BUILD)/corpus/<target>/, crashes to $(FUZZ_BUILD)/artifacts/). A crash fails the target.
 $(FUZZ_BUILD)/CMakeCache.txt: | deps
 	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
@@ -58,16 +62,23 @@ $(FUZZ_BUILD)/CMakeCache.txt: | deps
 fuzz-build: deps $(FUZZ_BUILD)/CMakeCache.txt
 	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
 
+ifeq ($(FUZZ_RUNS),)
+FUZZ_LENGTH = -max_total_time=$(FUZZ_SECONDS)
+else
+FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
+endif
+
 fuzz: fuzz-build
 	@for t in $(FUZZ_TARGETS); do \
 	  mkdir -p $(FUZZ_BUILD)/corpus/$$t $(FUZZ_BUILD)/artifacts; \
-	  echo "fuzz_$$t: $(FUZZ_SECONDS) s"; \
+	  echo "fuzz_$$t: $(FUZZ_LENGTH)"; \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
-	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -timeout=20 \
+	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$$t $(FUZZ_LENGTH) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- \
 	    $(FUZZ_BUILD)/corpus/$$t tests/fuzz/corpus/$$t 2>$(FUZZ_BUILD)/fuzz_$$t.log \
-	  || { tail -n 60 $(FUZZ_BUILD)/fuzz_$$t.log; echo "fuzz_$$t FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }; \
+	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$$t.log; \
+	       tail -n 8 $(FUZZ_BUILD)/fuzz_$$t.log; echo "fuzz_$$t FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }; \
 	  grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$$t.log || true; \
 	done
 

@@ -61,6 +61,40 @@ urdf::ModelInterfaceSharedPtr parse_with_urdfdom(const std::string& xml, const s
   return model;
 }
 
+// TinyXML 2.6 trusts a UTF-8 lead byte's length and steps over the text's terminating NUL when the
+// sequence is cut short (fuzz_urdf found it reading past the buffer), and it stops silently at an
+// embedded NUL. Refuse both before any XML reader sees the text.
+void check_utf8(const std::string& text, const std::string& file) {
+  int line = 1, column = 1;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    int length = 1;
+    if (byte >= 0xF0 && byte <= 0xF4) length = 4;
+    else if (byte >= 0xE0) length = byte <= 0xEF ? 3 : 0;
+    else if (byte >= 0xC2) length = 2;
+    else if (byte >= 0x80) length = 0;
+    bool valid = length > 0 && i + length <= text.size() && byte != 0;
+    for (int k = 1; valid && k < length; ++k)
+      valid = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
+    if (!valid) {
+      std::ostringstream what;
+      what << "line " << line << ", column " << column << " (byte " << i << "): ";
+      if (byte == 0)
+        what << "a NUL character";
+      else
+        what << "not valid UTF-8 (byte 0x" << std::hex << static_cast<int>(byte) << ")";
+      fail(file, what.str());
+    }
+    if (byte == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    i += length;
+  }
+}
+
 struct Pose {
   Mat3 R = Mat3::Identity();
   Vec3 p = Vec3::Zero();
@@ -198,6 +232,7 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
 
   // TinyXML (urdfdom's own XML reader) for the XML error position and the document order that
   // urdfdom's maps do not keep.
+  check_utf8(xml, file);
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error())
