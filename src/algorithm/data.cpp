@@ -4,21 +4,40 @@ namespace featherdrive {
 
 Data::Data(const Model& model) {
   const size_t n = model.links.size();
+  for (const Link& link : model.links) {
+    LinkInfo li{link.parent, link.nv, link.v_index, link.q_index, link.joint_type};
+    li.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
+    const Mat3& I = link.inertia_com;
+    li.inertia_diagonal = I(0, 1) == 0.0 && I(0, 2) == 0.0 && I(1, 2) == 0.0 && I(1, 0) == 0.0 &&
+                          I(2, 0) == 0.0 && I(2, 1) == 0.0;
+    if (link.parent >= 0) {
+      li.last_child = model.links[link.parent].children.back() == static_cast<int>(info.size());
+      li.later = !li.last_child || info[link.parent].later;
+    }
+    info.push_back(li);
+    constants.push_back({link.tree_transform, link.axis, link.com, link.inertia_com, link.mass});
+  }
   parent_transform.resize(n);
   world_rotation.assign(n, Mat3::Identity());
   world_position.assign(n, Vec3::Zero());
   velocity.assign(n, Vec6::Zero());
   bias_acceleration.assign(n, Vec6::Zero());
+  velocity0.assign(n, Vec6::Zero());
+  bias_acceleration0.assign(n, Vec6::Zero());
   articulated_inertia.assign(n, Mat6::Zero());
   articulated_bias.assign(n, Vec6::Zero());
-  acceleration.assign(n, Vec6::Zero());
+  acceleration0.assign(n, Vec6::Zero());
   response.assign(n, Mat6::Zero());
+  one_dof.assign(n, OneDof{});
+  acceleration.assign(n, Vec6::Zero());
   force.assign(n, Vec6::Zero());
   composite_inertia.assign(n, Mat6::Zero());
   for (const Link& link : model.links) {
-    U.push_back(Mat6N::Zero(6, link.nv));
-    D_inv.push_back(MatNN::Zero(link.nv, link.nv));
-    parent_coupling.push_back(Mat6N::Zero(6, link.nv));
+    const int k = link.nv == 1 ? 0 : link.nv;  // 1-dof joints use one_dof
+    motion_subspace.push_back(Mat6N::Zero(6, k));
+    U.push_back(Mat6N::Zero(6, k));
+    D_inv.push_back(MatNN::Zero(k, k));
+    parent_coupling.push_back(Mat6N::Zero(6, k));
     inverse_mass_block.push_back(MatNN::Zero(link.nv, link.nv));
   }
   u = VecX::Zero(model.nv);

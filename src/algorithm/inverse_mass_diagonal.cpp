@@ -5,32 +5,52 @@
 
 namespace featherdrive {
 
-// Lambda_i = S D^-1 S^T + P T P^T with T = X Lambda_p X^T and P = I - S D^-1 U^T;
+// In frame 0, where a link's and its parent's spatial vectors share coordinates:
+// Lambda_i = S D^-1 S^T + P T P^T with T = Lambda_p and P = I - S D^-1 U^T;
 // (M^-1)_ii = D^-1 + D^-1 U^T T U D^-1 (docs/math/unit_response.md).
 const VecX& articulated_response(const Model& model, Data& data) {
+  static const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
   for (int i = 0; i < model.num_links(); ++i) {
-    const Link& link = model.links[i];
-    Mat6 T = Mat6::Zero();
-    if (link.parent >= 0) {
-      const Mat6 X = data.parent_transform[i].matrix();
-      T.noalias() = X * data.response[link.parent] * X.transpose();
-    }
-    if (link.nv == 0) {
-      data.response[i] = T;
+    const Data::LinkInfo& link = data.info[i];
+    const Mat6& T = link.parent >= 0 ? data.response[link.parent] : kZero;
+    Mat6& L = data.response[i];
+    if (link.nv == 1) {
+      // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
+      //          = T + S (r S - h)^T - h S^T.
+      Data::OneDof& J = data.one_dof[i];
+      J.W.noalias() = T * J.U;
+      const double r = J.D_inv + J.D_inv * J.D_inv * J.U.dot(J.W);
+      const Vec6 h = J.D_inv * J.W;
+      const Vec6 g = r * J.S - h;
+      L = T;
+      L.noalias() += J.S * g.transpose();
+      L.noalias() -= h * J.S.transpose();
+      J.G = g;
+      J.inverse_mass = r;
+      if (link.parent >= 0 && data.info[link.parent].nv == 1) {
+        const Data::OneDof& P = data.one_dof[link.parent];
+        J.parent_W = J.U.dot(P.W);
+        J.parent_S = J.U.dot(P.S);
+      }
+      data.inverse_mass_block[i](0, 0) = r;
+      data.inverse_mass_diagonal[link.v_index] = r;
       continue;
     }
-    const Mat6N& S = link.motion_subspace;
+    if (link.nv == 0) {
+      L = T;
+      continue;
+    }
+    const Mat6N& S = data.motion_subspace[i];
     const Mat6N& U = data.U[i];
     const MatNN& Dinv = data.D_inv[i];
     const Mat6N W = T * U;
     const MatNN UtW = U.transpose() * W;
     const Mat6N SDinv = S * Dinv;
-    Mat6 L = T;
+    L = T;
     L.noalias() -= SDinv * W.transpose();
     L.noalias() -= W * SDinv.transpose();
     L.noalias() += SDinv * UtW * SDinv.transpose();
     L.noalias() += SDinv * S.transpose();
-    data.response[i] = L;
     data.parent_coupling[i] = W;
     data.inverse_mass_block[i] = Dinv + Dinv * UtW * Dinv;
     data.inverse_mass_diagonal.segment(link.v_index, link.nv) = data.inverse_mass_block[i].diagonal();
