@@ -253,7 +253,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   if (!root.IsMap())
     throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
   r.map(root, "",
-        {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "initial",
+        {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joints"});
 
   Scene scene;
@@ -284,6 +284,13 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   if (steps > 1'000'000'000L) r.fail("steps", root["steps"], "must be <= 1000000000");
   scene.steps = static_cast<int>(steps);
 
+  if (root["compat"]) {
+    const std::string compat = r.text(root["compat"], "compat");
+    if (compat == "physx")
+      scene.options.compat = Compat::physx;
+    else if (compat != "none")
+      r.fail("compat", root["compat"], "must be none or physx");
+  }
   if (const YAML::Node s = root["solver"]) {
     r.map(s, "solver", {"type", "position_iterations", "velocity_iterations"});
     if (s["type"]) {

@@ -41,6 +41,7 @@ void check_quaternions(const Model& model, const VecX& q, bool unit) {
 }  // namespace
 
 const char* to_string(SolverType type) { return type == SolverType::pgs ? "pgs" : "tgs"; }
+const char* to_string(Compat compat) { return compat == Compat::physx ? "physx" : "none"; }
 
 void validate_options(const SimulationOptions& o) {
   if (!std::isfinite(o.dt) || o.dt <= 0.0)
@@ -90,6 +91,10 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
 
 void Simulation::set_options(const SimulationOptions& options) {
   validate_options(options);
+  if (options.compat != options_.compat)
+    throw std::invalid_argument(std::string("simulation options: compat = ") +
+                                to_string(options.compat) + " differs from the simulation's " +
+                                to_string(options_.compat) + ": compat is chosen at construction");
   options_ = options;
 }
 

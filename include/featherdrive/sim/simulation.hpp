@@ -16,11 +16,18 @@ namespace featherdrive {
 enum class SolverType { pgs, tgs };
 const char* to_string(SolverType type);
 
+/// Whose defaults and step details a simulation follows. physx: PhysX 5.6.1's defaults for the
+/// per-link and per-joint parameters nobody set, and its two departures from textbook Gauss-Seidel
+/// (../shared/physx/NOTES.md; docs/physx_parity.md). Chosen at construction.
+enum class Compat { none, physx };
+const char* to_string(Compat compat);
+
 struct SimulationOptions {
   double dt = 1.0 / 60.0;           ///< time step tau [s]
   SolverType solver = SolverType::pgs;
   int position_iterations = 4;      ///< >= 1
   int velocity_iterations = 1;      ///< >= 0
+  Compat compat = Compat::none;
 };
 
 /// Throws std::invalid_argument naming the field and value for dt <= 0 or non-finite,
@@ -41,6 +48,7 @@ class Simulation {
   const Model& model() const { return *model_; }
   const std::shared_ptr<const Model>& model_ptr() const { return model_; }
   const SimulationOptions& options() const { return options_; }
+  /// Throws std::invalid_argument for invalid options or a different compat.
   void set_options(const SimulationOptions& options);
 
   // State.
