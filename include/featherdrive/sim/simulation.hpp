@@ -110,7 +110,8 @@ class Simulation {
   void step();
   void step(int count);
 
-  /// The algorithms' workspace after the last step (kinematics are those of the step's start).
+  /// The algorithms' workspace after the last step: poses of the step's start, velocities in
+  /// frame 0 (velocity0); the link-frame velocities (Data::velocity) are not computed by a step.
   const Data& data() const { return data_; }
 
  private:
@@ -119,7 +120,7 @@ class Simulation {
   int driven_dof(const std::string& joint) const;
   void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
-  void sweep(const RowPhase& phase);
+  void sweep(RowPhase& phase);
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_restore();
