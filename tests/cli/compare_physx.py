@@ -78,6 +78,13 @@ def physx(cli, source, out_dir):
     with open(png, "rb") as f:
         check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the plot is a PNG")
 
+    # A URDF whose fixed root has no <inertial> (PhysX gets a stand-in mass for it).
+    for name in ("slider.yaml", "pendulum.yaml"):
+        r = run(cli, "compare-physx", os.path.join(source, "examples", name), env=environment())
+        m = re.search(r"largest relative difference: q " + number + ", qd " + number + ", force " + number, r.stdout)
+        check(r.returncode == 0 and m is not None and max(float(x) for x in m.groups()) < 1e-4,
+              f"compare-physx {name} agrees within 1e-4", r)
+
     # Overrides reach both sides: TGS, 2 steps.
     r = run(cli, "compare-physx", scene, "--steps", "2", "--solver", "tgs", "--position-iterations", "8",
             "--velocity-iterations", "2", env=environment())
