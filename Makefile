@@ -11,7 +11,7 @@ FUZZ_SEED ?= 1
 FUZZ_TARGETS = urdf scene step
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build run test test-asan test-main fuzz fuzz-build bench clean format
+.PHONY: all deps configure build run test test-asan test-main fuzz fuzz-build bench clean format physx
 
 all: build
 
@@ -34,6 +34,11 @@ run: build
 	@./$(BUILD)/tools/featherdrive simulate examples/arm7_pgs.yaml --out out/arm7_pgs.csv --plot out/arm7_pgs.png
 	@echo
 	@./$(BUILD)/tools/featherdrive simulate examples/arm7_tgs.yaml --out out/arm7_tgs.csv --plot out/arm7_tgs.png
+
+# PhysX 5.6.1 for `featherdrive compare-physx` (the tests install it themselves): the pinned npm
+# package and our harness in $(BUILD)/physx. Needs node and npm (apt-get install -y nodejs npm).
+physx:
+	sh tests/physx/install.sh $(BUILD)/physx
 
 $(ASAN_BUILD)/CMakeCache.txt: | deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFEATHERDRIVE_SANITIZE=ON \

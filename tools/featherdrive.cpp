@@ -1,5 +1,6 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
-// a URDF robot. Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else.
+// a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp).
+// Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else.
 #include <CLI/CLI.hpp>
 
 #include <spawn.h>
@@ -16,6 +17,7 @@
 #include <limits>
 #include <optional>
 
+#include "compare_physx.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -283,6 +285,24 @@ int main(int argc, char** argv) {
   info_cmd->add_option("robot", urdf, "URDF file")->required();
   info_cmd->add_flag("--floating", floating, "Import with a floating root instead of a fixed base");
 
+  ComparePhysxArgs cmp_args;
+  CLI::App* cmp_cmd = app.add_subcommand(
+      "compare-physx",
+      "Run a scene in featherdrive and in PhysX 5.6.1 (node and the harness of tests/physx, "
+      "`make physx`) and show the largest differences per joint");
+  cmp_cmd->add_option("scene", cmp_args.scene, "Scene file (YAML or JSON)")->required();
+  cmp_cmd->add_option("--plot", cmp_args.plot, "PNG of the differences over time per joint");
+  cmp_cmd->add_option("--steps", cmp_args.steps, "Number of steps (overrides the scene)")
+      ->check(CLI::NonNegativeNumber);
+  cmp_cmd->add_option("--solver", cmp_args.solver, "pgs or tgs (overrides the scene)")
+      ->check(CLI::IsMember({"pgs", "tgs"}));
+  cmp_cmd->add_option("--position-iterations", cmp_args.position_iterations,
+                      "Overrides the scene (PhysX: 1 to 255)")
+      ->check(CLI::Range(1, 1000000));
+  cmp_cmd->add_option("--velocity-iterations", cmp_args.velocity_iterations,
+                      "Overrides the scene (PhysX: 0 to 255)")
+      ->check(CLI::Range(0, 1000000));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -291,9 +311,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";
-    if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info")
+    if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
+        first != "compare-physx")
       report("unknown command '" + first +
-             "' (expected simulate or info; see featherdrive --help)");
+             "' (expected simulate, info or compare-physx; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
@@ -301,6 +322,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*sim_cmd) return simulate(sim_args);
+    if (*cmp_cmd) return compare_physx(cmp_args);
     return info(urdf, floating);
   } catch (const std::invalid_argument& e) {  // bad input: InputError and the core's validation
     report(e.what());

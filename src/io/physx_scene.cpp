@@ -2,6 +2,8 @@
 
 #include "featherdrive/core/format.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -73,9 +75,14 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   js << "  \"links\": [\n";
   for (int i = 0; i < model.num_links(); ++i) {
     const Link& l = model.links[i];
-    const Mat3& I = l.inertia_com;
+    // PhysX needs a positive mass and inertia on every link; a fixed root's (e.g. a URDF's empty
+    // world link) never enters the dynamics, so a unit one stands in for a missing one.
+    const bool stand_in = i == 0 && !model.floating_base() &&
+                          !(l.mass > 0.0 && l.inertia_com.llt().info() == Eigen::Success);
+    const Mat3 I = stand_in ? Mat3::Identity() : l.inertia_com;
     js << "    {\"name\": " << str(l.name) << ", \"parent\": " << l.parent
-       << ", \"mass\": " << num(l.mass) << ", \"com\": " << vec(l.com) << ", \"inertia\": ["
+       << ", \"mass\": " << num(stand_in ? 1.0 : l.mass) << ", \"com\": " << vec(l.com)
+       << ", \"inertia\": ["
        << num(I(0, 0)) << ", " << num(I(1, 1)) << ", " << num(I(2, 2)) << ", " << num(I(0, 1))
        << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     \"joint\": ";
     if (i == 0) {

@@ -5,16 +5,12 @@
 //  - free-running for 240 steps: within 1e-4.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
-#include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 
+#include "featherdrive/io/physx_runner.hpp"
 #include "featherdrive/io/physx_scene.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "support/models.hpp"
@@ -24,57 +20,17 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-struct Trajectory {
-  std::vector<std::string> joints;               // dof joints, model order
-  std::vector<std::vector<double>> q, qd, f;     // [step][dof]
-};
+using Trajectory = JointTrajectory;
+
+// node and the harness as CMake found and installed them (the physx fixture).
+Trajectory run_physx(const Simulation& sim, int steps, const std::vector<TargetsByJoint>& targets) {
+  return featherdrive::run_physx(PhysxInstall{FEATHERDRIVE_NODE, FEATHERDRIVE_PHYSX_DIR}, sim,
+                                 steps, targets);
+}
 
 // The harness reports the force of every row on the dof (PhysX's incoming joint force projected on
 // the axis): drive, limit, friction and velocity limit together.
-double joint_force(const Simulation& sim, int dof) {
-  return sim.drive_force()[dof] + sim.limit_force()[dof] + sim.friction_force()[dof] +
-         sim.velocity_limit_force()[dof];
-}
-
-Trajectory read_csv(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  {
-    std::stringstream s(line);
-    std::string cell;
-    while (std::getline(s, cell, ',')) header.push_back(cell);
-  }
-  Trajectory t;
-  for (const auto& h : header)
-    if (h.rfind("q:", 0) == 0) t.joints.push_back(h.substr(2));
-  const size_t n = t.joints.size();
-  while (std::getline(in, line)) {
-    std::stringstream s(line);
-    std::string cell;
-    std::vector<double> row;
-    while (std::getline(s, cell, ',')) row.push_back(std::stod(cell));
-    t.q.emplace_back(row.begin() + 2, row.begin() + 2 + n);
-    t.qd.emplace_back(row.begin() + 2 + n, row.begin() + 2 + 2 * n);
-    t.f.emplace_back(row.begin() + 2 + 2 * n, row.begin() + 2 + 3 * n);
-  }
-  return t;
-}
-
-Trajectory run_physx(const Simulation& sim, int steps, const std::vector<TargetsByJoint>& targets) {
-  static int counter = 0;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("featherdrive_physx_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string stem = (dir / ("scene" + std::to_string(counter++))).string();
-  std::ofstream(stem + ".json") << physx_scene_json(sim, steps, targets);
-  const std::string command = std::string(FEATHERDRIVE_NODE) + " " + FEATHERDRIVE_PHYSX_DIR +
-                              "/harness.js " + stem + ".json " + stem + ".csv";
-  const int rc = std::system(command.c_str());
-  if (rc != 0) throw std::runtime_error("harness failed: " + command);
-  return read_csv(stem + ".csv");
-}
+double joint_force(const Simulation& sim, int dof) { return physx_joint_force(sim, dof); }
 
 // Sets the targets of step k+1 (the same rule as the harness: entry k before step k + 1).
 void apply_targets(Simulation& sim, const std::vector<TargetsByJoint>& targets, int k) {

@@ -1,0 +1,192 @@
+#include "compare_physx.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
+
+#include "featherdrive/core/format.hpp"
+#include "featherdrive/io/physx_runner.hpp"
+#include "featherdrive/io/scene.hpp"
+
+namespace fs = std::filesystem;
+using namespace featherdrive;
+
+namespace {
+
+// PhysX stores iteration counts in 8 bits (setSolverIterationCounts).
+void check_physx_iterations(const ComparePhysxArgs& args, const SimulationOptions& o) {
+  auto check = [&](int value, bool from_cli, const char* option, const char* key, int lowest) {
+    if (value >= lowest && value <= 255) return;
+    std::string m = from_cli ? std::string(option) : args.scene + ": " + key;
+    m += " = " + std::to_string(value) + ": PhysX allows " + std::to_string(lowest) + " to 255";
+    throw std::invalid_argument(m);
+  };
+  check(o.position_iterations, args.position_iterations.has_value(), "--position-iterations",
+        "solver.position_iterations", 1);
+  check(o.velocity_iterations, args.velocity_iterations.has_value(), "--velocity-iterations",
+        "solver.velocity_iterations", 0);
+}
+
+// The differences featherdrive - PhysX per row, for the plot script.
+void write_differences(const fs::path& path, const JointTrajectory& fd, const JointTrajectory& px) {
+  std::ofstream out(path);
+  out << "step,t";
+  for (const char* prefix : {"dq:", "dqd:", "df:"})
+    for (const std::string& j : px.joints) out << ',' << prefix << j;
+  out << '\n';
+  std::vector<size_t> in_fd;  // columns matched by name, as compare_trajectories does
+  for (const std::string& j : px.joints)
+    in_fd.push_back(
+        static_cast<size_t>(std::find(fd.joints.begin(), fd.joints.end(), j) - fd.joints.begin()));
+  for (size_t k = 0; k < px.rows(); ++k) {
+    out << k << ',' << format_double(px.t[k]);
+    for (const auto m : {&JointTrajectory::q, &JointTrajectory::qd, &JointTrajectory::f})
+      for (size_t j = 0; j < px.joints.size(); ++j)
+        out << ',' << format_double((fd.*m)[k][in_fd[j]] - (px.*m)[k][j]);
+    out << '\n';
+  }
+  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+}
+
+void plot(const fs::path& csv, const fs::path& png, const std::string& title) {
+  const char* python_env = std::getenv("FEATHERDRIVE_PYTHON");
+  const std::string python = python_env ? python_env : "/usr/bin/python3";
+  if (png.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(png.parent_path(), ec);
+  }
+  const int rc = run_program(
+      {python, FEATHERDRIVE_PHYSX_PLOT_SCRIPT, csv.string(), png.string(), "--title", title});
+  if (rc != 0) {
+    std::string m = "plotting failed: ";
+    m += python + " " + FEATHERDRIVE_PHYSX_PLOT_SCRIPT;
+    m += rc < 0 ? " could not be run" : " exited with " + std::to_string(rc);
+    throw std::runtime_error(m);
+  }
+}
+
+}  // namespace
+
+int compare_physx(const ComparePhysxArgs& args) {
+  Scene scene = load_scene(args.scene);
+  for (const std::string& w : scene.robot.warnings)
+    std::cerr << "featherdrive: warning: " << w << "\n";
+  if (args.steps) scene.steps = *args.steps;
+  if (!args.solver.empty())
+    scene.options.solver = args.solver == "tgs" ? SolverType::tgs : SolverType::pgs;
+  if (args.position_iterations) scene.options.position_iterations = *args.position_iterations;
+  if (args.velocity_iterations) scene.options.velocity_iterations = *args.velocity_iterations;
+  validate_options(scene.options);
+  check_physx_iterations(args, scene.options);
+  const Model& model = *scene.model();
+
+  Simulation sim = make_simulation(scene);
+  // The harness cannot set PhysX's static/dynamic/viscous friction (URDF <dynamics> gives the
+  // arm some): both sides run without it, and the output says so.
+  std::string friction_off;
+  for (const Link& l : model.links)
+    if (l.nv == 1 && sim.joint_friction(l.v_index).active()) {
+      sim.set_joint_friction(l.v_index, JointFriction{});
+      friction_off += " " + l.joint_name;
+    }
+
+  // The targets of every step as the harness takes them (entry k before step k + 1), from the
+  // scene's own rule on a copy.
+  std::vector<TargetsByJoint> targets;
+  {
+    bool any_sine = false;
+    for (const DriveSpec& d : scene.drives) any_sine = any_sine || d.sine.has_value();
+    Simulation copy = sim;
+    for (int k = 0; any_sine && k < scene.steps; ++k) {
+      apply_targets(scene, copy, k);
+      TargetsByJoint& t = targets.emplace_back();
+      for (const DriveSpec& d : scene.drives)
+        if (d.sine)
+          t[d.joint] = {copy.drive(d.dof).target_position, copy.drive(d.dof).target_velocity};
+    }
+  }
+  try {
+    (void)physx_scene_json(sim, 0);  // what PhysX cannot represent is the input's fault
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(args.scene + ": " + e.what());
+  }
+
+  const PhysxInstall physx =
+      find_physx({FEATHERDRIVE_PHYSX_BUILD_DIR, FEATHERDRIVE_PHYSX_SOURCE_DIR});
+
+  JointTrajectory fd = empty_trajectory(model);
+  {
+    Simulation run = sim;
+    append_state(fd, run);
+    for (double& f : fd.f[0]) f = 0.0;  // row 0: no step has run (the harness's convention)
+    for (int k = 0; k < scene.steps; ++k) {
+      apply_targets(scene, run, k);
+      run.step();
+      append_state(fd, run);
+    }
+  }
+  JointTrajectory px;
+  try {
+    px = run_physx(physx, sim, scene.steps, targets);
+  } catch (const PhysxError& e) {
+    if (e.harness_exit == 2)  // the harness refused a value of the exported scene
+      throw std::invalid_argument(args.scene + ": PhysX refused the scene: " + e.what());
+    throw;
+  }
+  const TrajectoryComparison c = compare_trajectories(fd, px);
+
+  const SimulationOptions& o = sim.options();
+  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s), solver %s %d/%d\n",
+              args.scene.c_str(), scene.robot.name.c_str(), model.nv, o.dt, scene.steps,
+              scene.steps * o.dt, to_string(o.solver), o.position_iterations,
+              o.velocity_iterations);
+  std::printf("  featherdrive (float64) against PhysX 5.6.1 (float32, %s)\n",
+              physx.dir.string().c_str());
+  if (!friction_off.empty())
+    std::printf("  joint friction off on both sides (PhysX's cannot be set):%s\n",
+                friction_off.c_str());
+  if (model.floating_base()) std::printf("  the floating root's pose is not compared\n");
+  std::printf("  largest |featherdrive - PhysX| per joint, at step; relative: / the scale below\n");
+  std::printf("  %-16s %10s %5s %9s  %10s %5s %9s  %10s %5s %9s\n", "joint", "q", "step",
+              "relative", "qd", "step", "relative", "force", "step", "relative");
+  auto rel = [](double v, double scale) { return scale > 0.0 ? v / scale : 0.0; };
+  for (const JointDifference& j : c.joints)
+    std::printf("  %-16s %10.2e %5zu %9.1e  %10.2e %5zu %9.1e  %10.2e %5zu %9.1e\n",
+                j.joint.c_str(), j.q.value, j.q.row, rel(j.q.value, c.scale_q), j.qd.value,
+                j.qd.row, rel(j.qd.value, c.scale_qd), j.f.value, j.f.row,
+                rel(j.f.value, c.scale_f));
+  std::printf("  %-16s %10.4g %5s %9s  %10.4g %5s %9s  %10.4g\n", "scale", c.scale_q, "", "",
+              c.scale_qd, "", "", c.scale_f);
+  std::printf("  (scale: largest |q|, |qd|, |force| of PhysX's run over all joints and steps)\n");
+  std::printf("  largest relative difference: q %.1e, qd %.1e, force %.1e\n", c.relative_q(),
+              c.relative_qd(), c.relative_f());
+
+  if (!args.plot.empty()) {
+    std::fflush(stdout);
+    const fs::path csv = fs::temp_directory_path() /
+                         ("featherdrive-" + std::to_string(getpid()) + "-physx-diff.csv");
+    struct Remove {
+      fs::path p;
+      ~Remove() {
+        std::error_code ec;
+        fs::remove(p, ec);
+      }
+    } remove{csv};
+    write_differences(csv, fd, px);
+    std::string title = scene.robot.name;
+    title += ": featherdrive - PhysX, ";
+    title += to_string(o.solver);
+    title += " (";
+    title += fs::path(args.scene).filename().string();
+    title += ")";
+    plot(csv, args.plot, title);
+    std::printf("  plot: %s\n", args.plot.c_str());
+  }
+  return 0;
+}

@@ -1,0 +1,53 @@
+#!/usr/bin/python3
+"""Plots featherdrive - PhysX over time per joint: position, velocity and force differences.
+Called by `featherdrive compare-physx --plot`.
+
+usage: plot_physx_diff.py DIFFERENCES.csv OUT.png [--title TITLE]
+DIFFERENCES.csv: step,t,dq:<joint>...,dqd:<joint>...,df:<joint>...
+"""
+import argparse
+import csv
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("differences")
+    parser.add_argument("png")
+    parser.add_argument("--title", default="featherdrive - PhysX")
+    args = parser.parse_args()
+
+    with open(args.differences, newline="") as f:
+        rows = list(csv.reader(f))
+    if len(rows) < 2:
+        sys.exit(f"plot_physx_diff: {args.differences} has no rows")
+    header, data = rows[0], rows[1:]
+    col = {name: [float(r[i]) for r in data] for i, name in enumerate(header)}
+    joints = [c[3:] for c in header if c.startswith("dq:")]
+
+    panels = (("dq:", "q difference [rad or m]"), ("dqd:", "qd difference [rad/s or m/s]"),
+              ("df:", "force difference [Nm or N]"))
+    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(10, 10))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (prefix, label) in zip(axes, panels):
+        for i, joint in enumerate(joints):
+            ax.plot(col["t"], col[prefix + joint], color=colours[i % len(colours)], label=joint,
+                    linewidth=0.9)
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+        # Differences near float32 rounding: keep matplotlib from hiding them in an offset.
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3), useOffset=False)
+    axes[0].legend(loc="upper right", fontsize="small", ncol=2)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(args.title)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=100)
+
+
+if __name__ == "__main__":
+    main()
