@@ -162,8 +162,10 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
   const auto targets = c.targets(steps);
   const Trajectory px = run_physx(initial, steps, targets);
   const Scale scale = scale_of(px);
-  const int nv = model->nv;
+  // The 1-dof joints (a floating root's 6 dofs are compared as px.root).
+  const int nv = model->nv - (model->floating_base() ? 6 : 0);
   ASSERT_EQ(static_cast<int>(px.joints.size()), nv);
+  ASSERT_EQ(px.root.empty(), !model->floating_base());
   ASSERT_EQ(static_cast<int>(px.q.size()), steps + 1);
   std::vector<int> dof(nv);
   for (int j = 0; j < nv; ++j) dof[j] = model->dof_index(px.joints[j]);
