@@ -4,6 +4,7 @@
 
 #include "featherdrive/algorithm/energy.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
