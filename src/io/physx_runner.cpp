@@ -72,6 +72,12 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
   }
   const int t_col = find_column(header, "t");
   if (t_col < 0) throw PhysxError(name + ": header: column 't' is missing");
+  std::vector<int> root_col;
+  for (const char* c : {"px", "py", "pz", "qw", "qx", "qy", "qz", "wx", "wy", "wz", "vx", "vy", "vz"}) {
+    const int col = find_column(header, std::string("root:") + c);
+    if (col >= 0) root_col.push_back(col);
+  }
+  if (root_col.size() != 13) root_col.clear();
   const size_t n = t.joints.size();
   for (long line_no = 2; std::getline(in, line); ++line_no) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -100,6 +106,11 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
     t.q.push_back(std::move(q));
     t.qd.push_back(std::move(qd));
     t.f.push_back(std::move(f));
+    if (!root_col.empty()) {
+      std::vector<double> root;
+      for (int col : root_col) root.push_back(value(col));
+      t.root.push_back(std::move(root));
+    }
   }
   return t;
 }

@@ -58,7 +58,8 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     : model_(model ? std::move(model) : throw std::invalid_argument("Simulation: model is null")),
       options_(options),
       data_(*model_),
-      sweep_(*model_) {
+      sweep_(*model_),
+      departures_(*model_) {
   validate_options(options_);
   const int nv = model_->nv;
   q_ = model_->neutral_configuration();

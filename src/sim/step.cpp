@@ -32,16 +32,25 @@ void Simulation::step() {
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
-  // Poses at the start of the step (ABA computes the velocities it needs, in frame 0).
-  forward_kinematics(model, data_, q_);
+  // Poses at the start of the step (ABA computes the velocities it needs, in frame 0; the link
+  // bias of compat physx reads the link-frame ones).
+  if (physx()) forward_kinematics(model, data_, q_, qd_);
+  else forward_kinematics(model, data_, q_);
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1).
   aba_from_kinematics(model, data_, qd_, applied_force_);
   qd_ += dt * data_.qdd;
+  // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
+  if (physx()) {
+    compute_link_bias(model, data_, qd_, dt, departures_);
+    if (model.floating_base())
+      correct_free_velocity_momentum(model, data_, applied_force_, dt, departures_, qd_);
+  }
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);
   // Rows, position iterations, position update, velocity iterations.
   if (options_.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
+  if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
   // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
   for (int d = 0; d < model.nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
@@ -110,7 +119,7 @@ void Simulation::sweep(RowPhase& phase) {
   if (!any_rows_) return;
   gauss_seidel_sweep(*model_, data_, sweep_, qd_, [this, &phase](int dof, double v) {
     phase.delta_x = delta_x_[dof];
-    return solve_dof_rows(rows_[static_cast<size_t>(dof)], v, phase);
+    return solve_dof_rows(rows_[static_cast<size_t>(dof)], v + departures_.row_bias[dof], phase);
   });
 }
 
@@ -125,7 +134,8 @@ void Simulation::solve_pgs() {
   phase.h = dt;
   phase.limit_erp = limit_erp(SolverType::pgs, options_.position_iterations);
   for (int it = 0; it < options_.position_iterations; ++it) sweep(phase);
-  integrate_configuration(*model_, q_, qd_, dt, q_);
+  departures_.qd_position = qd_;
+  integrate_positions(dt);
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
 }
@@ -144,14 +154,34 @@ void Simulation::solve_tgs() {
   phase.h = rho;
   phase.tgs = true;
   phase.limit_erp = limit_erp(SolverType::tgs, n);
+  departures_.qd_position.setZero();
   for (int i = 1; i <= n; ++i) {
     phase.time_to_step_end = dt - i * rho;
     sweep(phase);
-    integrate_configuration(*model_, q_, qd_, rho, q_);
+    integrate_positions(rho);
     delta_x_ += rho * qd_;
+    if (physx()) {
+      // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1).
+      track_prismatic_position_change(*model_, q_, qd_, rho, departures_, delta_x_);
+      departures_.qd_position += (1.0 / n) * qd_;
+    }
   }
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+}
+
+// q advanced over h. compat physx moves a floating root about its COM with the world velocity of
+// the step's start frame, as PhysX keeps it (updateRootBody, recordDeltaMotion).
+void Simulation::integrate_positions(double h) {
+  if (!physx() || !model_->floating_base()) {
+    integrate_configuration(*model_, q_, qd_, h, q_);
+    return;
+  }
+  const int iq = model_->links[0].q_index;
+  const Eigen::Matrix<double, 7, 1> root = q_.segment<7>(iq);
+  integrate_configuration(*model_, q_, qd_, h, q_);
+  q_.segment<7>(iq) = root;
+  integrate_root_about_com(*model_, qd_, h, departures_, q_);
 }
 
 }  // namespace featherdrive

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <array>
 #include <functional>
 #include <map>
 
@@ -51,6 +52,10 @@ Scale scale_of(const Trajectory& t) {
       s.qd = std::max(s.qd, std::abs(t.qd[k][j]));
       s.f = std::max(s.f, std::abs(t.f[k][j]));
     }
+  for (const auto& r : t.root) {
+    for (int c = 0; c < 7; ++c) s.q = std::max(s.q, std::abs(r[c]));
+    for (int c = 7; c < 13; ++c) s.qd = std::max(s.qd, std::abs(r[c]));
+  }
   return s;
 }
 
@@ -64,6 +69,7 @@ struct Case {
   std::function<std::shared_ptr<const Model>()> model;
   std::function<void(Simulation&)> setup;
   std::function<std::vector<TargetsByJoint>(int)> targets = [](int) { return std::vector<TargetsByJoint>{}; };
+  Compat compat = Compat::none;
 };
 
 struct Solver {
@@ -76,9 +82,30 @@ std::string solver_name(const Solver& s) {
          std::to_string(s.velocity_iterations);
 }
 
-void compare(const Case& c, const Solver& solver, int steps, double restart_tol, double free_tol) {
+// The floating root's state as the harness writes it (world twist, link-origin velocity).
+std::array<double, 13> root_state(const Simulation& sim) {
+  const Model& m = sim.model();
+  const int iq = m.links[0].q_index, iv = m.links[0].v_index;
+  const Quat Q(sim.q()[iq + 3], sim.q()[iq + 4], sim.q()[iq + 5], sim.q()[iq + 6]);
+  const Mat3 R = Q.toRotationMatrix();
+  const Vec3 w = R * Vec3(sim.qd().segment<3>(iv)), v = R * Vec3(sim.qd().segment<3>(iv + 3));
+  return {sim.q()[iq], sim.q()[iq + 1], sim.q()[iq + 2], Q.w(), Q.x(), Q.y(), Q.z(),
+          w.x(), w.y(), w.z(), v.x(), v.y(), v.z()};
+}
+
+void set_root_state(const std::vector<double>& r, VecX& q, VecX& qd, const Model& m) {
+  const int iq = m.links[0].q_index, iv = m.links[0].v_index;
+  for (int c = 0; c < 7; ++c) q[iq + c] = r[c];
+  const Mat3 R = Quat(r[3], r[4], r[5], r[6]).normalized().toRotationMatrix();
+  qd.segment<3>(iv) = R.transpose() * Vec3(r[7], r[8], r[9]);
+  qd.segment<3>(iv + 3) = R.transpose() * Vec3(r[10], r[11], r[12]);
+}
+
+void compare(const Case& c, const Solver& solver, int steps, double restart_tol, double free_tol,
+             bool expect_match = true) {
   auto model = c.model();
   SimulationOptions o;
+  o.compat = c.compat;
   o.solver = solver.type;
   o.position_iterations = solver.position_iterations;
   o.velocity_iterations = solver.velocity_iterations;
@@ -87,8 +114,10 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
   const auto targets = c.targets(steps);
   const Trajectory px = run_physx(initial, steps, targets);
   const Scale scale = scale_of(px);
-  const int nv = model->nv;
+  // The 1-dof joints (a floating root's 6 dofs are compared as px.root).
+  const int nv = model->nv - (model->floating_base() ? 6 : 0);
   ASSERT_EQ(static_cast<int>(px.joints.size()), nv);
+  ASSERT_EQ(px.root.empty(), !model->floating_base());
   ASSERT_EQ(static_cast<int>(px.q.size()), steps + 1);
   std::vector<int> dof(nv);
   for (int j = 0; j < nv; ++j) dof[j] = model->dof_index(px.joints[j]);
@@ -111,6 +140,20 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
       e.qd = std::max(e.qd, ev);
       e.f = std::max(e.f, ef);
     }
+    if (px.root.empty()) return;
+    const auto r = root_state(sim);
+    // A quaternion and its negative are the same orientation.
+    const double sign = r[3] * px.root[k][3] + r[4] * px.root[k][4] + r[5] * px.root[k][5] +
+                        r[6] * px.root[k][6] < 0 ? -1.0 : 1.0;
+    for (int col = 0; col < 13; ++col) {
+      const double mine = col >= 3 && col < 7 ? sign * r[col] : r[col];
+      const double err = std::abs(mine - px.root[k][col]) / (col < 7 ? scale.q : scale.qd);
+      if (std::getenv("FEATHERDRIVE_PARITY_DUMP"))
+        std::printf("%s %d root[%d] %.9g %.9g\n", mode, k, col, mine, px.root[k][col]);
+      double& slot = col < 7 ? e.q : e.qd;
+      if (err > std::max({e.q, e.qd, e.f})) worst_step = k;
+      slot = std::max(slot, err);
+    }
   };
   // Restarted from PhysX's state before every step.
   {
@@ -121,6 +164,7 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
         q[model->links[model->dof_link[dof[j]]].q_index] = px.q[k][j];
         qd[dof[j]] = px.qd[k][j];
       }
+      if (!px.root.empty()) set_root_state(px.root[k], q, qd, *model);
       sim.set_q(q);
       sim.set_qd(qd);
       apply_targets(sim, targets, k);
@@ -140,6 +184,7 @@ void compare(const Case& c, const Solver& solver, int steps, double restart_tol,
   std::printf("%-28s %-10s restart q %.1e qd %.1e f %.1e (step %d) | free q %.1e qd %.1e f %.1e (step %d) | scale q %.3g qd %.3g f %.3g\n",
               c.name.c_str(), solver_name(solver).c_str(), restart.q, restart.qd, restart.f,
               restart_worst_step, free.q, free.qd, free.f, free_worst_step, scale.q, scale.qd, scale.f);
+  if (!expect_match) return;  // default mode on robots PhysX departs on: figures only
   EXPECT_LT(restart.q, restart_tol);
   EXPECT_LT(restart.qd, restart_tol);
   EXPECT_LT(restart.f, restart_tol);
@@ -298,6 +343,58 @@ std::vector<Case> cases() {
   return out;
 }
 
+// The tree of tests/data/physx_tree.urdf: prismatic joints on rotating parents, which PhysX solves
+// with a biased joint velocity, and (floating) the momentum corrections of a free base. URDF limits
+// and velocity limits off: the harness's PhysX has none of its own (parameters inert).
+const std::vector<std::string> kTreeJoints = {"yaw", "left_shoulder", "left_elbow", "left_wrist_slide",
+                                              "right_shoulder", "right_extend", "right_finger_joint",
+                                              "lift_slide", "neck"};
+
+std::shared_ptr<const Model> physx_tree(bool fixed_base, const Vec3& gravity) {
+  UrdfOptions options;
+  options.fixed_base = fixed_base;
+  options.gravity = gravity;
+  return load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/tests/data/physx_tree.urdf", options).model;
+}
+
+void setup_tree(Simulation& s) {
+  for (const Link& l : s.model().links) {
+    if (l.nv != 1) continue;
+    s.set_joint_limits(l.v_index, -kInf, kInf);
+    s.set_max_joint_velocity(l.v_index, kInf);
+    s.set_joint_friction(l.v_index, JointFriction{});
+  }
+  drive_all(s, 800, 40);
+  VecX q = s.q(), qd = s.qd();
+  for (const Link& l : s.model().links)
+    if (l.nv == 1) {
+      q[l.q_index] = 0.2;
+      qd[l.v_index] = 0.5;
+    }
+  if (s.model().floating_base()) {
+    // Standing 0.5 m up, tilted, turning and drifting: angular momentum about the COM to keep.
+    const Quat Q(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+    q.head<7>() << 0.0, 0.0, 0.5, Q.w(), Q.x(), Q.y(), Q.z();
+    qd.head<6>() << 0.4, -0.6, 0.9, 0.1, 0.0, 0.2;
+    // Under gravity, thrown up so that it is back near its start after the 4 s run: PhysX's float32
+    // positions keep 1e-7 of |p|, and the harness's force readback reads them.
+    const Vec3 up = Quat(q[3], q[4], q[5], q[6]).conjugate() * Vec3(0, 0, 2.0 * 9.81);
+    if (s.model().gravity.norm() > 0.0) qd.segment<3>(3) += up;
+  }
+  s.set_q(q);
+  s.set_qd(qd);
+}
+
+std::vector<Case> tree_cases(Compat compat) {
+  const std::string suffix = compat == Compat::physx ? "" : "_default_mode";
+  auto targets = [](int steps) { return sine_targets(kTreeJoints, steps, 1.0 / 60.0, 0.3); };
+  return {
+      {"tree_fixed" + suffix, [] { return physx_tree(true, Vec3(0, 0, -9.81)); }, setup_tree, targets, compat},
+      {"tree_floating" + suffix, [] { return physx_tree(false, Vec3(0, 0, -9.81)); }, setup_tree, targets, compat},
+      {"tree_floating_zero_g" + suffix, [] { return physx_tree(false, Vec3::Zero()); }, setup_tree, targets, compat},
+  };
+}
+
 struct ParityCase {
   Case c;
   Solver solver;
@@ -326,8 +423,33 @@ std::vector<ParityCase> parity_cases() {
                                        {SolverType::tgs, 4, 1}, {SolverType::tgs, 32, 4}};
   for (const Case& c : cases())
     for (const Solver& s : solvers) out.push_back({c, s});
+  for (const Case& c : tree_cases(Compat::physx))
+    for (const Solver& s : solvers) out.push_back({c, s});
   return out;
 }
+
+// Default (textbook) mode on the same trees: not expected to match PhysX; prints the figures of
+// docs/physx_parity.md ("What compat: physx changes").
+class PhysxDefaultModeDeparts : public ::testing::TestWithParam<ParityCase> {};
+
+TEST_P(PhysxDefaultModeDeparts, Figures) {
+  compare(GetParam().c, GetParam().solver, 240, 1e-5, 1e-4, /*expect_match=*/false);
+}
+
+std::vector<ParityCase> default_mode_cases() {
+  std::vector<ParityCase> out;
+  const std::vector<Solver> solvers = {{SolverType::pgs, 1, 0}, {SolverType::pgs, 4, 1},
+                                       {SolverType::pgs, 32, 4}, {SolverType::tgs, 1, 0},
+                                       {SolverType::tgs, 4, 1}, {SolverType::tgs, 32, 4}};
+  for (const Case& c : tree_cases(Compat::none))
+    for (const Solver& s : solvers) out.push_back({c, s});
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Trees, PhysxDefaultModeDeparts, ::testing::ValuesIn(default_mode_cases()),
+                         [](const auto& info) {
+                           return info.param.c.name + "_" + solver_name(info.param.solver);
+                         });
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PhysxParity, ::testing::ValuesIn(parity_cases()),
                          [](const auto& info) {

@@ -30,12 +30,15 @@ struct JointTrajectory {
   std::vector<std::string> joints;
   std::vector<double> t;                      ///< [row]
   std::vector<std::vector<double>> q, qd, f;  ///< [row][joint]
+  /// The harness's floating root, [row][13]: root:px py pz qw qx qy qz (link frame pose), world
+  /// angular velocity wx wy wz, world velocity of the link origin vx vy vz; empty without them.
+  std::vector<std::vector<double>> root;
   size_t rows() const { return q.size(); }
 };
 
 /// Reads a CSV of the harness (tests/physx/README.md) or of `featherdrive simulate` for a robot
 /// without a floating root: step,t,q:<joint>...,qd:<joint>...,f:<joint>... (other columns, e.g.
-/// the harness's root:*, are ignored). `name` is the file named in messages. Throws PhysxError
+/// the harness's root:* columns, are read into `root` when all 13 are there, or ignored). `name` is the file named in messages. Throws PhysxError
 /// naming the file, line, column and value for a missing column, a short row or a bad number.
 JointTrajectory parse_joint_csv(const std::string& text, const std::string& name);
 JointTrajectory read_joint_csv(const std::filesystem::path& path);

@@ -9,6 +9,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
+#include "featherdrive/sim/physx_departures.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 
 namespace featherdrive {
@@ -124,6 +125,8 @@ class Simulation {
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_restore();
+  bool physx() const { return options_.compat == Compat::physx; }
+  void integrate_positions(double h);
 
   std::shared_ptr<const Model> model_;
   SimulationOptions options_;
@@ -146,6 +149,7 @@ class Simulation {
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
+  PhysxDepartures departures_; ///< compat physx: the link bias and momentum corrections
 };
 
 }  // namespace featherdrive

@@ -1,0 +1,180 @@
+// PhysX departure 1: the biased joint velocity of prismatic rows (docs/math/physx_departures.md,
+// "The link bias"). PhysX's free-velocity update moves each link's velocity by dt times its
+// velocity-product acceleration (FeatherstoneArticulation::computeLinkInternalAcceleration adds the
+// Coriolis vectors of computeLinkStates); a row measures its joint velocity from the two links'
+// velocities at the joint point, so a prismatic row sees qd + delta.
+#include "featherdrive/sim/physx_departures.hpp"
+
+#include "featherdrive/algorithm/joint_motion.hpp"
+
+namespace featherdrive {
+
+WorldPose::WorldPose(const Model& model)
+    : R(model.links.size(), Mat3::Identity()), p(model.links.size(), Vec3::Zero()),
+      com(model.links.size(), Vec3::Zero()) {}
+
+WorldVelocity::WorldVelocity(const Model& model)
+    : w(model.links.size(), Vec3::Zero()), v(model.links.size(), Vec3::Zero()) {}
+
+PhysxDepartures::PhysxDepartures(const Model& model)
+    : start(model), now(model), vel(model), scratch(model),
+      bias_w(model.links.size(), Vec3::Zero()), bias_v(model.links.size(), Vec3::Zero()),
+      turn(model.links.size(), Vec3::Zero()), row_bias(VecX::Zero(model.nv)),
+      qd_position(VecX::Zero(model.nv)) {
+  for (const Link& l : model.links) total_mass += l.mass;
+}
+
+void world_pose(const Model& model, const VecX& q, WorldPose& pose) {
+  const int n = model.num_links();
+  double mass = 0.0;
+  pose.total_com.setZero();
+  for (int i = 0; i < n; ++i) {
+    const Link& link = model.links[i];
+    const Transform X = joint_transform(link, q.data() + link.q_index) * link.tree_transform;
+    if (link.parent < 0) {
+      pose.R[i] = X.E.transpose();
+      pose.p[i] = X.r;
+    } else {
+      pose.R[i].noalias() = pose.R[link.parent] * X.E.transpose();
+      pose.p[i] = pose.p[link.parent] + pose.R[link.parent] * X.r;
+    }
+    pose.com[i] = pose.p[i] + pose.R[i] * link.com;
+    pose.total_com += link.mass * pose.com[i];
+    mass += link.mass;
+  }
+  if (mass > 0.0) pose.total_com /= mass;
+}
+
+void root_world_twist(const Model& model, const WorldPose& pose, const VecX& qd, Vec3& w0, Vec3& v0) {
+  const Link& root = model.links[0];
+  if (root.joint_type != JointType::floating) {
+    w0.setZero();
+    v0.setZero();
+    return;
+  }
+  w0 = pose.R[0] * qd.segment<3>(root.v_index);
+  v0 = pose.R[0] * qd.segment<3>(root.v_index + 3);
+}
+
+void world_velocity(const Model& model, const WorldPose& pose, const VecX& qd, const Vec3& w0,
+                    const Vec3& v0, WorldVelocity& out) {
+  const int n = model.num_links();
+  out.w[0] = w0;
+  out.v[0] = v0 + w0.cross(pose.com[0] - pose.p[0]);
+  for (int i = 1; i < n; ++i) {
+    const Link& link = model.links[i];
+    const int p = link.parent;
+    Vec3 w = out.w[p];
+    // Origin velocity of the link frame if rigidly attached to the parent.
+    Vec3 v = out.v[p] + out.w[p].cross(pose.p[i] - pose.com[p]);
+    switch (link.joint_type) {
+      case JointType::revolute: w += pose.R[i] * link.axis * qd[link.v_index]; break;
+      case JointType::prismatic: v += pose.R[i] * link.axis * qd[link.v_index]; break;
+      case JointType::spherical: w += pose.R[i] * qd.segment<3>(link.v_index); break;
+      default: break;
+    }
+    out.w[i] = w;
+    out.v[i] = v + w.cross(pose.com[i] - pose.p[i]);
+  }
+}
+
+void momentum(const Model& model, const WorldPose& pose, const WorldVelocity& vel,
+              const std::vector<Vec3>* bias_w, const std::vector<Vec3>* bias_v, Vec3& linear,
+              Vec3& angular) {
+  const int n = model.num_links();
+  linear.setZero();
+  double mass = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double m = model.links[i].mass;
+    linear += m * (bias_v ? Vec3(vel.v[i] + (*bias_v)[i]) : vel.v[i]);
+    mass += m;
+  }
+  const Vec3 vcom = mass > 0.0 ? Vec3(linear / mass) : Vec3::Zero();
+  angular.setZero();
+  for (int i = 0; i < n; ++i) {
+    const Link& link = model.links[i];
+    const Vec3 w = bias_w ? Vec3(vel.w[i] + (*bias_w)[i]) : vel.w[i];
+    const Vec3 v = bias_v ? Vec3(vel.v[i] + (*bias_v)[i]) : vel.v[i];
+    const Mat3 I = pose.R[i] * link.inertia_com * pose.R[i].transpose();
+    angular += I * w + link.mass * (pose.com[i] - pose.total_com).cross(v - vcom);
+  }
+}
+
+void compute_link_bias(const Model& model, const Data& data, const VecX& qd, double dt,
+                       PhysxDepartures& dep) {
+  const int n = model.num_links();
+  WorldPose& s = dep.start;
+  // The start pose and velocities, from the kinematics of the step's start.
+  double mass = 0.0;
+  s.total_com.setZero();
+  for (int i = 0; i < n; ++i) {
+    const Link& link = model.links[i];
+    s.R[i] = data.world_rotation[i];
+    s.p[i] = data.world_position[i];
+    s.com[i] = s.p[i] + s.R[i] * link.com;
+    s.total_com += link.mass * s.com[i];
+    mass += link.mass;
+    const Vec6& v = data.velocity[i];  // body frame, link origin
+    dep.vel.w[i] = s.R[i] * v.head<3>();
+    dep.vel.v[i] = s.R[i] * (v.tail<3>() + v.head<3>().cross(link.com));
+  }
+  if (mass > 0.0) s.total_com /= mass;
+  dep.root_rotation_start = s.R[0];
+  // B_i: the parent's B moved rigidly to the link's COM, plus dt times the link's own
+  // velocity-product acceleration at zero joint and root accelerations: with r = c_i - c_p,
+  // mu_w = w_i - w_p and mu_v = v_i - v_p - w_p x r (the joint's share of the link's velocity),
+  // a_w = w_p x mu_w, a_v = w_p x (w_p x r) + 2 w_p x mu_v + mu_w x mu_v (eq. PD-1, the classical
+  // acceleration of the COM; PhysX's Coriolis vector in computeLinkStates).
+  dep.bias_w[0].setZero();
+  dep.bias_v[0].setZero();
+  for (int i = 1; i < n; ++i) {
+    const int p = model.links[i].parent;
+    const Vec3 r = s.com[i] - s.com[p];
+    const Vec3& wp = dep.vel.w[p];
+    const Vec3 mu_w = dep.vel.w[i] - wp;
+    const Vec3 mu_v = dep.vel.v[i] - dep.vel.v[p] - wp.cross(r);
+    dep.bias_w[i] = dep.bias_w[p] + dt * wp.cross(mu_w);
+    dep.bias_v[i] = dep.bias_v[p] + dep.bias_w[p].cross(r) +
+                    dt * (wp.cross(wp.cross(r)) + 2.0 * wp.cross(mu_v) + mu_w.cross(mu_v));
+  }
+  // delta = u . (B_child - B_parent) at the joint point (eq. PD-2); zero for revolute rows, whose
+  // angular bias has no component along the axis.
+  dep.row_bias.setZero();
+  for (int i = 1; i < n; ++i) {
+    const Link& link = model.links[i];
+    if (link.joint_type != JointType::prismatic) continue;
+    const int p = link.parent;
+    const Vec3 u = s.R[i] * link.axis;
+    const Vec3& J = s.p[i];
+    const Vec3 child = dep.bias_v[i] + dep.bias_w[i].cross(J - s.com[i]);
+    const Vec3 parent = dep.bias_v[p] + dep.bias_w[p].cross(J - s.com[p]);
+    dep.row_bias[link.v_index] = u.dot(child - parent);
+  }
+  for (int i = 0; i < n; ++i) dep.turn[i].setZero();
+  (void)qd;
+}
+
+void track_prismatic_position_change(const Model& model, const VecX& q, const VecX& qd, double h,
+                                     PhysxDepartures& dep, VecX& delta_x) {
+  const int n = model.num_links();
+  world_pose(model, q, dep.now);
+  // The sub-step's link angular velocities in the step's frozen start frame, biased.
+  Vec3 w0, v0;
+  root_world_twist(model, dep.start, qd, w0, v0);
+  world_velocity(model, dep.start, qd, w0, v0, dep.scratch);
+  for (int i = 0; i < n; ++i) dep.turn[i] += h * (dep.scratch.w[i] + dep.bias_w[i]);
+  // Position change of a prismatic joint: its child's COM displacement relative to its parent's,
+  // less the parent's accumulated turn applied to the COM-to-COM offset, along the start axis
+  // (eq. PD-3).
+  const WorldPose& s = dep.start;
+  for (int i = 1; i < n; ++i) {
+    const Link& link = model.links[i];
+    if (link.joint_type != JointType::prismatic) continue;
+    const int p = link.parent;
+    const Vec3 u = s.R[i] * link.axis;
+    const Vec3 moved = (dep.now.com[i] - s.com[i]) - (dep.now.com[p] - s.com[p]);
+    delta_x[link.v_index] = u.dot(moved + dep.turn[p].cross(s.com[p] - s.com[i]));
+  }
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,142 @@
+// PhysX departure 2: momentum corrections of a floating base (docs/math/physx_departures.md,
+// "Floating-base momentum"). PhysX 5.6.1: FeatherstoneArticulation::computeLinkInternalAcceleration
+// (after the free velocity), updateRootBody / recordDeltaMotion (the root pose, about its COM) and
+// updateBodies (the end of the step). All are rigid motions of the whole articulation, i.e.
+// changes of the root's velocity and position only; joint rates are never touched.
+#include "featherdrive/sim/physx_departures.hpp"
+
+#include <cmath>
+
+namespace featherdrive {
+namespace {
+
+// Inertia of all links about the articulation's COM, world frame.
+Mat3 compound_inertia(const Model& model, const WorldPose& pose) {
+  Mat3 I = Mat3::Zero();
+  for (int i = 0; i < model.num_links(); ++i) {
+    const Link& link = model.links[i];
+    const Vec3 r = pose.com[i] - pose.total_com;
+    I += pose.R[i] * link.inertia_com * pose.R[i].transpose() +
+         link.mass * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+  }
+  return I;
+}
+
+// The rigid rotation dw about the COM that scales |L| by `ratio`, and the uniform linear velocity
+// dv that then makes the linear momentum `target` (eq. PD-4, PD-5). P and L: the current momenta.
+void rigid_correction(const Model& model, const WorldPose& pose, const Vec3& P, const Vec3& L,
+                      double ratio, const Vec3& target, double mass, Vec3& dw, Vec3& dv) {
+  dw = compound_inertia(model, pose).inverse() * (L * (ratio - 1.0));
+  Vec3 P1 = P;
+  for (int i = 0; i < model.num_links(); ++i)
+    P1 += model.links[i].mass * dw.cross(pose.com[i] - pose.total_com);
+  dv = (target - P1) / mass;
+}
+
+// Writes a root world twist (angular velocity, origin velocity) into qd in the frame R.
+void store_root_twist(const Model& model, const Mat3& R, const Vec3& w, const Vec3& v, VecX& qd) {
+  const int iv = model.links[0].v_index;
+  qd.segment<3>(iv) = R.transpose() * w;
+  qd.segment<3>(iv + 3) = R.transpose() * v;
+}
+
+}  // namespace
+
+void correct_free_velocity_momentum(const Model& model, const Data& data, const VecX& applied_force,
+                                    double dt, PhysxDepartures& dep, VecX& qd) {
+  (void)data;
+  const WorldPose& s = dep.start;
+  const Link& root = model.links[0];
+  const double M = dep.total_mass;
+  // Target: the momentum before the velocity-product terms, i.e. the start momentum plus dt times
+  // the external wrench (gravity at the COM; a wrench applied on the root's dofs).
+  Vec3 P0, L0;
+  momentum(model, s, dep.vel, nullptr, nullptr, P0, L0);
+  const Vec3 n = s.R[0] * applied_force.segment<3>(root.v_index);
+  const Vec3 f = s.R[0] * applied_force.segment<3>(root.v_index + 3);
+  P0 += dt * (M * model.gravity + f);
+  L0 += dt * (n + (s.p[0] - s.total_com).cross(f));
+  // The free velocity as PhysX's links carry it: biased.
+  Vec3 w0, v0;
+  root_world_twist(model, s, qd, w0, v0);
+  world_velocity(model, s, qd, w0, v0, dep.scratch);
+  Vec3 P1, L1;
+  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, P1, L1);
+  const double l1 = L1.norm();
+  const double ratio = l1 == 0.0 ? 1.0 : L0.norm() / l1;
+  Vec3 dw, dv;
+  rigid_correction(model, s, P1, L1, ratio, P0, M, dw, dv);
+  w0 += dw;
+  v0 += dv + dw.cross(s.p[0] - s.total_com);
+  store_root_twist(model, s.R[0], w0, v0, qd);
+}
+
+void integrate_root_about_com(const Model& model, const VecX& qd, double h, PhysxDepartures& dep,
+                              VecX& q) {
+  const Link& root = model.links[0];
+  const int iq = root.q_index, iv = root.v_index;
+  // The root's joint frame in the world (usually the world itself).
+  const Mat3 RT = root.tree_transform.E.transpose();
+  const Vec3& pT = root.tree_transform.r;
+  const Quat QT(RT);
+  const Quat QJ = Quat(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]).normalized();
+  const Quat Qw = QT * QJ;
+  const Vec3 p = pT + RT * Vec3(q[iq], q[iq + 1], q[iq + 2]);
+  // World velocities of the step's start frame: angular, and of the root's COM.
+  const Mat3& R0 = dep.root_rotation_start;
+  const Vec3 wb = qd.segment<3>(iv);
+  const Vec3 w = R0 * wb;
+  const Vec3 vcom = R0 * (qd.segment<3>(iv + 3) + wb.cross(root.com));
+  const Vec3 com = p + Qw * root.com + h * vcom;
+  const Vec3 turn = h * w;
+  const double angle = turn.norm();
+  Quat dq = Quat::Identity();
+  if (angle > 0.0) dq = Quat(Eigen::AngleAxisd(angle, turn / angle));
+  const Quat Qnew = (dq * Qw).normalized();
+  const Vec3 pnew = com - Qnew * root.com;
+  const Quat QJnew = (QT.conjugate() * Qnew).normalized();
+  q.segment<3>(iq) = RT.transpose() * (pnew - pT);
+  q[iq + 3] = QJnew.w();
+  q[iq + 4] = QJnew.x();
+  q[iq + 5] = QJnew.y();
+  q[iq + 6] = QJnew.z();
+}
+
+void correct_end_of_step_momentum(const Model& model, double dt, PhysxDepartures& dep, VecX& q,
+                                  VecX& qd) {
+  const WorldPose& s = dep.start;
+  const Link& root = model.links[0];
+  const double M = dep.total_mass;
+  // Targets, from the solver's biased velocities in the start pose: the final ones (linear
+  // momentum and |angular momentum|) and those the positions moved with (where the COM goes).
+  Vec3 w0, v0, P_target, L_target, P_position, unused;
+  root_world_twist(model, s, qd, w0, v0);
+  world_velocity(model, s, qd, w0, v0, dep.scratch);
+  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, P_target, L_target);
+  {
+    Vec3 pw, pv;
+    root_world_twist(model, s, dep.qd_position, pw, pv);
+    world_velocity(model, s, dep.qd_position, pw, pv, dep.scratch);
+    momentum(model, s, dep.scratch, nullptr, &dep.bias_v, P_position, unused);
+  }
+  // Velocities in the new pose: the root keeps its world angular velocity and COM velocity.
+  world_pose(model, q, dep.now);
+  const WorldPose& n = dep.now;
+  const Vec3 root_com_velocity = v0 + w0.cross(s.com[0] - s.p[0]);
+  Vec3 v_origin = root_com_velocity - w0.cross(n.com[0] - n.p[0]);
+  world_velocity(model, n, qd, w0, v_origin, dep.scratch);
+  Vec3 P1, L1;
+  momentum(model, n, dep.scratch, nullptr, nullptr, P1, L1);
+  const double l1 = L1.norm();
+  const double ratio = l1 == 0.0 ? 0.0 : L_target.norm() / l1;
+  Vec3 dw, dv;
+  rigid_correction(model, n, P1, L1, ratio, P_target, M, dw, dv);
+  w0 += dw;
+  v_origin += dv + dw.cross(n.p[0] - n.total_com);
+  // The COM where the position-iteration momentum puts it: a shift of every link.
+  const Vec3 shift = s.total_com + P_position * (dt / M) - n.total_com;
+  q.segment<3>(root.q_index) += root.tree_transform.E * shift;
+  store_root_twist(model, n.R[0], w0, v_origin, qd);
+}
+
+}  // namespace featherdrive
