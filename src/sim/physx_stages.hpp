@@ -18,10 +18,10 @@ bool link_damping_forces(const Model& model, const Data& data,
                          const std::vector<LinkParameters>& parameters, double dt,
                          std::vector<Vec6>& force);
 
-/// transmitted_force.cpp. After aba_from_kinematics (free accelerations): |F_i| of every link i,
-/// F_i the spatial force its inbound joint transmits to its subtree (force and torque about the
-/// link's centre of mass, one 6-vector), external link forces (may be null) included. subtree is
-/// scratch (num_links entries).
+/// transmitted_force.cpp. After aba_from_kinematics (free accelerations): |tau_i| + |f_i| of every
+/// link i, (tau_i, f_i) the torque about the link's centre of mass and the force its inbound joint
+/// transmits to its subtree, external link forces (may be null) included. subtree is scratch
+/// (num_links entries).
 void transmitted_force_magnitudes(const Model& model, const Data& data,
                                   const std::vector<Vec6>* external_force,
                                   std::vector<Vec6>& subtree, VecX& magnitude);
@@ -31,5 +31,10 @@ void transmitted_force_magnitudes(const Model& model, const Data& data,
 /// 0 for a root that is not floating.
 void link_cfm(const Model& model, const Data& data, const std::vector<LinkParameters>& parameters,
               VecX& cfm);
+
+/// prismatic_limits.cpp. Compat::physx, at the end of the step: every prismatic joint with a
+/// finite limit is put back within it (PhysX does this when it writes the step's positions, after
+/// the velocity iterations; the rows of the step never see it).
+void clamp_prismatic_positions(const Model& model, const VecX& lower, const VecX& upper, VecX& q);
 
 }  // namespace featherdrive

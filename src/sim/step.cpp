@@ -145,6 +145,8 @@ void Simulation::solve_pgs() {
   integrate_configuration(*model_, q_, qd_, dt, q_);
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  if (options_.compat == Compat::physx)  // prismatic_limits.cpp
+    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }
 
 // TGS: each position iteration is a sub-step of rho = dt / n with a fresh drive impulse, the
@@ -169,6 +171,8 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  if (options_.compat == Compat::physx)  // prismatic_limits.cpp
+    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }
 
 }  // namespace featherdrive

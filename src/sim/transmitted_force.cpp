@@ -2,10 +2,9 @@
 // (frictionCoefficient). PhysX (computeZAForceInv + computeJointTransmittedFrictionForce, read in
 // the source) takes every link's Newton-Euler force I a + Z under the free accelerations (Z: the
 // link's gravity, external and velocity-product forces, negated), sums it over the joint's subtree
-// with torques about the child link's centre of mass, and uses the 6-vector's magnitude.
+// with torques about the child link's centre of mass, and uses |torque| + |force| (the
+// "magnitude" of PhysX's spatial vector is the sum of its two halves' norms, not the 6-norm).
 // docs/math/joint_constraints.md, "Friction that grows with the transmitted force".
-#include <cmath>
-
 #include "physx_stages.hpp"
 
 namespace featherdrive {
@@ -43,7 +42,7 @@ void transmitted_force_magnitudes(const Model& model, const Data& data,
     const Vec3 c = data.world_position[i] + data.world_rotation[i] * k.com - origin;
     const Vec6& F = subtree[static_cast<size_t>(i)];
     const Vec3 torque_at_com = F.head<3>() - c.cross(F.tail<3>());
-    magnitude[i] = std::sqrt(torque_at_com.squaredNorm() + F.tail<3>().squaredNorm());
+    magnitude[i] = torque_at_com.norm() + F.tail<3>().norm();
   }
 }
 

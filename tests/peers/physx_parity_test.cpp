@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <functional>
 #include <filesystem>
 #include <fstream>
@@ -108,6 +109,7 @@ struct Case {
   std::function<std::shared_ptr<const Model>()> model;
   std::function<void(Simulation&)> setup;
   std::function<std::vector<TargetsByJoint>(int)> targets = [](int) { return std::vector<TargetsByJoint>{}; };
+  Compat compat = Compat::none;
 };
 
 struct Solver {
@@ -120,14 +122,31 @@ std::string solver_name(const Solver& s) {
          std::to_string(s.velocity_iterations);
 }
 
+int nv0(const Simulation& s) { return s.model().nv; }
+
 void compare(const Case& c, const Solver& solver, int steps, double restart_tol, double free_tol) {
   auto model = c.model();
   SimulationOptions o;
   o.solver = solver.type;
   o.position_iterations = solver.position_iterations;
   o.velocity_iterations = solver.velocity_iterations;
+  o.compat = c.compat;
   Simulation initial(model, o);
   c.setup(initial);
+  if (const char* ov = std::getenv("FD_OVERRIDE")) {  // TEMP experiment
+    double v[5];
+    std::sscanf(ov, "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]);
+    for (int i = 0; i < model->num_links(); ++i) {
+      LinkParameters p = initial.link_parameters(i);
+      if (v[0] >= 0) p.cfm_scale = v[0];
+      if (v[1] >= 0) p.linear_damping = v[1];
+      if (v[2] >= 0) p.angular_damping = v[2];
+      if (v[4] >= 0) { p.max_linear_velocity = kInf; p.max_angular_velocity = kInf; }
+      initial.set_link_parameters(i, p);
+    }
+    for (int d = 0; d < nv0(initial); ++d)
+      if (v[3] >= 0) initial.set_friction_coefficient(d, v[3]);
+  }
   const auto targets = c.targets(steps);
   const Trajectory px = run_physx(initial, steps, targets);
   const Scale scale = scale_of(px);
@@ -342,6 +361,50 @@ std::vector<Case> cases() {
   return out;
 }
 
+// compat: physx, PhysX's defaults untouched on both sides (cfm scale 0.025, friction coefficient
+// 0.05, link damping 0.05, link velocity limits 100 m/s and 50 rad/s, joint velocity limit 100),
+// on the fixed-base scenes without a prismatic joint on a moving parent; and one scene with every
+// parameter away from its default.
+std::vector<Case> compat_cases() {
+  const std::vector<std::string> keep = {"slider_force", "slider_acceleration", "slider_limit",
+                                         "slider_velocity_limit", "pendulum", "pendulum_driven",
+                                         "chain3", "chain3_moving_targets",
+                                         "chain3_acceleration_armature", "branched_tree", "arm7"};
+  std::vector<Case> out;
+  for (Case c : cases()) {
+    if (std::find(keep.begin(), keep.end(), c.name) == keep.end()) continue;
+    c.name += "_physx";
+    c.compat = Compat::physx;
+    out.push_back(c);
+  }
+  const double dt = 1.0 / 60.0;
+  out.push_back({"chain3_physx_parameters", [] { return test::make_planar_chain(3, 1.0, 0.5); },
+                 [](Simulation& s) {
+                   drive_all(s, 400, 20, DriveType::acceleration);
+                   s.set_drive("joint2", Drive{DriveType::force, 300, 15, kInf, 0.0, 0.0});
+                   const double cfm[] = {0.0, 0.3, 0.1, 0.6};
+                   const double damping[] = {0.0, 0.8, 1.5, 0.4};
+                   for (int i = 0; i < s.model().num_links(); ++i) {
+                     LinkParameters p;
+                     p.cfm_scale = cfm[i];
+                     p.linear_damping = damping[i];
+                     p.angular_damping = 2.0 * damping[i];
+                     p.max_linear_velocity = 1.2;
+                     p.max_angular_velocity = 2.5;
+                     s.set_link_parameters(i, p);
+                   }
+                   s.set_friction_coefficient("joint1", 0.4);
+                   s.set_friction_coefficient("joint3", 1.5);
+                   s.set_max_joint_velocity("joint2", 1.8);
+                   VecX q(3);
+                   q << 0.3, -0.2, 0.4;
+                   s.set_q(q);
+                 },
+                 [dt](int steps) { return sine_targets({"joint1", "joint2", "joint3"}, steps, dt, 0.8); },
+                 Compat::physx});
+  return out;
+}
+
 struct ParityCase {
   Case c;
   Solver solver;
@@ -372,6 +435,21 @@ std::vector<ParityCase> parity_cases() {
     for (const Solver& s : solvers) out.push_back({c, s});
   return out;
 }
+
+std::vector<ParityCase> compat_parity_cases() {
+  std::vector<ParityCase> out;
+  const std::vector<Solver> solvers = {{SolverType::pgs, 1, 0}, {SolverType::pgs, 4, 1},
+                                       {SolverType::pgs, 32, 4}, {SolverType::tgs, 1, 0},
+                                       {SolverType::tgs, 4, 1}, {SolverType::tgs, 32, 4}};
+  for (const Case& c : compat_cases())
+    for (const Solver& s : solvers) out.push_back({c, s});
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Compat, PhysxParity, ::testing::ValuesIn(compat_parity_cases()),
+                         [](const auto& info) {
+                           return info.param.c.name + "_" + solver_name(info.param.solver);
+                         });
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PhysxParity, ::testing::ValuesIn(parity_cases()),
                          [](const auto& info) {
