@@ -82,14 +82,32 @@ class ActuatorEnvelope:
     def active(self) -> bool:
         """Whether the envelope limits the drive."""
 
+class Compat(enum.Enum):
+    """Whose defaults and step details a simulation follows."""
+    none = 0
+    physx = 1
+
+class LinkParameters:
+    """PhysX's per-link parameters (inert by default; PhysX's defaults with compat='physx')."""
+    cfm_scale: float
+    linear_damping: float
+    angular_damping: float
+    max_linear_velocity: float
+    max_angular_velocity: float
+    def __init__(self, cfm_scale: float = 0.0, linear_damping: float = 0.0,
+                 angular_damping: float = 0.0, max_linear_velocity: float = ...,
+                 max_angular_velocity: float = ...) -> None: ...
+
 class SimulationOptions:
     """Time step and solver settings."""
     dt: float
     solver: SolverType
     position_iterations: int
     velocity_iterations: int
+    compat: Compat
     def __init__(self, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
-                 position_iterations: int = 4, velocity_iterations: int = 1) -> None:
+                 position_iterations: int = 4, velocity_iterations: int = 1,
+                 compat: Union[str, Compat] = "none") -> None:
         """ValueError for dt <= 0, position_iterations < 1 or velocity_iterations < 0."""
 
 def validate_options(options: SimulationOptions) -> None:
@@ -209,7 +227,8 @@ class ModelBuilder:
 class Simulation:
     """One simulation of a Model: state, drives, joint settings and the last step's forces."""
     def __init__(self, model: Model, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
-                 position_iterations: int = 4, velocity_iterations: int = 1) -> None: ...
+                 position_iterations: int = 4, velocity_iterations: int = 1,
+                 compat: Union[str, Compat] = "none") -> None: ...
     def copy(self) -> Simulation: ...
     @property
     def model(self) -> Model: ...
@@ -245,6 +264,10 @@ class Simulation:
     def set_joint_friction(self, joint: Joint, friction: JointFriction) -> None: ...
     def joint_friction(self, joint: Joint) -> JointFriction: ...
     def set_max_joint_velocity(self, joint: Joint, max_velocity: float) -> None: ...
+    def set_friction_coefficient(self, joint: Joint, coefficient: float) -> None: ...
+    def friction_coefficient(self, joint: Joint) -> float: ...
+    def set_link_parameters(self, link: Union[str, int], parameters: LinkParameters) -> None: ...
+    def link_parameters(self, link: Union[str, int]) -> LinkParameters: ...
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...

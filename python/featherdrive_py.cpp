@@ -128,10 +128,29 @@ DriveType to_drive_type(py::handle obj) {
                               ": must be 'none', 'force', 'acceleration' or a DriveType");
 }
 
+Compat to_compat(py::handle obj) {
+  if (py::isinstance<Compat>(obj)) return obj.cast<Compat>();
+  if (py::isinstance<py::str>(obj)) {
+    const auto s = obj.cast<std::string>();
+    if (s == "none") return Compat::none;
+    if (s == "physx") return Compat::physx;
+    throw std::invalid_argument("compat = '" + s + "': must be 'none' or 'physx'");
+  }
+  throw std::invalid_argument("compat = " + py::repr(obj).cast<std::string>() +
+                              ": must be 'none', 'physx' or a Compat");
+}
+
+// A link by name or index.
+int link_of(const Model& model, py::handle link) {
+  if (py::isinstance<py::str>(link)) return model.link_index(link.cast<std::string>());
+  return link.cast<int>();
+}
+
 SimulationOptions make_options(double dt, py::handle solver, int position_iterations,
-                               int velocity_iterations) {
+                               int velocity_iterations, py::handle compat = py::none()) {
   SimulationOptions o;
   o.dt = dt;
+  if (!compat.is_none()) o.compat = to_compat(compat);
   o.solver = to_solver(solver);
   o.position_iterations = position_iterations;
   o.velocity_iterations = velocity_iterations;
@@ -269,15 +288,51 @@ PYBIND11_MODULE(featherdrive, m) {
                      "opposing effort per unit speed")
       .def("active", &ActuatorEnvelope::active, "Whether the envelope limits the drive.");
 
+  py::enum_<Compat>(m, "Compat", "Whose defaults and step details a simulation follows.")
+      .value("none", Compat::none, "featherdrive's ideal articulation")
+      .value("physx", Compat::physx, "PhysX 5.6.1's defaults (docs/physx_parity.md)");
+
+  py::class_<LinkParameters>(m, "LinkParameters",
+                             "PhysX's per-link parameters: cfm scale, linear and angular damping "
+                             "[1/s], max linear [m/s] and angular [rad/s] velocity.")
+      .def(py::init([](double cfm, double ld, double ad, double mlv, double mav) {
+             return LinkParameters{cfm, ld, ad, mlv, mav};
+           }),
+           py::arg("cfm_scale") = 0.0, py::arg("linear_damping") = 0.0,
+           py::arg("angular_damping") = 0.0, py::arg("max_linear_velocity") = kInf,
+           py::arg("max_angular_velocity") = kInf, "Link parameters (inert by default).")
+      .def_readwrite("cfm_scale", &LinkParameters::cfm_scale, "in [0, 1]")
+      .def_readwrite("linear_damping", &LinkParameters::linear_damping, "1/s")
+      .def_readwrite("angular_damping", &LinkParameters::angular_damping, "1/s")
+      .def_readwrite("max_linear_velocity", &LinkParameters::max_linear_velocity, "m/s; inf for none")
+      .def_readwrite("max_angular_velocity", &LinkParameters::max_angular_velocity,
+                     "rad/s; inf for none")
+      .def("__repr__", [](const LinkParameters& p) {
+        std::string s = "LinkParameters(cfm_scale=";
+        s += fmt(p.cfm_scale);
+        s += ", linear_damping=";
+        s += fmt(p.linear_damping);
+        s += ", angular_damping=";
+        s += fmt(p.angular_damping);
+        s += ", max_linear_velocity=";
+        s += fmt(p.max_linear_velocity);
+        s += ", max_angular_velocity=";
+        s += fmt(p.max_angular_velocity);
+        s += ")";
+        return s;
+      });
+
   py::class_<SimulationOptions>(m, "SimulationOptions", "Time step and solver settings.")
       .def(py::init(&make_options), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
            py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
+           py::arg("compat") = "none",
            "Options; solver is 'pgs' or 'tgs'. Raises ValueError for dt <= 0, "
            "position_iterations < 1 or velocity_iterations < 0.")
       .def_readwrite("dt", &SimulationOptions::dt, "time step [s]")
       .def_readwrite("solver", &SimulationOptions::solver, "SolverType")
       .def_readwrite("position_iterations", &SimulationOptions::position_iterations, ">= 1")
       .def_readwrite("velocity_iterations", &SimulationOptions::velocity_iterations, ">= 0")
+      .def_readwrite("compat", &SimulationOptions::compat, "Compat, chosen at construction")
       .def("__repr__", [](const SimulationOptions& o) {
         return "SimulationOptions(dt=" + fmt(o.dt) + ", solver='" + to_string(o.solver) +
                "', position_iterations=" + std::to_string(o.position_iterations) +
@@ -435,11 +490,13 @@ PYBIND11_MODULE(featherdrive, m) {
   py::class_<Simulation>(m, "Simulation",
                          "One simulation of a Model: state, drives, joint settings and the "
                          "forces of the last step.")
-      .def(py::init([](ModelPtr model, double dt, py::handle solver, int pi, int vi) {
-             return Simulation(std::move(model), make_options(dt, solver, pi, vi));
+      .def(py::init([](ModelPtr model, double dt, py::handle solver, int pi, int vi,
+                       py::handle compat) {
+             return Simulation(std::move(model), make_options(dt, solver, pi, vi, compat));
            }),
            py::arg("model"), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
            py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
+           py::arg("compat") = "none",
            (std::string("A simulation at the neutral configuration, at rest, without drives; "
                          "solver ") + kSolverDoc + ".").c_str())
       .def(py::init([](ModelPtr model, const SimulationOptions& o) {
@@ -543,6 +600,28 @@ PYBIND11_MODULE(featherdrive, m) {
           "max_joint_velocity",
           [](const Simulation& s, py::handle j) { return s.max_joint_velocity(dof_of(s.model(), j)); },
           py::arg("joint"), "Largest |qd| of a joint (name or dof).")
+      .def(
+          "set_friction_coefficient",
+          [](Simulation& s, py::handle joint, double c) {
+            s.set_friction_coefficient(dof_of(s.model(), joint), c);
+          },
+          py::arg("joint"), py::arg("coefficient"),
+          "PhysX's older joint friction coefficient of a joint (name or dof): the friction impulse "
+          "of a solve is at most coefficient * h * |F|, F the force the joint transmits.")
+      .def(
+          "friction_coefficient",
+          [](const Simulation& s, py::handle j) { return s.friction_coefficient(dof_of(s.model(), j)); },
+          py::arg("joint"), "The friction coefficient of a joint (name or dof).")
+      .def(
+          "set_link_parameters",
+          [](Simulation& s, py::handle link, const LinkParameters& p) {
+            s.set_link_parameters(link_of(s.model(), link), p);
+          },
+          py::arg("link"), py::arg("parameters"), "LinkParameters of a link (name or index).")
+      .def(
+          "link_parameters",
+          [](const Simulation& s, py::handle link) { return s.link_parameters(link_of(s.model(), link)); },
+          py::arg("link"), "The LinkParameters (a copy) of a link (name or index).")
       .def(
           "set_actuator_envelope",
           [](Simulation& s, py::handle joint, const ActuatorEnvelope& e) {

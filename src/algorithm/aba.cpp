@@ -103,7 +103,8 @@ void articulated_inertias(const Model& model, Data& data) {
   }
 }
 
-const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau) {
+const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                                const std::vector<Vec6>* external_force) {
   const int n = model.num_links();
   data.frame_origin = data.world_position[0];
   // Pass 1: S_i and I_i in frame 0, velocities, velocity-product accelerations, bias forces.
@@ -120,6 +121,7 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
     data.bias_acceleration0[i] = cross_motion(vi, vJ);
     const Vec6 h = data.articulated_inertia[i] * vi;
     data.articulated_bias[i] = cross_force(vi, h);
+    if (external_force) data.articulated_bias[i] -= (*external_force)[static_cast<size_t>(i)];
   }
   // Pass 2: articulated inertias and bias forces, leaves to root.
   for (int i = n - 1; i >= 0; --i) {

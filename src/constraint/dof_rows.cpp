@@ -102,6 +102,17 @@ double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
     total += delta;
     v += rows.response * delta;
   };
+  if (rows.has_transmission_friction) {
+    // The impulse that stops the joint, within +-bound; PhysX re-applies it whole in every TGS
+    // solve (solveInternalJointConstraintRecursive).
+    const double applied = phase.tgs ? 0.0 : rows.transmission_friction_impulse;
+    const double next = std::clamp(applied - v * rows.recip_response,
+                                   -rows.transmission_friction_bound,
+                                   rows.transmission_friction_bound);
+    rows.transmission_friction_impulse = next;
+    rows.transmission_friction_applied += next - applied;
+    apply(next - applied);
+  }
   if (rows.has_drive && !(phase.tgs && phase.velocity_iteration)) {  // TGS freezes the drive
     double next = drive_impulse(rows.drive, v, rows.drive_impulse, phase.delta_x,
                                 phase.time_to_step_end);

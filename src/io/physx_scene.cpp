@@ -84,7 +84,13 @@ std::string physx_scene_json(const Simulation& sim, int steps,
        << ", \"mass\": " << num(stand_in ? 1.0 : l.mass) << ", \"com\": " << vec(l.com)
        << ", \"inertia\": ["
        << num(I(0, 0)) << ", " << num(I(1, 1)) << ", " << num(I(2, 2)) << ", " << num(I(0, 1))
-       << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     \"joint\": ";
+       << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     ";
+    // PhysX's link parameters, as featherdrive has them (so Compat::physx gives PhysX's defaults).
+    const LinkParameters& lp = sim.link_parameters(i);
+    js << "\"cfm_scale\": " << num(lp.cfm_scale) << ", \"linear_damping\": "
+       << num(lp.linear_damping) << ", \"angular_damping\": " << num(lp.angular_damping)
+       << ", \"max_linear_velocity\": " << num(lp.max_linear_velocity)
+       << ", \"max_angular_velocity\": " << num(lp.max_angular_velocity) << ",\n     \"joint\": ";
     if (i == 0) {
       js << "null}";
     } else {
@@ -108,7 +114,8 @@ std::string physx_scene_json(const Simulation& sim, int steps,
           throw std::invalid_argument("physx export: joint '" + l.joint_name +
                                       "' has an actuator envelope, which the harness cannot set");
         js << ", \"armature\": " << num(model.armature[d])
-           << ", \"max_velocity\": " << num(sim.max_joint_velocity(d));
+           << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
+           << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d));
         if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
           js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
              << ", \"upper\": " << num(sim.upper_limit(d)) << "}";

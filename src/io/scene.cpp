@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -124,9 +125,31 @@ class Reader {
   std::string file_;
 };
 
-const std::vector<std::string> kDriveKeys = {"type",      "stiffness",       "damping",
-                                             "max_force", "target_position", "target_velocity",
-                                             "target",    "envelope"};
+const std::vector<std::string> kDriveKeys = {"type",          "stiffness",       "damping",
+                                             "max_force",     "max_impulse",     "target_position",
+                                             "target_velocity", "target",        "envelope"};
+const std::vector<std::string> kLinkKeys = {"cfm_scale", "linear_damping", "angular_damping",
+                                            "max_linear_velocity", "max_angular_velocity"};
+
+LinkSettings read_link(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.map(node, path, kLinkKeys);
+  LinkSettings ls;
+  const auto at = [&](const char* key) { return Reader::join(path, key); };
+  if (node["cfm_scale"]) {
+    const double v = r.number(node["cfm_scale"], at("cfm_scale"));
+    if (!(v >= 0.0 && v <= 1.0)) r.fail(at("cfm_scale"), node["cfm_scale"], "must be in [0, 1]");
+    ls.cfm_scale = v;
+  }
+  if (node["linear_damping"])
+    ls.linear_damping = r.non_negative(node["linear_damping"], at("linear_damping"));
+  if (node["angular_damping"])
+    ls.angular_damping = r.non_negative(node["angular_damping"], at("angular_damping"));
+  if (node["max_linear_velocity"])
+    ls.max_linear_velocity = r.positive(node["max_linear_velocity"], at("max_linear_velocity"));
+  if (node["max_angular_velocity"])
+    ls.max_angular_velocity = r.positive(node["max_angular_velocity"], at("max_angular_velocity"));
+  return ls;
+}
 
 DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string& path,
                      DriveSpec spec) {
@@ -145,7 +168,16 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
   }
   if (node["stiffness"]) spec.drive.stiffness = r.non_negative(node["stiffness"], at("stiffness"));
   if (node["damping"]) spec.drive.damping = r.non_negative(node["damping"], at("damping"));
-  if (node["max_force"]) spec.drive.max_force = r.positive(node["max_force"], at("max_force"));
+  if (node["max_force"] && node["max_impulse"])
+    r.fail(path, "set max_force (a force) or max_impulse (N s per step), not both");
+  if (node["max_force"]) {
+    spec.drive.max_force = r.positive(node["max_force"], at("max_force"));
+    spec.drive.max_impulse = std::numeric_limits<double>::infinity();
+  }
+  if (node["max_impulse"]) {
+    spec.drive.max_impulse = r.positive(node["max_impulse"], at("max_impulse"));
+    spec.drive.max_force = std::numeric_limits<double>::infinity();
+  }
   const bool constant = node["target_position"] || node["target_velocity"];
   if (constant && node["target"])
     r.fail(path,
@@ -223,6 +255,14 @@ int joint_dof(const Reader& r, const UrdfRobot& robot, const std::string& joint,
 
 }  // namespace
 
+void LinkSettings::apply_to(LinkParameters& p) const {
+  if (cfm_scale) p.cfm_scale = *cfm_scale;
+  if (linear_damping) p.linear_damping = *linear_damping;
+  if (angular_damping) p.angular_damping = *angular_damping;
+  if (max_linear_velocity) p.max_linear_velocity = *max_linear_velocity;
+  if (max_angular_velocity) p.max_angular_velocity = *max_angular_velocity;
+}
+
 double SineTarget::position(double t) const {
   return offset + amplitude * std::sin(2.0 * std::numbers::pi * frequency * t + phase);
 }
@@ -254,7 +294,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
-         "drive_defaults", "drives", "joints"});
+         "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links"});
 
   Scene scene;
   scene.path = path;
@@ -321,7 +361,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       js.joint = name;
       js.dof = joint_dof(r, scene.robot, name, path_j);
       const YAML::Node j = kv.second;
-      r.map(j, path_j, {"lower", "upper", "max_velocity", "friction", "armature"});
+      r.map(j, path_j,
+            {"lower", "upper", "max_velocity", "friction", "friction_coefficient", "armature"});
       if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
       if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
       if (js.lower && std::isnan(*js.lower))
@@ -336,6 +377,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       if (j["max_velocity"])
         js.max_velocity = r.positive(j["max_velocity"], path_j + ".max_velocity");
       if (j["armature"]) js.armature = r.non_negative(j["armature"], path_j + ".armature");
+      if (j["friction_coefficient"])
+        js.friction_coefficient =
+            r.non_negative(j["friction_coefficient"], path_j + ".friction_coefficient");
       if (const YAML::Node f = j["friction"]) {
         const std::string fp = path_j + ".friction";
         r.map(f, fp, {"static", "dynamic", "viscous"});
@@ -361,6 +405,44 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         }
     if (rebuild) scene.robot.rebuild();
     m = scene.robot.model.get();
+  }
+
+  if (const YAML::Node jd = root["joint_defaults"]) {
+    r.map(jd, "joint_defaults", {"friction_coefficient", "max_velocity"});
+    JointSettings js;
+    if (jd["friction_coefficient"])
+      js.friction_coefficient =
+          r.non_negative(jd["friction_coefficient"], "joint_defaults.friction_coefficient");
+    if (jd["max_velocity"])
+      js.max_velocity = r.positive(jd["max_velocity"], "joint_defaults.max_velocity");
+    scene.joint_defaults = js;
+  }
+  if (const YAML::Node ld = root["link_defaults"])
+    scene.link_defaults = read_link(r, ld, "link_defaults");
+  if (const YAML::Node ls = root["links"]) {
+    r.map(ls, "links", {});
+    std::map<int, LinkSettings> by_index;
+    for (const auto& kv : ls) {
+      const std::string name = kv.first.Scalar();
+      const std::string p = "links." + name;
+      int index = -1;
+      for (int i = 0; i < m->num_links(); ++i)
+        if (m->links[i].name == name) index = i;
+      if (index < 0) {
+        std::string list;
+        for (const Link& link : m->links) {
+          if (!list.empty()) list += ", ";
+          list += link.name;
+        }
+        r.fail(p, "no link named '" + name + "' in " + scene.robot.path.filename().string() +
+                      " (links: " + list + "; links on fixed joints are merged into their parent)");
+      }
+      LinkSettings link = read_link(r, kv.second, p);
+      link.link = name;
+      link.index = index;
+      by_index[index] = link;
+    }
+    for (const auto& [index, link] : by_index) scene.links.push_back(link);
   }
 
   scene.q0 = m->neutral_configuration();
@@ -429,12 +511,32 @@ Simulation make_simulation(const Scene& scene) {
     Simulation sim(scene.model(), scene.options);
     sim.set_q(scene.q0);
     sim.set_qd(scene.qd0);
+    for (int i = 0; i < sim.model().num_links(); ++i) {
+      LinkParameters p = sim.link_parameters(i);
+      if (scene.link_defaults) scene.link_defaults->apply_to(p);
+      for (const LinkSettings& ls : scene.links)
+        if (ls.index == i) ls.apply_to(p);
+      sim.set_link_parameters(i, p);
+    }
+    if (scene.joint_defaults) {
+      const Model& model = sim.model();
+      for (const Link& link : model.links) {
+        if (link.nv != 1 ||
+            (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic))
+          continue;
+        const JointSettings& jd = *scene.joint_defaults;
+        if (jd.friction_coefficient) sim.set_friction_coefficient(link.v_index, *jd.friction_coefficient);
+        if (jd.max_velocity && !std::isfinite(model.velocity_limit[link.v_index]))
+          sim.set_max_joint_velocity(link.v_index, *jd.max_velocity);
+      }
+    }
     for (const JointSettings& js : scene.joints) {
       if (js.lower || js.upper)
         sim.set_joint_limits(js.dof, js.lower.value_or(sim.lower_limit(js.dof)),
                              js.upper.value_or(sim.upper_limit(js.dof)));
       if (js.max_velocity) sim.set_max_joint_velocity(js.dof, *js.max_velocity);
       if (js.friction) sim.set_joint_friction(js.dof, *js.friction);
+      if (js.friction_coefficient) sim.set_friction_coefficient(js.dof, *js.friction_coefficient);
     }
     for (const DriveSpec& d : scene.drives) {
       sim.set_drive(d.dof, d.drive);

@@ -88,6 +88,24 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   velocity_limit_force_start_ = velocity_limit_force_;
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
+  const size_t n = static_cast<size_t>(model_->num_links());
+  friction_coefficient_ = VecX::Zero(nv);
+  link_parameters_.assign(n, LinkParameters{});
+  link_force_.assign(n, Vec6::Zero());
+  subtree_force_.assign(n, Vec6::Zero());
+  transmitted_force_ = VecX::Zero(model_->num_links());
+  link_cfm_ = VecX::Zero(model_->num_links());
+  if (options_.compat == Compat::physx) {
+    // PhysX 5.6.1's defaults for everything nobody set; a model's velocity limit counts as set.
+    link_parameters_.assign(n, physx_default::link());
+    for (int d = 0; d < nv; ++d) {
+      const JointType type = model_->links[model_->dof_link[d]].joint_type;
+      if (type != JointType::revolute && type != JointType::prismatic) continue;
+      friction_coefficient_[d] = physx_default::friction_coefficient;
+      if (!std::isfinite(max_velocity_[d])) max_velocity_[d] = physx_default::max_joint_velocity;
+    }
+  }
+  update_link_damping_active();
 }
 
 void Simulation::set_options(const SimulationOptions& options) {
@@ -219,6 +237,44 @@ void Simulation::set_max_joint_velocity(int dof, double max_velocity) {
 }
 void Simulation::set_max_joint_velocity(const std::string& joint, double max_velocity) {
   set_max_joint_velocity(driven_dof(joint), max_velocity);
+}
+
+void Simulation::set_friction_coefficient(int dof, double coefficient) {
+  one_dof_joint(dof);
+  validate_friction_coefficient(coefficient, model_->links[model_->dof_link[dof]].joint_name);
+  friction_coefficient_[dof] = coefficient;
+}
+void Simulation::set_friction_coefficient(const std::string& joint, double coefficient) {
+  set_friction_coefficient(driven_dof(joint), coefficient);
+}
+
+void Simulation::update_link_damping_active() {
+  link_damping_active_ = false;
+  for (const LinkParameters& p : link_parameters_)
+    link_damping_active_ = link_damping_active_ || p.linear_damping > 0.0 ||
+                           p.angular_damping > 0.0 || std::isfinite(p.max_linear_velocity) ||
+                           std::isfinite(p.max_angular_velocity);
+}
+
+void Simulation::set_link_parameters(int link, const LinkParameters& parameters) {
+  if (link < 0 || link >= model_->num_links())
+    throw std::invalid_argument("link index " + std::to_string(link) + " is out of range [0, " +
+                                std::to_string(model_->num_links()) + ")");
+  validate_link_parameters(parameters, model_->links[link].name);
+  link_parameters_[static_cast<size_t>(link)] = parameters;
+  update_link_damping_active();
+}
+void Simulation::set_link_parameters(const std::string& link, const LinkParameters& parameters) {
+  set_link_parameters(model_->link_index(link), parameters);
+}
+const LinkParameters& Simulation::link_parameters(int link) const {
+  if (link < 0 || link >= model_->num_links())
+    throw std::invalid_argument("link index " + std::to_string(link) + " is out of range [0, " +
+                                std::to_string(model_->num_links()) + ")");
+  return link_parameters_[static_cast<size_t>(link)];
+}
+const LinkParameters& Simulation::link_parameters(const std::string& link) const {
+  return link_parameters(model_->link_index(link));
 }
 
 void Simulation::set_actuator_envelope(int dof, const ActuatorEnvelope& envelope) {

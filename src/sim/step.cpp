@@ -8,6 +8,7 @@
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "physx_stages.hpp"
 
 namespace featherdrive {
 namespace {
@@ -32,12 +33,19 @@ void Simulation::step() {
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
-  // Poses at the start of the step (ABA computes the velocities it needs, in frame 0; the link
-  // bias of compat physx reads the link-frame ones).
-  if (physx()) forward_kinematics(model, data_, q_, qd_);
+  // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
+  // bias of compat physx and link damping read the link-frame ones.
+  if (physx() || link_damping_active_) forward_kinematics(model, data_, q_, qd_);
   else forward_kinematics(model, data_, q_);
+  // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
+  any_link_force_ =
+      link_damping_active_ && link_damping_forces(model, data_, link_parameters_, dt, link_force_);
+  const std::vector<Vec6>* link_force = any_link_force_ ? &link_force_ : nullptr;
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1).
-  aba_from_kinematics(model, data_, qd_, applied_force_);
+  aba_from_kinematics(model, data_, qd_, applied_force_, link_force);
+  // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
+  if ((friction_coefficient_.array() > 0.0).any())
+    transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
   qd_ += dt * data_.qdd;
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
   if (physx()) {
@@ -47,6 +55,7 @@ void Simulation::step() {
   }
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);
+  link_cfm(model, data_, link_parameters_, link_cfm_);  // link_cfm.cpp
   // Rows, position iterations, position update, velocity iterations.
   if (options_.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
@@ -56,7 +65,7 @@ void Simulation::step() {
     const DofRows& r = rows_[static_cast<size_t>(d)];
     drive_force_[d] = r.drive_impulse / dt;
     limit_force_[d] = (r.low_impulse + r.high_impulse) / dt;
-    friction_force_[d] = r.friction_impulse / dt;
+    friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) / dt;
     velocity_limit_force_[d] = r.velocity_limit_impulse / dt;
   }
   check_finite_or_restore();
@@ -89,16 +98,26 @@ void Simulation::setup_rows(double h, bool tgs) {
     }
     const double r = data_.inverse_mass_diagonal[d];
     const double x0 = q_[link.q_index];
+    // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
+    const double cfm = std::max(link_cfm_[model.dof_link[d]],
+                                link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
     rows.response = r;
-    rows.recip_response = 1.0 / r;
+    rows.recip_response = 1.0 / (r + cfm);
     const Drive& drive = drives_[static_cast<size_t>(d)];
     rows.has_drive = drive.type != DriveType::none;
-    if (rows.has_drive) rows.drive = setup_drive_row(drive, r, x0, h, dt, tgs);
+    // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
+    if (rows.has_drive)
+      rows.drive = setup_drive_row(drive, drive.type == DriveType::acceleration ? r + cfm : r, x0,
+                                   h, dt, tgs);
     const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
     rows.has_envelope = rows.has_drive && envelope.active();
     rows.envelope = envelope;
     rows.external_impulse = applied_force_[d] * dt;
     const JointFriction& friction = friction_[static_cast<size_t>(d)];
+    rows.has_transmission_friction = friction_coefficient_[d] > 0.0 &&
+                                     friction.static_effort == 0.0 && friction.viscous == 0.0;
+    rows.transmission_friction_bound =
+        friction_coefficient_[d] * h * transmitted_force_[model.dof_link[d]];
     rows.has_friction = friction.active();
     rows.static_friction_impulse = friction.static_effort * dt;
     rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
@@ -138,6 +157,8 @@ void Simulation::solve_pgs() {
   integrate_positions(dt);
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  if (physx())  // prismatic_limits.cpp
+    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }
 
 // TGS: each position iteration is a sub-step of rho = dt / n with a fresh drive impulse, the
@@ -168,6 +189,8 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  if (physx())  // prismatic_limits.cpp
+    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of

@@ -10,8 +10,10 @@ namespace featherdrive {
 const VecX& aba(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& tau);
 
 /// The second and third ABA passes on the kinematics already in data (forward_kinematics with
-/// velocities must have run). Returns data.qdd.
-const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau);
+/// velocities must have run). external_force (null: none) holds a spatial force on every link in
+/// frame 0, [torque about the frame origin; force]. Returns data.qdd.
+const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                                const std::vector<Vec6>* external_force = nullptr);
 
 /// Only the articulated inertias IA, U and D^-1 (no bias forces), on kinematics already in data.
 void articulated_inertias(const Model& model, Data& data);

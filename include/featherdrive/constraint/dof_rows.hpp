@@ -1,5 +1,5 @@
 // All rows of one dof, solved together in PhysX's order (../shared/physx/NOTES.md, "Several rows
-// on one dof"): drive -> friction -> position limit -> velocity limit. Each sees the joint velocity
+// on one dof"): transmitted-force friction -> drive -> friction -> position limit -> velocity limit. Each sees the joint velocity
 // the previous one left (v += r * impulse), and their impulse changes are applied as one.
 // docs/math/joint_constraints.md.
 #pragma once
@@ -12,7 +12,16 @@ namespace featherdrive {
 /// One dof's rows for one step: set up once, updated every iteration.
 struct DofRows {
   double response = 0.0;        ///< r = (M^-1)_jj (ERRATA 6)
-  double recip_response = 0.0;  ///< 1 / r
+  /// 1 / (r + cfm): every row but a force drive's (cfm from the link's cfm_scale, else 0)
+  double recip_response = 0.0;
+
+  /// PhysX's older friction (frictionCoefficient): |impulse| <= coefficient * h * |F|, F the
+  /// spatial force the joint transmits at the step's start. Accumulated in PGS, fresh per solve
+  /// in TGS. Used only where no static or viscous friction is set (like PhysX).
+  bool has_transmission_friction = false;
+  double transmission_friction_bound = 0.0;  ///< coefficient * h * |F| [N s]
+  double transmission_friction_impulse = 0.0;  ///< PGS: the accumulated impulse
+  double transmission_friction_applied = 0.0;  ///< all its impulse changes of the step
 
   bool has_drive = false;
   DriveRow drive;
@@ -39,7 +48,8 @@ struct DofRows {
   double velocity_limit_impulse = 0.0;
 
   bool active() const {
-    return has_drive || has_friction || has_limit || max_velocity < kNoVelocityLimit;
+    return has_transmission_friction || has_drive || has_friction || has_limit ||
+           max_velocity < kNoVelocityLimit;
   }
   static constexpr double kNoVelocityLimit = std::numeric_limits<double>::infinity();
 };

@@ -40,8 +40,18 @@ struct DriveSpec {
 struct JointSettings {
   std::string joint;
   int dof = 0;
-  std::optional<double> lower, upper, max_velocity, armature;
+  std::optional<double> lower, upper, max_velocity, armature, friction_coefficient;
   std::optional<JointFriction> friction;
+};
+
+/// PhysX's link parameters a scene sets (link_parameters.hpp); the rest keep the simulation's
+/// defaults (Compat::physx: PhysX's).
+struct LinkSettings {
+  std::string link;
+  int index = 0;
+  std::optional<double> cfm_scale, linear_damping, angular_damping, max_linear_velocity,
+      max_angular_velocity;
+  void apply_to(LinkParameters& parameters) const;
 };
 
 struct Scene {
@@ -53,6 +63,11 @@ struct Scene {
   VecX q0, qd0;                       ///< initial state; joints the file omits start at 0
   std::vector<DriveSpec> drives;      ///< in URDF joint order
   std::vector<JointSettings> joints;  ///< in URDF joint order
+  /// link_defaults (every link) and joint_defaults (friction_coefficient for every joint,
+  /// max_velocity for every joint whose URDF gives no velocity limit); links and joints override.
+  std::optional<LinkSettings> link_defaults;
+  std::vector<LinkSettings> links;    ///< in model link order
+  std::optional<JointSettings> joint_defaults;
 
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };

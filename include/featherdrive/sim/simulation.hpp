@@ -9,6 +9,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
+#include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/physx_departures.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 
@@ -92,16 +93,29 @@ class Simulation {
   void set_max_joint_velocity(int dof, double max_velocity);
   void set_max_joint_velocity(const std::string& joint, double max_velocity);
   double max_joint_velocity(int dof) const { return max_velocity_[check_dof(dof)]; }
+  /// PhysX's older joint friction: |impulse| <= coefficient * h * |F| per solve, F the spatial
+  /// force the joint transmits (docs/math/joint_constraints.md). 0 (none) by default;
+  /// PhysX's 0.05 with Compat::physx. Not applied where static or viscous friction is set.
+  void set_friction_coefficient(int dof, double coefficient);
+  void set_friction_coefficient(const std::string& joint, double coefficient);
+  double friction_coefficient(int dof) const { return friction_coefficient_[check_dof(dof)]; }
   void set_actuator_envelope(int dof, const ActuatorEnvelope& envelope);
   void set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope);
   const ActuatorEnvelope& actuator_envelope(int dof) const { return envelopes_.at(static_cast<size_t>(check_dof(dof))); }
+
+  // Link parameters (link_parameters.hpp): inert by default; PhysX 5.6.1's defaults with
+  // Compat::physx. Throw std::invalid_argument naming the link, field and value.
+  void set_link_parameters(int link, const LinkParameters& parameters);
+  void set_link_parameters(const std::string& link, const LinkParameters& parameters);
+  const LinkParameters& link_parameters(int link) const;
+  const LinkParameters& link_parameters(const std::string& link) const;
 
   // Outputs of the last step.
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
   const VecX& drive_force() const { return drive_force_; }
   /// The position-limit force of each dof (impulse / dt; positive pushes towards +q).
   const VecX& limit_force() const { return limit_force_; }
-  /// The joint-friction force of each dof (impulse / dt).
+  /// The joint-friction force of each dof (impulse / dt), both friction models.
   const VecX& friction_force() const { return friction_force_; }
   /// The force the joint velocity limit applied on each dof (impulse / dt).
   const VecX& velocity_limit_force() const { return velocity_limit_force_; }
@@ -125,6 +139,7 @@ class Simulation {
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_restore();
+  void update_link_damping_active();
   bool physx() const { return options_.compat == Compat::physx; }
   void integrate_positions(double h);
 
@@ -141,6 +156,8 @@ class Simulation {
   VecX lower_limit_, upper_limit_, max_velocity_;
   std::vector<JointFriction> friction_;
   std::vector<ActuatorEnvelope> envelopes_;
+  VecX friction_coefficient_;
+  std::vector<LinkParameters> link_parameters_;
   VecX drive_force_, limit_force_, friction_force_, velocity_limit_force_;
 
   // Per-step scratch.
@@ -150,6 +167,13 @@ class Simulation {
   bool any_rows_ = false;
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
   PhysxDepartures departures_; ///< compat physx: the link bias and momentum corrections
+  // PhysX's parameters (physx_stages.hpp), per link.
+  std::vector<Vec6> link_force_;     ///< link damping / velocity-limit forces, frame 0
+  bool any_link_force_ = false;
+  bool link_damping_active_ = false;  ///< some link has damping or a velocity limit
+  std::vector<Vec6> subtree_force_;  ///< scratch of transmitted_force_magnitudes
+  VecX transmitted_force_;           ///< |F| through each link's inbound joint
+  VecX link_cfm_;
 };
 
 }  // namespace featherdrive
