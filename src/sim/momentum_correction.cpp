@@ -43,8 +43,8 @@ void store_root_twist(const Model& model, const Mat3& R, const Vec3& w, const Ve
 }  // namespace
 
 void correct_free_velocity_momentum(const Model& model, const Data& data, const VecX& applied_force,
-                                    double dt, PhysxDepartures& dep, VecX& qd) {
-  (void)data;
+                                    const std::vector<Vec6>* link_force, double dt,
+                                    PhysxDepartures& dep, VecX& qd) {
   const WorldPose& s = dep.start;
   const Link& root = model.links[0];
   const double M = dep.total_mass;
@@ -56,6 +56,15 @@ void correct_free_velocity_momentum(const Model& model, const Data& data, const 
   const Vec3 f = s.R[0] * applied_force.segment<3>(root.v_index + 3);
   P0 += dt * (M * model.gravity + f);
   L0 += dt * (n + (s.p[0] - s.total_com).cross(f));
+  // Link damping and link velocity limits act as external forces too (frame 0: torque about the
+  // root's origin).
+  if (link_force) {
+    const Vec3 com = s.total_com - data.world_position[0];
+    for (const Vec6& w : *link_force) {
+      P0 += dt * w.tail<3>();
+      L0 += dt * (w.head<3>() - com.cross(w.tail<3>()));
+    }
+  }
   // The free velocity as PhysX's links carry it: biased.
   Vec3 w0, v0;
   root_world_twist(model, s, qd, w0, v0);

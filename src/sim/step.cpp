@@ -51,7 +51,7 @@ void Simulation::step() {
   if (physx()) {
     compute_link_bias(model, data_, qd_, dt, departures_);
     if (model.floating_base())
-      correct_free_velocity_momentum(model, data_, applied_force_, dt, departures_, qd_);
+      correct_free_velocity_momentum(model, data_, applied_force_, link_force, dt, departures_, qd_);
   }
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);

@@ -78,6 +78,13 @@ std::pair<double, double> drift(Compat compat, SolverType solver) {
   o.solver = solver;
   o.compat = compat;
   Simulation sim(model, o);
+  // Link damping and link velocity limits are external forces: off, so momentum has no source.
+  for (int i = 0; i < model->num_links(); ++i) {
+    LinkParameters p = sim.link_parameters(i);
+    p.linear_damping = p.angular_damping = 0.0;
+    p.max_linear_velocity = p.max_angular_velocity = kInf;
+    sim.set_link_parameters(i, p);
+  }
   VecX q = sim.q(), qd = sim.qd();
   for (const Link& l : model->links)
     if (l.nv == 1) {

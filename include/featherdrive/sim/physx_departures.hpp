@@ -72,7 +72,8 @@ void track_prismatic_position_change(const Model& model, const VecX& q, const Ve
 /// velocity update to its magnitude before the velocity-product terms, and restores the linear
 /// momentum, by a rigid motion of the root. qd holds the free velocity on entry.
 void correct_free_velocity_momentum(const Model& model, const Data& data, const VecX& applied_force,
-                                    double dt, PhysxDepartures& dep, VecX& qd);
+                                    const std::vector<Vec6>* link_force, double dt,
+                                    PhysxDepartures& dep, VecX& qd);
 
 /// Stage 2: the root pose advanced over h about its centre of mass with the world velocity of the
 /// step's start frame (PhysX keeps root velocities in the world).
