@@ -27,9 +27,9 @@ void check_physx_iterations(const ComparePhysxArgs& args, const SimulationOption
     m += " = " + std::to_string(value) + ": PhysX allows " + std::to_string(lowest) + " to 255";
     throw std::invalid_argument(m);
   };
-  check(o.position_iterations, args.position_iterations.has_value(), "--position-iterations",
+  check(o.position_iterations, args.overrides.position_iterations.has_value(), "--position-iterations",
         "solver.position_iterations", 1);
-  check(o.velocity_iterations, args.velocity_iterations.has_value(), "--velocity-iterations",
+  check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(), "--velocity-iterations",
         "solver.velocity_iterations", 0);
 }
 
@@ -74,15 +74,7 @@ void plot(const fs::path& csv, const fs::path& png, const std::string& title) {
 }  // namespace
 
 int compare_physx(const ComparePhysxArgs& args) {
-  Scene scene = load_scene(args.scene);
-  for (const std::string& w : scene.robot.warnings)
-    std::cerr << "featherdrive: warning: " << w << "\n";
-  if (args.steps) scene.steps = *args.steps;
-  if (!args.solver.empty())
-    scene.options.solver = args.solver == "tgs" ? SolverType::tgs : SolverType::pgs;
-  if (args.position_iterations) scene.options.position_iterations = *args.position_iterations;
-  if (args.velocity_iterations) scene.options.velocity_iterations = *args.velocity_iterations;
-  validate_options(scene.options);
+  Scene scene = args.overrides.load(args.scene);
   check_physx_iterations(args, scene.options);
   const Model& model = *scene.model();
 

@@ -2,16 +2,14 @@
 // tests/physx/ under node), and per joint the largest differences of q, qd and force.
 #pragma once
 
-#include <optional>
 #include <string>
+
+#include "scene_overrides.hpp"
 
 struct ComparePhysxArgs {
   std::string scene;
   std::string plot;
-  std::optional<int> steps;
-  std::string solver;
-  std::optional<int> position_iterations;
-  std::optional<int> velocity_iterations;
+  SceneOverrides overrides;
 };
 
 /// Returns the exit code; throws std::invalid_argument for bad input, other exceptions for

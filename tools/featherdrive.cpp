@@ -18,6 +18,7 @@
 #include <optional>
 
 #include "compare_physx.hpp"
+#include "scene_overrides.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -34,10 +35,7 @@ struct SimulateArgs {
   std::string scene;
   std::string out;
   std::string plot;
-  std::optional<int> steps;
-  std::string solver;
-  std::optional<int> position_iterations;
-  std::optional<int> velocity_iterations;
+  SceneOverrides overrides;
   std::string save_state;
   std::string load_state;
 };
@@ -105,14 +103,7 @@ class Progress {
 };
 
 int simulate(const SimulateArgs& args) {
-  Scene scene = load_scene(args.scene);
-  print_warnings(scene.robot.warnings);
-  if (args.steps) scene.steps = *args.steps;
-  if (!args.solver.empty())
-    scene.options.solver = args.solver == "tgs" ? SolverType::tgs : SolverType::pgs;
-  if (args.position_iterations) scene.options.position_iterations = *args.position_iterations;
-  if (args.velocity_iterations) scene.options.velocity_iterations = *args.velocity_iterations;
-  validate_options(scene.options);
+  Scene scene = args.overrides.load(args.scene);
   const Model& model = *scene.model();
 
   // The simulation: the scene's, or the scene's model with the state and settings of a
@@ -121,9 +112,7 @@ int simulate(const SimulateArgs& args) {
   if (!args.load_state.empty()) {
     load_checkpoint(args.load_state, sim);
     SimulationOptions o = sim.options();
-    if (!args.solver.empty()) o.solver = scene.options.solver;
-    if (args.position_iterations) o.position_iterations = *args.position_iterations;
-    if (args.velocity_iterations) o.velocity_iterations = *args.velocity_iterations;
+    args.overrides.apply(o);
     sim.set_options(o);
     if (sim.step_count() + scene.steps > std::numeric_limits<int>::max())
       throw std::invalid_argument(args.load_state + ": step count " +
@@ -263,14 +252,7 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--out", sim_args.out,
                       "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...");
   sim_cmd->add_option("--plot", sim_args.plot, "PNG of positions against targets and drive forces");
-  sim_cmd->add_option("--steps", sim_args.steps, "Number of steps (overrides the scene)")
-      ->check(CLI::NonNegativeNumber);
-  sim_cmd->add_option("--solver", sim_args.solver, "pgs or tgs (overrides the scene)")
-      ->check(CLI::IsMember({"pgs", "tgs"}));
-  sim_cmd->add_option("--position-iterations", sim_args.position_iterations, "Overrides the scene")
-      ->check(CLI::Range(1, 1000000));
-  sim_cmd->add_option("--velocity-iterations", sim_args.velocity_iterations, "Overrides the scene")
-      ->check(CLI::Range(0, 1000000));
+  sim_args.overrides.add_options(sim_cmd);
   sim_cmd->add_option("--save-state", sim_args.save_state,
                       "Write a checkpoint of the final state and settings (written atomically)");
   sim_cmd->add_option("--load-state", sim_args.load_state,
@@ -292,16 +274,7 @@ int main(int argc, char** argv) {
       "`make physx`) and show the largest differences per joint");
   cmp_cmd->add_option("scene", cmp_args.scene, "Scene file (YAML or JSON)")->required();
   cmp_cmd->add_option("--plot", cmp_args.plot, "PNG of the differences over time per joint");
-  cmp_cmd->add_option("--steps", cmp_args.steps, "Number of steps (overrides the scene)")
-      ->check(CLI::NonNegativeNumber);
-  cmp_cmd->add_option("--solver", cmp_args.solver, "pgs or tgs (overrides the scene)")
-      ->check(CLI::IsMember({"pgs", "tgs"}));
-  cmp_cmd->add_option("--position-iterations", cmp_args.position_iterations,
-                      "Overrides the scene (PhysX: 1 to 255)")
-      ->check(CLI::Range(1, 1000000));
-  cmp_cmd->add_option("--velocity-iterations", cmp_args.velocity_iterations,
-                      "Overrides the scene (PhysX: 0 to 255)")
-      ->check(CLI::Range(0, 1000000));
+  cmp_args.overrides.add_options(cmp_cmd, " (PhysX: 1 to 255)", " (PhysX: 0 to 255)");
 
   try {
     app.parse(argc, argv);
