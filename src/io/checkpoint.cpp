@@ -144,6 +144,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   p.u8(static_cast<std::uint8_t>(o.solver));
   p.i64(o.position_iterations);
   p.i64(o.velocity_iterations);
+  p.u8(static_cast<std::uint8_t>(o.compat));
   p.vec(sim.q());
   p.vec(sim.qd());
   p.vec(sim.applied_force());
@@ -161,6 +162,13 @@ std::string checkpoint_bytes(const Simulation& sim) {
     const ActuatorEnvelope& e = sim.actuator_envelope(d);
     for (double v : {e.max_effort, e.max_actuator_velocity, e.speed_effort_gradient,
                      e.velocity_dependent_resistance})
+      p.f64(v);
+    p.f64(sim.friction_coefficient(d));
+  }
+  for (int i = 0; i < model.num_links(); ++i) {
+    const LinkParameters& l = sim.link_parameters(i);
+    for (double v : {l.cfm_scale, l.linear_damping, l.angular_damping, l.max_linear_velocity,
+                     l.max_angular_velocity})
       p.f64(v);
   }
   p.vec(sim.drive_force());
@@ -239,6 +247,14 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                      std::to_string(vel));
     o.position_iterations = static_cast<int>(pos);
     o.velocity_iterations = static_cast<int>(vel);
+    const std::uint8_t compat = r.u8();
+    if (compat > static_cast<std::uint8_t>(Compat::physx))
+      fail(name, "corrupt checkpoint: compat = " + std::to_string(compat));
+    o.compat = static_cast<Compat>(compat);
+    if (o.compat != sim.options().compat)
+      fail(name, std::string("the checkpoint is of a compat ") + to_string(o.compat) +
+                     " simulation, this simulation is compat " + to_string(sim.options().compat) +
+                     " (compat is chosen when a simulation is made)");
     next.set_options(o);
     next.set_clock(time, step_count);
     const VecX q = r.vec(model.nq);
@@ -267,6 +283,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       e.max_actuator_velocity = r.f64();
       e.speed_effort_gradient = r.f64();
       e.velocity_dependent_resistance = r.f64();
+      const double friction_coefficient = r.f64();
       next.set_drive(d, drive);
       // The per-joint settings exist for revolute and prismatic joints only; elsewhere the
       // model's values stand (the fingerprint matched), and a setter is called only to change a
@@ -282,6 +299,16 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
         next.set_max_joint_velocity(d, max_velocity);
       next.set_joint_friction(d, f);
       next.set_actuator_envelope(d, e);
+      next.set_friction_coefficient(d, friction_coefficient);
+    }
+    for (int i = 0; i < model.num_links(); ++i) {
+      LinkParameters l;
+      l.cfm_scale = r.f64();
+      l.linear_damping = r.f64();
+      l.angular_damping = r.f64();
+      l.max_linear_velocity = r.f64();
+      l.max_angular_velocity = r.f64();
+      next.set_link_parameters(i, l);
     }
     const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
                friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);

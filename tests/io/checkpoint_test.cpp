@@ -149,6 +149,57 @@ TEST(Checkpoint, InterruptedRunEqualsUninterruptedRunBitForBit) {
   }
 }
 
+// compat physx with PhysX's parameters away from their defaults on a floating tree (the momentum
+// corrections, link damping, cfm and the transmitted-force friction all in play).
+Simulation busy_physx_simulation(unsigned seed) {
+  auto model = test::make_random_tree(seed, 6, /*floating=*/true, /*spherical=*/false, 0.01);
+  SimulationOptions o;
+  o.compat = Compat::physx;
+  o.solver = seed % 2 ? SolverType::pgs : SolverType::tgs;
+  Simulation sim(model, o);
+  std::mt19937 rng(seed);
+  sim.set_q(test::random_configuration(*model, rng));
+  sim.set_qd(test::random_vector(model->nv, rng, 0.5));
+  for (int i = 0; i < model->num_links(); ++i)
+    sim.set_link_parameters(i, {0.01 * i, 0.1 + 0.02 * i, 0.2, 3.0 + i, 5.0});
+  for (const Link& l : model->links)
+    if (l.joint_type == JointType::revolute || l.joint_type == JointType::prismatic) {
+      sim.set_drive(l.v_index, Drive{DriveType::force, 50.0, 4.0, kInf, 0.3, 0.0});
+      sim.set_friction_coefficient(l.v_index, 0.02 * (l.v_index + 1));
+    }
+  return sim;
+}
+
+TEST(Checkpoint, CompatPhysxResumesBitForBitWithItsParameters) {
+  for (unsigned seed : {4u, 7u}) {
+    Simulation whole = busy_physx_simulation(seed);
+    Simulation first = busy_physx_simulation(seed);
+    whole.step(30);
+    first.step(11);
+    const std::string bytes = checkpoint_bytes(first);
+    SimulationOptions o;
+    o.compat = Compat::physx;
+    Simulation resumed(first.model_ptr(), o);  // PhysX's defaults: the file must bring the rest
+    restore_checkpoint(bytes, resumed, "state.ckpt");
+    for (int i = 0; i < first.model().num_links(); ++i) {
+      EXPECT_EQ(resumed.link_parameters(i).cfm_scale, first.link_parameters(i).cfm_scale);
+      EXPECT_EQ(resumed.link_parameters(i).max_linear_velocity,
+                first.link_parameters(i).max_linear_velocity);
+    }
+    for (int d = 0; d < first.model().nv; ++d)
+      EXPECT_EQ(resumed.friction_coefficient(d), first.friction_coefficient(d));
+    resumed.step(19);
+    expect_same_state(whole, resumed);
+    // Into a simulation of the other compat: refused, nothing changed.
+    Simulation plain(first.model_ptr());
+    const std::string before = checkpoint_bytes(plain);
+    EXPECT_EQ(error_of(bytes, plain),
+              "state.ckpt: the checkpoint is of a compat physx simulation, this simulation is "
+              "compat none (compat is chosen when a simulation is made)");
+    EXPECT_EQ(checkpoint_bytes(plain), before);
+  }
+}
+
 TEST(Checkpoint, SceneWithSineTargetsResumesBitForBit) {
   const Scene scene = load_scene(kExamples + "arm7_tgs.yaml");
   const int n = 50, split = 21;
@@ -224,9 +275,9 @@ TEST(Checkpoint, CorruptBytesFailTheChecksum) {
 TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   Simulation a = busy_simulation(4);
   std::string bytes = checkpoint_bytes(a);
-  bytes[8] = 2;  // the version, little-endian, right after the magic
+  bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
-            "state.ckpt: checkpoint format version 2 is not supported (this build reads version 1)");
+            "state.ckpt: checkpoint format version 1 is not supported (this build reads version 2)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {

@@ -7,8 +7,9 @@
 //   u64           model fingerprint (model_fingerprint)
 //   u32, u32      nq, nv of the model
 //   u64           payload size in bytes
-//   payload       time, step count, solver options, q, qd, applied forces, per dof the drive,
-//                 limits, friction, max velocity and envelope, then the last step's drive, limit,
+//   payload       time, step count, solver options (compat included), q, qd, applied forces, per
+//                 dof the drive, limits, friction, max velocity, envelope and friction
+//                 coefficient, per link its LinkParameters, then the last step's drive, limit,
 //                 friction and velocity-limit forces
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
@@ -23,7 +24,8 @@
 
 namespace featherdrive {
 
-inline constexpr std::uint32_t kCheckpointVersion = 1;
+/// 2: compat, the joint friction coefficient and the link parameters (PhysX's) added.
+inline constexpr std::uint32_t kCheckpointVersion = 2;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file
 /// and what is wrong (truncated, corrupt, another format version, another model).
