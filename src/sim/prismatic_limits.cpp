@@ -1,8 +1,11 @@
-// PhysX 5.6.1 clamps a limited prismatic joint's position to its limits when it writes the step's
-// joint positions (enforcePrismaticLimits, from propagateLinksDown for PGS and
-// computeAndEnforceJointPositions for TGS, in DyFeatherstoneForwardDynamic.cpp, read in the
-// source): after the velocity iterations, so no row of the step sees the clamp. With an exact limit row this never acts; with cfm the limit row lets the
-// joint pass the limit a little, and PhysX's positions stop at it. Compat::physx only.
+// PhysX 5.6.1 clamps a limited prismatic joint's position to its limits whenever it integrates
+// joint positions (read in the source, DyFeatherstoneArticulation.cpp / DyFeatherstoneForwardDynamic.cpp):
+// PGS once per step, after the velocity iterations (propagateLinksDown), so no row of the step sees
+// the clamp; TGS in every sub-step (propagateTransform, from recordDeltaMotion), so the next
+// sub-step's limit row and the velocity iterations measure the position change from the clamped
+// pose, i.e. see the joint exactly at its limit rather than past it. The velocity is not changed.
+// With an exact limit row this never acts; with cfm the limit row lets the joint pass the limit a
+// little. Compat::physx only.
 #include <algorithm>
 
 #include "physx_stages.hpp"

@@ -180,6 +180,10 @@ void Simulation::solve_tgs() {
     phase.time_to_step_end = dt - i * rho;
     sweep(phase);
     integrate_positions(rho);
+    // PhysX clamps a limited prismatic joint's position in every sub-step (propagateTransform,
+    // from recordDeltaMotion), so the next sub-step's rows and the velocity iterations measure
+    // the position change from the clamped pose (prismatic_limits.cpp).
+    if (physx()) clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
     delta_x_ += rho * qd_;
     if (physx()) {
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1).
@@ -189,8 +193,6 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
-  if (physx())  // prismatic_limits.cpp
-    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of

@@ -462,15 +462,6 @@ TEST_P(PhysxParity, MatchesPhysx) {
     // (docs/physx_parity.md). Observed: 3.0e-5.
     restart_tol = 7e-5;
   }
-  if (p.c.name == "slider_limit_physx" && p.solver.type == SolverType::tgs &&
-      p.solver.position_iterations == 4) {
-    // Named difference, not yet explained: with cfm the limit row lets the slider pass its limit
-    // within the step; on the step it arrives (TGS, 4 sub-steps, 1 velocity iteration)
-    // featherdrive ends at qd = -0.094 m/s, PhysX at +0.0017 (1.1e-2 of the run's largest |qd|;
-    // the positions agree, both clamped to the limit). TGS 1/0 and 32/4 and all PGS settings
-    // agree to 3e-7 (docs/physx_parity.md, "compat: physx").
-    GTEST_SKIP() << "slider_limit_physx tgs_4_1: known difference at the limit hit (1.1e-2 of |qd|)";
-  }
   compare(p.c, p.solver, 240, restart_tol, 1e-4);
 }
 
