@@ -669,12 +669,14 @@ PYBIND11_MODULE(featherdrive, m) {
                     "N independent copies of one Model stepped together on all cores. Each "
                     "copy's result is bit-identical to stepping it alone, for any num_threads. "
                     "States read as (N, nq) / (N, nv) arrays (read-only copies).")
-      .def(py::init([](ModelPtr model, int count, double dt, py::handle solver, int pi, int vi) {
-             return std::make_unique<Batch>(std::move(model), count, make_options(dt, solver, pi, vi));
+      .def(py::init([](ModelPtr model, int count, double dt, py::handle solver, int pi, int vi,
+                       py::handle compat) {
+             return std::make_unique<Batch>(std::move(model), count,
+                                            make_options(dt, solver, pi, vi, compat));
            }),
            py::arg("model"), py::arg("count"), py::arg("dt") = 1.0 / 60.0,
            py::arg("solver") = "pgs", py::arg("position_iterations") = 4,
-           py::arg("velocity_iterations") = 1,
+           py::arg("velocity_iterations") = 1, py::arg("compat") = "none",
            "count copies of a new Simulation of model (as Simulation(model, dt, solver, ...)).")
       .def(py::init([](const Simulation& prototype, int count) {
              return std::make_unique<Batch>(prototype, count);

@@ -117,3 +117,16 @@ def test_simulation_divergence_is_runtime_error(arm):
         sim.step()
     assert sim.step_count == 2
     np.testing.assert_array_equal(sim.q, q)
+
+
+def test_batch_compat_physx_is_each_copy_s_compat_physx_simulation(arm):
+    batch = fd.Batch(arm, 3, compat="physx")
+    alone = fd.Simulation(arm, compat="physx")
+    assert batch.sim(1).options.compat == fd.Compat.physx
+    assert batch.sim(1).friction_coefficient(0) == alone.friction_coefficient(0) == 0.05
+    q0 = arm.neutral_configuration() + 0.3
+    batch.set_q(np.tile(q0, (3, 1)))
+    alone.set_q(q0)
+    batch.step(20)
+    alone.step(20)
+    np.testing.assert_array_equal(bits(batch.q[2]), bits(alone.q))
