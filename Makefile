@@ -92,7 +92,7 @@ fuzz: fuzz-build
 BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
 	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON $(CMAKE_FLAGS)
-	cmake --build build-bench -j $(JOBS) --target featherdrive_bench
+	cmake --build build-bench -j $(JOBS) --target featherdrive_bench featherdrive_profile
 	./build-bench/bench/featherdrive_bench $(BENCH_FLAGS) \
 	  --benchmark_out=build-bench/bench.json --benchmark_out_format=json
 	/usr/bin/python3 bench/plot_benchmarks.py build-bench/bench.json \
