@@ -78,8 +78,9 @@ def physx(cli, source, out_dir):
     with open(png, "rb") as f:
         check(f.read(8) == b"\x89PNG\r\n\x1a\n", "the plot is a PNG")
 
-    # A URDF whose fixed root has no <inertial> (PhysX gets a stand-in mass for it).
-    for name in ("slider.yaml", "pendulum.yaml"):
+    # A URDF whose fixed root has no <inertial> (PhysX gets a stand-in mass for it); the arm under
+    # compat physx with PhysX's defaults on both sides.
+    for name in ("slider.yaml", "pendulum.yaml", "arm7_physx.yaml"):
         r = run(cli, "compare-physx", os.path.join(source, "examples", name), env=environment())
         m = re.search(r"largest relative difference: q " + number + ", qd " + number + ", force " + number, r.stdout)
         check(r.returncode == 0 and m is not None and max(float(x) for x in m.groups()) < 1e-4,
