@@ -101,6 +101,7 @@ struct Case {
   const char* name;
   bool floating;
   SolverType solver;
+  Compat compat = Compat::none;
 };
 
 class StepAllocations : public ::testing::TestWithParam<Case> {};
@@ -117,6 +118,7 @@ TEST_P(StepAllocations, NoneAfterTheFirstStep) {
     options.solver = c.solver;
     options.position_iterations = 4;
     options.velocity_iterations = 1;
+    options.compat = c.compat;  // physx: PhysX's parameters, link bias and momentum corrections
     Simulation sim(model, options);
     std::mt19937 rng(3);
     constrain_every_joint(sim, rng);
@@ -134,7 +136,10 @@ INSTANTIATE_TEST_SUITE_P(Models, StepAllocations,
                          ::testing::Values(Case{"fixed_pgs", false, SolverType::pgs},
                                            Case{"fixed_tgs", false, SolverType::tgs},
                                            Case{"floating_pgs", true, SolverType::pgs},
-                                           Case{"floating_tgs", true, SolverType::tgs}),
+                                           Case{"floating_tgs", true, SolverType::tgs},
+                                           Case{"physx_fixed_pgs", false, SolverType::pgs, Compat::physx},
+                                           Case{"physx_floating_pgs", true, SolverType::pgs, Compat::physx},
+                                           Case{"physx_floating_tgs", true, SolverType::tgs, Compat::physx}),
                          [](const auto& p) { return std::string(p.param.name); });
 
 }  // namespace
