@@ -291,18 +291,23 @@ void Simulation::step(int count) {
   for (int i = 0; i < count; ++i) step();
 }
 
+// The state and outputs the step started from (kept by step()).
+void Simulation::restore_step_start() {
+  q_ = q_start_;
+  qd_ = qd_start_;
+  drive_force_ = drive_force_start_;
+  limit_force_ = limit_force_start_;
+  friction_force_ = friction_force_start_;
+  velocity_limit_force_ = velocity_limit_force_start_;
+}
+
 void Simulation::check_finite_or_restore() {
   const Model& model = *model_;
   auto fail = [&](const char* quantity, int dof, double value) {
     const std::string joint = model.links[model.dof_link[dof]].joint_name;
     const long step = step_count_ + 1;
     const double t = time_;
-    q_ = q_start_;
-    qd_ = qd_start_;
-    drive_force_ = drive_force_start_;
-    limit_force_ = limit_force_start_;
-    friction_force_ = friction_force_start_;
-    velocity_limit_force_ = velocity_limit_force_start_;
+    restore_step_start();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint
@@ -327,12 +332,7 @@ void Simulation::check_finite_or_restore() {
       }
   // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
   if (!std::isfinite(time_ + options_.dt)) {
-    q_ = q_start_;
-    qd_ = qd_start_;
-    drive_force_ = drive_force_start_;
-    limit_force_ = limit_force_start_;
-    friction_force_ = friction_force_start_;
-    velocity_limit_force_ = velocity_limit_force_start_;
+    restore_step_start();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_
