@@ -89,9 +89,12 @@ fuzz: fuzz-build
 
 # Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
 # the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.
+# BENCH_ARCH: the -march of the benchmark build (empty for the portable default).
+BENCH_ARCH ?= x86-64-v3
 BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
-	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON $(CMAKE_FLAGS)
+	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON \
+	  -DFEATHERDRIVE_ARCH=$(BENCH_ARCH) $(CMAKE_FLAGS)
 	cmake --build build-bench -j $(JOBS) --target featherdrive_bench featherdrive_profile
 	./build-bench/bench/featherdrive_bench $(BENCH_FLAGS) \
 	  --benchmark_out=build-bench/bench.json --benchmark_out_format=json
