@@ -96,7 +96,7 @@ double clamp_to_envelope(const ActuatorEnvelope& e, double unclamped, double acc
   return std::clamp(unclamped, lo, hi);
 }
 
-double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
+double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
   double total = 0.0;
   auto apply = [&](double delta) {
     total += delta;

@@ -315,6 +315,12 @@ void Simulation::check_finite_or_restore() {
       << "; the state is left as it was before this step (lower dt or the gains)";
     throw DivergenceError(s.str());
   };
+  // x * 0 is 0 for a finite x and NaN otherwise, so one sum tells whether all are finite; the
+  // search for the culprit runs only when one is not.
+  const double zero = (qd_.array() * 0.0).sum() + (drive_force_.array() * 0.0).sum() +
+                      (limit_force_.array() * 0.0).sum() + (friction_force_.array() * 0.0).sum() +
+                      (velocity_limit_force_.array() * 0.0).sum() + (q_.array() * 0.0).sum();
+  if (zero == 0.0 && std::isfinite(time_ + options_.dt)) return;
   // Velocities and forces first: a non-finite velocity also makes the position non-finite, and
   // the velocity is the nearer cause.
   for (int d = 0; d < model.nv; ++d) {

@@ -88,6 +88,7 @@ void Simulation::setup_rows(double h, bool tgs) {
   const Model& model = *model_;
   const double dt = options_.dt;
   any_rows_ = false;
+  any_undriven_rows_ = false;
   for (int d = 0; d < model.nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
     rows = DofRows{};
@@ -126,8 +127,12 @@ void Simulation::setup_rows(double h, bool tgs) {
     rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
     rows.error_high = upper_limit_[d] - x0;
     rows.max_velocity = max_velocity_[d];
+    rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.has_transmission_friction &&
+                      !rows.has_friction && !rows.has_limit &&
+                      !(rows.max_velocity < DofRows::kNoVelocityLimit);
     sweep_.has_rows[d] = rows.active() ? 1 : 0;
     any_rows_ = any_rows_ || rows.active();
+    any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
   }
   delta_x_.setZero();
 }
@@ -136,10 +141,15 @@ void Simulation::setup_rows(double h, bool tgs) {
 // row solves' cost).
 void Simulation::sweep(RowPhase& phase) {
   if (!any_rows_) return;
-  gauss_seidel_sweep(*model_, data_, sweep_, qd_, [this, &phase](int dof, double v) {
-    phase.delta_x = delta_x_[dof];
-    return solve_dof_rows(rows_[static_cast<size_t>(dof)], v + departures_.row_bias[dof], phase);
-  });
+  // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
+  DofRows* const rows = rows_.data();
+  const double* const row_bias = departures_.row_bias.data();
+  const double* const delta_x = delta_x_.data();
+  gauss_seidel_sweep(*model_, data_, sweep_, qd_,
+                     [rows, row_bias, delta_x, phase](int dof, double v) mutable {
+                       phase.delta_x = delta_x[dof];
+                       return solve_dof_rows(rows[dof], v + row_bias[dof], phase);
+                     });
 }
 
 // PGS: the rows converge on the coupled implicit step; positions move with the velocity after the
@@ -192,6 +202,8 @@ void Simulation::solve_tgs() {
     }
   }
   phase.velocity_iteration = true;
+  // Drives alone apply nothing there: the sweep would leave every velocity as it is.
+  if (!any_undriven_rows_) return;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
 }
 

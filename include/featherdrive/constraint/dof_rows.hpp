@@ -11,6 +11,14 @@ namespace featherdrive {
 
 /// One dof's rows for one step: set up once, updated every iteration.
 struct DofRows {
+  // The drive, read in every solve, first: with drive_only they are all a solve reads.
+  DriveRow drive;
+  double drive_impulse = 0.0;   ///< accumulated over the step
+  bool has_drive = false;
+  /// The drive is the dof's only row (no envelope, friction, limit or velocity limit): the
+  /// sweep's inline fast path.
+  bool drive_only = false;
+
   double response = 0.0;        ///< r = (M^-1)_jj (ERRATA 6)
   /// 1 / (r + cfm): every row but a force drive's (cfm from the link's cfm_scale, else 0)
   double recip_response = 0.0;
@@ -23,8 +31,6 @@ struct DofRows {
   double transmission_friction_impulse = 0.0;  ///< PGS: the accumulated impulse
   double transmission_friction_applied = 0.0;  ///< all its impulse changes of the step
 
-  bool has_drive = false;
-  DriveRow drive;
   bool has_envelope = false;
   ActuatorEnvelope envelope;
   double external_impulse = 0.0;  ///< applied joint force * dt, part of the actuator's effort
@@ -41,7 +47,6 @@ struct DofRows {
   double max_velocity = 0.0;  ///< +inf for none
 
   // Accumulated over the step.
-  double drive_impulse = 0.0;
   double friction_impulse = 0.0;
   double low_impulse = 0.0;   ///< >= 0
   double high_impulse = 0.0;  ///< <= 0
@@ -66,7 +71,19 @@ struct RowPhase {
 };
 
 /// Updates every row of the dof at joint velocity v; returns the impulse change to apply.
-double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase);
+double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase);
+
+/// solve_all_dof_rows, with a dof whose only row is its drive solved inline (the common case in
+/// the sweep's innermost loop).
+inline double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
+  if (!rows.drive_only) return solve_all_dof_rows(rows, v, phase);
+  if (phase.tgs && phase.velocity_iteration) return 0.0;  // TGS freezes the drive
+  const double next =
+      drive_impulse(rows.drive, v, rows.drive_impulse, phase.delta_x, phase.time_to_step_end);
+  const double delta = next - rows.drive_impulse;
+  rows.drive_impulse = next;
+  return delta;
+}
 
 /// The accumulated drive impulse clamped to what the actuator envelope allows (the effort of the
 /// step, drive plus external, within |E| <= max_effort - resistance |v| and

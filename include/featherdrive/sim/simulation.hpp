@@ -166,6 +166,7 @@ class Simulation {
   VecX drive_force_start_, limit_force_start_, friction_force_start_, velocity_limit_force_start_;
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
+  bool any_undriven_rows_ = false;  ///< a row other than a lone drive (acts in TGS velocity iterations)
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
   PhysxDepartures departures_; ///< compat physx: the link bias and momentum corrections
   // PhysX's parameters (physx_stages.hpp), per link.

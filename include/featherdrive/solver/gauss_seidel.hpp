@@ -16,52 +16,142 @@ namespace featherdrive {
 struct SweepWorkspace {
   explicit SweepWorkspace(const Model& model);
   std::vector<Vec6> link_velocity_change;  ///< Delta v_i of the sweep when entering, frame 0
-  std::vector<Vec6> subtree_impulse;       ///< pA_i: impulse handed up by finished children
+  /// pA_i: impulse handed up by finished children. Written first by the first child to leave,
+  /// so it needs no clearing; a leaf's stays zero.
+  std::vector<Vec6> subtree_impulse;
   std::vector<Vec6> parent_impulse_after;  ///< pA_parent right after link i handed its impulse
   std::vector<Vec6> later_velocity_change; ///< E_i: change of link i from later subtrees' impulses
   VecX joint_impulse;                      ///< impulse applied at each dof in this sweep (nv)
   VecX entry_velocity_change;              ///< each dof's velocity change when it was entered (nv)
   std::vector<char> has_rows;              ///< per dof: does the sweep solve a row here
+  /// Per link: it is its parent's first child (it hands the parent's pA its first value).
+  std::vector<char> first_child;
+  /// Per link: it has one dof and link i + 1 is its child with one dof (a run of a chain).
+  std::vector<char> chain_next;
+  std::vector<char> parent_one_dof;        ///< per link: its parent has one dof
+  Vec6 zero = Vec6::Zero();                ///< the world's velocity change
 };
 
 namespace detail {
+
+// stop's velocity change corrected by its whole-articulation response to the impulse pa one of
+// its children handed it (out of line: branching only).
+[[gnu::noinline]] inline void correct_velocity_change(const Data& data, SweepWorkspace& ws, int p,
+                                                      const Vec6& pa) {
+  ws.link_velocity_change[p].noalias() -= data.response[p] * pa;
+}
+
+// Link k, with 0 or several dofs, hands pa = pA + U D^-1 (impulse - S^T pA) to its parent.
+[[gnu::noinline]] inline void leave_multi_dof_link(const Data& data, SweepWorkspace& ws, int k,
+                                                   int stop, bool correct_stop) {
+  const Data::LinkInfo& link = data.info[k];
+  const int p = link.parent;
+  Vec6 pa = ws.subtree_impulse[k];
+  if (link.nv > 0) {
+    const VecN t = ws.joint_impulse.segment(link.v_index, link.nv) -
+                   data.motion_subspace[k].transpose() * pa;
+    pa.noalias() += data.U[k] * (data.D_inv[k] * t);
+  }
+  if (p < 0) return;
+  Vec6& pA_parent = ws.subtree_impulse[p];
+  if (ws.first_child[k]) pA_parent = pa;
+  else pA_parent += pa;
+  if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
+  if (p == stop && correct_stop) correct_velocity_change(data, ws, p, pa);
+}
 
 // Leaves the finished links from k up to `stop` (not included; -1 for all): each hands its
 // subtree's impulse pa = pA + U D^-1 (impulse - S^T pA) to its parent. When a sibling of the last
 // one is entered next (correct_stop), stop's velocity change is corrected by its
 // whole-articulation response to that impulse; no other link's velocity change is read again in
 // the sweep. Along a run of 1-dof links, S_p^T pA_p of the next one is formed from scalars so that
-// the 6-vector products stay off the chain of dependencies.
+// the 6-vector products stay off the chain of dependencies. Raw pointers are taken once: Eigen's
+// vector stores may alias anything, which would make the compiler reload every std::vector's
+// data pointer after each of them.
 inline void leave_links(const Data& data, SweepWorkspace& ws, int k, int stop, bool correct_stop) {
+  const Data::LinkInfo* const info = data.info.data();
+  const Data::OneDof* const one_dof = data.one_dof.data();
+  Vec6* const subtree_impulse = ws.subtree_impulse.data();
+  const double* const joint_impulse = ws.joint_impulse.data();
+  const char* const first_child = ws.first_child.data();
+  const char* const parent_one_dof = ws.parent_one_dof.data();
   bool have_x = false;
   double x = 0.0;  // S_k^T pA_k when have_x
   while (k != stop) {
-    const Data::LinkInfo& link = data.info[k];
+    const Data::LinkInfo& link = info[k];
     const int p = link.parent;
-    Vec6 pa = ws.subtree_impulse[k];
-    if (link.nv == 1) {
-      const Data::OneDof& J = data.one_dof[k];
-      if (!have_x) x = J.S.dot(pa);
-      const double beta = J.D_inv * (ws.joint_impulse[link.v_index] - x);
-      have_x = p >= 0 && p != stop && data.info[p].nv == 1;
-      if (have_x) x = data.one_dof[p].S.dot(ws.subtree_impulse[p] + pa) + beta * J.parent_S;
-      pa += beta * J.U;
-    } else {
+    if (link.nv != 1) {
+      leave_multi_dof_link(data, ws, k, stop, correct_stop);
+      if (p < 0) return;
       have_x = false;
-      if (link.nv > 0) {
-        const VecN t = ws.joint_impulse.segment(link.v_index, link.nv) -
-                       data.motion_subspace[k].transpose() * pa;
-        pa.noalias() += data.U[k] * (data.D_inv[k] * t);
-      }
+      k = p;
+      continue;
     }
+    const Data::OneDof& J = one_dof[k];
+    const Vec6& pA = subtree_impulse[k];
+    if (!have_x) x = J.S.dot(pA);
+    const double beta = J.D_inv * (joint_impulse[link.v_index] - x);
     if (p < 0) return;
-    Vec6& pA_parent = ws.subtree_impulse[p];
-    pA_parent += pa;
+    // S_p^T of the parent's pA after this hand-over (pA_p so far + pA + beta U).
+    have_x = parent_one_dof[k] && p != stop;
+    const bool first = first_child[k];
+    Vec6& pA_parent = subtree_impulse[p];
+    if (have_x) {
+      const Vec6& S_p = one_dof[p].S;
+      x = S_p.dot(pA) + beta * J.parent_S;
+      if (!first) x += S_p.dot(pA_parent);
+    }
+    if (first) pA_parent = pA + beta * J.U;
+    else pA_parent += pA + beta * J.U;
     if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
-    if (p == stop && correct_stop)
-      ws.link_velocity_change[p].noalias() -= data.response[p] * pa;
+    if (p == stop && correct_stop) correct_velocity_change(data, ws, p, pA + beta * J.U);
     k = p;
   }
+}
+
+// The end of a sweep for link i with 0 or several dofs, or with a later subtree: its joint's
+// velocity change adds -G^T pA and what the later subtrees do (E).
+[[gnu::noinline]] inline void finish_link(const Data& data, SweepWorkspace& ws, int i, VecX& qd) {
+  const Data::LinkInfo& link = data.info[i];
+  const Vec6& pA = ws.subtree_impulse[i];
+  // The velocity change of the parent from the impulses entered after this link's subtree.
+  auto parent_later = [&]() -> Vec6 {
+    Vec6 E_hat = data.info[link.parent].later ? ws.later_velocity_change[link.parent] : Vec6::Zero();
+    if (!link.last_child)
+      E_hat.noalias() -= data.response[link.parent] *
+                         (ws.subtree_impulse[link.parent] - ws.parent_impulse_after[i]);
+    return E_hat;
+  };
+  if (link.nv == 1) {
+    const Data::OneDof& J = data.one_dof[i];
+    const int d = link.v_index;
+    double dqd = ws.entry_velocity_change[d] - J.G.dot(pA);
+    if (link.later) {
+      const Vec6 E_hat = parent_later();
+      const double later = -J.D_inv * J.U.dot(E_hat);
+      dqd += later;
+      ws.later_velocity_change[i] = E_hat + later * J.S;
+    }
+    qd[d] += dqd;
+    return;
+  }
+  if (link.nv == 0) {
+    if (link.later) ws.later_velocity_change[i] = parent_later();
+    return;
+  }
+  const int v0 = link.v_index, nv = link.nv;
+  const Mat6N& S = data.motion_subspace[i];
+  const MatNN& D_inv = data.D_inv[i];
+  VecN dqd = ws.entry_velocity_change.segment(v0, nv) -
+             data.inverse_mass_block[i] * (S.transpose() * pA) +
+             D_inv * (data.parent_coupling[i].transpose() * pA);
+  if (link.later) {
+    const Vec6 E_hat = parent_later();
+    const VecN later = -(D_inv * (data.U[i].transpose() * E_hat));
+    dqd += later;
+    ws.later_velocity_change[i] = E_hat + S * later;
+  }
+  qd.segment(v0, nv) += dqd;
 }
 
 }  // namespace detail
@@ -72,52 +162,57 @@ template <class RowSolver>
 void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
                         RowSolver&& solve_row) {
   const int n = model.num_links();
-  ws.joint_impulse.setZero();
-  for (int i = 0; i < n; ++i) ws.subtree_impulse[i].setZero();
+  const Data::LinkInfo* const info = data.info.data();
+  const Data::OneDof* const one_dof = data.one_dof.data();
+  Vec6* const velocity_change = ws.link_velocity_change.data();
+  double* const joint_impulse = ws.joint_impulse.data();
+  double* const entry_velocity_change = ws.entry_velocity_change.data();
+  const char* const has_rows = ws.has_rows.data();
+  const char* const chain_next = ws.chain_next.data();
+  double* const v = qd.data();
   int previous = -1;
-  // The base of link i when it is entered right after its 1-dof parent, from scalars.
-  bool have_base = false;
-  double next_base = 0.0;
   for (int i = 0; i < n; ++i) {
-    const Data::LinkInfo& link = data.info[i];
-    if (previous != link.parent) {
-      detail::leave_links(data, ws, previous, link.parent, true);
-      have_base = false;
-    }
+    const Data::LinkInfo& link = info[i];
+    if (previous != link.parent) detail::leave_links(data, ws, previous, link.parent, true);
     previous = i;
     // Delta v of the parent, exact now.
-    const Vec6 from_parent = link.parent >= 0 ? ws.link_velocity_change[link.parent] : Vec6::Zero();
+    const Vec6& from_parent = link.parent >= 0 ? velocity_change[link.parent] : ws.zero;
     if (link.nv == 1) {
-      // The joint's velocity change from outside its subtree is base = -D^-1 U^T Delta v_p; its own
-      // impulse adds (M^-1)_ii times it. The link then moves by
-      // Delta v_p - W D^-1 impulse + S (base + (M^-1)_ii impulse).
-      const Data::OneDof& J = data.one_dof[i];
-      const int d = link.v_index;
-      const double base = have_base ? next_base : -J.D_inv * J.U.dot(from_parent);
-      // If the next link is a 1-dof child, U_c^T Delta v_p now, the rest after the impulse.
-      have_base = i + 1 < n && data.info[i + 1].parent == i && data.info[i + 1].nv == 1;
-      const double ahead = have_base ? data.one_dof[i + 1].U.dot(from_parent) : 0.0;
-      double impulse = 0.0;
-      if (ws.has_rows[d]) {
-        impulse = solve_row(d, qd[d] + base);
-        ws.joint_impulse[d] = impulse;
+      // A run of 1-dof links, each the child of the one before. A joint's velocity change from
+      // outside its subtree is base = -D^-1 U^T Delta v_p; its own impulse adds (M^-1)_ii times
+      // it. The link then moves by Delta v_p - W D^-1 impulse + S (base + (M^-1)_ii impulse).
+      // The next link's base, -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S), has its
+      // 6-vector product formed before the impulse is known, the rest from scalars.
+      const Vec6* dv_parent = &from_parent;
+      double base = -one_dof[i].D_inv * one_dof[i].U.dot(from_parent);
+      for (;;) {
+        const Data::OneDof& J = one_dof[i];
+        const int d = info[i].v_index;
+        const bool next = chain_next[i];
+        double ahead = 0.0, c_W = 0.0, c_S = 0.0;
+        if (next) {
+          const Data::OneDof& C = one_dof[i + 1];
+          ahead = -C.D_inv * C.U.dot(*dv_parent);
+          c_W = C.D_inv * C.parent_W;
+          c_S = -C.D_inv * C.parent_S;
+        }
+        double impulse = 0.0;
+        if (has_rows[d]) impulse = solve_row(d, v[d] + base);
+        joint_impulse[d] = impulse;
+        const double dqd = base + J.inverse_mass * impulse;
+        const double h = J.D_inv * impulse;
+        entry_velocity_change[d] = dqd;
+        Vec6& dv = velocity_change[i];
+        dv = *dv_parent - h * J.W + dqd * J.S;
+        if (!next) break;
+        base = (ahead + h * c_W) + dqd * c_S;
+        dv_parent = &dv;
+        previous = ++i;
       }
-      const double dqd = base + J.inverse_mass * impulse;
-      const double h = J.D_inv * impulse;
-      ws.entry_velocity_change[d] = dqd;
-      if (have_base) {
-        const Data::OneDof& C = data.one_dof[i + 1];
-        next_base = -C.D_inv * (ahead - h * C.parent_W + dqd * C.parent_S);
-      }
-      Vec6 dv = from_parent;
-      dv -= h * J.W;
-      dv += dqd * J.S;
-      ws.link_velocity_change[i] = dv;
       continue;
     }
-    have_base = false;
     if (link.nv == 0) {
-      ws.link_velocity_change[i] = from_parent;
+      velocity_change[i] = from_parent;
       continue;
     }
     const int nv = link.nv;
@@ -126,6 +221,7 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
     const MatNN& D_inv = data.D_inv[i];
     const VecN base = -(D_inv * (U.transpose() * from_parent));
     auto impulse = ws.joint_impulse.segment(v0, nv);
+    impulse.setZero();
     for (int d = 0; d < nv; ++d) {
       if (!ws.has_rows[v0 + d]) continue;
       const double current = qd[v0 + d] + base[d] + data.inverse_mass_block[i].row(d).dot(impulse);
@@ -139,48 +235,16 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
   detail::leave_links(data, ws, previous, -1, false);
   // Every joint's velocity change is what it had when entered, plus what its subtree's impulses
   // do to it (-G^T pA, local), plus what subtrees entered after its own do to it (E, zero unless
-  // it or an ancestor has a later sibling).
+  // it or an ancestor has a later sibling: detail::finish_link).
+  const Vec6* const subtree_impulse = ws.subtree_impulse.data();
   for (int i = 0; i < n; ++i) {
-    const Data::LinkInfo& link = data.info[i];
-    const Vec6& pA = ws.subtree_impulse[i];
-    // The velocity change of the parent from the impulses entered after this link's subtree.
-    auto parent_later = [&]() -> Vec6 {
-      Vec6 E_hat = data.info[link.parent].later ? ws.later_velocity_change[link.parent] : Vec6::Zero();
-      if (!link.last_child)
-        E_hat.noalias() -= data.response[link.parent] *
-                           (ws.subtree_impulse[link.parent] - ws.parent_impulse_after[i]);
-      return E_hat;
-    };
-    if (link.nv == 1) {
-      const Data::OneDof& J = data.one_dof[i];
+    const Data::LinkInfo& link = info[i];
+    if (link.nv == 1 && !link.later) {
       const int d = link.v_index;
-      double dqd = ws.entry_velocity_change[d] - J.G.dot(pA);
-      if (link.later) {
-        const Vec6 E_hat = parent_later();
-        const double later = -J.D_inv * J.U.dot(E_hat);
-        dqd += later;
-        ws.later_velocity_change[i] = E_hat + later * J.S;
-      }
-      qd[d] += dqd;
-      continue;
+      v[d] += entry_velocity_change[d] - one_dof[i].G.dot(subtree_impulse[i]);
+    } else {
+      detail::finish_link(data, ws, i, qd);
     }
-    if (link.nv == 0) {
-      if (link.later) ws.later_velocity_change[i] = parent_later();
-      continue;
-    }
-    const int v0 = link.v_index, nv = link.nv;
-    const Mat6N& S = data.motion_subspace[i];
-    const MatNN& D_inv = data.D_inv[i];
-    VecN dqd = ws.entry_velocity_change.segment(v0, nv) -
-               data.inverse_mass_block[i] * (S.transpose() * pA) +
-               D_inv * (data.parent_coupling[i].transpose() * pA);
-    if (link.later) {
-      const Vec6 E_hat = parent_later();
-      const VecN later = -(D_inv * (data.U[i].transpose() * E_hat));
-      dqd += later;
-      ws.later_velocity_change[i] = E_hat + S * later;
-    }
-    qd.segment(v0, nv) += dqd;
   }
 }
 
