@@ -92,8 +92,9 @@ void Simulation::setup_rows(double h, bool tgs) {
   for (int d = 0; d < model.nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
     rows = DofRows{};
-    const Link& link = model.links[model.dof_link[d]];
-    if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic) {
+    // Data's compact copy of the link: a Link spreads over a kilobyte.
+    const Data::LinkInfo& link = data_.info[model.dof_link[d]];
+    if (link.type != JointType::revolute && link.type != JointType::prismatic) {
       sweep_.has_rows[d] = 0;
       continue;
     }

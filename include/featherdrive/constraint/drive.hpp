@@ -59,9 +59,10 @@ DriveRow setup_drive_row(const Drive& drive, double unit_response, double x0, do
 /// The new accumulated impulse of the step after one update at joint velocity v.
 inline double drive_impulse(const DriveRow& row, double v, double accumulated, double delta_x,
                             double time_to_step_end) {
-  double lambda = row.target_vel_plus_initial_bias + row.vel_multiplier * v +
-                  row.impulse_multiplier * accumulated - row.bias_coefficient * delta_x -
-                  row.target_pos_bias * time_to_step_end;
+  // The velocity term last: in a sweep, v is the one input that waits on the previous row.
+  const double rest = row.target_vel_plus_initial_bias + row.impulse_multiplier * accumulated -
+                      row.bias_coefficient * delta_x - row.target_pos_bias * time_to_step_end;
+  double lambda = rest + row.vel_multiplier * v;
   if (lambda > row.max_impulse) lambda = row.max_impulse;
   if (lambda < -row.max_impulse) lambda = -row.max_impulse;
   return lambda;

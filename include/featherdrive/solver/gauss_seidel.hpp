@@ -181,20 +181,22 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
       // A run of 1-dof links, each the child of the one before. A joint's velocity change from
       // outside its subtree is base = -D^-1 U^T Delta v_p; its own impulse adds (M^-1)_ii times
       // it. The link then moves by Delta v_p - W D^-1 impulse + S (base + (M^-1)_ii impulse).
-      // The next link's base, -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S), has its
-      // 6-vector product formed before the impulse is known, the rest from scalars.
+      // The next link's base, -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S) with
+      // h = D^-1 impulse, is affine in the impulse.
       const Vec6* dv_parent = &from_parent;
       double base = -one_dof[i].D_inv * one_dof[i].U.dot(from_parent);
       for (;;) {
         const Data::OneDof& J = one_dof[i];
         const int d = info[i].v_index;
         const bool next = chain_next[i];
-        double ahead = 0.0, c_W = 0.0, c_S = 0.0;
+        // next base = ahead + impulse * per_impulse, both formed before the impulse is known:
+        // the chain of dependencies from one row to the next is one multiply-add.
+        double ahead = 0.0, per_impulse = 0.0;
         if (next) {
           const Data::OneDof& C = one_dof[i + 1];
-          ahead = -C.D_inv * C.U.dot(*dv_parent);
-          c_W = C.D_inv * C.parent_W;
-          c_S = -C.D_inv * C.parent_S;
+          const double c_S = -C.D_inv * C.parent_S;
+          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * c_S;
+          per_impulse = J.D_inv * (C.D_inv * C.parent_W) + J.inverse_mass * c_S;
         }
         double impulse = 0.0;
         if (has_rows[d]) impulse = solve_row(d, v[d] + base);
@@ -205,7 +207,7 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
         Vec6& dv = velocity_change[i];
         dv = *dv_parent - h * J.W + dqd * J.S;
         if (!next) break;
-        base = (ahead + h * c_W) + dqd * c_S;
+        base = ahead + impulse * per_impulse;
         dv_parent = &dv;
         previous = ++i;
       }
