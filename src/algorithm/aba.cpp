@@ -4,6 +4,8 @@
 // plain addition. 1-dof joints (S a 6-vector, D a number) take a path of their own.
 #include "featherdrive/algorithm/aba.hpp"
 
+#include <cmath>
+
 #include <Eigen/Cholesky>
 
 #include "featherdrive/algorithm/kinematics.hpp"
@@ -87,9 +89,67 @@ void subspace_in_frame0(const Model& model, Data& data, int i, const Mat3& R, co
     data.motion_subspace[i].col(c) = motion_to_frame0(R, p, S_link.col(c));
 }
 
+// The inverse of a symmetric positive definite N x N matrix from its Cholesky factor L:
+// D^-1 = L^-T L^-1. Written out for fixed sizes, where Eigen's LLT::solve takes a blocked
+// triangular solve meant for large matrices.
+template <int N>
+Eigen::Matrix<double, N, N> spd_inverse(const Eigen::Matrix<double, N, N>& D) {
+  using MatKK = Eigen::Matrix<double, N, N>;
+  MatKK L = MatKK::Zero();
+  for (int j = 0; j < N; ++j) {
+    double d = D(j, j);
+    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
+    L(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < N; ++i) {
+      double x = D(i, j);
+      for (int k = 0; k < j; ++k) x -= L(i, k) * L(j, k);
+      L(i, j) = x / L(j, j);
+    }
+  }
+  MatKK L_inv = MatKK::Zero();  // lower triangular, column by column (forward substitution)
+  for (int j = 0; j < N; ++j) {
+    L_inv(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < N; ++i) {
+      double x = 0.0;
+      for (int k = j; k < i; ++k) x -= L(i, k) * L_inv(k, j);
+      L_inv(i, j) = x / L(i, i);
+    }
+  }
+  return L_inv.transpose() * L_inv;
+}
+
+// U, D^-1 of a joint with N dofs, on fixed-size matrices (Eigen runs the dynamic-size products
+// through its general matrix product).
+template <int N>
+void joint_inertia_fixed(const Model& model, int v_index, const Mat6N& S_dyn, const Mat6& IA,
+                         Mat6N& U_out, MatNN& D_inv) {
+  using Mat6K = Eigen::Matrix<double, 6, N>;
+  using MatKK = Eigen::Matrix<double, N, N>;
+  const Mat6K S = S_dyn;
+  const Mat6K U = IA * S;
+  MatKK D = S.transpose() * U;
+  D.diagonal() += model.armature.segment<N>(v_index);
+  U_out = U;
+  D_inv = spd_inverse<N>(D);
+}
+
+// Pass 3 at a joint with N dofs: qdd = D^-1 (u - U^T a), a += S qdd, on fixed sizes.
+template <int N>
+void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
+  using Mat6K = Eigen::Matrix<double, 6, N>;
+  using VecK = Eigen::Matrix<double, N, 1>;
+  const Mat6K U = data.U[i];
+  const Eigen::Matrix<double, N, N> D_inv = data.D_inv[i];
+  const VecK qdd = D_inv * (data.u.segment<N>(v_index) - U.transpose() * a);
+  data.qdd.segment<N>(v_index) = qdd;
+  a.noalias() += Mat6K(data.motion_subspace[i]) * qdd;
+}
+
 // U, D^-1 of a joint with several dofs.
 void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& IA, Mat6N& U,
                    MatNN& D_inv) {
+  if (S.cols() == 6) return joint_inertia_fixed<6>(model, v_index, S, IA, U, D_inv);
+  if (S.cols() == 3) return joint_inertia_fixed<3>(model, v_index, S, IA, U, D_inv);
   U.noalias() = IA * S;
   MatNN D = S.transpose() * U;
   D.diagonal() += model.armature.segment(v_index, S.cols());
@@ -197,9 +257,8 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
       if (link.parent < 0) continue;
       // Ia = IA - U D^-1 U^T; pa = pA + Ia c + U D^-1 u = pA + IA c + U D^-1 (u - U.c)
       const Vec6& c = data.bias_acceleration0[i];
-      Vec6& pA_parent = data.articulated_bias[link.parent];
-      pA_parent.noalias() += IA * c;
-      pA_parent += pA + (D_inv * (u - J.U.dot(c))) * J.U;
+      const Vec6 IAc = IA * c;  // (+= IA * c would broadcast c's entries once per row pair)
+      data.articulated_bias[link.parent] += pA + IAc + (D_inv * (u - J.U.dot(c))) * J.U;
       add_to_parent(IA, D_inv, J.U, data.articulated_inertia[link.parent]);
       continue;
     }
@@ -234,6 +293,10 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
       const double qdd = J.D_inv * (data.u[link.v_index] - J.U.dot(a));
       data.qdd[link.v_index] = qdd;
       a += qdd * J.S;
+    } else if (link.nv == 6) {
+      joint_acceleration_fixed<6>(data, i, link.v_index, a);
+    } else if (link.nv == 3) {
+      joint_acceleration_fixed<3>(data, i, link.v_index, a);
     } else if (link.nv > 0) {
       auto qdd = data.qdd.segment(link.v_index, link.nv);
       qdd = data.D_inv[i] * (data.u.segment(link.v_index, link.nv) - data.U[i].transpose() * a);

@@ -47,7 +47,12 @@ const VecX& articulated_response(const Model& model, Data& data) {
     const Mat6N& U = data.U[i];
     const MatNN& Dinv = data.D_inv[i];
     if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
-      L.noalias() = S * Dinv * S.transpose();
+      if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
+        const Mat6 S6 = S;
+        L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
+      } else {
+        L.noalias() = S * Dinv * S.transpose();
+      }
       data.parent_coupling[i].setZero();
       data.inverse_mass_block[i] = Dinv;
       data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
