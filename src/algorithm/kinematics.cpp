@@ -133,6 +133,33 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   X.r = r;
 }
 
+// X v for a coordinate revolute joint's X_i = [R(e_A, q)^T, r]: E mixes two coordinates.
+template <int A>
+Vec6 coordinate_apply_motion(const Transform& X, const Vec6& v) {
+  constexpr int A1 = A == 2 ? 0 : A + 1, A2 = A == 0 ? 2 : A - 1;
+  const double c = X.E(A1, A1), s = X.E(A1, A2);
+  const Vec3 w = v.head<3>(), u = v.tail<3>() - X.r.cross(w);
+  Vec6 out;
+  out[A] = w[A];
+  out[A1] = c * w[A1] + s * w[A2];
+  out[A2] = c * w[A2] - s * w[A1];
+  out[3 + A] = u[A];
+  out[3 + A1] = c * u[A1] + s * u[A2];
+  out[3 + A2] = c * u[A2] - s * u[A1];
+  return out;
+}
+
+// X_i v_parent, the parent's velocity in link i's frame.
+Vec6 velocity_from_parent(const Data& data, int i) {
+  const Data::LinkInfo& link = data.info[i];
+  const Transform& X = data.parent_transform[i];
+  const Vec6& vp = data.velocity[link.parent];
+  if (!link.coordinate_revolute) return X.apply_motion(vp);
+  if (link.unit_axis == 0) return coordinate_apply_motion<0>(X, vp);
+  if (link.unit_axis == 1) return coordinate_apply_motion<1>(X, vp);
+  return coordinate_apply_motion<2>(X, vp);
+}
+
 // Either of the above.
 inline void position_any(const Model& model, Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
@@ -155,8 +182,7 @@ void forward_kinematics(const Model& model, Data& data, const VecX& q, const Vec
     position_any(model, data, i, q);
     const Data::LinkInfo& link = data.info[i];
     const Vec3& axis = data.constants[i].axis;
-    Vec6 vi = link.parent >= 0 ? data.parent_transform[i].apply_motion(data.velocity[link.parent])
-                               : Vec6::Zero();
+    Vec6 vi = link.parent >= 0 ? velocity_from_parent(data, i) : Vec6::Zero();
     Vec6& c = data.bias_acceleration[i];
     switch (link.type) {
       case JointType::fixed: c.setZero(); break;
