@@ -133,9 +133,10 @@ void joint_inertia_fixed(const Model& model, int v_index, const Mat6N& S_dyn, co
   D_inv = spd_inverse<N>(D);
 }
 
-// Pass 3 at a joint with N dofs: qdd = D^-1 (u - U^T a), a += S qdd, on fixed sizes.
+// Pass 3 at a joint with N dofs: qdd = D^-1 (u - U^T a), a += S qdd, on fixed sizes. Out of
+// line: inlined, it costs the 1-dof path of pass 3 registers.
 template <int N>
-void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
+[[gnu::noinline]] void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
   using Mat6K = Eigen::Matrix<double, 6, N>;
   using VecK = Eigen::Matrix<double, N, 1>;
   const Mat6K U = data.U[i];
