@@ -88,14 +88,16 @@ void position_link(const Model& model, Data& data, int i, const VecX& q) {
     // R = Rp X_T^T R(e_k, q): columns k1 and k2 mix. Rp X_T^T is Rp when X_T does not rotate.
     const int a = link.unit_axis, a1 = next_axis(a), a2 = previous_axis(a);
     Mat3 B;
-    if (!link.tree_rotation_identity) B.noalias() = Rp * data.constants[i].tree_transform.E.transpose();
+    if (!link.tree_rotation_identity)
+      B.noalias() = Rp * data.constants[i].tree_transform.E.transpose();
     const Mat3& P = link.tree_rotation_identity ? Rp : B;
     R.col(a) = P.col(a);
     R.col(a1) = c * P.col(a1) + s * P.col(a2);
     R.col(a2) = c * P.col(a2) - s * P.col(a1);
     return;
   }
-  if (link.tree_rotation_identity && (link.type == JointType::fixed || link.type == JointType::prismatic))
+  const bool fixed_rotation = link.type == JointType::fixed || link.type == JointType::prismatic;
+  if (link.tree_rotation_identity && fixed_rotation)
     R = Rp;
   else
     R.noalias() = Rp * X.E.transpose();
