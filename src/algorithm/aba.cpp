@@ -4,6 +4,8 @@
 // plain addition. 1-dof joints (S a 6-vector, D a number) take a path of their own.
 #include "featherdrive/algorithm/aba.hpp"
 
+#include <cmath>
+
 #include <Eigen/Cholesky>
 
 #include "featherdrive/algorithm/kinematics.hpp"
@@ -11,28 +13,54 @@
 namespace featherdrive {
 namespace {
 
-// The spatial inertia in frame 0 of a link with orientation R at p (relative to the frame origin):
-// [Ic + m c x c x^T, m c x; m c x^T, m 1] with c its centre of mass and Ic its inertia about it,
-// both in frame 0. Ic = R Ic_link R^T is formed on its six distinct entries.
-void inertia_in_frame0(const Data::LinkConstants& link, bool diagonal, const Mat3& R,
-                       const Vec3& p, Mat6& I) {
-  const double m = link.mass;
+// A link's rigid-body inertia in frame 0, by its parts: I = [A, m c x; m c x^T, m 1] with
+// A = Ic + m c x c x^T, c the centre of mass and Ic the inertia about it, both in frame 0.
+struct BodyInertia {
+  Mat3 A;
+  Vec3 mc;  ///< m c
+  double m;
+};
+
+// The inertia of a link with orientation R at p (relative to the frame origin). Ic = R Ic_link R^T
+// and A are formed on their six distinct entries. Forced inline: out of line, b returns through
+// memory (20 instructions a link more in pass 1).
+[[gnu::always_inline]] inline BodyInertia body_inertia(const Data::LinkConstants& link,
+                                                       bool diagonal, const Mat3& R,
+                                                       const Vec3& p) {
+  BodyInertia b;
+  b.m = link.mass;
   const Vec3 c = p + R * link.com;
+  b.mc = b.m * c;
   Mat3 RI;  // R Ic_link, or R's columns scaled by the principal moments
   if (diagonal) RI = R * link.inertia_com.diagonal().asDiagonal();
   else RI.noalias() = R * link.inertia_com;
-  const double cc = c.squaredNorm();
+  const double mcc = b.mc.dot(c);
   for (int r = 0; r < 3; ++r)
     for (int k = r; k < 3; ++k) {
-      double a = RI(r, 0) * R(k, 0) + RI(r, 1) * R(k, 1) + RI(r, 2) * R(k, 2) - m * c[r] * c[k];
-      if (r == k) a += m * cc;
-      I(r, k) = a;
-      I(k, r) = a;
+      double a = RI(r, 0) * R(k, 0) + RI(r, 1) * R(k, 1) + RI(r, 2) * R(k, 2) - b.mc[r] * c[k];
+      if (r == k) a += mcc;
+      b.A(r, k) = a;
+      b.A(k, r) = a;
     }
-  const Vec3 mc = m * c;
-  I.topRightCorner<3, 3>() << 0.0, -mc.z(), mc.y(), mc.z(), 0.0, -mc.x(), -mc.y(), mc.x(), 0.0;
-  I.bottomLeftCorner<3, 3>() = I.topRightCorner<3, 3>().transpose();
-  I.bottomRightCorner<3, 3>() = m * Mat3::Identity();
+  return b;
+}
+
+// The 6 x 6 matrix of b, column by column.
+inline void write_inertia(const BodyInertia& b, Mat6& I) {
+  const Mat3& A = b.A;
+  const double x = b.mc.x(), y = b.mc.y(), z = b.mc.z(), m = b.m;
+  I.col(0) << A(0, 0), A(1, 0), A(2, 0), 0.0, -z, y;
+  I.col(1) << A(0, 1), A(1, 1), A(2, 1), z, 0.0, -x;
+  I.col(2) << A(0, 2), A(1, 2), A(2, 2), -y, x, 0.0;
+  I.col(3) << 0.0, z, -y, m, 0.0, 0.0;
+  I.col(4) << -z, 0.0, x, 0.0, m, 0.0;
+  I.col(5) << y, -x, 0.0, 0.0, 0.0, m;
+}
+
+// out = [top; bottom] (Eigen's comma initializer trips GCC's -Warray-bounds here).
+inline void set_halves(const Vec3& top, const Vec3& bottom, Vec6& out) {
+  out.head<3>() = top;
+  out.tail<3>() = bottom;
 }
 
 // A motion vector of a link frame (orientation R, origin p) in frame 0.
@@ -44,54 +72,123 @@ Vec6 motion_to_frame0(const Mat3& R, const Vec3& p, const Vec6& s) {
   return out;
 }
 
-// Link i in frame 0 from the kinematics: its S_i and its inertia as the start of IA_i.
-void prepare_link(const Model& model, Data& data, int i) {
+// S_i in frame 0: [R a; p x R a] (revolute) or [0; R a] (prismatic) for a 1-dof joint, R a being
+// a column of R when the axis is a coordinate axis; motion_subspace[i] for the others.
+inline void one_dof_subspace(const Data& data, int i, const Mat3& R, const Vec3& p, Vec6& S) {
   const Data::LinkInfo& link = data.info[i];
-  const Data::LinkConstants& k = data.constants[i];
-  const Mat3& R = data.world_rotation[i];
-  const Vec3 p = data.world_position[i] - data.frame_origin;
-  inertia_in_frame0(k, link.inertia_diagonal, R, p, data.articulated_inertia[i]);
-  if (link.nv == 1) {
-    Vec6& S = data.one_dof[i].S;
-    if (link.type == JointType::revolute) {
-      S.head<3>().noalias() = R * k.axis;
-      S.tail<3>() = p.cross(S.head<3>());
-    } else {
-      S.head<3>().setZero();
-      S.tail<3>().noalias() = R * k.axis;
-    }
-  } else {
-    const Mat6N& S_link = model.links[i].motion_subspace;
-    for (int c = 0; c < link.nv; ++c)
-      data.motion_subspace[i].col(c) = motion_to_frame0(R, p, S_link.col(c));
+  const Vec3 a = link.unit_axis >= 0 ? Vec3(link.axis_sign * R.col(link.unit_axis))
+                                     : Vec3(R * data.constants[i].axis);
+  if (link.type == JointType::revolute) set_halves(a, p.cross(a), S);
+  else set_halves(Vec3::Zero(), a, S);
+}
+void subspace_in_frame0(const Model& model, Data& data, int i, const Mat3& R, const Vec3& p) {
+  if (data.info[i].nv == 1) {
+    one_dof_subspace(data, i, R, p, data.one_dof[i].S);
+    return;
   }
+  const Mat6N& S_link = model.links[i].motion_subspace;
+  for (int c = 0; c < data.info[i].nv; ++c)
+    data.motion_subspace[i].col(c) = motion_to_frame0(R, p, S_link.col(c));
+}
+
+// The inverse of a symmetric positive definite N x N matrix from its Cholesky factor L:
+// D^-1 = L^-T L^-1. Written out for fixed sizes, where Eigen's LLT::solve takes a blocked
+// triangular solve meant for large matrices.
+template <int N>
+Eigen::Matrix<double, N, N> spd_inverse(const Eigen::Matrix<double, N, N>& D) {
+  using MatKK = Eigen::Matrix<double, N, N>;
+  MatKK L = MatKK::Zero();
+  for (int j = 0; j < N; ++j) {
+    double d = D(j, j);
+    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
+    L(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < N; ++i) {
+      double x = D(i, j);
+      for (int k = 0; k < j; ++k) x -= L(i, k) * L(j, k);
+      L(i, j) = x / L(j, j);
+    }
+  }
+  MatKK L_inv = MatKK::Zero();  // lower triangular, column by column (forward substitution)
+  for (int j = 0; j < N; ++j) {
+    L_inv(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < N; ++i) {
+      double x = 0.0;
+      for (int k = j; k < i; ++k) x -= L(i, k) * L_inv(k, j);
+      L_inv(i, j) = x / L(i, i);
+    }
+  }
+  return L_inv.transpose() * L_inv;
+}
+
+// U, D^-1 of a joint with N dofs, on fixed-size matrices (Eigen runs the dynamic-size products
+// through its general matrix product).
+template <int N>
+void joint_inertia_fixed(const Model& model, int v_index, const Mat6N& S_dyn, const Mat6& IA,
+                         Mat6N& U_out, MatNN& D_inv) {
+  using Mat6K = Eigen::Matrix<double, 6, N>;
+  using MatKK = Eigen::Matrix<double, N, N>;
+  const Mat6K S = S_dyn;
+  const Mat6K U = IA * S;
+  MatKK D = S.transpose() * U;
+  D.diagonal() += model.armature.segment<N>(v_index);
+  U_out = U;
+  D_inv = spd_inverse<N>(D);
+}
+
+// Pass 3 at a joint with N dofs: qdd = D^-1 (u - U^T a), a += S qdd, on fixed sizes. Out of
+// line: inlined, it costs the 1-dof path of pass 3 registers.
+template <int N>
+[[gnu::noinline]] void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
+  using Mat6K = Eigen::Matrix<double, 6, N>;
+  using VecK = Eigen::Matrix<double, N, 1>;
+  const Mat6K U = data.U[i];
+  const Eigen::Matrix<double, N, N> D_inv = data.D_inv[i];
+  const VecK qdd = D_inv * (data.u.segment<N>(v_index) - U.transpose() * a);
+  data.qdd.segment<N>(v_index) = qdd;
+  a.noalias() += Mat6K(data.motion_subspace[i]) * qdd;
 }
 
 // U, D^-1 of a joint with several dofs.
 void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& IA, Mat6N& U,
                    MatNN& D_inv) {
+  if (S.cols() == 6) return joint_inertia_fixed<6>(model, v_index, S, IA, U, D_inv);
+  if (S.cols() == 3) return joint_inertia_fixed<3>(model, v_index, S, IA, U, D_inv);
   U.noalias() = IA * S;
   MatNN D = S.transpose() * U;
   D.diagonal() += model.armature.segment(v_index, S.cols());
   D_inv = D.llt().solve(MatNN::Identity(S.cols(), S.cols()));
 }
 
+// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia, rows
+// 0-3 and 4-5 apart (a 4-wide and a 2-wide operation with AVX).
+inline void add_to_parent(const Mat6& IA, double D_inv, const Vec6& U, Mat6& IA_parent) {
+  for (int j = 0; j < 6; ++j) {
+    const double k = D_inv * U[j];
+    IA_parent.col(j).head<4>() += IA.col(j).head<4>() - k * U.head<4>();
+    IA_parent.col(j).tail<2>() += IA.col(j).tail<2>() - k * U.tail<2>();
+  }
+}
+
 }  // namespace
 
 void articulated_inertias(const Model& model, Data& data) {
+  const int n = model.num_links();
   data.frame_origin = data.world_position[0];
-  for (int i = 0; i < model.num_links(); ++i) prepare_link(model, data, i);
-  for (int i = model.num_links() - 1; i >= 0; --i) {
+  for (int i = 0; i < n; ++i) {
+    const Mat3& R = data.world_rotation[i];
+    const Vec3 p = data.world_position[i] - data.frame_origin;
+    const BodyInertia b = body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p);
+    write_inertia(b, data.articulated_inertia[i]);
+    subspace_in_frame0(model, data, i, R, p);
+  }
+  for (int i = n - 1; i >= 0; --i) {
     const Data::LinkInfo& link = data.info[i];
     const Mat6& IA = data.articulated_inertia[i];
     if (link.nv == 1) {
       Data::OneDof& J = data.one_dof[i];
       J.U.noalias() = IA * J.S;
       J.D_inv = 1.0 / (J.S.dot(J.U) + model.armature[link.v_index]);
-      if (link.parent < 0) continue;
-      Mat6& IA_parent = data.articulated_inertia[link.parent];
-      IA_parent += IA;
-      IA_parent.noalias() -= (J.D_inv * J.U) * J.U.transpose();
+      if (link.parent >= 0) add_to_parent(IA, J.D_inv, J.U, data.articulated_inertia[link.parent]);
       continue;
     }
     if (link.nv > 0)
@@ -106,47 +203,69 @@ void articulated_inertias(const Model& model, Data& data) {
 const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
                                 const std::vector<Vec6>* external_force) {
   const int n = model.num_links();
-  data.frame_origin = data.world_position[0];
-  // Pass 1: S_i and I_i in frame 0, velocities, velocity-product accelerations, bias forces.
+  const Vec3 origin = data.world_position[0];
+  data.frame_origin = origin;
+  // Pass 1, in two loops (one would keep more values live than there are registers). First S_i
+  // and I_i in frame 0, link by link.
   for (int i = 0; i < n; ++i) {
-    prepare_link(model, data, i);
+    const Mat3& R = data.world_rotation[i];
+    const Vec3 p = data.world_position[i] - origin;
+    write_inertia(body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p),
+                  data.articulated_inertia[i]);
+    if (data.info[i].nv == 1) one_dof_subspace(data, i, R, p, data.one_dof[i].S);
+    else subspace_in_frame0(model, data, i, R, p);
+  }
+  // Then velocities v_i = v_parent + S qd, velocity-product accelerations c_i = v_i x S qd and bias
+  // forces v_i x* I_i v_i, root to leaves.
+  for (int i = 0; i < n; ++i) {
     const Data::LinkInfo& link = data.info[i];
-    Vec6 vJ;
-    if (link.nv == 1) vJ = data.one_dof[i].S * v[link.v_index];
-    else if (link.nv > 0) vJ.noalias() = data.motion_subspace[i] * v.segment(link.v_index, link.nv);
-    else vJ.setZero();
-    Vec6 vi = vJ;
-    if (link.parent >= 0) vi += data.velocity0[link.parent];
+    Vec3 wJ = Vec3::Zero(), vJ = Vec3::Zero();  // S qd
+    if (link.nv == 1) {
+      const double qd = v[link.v_index];
+      wJ = qd * data.one_dof[i].S.head<3>();
+      vJ = qd * data.one_dof[i].S.tail<3>();
+    } else if (link.nv > 0) {
+      const Vec6 sJ = data.motion_subspace[i] * v.segment(link.v_index, link.nv);
+      wJ = sJ.head<3>();
+      vJ = sJ.tail<3>();
+    }
+    Vec6 vi;
+    if (link.parent >= 0) {
+      vi.head<3>() = data.velocity0[link.parent].head<3>() + wJ;
+      vi.tail<3>() = data.velocity0[link.parent].tail<3>() + vJ;
+    } else {
+      set_halves(wJ, vJ, vi);
+    }
     data.velocity0[i] = vi;
-    data.bias_acceleration0[i] = cross_motion(vi, vJ);
+    const Vec3 w = vi.head<3>(), vo = vi.tail<3>();
+    set_halves(w.cross(wJ), w.cross(vJ) + vo.cross(wJ), data.bias_acceleration0[i]);
     const Vec6 h = data.articulated_inertia[i] * vi;
-    data.articulated_bias[i] = cross_force(vi, h);
-    if (external_force) data.articulated_bias[i] -= (*external_force)[static_cast<size_t>(i)];
+    Vec6& pA = data.articulated_bias[i];
+    set_halves(w.cross(h.head<3>()) + vo.cross(h.tail<3>()), w.cross(h.tail<3>()), pA);
+    if (external_force) pA -= (*external_force)[static_cast<size_t>(i)];
   }
   // Pass 2: articulated inertias and bias forces, leaves to root.
   for (int i = n - 1; i >= 0; --i) {
     const Data::LinkInfo& link = data.info[i];
     const Mat6& IA = data.articulated_inertia[i];
     const Vec6& pA = data.articulated_bias[i];
-    const Vec6& c = data.bias_acceleration0[i];
     if (link.nv == 1) {
+      // No 6-vector temporaries (GCC keeps them on the stack and copies them): J's are read.
       Data::OneDof& J = data.one_dof[i];
       J.U.noalias() = IA * J.S;
-      J.D_inv = 1.0 / (J.S.dot(J.U) + model.armature[link.v_index]);
+      const double D_inv = 1.0 / (J.S.dot(J.U) + model.armature[link.v_index]);
+      J.D_inv = D_inv;
       const double u = tau[link.v_index] - J.S.dot(pA);
       data.u[link.v_index] = u;
       if (link.parent < 0) continue;
       // Ia = IA - U D^-1 U^T; pa = pA + Ia c + U D^-1 u = pA + IA c + U D^-1 (u - U.c)
-      const Vec6 UD = J.D_inv * J.U;
-      Vec6& pA_parent = data.articulated_bias[link.parent];
-      pA_parent += pA;
-      pA_parent.noalias() += IA * c;
-      pA_parent += (u - J.U.dot(c)) * UD;
-      Mat6& IA_parent = data.articulated_inertia[link.parent];
-      IA_parent += IA;
-      IA_parent.noalias() -= UD * J.U.transpose();
+      const Vec6& c = data.bias_acceleration0[i];
+      const Vec6 IAc = IA * c;  // (+= IA * c would broadcast c's entries once per row pair)
+      data.articulated_bias[link.parent] += pA + IAc + (D_inv * (u - J.U.dot(c))) * J.U;
+      add_to_parent(IA, D_inv, J.U, data.articulated_inertia[link.parent]);
       continue;
     }
+    const Vec6& c = data.bias_acceleration0[i];
     auto u = data.u.segment(link.v_index, link.nv);
     if (link.nv > 0) {
       const Mat6N& S = data.motion_subspace[i];
@@ -177,6 +296,10 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
       const double qdd = J.D_inv * (data.u[link.v_index] - J.U.dot(a));
       data.qdd[link.v_index] = qdd;
       a += qdd * J.S;
+    } else if (link.nv == 6) {
+      joint_acceleration_fixed<6>(data, i, link.v_index, a);
+    } else if (link.nv == 3) {
+      joint_acceleration_fixed<3>(data, i, link.v_index, a);
     } else if (link.nv > 0) {
       auto qdd = data.qdd.segment(link.v_index, link.nv);
       qdd = data.D_inv[i] * (data.u.segment(link.v_index, link.nv) - data.U[i].transpose() * a);

@@ -1,5 +1,7 @@
 #include "featherdrive/algorithm/data.hpp"
 
+#include <cmath>
+
 namespace featherdrive {
 
 Data::Data(const Model& model) {
@@ -10,6 +12,15 @@ Data::Data(const Model& model) {
     const Mat3& I = link.inertia_com;
     li.inertia_diagonal = I(0, 1) == 0.0 && I(0, 2) == 0.0 && I(1, 2) == 0.0 && I(1, 0) == 0.0 &&
                           I(2, 0) == 0.0 && I(2, 1) == 0.0;
+    if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic)
+      for (int k = 0; k < 3; ++k)
+        if (std::abs(link.axis[k]) == 1.0 && link.axis[(k + 1) % 3] == 0.0 &&
+            link.axis[(k + 2) % 3] == 0.0) {
+          li.unit_axis = k;
+          li.axis_sign = link.axis[k];
+        }
+    li.coordinate_revolute = link.joint_type == JointType::revolute && li.unit_axis >= 0 &&
+                             li.tree_rotation_identity && link.parent >= 0;
     if (link.parent >= 0) {
       li.last_child = model.links[link.parent].children.back() == static_cast<int>(info.size());
       li.later = !li.last_child || info[link.parent].later;

@@ -16,16 +16,19 @@ const VecX& articulated_response(const Model& model, Data& data) {
     Mat6& L = data.response[i];
     if (link.nv == 1) {
       // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
-      //          = T + S (r S - h)^T - h S^T.
+      //          = T + S g^T - h S^T, g = r S - h (G_i).
+      // No 6-vector temporaries: GCC keeps them on the stack and copies them; J's are read instead.
       Data::OneDof& J = data.one_dof[i];
       J.W.noalias() = T * J.U;
-      const double r = J.D_inv + J.D_inv * J.D_inv * J.U.dot(J.W);
-      const Vec6 h = J.D_inv * J.W;
-      const Vec6 g = r * J.S - h;
-      L = T;
-      L.noalias() += J.S * g.transpose();
-      L.noalias() -= h * J.S.transpose();
-      J.G = g;
+      const double D_inv = J.D_inv;
+      const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
+      J.G = r * J.S - D_inv * J.W;
+      // Column by column, rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation with AVX).
+      for (int j = 0; j < 6; ++j) {
+        const double g = J.G[j], sh = J.S[j] * D_inv;
+        L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
+        L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
+      }
       J.inverse_mass = r;
       if (link.parent >= 0 && data.info[link.parent].nv == 1) {
         const Data::OneDof& P = data.one_dof[link.parent];
@@ -43,6 +46,18 @@ const VecX& articulated_response(const Model& model, Data& data) {
     const Mat6N& S = data.motion_subspace[i];
     const Mat6N& U = data.U[i];
     const MatNN& Dinv = data.D_inv[i];
+    if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
+      if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
+        const Mat6 S6 = S;
+        L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
+      } else {
+        L.noalias() = S * Dinv * S.transpose();
+      }
+      data.parent_coupling[i].setZero();
+      data.inverse_mass_block[i] = Dinv;
+      data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
+      continue;
+    }
     const Mat6N W = T * U;
     const MatNN UtW = U.transpose() * W;
     const Mat6N SDinv = S * Dinv;

@@ -19,18 +19,44 @@ Mat3 rotation_transpose(const Vec3& a, double q) {
   return E;
 }
 
-// X_i = X_J(q) X_T, written into X, with the common joints written out.
+// The two coordinate axes after k in cyclic order: a rotation by q about e_k is c = cos q,
+// s = sin q in rows and columns (k1, k2) and 1 at (k, k).
+int next_axis(int k) { return k == 2 ? 0 : k + 1; }
+int previous_axis(int k) { return k == 0 ? 2 : k - 1; }
+
+// X_i = X_J(q) X_T, written into X, with the common joints written out. For a revolute joint
+// about a coordinate axis, (c, s) receive the cosine and sine of its angle (axis sign included).
 void parent_transform_of(const Model& model, const Data& data, int i, const double* q,
-                         Transform& X) {
+                         Transform& X, double& c, double& s) {
   const Data::LinkInfo& info = data.info[i];
   const Data::LinkConstants& k = data.constants[i];
   const Transform& T = k.tree_transform;
   switch (info.type) {
     case JointType::fixed: X = T; return;
     case JointType::revolute:
+      X.r = T.r;
+      if (info.unit_axis >= 0) {
+        // R(+-e_k, q)^T X_T: rows k1 and k2 of E_T mix, row k stays.
+        const double angle = info.axis_sign * q[0];
+        c = std::cos(angle);
+        s = std::sin(angle);
+        const int a = info.unit_axis, a1 = next_axis(a), a2 = previous_axis(a);
+        if (info.tree_rotation_identity) {
+          X.E.setZero();
+          X.E(a, a) = 1.0;
+          X.E(a1, a1) = c;
+          X.E(a1, a2) = s;
+          X.E(a2, a1) = -s;
+          X.E(a2, a2) = c;
+        } else {
+          X.E.row(a) = T.E.row(a);
+          X.E.row(a1) = c * T.E.row(a1) + s * T.E.row(a2);
+          X.E.row(a2) = c * T.E.row(a2) - s * T.E.row(a1);
+        }
+        return;
+      }
       if (info.tree_rotation_identity) X.E = rotation_transpose(k.axis, q[0]);
       else X.E.noalias() = rotation_transpose(k.axis, q[0]) * T.E;
-      X.r = T.r;
       return;
     case JointType::prismatic:
       X.E = T.E;
@@ -41,36 +67,124 @@ void parent_transform_of(const Model& model, const Data& data, int i, const doub
   }
 }
 
-// Link i's X_i, world rotation and world position (its parent's are done).
+const Mat3 kIdentity3 = Mat3::Identity();  // the world's pose, the root's parent
+const Vec3 kZero3 = Vec3::Zero();
+
+// Link i's X_i, world rotation and world position (its parent's are done; the world's for the
+// root): any joint.
 void position_link(const Model& model, Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
   Transform& X = data.parent_transform[i];
-  parent_transform_of(model, data, i, q.data() + link.q_index, X);
-  if (link.parent < 0) {
-    data.world_rotation[i] = X.E.transpose();
-    data.world_position[i] = X.r;
-  } else {
-    const Mat3& Rp = data.world_rotation[link.parent];
-    data.world_rotation[i].noalias() = Rp * X.E.transpose();
-    data.world_position[i] = data.world_position[link.parent];
-    data.world_position[i].noalias() += Rp * X.r;
+  double c = 1.0, s = 0.0;
+  parent_transform_of(model, data, i, q.data() + link.q_index, X, c, s);
+  const bool has_parent = link.parent >= 0;
+  const Mat3& Rp = has_parent ? data.world_rotation[link.parent] : kIdentity3;
+  const Vec3& pp = has_parent ? data.world_position[link.parent] : kZero3;
+  Mat3& R = data.world_rotation[i];
+  Vec3& p = data.world_position[i];
+  p = pp;
+  p.noalias() += Rp * X.r;
+  if (link.type == JointType::revolute && link.unit_axis >= 0) {
+    // R = Rp X_T^T R(e_k, q): columns k1 and k2 mix. Rp X_T^T is Rp when X_T does not rotate.
+    const int a = link.unit_axis, a1 = next_axis(a), a2 = previous_axis(a);
+    Mat3 B;
+    if (!link.tree_rotation_identity)
+      B.noalias() = Rp * data.constants[i].tree_transform.E.transpose();
+    const Mat3& P = link.tree_rotation_identity ? Rp : B;
+    R.col(a) = P.col(a);
+    R.col(a1) = c * P.col(a1) + s * P.col(a2);
+    R.col(a2) = c * P.col(a2) - s * P.col(a1);
+    return;
   }
+  const bool fixed_rotation = link.type == JointType::fixed || link.type == JointType::prismatic;
+  if (link.tree_rotation_identity && fixed_rotation)
+    R = Rp;
+  else
+    R.noalias() = Rp * X.E.transpose();
+}
+
+// The common case (LinkInfo::coordinate_revolute) about e_A, inline: X_i = [R(e_A, q)^T, r_T],
+// R_i = R_p R(e_A, q), p_i = p_p + R_p r_T. A is a template argument so that every index is a
+// constant.
+template <int A>
+void position_coordinate_revolute(Data& data, int i, const VecX& q) {
+  constexpr int A1 = A == 2 ? 0 : A + 1, A2 = A == 0 ? 2 : A - 1;
+  const Data::LinkInfo& link = data.info[i];
+  // First, so that nothing computed before it has to survive the call.
+  const double angle = link.axis_sign * q[link.q_index];
+  const double c = std::cos(angle), s = std::sin(angle);
+  const Vec3 r = data.constants[i].tree_transform.r;
+  const Mat3& Rp = data.world_rotation[link.parent];
+  const Vec3 p = data.world_position[link.parent] + Rp * r;
+  const Vec3 x = Rp.col(A1), y = Rp.col(A2), z = Rp.col(A);
+  Mat3& R = data.world_rotation[i];
+  R.col(A) = z;
+  R.col(A1) = c * x + s * y;
+  R.col(A2) = c * y - s * x;
+  data.world_position[i] = p;
+  Transform& X = data.parent_transform[i];
+  X.E(A, A) = 1.0;
+  X.E(A, A1) = 0.0;
+  X.E(A, A2) = 0.0;
+  X.E(A1, A) = 0.0;
+  X.E(A2, A) = 0.0;
+  X.E(A1, A1) = c;
+  X.E(A1, A2) = s;
+  X.E(A2, A1) = -s;
+  X.E(A2, A2) = c;
+  X.r = r;
+}
+
+// X v for a coordinate revolute joint's X_i = [R(e_A, q)^T, r]: E mixes two coordinates.
+template <int A>
+Vec6 coordinate_apply_motion(const Transform& X, const Vec6& v) {
+  constexpr int A1 = A == 2 ? 0 : A + 1, A2 = A == 0 ? 2 : A - 1;
+  const double c = X.E(A1, A1), s = X.E(A1, A2);
+  const Vec3 w = v.head<3>(), u = v.tail<3>() - X.r.cross(w);
+  Vec6 out;
+  out[A] = w[A];
+  out[A1] = c * w[A1] + s * w[A2];
+  out[A2] = c * w[A2] - s * w[A1];
+  out[3 + A] = u[A];
+  out[3 + A1] = c * u[A1] + s * u[A2];
+  out[3 + A2] = c * u[A2] - s * u[A1];
+  return out;
+}
+
+// X_i v_parent, the parent's velocity in link i's frame.
+Vec6 velocity_from_parent(const Data& data, int i) {
+  const Data::LinkInfo& link = data.info[i];
+  const Transform& X = data.parent_transform[i];
+  const Vec6& vp = data.velocity[link.parent];
+  if (!link.coordinate_revolute) return X.apply_motion(vp);
+  if (link.unit_axis == 0) return coordinate_apply_motion<0>(X, vp);
+  if (link.unit_axis == 1) return coordinate_apply_motion<1>(X, vp);
+  return coordinate_apply_motion<2>(X, vp);
+}
+
+// Either of the above.
+inline void position_any(const Model& model, Data& data, int i, const VecX& q) {
+  const Data::LinkInfo& link = data.info[i];
+  if (!link.coordinate_revolute) position_link(model, data, i, q);
+  else if (link.unit_axis == 0) position_coordinate_revolute<0>(data, i, q);
+  else if (link.unit_axis == 1) position_coordinate_revolute<1>(data, i, q);
+  else position_coordinate_revolute<2>(data, i, q);
 }
 
 }  // namespace
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q) {
-  for (int i = 0; i < model.num_links(); ++i) position_link(model, data, i, q);
+  const int n = model.num_links();
+  for (int i = 0; i < n; ++i) position_any(model, data, i, q);
 }
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q, const VecX& v) {
   const int n = model.num_links();
   for (int i = 0; i < n; ++i) {
-    position_link(model, data, i, q);
+    position_any(model, data, i, q);
     const Data::LinkInfo& link = data.info[i];
     const Vec3& axis = data.constants[i].axis;
-    Vec6 vi = link.parent >= 0 ? data.parent_transform[i].apply_motion(data.velocity[link.parent])
-                               : Vec6::Zero();
+    Vec6 vi = link.parent >= 0 ? velocity_from_parent(data, i) : Vec6::Zero();
     Vec6& c = data.bias_acceleration[i];
     switch (link.type) {
       case JointType::fixed: c.setZero(); break;

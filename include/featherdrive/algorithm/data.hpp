@@ -30,6 +30,13 @@ struct Data {
     bool later = false;      ///< it or an ancestor has a sibling after it (a later subtree)
     bool tree_rotation_identity = false;  ///< the joint frame is parallel to the parent frame
     bool inertia_diagonal = false;        ///< the inertia about the centre of mass is diagonal
+    /// k when a revolute or prismatic joint's axis is +-e_k (the kinematics' and ABA's shortcut:
+    /// a rotation about a coordinate axis mixes two columns), else -1; axis_sign is the sign.
+    int unit_axis = -1;
+    double axis_sign = 1.0;
+    /// A revolute joint about +-e_k whose frame is parallel to its parent link's, not the root:
+    /// the kinematics' shortcut (only two columns of the parent's rotation mix).
+    bool coordinate_revolute = false;
   };
   std::vector<LinkInfo> info;
   /// What the kinematics and the articulated-body passes read of a link, copied from the Model
