@@ -44,27 +44,4 @@ void validate_drive(const Drive& d, const std::string& joint) {
     reject(joint, "target_velocity", d.target_velocity, "must be finite");
 }
 
-DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h, double step_dt,
-                         bool tgs) {
-  DriveRow row;
-  row.impulse_multiplier = 1.0;
-  if (drive.type == DriveType::none) return row;
-  const double kp = drive.stiffness;
-  const double kd = drive.damping;
-  const double a = h * (h * kp + kd);                   // eq. (13) / (30)
-  const double b = h * kd * drive.target_velocity;      // eq. (14) / (31)
-  // Force drive: x = 1 / (a r + 1), eq. (15); acceleration drive: x = 1 / (a + 1) and every
-  // coefficient carries r^-1, eq. (32)-(39) with ERRATA 1-2.
-  const bool accel = drive.type == DriveType::acceleration;
-  const double x = accel ? 1.0 / (a + 1.0) : 1.0 / (a * r + 1.0);
-  const double scale = accel ? x / r : x;
-  row.target_vel_plus_initial_bias = scale * (b + h * kp * (drive.target_position - x0));
-  row.vel_multiplier = -scale * a;
-  row.impulse_multiplier = tgs ? 1.0 : 1.0 - x;
-  row.bias_coefficient = scale * h * kp;
-  row.target_pos_bias = tgs ? scale * h * kp * drive.target_velocity : 0.0;
-  row.max_impulse = std::min(drive.max_force * step_dt, drive.max_impulse);
-  return row;
-}
-
 }  // namespace featherdrive

@@ -61,12 +61,13 @@ void Simulation::step() {
   else solve_tgs();
   if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
   // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
+  const double inv_dt = 1.0 / dt;
   for (int d = 0; d < model.nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
-    drive_force_[d] = r.drive_impulse / dt;
-    limit_force_[d] = (r.low_impulse + r.high_impulse) / dt;
-    friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) / dt;
-    velocity_limit_force_[d] = r.velocity_limit_impulse / dt;
+    drive_force_[d] = r.drive_impulse * inv_dt;
+    limit_force_[d] = (r.low_impulse + r.high_impulse) * inv_dt;
+    friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
+    velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
   }
   check_finite_or_restore();
   time_ += dt;

@@ -3,6 +3,7 @@
 // update shared by PGS (eq. 18/34) and TGS (eq. 44/45). docs/math/implicit_drives.md.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <string>
 
@@ -53,8 +54,28 @@ struct DriveRow {
 /// position x0. h is the time step of one solve: tau for PGS, rho = tau / n for TGS
 /// (ERRATA 4); tgs selects driveImpulseMultiplier = 1 and the target interpolation.
 /// step_dt is the whole step tau (the impulse limit is max_force * tau for the whole step).
-DriveRow setup_drive_row(const Drive& drive, double unit_response, double x0, double h,
-                         double step_dt, bool tgs);
+inline DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h,
+                                double step_dt, bool tgs) {
+  DriveRow row;
+  row.impulse_multiplier = 1.0;
+  if (drive.type == DriveType::none) return row;
+  const double kp = drive.stiffness;
+  const double kd = drive.damping;
+  const double a = h * (h * kp + kd);                   // eq. (13) / (30)
+  const double b = h * kd * drive.target_velocity;      // eq. (14) / (31)
+  // Force drive: x = 1 / (a r + 1), eq. (15); acceleration drive: x = 1 / (a + 1) and every
+  // coefficient carries r^-1, eq. (32)-(39) with ERRATA 1-2.
+  const bool accel = drive.type == DriveType::acceleration;
+  const double x = accel ? 1.0 / (a + 1.0) : 1.0 / (a * r + 1.0);
+  const double scale = accel ? x / r : x;
+  row.target_vel_plus_initial_bias = scale * (b + h * kp * (drive.target_position - x0));
+  row.vel_multiplier = -scale * a;
+  row.impulse_multiplier = tgs ? 1.0 : 1.0 - x;
+  row.bias_coefficient = scale * h * kp;
+  row.target_pos_bias = tgs ? scale * h * kp * drive.target_velocity : 0.0;
+  row.max_impulse = std::min(drive.max_force * step_dt, drive.max_impulse);
+  return row;
+}
 
 /// The new accumulated impulse of the step after one update at joint velocity v.
 inline double drive_impulse(const DriveRow& row, double v, double accumulated, double delta_x,
