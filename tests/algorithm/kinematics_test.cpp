@@ -1,0 +1,101 @@
+// forward_kinematics against poses and velocities composed here with Eigen's AngleAxis, on a chain
+// whose joints mix the coordinate-axis fast paths (axes +-e_k, joint frame parallel to the
+// parent's) with general ones (tilted frames, oblique axes).
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/model/model_builder.hpp"
+
+namespace featherdrive {
+namespace {
+
+struct JointCase {
+  JointType type;
+  Vec3 axis;
+  Vec3 rpy;
+};
+
+Mat3 rpy_rotation(const Vec3& rpy) {  // URDF: R = Rz(yaw) Ry(pitch) Rx(roll)
+  return (Eigen::AngleAxisd(rpy.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Vec3::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+TEST(ForwardKinematics, CoordinateAndGeneralJointsMatchComposedRotations) {
+  const std::vector<JointCase> joints = {
+      {JointType::revolute, Vec3::UnitX(), Vec3::Zero()},
+      {JointType::revolute, -Vec3::UnitY(), Vec3::Zero()},
+      {JointType::revolute, Vec3::UnitZ(), Vec3::Zero()},
+      {JointType::revolute, -Vec3::UnitX(), Vec3::Zero()},
+      {JointType::prismatic, -Vec3::UnitZ(), Vec3::Zero()},
+      {JointType::revolute, Vec3::UnitY(), Vec3::Zero()},
+      {JointType::revolute, -Vec3::UnitZ(), Vec3(0.3, -0.2, 0.7)},
+      {JointType::prismatic, Vec3::UnitX(), Vec3::Zero()},
+      {JointType::revolute, Vec3(0.6, 0.0, 0.8), Vec3::Zero()},
+      {JointType::revolute, -Vec3::UnitY(), Vec3::Zero()},
+      {JointType::prismatic, Vec3(0.0, 0.8, -0.6), Vec3(-0.4, 0.1, 0.2)},
+      {JointType::revolute, Vec3::UnitX(), Vec3::Zero()},
+  };
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity(), fixed_joint("base")));
+  std::vector<Vec3> origins;
+  for (size_t k = 0; k < joints.size(); ++k) {
+    const Vec3 xyz(u(rng), u(rng), u(rng));
+    origins.push_back(xyz);
+    const std::string name = "l" + std::to_string(k);
+    const std::string parent = k == 0 ? "base" : "l" + std::to_string(k - 1);
+    const JointCase& j = joints[k];
+    JointSpec spec = j.type == JointType::revolute ? revolute_joint("j" + name, j.axis, xyz, j.rpy)
+                                                   : prismatic_joint("j" + name, j.axis, xyz, j.rpy);
+    b.add_link(make_link(name, parent, 1.0, Vec3::Zero(), Mat3::Identity(), spec));
+  }
+  const Model model = b.build();
+  ASSERT_EQ(model.nv, static_cast<int>(joints.size()));
+  VecX q(model.nq), v(model.nv);
+  for (int d = 0; d < model.nv; ++d) {
+    q[d] = 2.5 * u(rng);
+    v[d] = 3.0 * u(rng);
+  }
+  Data data(model);
+  forward_kinematics(model, data, q, v);
+  Data positions_only(model);
+  forward_kinematics(model, positions_only, q);
+
+  Mat3 R = Mat3::Identity();
+  Vec3 p = Vec3::Zero(), w = Vec3::Zero(), vel = Vec3::Zero();  // world frame
+  for (size_t k = 0; k < joints.size(); ++k) {
+    const int i = static_cast<int>(k) + 1;
+    const JointCase& j = joints[k];
+    const Vec3 a = j.axis.normalized();
+    const Vec3 p_next = p + R * origins[k] +
+                        (j.type == JointType::prismatic ? Vec3(R * rpy_rotation(j.rpy) * a * q[k])
+                                                        : Vec3::Zero());
+    vel += w.cross(p_next - p);
+    Mat3 R_next = R * rpy_rotation(j.rpy);
+    if (j.type == JointType::revolute) {
+      R_next = R_next * Eigen::AngleAxisd(q[k], a).toRotationMatrix();
+      w += R_next * a * v[k];
+    } else {
+      vel += R_next * a * v[k];
+    }
+    R = R_next;
+    p = p_next;
+    SCOPED_TRACE("link " + std::to_string(i));
+    EXPECT_LT((data.world_rotation[i] - R).norm(), 1e-12);
+    EXPECT_LT((data.world_position[i] - p).norm(), 1e-12);
+    EXPECT_LT((positions_only.world_rotation[i] - R).norm(), 1e-12);
+    EXPECT_LT((positions_only.world_position[i] - p).norm(), 1e-12);
+    EXPECT_LT((data.velocity[i].head<3>() - R.transpose() * w).norm(), 1e-11);
+    EXPECT_LT((data.velocity[i].tail<3>() - R.transpose() * vel).norm(), 1e-11);
+  }
+}
+
+}  // namespace
+}  // namespace featherdrive
