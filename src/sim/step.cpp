@@ -92,26 +92,33 @@ void Simulation::setup_rows(double h, bool tgs) {
   any_undriven_rows_ = false;
   for (int d = 0; d < model.nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
-    rows = DofRows{};
     // Data's compact copy of the link: a Link spreads over a kilobyte.
     const Data::LinkInfo& link = data_.info[model.dof_link[d]];
     if (link.type != JointType::revolute && link.type != JointType::prismatic) {
+      rows = DofRows{};
       sweep_.has_rows[d] = 0;
       continue;
     }
+    // Every field is set below; the accumulators start from zero.
+    rows.drive_impulse = 0.0;
+    rows.transmission_friction_impulse = 0.0;
+    rows.transmission_friction_applied = 0.0;
+    rows.friction_impulse = 0.0;
+    rows.low_impulse = 0.0;
+    rows.high_impulse = 0.0;
+    rows.velocity_limit_impulse = 0.0;
     const double r = data_.inverse_mass_diagonal[d];
     const double x0 = q_[link.q_index];
     // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
     const double cfm = std::max(link_cfm_[model.dof_link[d]],
                                 link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
     rows.response = r;
-    rows.recip_response = 1.0 / (r + cfm);
     const Drive& drive = drives_[static_cast<size_t>(d)];
     rows.has_drive = drive.type != DriveType::none;
     // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
-    if (rows.has_drive)
-      rows.drive = setup_drive_row(drive, drive.type == DriveType::acceleration ? r + cfm : r, x0,
-                                   h, dt, tgs);
+    rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
+                                                             ? r + cfm : r, x0, h, dt, tgs)
+                                : DriveRow{};
     const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
     rows.has_envelope = rows.has_drive && envelope.active();
     rows.envelope = envelope;
@@ -132,6 +139,8 @@ void Simulation::setup_rows(double h, bool tgs) {
     rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.has_transmission_friction &&
                       !rows.has_friction && !rows.has_limit &&
                       !(rows.max_velocity < DofRows::kNoVelocityLimit);
+    // 1 / (r + cfm) is read by every row but a lone drive.
+    rows.recip_response = rows.drive_only ? 0.0 : 1.0 / (r + cfm);
     sweep_.has_rows[d] = rows.active() ? 1 : 0;
     any_rows_ = any_rows_ || rows.active();
     any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
