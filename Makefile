@@ -89,8 +89,9 @@ fuzz: fuzz-build
 
 # Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
 # the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.
-# BENCH_ARCH: the -march of the benchmark build (empty for the portable default).
-BENCH_ARCH ?= x86-64-v3
+# BENCH_ARCH: the -march of the benchmark build; empty (the default) builds for portable x86-64,
+# like every other build and like the peers' Debian packages (x86-64-v3: AVX2 and FMA).
+BENCH_ARCH ?=
 BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
 	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON \

@@ -29,6 +29,10 @@ struct SweepWorkspace {
   /// Per link: it has one dof and link i + 1 is its child with one dof (a run of a chain).
   std::vector<char> chain_next;
   std::vector<char> parent_one_dof;        ///< per link: its parent has one dof
+  /// Per link: one dof and no later subtree, so its joint's velocity is final when it is left
+  /// (detail::leave_links); the others, in model order, are finished after the sweep.
+  std::vector<char> finish_on_leave;
+  std::vector<int> finish_after;
   Vec6 zero = Vec6::Zero();                ///< the world's velocity change
 };
 
@@ -68,13 +72,16 @@ namespace detail {
 // the 6-vector products stay off the chain of dependencies. Raw pointers are taken once: Eigen's
 // vector stores may alias anything, which would make the compiler reload every std::vector's
 // data pointer after each of them.
-inline void leave_links(const Data& data, SweepWorkspace& ws, int k, int stop, bool correct_stop) {
+inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k, int stop,
+                        bool correct_stop) {
   const Data::LinkInfo* const info = data.info.data();
   const Data::OneDof* const one_dof = data.one_dof.data();
   Vec6* const subtree_impulse = ws.subtree_impulse.data();
   const double* const joint_impulse = ws.joint_impulse.data();
   const char* const first_child = ws.first_child.data();
   const char* const parent_one_dof = ws.parent_one_dof.data();
+  const char* const finish_on_leave = ws.finish_on_leave.data();
+  const double* const entry_velocity_change = ws.entry_velocity_change.data();
   bool have_x = false;
   double x = 0.0;  // S_k^T pA_k when have_x
   while (k != stop) {
@@ -90,7 +97,10 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, int k, int stop, b
     const Data::OneDof& J = one_dof[k];
     const Vec6& pA = subtree_impulse[k];
     if (!have_x) x = J.S.dot(pA);
-    const double beta = J.D_inv * (joint_impulse[link.v_index] - x);
+    const int d = link.v_index;
+    const double beta = J.D_inv * (joint_impulse[d] - x);
+    // Its velocity change: what it had when entered, plus what its subtree's impulses do to it.
+    if (finish_on_leave[k]) qd[d] += entry_velocity_change[d] - J.G.dot(pA);
     if (p < 0) return;
     // S_p^T of the parent's pA after this hand-over (pA_p so far + pA + beta U).
     have_x = parent_one_dof[k] && p != stop;
@@ -173,7 +183,7 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
   int previous = -1;
   for (int i = 0; i < n; ++i) {
     const Data::LinkInfo& link = info[i];
-    if (previous != link.parent) detail::leave_links(data, ws, previous, link.parent, true);
+    if (previous != link.parent) detail::leave_links(data, ws, v, previous, link.parent, true);
     previous = i;
     // Delta v of the parent, exact now.
     const Vec6& from_parent = link.parent >= 0 ? velocity_change[link.parent] : ws.zero;
@@ -234,20 +244,10 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
     ws.entry_velocity_change.segment(v0, nv) = dqd;
     ws.link_velocity_change[i] = parent_now + data.motion_subspace[i] * dqd;
   }
-  detail::leave_links(data, ws, previous, -1, false);
-  // Every joint's velocity change is what it had when entered, plus what its subtree's impulses
-  // do to it (-G^T pA, local), plus what subtrees entered after its own do to it (E, zero unless
-  // it or an ancestor has a later sibling: detail::finish_link).
-  const Vec6* const subtree_impulse = ws.subtree_impulse.data();
-  for (int i = 0; i < n; ++i) {
-    const Data::LinkInfo& link = info[i];
-    if (link.nv == 1 && !link.later) {
-      const int d = link.v_index;
-      v[d] += entry_velocity_change[d] - one_dof[i].G.dot(subtree_impulse[i]);
-    } else {
-      detail::finish_link(data, ws, i, qd);
-    }
-  }
+  detail::leave_links(data, ws, v, previous, -1, false);
+  // The joints not finished when left: several dofs, or a later subtree whose impulses also move
+  // them (detail::finish_link), root first.
+  for (const int i : ws.finish_after) detail::finish_link(data, ws, i, qd);
 }
 
 }  // namespace featherdrive
