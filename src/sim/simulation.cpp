@@ -80,12 +80,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     if (type != JointType::revolute && type != JointType::prismatic) continue;
     friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
   }
-  q_start_ = q_;
-  qd_start_ = qd_;
-  drive_force_start_ = drive_force_;
-  limit_force_start_ = limit_force_;
-  friction_force_start_ = friction_force_;
-  velocity_limit_force_start_ = velocity_limit_force_;
+  save_step_start();  // sizes the copies, so that a step allocates nothing
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model_->num_links());
@@ -289,6 +284,16 @@ void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorE
 void Simulation::step(int count) {
   if (count < 0) throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
   for (int i = 0; i < count; ++i) step();
+}
+
+// The state and outputs a step starts from, kept to be restored if it diverges.
+void Simulation::save_step_start() {
+  q_start_ = q_;
+  qd_start_ = qd_;
+  drive_force_start_ = drive_force_;
+  limit_force_start_ = limit_force_;
+  friction_force_start_ = friction_force_;
+  velocity_limit_force_start_ = velocity_limit_force_;
 }
 
 // The state and outputs the step started from (kept by step()).

@@ -24,12 +24,7 @@ double limit_erp(SolverType solver, int position_iterations) {
 void Simulation::step() {
   const Model& model = *model_;
   const double dt = options_.dt;
-  q_start_ = q_;  // kept to restore the state if the step diverges
-  qd_start_ = qd_;
-  drive_force_start_ = drive_force_;
-  limit_force_start_ = limit_force_;
-  friction_force_start_ = friction_force_;
-  velocity_limit_force_start_ = velocity_limit_force_;
+  save_step_start();  // restored if the step diverges
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();

@@ -139,6 +139,7 @@ class Simulation {
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_restore();
+  void save_step_start();
   void restore_step_start();
   void update_link_damping_active();
   bool physx() const { return options_.compat == Compat::physx; }
