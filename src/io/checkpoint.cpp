@@ -321,7 +321,8 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
   } catch (const std::invalid_argument& e) {
     fail(name, std::string("bad value in the checkpoint: ") + e.what());
   }
-  sim = std::move(next);
+  // Copied, not moved: same sizes, so every buffer stays where it is and views of sim stay valid.
+  sim = next;
 }
 
 void save_checkpoint(const Simulation& sim, const std::filesystem::path& path) {
