@@ -270,7 +270,9 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
     if (link.nv > 0) {
       const Mat6N& S = data.motion_subspace[i];
       joint_inertia(model, link.v_index, S, IA, data.U[i], data.D_inv[i]);
-      u = tau.segment(link.v_index, link.nv) - S.transpose() * pA;
+      // In two statements: assigned in one, the product would go through a heap temporary.
+      u = tau.segment(link.v_index, link.nv);
+      u.noalias() -= S.transpose() * pA;
     }
     if (link.parent < 0) continue;
     Mat6 Ia = IA;
@@ -302,7 +304,10 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
       joint_acceleration_fixed<3>(data, i, link.v_index, a);
     } else if (link.nv > 0) {
       auto qdd = data.qdd.segment(link.v_index, link.nv);
-      qdd = data.D_inv[i] * (data.u.segment(link.v_index, link.nv) - data.U[i].transpose() * a);
+      Vec6 r = Vec6::Zero();  // u - U^T a in the first nv entries, on the stack
+      r.head(link.nv) = data.u.segment(link.v_index, link.nv);
+      r.head(link.nv).noalias() -= data.U[i].transpose() * a;
+      qdd.noalias() = data.D_inv[i] * r.head(link.nv);
       a.noalias() += data.motion_subspace[i] * qdd;
     }
     data.acceleration0[i] = a;

@@ -240,7 +240,9 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
       impulse[d] += solve_row(v0 + d, current);
     }
     const Vec6 parent_now = from_parent - data.parent_coupling[i] * (D_inv * impulse);
-    const VecN dqd = D_inv * (impulse - U.transpose() * parent_now);
+    VecN r = impulse;  // impulse - U^T parent_now; in one expression Eigen would take a heap temporary
+    r.noalias() -= U.transpose() * parent_now;
+    const VecN dqd = D_inv * r;
     ws.entry_velocity_change.segment(v0, nv) = dqd;
     ws.link_velocity_change[i] = parent_now + data.motion_subspace[i] * dqd;
   }
