@@ -83,7 +83,7 @@ int compare_physx(const ComparePhysxArgs& args) {
     bool any_sine = false;
     for (const DriveSpec& d : scene.drives) any_sine = any_sine || d.sine.has_value();
     Simulation copy = sim;
-    for (int k = 0; any_sine && k < scene.steps; ++k) {
+    for (int k = 0; any_sine && k < scene.steps && !interrupted(); ++k) {
       apply_targets(scene, copy, k);
       TargetsByJoint& t = targets.emplace_back();
       for (const DriveSpec& d : scene.drives)

@@ -381,9 +381,12 @@ with open(sys.argv[3], 'w', newline='') as f:
         out.writerow([k, k * scene['dt']] + [0] * (3 * len(names)))
 """)
     os.chmod(node, 0o755)
-    r = run("compare-physx", scene, PATH=bin_dir + os.pathsep + os.environ.get("PATH", ""),
-            FEATHERDRIVE_PHYSX_DIR=physx)
+    r = run("compare-physx", scene, "--plot", w("cmp.png"),
+            PATH=bin_dir + os.pathsep + os.environ.get("PATH", ""), FEATHERDRIVE_PHYSX_DIR=physx)
     check(r.returncode == 0, "compare-physx against the fake PhysX", r)
+    # The differences' CSV (quoted header) read by the real plot script.
+    check(os.path.exists(w("cmp.png")) and read(w("cmp.png"), "rb").startswith(b"\x89PNG"),
+          "the differences of odd names are plotted", r)
     if os.path.exists(seen):
         s = json.load(open(seen))
         check(s["links"][1]["joint"]["name"] == odd and list(s["initial"]["q"]) == [odd],
