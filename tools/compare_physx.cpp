@@ -28,10 +28,10 @@ void check_physx_iterations(const ComparePhysxArgs& args, const SimulationOption
     m += " = " + std::to_string(value) + ": PhysX allows " + std::to_string(lowest) + " to 255";
     throw std::invalid_argument(m);
   };
-  check(o.position_iterations, args.overrides.position_iterations.has_value(), "--position-iterations",
-        "solver.position_iterations", 1);
-  check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(), "--velocity-iterations",
-        "solver.velocity_iterations", 0);
+  check(o.position_iterations, args.overrides.position_iterations.has_value(),
+        "--position-iterations", "solver.position_iterations", 1);
+  check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(),
+        "--velocity-iterations", "solver.velocity_iterations", 0);
 }
 
 // The differences featherdrive - PhysX per row, for the plot script.

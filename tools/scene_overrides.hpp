@@ -44,7 +44,8 @@ struct SceneOverrides {
   /// The notes are appended to the iteration options' help (e.g. PhysX's range).
   void add_options(CLI::App* cmd, const std::string& position_note = "",
                    const std::string& velocity_note = "") {
-    cmd->add_option("--steps", steps_text, "Number of steps, 0 to 2147483647 (overrides the scene)");
+    cmd->add_option("--steps", steps_text,
+                    "Number of steps, 0 to 2147483647 (overrides the scene)");
     cmd->add_option("--solver", solver, "pgs or tgs (overrides the scene)")
         ->check(CLI::IsMember({"pgs", "tgs"}));
     cmd->add_option("--position-iterations", position_text,
@@ -66,7 +67,8 @@ struct SceneOverrides {
   /// The solver settings given on the command line, over `options`.
   void apply(featherdrive::SimulationOptions& options) const {
     if (!solver.empty())
-      options.solver = solver == "tgs" ? featherdrive::SolverType::tgs : featherdrive::SolverType::pgs;
+      options.solver =
+          solver == "tgs" ? featherdrive::SolverType::tgs : featherdrive::SolverType::pgs;
     if (position_iterations) options.position_iterations = *position_iterations;
     if (velocity_iterations) options.velocity_iterations = *velocity_iterations;
   }

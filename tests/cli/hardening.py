@@ -36,7 +36,9 @@ def run(*args, cwd=None, **changes):
 
 def check(condition, what, result=None):
     if not condition:
-        detail = f"\n  rc={result.returncode} stdout={result.stdout!r} stderr={result.stderr!r}" if result else ""
+        detail = ""
+        if result:
+            detail = f"\n  rc={result.returncode} stdout={result.stdout!r} stderr={result.stderr!r}"
         failures.append(what + detail)
 
 
@@ -96,7 +98,8 @@ def non_regular_inputs():
         s = write(w("model.yaml"), f"model: {model}\nsteps: 1\n")
         one_line_error(run("simulate", s), 2, f"model = {model}", f"a scene with model {model}")
     one_line_error(run("simulate", w("missing.yaml")), 2,
-                   f"{w('missing.yaml')}: cannot open the file: No such file or directory", "a missing scene")
+                   f"{w('missing.yaml')}: cannot open the file: No such file or directory",
+                   "a missing scene")
     os.remove(fifo)
     os.remove(big)
     os.rmdir(w("folder.urdf"))
@@ -124,7 +127,8 @@ def outputs_never_clobber_inputs():
         (["--save-state", w("slider.urdf")], "is the scene's model"),
         (["--load-state", ckpt, "--save-state", ckpt], "is the --load-state checkpoint"),
         (["--load-state", ckpt, "--out", w("sub/../s.ckpt")], "is the --load-state checkpoint"),
-        (["--out", w("a.csv"), "--save-state", w("sub/../a.csv")], "two outputs cannot share a file"),
+        (["--out", w("a.csv"), "--save-state", w("sub/../a.csv")],
+         "two outputs cannot share a file"),
         (["--out", w("x.png"), "--plot", w("x.png")], "two outputs cannot share a file"),
     ]
     for extra, text in cases:
@@ -143,14 +147,16 @@ def outputs_never_clobber_inputs():
     for option, target in (("--out", "/dev/null"), ("--save-state", "/dev/null"), ("--out", fifo),
                            ("--save-state", fifo), ("--out", w("folder.csv"))):
         one_line_error(run("simulate", scene, option, target), 2,
-                       f"{target}: is not a regular file; refusing to replace it", f"{option} {target}")
+                       f"{target}: is not a regular file; refusing to replace it",
+                       f"{option} {target}")
     check(stat.S_ISFIFO(os.stat(fifo).st_mode) and os.path.isdir(w("folder.csv")),
           "the FIFO and the folder are still there")
     check(stat.S_ISCHR(os.stat("/dev/null").st_mode), "/dev/null is still a device")
     # A successful run replaces a regular file whole, leaving no temporary.
     write(w("a.csv"), "old")
     r = run("simulate", scene, "--out", w("a.csv"), "--save-state", w("a.ckpt"))
-    check(r.returncode == 0 and read(w("a.csv")).startswith("step,t,q:slide"), "--out replaces a file", r)
+    check(r.returncode == 0 and read(w("a.csv")).startswith("step,t,q:slide"),
+          "--out replaces a file", r)
     # An output that cannot be written: exit 1, one line, nothing left behind.
     write(w("plain"), "")
     one_line_error(run("simulate", scene, "--out", w("plain/x.csv")), 1,
@@ -184,7 +190,8 @@ json.dump(info, open({record!r}, 'w'))
 open(args[-1], 'wb').write(b'\\x89PNG\\r\\n\\x1a\\n')
 """)
     r = run("simulate", scene, "--plot", w("p.png"), FEATHERDRIVE_PYTHON=fake)
-    check(r.returncode == 0 and read(w("p.png"), "rb").startswith(b"\x89PNG"), "a plot through the fake", r)
+    check(r.returncode == 0 and read(w("p.png"), "rb").startswith(b"\x89PNG"),
+          "a plot through the fake", r)
     if os.path.exists(record):
         info = json.load(open(record))
         args = info["args"]
@@ -207,12 +214,14 @@ open(args[-1], 'wb').write(b'\\x89PNG\\r\\n\\x1a\\n')
     for i in range(3):
         os.remove(os.path.join(TMP, f"featherdrive-planted-{i}"))
     # The script failing: its last stderr line, exit 1, no PNG, no temporaries.
-    failing = fake_python("failing_python", "print('Traceback (most recent call last):', file=sys.stderr)\n"
+    failing = fake_python("failing_python",
+                          "print('Traceback (most recent call last):', file=sys.stderr)\n"
                           "print('  File x', file=sys.stderr)\n"
                           "sys.exit('ValueError: could not convert string to float')\n")
     os.remove(w("p.png"))
     r = run("simulate", scene, "--plot", w("p.png"), FEATHERDRIVE_PYTHON=failing)
-    one_line_error(r, 1, f"plotting {w('p.png')} failed: ValueError: could not convert string to float",
+    one_line_error(r, 1,
+                   f"plotting {w('p.png')} failed: ValueError: could not convert string to float",
                    "a failing plot script")
     check("Traceback" not in r.stderr and not os.path.exists(w("p.png")), "no traceback, no PNG", r)
     # A python without matplotlib: Debian's without its site packages, and the pyenv one on PATH.
@@ -221,24 +230,28 @@ open(args[-1], 'wb').write(b'\\x89PNG\\r\\n\\x1a\\n')
     os.chmod(no_mpl, 0o755)
     pythons = [no_mpl]
     other = shutil.which("python3")
-    if other and subprocess.run([other, "-c", "import matplotlib"], capture_output=True).returncode != 0:
+    has_mpl = other and subprocess.run([other, "-c", "import matplotlib"],
+                                       capture_output=True).returncode == 0
+    if other and not has_mpl:
         pythons.append(other)
     for python in pythons:
         r = run("simulate", scene, "--plot", w("p.png"), FEATHERDRIVE_PYTHON=python)
         one_line_error(r, 1, "cannot import matplotlib", f"--plot with {python}")
-        check("Traceback" not in r.stderr and not os.path.exists(w("p.png")), "no traceback, no PNG", r)
-    one_line_error(run("simulate", scene, "--plot", w("p.png"), FEATHERDRIVE_PYTHON=w("no-such-python")), 1,
-                   "no-such-python could not be run", "a python that does not exist")
+        check("Traceback" not in r.stderr and not os.path.exists(w("p.png")),
+              "no traceback, no PNG", r)
+    r = run("simulate", scene, "--plot", w("p.png"), FEATHERDRIVE_PYTHON=w("no-such-python"))
+    one_line_error(r, 1, "no-such-python could not be run", "a python that does not exist")
     # Extensions are checked before anything runs.
     for png in ("out.jpg", "out", "out.png.csv", "out.pdf"):
         r = run("simulate", scene, "--plot", w(png), "--out", w("never.csv"))
         one_line_error(r, 2, f"--plot {w(png)}: the plot must be a .png file", f"--plot {png}")
         check(not os.path.exists(w("never.csv")), f"--plot {png}: nothing ran")
-        one_line_error(run("compare-physx", scene, "--plot", w(png)), 2, "the plot must be a .png file",
-                       f"compare-physx --plot {png}")
+        one_line_error(run("compare-physx", scene, "--plot", w(png)), 2,
+                       "the plot must be a .png file", f"compare-physx --plot {png}")
     # Paths beginning with '-' are paths, with the real plot script.
     r = run("simulate", scene, "--out=-traj.csv", "--plot=-plot.PNG", cwd=WORK)
-    check(r.returncode == 0 and read(w("-plot.PNG"), "rb").startswith(b"\x89PNG"), "paths beginning with -", r)
+    check(r.returncode == 0 and read(w("-plot.PNG"), "rb").startswith(b"\x89PNG"),
+          "paths beginning with -", r)
     check(read(w("-traj.csv")).count("\n") == 22, "the trajectory beginning with - is whole")
     no_temporaries("plots")
     for name in ("-plot.PNG", "-traj.csv", "victim", "argv.json"):
@@ -263,7 +276,8 @@ def signals():
         out = w(f"long_{name}.csv")
         proc = subprocess.Popen([CLI, "simulate", scene, "--steps", "10000000", "--out", out,
                                  "--save-state", w("never.ckpt")],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env())
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=env())
         grew = wait_for_growth(WORK, rf"^\.long_{name}\.csv\.", proc)
         check(grew, f"{name}: the trajectory's temporary grows")
         proc.send_signal(sig)
@@ -272,10 +286,12 @@ def signals():
         check(proc.returncode == code, f"{name}: exit {code}", result)
         m = re.search(rf"featherdrive: interrupted at step (\d+) of 10000000 \(signal {name}\); "
                       rf"the trajectory {re.escape(out)} holds steps 0\.\.(\d+)$", stderr.strip())
-        check(m is not None and len(stderr.strip().splitlines()) == 1, f"{name}: one line saying where", result)
+        check(m is not None and len(stderr.strip().splitlines()) == 1,
+              f"{name}: one line saying where", result)
         with open(out, newline="") as f:
             rows = list(csv.reader(f))
-        check(all(len(row) == len(rows[0]) for row in rows), f"{name}: every row has the header's columns")
+        check(all(len(row) == len(rows[0]) for row in rows),
+              f"{name}: every row has the header's columns")
         check(read(out).endswith("\n"), f"{name}: the last row is whole")
         if m:
             n = int(m.group(1))
@@ -285,9 +301,11 @@ def signals():
         no_temporaries(name)
         os.remove(out)
     # Only a plot wanted: the trajectory is a temporary in TMPDIR, removed at the interrupt.
-    proc = subprocess.Popen([CLI, "simulate", scene, "--steps", "10000000", "--plot", w("never.png")],
+    proc = subprocess.Popen([CLI, "simulate", scene, "--steps", "10000000",
+                             "--plot", w("never.png")],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env())
-    check(wait_for_growth(TMP, r"^trajectory\.csv$", proc), "plot only: the temporary trajectory grows")
+    check(wait_for_growth(TMP, r"^trajectory\.csv$", proc),
+          "plot only: the temporary trajectory grows")
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=60)
     result = subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
@@ -301,18 +319,22 @@ def integers():
     cases = [
         (["--steps", "-5"], "--steps = -5: must be between 0 and 2147483647"),
         (["--steps", "2147483648"], "--steps = 2147483648: must be between 0 and 2147483647"),
-        (["--steps", "99999999999999999999999"], "--steps = 99999999999999999999999: must be between 0"),
+        (["--steps", "99999999999999999999999"],
+         "--steps = 99999999999999999999999: must be between 0"),
         (["--steps", "1e3"], "--steps = 1e3: must be an integer between 0 and 2147483647"),
         (["--steps", "many"], "--steps = many: must be an integer"),
         (["--steps", ""], "--steps = : must be an integer"),
         (["--steps", "5x"], "--steps = 5x: must be an integer"),
         (["--position-iterations", "4294967297"],
          "--position-iterations = 4294967297: must be between 1 and 1000000"),
-        (["--position-iterations", "0"], "--position-iterations = 0: must be between 1 and 1000000"),
-        (["--position-iterations", "-4294967295"], "--position-iterations = -4294967295: must be between"),
+        (["--position-iterations", "0"],
+         "--position-iterations = 0: must be between 1 and 1000000"),
+        (["--position-iterations", "-4294967295"],
+         "--position-iterations = -4294967295: must be between"),
         (["--velocity-iterations", "4294967296"],
          "--velocity-iterations = 4294967296: must be between 0 and 1000000"),
-        (["--velocity-iterations", "-1"], "--velocity-iterations = -1: must be between 0 and 1000000"),
+        (["--velocity-iterations", "-1"],
+         "--velocity-iterations = -1: must be between 0 and 1000000"),
         (["--velocity-iterations", "1.5"], "--velocity-iterations = 1.5: must be an integer"),
     ]
     for extra, text in cases:
@@ -320,8 +342,10 @@ def integers():
             r = run(command, scene, *extra)
             one_line_error(r, 2, text, f"{command} {' '.join(extra)}")
             check(len(r.stderr) < 160, f"{command} {extra}: a short line", r)
-    r = run("simulate", scene, "--steps", "+3", "--position-iterations", "1000000", "--velocity-iterations", "0")
-    check(r.returncode == 0 and "3 steps" in r.stdout and "1000000 position / 0 velocity" in r.stdout,
+    r = run("simulate", scene, "--steps", "+3", "--position-iterations", "1000000",
+            "--velocity-iterations", "0")
+    check(r.returncode == 0 and "3 steps" in r.stdout
+          and "1000000 position / 0 velocity" in r.stdout,
           "integers at the bounds run", r)
 
 
@@ -335,7 +359,8 @@ def reports():
                   "         joint3: {target_position: 1e-200}}\n")
     r = run("simulate", scene)
     check(r.returncode == 0, "the huge targets run", r)
-    for joint, value in (("joint1", "1.000e+308"), ("joint2", "-1.000e+200"), ("joint3", "1.000e-200")):
+    for joint, value in (("joint1", "1.000e+308"), ("joint2", "-1.000e+200"),
+                         ("joint3", "1.000e-200")):
         rms = value.lstrip("-")
         m = re.search(rf"^\s+{joint}\s+force\s+(\S+)\s+(\S+)\s+(\S+)$", r.stdout, re.M)
         check(m is not None and m.group(1) == value and m.group(2) == rms,
@@ -358,7 +383,8 @@ def names_and_physx_scale():
     if r.returncode == 0:
         with open(w("odd.csv"), newline="") as f:
             rows = list(csv.reader(f))
-        check(rows[0] == ["step", "t", "q:" + odd, "qd:" + odd, "f:" + odd], f"the header: {rows[0]}")
+        check(rows[0] == ["step", "t", "q:" + odd, "qd:" + odd, "f:" + odd],
+              f"the header: {rows[0]}")
         check(all(len(row) == 5 for row in rows) and len(rows) == 7, "every row has 5 columns")
     # The fake PhysX: node is a Python script that reads the scene with json and answers zeros.
     bin_dir, physx = w("fakebin"), w("fakephysx")
@@ -398,9 +424,11 @@ with open(sys.argv[3], 'w', newline='') as f:
           f"differences against PhysX's scale of 0 are inf: {m.groups() if m else r.stdout}")
     row = re.search(r"^\s+hinge, \"the\" \\one\\\s+(\S+)\s+(\d+)\s+(\S+)\s+(\S+)\s+(\d+)\s+(\S+)",
                     r.stdout, re.M)
-    check(row is not None and float(row.group(1)) > 0.01 and row.group(3) == "inf" and row.group(6) == "inf",
+    check(row is not None and float(row.group(1)) > 0.01
+          and row.group(3) == "inf" and row.group(6) == "inf",
           f"the joint's row: a difference and a relative inf: {row.groups() if row else r.stdout}")
-    check("relative to a scale of 0, any difference is inf" in r.stdout, "the scale of 0 is explained", r)
+    check("relative to a scale of 0, any difference is inf" in r.stdout,
+          "the scale of 0 is explained", r)
     shutil.rmtree(bin_dir)
     shutil.rmtree(physx)
     no_temporaries("compare-physx")
@@ -415,8 +443,8 @@ def main():
     os.makedirs(WORK)
     TMP = os.path.join(WORK, "tmp")
     os.makedirs(TMP)
-    for part in (non_regular_inputs, outputs_never_clobber_inputs, plots, signals, integers, reports,
-                 names_and_physx_scale):
+    for part in (non_regular_inputs, outputs_never_clobber_inputs, plots, signals, integers,
+                 reports, names_and_physx_scale):
         part()
     if failures:
         print("\n".join(failures))

@@ -192,7 +192,8 @@ TEST(Files, NonRegularTargetsAreNeverReplaced) {
   fs::create_directories(dir / "folder.csv");
   fs::create_symlink("/dev/null", dir / "null-link.csv");
   Simulation sim = make_simulation(load_scene(kExamples + "slider.yaml"));
-  for (const fs::path& p : {fifo, dir / "folder.csv", dir / "null-link.csv", fs::path("/dev/null")}) {
+  for (const fs::path& p :
+       {fifo, dir / "folder.csv", dir / "null-link.csv", fs::path("/dev/null")}) {
     const std::string expected = p.string() + ": is not a regular file; refusing to replace it";
     EXPECT_EQ(message_of<std::invalid_argument>([&] { AtomicFile f(p); }), expected);
     EXPECT_EQ(message_of<std::invalid_argument>([&] { save_checkpoint(sim, p); }), expected);
@@ -207,9 +208,9 @@ TEST(Files, NonRegularTargetsAreNeverReplaced) {
 TEST(Files, WriteFailuresThrowAndLeaveNoTemporary) {
   const fs::path dir = fresh_dir("failures");
   // A folder that does not exist: the temporary cannot be made.
-  EXPECT_EQ(message_of<std::runtime_error>([&] { AtomicFile f(dir / "none" / "x.csv", "the plot"); }),
-            (dir / "none" / "x.csv").string() +
-                ": cannot write the plot: No such file or directory");
+  EXPECT_EQ(
+      message_of<std::runtime_error>([&] { AtomicFile f(dir / "none" / "x.csv", "the plot"); }),
+      (dir / "none" / "x.csv").string() + ": cannot write the plot: No such file or directory");
   // A write that fails (the file size limit, as a full disk would): the target is untouched.
   write(dir / "x.csv", "old");
   struct rlimit old {};

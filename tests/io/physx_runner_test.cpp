@@ -182,8 +182,10 @@ TEST(PhysxRunner, TrajectoryCsvWithOddJointNamesReadsBack) {
   // Joint names with a comma and quotes (legal in URDF) keep the columns aligned.
   const std::string urdf = R"(<robot name="odd">
     <link name="base"/>
-    <link name="l1"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-    <link name="l2"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <link name="l1"><inertial><mass value="1"/>
+      <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <link name="l2"><inertial><mass value="1"/>
+      <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
     <joint name="a,b" type="prismatic"><parent link="base"/><child link="l1"/><axis xyz="1 0 0"/>
       <limit effort="1" velocity="1" lower="-1" upper="1"/></joint>
     <joint name="say &quot;hi&quot;" type="continuous"><parent link="l1"/><child link="l2"/></joint>

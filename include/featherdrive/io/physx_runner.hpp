@@ -79,9 +79,9 @@ PhysxInstall find_physx(const std::vector<std::filesystem::path>& default_dirs);
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
                           const std::vector<TargetsByJoint>& targets = {});
 
-/// Runs a program (argv[0] a path, or a name looked up on PATH) without a shell and waits for it; its stdout goes to the
-/// caller's, its stderr to `stderr_path` unless that is empty. Returns the exit status, or -1 when
-/// it could not be started or did not exit normally.
+/// Runs a program (argv[0] a path, or a name looked up on PATH) without a shell and waits for
+/// it; its stdout goes to the caller's, its stderr to `stderr_path` unless that is empty. Returns
+/// the exit status, or -1 when it could not be started or did not exit normally.
 int run_program(const std::vector<std::string>& argv,
                 const std::filesystem::path& stderr_path = {});
 
