@@ -1,18 +1,19 @@
 #include "compare_physx.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 
+#include "cli_common.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/physx_runner.hpp"
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/trajectory.hpp"
 
 namespace fs = std::filesystem;
 using namespace featherdrive;
@@ -27,10 +28,10 @@ void check_physx_iterations(const ComparePhysxArgs& args, const SimulationOption
     m += " = " + std::to_string(value) + ": PhysX allows " + std::to_string(lowest) + " to 255";
     throw std::invalid_argument(m);
   };
-  check(o.position_iterations, args.overrides.position_iterations.has_value(), "--position-iterations",
-        "solver.position_iterations", 1);
-  check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(), "--velocity-iterations",
-        "solver.velocity_iterations", 0);
+  check(o.position_iterations, args.overrides.position_iterations.has_value(),
+        "--position-iterations", "solver.position_iterations", 1);
+  check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(),
+        "--velocity-iterations", "solver.velocity_iterations", 0);
 }
 
 // The differences featherdrive - PhysX per row, for the plot script.
@@ -38,7 +39,7 @@ void write_differences(const fs::path& path, const JointTrajectory& fd, const Jo
   std::ofstream out(path);
   out << "step,t";
   for (const char* prefix : {"dq:", "dqd:", "df:"})
-    for (const std::string& j : px.joints) out << ',' << prefix << j;
+    for (const std::string& j : px.joints) out << ',' << csv_field(prefix + j);
   out << '\n';
   std::vector<size_t> in_fd;  // columns matched by name, as compare_trajectories does
   for (const std::string& j : px.joints)
@@ -54,29 +55,16 @@ void write_differences(const fs::path& path, const JointTrajectory& fd, const Jo
   if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
 }
 
-void plot(const fs::path& csv, const fs::path& png, const std::string& title) {
-  const char* python_env = std::getenv("FEATHERDRIVE_PYTHON");
-  const std::string python = python_env ? python_env : "/usr/bin/python3";
-  if (png.has_parent_path()) {
-    std::error_code ec;
-    fs::create_directories(png.parent_path(), ec);
-  }
-  const int rc = run_program(
-      {python, FEATHERDRIVE_PHYSX_PLOT_SCRIPT, csv.string(), png.string(), "--title", title});
-  if (rc != 0) {
-    std::string m = "plotting failed: ";
-    m += python + " " + FEATHERDRIVE_PHYSX_PLOT_SCRIPT;
-    m += rc < 0 ? " could not be run" : " exited with " + std::to_string(rc);
-    throw std::runtime_error(m);
-  }
-}
-
 }  // namespace
 
 int compare_physx(const ComparePhysxArgs& args) {
+  install_interrupt_handlers();
+  if (!args.plot.empty()) check_plot_path("--plot", args.plot);
   Scene scene = args.overrides.load(args.scene);
   check_physx_iterations(args, scene.options);
   const Model& model = *scene.model();
+  check_outputs({{"--plot", args.plot}},
+                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});
 
   Simulation sim = make_simulation(scene);
   // The harness cannot set PhysX's static/dynamic/viscous friction (URDF <dynamics> gives the
@@ -95,7 +83,7 @@ int compare_physx(const ComparePhysxArgs& args) {
     bool any_sine = false;
     for (const DriveSpec& d : scene.drives) any_sine = any_sine || d.sine.has_value();
     Simulation copy = sim;
-    for (int k = 0; any_sine && k < scene.steps; ++k) {
+    for (int k = 0; any_sine && k < scene.steps && !interrupted(); ++k) {
       apply_targets(scene, copy, k);
       TargetsByJoint& t = targets.emplace_back();
       for (const DriveSpec& d : scene.drives)
@@ -117,11 +105,17 @@ int compare_physx(const ComparePhysxArgs& args) {
     Simulation run = sim;
     append_state(fd, run);
     for (double& f : fd.f[0]) f = 0.0;  // row 0: no step has run (the harness's convention)
-    for (int k = 0; k < scene.steps; ++k) {
+    for (int k = 0; k < scene.steps && !interrupted(); ++k) {
       apply_targets(scene, run, k);
       run.step();
       append_state(fd, run);
     }
+  }
+  if (const int signal = interrupted()) {
+    std::cerr << "featherdrive: interrupted at step " << fd.rows() - 1 << " of " << scene.steps
+              << " of featherdrive's run (signal " << signal_name(signal)
+              << "); nothing was compared\n";
+    return 128 + signal;
   }
   JointTrajectory px;
   try {
@@ -147,7 +141,10 @@ int compare_physx(const ComparePhysxArgs& args) {
   std::printf("  largest |featherdrive - PhysX| per joint, at step; relative: / the scale below\n");
   std::printf("  %-16s %10s %5s %9s  %10s %5s %9s  %10s %5s %9s\n", "joint", "q", "step",
               "relative", "qd", "step", "relative", "force", "step", "relative");
-  auto rel = [](double v, double scale) { return scale > 0.0 ? v / scale : 0.0; };
+  // Against a scale of 0 (PhysX's quantity never leaves 0) any difference is infinitely large.
+  auto rel = [](double v, double scale) {
+    return scale > 0.0 ? v / scale : v > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
+  };
   for (const JointDifference& j : c.joints)
     std::printf("  %-16s %10.2e %5zu %9.1e  %10.2e %5zu %9.1e  %10.2e %5zu %9.1e\n",
                 j.joint.c_str(), j.q.value, j.q.row, rel(j.q.value, c.scale_q), j.qd.value,
@@ -155,21 +152,17 @@ int compare_physx(const ComparePhysxArgs& args) {
                 rel(j.f.value, c.scale_f));
   std::printf("  %-16s %10.4g %5s %9s  %10.4g %5s %9s  %10.4g\n", "scale", c.scale_q, "", "",
               c.scale_qd, "", "", c.scale_f);
-  std::printf("  (scale: largest |q|, |qd|, |force| of PhysX's run over all joints and steps)\n");
+  std::printf("  (scale: largest |q|, |qd|, |force| of PhysX's run over all joints and steps%s)\n",
+              c.scale_q > 0.0 && c.scale_qd > 0.0 && c.scale_f > 0.0
+                  ? ""
+                  : "; relative to a scale of 0, any difference is inf");
   std::printf("  largest relative difference: q %.1e, qd %.1e, force %.1e\n", c.relative_q(),
               c.relative_qd(), c.relative_f());
 
   if (!args.plot.empty()) {
     std::fflush(stdout);
-    const fs::path csv = fs::temp_directory_path() /
-                         ("featherdrive-" + std::to_string(getpid()) + "-physx-diff.csv");
-    struct Remove {
-      fs::path p;
-      ~Remove() {
-        std::error_code ec;
-        fs::remove(p, ec);
-      }
-    } remove{csv};
+    const PrivateTempDir tmp;
+    const fs::path csv = tmp.path() / "physx-diff.csv";
     write_differences(csv, fd, px);
     std::string title = scene.robot.name;
     title += ": featherdrive - PhysX, ";
@@ -177,7 +170,7 @@ int compare_physx(const ComparePhysxArgs& args) {
     title += " (";
     title += fs::path(args.scene).filename().string();
     title += ")";
-    plot(csv, args.plot, title);
+    run_plot_script(FEATHERDRIVE_PHYSX_PLOT_SCRIPT, {csv.string()}, args.plot, title, tmp);
     std::printf("  plot: %s\n", args.plot.c_str());
   }
   return 0;

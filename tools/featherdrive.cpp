@@ -1,10 +1,9 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
 // a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp).
-// Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else.
+// Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else, 130 / 143 after
+// SIGINT / SIGTERM (the run stops after a whole step; simulate keeps the rows written at --out).
 #include <CLI/CLI.hpp>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,14 +16,14 @@
 #include <limits>
 #include <optional>
 
+#include "cli_common.hpp"
 #include "compare_physx.hpp"
 #include "scene_overrides.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
+#include "featherdrive/io/files.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/trajectory.hpp"
-
-extern char** environ;
 
 namespace fs = std::filesystem;
 using namespace featherdrive;
@@ -40,44 +39,29 @@ struct SimulateArgs {
   std::string load_state;
 };
 
-// Failures that are not the input's fault (files that cannot be written, the plot script).
-struct RunError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 void print_warnings(const std::vector<std::string>& warnings) {
   for (const std::string& w : warnings) std::cerr << "featherdrive: warning: " << w << "\n";
 }
 
-std::ofstream open_output(const fs::path& path) {
-  if (path.has_parent_path()) {
-    std::error_code ec;
-    fs::create_directories(path.parent_path(), ec);
+// A root mean square without overflow: the sum of squares is kept scaled by the largest
+// magnitude so far (as BLAS's nrm2 does), so errors near 1e308 give their RMS, not inf.
+class Rms {
+ public:
+  void add(double x) {
+    const double a = std::abs(x);
+    if (a == 0.0) return;
+    if (scale_ < a) {
+      sum_ = 1.0 + sum_ * (scale_ / a) * (scale_ / a);
+      scale_ = a;
+    } else {
+      sum_ += (a / scale_) * (a / scale_);
+    }
   }
-  std::ofstream out(path);
-  if (!out) throw RunError("cannot write " + path.string());
-  return out;
-}
+  double value(long n) const { return n > 0 ? scale_ * std::sqrt(sum_ / n) : 0.0; }
 
-// Runs /usr/bin/python3 (or $FEATHERDRIVE_PYTHON) on the plot script shipped with the project.
-void run_plot(const fs::path& trajectory, const fs::path& targets, const fs::path& png,
-              const std::string& title) {
-  const char* python_env = std::getenv("FEATHERDRIVE_PYTHON");
-  const char* script_env = std::getenv("FEATHERDRIVE_PLOT_SCRIPT");
-  const std::string python = python_env ? python_env : "/usr/bin/python3";
-  const std::string script = script_env ? script_env : FEATHERDRIVE_PLOT_SCRIPT;
-  std::vector<std::string> args = {
-      python, script, trajectory.string(), targets.string(), png.string(), "--title", title};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
-    throw RunError("cannot start " + python + " to plot");
-  int status = 0;
-  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw RunError("plotting failed: " + python + " " + script + " did not succeed");
-}
+ private:
+  double scale_ = 0.0, sum_ = 0.0;
+};
 
 class Progress {
  public:
@@ -103,8 +87,14 @@ class Progress {
 };
 
 int simulate(const SimulateArgs& args) {
+  install_interrupt_handlers();
+  if (!args.plot.empty()) check_plot_path("--plot", args.plot);
   Scene scene = args.overrides.load(args.scene);
   const Model& model = *scene.model();
+  check_outputs({{"--out", args.out}, {"--plot", args.plot}, {"--save-state", args.save_state}},
+                {{"the scene", args.scene},
+                 {"the scene's model", scene.robot.path},
+                 {"the --load-state checkpoint", args.load_state}});
 
   // The simulation: the scene's, or the scene's model with the state and settings of a
   // checkpoint; the command line's solver settings apply on top of either.
@@ -123,67 +113,83 @@ int simulate(const SimulateArgs& args) {
   const double dt = options.dt;
   const int first = static_cast<int>(sim.step_count());  // 0 unless resumed
 
-  // The trajectory goes to --out, or to a temporary file when only a plot is wanted.
-  std::vector<fs::path> temporary;
-  fs::path csv_path = args.out;
-  fs::path targets_path;
-  const std::string tag = "featherdrive-" + std::to_string(getpid());
+  // The trajectory goes to a temporary file beside --out, renamed over it at the end (or at an
+  // interrupt); with only a plot wanted, to a private temporary folder, as do the targets.
+  std::optional<PrivateTempDir> tmp;
+  std::optional<AtomicFile> out_file;
+  std::optional<std::ofstream> plot_csv, targets_file;
+  fs::path csv_path = args.out, targets_path;
   if (!args.plot.empty()) {
+    tmp.emplace();
+    targets_path = tmp->path() / "targets.csv";
+    targets_file.emplace(targets_path);
     if (csv_path.empty()) {
-      csv_path = fs::temp_directory_path() / (tag + "-trajectory.csv");
-      temporary.push_back(csv_path);
+      csv_path = tmp->path() / "trajectory.csv";
+      plot_csv.emplace(csv_path);
     }
-    targets_path = fs::temp_directory_path() / (tag + "-targets.csv");
-    temporary.push_back(targets_path);
   }
-  struct Cleanup {
-    std::vector<fs::path>& files;
-    ~Cleanup() {
-      std::error_code ec;
-      for (const fs::path& f : files) fs::remove(f, ec);
-    }
-  } cleanup{temporary};
-
-  std::optional<std::ofstream> csv_file, targets_file;
+  if (!args.out.empty()) {
+    make_parent_folders(args.out);
+    out_file.emplace(args.out, "the trajectory");
+  }
+  std::ostream* csv_stream = out_file ? &out_file->stream() : plot_csv ? &*plot_csv : nullptr;
   std::optional<TrajectoryWriter> csv;
   std::optional<TargetWriter> targets;
-  if (!csv_path.empty()) {
-    csv_file.emplace(open_output(csv_path));
-    csv.emplace(*csv_file, scene.robot);
-  }
-  if (!targets_path.empty()) {
-    targets_file.emplace(open_output(targets_path));
-    targets.emplace(*targets_file, scene);
-  }
+  if (csv_stream) csv.emplace(*csv_stream, scene.robot);
+  if (targets_file) targets.emplace(*targets_file, scene);
+  // Every temporary is closed and written, or the run fails here.
+  auto finish_temporaries = [&] {
+    for (std::optional<std::ofstream>* f : {&plot_csv, &targets_file})
+      if (*f) {
+        (*f)->close();
+        if (!**f) throw RunError("cannot write a temporary file in " + tmp->path().string());
+      }
+  };
 
   const size_t n = scene.drives.size();
-  std::vector<double> max_force(n, 0.0), sum_sq(n, 0.0);
+  std::vector<double> max_force(n, 0.0);
+  std::vector<Rms> rms(n);
   Progress progress(scene.steps);
   const auto start = std::chrono::steady_clock::now();
   if (csv) csv->write(first, sim, /*initial=*/args.load_state.empty());
   if (targets) targets->write(first, first * dt);
-  for (int k = first; k < first + scene.steps; ++k) {
+  int last = first;  // the last whole step written
+  for (int k = first; k < first + scene.steps && !interrupted(); ++k) {
     apply_targets(scene, sim, k);
-    sim.step();
+    try {
+      sim.step();
+    } catch (const DivergenceError&) {  // --out keeps the steps before it, for a post-mortem
+      if (out_file) out_file->commit();
+      throw;
+    }
     const double t = (k + 1) * dt;
     for (size_t i = 0; i < n; ++i) {
       const DriveSpec& d = scene.drives[i];
-      const double e = d.target_at(t).first - sim.q()[model.links[model.dof_link[d.dof]].q_index];
-      sum_sq[i] += e * e;
+      rms[i].add(d.target_at(t).first - sim.q()[model.links[model.dof_link[d.dof]].q_index]);
       max_force[i] = std::max(max_force[i], std::abs(sim.drive_force()[d.dof]));
     }
     if (csv) csv->write(k + 1, sim);
     if (targets) targets->write(k + 1, t);
+    last = k + 1;
     progress.update(k + 1 - first);
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.done();
-  for (auto* f : {&csv_file, &targets_file})
-    if (*f) {
-      (*f)->close();
-      if (!**f) throw RunError("writing the trajectory failed");
-    }
+  if (const int signal = interrupted()) {
+    // The rows written so far are whole: --out keeps them; no checkpoint, no plot.
+    if (out_file) out_file->commit();
+    std::fflush(stdout);
+    std::cerr << "featherdrive: interrupted at step " << last << " of " << first + scene.steps
+              << " (signal " << signal_name(signal) << "); "
+              << (out_file ? "the trajectory " + args.out + " holds steps " +
+                                 std::to_string(first) + ".." + std::to_string(last)
+                           : std::string("no trajectory was written"))
+              << "\n";
+    return 128 + signal;
+  }
+  finish_temporaries();
+  if (out_file) out_file->commit();
   if (!args.save_state.empty()) save_checkpoint(sim, args.save_state);
 
   std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s)\n", args.scene.c_str(),
@@ -200,9 +206,8 @@ int simulate(const SimulateArgs& args) {
       const DriveSpec& d = scene.drives[i];
       const double final_error =
           d.target_at(t_end).first - sim.q()[model.links[model.dof_link[d.dof]].q_index];
-      const double rms = scene.steps > 0 ? std::sqrt(sum_sq[i] / scene.steps) : 0.0;
       std::printf("  %-16s %-12s %14.3e %14.3e %14.4g\n", d.joint.c_str(), to_string(d.drive.type),
-                  final_error, rms, max_force[i]);
+                  final_error, rms[i].value(scene.steps), max_force[i]);
     }
   }
   std::printf("  wall time %.3f s, %.0f steps/s\n", wall, wall > 0.0 ? scene.steps / wall : 0.0);
@@ -210,15 +215,12 @@ int simulate(const SimulateArgs& args) {
   if (!args.save_state.empty()) std::printf("  state: %s\n", args.save_state.c_str());
   if (!args.plot.empty()) {
     std::fflush(stdout);
-    fs::path png = args.plot;
-    if (png.has_parent_path()) {
-      std::error_code ec;
-      fs::create_directories(png.parent_path(), ec);
-    }
-    run_plot(csv_path, targets_path, png,
-             scene.robot.name + " - " + to_string(options.solver) + " (" +
-                 fs::path(args.scene).filename().string() + ")");
-    std::printf("  plot: %s\n", png.c_str());
+    run_plot_script(FEATHERDRIVE_PLOT_SCRIPT, {csv_path.string(), targets_path.string()},
+                    args.plot,
+                    scene.robot.name + " - " + to_string(options.solver) + " (" +
+                        fs::path(args.scene).filename().string() + ")",
+                    *tmp);
+    std::printf("  plot: %s\n", args.plot.c_str());
   }
   return 0;
 }
@@ -294,13 +296,23 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*sim_cmd) return simulate(sim_args);
-    if (*cmp_cmd) return compare_physx(cmp_args);
+    if (*sim_cmd) {
+      sim_args.overrides.parse();
+      return simulate(sim_args);
+    }
+    if (*cmp_cmd) {
+      cmp_args.overrides.parse();
+      return compare_physx(cmp_args);
+    }
     return info(urdf, floating);
   } catch (const std::invalid_argument& e) {  // bad input: InputError and the core's validation
     report(e.what());
     return 2;
   } catch (const std::exception& e) {  // DivergenceError, files that cannot be written, ...
+    if (const int signal = interrupted()) {  // e.g. the plot script or PhysX killed by Ctrl-C
+      report(std::string("interrupted (signal ") + signal_name(signal) + "): " + e.what());
+      return 128 + signal;
+    }
     report(e.what());
     return 1;
   }

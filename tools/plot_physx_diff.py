@@ -2,17 +2,21 @@
 """Plots featherdrive - PhysX over time per joint: position, velocity and force differences.
 Called by `featherdrive compare-physx --plot`.
 
-usage: plot_physx_diff.py DIFFERENCES.csv OUT.png [--title TITLE]
+usage: plot_physx_diff.py [--title TITLE] [--] DIFFERENCES.csv OUT.png
 DIFFERENCES.csv: step,t,dq:<joint>...,dqd:<joint>...,df:<joint>...
 """
 import argparse
 import csv
 import sys
 
-import matplotlib
+try:
+    import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+except ImportError as e:  # one line for featherdrive to show, not a traceback
+    sys.exit(f"plot_physx_diff: {sys.executable} cannot import matplotlib ({e}); "
+             "Debian: apt-get install python3-matplotlib, or set FEATHERDRIVE_PYTHON")
 
 
 def main():
@@ -46,7 +50,7 @@ def main():
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(args.title)
     fig.tight_layout()
-    fig.savefig(args.png, dpi=100)
+    fig.savefig(args.png, dpi=100, format="png")  # the name may be a temporary one
 
 
 if __name__ == "__main__":

@@ -2,16 +2,21 @@
 """Plots a featherdrive trajectory: joint positions against their drive targets, the tracking
 error and the drive forces. Called by `featherdrive simulate --plot`.
 
-usage: plot_trajectory.py TRAJECTORY.csv TARGETS.csv OUT.png [--title TITLE]
+usage: plot_trajectory.py [--title TITLE] [--] TRAJECTORY.csv TARGETS.csv OUT.png
+(`--` lets a path begin with "-"; OUT.png is written as a PNG whatever its name.)
 """
 import argparse
 import csv
 import sys
 
-import matplotlib
+try:
+    import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+except ImportError as e:  # one line for featherdrive to show, not a traceback
+    sys.exit(f"plot_trajectory: {sys.executable} cannot import matplotlib ({e}); "
+             "Debian: apt-get install python3-matplotlib, or set FEATHERDRIVE_PYTHON")
 
 
 def read_columns(path):
@@ -58,7 +63,7 @@ def main():
         ax.grid(True, alpha=0.3)
     fig.suptitle(args.title)
     fig.tight_layout()
-    fig.savefig(args.png, dpi=100)
+    fig.savefig(args.png, dpi=100, format="png")  # the name may be a temporary one
 
 
 if __name__ == "__main__":

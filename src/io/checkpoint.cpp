@@ -1,4 +1,5 @@
 #include "featherdrive/io/checkpoint.hpp"
+#include "featherdrive/io/files.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -327,59 +328,19 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
 
 void save_checkpoint(const Simulation& sim, const std::filesystem::path& path) {
   const std::string bytes = checkpoint_bytes(sim);
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  std::string tmpl = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
-  std::vector<char> name(tmpl.begin(), tmpl.end());
-  name.push_back('\0');
-  const int fd = mkstemp(name.data());
-  if (fd < 0)
-    throw std::runtime_error(path.string() + ": cannot write the checkpoint: " +
-                             std::strerror(errno));
-  const std::string tmp(name.data());
-  auto abandon = [&](const char* what) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error(path.string() + ": cannot write the checkpoint (" + what +
-                             "): " + std::strerror(err));
-  };
-  size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      abandon("write");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) abandon("fsync");
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw std::runtime_error(path.string() + ": cannot write the checkpoint (close): " +
-                             std::strerror(err));
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw std::runtime_error(path.string() + ": cannot write the checkpoint (rename): " +
-                             std::strerror(err));
-  }
-  // The rename itself reaches the disk with an fsync of the folder (best effort).
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dfd >= 0) {
-    (void)::fsync(dfd);
-    ::close(dfd);
-  }
+  AtomicFile out(path, "the checkpoint");
+  out.stream() << bytes;
+  out.commit();
 }
 
 void load_checkpoint(const std::filesystem::path& path, Simulation& sim) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw CheckpointError(path.string() + ": cannot open the checkpoint: " + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
-  restore_checkpoint(s.str(), sim, path.string());
+  std::string bytes;
+  try {
+    bytes = read_input_file(path, "the checkpoint");
+  } catch (const InputError& e) {
+    throw CheckpointError(e.what());
+  }
+  restore_checkpoint(bytes, sim, path.string());
 }
 
 }  // namespace featherdrive

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -26,6 +27,46 @@ std::vector<std::string> split(const std::string& line, char sep) {
   while (std::getline(s, cell, sep)) out.push_back(cell);
   if (!line.empty() && line.back() == sep) out.emplace_back();
   return out;
+}
+
+// The next record of an RFC 4180 CSV at `pos`: a quoted field may hold commas, doubled quotes
+// and line breaks (joint names may). `line` counts the lines passed. False at the end.
+bool next_record(const std::string& text, size_t& pos, long& line, std::vector<std::string>& cells,
+                 const std::string& name) {
+  cells.clear();
+  if (pos >= text.size()) return false;
+  const long first_line = line;
+  std::string cell;
+  bool quoted = false;
+  while (pos < text.size()) {
+    const char c = text[pos++];
+    if (quoted) {
+      if (c != '"') {
+        line += c == '\n';
+        cell += c;
+      } else if (pos < text.size() && text[pos] == '"') {
+        cell += '"';
+        ++pos;
+      } else {
+        quoted = false;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      cells.push_back(std::move(cell));
+      cell.clear();
+    } else if (c == '\n') {
+      ++line;
+      break;
+    } else if (c != '\r' || (pos < text.size() && text[pos] != '\n')) {
+      cell += c;
+    }
+  }
+  if (quoted)
+    throw PhysxError(name + ": line " + std::to_string(first_line) +
+                     ": a quoted field is not closed");
+  cells.push_back(std::move(cell));
+  return true;
 }
 
 int find_column(const std::vector<std::string>& header, const std::string& name) {
@@ -49,11 +90,11 @@ std::string last_line(const fs::path& path) {
 }  // namespace
 
 JointTrajectory parse_joint_csv(const std::string& text, const std::string& name) {
-  std::istringstream in(text);
-  std::string line;
-  if (!std::getline(in, line)) throw PhysxError(name + ": empty file, expected a CSV header");
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  const std::vector<std::string> header = split(line, ',');
+  size_t pos = 0;
+  long line_no = 1;
+  std::vector<std::string> header, cells;
+  if (!next_record(text, pos, line_no, header, name))
+    throw PhysxError(name + ": empty file, expected a CSV header");
   JointTrajectory t;
   std::vector<int> q_col, qd_col, f_col;
   for (const std::string& h : header) {
@@ -79,12 +120,10 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
   }
   if (root_col.size() != 13) root_col.clear();
   const size_t n = t.joints.size();
-  for (long line_no = 2; std::getline(in, line); ++line_no) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    const std::vector<std::string> cells = split(line, ',');
+  for (long row_line = line_no; next_record(text, pos, line_no, cells, name); row_line = line_no) {
+    if (cells.size() == 1 && cells[0].empty()) continue;  // a blank line
     if (cells.size() < header.size())
-      throw PhysxError(name + ": line " + std::to_string(line_no) + ": " +
+      throw PhysxError(name + ": line " + std::to_string(row_line) + ": " +
                        std::to_string(cells.size()) + " values, the header has " +
                        std::to_string(header.size()));
     auto value = [&](int col) {
@@ -92,7 +131,7 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
       double v = 0.0;
       const auto [end, ec] = std::from_chars(c.data(), c.data() + c.size(), v);
       if (ec != std::errc() || end != c.data() + c.size() || c.empty())
-        throw PhysxError(name + ": line " + std::to_string(line_no) + ", column '" +
+        throw PhysxError(name + ": line " + std::to_string(row_line) + ", column '" +
                          header[static_cast<size_t>(col)] + "': '" + c + "' is not a number");
       return v;
     };
@@ -226,12 +265,13 @@ int run_program(const std::vector<std::string>& argv, const fs::path& stderr_pat
     posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, stderr_path.c_str(),
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
   pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, args[0].c_str(), &actions, nullptr, ptrs.data(), environ);
+  const int spawned = posix_spawnp(&pid, args[0].c_str(), &actions, nullptr, ptrs.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) return -1;
   int status = 0;
-  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status)) return -1;
-  return WEXITSTATUS(status);
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
@@ -272,7 +312,9 @@ double relative(const std::vector<JointDifference>& joints, LargestDifference Jo
                 double scale) {
   double worst = 0.0;
   for (const JointDifference& j : joints) worst = std::max(worst, (j.*m).value);
-  return scale > 0.0 ? worst / scale : 0.0;
+  // A difference where the reference never leaves 0 has no finite relative size: infinite.
+  if (!(scale > 0.0)) return worst > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
+  return worst / scale;
 }
 }  // namespace
 

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/io/files.hpp"
 
 namespace featherdrive {
 namespace {
@@ -223,14 +224,6 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
   return spec;
 }
 
-std::string read_text_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the file: " + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The one-dof joint a scene entry names, or an error that lists the joints there are.
 int joint_dof(const Reader& r, const UrdfRobot& robot, const std::string& joint,
               const std::string& path) {
@@ -277,7 +270,7 @@ std::pair<double, double> DriveSpec::target_at(double t) const {
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-  return parse_scene(read_text_file(path), path);
+  return parse_scene(read_input_file(path), path);
 }
 
 Scene parse_scene(const std::string& text, const std::filesystem::path& path) {

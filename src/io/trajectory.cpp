@@ -20,6 +20,13 @@ std::vector<int> q_order(const UrdfRobot& robot) {
 
 }  // namespace
 
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (const char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
 std::vector<std::string> trajectory_columns(const UrdfRobot& robot) {
   const Model& model = *robot.model;
   std::vector<std::string> columns;
@@ -36,7 +43,7 @@ std::vector<std::string> trajectory_columns(const UrdfRobot& robot) {
 TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot)
     : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order) {
   out_ << "step,t";
-  for (const std::string& c : trajectory_columns(robot)) out_ << ',' << c;
+  for (const std::string& c : trajectory_columns(robot)) out_ << ',' << csv_field(c);
   out_ << '\n';
 }
 
@@ -50,7 +57,7 @@ void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
 
 TargetWriter::TargetWriter(std::ostream& out, const Scene& scene) : out_(out), scene_(scene) {
   out_ << "step,t";
-  for (const DriveSpec& d : scene.drives) out_ << ",target:" << d.joint;
+  for (const DriveSpec& d : scene.drives) out_ << ',' << csv_field("target:" + d.joint);
   out_ << '\n';
 }
 

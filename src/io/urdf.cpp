@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/io/files.hpp"
 
 namespace featherdrive {
 namespace {
@@ -165,14 +166,6 @@ Body combine(const Body& a, const Body& b) {
   return c;
 }
 
-std::string read_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path.string(), std::string("cannot open the file: ") + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::string joint_type_name(int type) {
   switch (type) {
     case urdf::Joint::REVOLUTE:
@@ -218,7 +211,7 @@ void UrdfRobot::rebuild() {
 }
 
 UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options) {
-  UrdfRobot robot = parse_urdf(read_file(path), path.string(), options);
+  UrdfRobot robot = parse_urdf(read_input_file(path), path.string(), options);
   robot.path = path;
   return robot;
 }

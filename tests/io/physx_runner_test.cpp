@@ -1,16 +1,21 @@
 // The comparison logic of `featherdrive compare-physx` on trajectories whose differences are known
 // by construction, the CSV reader's errors, and find_physx's messages (no node or PhysX needed).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/physx_runner.hpp"
+#include "featherdrive/io/trajectory.hpp"
+#include "featherdrive/io/urdf.hpp"
+#include "featherdrive/model/model_builder.hpp"
 
 namespace featherdrive {
 namespace {
@@ -134,6 +139,119 @@ TEST(PhysxRunner, CsvErrorsNameFileLineColumnAndValue) {
   EXPECT_EQ(message("step,t,q:a,f:a\n"), "px.csv: header: column 'qd:a' is missing for joint 'a'");
   EXPECT_EQ(message(""), "px.csv: empty file, expected a CSV header");
   EXPECT_THROW(read_joint_csv("/nonexistent/px.csv"), PhysxError);
+}
+
+TEST(PhysxRunner, QuotedHeaderFieldsAreRead) {
+  // RFC 4180: commas, doubled quotes and line breaks inside quotes; CRLF line ends.
+  const std::string text =
+      "step,t,\"q:a,b\",\"qd:a,b\",\"f:a,b\",\"q:say \"\"hi\"\"\",\"qd:say \"\"hi\"\"\","
+      "\"f:say \"\"hi\"\"\",\"q:x\ny\",\"qd:x\ny\",\"f:x\ny\"\r\n"
+      "0,0,1,2,3,4,5,6,7,8,9\r\n\r\n1,0.5,10,20,30,40,50,60,70,80,x\r\n";
+  try {
+    parse_joint_csv(text, "q.csv");
+    FAIL() << "the bad number must be found";
+  } catch (const PhysxError& e) {
+    // The header spans lines 1-4 (three names hold a line break), row 0 is line 5, a blank
+    // line 6: the bad row starts on line 7.
+    EXPECT_EQ(std::string(e.what()), "q.csv: line 7, column 'f:x\ny': 'x' is not a number");
+  }
+  const std::string good = text.substr(0, text.rfind(",x")) + ",90\r\n";
+  const JointTrajectory t = parse_joint_csv(good, "q.csv");
+  ASSERT_EQ(t.joints, (std::vector<std::string>{"a,b", "say \"hi\"", "x\ny"}));
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.q[1], (std::vector<double>{10, 40, 70}));
+  EXPECT_EQ(t.f[1], (std::vector<double>{30, 60, 90}));
+  try {
+    parse_joint_csv("step,t,\"q:a\n0,1\n", "open.csv");
+    FAIL() << "an unclosed quote must be refused";
+  } catch (const PhysxError& e) {
+    EXPECT_EQ(std::string(e.what()), "open.csv: line 1: a quoted field is not closed");
+  }
+}
+
+TEST(PhysxRunner, CsvFieldQuotesOnlyWhatNeedsIt) {
+  EXPECT_EQ(csv_field("q:joint1"), "q:joint1");
+  EXPECT_EQ(csv_field("q:a,b"), "\"q:a,b\"");
+  EXPECT_EQ(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
+  EXPECT_EQ(csv_field("x\ny"), "\"x\ny\"");
+  EXPECT_EQ(csv_field("x\ry"), "\"x\ry\"");
+  EXPECT_EQ(csv_field(""), "");
+}
+
+TEST(PhysxRunner, TrajectoryCsvWithOddJointNamesReadsBack) {
+  // Joint names with a comma and quotes (legal in URDF) keep the columns aligned.
+  const std::string urdf = R"(<robot name="odd">
+    <link name="base"/>
+    <link name="l1"><inertial><mass value="1"/>
+      <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <link name="l2"><inertial><mass value="1"/>
+      <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    <joint name="a,b" type="prismatic"><parent link="base"/><child link="l1"/><axis xyz="1 0 0"/>
+      <limit effort="1" velocity="1" lower="-1" upper="1"/></joint>
+    <joint name="say &quot;hi&quot;" type="continuous"><parent link="l1"/><child link="l2"/></joint>
+  </robot>)";
+  const UrdfRobot robot = parse_urdf(urdf, "odd.urdf");
+  Simulation sim(robot.model);
+  std::ostringstream out;
+  TrajectoryWriter writer(out, robot);
+  writer.write(0, sim, true);
+  sim.step();
+  writer.write(1, sim);
+  const JointTrajectory t = parse_joint_csv(out.str(), "odd.csv");
+  EXPECT_EQ(t.joints, (std::vector<std::string>{"a,b", "say \"hi\""}));
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.q[1][0], sim.q()[0]);
+  EXPECT_EQ(t.q[1][1], sim.q()[1]);
+}
+
+TEST(PhysxRunner, RelativeDifferenceAgainstAScaleOfZeroIsInfinite) {
+  // PhysX's joint stays at 0 in every quantity; featherdrive's moves by 0.9.
+  const JointTrajectory reference =
+      parse_joint_csv("step,t,q:a,qd:a,f:a\n0,0,0,0,0\n1,0.1,0,0,0\n", "px.csv");
+  JointTrajectory a = reference;
+  a.q[1][0] = 0.9;
+  const TrajectoryComparison c = compare_trajectories(a, reference);
+  EXPECT_EQ(c.scale_q, 0.0);
+  EXPECT_DOUBLE_EQ(c.joints[0].q.value, 0.9);
+  EXPECT_TRUE(std::isinf(c.relative_q()) && c.relative_q() > 0) << c.relative_q();
+  // No difference against a scale of 0 is no difference.
+  EXPECT_EQ(c.relative_qd(), 0.0);
+  EXPECT_EQ(c.relative_f(), 0.0);
+}
+
+TEST(PhysxRunner, SceneJsonEscapesNamesAsPythonsJsonReadsThem) {
+  if (!std::filesystem::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3";
+  // A name that would close the string and set gravity, backslashes, control characters.
+  const std::vector<std::string> names = {"base\", \"gravity\": [0, 0, 0], \"x\": \"",
+                                          "root (not exported)",
+                                          std::string("tab\tnl\ncr\rbel\x01\x1f"), "del\x7f",
+                                          "back\\slash\\", "slide\""};
+  ModelBuilder b;
+  b.set_gravity(Vec3(0, 0, -9.81));
+  const Mat3 I = Mat3::Identity() * 0.01;
+  b.add_link(make_link(names[0], "", 1.0, Vec3::Zero(), I, fixed_joint(names[1])));
+  b.add_link(make_link(names[2], names[0], 1.0, Vec3::Zero(), I,
+                       prismatic_joint(names[3], Vec3::UnitX())));
+  b.add_link(make_link(names[4], names[2], 1.0, Vec3::Zero(), I,
+                       prismatic_joint(names[5], Vec3::UnitY())));
+  Simulation sim(std::make_shared<const Model>(b.build()));
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("featherdrive-json-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "scene.json") << physx_scene_json(sim, 2, {{{names[3], {0.5, 0.0}}}});
+  // Exit 0 when every name reads back exactly and gravity is the model's.
+  const std::string script =
+      "import json, sys\n"
+      "d = json.load(open(sys.argv[1], encoding='utf-8'))\n"
+      "got = [l['name'] for l in d['links']] + [l['joint']['name'] for l in d['links'][1:]]\n"
+      "got += list(d['initial']['q']) + list(d['targets'][0])\n"
+      "want = sys.argv[2:]\n"
+      "want = [want[0], want[2], want[4], want[3], want[5], want[3], want[5], want[3]]\n"
+      "sys.exit(0 if got == want and d['gravity'] == [0, 0, -9.81] else 3)\n";
+  std::vector<std::string> argv = {"/usr/bin/python3", "-c", script, (dir / "scene.json").string()};
+  argv.insert(argv.end(), names.begin(), names.end());
+  EXPECT_EQ(run_program(argv), 0) << "python's json module read other names or gravity";
+  std::filesystem::remove_all(dir);
 }
 
 // Sets an environment variable for one scope.

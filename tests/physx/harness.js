@@ -605,7 +605,9 @@ function csvHeader(h) {
   if (h.s.floating_base) {
     for (const c of ['px', 'py', 'pz', 'qw', 'qx', 'qy', 'qz', 'wx', 'wy', 'wz', 'vx', 'vy', 'vz']) cols.push(`root:${c}`);
   }
-  return cols.join(',');
+  // RFC 4180, as featherdrive writes and reads them: a name with a comma, quote or line break.
+  const field = (c) => (/[",\r\n]/.test(c) ? `"${c.replace(/"/g, '""')}"` : c);
+  return cols.map(field).join(',');
 }
 
 function fmt(x) {

@@ -38,8 +38,10 @@ struct JointTrajectory {
 
 /// Reads a CSV of the harness (tests/physx/README.md) or of `featherdrive simulate` for a robot
 /// without a floating root: step,t,q:<joint>...,qd:<joint>...,f:<joint>... (other columns, e.g.
-/// the harness's root:* columns, are read into `root` when all 13 are there, or ignored). `name` is the file named in messages. Throws PhysxError
-/// naming the file, line, column and value for a missing column, a short row or a bad number.
+/// the harness's root:* columns, are read into `root` when all 13 are there, or ignored). Fields
+/// may be quoted as RFC 4180 says (a joint name with a comma). `name` is the file named in
+/// messages. Throws PhysxError naming the file, line, column and value for a missing column, a
+/// short row or a bad number.
 JointTrajectory parse_joint_csv(const std::string& text, const std::string& name);
 JointTrajectory read_joint_csv(const std::filesystem::path& path);
 
@@ -77,9 +79,9 @@ PhysxInstall find_physx(const std::vector<std::filesystem::path>& default_dirs);
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
                           const std::vector<TargetsByJoint>& targets = {});
 
-/// Runs a program (argv[0] a path) without a shell and waits for it; its stdout goes to the
-/// caller's, its stderr to `stderr_path` unless that is empty. Returns the exit status, or -1 when
-/// it could not be started or did not exit normally.
+/// Runs a program (argv[0] a path, or a name looked up on PATH) without a shell and waits for
+/// it; its stdout goes to the caller's, its stderr to `stderr_path` unless that is empty. Returns
+/// the exit status, or -1 when it could not be started or did not exit normally.
 int run_program(const std::vector<std::string>& argv,
                 const std::filesystem::path& stderr_path = {});
 
@@ -100,7 +102,8 @@ struct JointDifference {
 struct TrajectoryComparison {
   std::vector<JointDifference> joints;
   double scale_q = 0.0, scale_qd = 0.0, scale_f = 0.0;
-  /// The largest difference over all joints relative to the scale (0 where the scale is 0).
+  /// The largest difference over all joints relative to the scale; where the scale is 0, 0 for
+  /// no difference and infinity for any (never a misleading 0).
   double relative_q() const;
   double relative_qd() const;
   double relative_f() const;

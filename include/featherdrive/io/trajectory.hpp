@@ -1,6 +1,7 @@
 // Trajectory CSV files: one row per state, columns per dof in the URDF's joint order.
 //   step,t,q:<joint>...,qd:<joint>...,f:<joint>...
-// Numbers are written in the shortest form that reads back to the same double.
+// Numbers are written in the shortest form that reads back to the same double. A column name
+// holding a comma, a quote or a line break is quoted as RFC 4180 says (csv_field).
 #pragma once
 
 #include <ostream>
@@ -10,6 +11,10 @@
 #include "featherdrive/io/scene.hpp"
 
 namespace featherdrive {
+
+/// `s` as one CSV field: unchanged, or in double quotes (quotes doubled) when it holds a comma,
+/// a quote or a line break (RFC 4180).
+std::string csv_field(const std::string& s);
 
 /// Column names after step,t: q (nq of them: a floating root gives x, y, z, qw, qx, qy, qz), then
 /// qd and f (one per dof).
