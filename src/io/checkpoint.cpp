@@ -242,11 +242,12 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     if (step_count < 0 || step_count > kMaxStepCount)
       fail(name, "corrupt checkpoint: step count " + std::to_string(step_count) +
                      " is outside [0, " + std::to_string(kMaxStepCount) + "]");
-    if (!std::isfinite(time) || time < 0.0 ||
-        time > 2.0 * static_cast<double>(step_count) * kMaxDt)
+    if (!std::isfinite(time) || time < 0.0 || time > 2.0 * static_cast<double>(step_count) * kMaxDt)
       fail(name, "corrupt checkpoint: time " + format_double(time) + " s after " +
-                     std::to_string(step_count) + " steps is not one a run reaches (finite, >= 0, "
-                     "at most 2 * steps * " + format_double(kMaxDt) + " s)");
+                     std::to_string(step_count) +
+                     " steps is not one a run reaches (finite, >= 0, "
+                     "at most 2 * steps * " +
+                     format_double(kMaxDt) + " s)");
     SimulationOptions o;
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
@@ -311,19 +312,32 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
         // No setter can change these here, so a run saves the simulation's own values.
         const JointFriction& f0 = next.joint_friction(d);
         const ActuatorEnvelope& e0 = next.actuator_envelope(d);
-        const double saved[] = {lower, upper, max_velocity, f.static_effort, f.dynamic_effort,
-                                f.viscous, e.max_effort, e.max_actuator_velocity,
-                                e.speed_effort_gradient, e.velocity_dependent_resistance,
+        const double saved[] = {lower,
+                                upper,
+                                max_velocity,
+                                f.static_effort,
+                                f.dynamic_effort,
+                                f.viscous,
+                                e.max_effort,
+                                e.max_actuator_velocity,
+                                e.speed_effort_gradient,
+                                e.velocity_dependent_resistance,
                                 friction_coefficient};
-        const double held[] = {next.lower_limit(d), next.upper_limit(d),
-                               next.max_joint_velocity(d), f0.static_effort, f0.dynamic_effort,
-                               f0.viscous, e0.max_effort, e0.max_actuator_velocity,
-                               e0.speed_effort_gradient, e0.velocity_dependent_resistance,
+        const double held[] = {next.lower_limit(d),
+                               next.upper_limit(d),
+                               next.max_joint_velocity(d),
+                               f0.static_effort,
+                               f0.dynamic_effort,
+                               f0.viscous,
+                               e0.max_effort,
+                               e0.max_actuator_velocity,
+                               e0.speed_effort_gradient,
+                               e0.velocity_dependent_resistance,
                                next.friction_coefficient(d)};
         for (int k = 0; k < 11; ++k)
           if (!same(saved[k], held[k]))
-            fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " +
-                           to_string(jt) + " joint '" + model.links[model.dof_link[d]].joint_name +
+            fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
+                           " joint '" + model.links[model.dof_link[d]].joint_name +
                            "' has joint setting #" + std::to_string(k) + " = " +
                            format_double(saved[k]) + ", which only a 1-dof joint can change");
         continue;

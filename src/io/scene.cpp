@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -100,7 +100,8 @@ class Reader {
     if (begin != end && *begin == '+' && end - begin > 1 && begin[1] != '-') ++begin;
     std::int64_t v = 0;
     const auto [stop, error] = std::from_chars(begin, end, v);
-    if (begin == end || stop != end || (error != std::errc() && error != std::errc::result_out_of_range))
+    if (begin == end || stop != end ||
+        (error != std::errc() && error != std::errc::result_out_of_range))
       fail(path, node, "must be an integer");
     const bool negative = *begin == '-';
     if (error == std::errc::result_out_of_range ? negative : v < min)
@@ -181,9 +182,12 @@ void check_nesting(const std::string& text, const std::string& file) {
     for (; k < eol; ++k) {
       const char c = text[k];
       if (quote) {
-        if (quote == '"' && c == '\\') ++k;
-        else if (c == quote && quote == '\'' && k + 1 < eol && text[k + 1] == '\'') ++k;
-        else if (c == quote) quote = 0, start = false;
+        if (quote == '"' && c == '\\')
+          ++k;
+        else if (c == quote && quote == '\'' && k + 1 < eol && text[k + 1] == '\'')
+          ++k;
+        else if (c == quote)
+          quote = 0, start = false;
         continue;
       }
       if (c == ' ' || c == '\t' || c == '\r') continue;
@@ -656,8 +660,9 @@ void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
     if (!d.sine) continue;
     const double position = d.sine->position(t), velocity = d.sine->velocity(t);
     if (!std::isfinite(position) || !std::isfinite(velocity))
-      throw InputError(scene.path.string() + ": drives." + d.joint + ".target.sine: the target at t = " +
-                       format_double(t) + " s is not finite (2 pi frequency t overflows)");
+      throw InputError(scene.path.string() + ": drives." + d.joint +
+                       ".target.sine: the target at t = " + format_double(t) +
+                       " s is not finite (2 pi frequency t overflows)");
     sim.set_drive_target(d.dof, position, velocity);
   }
 }

@@ -424,10 +424,10 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       target = combine(target, moved);
       // Finite inputs can still overflow in the parallel axis shift (m d^2) or the mass sum.
       if (!(std::isfinite(target.mass) && target.com.allFinite() && target.inertia.allFinite()))
-        fail(file, "link '" + link->name + "' <inertial><origin xyz> = " +
-                       format_vec3(own[link->name].com) + ", mass " +
-                       format_double(own[link->name].mass) + ": merged into link '" + a +
-                       "' (fixed joints), the combined inertia overflows");
+        fail(file, "link '" + link->name +
+                       "' <inertial><origin xyz> = " + format_vec3(own[link->name].com) +
+                       ", mass " + format_double(own[link->name].mass) + ": merged into link '" +
+                       a + "' (fixed joints), the combined inertia overflows");
     }
     for (const urdf::JointSharedPtr& j : link->child_joints) {
       const urdf::LinkConstSharedPtr child = urdf_model->getLink(j->child_link_name);

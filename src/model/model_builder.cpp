@@ -184,7 +184,10 @@ Model ModelBuilder::build() const {
       j = parent[j];
     }
     if (j < 0 || walk[j] != i) continue;  // the root, or a link an earlier walk took to it
-    // Back on this walk: j is on a cycle; name it, once around.
+    // Back on this walk: a cycle. Name it once around, starting 2n + 1 steps up from i (where
+    // messages have always started it).
+    j = i;
+    for (size_t n = 0; n <= 2 * links_.size(); ++n) j = parent[j];
     if (parent[j] == j)
       fail("link '" + links_[j].name + "': parent = '" + links_[j].name + "' is the link itself");
     std::string cycle = "'" + links_[j].name + "'";

@@ -44,10 +44,12 @@ const char* to_string(SolverType type) { return type == SolverType::pgs ? "pgs" 
 const char* to_string(Compat compat) { return compat == Compat::physx ? "physx" : "none"; }
 
 void validate_options(const SimulationOptions& o) {
+  if (!std::isfinite(o.dt) || o.dt <= 0.0)
+    throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) + " must be finite and > 0");
   if (!(o.dt >= kMinDt && o.dt <= kMaxDt))
     throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) +
-                                " must be a normal number in [" + fmt(kMinDt) + ", " +
-                                fmt(kMaxDt) + "] s");
+                                " must be a normal number in [" + fmt(kMinDt) + ", " + fmt(kMaxDt) +
+                                "] s");
   const std::string most = std::to_string(kMaxIterations);
   if (o.position_iterations < 1)
     throw std::invalid_argument("simulation options: position_iterations = " +

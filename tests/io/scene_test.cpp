@@ -233,8 +233,7 @@ TEST(Scene, ScenesNestedDeeperThanTheBoundAreRefusedBeforeYamlCppParses) {
   const std::string many = repeat("[{", 500);
   for (const std::string& text :
        {"description: \"" + many + "\\\" '" + many + "\"\n", "description: '" + many + "'' \"'\n",
-        "# " + many + "\ndescription: x # " + many + "\n",
-        "description: it's " + many + "\n",
+        "# " + many + "\ndescription: x # " + many + "\n", "description: it's " + many + "\n",
         "description: |\n  " + many + "\n   \"\n    '\n" + repeat(" ", 200) + "x\n",
         "description: >-\n  a\n" + repeat(" ", 300) + many + "\n"}) {
     SCOPED_TRACE(text.substr(0, 80));
@@ -273,7 +272,8 @@ TEST(Scene, IntegersAreCheckedInSixtyFourBitsBeforeTheyAreNarrowed) {
   };
   for (const Case& c : cases) EXPECT_EQ(error_of(head + c.text), file + c.error) << c.text;
   // The largest values load as themselves.
-  const Scene s = scene_from(head + "steps: +1000000000\n"
+  const Scene s = scene_from(head +
+                             "steps: +1000000000\n"
                              "solver: {position_iterations: 1000000, velocity_iterations: 0}");
   EXPECT_EQ(s.steps, 1000000000);
   EXPECT_EQ(s.options.position_iterations, 1000000);
@@ -290,28 +290,33 @@ TEST(Scene, ApplyTargetsIsExactForEveryStepIndex) {
     SCOPED_TRACE(k);
     apply_targets(scene, sim, k);
     const double t = (static_cast<double>(k) + 1.0) * dt;
-    EXPECT_EQ(sim.drive(0).target_position, sine.offset + sine.amplitude * std::sin(w * t + sine.phase));
+    EXPECT_EQ(sim.drive(0).target_position,
+              sine.offset + sine.amplitude * std::sin(w * t + sine.phase));
     EXPECT_EQ(sim.drive(0).target_velocity, sine.amplitude * w * std::cos(w * t + sine.phase));
   }
   EXPECT_GT(sim.drive(0).target_position, -1.0);  // INT_MIN: t < 0 is just another time
 }
 
 TEST(Scene, SineTargetsThatOverflowAreRefusedWithTheKey) {
-  const std::string head = "model: slider.urdf\nsteps: 1\ndrives: {slide: {type: force, stiffness: 1, ";
+  const std::string head =
+      "model: slider.urdf\nsteps: 1\ndrives: {slide: {type: force, stiffness: 1, ";
   const std::string file = kExamples + "inline.yaml: drives.slide.target.sine = ";
   EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 1e308, offset: 1e308}}}}"),
             file + "{amplitude: 1e308, offset: 1e308}: offset + amplitude overflows");
   EXPECT_EQ(error_of(head + "target: {sine: {amplitude: -1.5e308, offset: -1e308}}}}"),
             file + "{amplitude: -1.5e308, offset: -1e308}: offset + amplitude overflows");
   EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 1e300, frequency: 1e10}}}}"),
-            file + "{amplitude: 1e300, frequency: 1e10}: the velocity amplitude 2 pi frequency "
-                   "amplitude overflows");
+            file +
+                "{amplitude: 1e300, frequency: 1e10}: the velocity amplitude 2 pi frequency "
+                "amplitude overflows");
   EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 0, frequency: 1e308}}}}"),
-            file + "{amplitude: 0, frequency: 1e308}: the velocity amplitude 2 pi frequency "
-                   "amplitude overflows");
+            file +
+                "{amplitude: 0, frequency: 1e308}: the velocity amplitude 2 pi frequency "
+                "amplitude overflows");
   // Finite everywhere but at a huge time: 2 pi f t overflows at step 999 (t = 1000 s).
-  const Scene s = scene_from("model: slider.urdf\nsteps: 1\ndt: 1\ndrives: {slide: {type: force, "
-                             "target: {sine: {amplitude: 1, frequency: 1e305}}}}");
+  const Scene s = scene_from(
+      "model: slider.urdf\nsteps: 1\ndt: 1\ndrives: {slide: {type: force, "
+      "target: {sine: {amplitude: 1, frequency: 1e305}}}}");
   Simulation sim = make_simulation(s);
   apply_targets(s, sim, 0);
   try {
@@ -319,8 +324,9 @@ TEST(Scene, SineTargetsThatOverflowAreRefusedWithTheKey) {
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
-              kExamples + "inline.yaml: drives.slide.target.sine: the target at t = 1000 s is not "
-                          "finite (2 pi frequency t overflows)");
+              kExamples +
+                  "inline.yaml: drives.slide.target.sine: the target at t = 1000 s is not "
+                  "finite (2 pi frequency t overflows)");
   }
 }
 

@@ -369,7 +369,8 @@ TEST(Urdf, DocumentsNestedDeeperThanTheBoundAreRefusedBeforeAnyReaderRecurses) {
             deeper);
   // Unclosed, attributes with '>' and '/', whitespace and newlines inside tags.
   EXPECT_EQ(on_small_stack([&] {
-              parse_urdf("<robot name='r'>\n" + nested(100000, "<a b=\"x>/y\" c='/>'\n>"), "x.urdf");
+              parse_urdf("<robot name='r'>\n" + nested(100000, "<a b=\"x>/y\" c='/>'\n>"),
+                         "x.urdf");
             }),
             "x.urdf: line 101: elements nested deeper than 100 (the bound)");
   // Closing tags in comments, CDATA or processing instructions close nothing.
@@ -414,10 +415,11 @@ TEST(Urdf, ALinkThatIsTheChildOfTwoJointsIsRefusedNamingBoth) {
   // A cycle with one parent each has no root: still the cycle message, found in O(n).
   std::string ring = "<robot name='r'>";
   for (int i = 0; i < 20000; ++i)
-    ring += link("r" + std::to_string(i)) +
-            joint("k" + std::to_string(i), "r" + std::to_string(i), "r" + std::to_string((i + 1) % 20000));
-  EXPECT_NE(urdf_error(ring + "</robot>").find("inline.urdf: the joints form a cycle through link 'r"),
-            std::string::npos);
+    ring += link("r" + std::to_string(i)) + joint("k" + std::to_string(i), "r" + std::to_string(i),
+                                                  "r" + std::to_string((i + 1) % 20000));
+  EXPECT_NE(
+      urdf_error(ring + "</robot>").find("inline.urdf: the joints form a cycle through link 'r"),
+      std::string::npos);
 }
 
 TEST(Urdf, LongChainsImportAndDescribeWithoutRecursion) {
@@ -457,8 +459,10 @@ TEST(Urdf, LongChainsOfFixedJointsMergeWithoutRecursion) {
 TEST(Urdf, NamesWithControlCharactersAreRefused) {
   const auto named = [](const std::string& link_name, const std::string& joint_name) {
     return "<robot name='r'><link name='base'/><link name='" + link_name + "'>" + kInertial +
-           "</link><joint name='" + joint_name + "' type='continuous'><parent link='base'/>"
-           "<child link='" + link_name + "'/></joint></robot>";
+           "</link><joint name='" + joint_name +
+           "' type='continuous'><parent link='base'/>"
+           "<child link='" +
+           link_name + "'/></joint></robot>";
   };
   EXPECT_EQ(urdf_error(named("a&#10;b", "j")),
             "inline.urdf: link name 'a\\x0ab' contains a control character (0x0a)");
@@ -480,7 +484,9 @@ TEST(Urdf, LimitsOfInfAreRefused) {
   const auto limited = [](const std::string& lower, const std::string& upper) {
     return "<robot name='r'><link name='base'/><link name='a'>" + kInertial +
            "</link><joint name='j' type='revolute'><parent link='base'/><child link='a'/>"
-           "<limit lower='" + lower + "' upper='" + upper + "' effort='1' velocity='1'/>"
+           "<limit lower='" +
+           lower + "' upper='" + upper +
+           "' effort='1' velocity='1'/>"
            "</joint></robot>";
   };
   for (const auto& [lower, upper] : {std::pair{"inf", "inf"}, std::pair{"-1", "-inf"},
@@ -496,9 +502,11 @@ TEST(Urdf, InertialsThatOverflowAreRefusedNamingTheLinkAndTheValue) {
   const auto robot = [](const std::string& mass, const std::string& origin,
                         const std::string& joint_type) {
     return "<robot name='r'><link name='base'>" + kInertial +
-           "</link><link name='hand'><inertial><origin xyz='" + origin + "'/><mass value='" +
-           mass + "'/><inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial>"
-           "</link><joint name='j' type='" + joint_type + "'><parent link='base'/>"
+           "</link><link name='hand'><inertial><origin xyz='" + origin + "'/><mass value='" + mass +
+           "'/><inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial>"
+           "</link><joint name='j' type='" +
+           joint_type +
+           "'><parent link='base'/>"
            "<child link='hand'/><axis xyz='0 0 1'/></joint></robot>";
   };
   // Merged: the parallel axis shift m d^2 overflows (it used to say "inertia(0,0) = -nan").
@@ -519,7 +527,8 @@ TEST(Urdf, InertialsThatOverflowAreRefusedNamingTheLinkAndTheValue) {
       "<mass value='5e307'/><inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/>"
       "</inertial></link><joint name='j' type='continuous'><parent link='base'/>"
       "<child link='hand'/></joint></robot>";
-  EXPECT_NE(urdf_error(two_heavy).find("inline.urdf: link 'hand': mass = 5e+307, inertia [1, 1, 1]: the model's total"),
+  EXPECT_NE(urdf_error(two_heavy).find(
+                "inline.urdf: link 'hand': mass = 5e+307, inertia [1, 1, 1]: the model's total"),
             std::string::npos);
   // Heavy but summable: describe prints the finite total.
   const UrdfRobot ok = parse_urdf(robot("1e300", "0 0 0", "continuous"), "ok.urdf");

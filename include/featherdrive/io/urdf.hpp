@@ -65,8 +65,8 @@ struct UrdfRobot {
 
 /// Reads a URDF file. Throws InputError naming the file, the element and the value for a
 /// malformed file, one nested deeper than kMaxUrdfDepth, a link that is the child of two joints, a
-/// name with a control character, an unsupported joint type (floating, planar) or a moving link without
-/// <inertial>.
+/// name with a control character, an unsupported joint type (floating, planar) or a moving link
+/// without <inertial>.
 UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options = {});
 
 /// The same from a string; `name` stands for the file in messages.
