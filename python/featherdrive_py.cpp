@@ -394,7 +394,8 @@ constexpr const char* kSolverDoc = "'pgs' or 'tgs' (or a SolverType)";
 }  // namespace
 
 PYBIND11_MODULE(featherdrive, m) {
-  main_thread_id = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  main_thread_id =
+      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
   m.doc() =
       "featherdrive: articulated robots in reduced coordinates with implicit PD joint drives "
       "solved as NVIDIA PhysX 5 does (PGS or TGS).\n\n"
@@ -765,10 +766,12 @@ PYBIND11_MODULE(featherdrive, m) {
             locked(s, [&] { s.set_qd(v); });
           },
           py::arg("qd"), "Sets the joint velocities (nv,).")
-      .def_property_readonly("time", [](const Simulation& s) { return locked(s, [&] { return s.time(); }); },
-                             "Simulated time [s].")
       .def_property_readonly(
-          "step_count", [](const Simulation& s) { return locked(s, [&] { return s.step_count(); }); },
+          "time", [](const Simulation& s) { return locked(s, [&] { return s.time(); }); },
+          "Simulated time [s].")
+      .def_property_readonly(
+          "step_count",
+          [](const Simulation& s) { return locked(s, [&] { return s.step_count(); }); },
           "Steps made.")
       .def(
           "set_applied_force",
@@ -979,9 +982,10 @@ PYBIND11_MODULE(featherdrive, m) {
       .def(
           "sim",
           [](Batch& b, py::handle i) -> Simulation& {
-            Simulation& s = b.sim(index_in(to_int64(i, "copy index", std::numeric_limits<long long>::min(),
-                                                    std::numeric_limits<long long>::max()),
-                                           b.size(), "copy index"));
+            constexpr auto lo = std::numeric_limits<long long>::min();
+            constexpr auto hi = std::numeric_limits<long long>::max();
+            const long long index = to_int64(i, "copy index", lo, hi);
+            Simulation& s = b.sim(index_in(index, b.size(), "copy index"));
             auto lock = lock_for(&b);
             lock_table()[&s] = std::move(lock);  // the copy shares the batch's lock
             return s;
@@ -1011,10 +1015,12 @@ PYBIND11_MODULE(featherdrive, m) {
           "set_options",
           [](Batch& b, const SimulationOptions& o) { locked(b, [&] { b.set_options(o); }); },
           py::arg("options"), "Sets every copy's options.")
-      .def_property_readonly("q", [](const Batch& b) { return read_only(locked(b, [&] { return b.q(); })); },
-                             "Configurations (N, nq), a read-only copy.")
-      .def_property_readonly("qd", [](const Batch& b) { return read_only(locked(b, [&] { return b.qd(); })); },
-                             "Joint velocities (N, nv), a read-only copy.")
+      .def_property_readonly(
+          "q", [](const Batch& b) { return read_only(locked(b, [&] { return b.q(); })); },
+          "Configurations (N, nq), a read-only copy.")
+      .def_property_readonly(
+          "qd", [](const Batch& b) { return read_only(locked(b, [&] { return b.qd(); })); },
+          "Joint velocities (N, nv), a read-only copy.")
       .def_property_readonly(
           "drive_force",
           [](const Batch& b) { return read_only(locked(b, [&] { return b.drive_force(); })); },

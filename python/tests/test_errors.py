@@ -343,8 +343,10 @@ def test_link_parameters_of_a_float_names_the_argument(arm):
 
 
 @pytest.mark.parametrize("call, message", [
-    (lambda arm: fd.Simulation(arm, solver=3), "solver = 3: expected 'pgs' or 'tgs' or a SolverType, not int"),
-    (lambda arm: fd.Simulation(arm, compat=1.0), "compat = 1.0: expected 'none' or 'physx' or a Compat"),
+    (lambda arm: fd.Simulation(arm, solver=3),
+     "solver = 3: expected 'pgs' or 'tgs' or a SolverType, not int"),
+    (lambda arm: fd.Simulation(arm, compat=1.0),
+     "compat = 1.0: expected 'none' or 'physx' or a Compat"),
     (lambda arm: fd.Drive(type=2), "drive type = 2: expected 'none', 'force' or 'acceleration'"),
     (lambda arm: fd.Simulation(arm).set_drive_gains(1.0, 1.0, None), "drive type = None"),
     (lambda arm: fd.Batch(arm, 2, solver=b"pgs"), "solver = b'pgs'"),
