@@ -186,7 +186,7 @@ void step_in_chunks(const T& object, int count, Step step) {
   auto lock = lock_for(&object);
   py::gil_scoped_release nogil;
   Hold hold(std::move(lock));
-  if (!on_main_thread()) return step(count);
+  if (count <= 1 || !on_main_thread()) return step(count);
   using Clock = std::chrono::steady_clock;
   int done = 0, chunk = 1;
   while (done < count) {

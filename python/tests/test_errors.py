@@ -239,8 +239,14 @@ def test_batch_sizes_indices_and_threads(arm):
             batch.num_threads = t
         with pytest.raises(ValueError, match=out_of_range("num_threads", t, 0, INT_MAX)):
             batch.set_num_threads(t)
+    for t in [4097, INT_MAX]:  # a huge TBB arena crashed
+        with pytest.raises(ValueError, match=rf"num_threads = {t} must be in \[0, 4096\]"):
+            batch.num_threads = t
     batch.num_threads = np.int8(2)
     assert batch.num_threads == 2
+    batch.set_num_threads(4096)
+    batch.step(1)
+    assert batch.effective_num_threads() == 4096 and batch.sim(0).step_count == 1
 
 
 @pytest.mark.parametrize("joint", [np.int64(2), np.int32(2), np.uint16(2), Index(2), 2])
