@@ -76,19 +76,22 @@ else
 FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
 endif
 
+# The targets run side by side, JOBS at a time (each fuzzer is single-threaded).
 fuzz: fuzz-build
-	@for t in $(FUZZ_TARGETS); do \
-	  mkdir -p $(FUZZ_BUILD)/corpus/$$t $(FUZZ_BUILD)/artifacts; \
-	  echo "fuzz_$$t: $(FUZZ_LENGTH)"; \
-	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
-	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$$t $(FUZZ_LENGTH) -timeout=20 \
+	@$(MAKE) --no-print-directory --output-sync=target -j $(JOBS) \
+	  $(addprefix fuzz-run-,$(FUZZ_TARGETS))
+
+fuzz-run-%:
+	@mkdir -p $(FUZZ_BUILD)/corpus/$* $(FUZZ_BUILD)/artifacts
+	@echo "fuzz_$*: $(FUZZ_LENGTH)"
+	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
+	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$* $(FUZZ_LENGTH) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
-	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- \
-	    $(FUZZ_BUILD)/corpus/$$t tests/fuzz/corpus/$$t 2>$(FUZZ_BUILD)/fuzz_$$t.log \
-	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$$t.log; \
-	       tail -n 8 $(FUZZ_BUILD)/fuzz_$$t.log; echo "fuzz_$$t FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }; \
-	  grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$$t.log || true; \
-	done
+	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$*- \
+	    $(FUZZ_BUILD)/corpus/$* tests/fuzz/corpus/$* 2>$(FUZZ_BUILD)/fuzz_$*.log \
+	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$*.log; \
+	       tail -n 8 $(FUZZ_BUILD)/fuzz_$*.log; echo "fuzz_$* FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
+	@grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$*.log || true
 
 # Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
 # the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.

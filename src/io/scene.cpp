@@ -396,8 +396,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   const std::string model = r.text(root["model"], "model");
   scene.model_path = std::filesystem::path(model).is_absolute() ? std::filesystem::path(model)
                                                                 : path.parent_path() / model;
+  // A folder, FIFO or device is load_urdf's to refuse ("is not a regular file"); only a name
+  // that is not there at all is this key's fault.
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(scene.model_path, ec))
+  if (!std::filesystem::exists(scene.model_path, ec))
     r.fail("model", root["model"],
            "no such file (looked for " +
                std::filesystem::absolute(scene.model_path).lexically_normal().string() + ")");

@@ -93,10 +93,12 @@ def non_regular_inputs():
         one_line_error(run("info", path), 2, f"{path}: {why}", f"info {path}")
         one_line_error(run("simulate", scene, "--load-state", path), 2, f"{path}: {why}",
                        f"--load-state {path}")
-    # A scene whose model is not a regular file: refused (by the scene reader) without a read.
-    for model in (w("folder.urdf"), fifo, "/dev/zero"):
+    # A scene whose model is not a regular file: refused by the URDF reader, without a read.
+    for model, why in ((w("folder.urdf"), "is a directory"),
+                       (fifo, "is not a regular file (a FIFO)"),
+                       ("/dev/zero", "is not a regular file (a character device)")):
         s = write(w("model.yaml"), f"model: {model}\nsteps: 1\n")
-        one_line_error(run("simulate", s), 2, f"model = {model}", f"a scene with model {model}")
+        one_line_error(run("simulate", s), 2, f"{model}: {why}", f"a scene with model {model}")
     one_line_error(run("simulate", w("missing.yaml")), 2,
                    f"{w('missing.yaml')}: cannot open the file: No such file or directory",
                    "a missing scene")

@@ -105,6 +105,8 @@ TEST(Batch, DriveSettersCheckEverythingFirst) {
   EXPECT_THROW(batch.set_q(RowMatrix::Zero(3, model->nq)), std::invalid_argument);
   EXPECT_THROW(batch.sim(2), std::invalid_argument);
   EXPECT_THROW(batch.set_num_threads(-1), std::invalid_argument);
+  EXPECT_THROW(batch.set_num_threads(Batch::kMaxThreads + 1), std::invalid_argument);
+  EXPECT_NO_THROW(batch.set_num_threads(Batch::kMaxThreads));
 }
 
 }  // namespace
