@@ -141,6 +141,29 @@ def test_model_and_file_errors(tmp_path):
         fd.load_scene(str(bad))
 
 
+def test_deep_and_long_urdfs():
+    # 100 000 nested elements: refused before the XML reader recurses (it would overflow the stack).
+    deep = '<robot name="r">' + "<a>" * 100000 + "</a>" * 100000 + "</robot>"
+    with pytest.raises(ValueError, match="deep.urdf: line 1: elements nested deeper than 100"):
+        fd.parse_urdf(deep, "deep.urdf")
+    # A link that is the child of two joints, before a cycle through it could loop.
+    two = ('<robot name="r"><link name="a"/><link name="b"/><link name="c"/>'
+           '<joint name="j1" type="fixed"><parent link="a"/><child link="b"/></joint>'
+           '<joint name="j2" type="fixed"><parent link="b"/><child link="c"/></joint>'
+           '<joint name="j3" type="fixed"><parent link="c"/><child link="b"/></joint></robot>')
+    with pytest.raises(ValueError, match="link 'b' is the child of two joints, 'j1' and 'j3'"):
+        fd.parse_urdf(two, "two.urdf")
+    # A 5 000-link chain imports, every joint a dof.
+    links = "".join(f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" '
+                    f'izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>' for i in range(5001))
+    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/>'
+                     f'<child link="l{i}"/><axis xyz="0 0 1"/>'
+                     f'<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+                     for i in range(1, 5001))
+    robot = fd.parse_urdf(f'<robot name="chain">{links}{joints}</robot>', "chain.urdf")
+    assert robot.model.nv == 5000
+
+
 # ---- integers: 64-bit range checks before narrowing; numpy integers are integers --------------
 
 class Index:

@@ -436,6 +436,29 @@ with open(sys.argv[3], 'w', newline='') as f:
     no_temporaries("compare-physx")
 
 
+def deep_and_long_robots():
+    # Stack depth the input controls: 100 000 nested elements are refused before the XML reader
+    # recurses; a 10 000-link chain is described (no recursion in the printer, linear output).
+    deep = write(w("deep.urdf"), '<robot name="r">' + "<a>" * 100000 + "</a>" * 100000 + "</robot>\n")
+    one_line_error(run("info", deep), 2, f"{deep}: line 1: elements nested deeper than 100",
+                   "info on a 100 000-deep URDF")
+    links = ['<link name="l0"/>']
+    joints = []
+    for i in range(1, 10001):
+        links.append(f'<link name="l{i}"><inertial><mass value="1"/>'
+                     '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+        joints.append(f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/>'
+                      f'<child link="l{i}"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/>'
+                      '<limit lower="-1" upper="1" effort="10" velocity="1"/></joint>')
+    chain = write(w("chain.urdf"), '<robot name="chain">' + "".join(links + joints) + "</robot>\n")
+    result = run("info", chain)
+    check(result.returncode == 0, "info on a 10 000-link chain: exit 0", result)
+    check("l10000" in result.stdout, "info on a 10 000-link chain: the last link is shown", result)
+    # Indentation capped at depth 32: linear output (2 spaces a level would make it 300 MB).
+    size = len(result.stdout)
+    check(size < 1000 * 10000, f"info on a 10 000-link chain: {size} bytes, linear in the links")
+
+
 def main():
     global CLI, SOURCE, WORK, TMP
     CLI, SOURCE, out_dir = sys.argv[1], os.path.abspath(sys.argv[2]), sys.argv[3]
@@ -446,7 +469,7 @@ def main():
     TMP = os.path.join(WORK, "tmp")
     os.makedirs(TMP)
     for part in (non_regular_inputs, outputs_never_clobber_inputs, plots, signals, integers,
-                 reports, names_and_physx_scale):
+                 reports, names_and_physx_scale, deep_and_long_robots):
         part()
     if failures:
         print("\n".join(failures))
