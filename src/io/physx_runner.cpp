@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -274,6 +276,50 @@ int run_program(const std::vector<std::string>& argv, const fs::path& stderr_pat
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+namespace {
+// One run on the harness's server (`node harness.js --serve SOCKET`, which the tests start once so
+// that PhysX is loaded once, not once per case): the exit status, its messages written to `log`;
+// -1 when no server answers on `socket_path` (the caller then starts node itself).
+int run_on_server(const std::string& socket_path, const fs::path& scene, const fs::path& csv,
+                  const fs::path& log) {
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  if (socket_path.size() >= sizeof address.sun_path) return -1;
+  std::copy(socket_path.begin(), socket_path.end(), address.sun_path);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  const std::string request = scene.string() + "\t" + csv.string() + "\n";
+  bool sent = true;
+  for (size_t done = 0; sent && done < request.size();) {
+    const ssize_t n = ::send(fd, request.data() + done, request.size() - done, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;
+    sent = n > 0;
+    if (sent) done += static_cast<size_t>(n);
+  }
+  std::string answer;
+  char buffer[4096];
+  for (ssize_t n; sent && (n = ::read(fd, buffer, sizeof buffer)) != 0;) {
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    answer.append(buffer, static_cast<size_t>(n));
+  }
+  ::close(fd);
+  const size_t end = answer.find('\n');
+  int code = -1;
+  if (end == std::string::npos ||
+      std::from_chars(answer.data(), answer.data() + end, code).ec != std::errc())
+    return -1;
+  std::ofstream(log) << answer.substr(end + 1);
+  return code;
+}
+}  // namespace
+
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
                           const std::vector<TargetsByJoint>& targets) {
   const std::string json = physx_scene_json(sim, steps, targets);  // throws for what PhysX lacks
@@ -287,7 +333,9 @@ JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int 
     if (!out.flush()) throw PhysxError("cannot write " + scene.string());
   }
   const std::string harness = (physx.dir / "harness.js").string();
-  const int rc = run_program({physx.node, harness, scene.string(), csv.string()}, log);
+  const char* server = std::getenv("FEATHERDRIVE_PHYSX_SERVER");
+  int rc = server && *server ? run_on_server(server, scene, csv, log) : -1;
+  if (rc < 0) rc = run_program({physx.node, harness, scene.string(), csv.string()}, log);
   if (rc != 0) {
     std::string m = "PhysX harness ";
     m += rc < 0 ? "could not be run" : "failed (exit " + std::to_string(rc) + ")";

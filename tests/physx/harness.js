@@ -3,6 +3,7 @@
 // featherdrive <-> PhysX comparison harness.
 //
 //   node harness.js SCENE.json OUT.csv
+//   node harness.js --serve SOCKET [IDLE_SECONDS]     (runs many, PhysX loaded once)
 //
 // Builds the articulation described by SCENE.json (format "featherdrive-physx/1", see
 // README.md) in PhysX 5.6.1 (WebAssembly build, CPU solver, float32), steps it and writes
@@ -648,13 +649,9 @@ function release(h) {
   try { h.scene.release(); } catch (e) { /* ignore */ }
 }
 
-async function main(argv) {
-  const usage = 'usage: node harness.js SCENE.json OUT.csv';
-  if (argv.length !== 2) {
-    console.error(`harness.js: error: expected 2 arguments\n${usage}`);
-    return 2;
-  }
-  const [scenePath, outPath] = argv;
+// One run: SCENE.json in, OUT.csv out. Returns the exit status; messages go to `say` (one line
+// each), as they go to stderr from the command line.
+function runOnce(P, scenePath, outPath, say) {
   let s;
   try {
     let text;
@@ -667,35 +664,87 @@ async function main(argv) {
     }
     s = parseScene(doc);
   } catch (e) {
-    if (e instanceof InputError) { console.error(`harness.js: error: ${e.message}`); return 2; }
+    if (e instanceof InputError) { say(`harness.js: error: ${e.message}`); return 2; }
     throw e;
   }
-
-  const P = await loadPhysX(__dirname);
   let result;
   try {
     result = simulate(P, s);
   } catch (e) {
-    if (e instanceof InputError) { console.error(`harness.js: error: ${e.message}`); return 2; }
-    console.error(`harness.js: error: ${e.message}`);
+    if (e instanceof InputError) { say(`harness.js: error: ${e.message}`); return 2; }
+    say(`harness.js: error: ${e.message}`);
     return 1;
   }
   const warnings = [...new Set(result.handle.world.messages.filter((m) => !m.severe).map((m) => m.text))];
-  for (const w of warnings) console.error(`harness.js: warning: ${w}`);
+  for (const w of warnings) say(`harness.js: warning: ${w}`);
   const lines = [result.header, ...result.rows.map((r) => r.map(fmt).join(','))];
   fs.mkdirSync(path.dirname(path.resolve(outPath)), { recursive: true });
   fs.writeFileSync(outPath, lines.join('\n') + '\n');
   if (result.asleep) {
-    console.error('harness.js: error: the articulation is asleep at the end of the run (results are not trustworthy)');
+    say('harness.js: error: the articulation is asleep at the end of the run (results are not trustworthy)');
     return 1;
   }
   const bad = result.rows.some((r) => r.some((x) => !Number.isFinite(x)));
   if (bad) {
-    console.error(`harness.js: error: the simulation produced non-finite values (see ${outPath})`);
+    say(`harness.js: error: the simulation produced non-finite values (see ${outPath})`);
     return 1;
   }
   release(result.handle);
   return 0;
+}
+
+// Serves runs on a Unix socket, PhysX loaded once (the tests' fixture; tests/physx/server.py):
+// a request is one line "SCENE.json<TAB>OUT.csv", the answer the exit status on its first line
+// and the messages after it. Requests are served one at a time, in arrival order. Exits after
+// `idleSeconds` without a request, so that a server nobody stops does not stay.
+async function serve(socketPath, idleSeconds) {
+  const net = require('net');
+  const P = await loadPhysX(__dirname);
+  try { fs.unlinkSync(socketPath); } catch (e) { /* not there */ }
+  let timer = null;
+  const server = net.createServer((conn) => {
+    let input = '';
+    conn.setEncoding('utf8');
+    conn.on('data', (chunk) => {
+      input += chunk;
+      const end = input.indexOf('\n');
+      if (end < 0) return;
+      const [scenePath, outPath] = input.slice(0, end).split('\t');
+      const said = [];
+      let code;
+      try {
+        code = outPath === undefined ? 2 : runOnce(P, scenePath, outPath, (m) => said.push(m));
+        if (outPath === undefined) said.push('harness.js: error: expected SCENE.json<TAB>OUT.csv');
+      } catch (e) {
+        said.push(`harness.js: error: ${e && e.message ? e.message : e}`);
+        code = 1;
+      }
+      conn.end(`${code}\n${said.join('\n')}${said.length ? '\n' : ''}`);
+      rearm();
+    });
+    conn.on('error', () => { /* the client went away */ });
+  });
+  const rearm = () => {
+    if (timer) clearTimeout(timer);
+    timer = setTimeout(() => { server.close(); process.exit(0); }, idleSeconds * 1000);
+  };
+  rearm();
+  server.listen(socketPath);
+  return new Promise(() => {});  // runs until idle
+}
+
+async function main(argv) {
+  const usage = 'usage: node harness.js SCENE.json OUT.csv | node harness.js --serve SOCKET [IDLE_SECONDS]';
+  if (argv[0] === '--serve' && (argv.length === 2 || argv.length === 3)) {
+    return serve(argv[1], argv.length === 3 ? Number(argv[2]) : 120);
+  }
+  if (argv.length !== 2) {
+    console.error(`harness.js: error: expected 2 arguments\n${usage}`);
+    return 2;
+  }
+  const [scenePath, outPath] = argv;
+  const P = await loadPhysX(__dirname);
+  return runOnce(P, scenePath, outPath, (m) => console.error(m));
 }
 
 module.exports = {

@@ -74,7 +74,10 @@ std::string physx_install_hint();
 PhysxInstall find_physx(const std::vector<std::filesystem::path>& default_dirs);
 
 /// Exports sim (its current state and settings) with `steps` steps and targets[k] set before
-/// step k + 1, runs the harness and returns its trajectory (steps + 1 rows). The files go to a
+/// step k + 1, runs the harness and returns its trajectory (steps + 1 rows). Where
+/// $FEATHERDRIVE_PHYSX_SERVER names the socket of a running `node harness.js --serve SOCKET`
+/// (the tests start one: PhysX then loads once, not once per run), the run goes there; when
+/// none answers, node is started as usual. The files go to a
 /// fresh temporary folder, removed afterwards unless the run fails (the message names it).
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
                           const std::vector<TargetsByJoint>& targets = {});
