@@ -1,13 +1,22 @@
 """Typed stubs of the featherdrive module (python/featherdrive_py.cpp): articulated robots in
 reduced coordinates with implicit PD joint drives solved as NVIDIA PhysX 5 does (PGS or TGS).
 
-Vectors read from a Simulation are read-only numpy views onto its state that follow later steps;
-copy them (numpy.array(sim.q)) to keep a snapshot. Bad input raises ValueError, a diverging step
-RuntimeError (DivergenceError), with the C++ message."""
+Vectors read from a Simulation are read-only numpy views onto its state that follow later steps
+and stay valid for its life (no call moves them; load_checkpoint restores in place); copy them
+(numpy.array(sim.q)) to keep a snapshot. Settings read back and Batch states are copies.
+
+A Simulation or Batch may be shared between threads: each call holds the object's lock (a copy
+from Batch.sim(i) shares the batch's), so calls run one after another, each whole; step() runs
+without the GIL. Views are not synchronised: read them when no step runs. Ctrl-C interrupts
+step() between two steps (KeyboardInterrupt, state of the last whole step).
+
+Integers are int, numpy integers or objects with __index__ (not bool, not float: TypeError),
+range-checked in 64 bits (ValueError naming the argument and value). Bad values raise
+ValueError, wrong types TypeError, a diverging step RuntimeError (DivergenceError)."""
 
 import enum
 import os
-from typing import Union
+from typing import SupportsIndex, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -15,7 +24,9 @@ import numpy.typing as npt
 ArrayLike = npt.ArrayLike
 Vector = npt.NDArray[np.float64]
 PathLike = Union[str, os.PathLike[str]]
-Joint = Union[str, int]
+Int = SupportsIndex
+"""An integer: int, a numpy integer or anything with __index__ (bool is refused)."""
+Joint = Union[str, Int]
 """A joint name, or a dof index."""
 
 class DivergenceError(RuntimeError):
@@ -106,7 +117,7 @@ class SimulationOptions:
     velocity_iterations: int
     compat: Compat
     def __init__(self, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
-                 position_iterations: int = 4, velocity_iterations: int = 1,
+                 position_iterations: Int = 4, velocity_iterations: Int = 1,
                  compat: Union[str, Compat] = "none") -> None:
         """ValueError for dt <= 0, position_iterations < 1 or velocity_iterations < 0."""
 
@@ -227,13 +238,14 @@ class ModelBuilder:
 class Simulation:
     """One simulation of a Model: state, drives, joint settings and the last step's forces."""
     def __init__(self, model: Model, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
-                 position_iterations: int = 4, velocity_iterations: int = 1,
+                 position_iterations: Int = 4, velocity_iterations: Int = 1,
                  compat: Union[str, Compat] = "none") -> None: ...
     def copy(self) -> Simulation: ...
     @property
     def model(self) -> Model: ...
     @property
-    def options(self) -> SimulationOptions: ...
+    def options(self) -> SimulationOptions:
+        """A copy; set_options changes them."""
     def set_options(self, options: SimulationOptions) -> None: ...
     @property
     def q(self) -> Vector:
@@ -266,8 +278,8 @@ class Simulation:
     def set_max_joint_velocity(self, joint: Joint, max_velocity: float) -> None: ...
     def set_friction_coefficient(self, joint: Joint, coefficient: float) -> None: ...
     def friction_coefficient(self, joint: Joint) -> float: ...
-    def set_link_parameters(self, link: Union[str, int], parameters: LinkParameters) -> None: ...
-    def link_parameters(self, link: Union[str, int]) -> LinkParameters: ...
+    def set_link_parameters(self, link: Union[str, Int], parameters: LinkParameters) -> None: ...
+    def link_parameters(self, link: Union[str, Int]) -> LinkParameters: ...
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
@@ -279,8 +291,9 @@ class Simulation:
     def friction_force(self) -> Vector: ...
     @property
     def velocity_limit_force(self) -> Vector: ...
-    def step(self, count: int = 1) -> None:
-        """Advances count steps (GIL released); DivergenceError on a non-finite step."""
+    def step(self, count: Int = 1) -> None:
+        """Advances count steps (0 <= count < 2**31, GIL released); DivergenceError on a
+        non-finite step; Ctrl-C: KeyboardInterrupt at a whole step."""
 
 def set_drive_targets(sim: Simulation, positions: ArrayLike, velocities: ArrayLike) -> None: ...
 def set_drive_gains(sim: Simulation, stiffness: ArrayLike, damping: ArrayLike,
@@ -290,16 +303,20 @@ class Batch:
     """N independent copies of one Model stepped together on all cores, bit-identical to
     stepping each alone for any num_threads."""
     num_threads: int
-    def __init__(self, model: Model, count: int, dt: float = 1.0 / 60.0,
-                 solver: Union[str, SolverType] = "pgs", position_iterations: int = 4,
-                 velocity_iterations: int = 1,
+    @overload
+    def __init__(self, model: Model, count: Int, dt: float = 1.0 / 60.0,
+                 solver: Union[str, SolverType] = "pgs", position_iterations: Int = 4,
+                 velocity_iterations: Int = 1,
                  compat: Union[str, Compat] = "none") -> None: ...
+    @overload
+    def __init__(self, prototype: Simulation, count: Int) -> None: ...
     def __len__(self) -> int: ...
     def size(self) -> int: ...
     @property
     def model(self) -> Model: ...
-    def sim(self, i: int) -> Simulation: ...
-    def set_num_threads(self, threads: int) -> None: ...
+    def sim(self, i: Int) -> Simulation:
+        """A reference into the batch; it shares the batch's lock."""
+    def set_num_threads(self, threads: Int) -> None: ...
     def effective_num_threads(self) -> int: ...
     def set_options(self, options: SimulationOptions) -> None: ...
     @property
@@ -322,8 +339,9 @@ class Batch:
     def set_drive_gains(self, stiffness: ArrayLike, damping: ArrayLike,
                         type: Union[DriveType, str] = DriveType.force) -> None: ...
     def set_drive(self, joint: str, drive: Drive) -> None: ...
-    def step(self, count: int = 1) -> None:
-        """Steps every copy (GIL released); DivergenceError names the lowest diverged copy."""
+    def step(self, count: Int = 1) -> None:
+        """Steps every copy (0 <= count < 2**31, GIL released); DivergenceError names the lowest
+        diverged copy; Ctrl-C: KeyboardInterrupt with every copy at the same whole step."""
 
 class UrdfOptions:
     fixed_base: bool
@@ -388,7 +406,8 @@ def load_scene(path: PathLike) -> Scene:
     """Raises InputError (a ValueError) naming the file, key and value."""
 def parse_scene(text: str, path: PathLike) -> Scene: ...
 def make_simulation(scene: Scene) -> Simulation: ...
-def apply_targets(scene: Scene, sim: Simulation, step_index: int) -> None: ...
+def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
+    """0 <= step_index <= 2**31 - 2."""
 
 
 class CheckpointError(ValueError): ...

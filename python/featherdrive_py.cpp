@@ -9,11 +9,18 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstring>
+#include <exception>
+#include <initializer_list>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <unordered_map>
+#include <utility>
 
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -28,6 +35,189 @@ using namespace featherdrive;
 namespace {
 
 using ModelPtr = std::shared_ptr<Model>;
+constexpr long long kIntMax = std::numeric_limits<int>::max();
+
+// ---- integers -------------------------------------------------------------------------------
+// Every integer from Python is read in 64 bits and range-checked before it is narrowed: ValueError
+// naming the argument and the value. int, numpy integers and anything with __index__ are integers;
+// bool is refused (True as a count or an index is a mistake) and so are floats: TypeError.
+
+std::string type_name(py::handle obj) {
+  return py::str(py::type::handle_of(obj).attr("__name__")).cast<std::string>();
+}
+
+bool is_integer(py::handle obj) {
+  if (PyBool_Check(obj.ptr())) return false;
+  if (PyLong_Check(obj.ptr())) return true;
+  if (!PyIndex_Check(obj.ptr())) return false;
+  return !py::isinstance(obj, py::module_::import("numpy").attr("bool_"));
+}
+
+/// obj as a 64-bit integer in [lo, hi].
+long long to_int64(py::handle obj, const std::string& what, long long lo, long long hi) {
+  if (!is_integer(obj))
+    throw py::type_error(what + " must be an integer, not " + type_name(obj) + " (" +
+                         py::repr(obj).cast<std::string>() + ")");
+  const auto index = py::reinterpret_steal<py::object>(PyNumber_Index(obj.ptr()));
+  if (!index) throw py::error_already_set();
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+  if (v == -1 && PyErr_Occurred()) throw py::error_already_set();
+  if (overflow != 0 || v < lo || v > hi)
+    throw py::value_error(what + " = " + py::str(index).cast<std::string>() +
+                          " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                          "]");
+  return v;
+}
+
+int to_int(py::handle obj, const std::string& what, long long lo, long long hi = kIntMax) {
+  return static_cast<int>(to_int64(obj, what, lo, std::min(hi, kIntMax)));
+}
+
+/// A str argument as UTF-8; TypeError naming `what` for anything else.
+std::string to_str(py::handle obj, const std::string& what) {
+  if (!py::isinstance<py::str>(obj))
+    throw py::type_error(what + " must be a str, not " + type_name(obj));
+  Py_ssize_t size = 0;
+  const char* data = PyUnicode_AsUTF8AndSize(obj.ptr(), &size);
+  if (!data) throw py::error_already_set();
+  return std::string(data, static_cast<size_t>(size));
+}
+
+/// A joint or link given as a name or an index, read while the GIL is held; resolved against the
+/// model later, under the object's lock.
+struct NameOrIndex {
+  std::string name;
+  long long index = -1;
+  bool named = false;
+};
+
+NameOrIndex to_name_or_index(py::handle obj, const std::string& what, const char* expected) {
+  if (py::isinstance<py::str>(obj)) return {to_str(obj, what), -1, true};
+  if (!is_integer(obj))
+    throw py::type_error(what + " = " + py::repr(obj).cast<std::string>() + ": expected " +
+                         expected + ", not " + type_name(obj));
+  return {"", to_int64(obj, what, std::numeric_limits<long long>::min(),
+                       std::numeric_limits<long long>::max()), false};
+}
+
+// ---- per-object locks -----------------------------------------------------------------------
+// Python threads may share a Simulation or Batch: every binding that reads or writes one holds
+// its lock, so calls on one object are serialised (whole calls: a step(n) runs its n steps before
+// another call on that object starts). The lock is waited for with the GIL released, so that its
+// holder can re-take the GIL (step() runs without it); the main thread's wait answers Ctrl-C. The
+// table maps an object's address to its lock and is only touched with the GIL held, which guards
+// it. A copy inside a Batch maps to the batch's lock (Batch.sim registers it). The entries of an
+// object go when the Python object owning it is freed (the holders' deleters).
+
+struct ObjectLock {
+  std::timed_mutex mutex;
+};
+
+using LockTable = std::unordered_map<const void*, std::shared_ptr<ObjectLock>>;
+
+LockTable& lock_table() {
+  static auto* table = new LockTable;  // never destroyed: deleters may run during interpreter exit
+  return *table;
+}
+
+std::shared_ptr<ObjectLock> lock_for(const void* object) {
+  std::shared_ptr<ObjectLock>& lock = lock_table()[object];
+  if (!lock) lock = std::make_shared<ObjectLock>();
+  return lock;
+}
+
+unsigned long main_thread_id = 0;  // set at import
+
+bool on_main_thread() { return PyThread_get_thread_ident() == main_thread_id; }
+
+/// Raises KeyboardInterrupt (or what a signal handler raised) if a signal came; call without the
+/// GIL, on the main thread (the only one Python runs signal handlers on).
+void check_signals() {
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+}
+
+/// Holds an object's lock for its scope.
+class Hold {
+ public:
+  /// With the GIL held: waits without it if another thread holds the lock.
+  explicit Hold(const void* object) : lock_(lock_for(object)) {
+    if (lock_->mutex.try_lock()) return;
+    py::gil_scoped_release nogil;
+    wait();
+  }
+  /// Without the GIL (lock from lock_for, taken with the GIL).
+  explicit Hold(std::shared_ptr<ObjectLock> lock) : lock_(std::move(lock)) { wait(); }
+  ~Hold() { lock_->mutex.unlock(); }
+  Hold(const Hold&) = delete;
+  Hold& operator=(const Hold&) = delete;
+
+ private:
+  void wait() {
+    if (!on_main_thread()) return lock_->mutex.lock();
+    while (!lock_->mutex.try_lock_for(std::chrono::milliseconds(20))) check_signals();
+  }
+  std::shared_ptr<ObjectLock> lock_;
+};
+
+/// f() holding object's lock, with the GIL.
+template <class T, class F>
+auto locked(const T& object, F&& f) {
+  Hold hold(&object);
+  return f();
+}
+
+/// f() holding object's lock, without the GIL (file input and output); f must not touch Python.
+template <class T, class F>
+void locked_nogil(const T& object, F&& f) {
+  auto lock = lock_for(&object);
+  py::gil_scoped_release nogil;
+  Hold hold(std::move(lock));
+  f();
+}
+
+/// step(n) for n = count in all, without the GIL, holding object's lock. On the main thread the
+/// steps go in chunks with a check for Ctrl-C between them (KeyboardInterrupt with the state of
+/// the last whole step); chunks double while they take under 2 ms, so a long run checks every few
+/// ms and step(1) costs no check at all.
+template <class T, class Step>
+void step_in_chunks(const T& object, int count, Step step) {
+  auto lock = lock_for(&object);
+  py::gil_scoped_release nogil;
+  Hold hold(std::move(lock));
+  if (count <= 1 || !on_main_thread()) return step(count);
+  using Clock = std::chrono::steady_clock;
+  int done = 0, chunk = 1;
+  while (done < count) {
+    const int n = std::min(chunk, count - done);
+    const auto start = Clock::now();
+    step(n);
+    done += n;
+    if (done == count) break;
+    check_signals();
+    const auto took = Clock::now() - start;
+    if (took < std::chrono::milliseconds(2) && chunk <= kIntMax / 2) chunk *= 2;
+    else if (took > std::chrono::milliseconds(20) && chunk > 1) chunk /= 2;
+  }
+}
+
+// Python owns Simulations and Batches through these: freeing one drops its lock entries.
+struct SimulationDeleter {
+  void operator()(Simulation* sim) const {
+    lock_table().erase(sim);
+    delete sim;
+  }
+};
+struct BatchDeleter {
+  void operator()(Batch* batch) const {
+    lock_table().erase(batch);
+    for (int i = 0; i < batch->size(); ++i) lock_table().erase(&batch->sim(i));
+    delete batch;
+  }
+};
+using SimulationHolder = std::unique_ptr<Simulation, SimulationDeleter>;
+using BatchHolder = std::unique_ptr<Batch, BatchDeleter>;
 
 // Python holds models as shared_ptr<Model> (pybind11 needs a non-const holder); the bindings
 // expose no way to change one, so it stays as immutable as the C++ shared_ptr<const Model>.
@@ -103,73 +293,89 @@ py::array read_only(RowMatrix m) {
   return a;
 }
 
+// An enum argument: the enum itself or its name; ValueError for an unknown name, TypeError for
+// any other type.
+template <class E>
+E to_enum(py::handle obj, const char* what, std::initializer_list<std::pair<const char*, E>> names,
+          const char* expected) {
+  if (py::isinstance<E>(obj)) return obj.cast<E>();
+  if (!py::isinstance<py::str>(obj))
+    throw py::type_error(std::string(what) + " = " + py::repr(obj).cast<std::string>() +
+                         ": expected " + expected + " or a " +
+                         py::str(py::type::of<E>().attr("__name__")).cast<std::string>() +
+                         ", not " + type_name(obj));
+  const std::string s = to_str(obj, what);
+  for (const auto& [name, value] : names)
+    if (s == name) return value;
+  throw std::invalid_argument(std::string(what) + " = '" + s + "': must be " + expected);
+}
+
 SolverType to_solver(py::handle obj) {
-  if (py::isinstance<SolverType>(obj)) return obj.cast<SolverType>();
-  if (py::isinstance<py::str>(obj)) {
-    const auto s = obj.cast<std::string>();
-    if (s == "pgs") return SolverType::pgs;
-    if (s == "tgs") return SolverType::tgs;
-    throw std::invalid_argument("solver = '" + s + "': must be 'pgs' or 'tgs'");
-  }
-  throw std::invalid_argument("solver = " + py::repr(obj).cast<std::string>() +
-                              ": must be 'pgs', 'tgs' or a SolverType");
+  return to_enum<SolverType>(obj, "solver", {{"pgs", SolverType::pgs}, {"tgs", SolverType::tgs}},
+                             "'pgs' or 'tgs'");
 }
 
 DriveType to_drive_type(py::handle obj) {
-  if (py::isinstance<DriveType>(obj)) return obj.cast<DriveType>();
-  if (py::isinstance<py::str>(obj)) {
-    const auto s = obj.cast<std::string>();
-    if (s == "none") return DriveType::none;
-    if (s == "force") return DriveType::force;
-    if (s == "acceleration") return DriveType::acceleration;
-    throw std::invalid_argument("drive type = '" + s + "': must be 'none', 'force' or 'acceleration'");
-  }
-  throw std::invalid_argument("drive type = " + py::repr(obj).cast<std::string>() +
-                              ": must be 'none', 'force', 'acceleration' or a DriveType");
+  return to_enum<DriveType>(obj, "drive type",
+                            {{"none", DriveType::none},
+                             {"force", DriveType::force},
+                             {"acceleration", DriveType::acceleration}},
+                            "'none', 'force' or 'acceleration'");
 }
 
 Compat to_compat(py::handle obj) {
-  if (py::isinstance<Compat>(obj)) return obj.cast<Compat>();
-  if (py::isinstance<py::str>(obj)) {
-    const auto s = obj.cast<std::string>();
-    if (s == "none") return Compat::none;
-    if (s == "physx") return Compat::physx;
-    throw std::invalid_argument("compat = '" + s + "': must be 'none' or 'physx'");
-  }
-  throw std::invalid_argument("compat = " + py::repr(obj).cast<std::string>() +
-                              ": must be 'none', 'physx' or a Compat");
+  return to_enum<Compat>(obj, "compat", {{"none", Compat::none}, {"physx", Compat::physx}},
+                         "'none' or 'physx'");
 }
 
-// A link by name or index.
-int link_of(const Model& model, py::handle link) {
-  if (py::isinstance<py::str>(link)) return model.link_index(link.cast<std::string>());
-  return link.cast<int>();
-}
-
-SimulationOptions make_options(double dt, py::handle solver, int position_iterations,
-                               int velocity_iterations, py::handle compat = py::none()) {
+SimulationOptions make_options(double dt, py::handle solver, py::handle position_iterations,
+                               py::handle velocity_iterations, py::handle compat = py::none()) {
   SimulationOptions o;
   o.dt = dt;
   if (!compat.is_none()) o.compat = to_compat(compat);
   o.solver = to_solver(solver);
-  o.position_iterations = position_iterations;
-  o.velocity_iterations = velocity_iterations;
+  o.position_iterations = to_int(position_iterations, "position_iterations", 1);
+  o.velocity_iterations = to_int(velocity_iterations, "velocity_iterations", 0);
   validate_options(o);
   return o;
 }
 
+NameOrIndex joint_arg(py::handle joint) {
+  return to_name_or_index(joint, "joint", "a joint name (str) or a dof index (int)");
+}
+
+NameOrIndex link_arg(py::handle link) {
+  return to_name_or_index(link, "link", "a link name (str) or a link index (int)");
+}
+
+int index_in(long long index, int size, const char* what) {
+  if (index < 0 || index >= size)
+    throw std::invalid_argument(std::string(what) + " " + std::to_string(index) +
+                                " is out of range [0, " + std::to_string(size) + ")");
+  return static_cast<int>(index);
+}
+
 /// The dof of a joint given by name (its first dof) or by dof index.
-int dof_of(const Model& model, py::handle joint) {
-  if (py::isinstance<py::str>(joint)) return model.dof_index(joint.cast<std::string>());
-  if (py::isinstance<py::int_>(joint) && !py::isinstance<py::bool_>(joint)) {
-    const long dof = joint.cast<long>();
-    if (dof < 0 || dof >= model.nv)
-      throw std::invalid_argument("dof index " + std::to_string(dof) + " is out of range [0, " +
-                                  std::to_string(model.nv) + ")");
-    return static_cast<int>(dof);
-  }
-  throw std::invalid_argument("joint = " + py::repr(joint).cast<std::string>() +
-                              ": expected a joint name (str) or a dof index (int)");
+int dof_of(const Model& model, const NameOrIndex& joint) {
+  return joint.named ? model.dof_index(joint.name) : index_in(joint.index, model.nv, "dof index");
+}
+
+int link_of(const Model& model, const NameOrIndex& link) {
+  return link.named ? model.link_index(link.name)
+                    : index_in(link.index, model.num_links(), "link index");
+}
+
+/// The model of a simulation or batch, read under its lock.
+template <class T>
+std::shared_ptr<const Model> model_of(const T& object) {
+  return locked(object, [&] { return object.model_ptr(); });
+}
+
+/// f(dof) under the simulation's lock, for a joint given by name or dof index.
+template <class F>
+auto on_joint(const Simulation& s, py::handle joint, F f) {
+  const NameOrIndex j = joint_arg(joint);
+  return locked(s, [&] { return f(dof_of(s.model(), j)); });
 }
 
 std::string fmt(double v) {
@@ -188,13 +394,30 @@ constexpr const char* kSolverDoc = "'pgs' or 'tgs' (or a SolverType)";
 }  // namespace
 
 PYBIND11_MODULE(featherdrive, m) {
+  main_thread_id =
+      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
   m.doc() =
       "featherdrive: articulated robots in reduced coordinates with implicit PD joint drives "
       "solved as NVIDIA PhysX 5 does (PGS or TGS).\n\n"
       "Vectors read from a Simulation (q, qd, drive_force, ...) are read-only numpy views onto "
-      "its state: they follow later steps; copy them (numpy.array(sim.q)) to keep a snapshot. "
-      "Bad input raises ValueError, a diverging step RuntimeError (DivergenceError), with the "
-      "C++ message.";
+      "its state: they follow later steps and stay valid for the simulation's life (set_q, "
+      "set_options, load_checkpoint, ... write into the same memory); copy them "
+      "(numpy.array(sim.q)) to keep a snapshot. Batch states and the settings read back "
+      "(drive(), options, ...) are copies.\n\n"
+      "Threads: a Simulation or Batch may be shared between Python threads. Each has a lock "
+      "that every method holds while it reads or writes the object (a copy from Batch.sim(i) "
+      "shares its batch's lock), so calls on one object run one after another, each whole: "
+      "four threads calling step(n) make exactly 4n steps, the same as one thread. A method "
+      "waits for the lock without the GIL; step() runs without the GIL, so threads stepping "
+      "different objects run in parallel. Views are not synchronised: reading sim.q while "
+      "another thread steps sim reads values being written; read views when no step runs.\n\n"
+      "Ctrl-C interrupts step() (Simulation and Batch) between two steps: KeyboardInterrupt, "
+      "with the state of the last whole step (step_count tells how many were made).\n\n"
+      "Integers (counts, indices, iterations, threads) are int, numpy integers or any object "
+      "with __index__; bool and float are refused (TypeError); a value out of range raises "
+      "ValueError naming the argument and the value, before anything is narrowed to 32 bits.\n\n"
+      "Bad values raise ValueError, wrong types TypeError, a diverging step RuntimeError "
+      "(DivergenceError), with the C++ message.";
 
   // Errors: subclasses of the Python exceptions the C++ base classes map to.
   py::register_exception<DivergenceError>(m, "DivergenceError", PyExc_RuntimeError)
@@ -330,8 +553,18 @@ PYBIND11_MODULE(featherdrive, m) {
            "position_iterations < 1 or velocity_iterations < 0.")
       .def_readwrite("dt", &SimulationOptions::dt, "time step [s]")
       .def_readwrite("solver", &SimulationOptions::solver, "SolverType")
-      .def_readwrite("position_iterations", &SimulationOptions::position_iterations, ">= 1")
-      .def_readwrite("velocity_iterations", &SimulationOptions::velocity_iterations, ">= 0")
+      .def_property(
+          "position_iterations", [](const SimulationOptions& o) { return o.position_iterations; },
+          [](SimulationOptions& o, py::handle n) {
+            o.position_iterations = to_int(n, "position_iterations", 1);
+          },
+          ">= 1")
+      .def_property(
+          "velocity_iterations", [](const SimulationOptions& o) { return o.velocity_iterations; },
+          [](SimulationOptions& o, py::handle n) {
+            o.velocity_iterations = to_int(n, "velocity_iterations", 0);
+          },
+          ">= 0")
       .def_readwrite("compat", &SimulationOptions::compat, "Compat, chosen at construction")
       .def("__repr__", [](const SimulationOptions& o) {
         return "SimulationOptions(dt=" + fmt(o.dt) + ", solver='" + to_string(o.solver) +
@@ -487,10 +720,13 @@ PYBIND11_MODULE(featherdrive, m) {
           "link or joint, field and value.");
 
   // ---- simulation -----------------------------------------------------------------------------
-  py::class_<Simulation>(m, "Simulation",
-                         "One simulation of a Model: state, drives, joint settings and the "
-                         "forces of the last step.")
-      .def(py::init([](ModelPtr model, double dt, py::handle solver, int pi, int vi,
+  // Every method holds the object's lock (see Hold) while it reads or writes the simulation, and
+  // converts its Python arguments before (a conversion may run Python code that uses the object).
+  // The views (q, qd, ...) are taken without it: creating one reads nothing.
+  py::class_<Simulation, SimulationHolder>(m, "Simulation",
+                                           "One simulation of a Model: state, drives, joint "
+                                           "settings and the forces of the last step.")
+      .def(py::init([](ModelPtr model, double dt, py::handle solver, py::handle pi, py::handle vi,
                        py::handle compat) {
              return Simulation(std::move(model), make_options(dt, solver, pi, vi, compat));
            }),
@@ -503,54 +739,77 @@ PYBIND11_MODULE(featherdrive, m) {
              return Simulation(std::move(model), o);
            }),
            py::arg("model"), py::arg("options"), "A simulation with these options.")
-      .def("copy", [](const Simulation& s) { return Simulation(s); },
+      .def("copy", [](const Simulation& s) { return locked(s, [&] { return Simulation(s); }); },
            "An independent copy (same model, state and settings).")
-      .def_property_readonly("model", [](const Simulation& s) { return to_python(s.model_ptr()); },
+      .def_property_readonly("model", [](const Simulation& s) { return to_python(model_of(s)); },
                              "The Model.")
-      .def_property_readonly("options", &Simulation::options, "The SimulationOptions (a copy).")
-      .def("set_options", &Simulation::set_options, py::arg("options"),
-           "Replaces the options; ValueError for bad ones.")
+      .def_property_readonly(
+          "options", [](const Simulation& s) { return locked(s, [&] { return s.options(); }); },
+          "The SimulationOptions (a copy; set_options changes them).")
+      .def(
+          "set_options",
+          [](Simulation& s, const SimulationOptions& o) { locked(s, [&] { s.set_options(o); }); },
+          py::arg("options"), "Replaces the options; ValueError for bad ones.")
       .def_property_readonly("q", &Simulation::q, ref, "Configuration (nq,), read-only view.")
       .def_property_readonly("qd", &Simulation::qd, ref, "Joint velocities (nv,), read-only view.")
       .def(
-          "set_q", [](Simulation& s, py::handle q) { s.set_q(to_vector(q, s.model().nq, "q")); },
+          "set_q",
+          [](Simulation& s, py::handle q) {
+            const VecX v = to_vector(q, model_of(s)->nq, "q");
+            locked(s, [&] { s.set_q(v); });
+          },
           py::arg("q"), "Sets the configuration (nq,); quaternions are normalised.")
       .def(
-          "set_qd", [](Simulation& s, py::handle qd) { s.set_qd(to_vector(qd, s.model().nv, "qd")); },
+          "set_qd",
+          [](Simulation& s, py::handle qd) {
+            const VecX v = to_vector(qd, model_of(s)->nv, "qd");
+            locked(s, [&] { s.set_qd(v); });
+          },
           py::arg("qd"), "Sets the joint velocities (nv,).")
-      .def_property_readonly("time", &Simulation::time, "Simulated time [s].")
-      .def_property_readonly("step_count", &Simulation::step_count, "Steps made.")
+      .def_property_readonly(
+          "time", [](const Simulation& s) { return locked(s, [&] { return s.time(); }); },
+          "Simulated time [s].")
+      .def_property_readonly(
+          "step_count",
+          [](const Simulation& s) { return locked(s, [&] { return s.step_count(); }); },
+          "Steps made.")
       .def(
           "set_applied_force",
           [](Simulation& s, py::handle tau) {
-            s.set_applied_force(to_vector(tau, s.model().nv, "applied_force"));
+            const VecX v = to_vector(tau, model_of(s)->nv, "applied_force");
+            locked(s, [&] { s.set_applied_force(v); });
           },
           py::arg("tau"), "Joint forces applied through each step (nv,), e.g. feed-forward.")
       .def_property_readonly("applied_force", &Simulation::applied_force, ref,
                              "Applied joint forces (nv,), read-only view.")
       .def(
           "set_drive",
-          [](Simulation& s, py::handle joint, const Drive& d) { s.set_drive(dof_of(s.model(), joint), d); },
+          [](Simulation& s, py::handle joint, const Drive& d) {
+            on_joint(s, joint, [&](int dof) { s.set_drive(dof, d); });
+          },
           py::arg("joint"), py::arg("drive"),
           "Sets the Drive of a joint (name) or dof (index); ValueError naming the joint and "
           "field for bad values.")
       .def(
-          "drive", [](const Simulation& s, py::handle joint) { return s.drive(dof_of(s.model(), joint)); },
+          "drive",
+          [](const Simulation& s, py::handle joint) {
+            return on_joint(s, joint, [&](int dof) { return s.drive(dof); });
+          },
           py::arg("joint"), "The Drive (a copy) of a joint (name) or dof (index).")
       .def(
           "set_drive_target",
           [](Simulation& s, py::handle joint, double position, double velocity) {
-            s.set_drive_target(dof_of(s.model(), joint), position, velocity);
+            on_joint(s, joint, [&](int dof) { s.set_drive_target(dof, position, velocity); });
           },
           py::arg("joint"), py::arg("position"), py::arg("velocity") = 0.0,
           "Sets one joint's drive target position and velocity.")
       .def(
           "set_drive_targets",
           [](Simulation& s, py::handle positions, py::object velocities) {
-            const int nv = s.model().nv;
+            const int nv = model_of(s)->nv;
             const VecX p = to_vector(positions, nv, "positions");
             const VecX v = velocities.is_none() ? VecX::Zero(nv) : to_vector(velocities, nv, "velocities");
-            set_drive_targets(s, p, v);
+            locked(s, [&] { set_drive_targets(s, p, v); });
           },
           py::arg("positions"), py::arg("velocities") = py::none(),
           "Sets every dof's target position and velocity (nv,) each; velocities default to 0. "
@@ -558,9 +817,11 @@ PYBIND11_MODULE(featherdrive, m) {
       .def(
           "set_drive_gains",
           [](Simulation& s, py::handle stiffness, py::handle damping, py::handle type) {
-            const int nv = s.model().nv;
-            set_drive_gains(s, to_vector(stiffness, nv, "stiffness", true),
-                            to_vector(damping, nv, "damping", true), to_drive_type(type));
+            const int nv = model_of(s)->nv;
+            const VecX kp = to_vector(stiffness, nv, "stiffness", true);
+            const VecX kd = to_vector(damping, nv, "damping", true);
+            const DriveType t = to_drive_type(type);
+            locked(s, [&] { set_drive_gains(s, kp, kd, t); });
           },
           py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
           "Sets every dof's stiffness and damping ((nv,) each, or a scalar for all) and makes "
@@ -569,68 +830,86 @@ PYBIND11_MODULE(featherdrive, m) {
       .def(
           "set_joint_limits",
           [](Simulation& s, py::handle joint, double lower, double upper) {
-            s.set_joint_limits(dof_of(s.model(), joint), lower, upper);
+            on_joint(s, joint, [&](int dof) { s.set_joint_limits(dof, lower, upper); });
           },
           py::arg("joint"), py::arg("lower"), py::arg("upper"),
           "Position limits of a revolute or prismatic joint (name or dof); +-inf for none.")
       .def(
-          "lower_limit", [](const Simulation& s, py::handle j) { return s.lower_limit(dof_of(s.model(), j)); },
+          "lower_limit",
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.lower_limit(dof); });
+          },
           py::arg("joint"), "Lower position limit of a joint (name or dof).")
       .def(
-          "upper_limit", [](const Simulation& s, py::handle j) { return s.upper_limit(dof_of(s.model(), j)); },
+          "upper_limit",
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.upper_limit(dof); });
+          },
           py::arg("joint"), "Upper position limit of a joint (name or dof).")
       .def(
           "set_joint_friction",
           [](Simulation& s, py::handle joint, const JointFriction& f) {
-            s.set_joint_friction(dof_of(s.model(), joint), f);
+            on_joint(s, joint, [&](int dof) { s.set_joint_friction(dof, f); });
           },
           py::arg("joint"), py::arg("friction"), "JointFriction of a joint (name or dof).")
       .def(
           "joint_friction",
-          [](const Simulation& s, py::handle j) { return s.joint_friction(dof_of(s.model(), j)); },
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.joint_friction(dof); });
+          },
           py::arg("joint"), "The JointFriction (a copy) of a joint (name or dof).")
       .def(
           "set_max_joint_velocity",
           [](Simulation& s, py::handle joint, double v) {
-            s.set_max_joint_velocity(dof_of(s.model(), joint), v);
+            on_joint(s, joint, [&](int dof) { s.set_max_joint_velocity(dof, v); });
           },
           py::arg("joint"), py::arg("max_velocity"),
           "Largest |qd| of a joint (name or dof); inf for none.")
       .def(
           "max_joint_velocity",
-          [](const Simulation& s, py::handle j) { return s.max_joint_velocity(dof_of(s.model(), j)); },
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.max_joint_velocity(dof); });
+          },
           py::arg("joint"), "Largest |qd| of a joint (name or dof).")
       .def(
           "set_friction_coefficient",
           [](Simulation& s, py::handle joint, double c) {
-            s.set_friction_coefficient(dof_of(s.model(), joint), c);
+            on_joint(s, joint, [&](int dof) { s.set_friction_coefficient(dof, c); });
           },
           py::arg("joint"), py::arg("coefficient"),
           "PhysX's older joint friction coefficient of a joint (name or dof): the friction impulse "
           "of a solve is at most coefficient * h * |F|, F the force the joint transmits.")
       .def(
           "friction_coefficient",
-          [](const Simulation& s, py::handle j) { return s.friction_coefficient(dof_of(s.model(), j)); },
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.friction_coefficient(dof); });
+          },
           py::arg("joint"), "The friction coefficient of a joint (name or dof).")
       .def(
           "set_link_parameters",
           [](Simulation& s, py::handle link, const LinkParameters& p) {
-            s.set_link_parameters(link_of(s.model(), link), p);
+            const NameOrIndex l = link_arg(link);
+            locked(s, [&] { s.set_link_parameters(link_of(s.model(), l), p); });
           },
           py::arg("link"), py::arg("parameters"), "LinkParameters of a link (name or index).")
       .def(
           "link_parameters",
-          [](const Simulation& s, py::handle link) { return s.link_parameters(link_of(s.model(), link)); },
+          [](const Simulation& s, py::handle link) {
+            const NameOrIndex l = link_arg(link);
+            return locked(s, [&] { return s.link_parameters(link_of(s.model(), l)); });
+          },
           py::arg("link"), "The LinkParameters (a copy) of a link (name or index).")
       .def(
           "set_actuator_envelope",
           [](Simulation& s, py::handle joint, const ActuatorEnvelope& e) {
-            s.set_actuator_envelope(dof_of(s.model(), joint), e);
+            on_joint(s, joint, [&](int dof) { s.set_actuator_envelope(dof, e); });
           },
           py::arg("joint"), py::arg("envelope"), "ActuatorEnvelope of a joint (name or dof).")
       .def(
           "actuator_envelope",
-          [](const Simulation& s, py::handle j) { return s.actuator_envelope(dof_of(s.model(), j)); },
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.actuator_envelope(dof); });
+          },
           py::arg("joint"), "The ActuatorEnvelope (a copy) of a joint (name or dof).")
       .def_property_readonly("drive_force", &Simulation::drive_force, ref,
                              "Drive force of each dof in the last step (nv,), read-only view.")
@@ -640,96 +919,155 @@ PYBIND11_MODULE(featherdrive, m) {
                              "Joint-friction force of each dof in the last step (nv,), view.")
       .def_property_readonly("velocity_limit_force", &Simulation::velocity_limit_force, ref,
                              "Velocity-limit force of each dof in the last step (nv,), view.")
-      .def("step", py::overload_cast<int>(&Simulation::step), py::arg("count") = 1,
-           py::call_guard<py::gil_scoped_release>(),
-           "Advances count steps of options.dt (the GIL is released). DivergenceError (a "
-           "RuntimeError) if a step would give a non-finite value: the state is that before the "
-           "step that diverged, the steps before it are kept.");
+      .def(
+          "step",
+          [](Simulation& s, py::handle count) {
+            const int n = to_int(count, "step: count", 0);
+            step_in_chunks(s, n, [&](int k) { s.step(k); });
+          },
+          py::arg("count") = 1,
+          "Advances count steps of options.dt without the GIL. DivergenceError (a RuntimeError) "
+          "if a step would give a non-finite value: the state is that before the step that "
+          "diverged, the steps before it are kept. Ctrl-C raises KeyboardInterrupt with the state "
+          "of the last whole step (step_count tells how many were made).");
 
   m.def(
       "set_drive_targets",
       [](Simulation& s, py::handle positions, py::handle velocities) {
-        const int nv = s.model().nv;
-        set_drive_targets(s, to_vector(positions, nv, "positions"), to_vector(velocities, nv, "velocities"));
+        const int nv = model_of(s)->nv;
+        const VecX p = to_vector(positions, nv, "positions");
+        const VecX v = to_vector(velocities, nv, "velocities");
+        locked(s, [&] { set_drive_targets(s, p, v); });
       },
       py::arg("sim"), py::arg("positions"), py::arg("velocities"),
       "The C++ free function; the same as sim.set_drive_targets(positions, velocities).");
   m.def(
       "set_drive_gains",
       [](Simulation& s, py::handle stiffness, py::handle damping, py::handle type) {
-        const int nv = s.model().nv;
-        set_drive_gains(s, to_vector(stiffness, nv, "stiffness", true),
-                        to_vector(damping, nv, "damping", true), to_drive_type(type));
+        const int nv = model_of(s)->nv;
+        const VecX kp = to_vector(stiffness, nv, "stiffness", true);
+        const VecX kd = to_vector(damping, nv, "damping", true);
+        const DriveType t = to_drive_type(type);
+        locked(s, [&] { set_drive_gains(s, kp, kd, t); });
       },
       py::arg("sim"), py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
       "The C++ free function; the same as sim.set_drive_gains(stiffness, damping, type).");
 
   // ---- batch ----------------------------------------------------------------------------------
-  py::class_<Batch>(m, "Batch",
-                    "N independent copies of one Model stepped together on all cores. Each "
-                    "copy's result is bit-identical to stepping it alone, for any num_threads. "
-                    "States read as (N, nq) / (N, nv) arrays (read-only copies).")
-      .def(py::init([](ModelPtr model, int count, double dt, py::handle solver, int pi, int vi,
-                       py::handle compat) {
-             return std::make_unique<Batch>(std::move(model), count,
-                                            make_options(dt, solver, pi, vi, compat));
+  py::class_<Batch, BatchHolder>(m, "Batch",
+                                 "N independent copies of one Model stepped together on all "
+                                 "cores. Each copy's result is bit-identical to stepping it "
+                                 "alone, for any num_threads. States read as (N, nq) / (N, nv) "
+                                 "arrays (read-only copies).")
+      .def(py::init([](ModelPtr model, py::handle count, double dt, py::handle solver,
+                       py::handle pi, py::handle vi, py::handle compat) {
+             const int n = to_int(count, "count", 1);
+             return BatchHolder(new Batch(std::move(model), n,
+                                          make_options(dt, solver, pi, vi, compat)));
            }),
            py::arg("model"), py::arg("count"), py::arg("dt") = 1.0 / 60.0,
            py::arg("solver") = "pgs", py::arg("position_iterations") = 4,
            py::arg("velocity_iterations") = 1, py::arg("compat") = "none",
            "count copies of a new Simulation of model (as Simulation(model, dt, solver, ...)).")
-      .def(py::init([](const Simulation& prototype, int count) {
-             return std::make_unique<Batch>(prototype, count);
+      .def(py::init([](const Simulation& prototype, py::handle count) {
+             const int n = to_int(count, "count", 1);
+             return locked(prototype, [&] { return BatchHolder(new Batch(prototype, n)); });
            }),
            py::arg("prototype"), py::arg("count"),
            "count copies of prototype: its state, drives, limits and other settings.")
-      .def("__len__", &Batch::size, "Number of copies.")
+      .def("__len__", &Batch::size, "Number of copies.")  // fixed at construction: no lock
       .def("size", &Batch::size, "Number of copies.")
-      .def_property_readonly("model", [](const Batch& b) { return to_python(b.model_ptr()); },
+      .def_property_readonly("model", [](const Batch& b) { return to_python(model_of(b)); },
                              "The shared Model.")
-      .def("sim", py::overload_cast<int>(&Batch::sim), py::arg("i"), ref,
-           "Copy i as a Simulation (a reference into the batch, for per-copy settings).")
-      .def_property("num_threads", &Batch::num_threads, &Batch::set_num_threads,
-                    "Threads step() uses: 0 = all cores (default), 1 = serial.")
-      .def("set_num_threads", &Batch::set_num_threads, py::arg("threads"),
-           "Threads step() uses: 0 = all cores, 1 = serial; ValueError if < 0.")
-      .def("effective_num_threads", &Batch::effective_num_threads,
-           "The threads step() will use.")
-      .def("set_options", &Batch::set_options, py::arg("options"), "Sets every copy's options.")
-      .def_property_readonly("q", [](const Batch& b) { return read_only(b.q()); },
-                             "Configurations (N, nq), a read-only copy.")
-      .def_property_readonly("qd", [](const Batch& b) { return read_only(b.qd()); },
-                             "Joint velocities (N, nv), a read-only copy.")
-      .def_property_readonly("drive_force", [](const Batch& b) { return read_only(b.drive_force()); },
-                             "Drive forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly("limit_force", [](const Batch& b) { return read_only(b.limit_force()); },
-                             "Position-limit forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly("friction_force",
-                             [](const Batch& b) { return read_only(b.friction_force()); },
-                             "Joint-friction forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly("velocity_limit_force",
-                             [](const Batch& b) { return read_only(b.velocity_limit_force()); },
-                             "Velocity-limit forces of the last step (N, nv), a read-only copy.")
       .def(
-          "set_q", [](Batch& b, py::handle q) { b.set_q(to_matrix(q, b.size(), b.model().nq, "q")); },
+          "sim",
+          [](Batch& b, py::handle i) -> Simulation& {
+            constexpr auto lo = std::numeric_limits<long long>::min();
+            constexpr auto hi = std::numeric_limits<long long>::max();
+            const long long index = to_int64(i, "copy index", lo, hi);
+            Simulation& s = b.sim(index_in(index, b.size(), "copy index"));
+            auto lock = lock_for(&b);
+            lock_table()[&s] = std::move(lock);  // the copy shares the batch's lock
+            return s;
+          },
+          py::arg("i"), ref,
+          "Copy i as a Simulation (a reference into the batch, for per-copy settings; it shares "
+          "the batch's lock).")
+      .def_property(
+          "num_threads", [](const Batch& b) { return locked(b, [&] { return b.num_threads(); }); },
+          [](Batch& b, py::handle threads) {
+            const int n = to_int(threads, "num_threads", 0);
+            locked(b, [&] { b.set_num_threads(n); });
+          },
+          "Threads step() uses: 0 = all cores (default), 1 = serial.")
+      .def(
+          "set_num_threads",
+          [](Batch& b, py::handle threads) {
+            const int n = to_int(threads, "num_threads", 0);
+            locked(b, [&] { b.set_num_threads(n); });
+          },
+          py::arg("threads"), "Threads step() uses: 0 = all cores, 1 = serial; ValueError if < 0.")
+      .def(
+          "effective_num_threads",
+          [](const Batch& b) { return locked(b, [&] { return b.effective_num_threads(); }); },
+          "The threads step() will use.")
+      .def(
+          "set_options",
+          [](Batch& b, const SimulationOptions& o) { locked(b, [&] { b.set_options(o); }); },
+          py::arg("options"), "Sets every copy's options.")
+      .def_property_readonly(
+          "q", [](const Batch& b) { return read_only(locked(b, [&] { return b.q(); })); },
+          "Configurations (N, nq), a read-only copy.")
+      .def_property_readonly(
+          "qd", [](const Batch& b) { return read_only(locked(b, [&] { return b.qd(); })); },
+          "Joint velocities (N, nv), a read-only copy.")
+      .def_property_readonly(
+          "drive_force",
+          [](const Batch& b) { return read_only(locked(b, [&] { return b.drive_force(); })); },
+          "Drive forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly(
+          "limit_force",
+          [](const Batch& b) { return read_only(locked(b, [&] { return b.limit_force(); })); },
+          "Position-limit forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly(
+          "friction_force",
+          [](const Batch& b) { return read_only(locked(b, [&] { return b.friction_force(); })); },
+          "Joint-friction forces of the last step (N, nv), a read-only copy.")
+      .def_property_readonly(
+          "velocity_limit_force",
+          [](const Batch& b) {
+            return read_only(locked(b, [&] { return b.velocity_limit_force(); }));
+          },
+          "Velocity-limit forces of the last step (N, nv), a read-only copy.")
+      .def(
+          "set_q",
+          [](Batch& b, py::handle q) {
+            const RowMatrix v = to_matrix(q, b.size(), model_of(b)->nq, "q");
+            locked(b, [&] { b.set_q(v); });
+          },
           py::arg("q"), "Sets the configurations (N, nq), or (nq,) for all copies.")
       .def(
-          "set_qd", [](Batch& b, py::handle qd) { b.set_qd(to_matrix(qd, b.size(), b.model().nv, "qd")); },
+          "set_qd",
+          [](Batch& b, py::handle qd) {
+            const RowMatrix v = to_matrix(qd, b.size(), model_of(b)->nv, "qd");
+            locked(b, [&] { b.set_qd(v); });
+          },
           py::arg("qd"), "Sets the joint velocities (N, nv), or (nv,) for all copies.")
       .def(
           "set_applied_force",
           [](Batch& b, py::handle tau) {
-            b.set_applied_force(to_matrix(tau, b.size(), b.model().nv, "applied_force"));
+            const RowMatrix v = to_matrix(tau, b.size(), model_of(b)->nv, "applied_force");
+            locked(b, [&] { b.set_applied_force(v); });
           },
           py::arg("tau"), "Sets the applied joint forces (N, nv), or (nv,) for all copies.")
       .def(
           "set_drive_targets",
           [](Batch& b, py::handle positions, py::object velocities) {
-            const int n = b.size(), nv = b.model().nv;
+            const int n = b.size(), nv = model_of(b)->nv;
             const RowMatrix p = to_matrix(positions, n, nv, "positions");
             const RowMatrix v = velocities.is_none() ? RowMatrix::Zero(n, nv)
                                                      : to_matrix(velocities, n, nv, "velocities");
-            b.set_drive_targets(p, v);
+            locked(b, [&] { b.set_drive_targets(p, v); });
           },
           py::arg("positions"), py::arg("velocities") = py::none(),
           "Per-copy target positions and velocities, (N, nv) or (nv,) for all copies; "
@@ -737,20 +1075,44 @@ PYBIND11_MODULE(featherdrive, m) {
       .def(
           "set_drive_gains",
           [](Batch& b, py::handle stiffness, py::handle damping, py::handle type) {
-            const int n = b.size(), nv = b.model().nv;
-            b.set_drive_gains(to_matrix(stiffness, n, nv, "stiffness"),
-                              to_matrix(damping, n, nv, "damping"), to_drive_type(type));
+            const int n = b.size(), nv = model_of(b)->nv;
+            const RowMatrix kp = to_matrix(stiffness, n, nv, "stiffness");
+            const RowMatrix kd = to_matrix(damping, n, nv, "damping");
+            const DriveType t = to_drive_type(type);
+            locked(b, [&] { b.set_drive_gains(kp, kd, t); });
           },
           py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
           "Per-copy stiffness and damping, (N, nv) or (nv,) for all copies, as "
           "Simulation.set_drive_gains. Nothing changes on a ValueError.")
-      .def("set_drive", &Batch::set_drive, py::arg("joint"), py::arg("drive"),
-           "The same Drive on one joint (name) of every copy.")
-      .def("step", &Batch::step, py::arg("count") = 1, py::call_guard<py::gil_scoped_release>(),
-           "Steps every copy count times, in parallel, without the GIL. A copy that diverges "
-           "stops at that step with its state from before it; the others make all their steps; "
-           "then DivergenceError names the lowest diverged copy (sim(i).step_count tells how far "
-           "each got).");
+      .def(
+          "set_drive",
+          [](Batch& b, py::handle joint, const Drive& d) {
+            const std::string j = to_str(joint, "joint");
+            locked(b, [&] { b.set_drive(j, d); });
+          },
+          py::arg("joint"), py::arg("drive"), "The same Drive on one joint (name) of every copy.")
+      .def(
+          "step",
+          [](Batch& b, py::handle count) {
+            const int n = to_int(count, "step: count", 0);
+            // A copy that diverged stays at its step and diverges again in every later chunk
+            // (same state, same inputs), so the last chunk's error names every diverged copy, as
+            // one Batch::step(n) would.
+            std::exception_ptr diverged;
+            step_in_chunks(b, n, [&](int k) {
+              try {
+                b.step(k);
+              } catch (const DivergenceError&) {
+                diverged = std::current_exception();
+              }
+            });
+            if (diverged) std::rethrow_exception(diverged);
+          },
+          py::arg("count") = 1,
+          "Steps every copy count times, in parallel, without the GIL. A copy that diverges "
+          "stops at that step with its state from before it; the others make all their steps; "
+          "then DivergenceError names the lowest diverged copy (sim(i).step_count tells how far "
+          "each got). Ctrl-C raises KeyboardInterrupt with every copy at a whole step.");
 
   // ---- io -------------------------------------------------------------------------------------
   py::class_<UrdfOptions>(m, "UrdfOptions", "How to import a URDF.")
@@ -778,7 +1140,8 @@ PYBIND11_MODULE(featherdrive, m) {
       .def_readonly("name", &UrdfRobot::name, "<robot name>")
       .def_readonly("root_link", &UrdfRobot::root_link, "root link name")
       .def_readonly("root_joint", &UrdfRobot::root_joint, "name of the root's joint")
-      .def_readonly("options", &UrdfRobot::options, "the UrdfOptions")
+      .def_property_readonly("options", [](const UrdfRobot& r) { return r.options; },
+                             "the UrdfOptions (a copy)")
       .def_readwrite("links", &UrdfRobot::links,
                      "the LinkSpecs after merging (a copy; assign an edited list and call "
                      "rebuild())")
@@ -815,8 +1178,11 @@ PYBIND11_MODULE(featherdrive, m) {
   py::class_<Scene>(m, "Scene", "A scene file: robot, options, initial state and drives.")
       .def_readonly("path", &Scene::path, "the scene file")
       .def_readonly("model_path", &Scene::model_path, "the URDF")
-      .def_readonly("robot", &Scene::robot, "the UrdfRobot")
-      .def_readonly("options", &Scene::options, "the SimulationOptions")
+      // Copies: a reference would let Python edit the scene's robot and options in place.
+      .def_property_readonly("robot", [](const Scene& s) { return s.robot; },
+                             "the UrdfRobot (a copy)")
+      .def_property_readonly("options", [](const Scene& s) { return s.options; },
+                             "the SimulationOptions (a copy)")
       .def_readonly("steps", &Scene::steps, "number of steps")
       .def_readonly("q0", &Scene::q0, "initial q (nq,)")
       .def_readonly("qd0", &Scene::qd0, "initial qd (nv,)")
@@ -831,15 +1197,33 @@ PYBIND11_MODULE(featherdrive, m) {
         "Reads scene text; path names the file and anchors the model path.");
   m.def("make_simulation", &make_simulation, py::arg("scene"),
         "A Simulation in the scene's initial state with its drives and joint settings.");
-  m.def("apply_targets", &apply_targets, py::arg("scene"), py::arg("sim"), py::arg("step_index"),
-        "Sets the sine targets for step k (0-based): those at t = (k + 1) dt.");
+  m.def(
+      "apply_targets",
+      [](const Scene& scene, Simulation& sim, py::handle step_index) {
+        // k + 1 must fit the C++ int.
+        const int k = to_int(step_index, "apply_targets: step_index", 0, kIntMax - 1);
+        locked(sim, [&] { apply_targets(scene, sim, k); });
+      },
+      py::arg("scene"), py::arg("sim"), py::arg("step_index"),
+      "Sets the sine targets for step k (0-based, at most 2**31 - 2): those at t = (k + 1) dt.");
 
   py::register_exception<CheckpointError>(m, "CheckpointError", PyExc_ValueError).doc() =
       "A file that is not a checkpoint of this model (truncated, corrupt, other version or "
       "model); a ValueError.";
-  m.def("save_checkpoint", &save_checkpoint, py::arg("sim"), py::arg("path"),
-        "Writes the full simulation state (state, clock, inputs, settings, last forces) "
-        "atomically, bit-exact.");
-  m.def("load_checkpoint", &load_checkpoint, py::arg("path"), py::arg("sim"),
-        "Restores a checkpoint into sim (same model); CheckpointError and sim unchanged otherwise.");
+  m.def(
+      "save_checkpoint",
+      [](const Simulation& sim, const std::filesystem::path& path) {
+        locked_nogil(sim, [&] { save_checkpoint(sim, path); });
+      },
+      py::arg("sim"), py::arg("path"),
+      "Writes the full simulation state (state, clock, inputs, settings, last forces) "
+      "atomically, bit-exact.");
+  m.def(
+      "load_checkpoint",
+      [](const std::filesystem::path& path, Simulation& sim) {
+        locked_nogil(sim, [&] { load_checkpoint(path, sim); });
+      },
+      py::arg("path"), py::arg("sim"),
+      "Restores a checkpoint into sim (same model) in place: views of sim stay valid and show "
+      "the restored state. CheckpointError and sim unchanged otherwise.");
 }

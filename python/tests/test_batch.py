@@ -108,6 +108,58 @@ def test_divergence_names_the_copy_and_leaves_the_others_stepping(arm):
         np.testing.assert_array_equal(batch.q[i], alone.q)
 
 
+def slider():
+    """A 2.5 kg cube sliding along z without limits."""
+    b = fd.ModelBuilder()
+    b.add_link(fd.make_link("base", "", 0.0, [0, 0, 0], np.zeros((3, 3)), fd.fixed_joint("world")))
+    b.add_link(fd.make_link("carriage", "base", 2.5, [0, 0, 0], 0.004 * np.eye(3),
+                            fd.prismatic_joint("slide", [0, 0, 1])))
+    return b.build()
+
+
+def test_divergence_in_the_middle_of_a_long_step(arm):
+    """On the main thread step(n) runs in chunks (between them it checks for Ctrl-C): copies that
+    diverge mid-run (a huge applied force overflows after some hundred steps) stop where they would
+    alone, the others make all n steps, and the error is that of one uninterrupted call (made
+    from another thread, which steps in one go)."""
+    import threading
+    model, forces = slider(), [0.0, 1e153, 3.0, 1e154, -2.0]
+    lone = []
+    for f in forces:
+        sim = fd.Simulation(model, dt=0.01)
+        sim.set_applied_force([f])
+        try:
+            sim.step(1000)
+            lone.append((sim, None))
+        except fd.DivergenceError as e:
+            lone.append((sim, str(e)))
+    assert [s.step_count for s, _ in lone] == [1000, 651, 1000, 206, 1000]
+    results = []
+    for on_main in (True, False):
+        batch = fd.Batch(model, len(forces), dt=0.01)
+        batch.set_applied_force(np.array(forces)[:, None])
+        errors = []
+
+        def step():
+            try:
+                batch.step(1000)
+            except fd.DivergenceError as e:
+                errors.append(str(e))
+
+        if on_main:
+            step()
+        else:
+            thread = threading.Thread(target=step)
+            thread.start()
+            thread.join()
+        assert errors == ["batch copy 1 (2 of 5 copies diverged): " + lone[1][1]]
+        for i, (sim, _) in enumerate(lone):
+            assert batch.sim(i).step_count == sim.step_count
+            np.testing.assert_array_equal(bits(batch.q[i]), bits(sim.q))
+        results.append(errors[0])
+    assert results[0] == results[1]
+
+
 def test_simulation_divergence_is_runtime_error(arm):
     sim = fd.Simulation(arm, dt=0.01)
     sim.step(2)

@@ -7,11 +7,14 @@
 #include <algorithm>
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
+
+#include "featherdrive/core/format.hpp"
 
 namespace featherdrive {
 namespace {
@@ -235,7 +238,17 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
   Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
   try {
     const double time = r.f64();
-    const long step_count = static_cast<long>(r.i64());
+    const std::int64_t step_count = r.i64();
+    // The clock must be one a run reaches (Simulation::set_clock's rule), or resuming overflows.
+    if (step_count < 0 || step_count > kMaxStepCount)
+      fail(name, "corrupt checkpoint: step count " + std::to_string(step_count) +
+                     " is outside [0, " + std::to_string(kMaxStepCount) + "]");
+    if (!std::isfinite(time) || time < 0.0 || time > 2.0 * static_cast<double>(step_count) * kMaxDt)
+      fail(name, "corrupt checkpoint: time " + format_double(time) + " s after " +
+                     std::to_string(step_count) +
+                     " steps is not one a run reaches (finite, >= 0, "
+                     "at most 2 * steps * " +
+                     format_double(kMaxDt) + " s)");
     SimulationOptions o;
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
@@ -243,9 +256,12 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       fail(name, "corrupt checkpoint: solver = " + std::to_string(solver));
     o.solver = static_cast<SolverType>(solver);
     const std::int64_t pos = r.i64(), vel = r.i64();
-    if (pos < 0 || pos > 1'000'000'000 || vel < 0 || vel > 1'000'000'000)
-      fail(name, "corrupt checkpoint: iterations " + std::to_string(pos) + " / " +
-                     std::to_string(vel));
+    if (pos < 1 || pos > kMaxIterations)
+      fail(name, "corrupt checkpoint: position_iterations " + std::to_string(pos) +
+                     " is outside [1, " + std::to_string(kMaxIterations) + "]");
+    if (vel < 0 || vel > kMaxIterations)
+      fail(name, "corrupt checkpoint: velocity_iterations " + std::to_string(vel) +
+                     " is outside [0, " + std::to_string(kMaxIterations) + "]");
     o.position_iterations = static_cast<int>(pos);
     o.velocity_iterations = static_cast<int>(vel);
     const std::uint8_t compat = r.u8();
@@ -257,7 +273,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                      " simulation, this simulation is compat " + to_string(sim.options().compat) +
                      " (compat is chosen when a simulation is made)");
     next.set_options(o);
-    next.set_clock(time, step_count);
+    next.set_clock(time, static_cast<long>(step_count));
     const VecX q = r.vec(model.nq);
     next.set_qd(r.vec(model.nv));
     next.set_applied_force(r.vec(model.nv));
@@ -289,11 +305,44 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       // The per-joint settings exist for revolute and prismatic joints only; elsewhere the
       // model's values stand (the fingerprint matched), and a setter is called only to change a
       // value, so what the model itself allows (e.g. a velocity limit of 0) is kept as it is.
-      const JointType jt = model.links[model.dof_link[d]].joint_type;
-      if (jt != JointType::revolute && jt != JointType::prismatic) continue;
       const auto same = [](double a, double b) {
         return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
       };
+      const JointType jt = model.links[model.dof_link[d]].joint_type;
+      if (jt != JointType::revolute && jt != JointType::prismatic) {
+        // No setter can change these here, so a run saves the simulation's own values.
+        const JointFriction& f0 = next.joint_friction(d);
+        const ActuatorEnvelope& e0 = next.actuator_envelope(d);
+        const double saved[] = {lower,
+                                upper,
+                                max_velocity,
+                                f.static_effort,
+                                f.dynamic_effort,
+                                f.viscous,
+                                e.max_effort,
+                                e.max_actuator_velocity,
+                                e.speed_effort_gradient,
+                                e.velocity_dependent_resistance,
+                                friction_coefficient};
+        const double held[] = {next.lower_limit(d),
+                               next.upper_limit(d),
+                               next.max_joint_velocity(d),
+                               f0.static_effort,
+                               f0.dynamic_effort,
+                               f0.viscous,
+                               e0.max_effort,
+                               e0.max_actuator_velocity,
+                               e0.speed_effort_gradient,
+                               e0.velocity_dependent_resistance,
+                               next.friction_coefficient(d)};
+        for (int k = 0; k < 11; ++k)
+          if (!same(saved[k], held[k]))
+            fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
+                           " joint '" + model.links[model.dof_link[d]].joint_name +
+                           "' has joint setting #" + std::to_string(k) + " = " +
+                           format_double(saved[k]) + ", which only a 1-dof joint can change");
+        continue;
+      }
       if (!same(lower, next.lower_limit(d)) || !same(upper, next.upper_limit(d)))
         next.set_joint_limits(d, lower, upper);
       if (!same(max_velocity, next.max_joint_velocity(d)))

@@ -1,8 +1,12 @@
 #include "featherdrive/io/describe.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace featherdrive {
 namespace {
@@ -26,15 +30,21 @@ std::string inertia(const Mat3& I) {
          num(I(0, 1)) + ", ixz " + num(I(0, 2)) + ", iyz " + num(I(1, 2));
 }
 
-void link_lines(std::ostringstream& out, const UrdfRobot& robot, const Model& model, int i,
-                int depth) {
+// Indentation shows the tree up to this depth; deeper links print their depth as a number, so a
+// long chain's output stays linear in its length.
+constexpr int kMaxIndent = 32;
+
+void link_line(std::ostringstream& out, const Model& model, const std::string& merged, int i,
+               int depth) {
   const Link& link = model.links[i];
-  const std::string pad(2 * depth, ' ');
+  const std::string pad(2 * std::min(depth, kMaxIndent), ' ');
   const std::string more = pad + "      ";
   const bool angular = link.joint_type == JointType::revolute;
   const char* pos_unit = angular ? "rad" : "m";
   const char* force_unit = angular ? "Nm" : "N";
-  out << pad << "- " << link.name;
+  out << pad << "- ";
+  if (depth > kMaxIndent) out << "(depth " << depth << ") ";
+  out << link.name;
   if (link.parent < 0) {
     out << "  (root, "
         << (link.joint_type == JointType::floating ? "floating" : "welded to the world") << ")\n";
@@ -60,11 +70,25 @@ void link_lines(std::ostringstream& out, const UrdfRobot& robot, const Model& mo
   }
   out << more << "mass " << num(link.mass) << " kg, com " << vec(link.com) << " m, inertia "
       << inertia(link.inertia_com) << " kg m^2\n";
-  std::string merged;
-  for (const auto& [name, m] : robot.merged)
-    if (m.into == link.name) merged += (merged.empty() ? "" : ", ") + name;
   if (!merged.empty()) out << more << "merged through fixed joints: " << merged << "\n";
-  for (int c : link.children) link_lines(out, robot, model, c, depth + 1);
+}
+
+// The tree depth first, children in order, with an explicit stack: a chain of any length.
+void link_lines(std::ostringstream& out, const UrdfRobot& robot, const Model& model) {
+  std::map<std::string, std::string> merged;  // link -> the links merged into it
+  for (const auto& [name, m] : robot.merged) {
+    std::string& list = merged[m.into];
+    list += (list.empty() ? "" : ", ") + name;
+  }
+  std::vector<std::pair<int, int>> stack{{0, 0}};  // link, depth
+  while (!stack.empty()) {
+    const auto [i, depth] = stack.back();
+    stack.pop_back();
+    const auto it = merged.find(model.links[i].name);
+    link_line(out, model, it == merged.end() ? std::string() : it->second, i, depth);
+    const std::vector<int>& children = model.links[i].children;
+    for (auto c = children.rbegin(); c != children.rend(); ++c) stack.emplace_back(*c, depth + 1);
+  }
 }
 
 }  // namespace
@@ -79,7 +103,7 @@ std::string describe(const UrdfRobot& robot) {
       << " links after merging " << robot.merged.size() << " fixed, " << model.nv << " dofs, "
       << (model.floating_base() ? "floating base" : "fixed base") << ", total mass " << num(total)
       << " kg\n\ntree (inertia about the centre of mass, link axes):\n";
-  link_lines(out, robot, model, 0, 0);
+  link_lines(out, robot, model);
   out << "\ndofs in URDF order:";
   for (int d : robot.dof_order) out << " " << model.dof_names[d];
   out << "\n";

@@ -2,8 +2,11 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -17,6 +20,8 @@
 
 namespace featherdrive {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Reads YAML nodes and names the file, the key path and the value in every error.
 class Reader {
@@ -86,16 +91,25 @@ class Reader {
     if (std::isnan(v) || v <= 0.0) fail(path, node, "must be > 0");
     return v;
   }
-  long integer(const YAML::Node& node, const std::string& path, long min) const {
+  /// An integer in [min, max], read in 64 bits before it is narrowed: a fraction, an exponent
+  /// or a value out of range is refused, never truncated.
+  long integer(const YAML::Node& node, const std::string& path, long min, long max) const {
     if (!node.IsScalar()) fail(path, node, "must be an integer");
-    long v = 0;
-    try {
-      v = node.as<long>();
-    } catch (const YAML::Exception&) {
+    const std::string& text = node.Scalar();
+    const char* begin = text.data();
+    const char* end = begin + text.size();
+    if (begin != end && *begin == '+' && end - begin > 1 && begin[1] != '-') ++begin;
+    std::int64_t v = 0;
+    const auto [stop, error] = std::from_chars(begin, end, v);
+    if (begin == end || stop != end ||
+        (error != std::errc() && error != std::errc::result_out_of_range))
       fail(path, node, "must be an integer");
-    }
-    if (v < min) fail(path, node, "must be >= " + std::to_string(min));
-    return v;
+    const bool negative = *begin == '-';
+    if (error == std::errc::result_out_of_range ? negative : v < min)
+      fail(path, node, "must be >= " + std::to_string(min));
+    if (error == std::errc::result_out_of_range || v > max)
+      fail(path, node, "must be <= " + std::to_string(max));
+    return static_cast<long>(v);
   }
   bool boolean(const YAML::Node& node, const std::string& path) const {
     if (!node.IsScalar()) fail(path, node, "must be true or false");
@@ -125,6 +139,84 @@ class Reader {
  private:
   std::string file_;
 };
+
+// yaml-cpp parses nested nodes recursively (its own guard stops at 2000 levels, deep enough to
+// overflow a small stack), so the nesting is measured first, without recursion: block levels by
+// the indentation of each line and its leading "- ", "? ", ": " indicators, flow levels by the
+// brackets outside quoted scalars and comments; block scalar content (| and >) is skipped. Where
+// this reading differs from YAML's it counts more levels, not fewer.
+void check_nesting(const std::string& text, const std::string& file) {
+  std::vector<size_t> columns;  // the columns of the open block nodes, innermost last
+  int flow = 0;
+  char quote = 0;
+  long block_scalar = -1;  // inside a block scalar: lines indented more than this are its text
+  size_t line = 1;
+  auto check = [&] {
+    if (columns.size() + static_cast<size_t>(flow) > static_cast<size_t>(kMaxSceneDepth))
+      throw InputError(file + ": line " + std::to_string(line) + ": nested deeper than " +
+                       std::to_string(kMaxSceneDepth) + " levels (the bound)");
+  };
+  const size_t n = text.size();
+  for (size_t i = 0; i < n; ++line) {
+    const size_t eol = std::min(text.find('\n', i), n);
+    size_t k = i;
+    while (k < eol && text[k] == ' ') ++k;
+    const long indent = static_cast<long>(k - i);
+    const bool blank = k == eol || text[k] == '#' || text[k] == '\r';
+    if (block_scalar >= 0 && (blank || indent > block_scalar)) {
+      i = eol + 1;
+      continue;
+    }
+    block_scalar = -1;
+    bool start = true;  // where a node may begin: a quote or a bracket opens one
+    if (!quote && flow == 0 && !blank) {
+      while (!columns.empty() && columns.back() >= k - i) columns.pop_back();
+      columns.push_back(k - i);
+      check();
+      while (k < eol && (text[k] == '-' || text[k] == '?' || text[k] == ':') &&
+             (k + 1 == eol || text[k + 1] == ' ')) {
+        for (++k; k < eol && text[k] == ' ';) ++k;
+        columns.push_back(k - i);
+        check();
+      }
+    }
+    for (; k < eol; ++k) {
+      const char c = text[k];
+      if (quote) {
+        if (quote == '"' && c == '\\')
+          ++k;
+        else if (c == quote && quote == '\'' && k + 1 < eol && text[k + 1] == '\'')
+          ++k;
+        else if (c == quote)
+          quote = 0, start = false;
+        continue;
+      }
+      if (c == ' ' || c == '\t' || c == '\r') continue;
+      if (c == '#' && (k == i || text[k - 1] == ' ' || text[k - 1] == '\t')) break;
+      const bool indicator = k + 1 == eol || text[k + 1] == ' ' || text[k + 1] == '\r';
+      if (start && (c == '"' || c == '\'')) {
+        quote = c;
+      } else if ((c == '[' || c == '{') && (start || flow > 0)) {
+        ++flow;
+        check();
+        start = true;
+      } else if ((c == ']' || c == '}') && flow > 0) {
+        --flow;
+        start = false;
+      } else if (c == ',' && flow > 0) {
+        start = true;
+      } else if ((c == ':' || c == '-' || c == '?') && indicator) {
+        start = true;
+      } else if ((c == '|' || c == '>') && start && flow == 0) {
+        block_scalar = indent;
+        break;
+      } else {
+        start = false;
+      }
+    }
+    i = eol + 1;
+  }
+}
 
 const std::vector<std::string> kDriveKeys = {"type",          "stiffness",       "damping",
                                              "max_force",     "max_impulse",     "target_position",
@@ -200,6 +292,13 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
     if (s["frequency"]) sine.frequency = r.non_negative(s["frequency"], spath + ".frequency");
     if (s["phase"]) sine.phase = r.finite(s["phase"], spath + ".phase");
     if (s["offset"]) sine.offset = r.finite(s["offset"], spath + ".offset");
+    // The target |offset| + |amplitude| and its velocity's amplitude 2 pi f |amplitude| must stay
+    // finite at every time (apply_targets still checks w t + phase for a huge t).
+    if (!std::isfinite(std::abs(sine.offset) + std::abs(sine.amplitude)))
+      r.fail(spath, s, "offset + amplitude overflows");
+    const double w = 2.0 * std::numbers::pi * sine.frequency;
+    if (!std::isfinite(w) || !std::isfinite(w * std::abs(sine.amplitude)))
+      r.fail(spath, s, "the velocity amplitude 2 pi frequency amplitude overflows");
     spec.sine = sine;
   }
   if (node["envelope"]) {
@@ -275,6 +374,7 @@ Scene load_scene(const std::filesystem::path& path) {
 
 Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   const Reader r(path.string());
+  check_nesting(text, path.string());
   YAML::Node loaded;
   try {
     loaded = YAML::Load(text);
@@ -311,11 +411,13 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     scene.options.dt = r.number(root["dt"], "dt");
     if (!std::isfinite(scene.options.dt) || scene.options.dt <= 0.0)
       r.fail("dt", root["dt"], "must be finite and > 0");
+    if (scene.options.dt < kMinDt || scene.options.dt > kMaxDt)
+      r.fail("dt", root["dt"],
+             "must be in [" + format_double(kMinDt) + ", " + format_double(kMaxDt) +
+                 "] s (a normal number)");
   }
   if (!root["steps"]) r.fail("steps", "missing: the number of steps to simulate");
-  const long steps = r.integer(root["steps"], "steps", 0);
-  if (steps > 1'000'000'000L) r.fail("steps", root["steps"], "must be <= 1000000000");
-  scene.steps = static_cast<int>(steps);
+  scene.steps = static_cast<int>(r.integer(root["steps"], "steps", 0, 1'000'000'000L));
 
   if (root["compat"]) {
     const std::string compat = r.text(root["compat"], "compat");
@@ -336,11 +438,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         r.fail("solver.type", s["type"], "must be pgs or tgs");
     }
     if (s["position_iterations"])
-      scene.options.position_iterations =
-          static_cast<int>(r.integer(s["position_iterations"], "solver.position_iterations", 1));
+      scene.options.position_iterations = static_cast<int>(
+          r.integer(s["position_iterations"], "solver.position_iterations", 1, kMaxIterations));
     if (s["velocity_iterations"])
-      scene.options.velocity_iterations =
-          static_cast<int>(r.integer(s["velocity_iterations"], "solver.velocity_iterations", 0));
+      scene.options.velocity_iterations = static_cast<int>(
+          r.integer(s["velocity_iterations"], "solver.velocity_iterations", 0, kMaxIterations));
   }
 
   // Joint settings first: armature changes the model.
@@ -358,10 +460,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
             {"lower", "upper", "max_velocity", "friction", "friction_coefficient", "armature"});
       if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
       if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
-      if (js.lower && std::isnan(*js.lower))
-        r.fail(path_j + ".lower", j["lower"], "must be a number");
-      if (js.upper && std::isnan(*js.upper))
-        r.fail(path_j + ".upper", j["upper"], "must be a number");
+      if (js.lower && (std::isnan(*js.lower) || *js.lower == kInf))
+        r.fail(path_j + ".lower", j["lower"], "must be a number below .inf");
+      if (js.upper && (std::isnan(*js.upper) || *js.upper == -kInf))
+        r.fail(path_j + ".upper", j["upper"], "must be a number above -.inf");
       const double lower = js.lower.value_or(m->lower_limit[js.dof]);
       const double upper = js.upper.value_or(m->upper_limit[js.dof]);
       if (lower > upper)
@@ -545,9 +647,17 @@ Simulation make_simulation(const Scene& scene) {
 }
 
 void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
-  const double t = (step_index + 1) * sim.options().dt;
-  for (const DriveSpec& d : scene.drives)
-    if (d.sine) sim.set_drive_target(d.dof, d.sine->position(t), d.sine->velocity(t));
+  // In double: (step_index + 1) in int overflows for INT_MAX.
+  const double t = (static_cast<double>(step_index) + 1.0) * sim.options().dt;
+  for (const DriveSpec& d : scene.drives) {
+    if (!d.sine) continue;
+    const double position = d.sine->position(t), velocity = d.sine->velocity(t);
+    if (!std::isfinite(position) || !std::isfinite(velocity))
+      throw InputError(scene.path.string() + ": drives." + d.joint +
+                       ".target.sine: the target at t = " + format_double(t) +
+                       " s is not finite (2 pi frequency t overflows)");
+    sim.set_drive_target(d.dof, position, velocity);
+  }
 }
 
 Simulation run_scene(const Scene& scene,

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -16,6 +17,8 @@
 
 namespace featherdrive {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw InputError(file + ": " + what);
@@ -93,6 +96,62 @@ void check_utf8(const std::string& text, const std::string& file) {
       ++column;
     }
     i += length;
+  }
+}
+
+// TinyXML (used by urdfdom too) parses and frees elements recursively, so a document nested
+// tens of thousands deep overflows the stack. Count the nesting as TinyXML would read it: comments
+// and CDATA end at "-->" and "]]>", "<!DOCTYPE ...>" and other "<!" at the first '>', "<?...?>" and
+// tags at the first '>' outside quotes, "<a/>" opens nothing.
+void check_nesting(const std::string& text, const std::string& file) {
+  int depth = 0, line = 1;
+  const size_t n = text.size();
+  // Moves i past the first `end` at or after it, counting lines; to the end if there is none.
+  auto skip_to = [&](size_t& i, const char* end) {
+    const size_t at = text.find(end, i);
+    const size_t stop = at == std::string::npos ? n : at + std::strlen(end);
+    for (; i < stop; ++i) line += text[i] == '\n';
+  };
+  // Moves i past the first '>' outside quoted values; true when the tag ends in "/>".
+  auto skip_tag = [&](size_t& i) {
+    char quote = 0, last = 0;
+    for (; i < n; ++i) {
+      const char c = text[i];
+      line += c == '\n';
+      if (quote) {
+        if (c == quote) quote = 0;
+      } else if (c == '"' || c == '\'') {
+        quote = c;
+      } else if (c == '>') {
+        ++i;
+        return last == '/';
+      }
+      if (!quote && c != ' ' && c != '\t' && c != '\n' && c != '\r') last = c;
+    }
+    return false;
+  };
+  for (size_t i = 0; i < n;) {
+    if (text[i] != '<') {
+      line += text[i] == '\n';
+      ++i;
+      continue;
+    }
+    if (text.compare(i, 4, "<!--") == 0) {
+      skip_to(i, "-->");
+    } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+      skip_to(i, "]]>");
+    } else if (text.compare(i, 2, "<!") == 0) {
+      skip_to(i, ">");
+    } else if (text.compare(i, 2, "<?") == 0 || text.compare(i, 2, "</") == 0) {
+      const bool close = text[i + 1] == '/';
+      skip_tag(i);
+      if (close && depth > 0) --depth;
+    } else {
+      const int at = line;
+      if (!skip_tag(i) && ++depth > kMaxUrdfDepth)
+        fail(file, "line " + std::to_string(at) + ": elements nested deeper than " +
+                       std::to_string(kMaxUrdfDepth) + " (the bound)");
+    }
   }
 }
 
@@ -226,6 +285,7 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
   // TinyXML (urdfdom's own XML reader) for the XML error position and the document order that
   // urdfdom's maps do not keep.
   check_utf8(xml, file);
+  check_nesting(xml, file);
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error())
@@ -236,10 +296,13 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     fail(file, std::string("the root element is <") + (robot_xml ? robot_xml->Value() : "") +
                    ">, expected <robot>");
   std::vector<std::string> link_order;
-  std::map<std::string, std::string> parent_of;  // child link -> parent link, from <joint>s
+  std::map<std::string, std::string> parent_of;     // child link -> parent link, from <joint>s
+  std::map<std::string, std::string> parent_joint;  // child link -> its joint
   for (const TiXmlElement* e = robot_xml->FirstChildElement(); e; e = e->NextSiblingElement()) {
     const char* name = e->Attribute("name");
     const std::string tag = e->Value();
+    if ((tag == "link" || tag == "joint") && name)
+      if (const std::string why = name_problem(name); !why.empty()) fail(file, tag + " " + why);
     if (tag == "link" && name) link_order.push_back(name);
     if (tag == "joint" && name) {
       robot.joint_order.push_back(name);
@@ -249,21 +312,38 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       const char* c = child ? child->Attribute("link") : nullptr;
       if (p && c && std::string(p) == c)
         fail(file, "joint '" + std::string(name) + "': parent and child are both link '" + c + "'");
-      if (p && c) parent_of.emplace(c, p);
+      if (!p || !c) continue;
+      // urdfdom would hang the link under both parents (and a cycle through the second one made
+      // the tree walk below endless).
+      if (auto [it, added] = parent_joint.emplace(c, name); !added)
+        fail(file, "link '" + std::string(c) + "' is the child of two joints, '" + it->second +
+                       "' and '" + name + "'");
+      parent_of.emplace(c, p);
     }
   }
   // A cycle of joints is refused here: urdfdom would build it from shared pointers and leak it.
+  // Each link is marked by the first walk up that reaches it, so this is O(n) for any chain.
+  std::map<std::string, std::string> walk;  // link -> the link whose walk reached it first
   for (const auto& [start, unused] : parent_of) {
     std::string link = start;
-    for (size_t n = 0; n <= parent_of.size(); ++n) {
+    while (walk.emplace(link, start).second) {
       auto it = parent_of.find(link);
       if (it == parent_of.end()) break;
       link = it->second;
-      if (link == start) fail(file, "the joints form a cycle through link '" + start + "'");
     }
+    if (walk[link] == start && parent_of.count(link))
+      fail(file, "the joints form a cycle through link '" + link + "'");
   }
 
   const urdf::ModelInterfaceSharedPtr urdf_model = parse_with_urdfdom(xml, file, robot.warnings);
+  // urdfdom's links own their children, so freeing a long chain recursed once per link: cut the
+  // links apart first (the map still owns every one).
+  struct Unlink {
+    urdf::ModelInterface& model;
+    ~Unlink() {
+      for (auto& [name, link] : model.links_) link->child_links.clear();
+    }
+  } unlink{*urdf_model};
   robot.name = urdf_model->getName();
   const urdf::LinkConstSharedPtr root = urdf_model->getRoot();
   robot.root_link = root->name;
@@ -305,6 +385,9 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       b.mass = in.mass;
       b.com = origin.p;
       b.inertia = origin.identity_rotation ? I : Mat3(origin.R * I * origin.R.transpose());
+      if (!b.inertia.allFinite())
+        fail(file, where + "<inertia>: turned by <origin rpy> = " + format_vec3(origin.rpy) +
+                       " it overflows");
       b.has_inertial = true;
     }
     own[name] = b;
@@ -332,6 +415,12 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       moved.com = p.identity_rotation ? Vec3(p.p + moved.com) : Vec3(p.p + p.R * moved.com);
       if (!p.identity_rotation) moved.inertia = p.R * moved.inertia * p.R.transpose();
       target = combine(target, moved);
+      // Finite inputs can still overflow in the parallel axis shift (m d^2) or the mass sum.
+      if (!(std::isfinite(target.mass) && target.com.allFinite() && target.inertia.allFinite()))
+        fail(file, "link '" + link->name +
+                       "' <inertial><origin xyz> = " + format_vec3(own[link->name].com) +
+                       ", mass " + format_double(own[link->name].mass) + ": merged into link '" +
+                       a + "' (fixed joints), the combined inertia overflows");
     }
     for (const urdf::JointSharedPtr& j : link->child_joints) {
       const urdf::LinkConstSharedPtr child = urdf_model->getLink(j->child_link_name);
@@ -399,6 +488,12 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
           if (j->limits) {
             spec.joint.lower_limit = j->limits->lower;
             spec.joint.upper_limit = j->limits->upper;
+            if (std::isnan(j->limits->lower) || j->limits->lower == kInf)
+              fail(file, where + " lower> = " + format_double(j->limits->lower) +
+                             ": must be a number below inf");
+            if (std::isnan(j->limits->upper) || j->limits->upper == -kInf)
+              fail(file, where + " upper> = " + format_double(j->limits->upper) +
+                             ": must be a number above -inf");
             if (j->limits->lower > j->limits->upper)
               fail(file, where + " lower> = " + format_double(j->limits->lower) +
                              ": is above upper = " + format_double(j->limits->upper));
@@ -457,9 +552,12 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
   const Model& model = *robot.model;
   if (model.floating_base())
     for (int d = 0; d < model.links[0].nv; ++d) robot.dof_order.push_back(d);
+  std::map<std::string, int> dof_of;  // one lookup per joint: Model::dof_index searches
+  for (const Link& link : model.links)
+    if (link.nv == 1) dof_of.emplace(link.joint_name, link.v_index);
   for (const std::string& name : robot.joint_order) {
     const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
-    if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(model.dof_index(name));
+    if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(dof_of.at(name));
   }
   return robot;
 }

@@ -5,11 +5,14 @@
 #include <Eigen/Eigenvalues>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
 namespace featherdrive {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string fmt(double v) { return format_double(v); }
 std::string fmt(const Vec3& v) { return format_vec3(v); }
@@ -67,6 +70,23 @@ void check_inertia(const std::string& who, const Mat3& I) {
 }
 
 }  // namespace
+
+std::string name_problem(const std::string& name) {
+  static const char* const kHex = "0123456789abcdef";
+  std::string shown, first;
+  for (const char c : name) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte != 0x7f) {
+      shown += c;
+      continue;
+    }
+    const std::string code = {'x', kHex[byte >> 4], kHex[byte & 15]};
+    if (first.empty()) first = "0" + code;
+    shown += "\\" + code;
+  }
+  if (first.empty()) return "";
+  return "name '" + shown + "' contains a control character (" + first + ")";
+}
 
 namespace {
 JointSpec joint_of(std::string name, JointType type, const Vec3& axis, const Vec3& xyz,
@@ -129,6 +149,8 @@ Model ModelBuilder::build() const {
   for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
     const LinkSpec& l = links_[i];
     if (l.name.empty()) fail("link #" + std::to_string(i) + ": name is empty");
+    if (const std::string why = name_problem(l.name); !why.empty()) fail("link " + why);
+    if (const std::string why = name_problem(l.joint.name); !why.empty()) fail("joint " + why);
     if (!by_name.emplace(l.name, i).second) fail("link '" + l.name + "': duplicate link name");
     if (l.joint.name.empty()) fail("link '" + l.name + "': joint name is empty");
     if (auto [it, added] = joint_names.emplace(l.joint.name, i); !added)
@@ -152,18 +174,26 @@ Model ModelBuilder::build() const {
     parent[i] = it->second;
   }
   if (root < 0) fail("the model has no root link (every link names a parent)");
+  // Every walk up from a link must reach the root. Each link is marked by the first walk that
+  // reaches it, so a walk stops at a link seen before: O(n) however long the chain.
+  std::vector<int> walk(links_.size(), -1);
   for (int i = 0; i < static_cast<int>(links_.size()); ++i) {
-    // Walking up from any link must reach the root within n steps.
     int j = i;
-    for (size_t n = 0; j >= 0 && n <= links_.size(); ++n) j = parent[j];
-    if (j >= 0) {
-      // Name the cycle itself: walk n steps to be on it, then once around.
-      for (size_t n = 0; n < links_.size(); ++n) j = parent[j];
-      if (parent[j] == j) fail("link '" + links_[j].name + "': parent = '" + links_[j].name + "' is the link itself");
-      std::string cycle = "'" + links_[j].name + "'";
-      for (int k = parent[j]; k != j; k = parent[k]) cycle += " -> '" + links_[k].name + "'";
-      fail("links " + cycle + " -> '" + links_[j].name + "' form a cycle (each names the next as parent)");
+    while (j >= 0 && walk[j] < 0) {
+      walk[j] = i;
+      j = parent[j];
     }
+    if (j < 0 || walk[j] != i) continue;  // the root, or a link an earlier walk took to it
+    // Back on this walk: a cycle. Name it once around, starting 2n + 1 steps up from i (where
+    // messages have always started it).
+    j = i;
+    for (size_t n = 0; n <= 2 * links_.size(); ++n) j = parent[j];
+    if (parent[j] == j)
+      fail("link '" + links_[j].name + "': parent = '" + links_[j].name + "' is the link itself");
+    std::string cycle = "'" + links_[j].name + "'";
+    for (int k = parent[j]; k != j; k = parent[k]) cycle += " -> '" + links_[k].name + "'";
+    fail("links " + cycle + " -> '" + links_[j].name +
+         "' form a cycle (each names the next as parent)");
   }
 
   // Children in insertion order; depth-first preorder from the root.
@@ -186,6 +216,7 @@ Model ModelBuilder::build() const {
   model.links.resize(order.size());
   std::vector<double> armature, lower, upper, effort, velocity, damping, friction;
   std::vector<bool> can_move(order.size(), false);
+  double total_mass = 0.0, inertia_sum = 0.0;
   for (int k = 0; k < static_cast<int>(order.size()); ++k) {
     const LinkSpec& s = links_[order[k]];
     const JointSpec& j = s.joint;
@@ -243,6 +274,15 @@ Model ModelBuilder::build() const {
     link.com = s.com;
     link.inertia_com = 0.5 * (s.inertia + s.inertia.transpose());
     link.inertia = spatial_inertia(s.mass, s.com, link.inertia_com);
+    // Finite inputs whose products or sums overflow would fail later, naming no field.
+    if (!link.inertia.allFinite())
+      fail(who_link + ": mass = " + fmt(s.mass) + " at com = " + fmt(s.com) +
+           ": the spatial inertia (m c, m c c^T) overflows");
+    total_mass += s.mass;
+    inertia_sum += link.inertia.cwiseAbs().sum();
+    if (!std::isfinite(total_mass) || !std::isfinite(inertia_sum))
+      fail(who_link + ": mass = " + fmt(s.mass) + ", inertia " + fmt(s.inertia.diagonal()) +
+           ": the model's total mass or inertia overflows");
 
     // Per-dof parameters.
     if (!j.armature.empty() && link.nv == 0)
@@ -256,6 +296,8 @@ Model ModelBuilder::build() const {
         fail(who_joint + ": armature = " + fmt(a) + " must be finite and >= 0");
     if (std::isnan(j.lower_limit)) fail(who_joint + ": lower_limit is NaN");
     if (std::isnan(j.upper_limit)) fail(who_joint + ": upper_limit is NaN");
+    if (j.lower_limit == kInf) fail(who_joint + ": lower_limit = inf leaves no position");
+    if (j.upper_limit == -kInf) fail(who_joint + ": upper_limit = -inf leaves no position");
     if (j.lower_limit > j.upper_limit)
       fail(who_joint + ": lower_limit = " + fmt(j.lower_limit) + " is above upper_limit = " +
            fmt(j.upper_limit));

@@ -108,9 +108,11 @@ Simulation& Batch::sim(int i) {
 const Simulation& Batch::sim(int i) const { return const_cast<Batch*>(this)->sim(i); }
 
 void Batch::set_num_threads(int threads) {
-  if (threads < 0)
+  // TBB's arena crashes for some hundred thousand threads; no machine needs more than this.
+  if (threads < 0 || threads > kMaxThreads)
     throw std::invalid_argument("Batch: num_threads = " + std::to_string(threads) +
-                                " must be >= 0 (0 = all cores)");
+                                " must be in [0, " + std::to_string(kMaxThreads) +
+                                "] (0 = all cores)");
   threads_ = threads;
 }
 

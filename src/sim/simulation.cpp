@@ -46,12 +46,23 @@ const char* to_string(Compat compat) { return compat == Compat::physx ? "physx" 
 void validate_options(const SimulationOptions& o) {
   if (!std::isfinite(o.dt) || o.dt <= 0.0)
     throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) + " must be finite and > 0");
+  if (!(o.dt >= kMinDt && o.dt <= kMaxDt))
+    throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) +
+                                " must be a normal number in [" + fmt(kMinDt) + ", " + fmt(kMaxDt) +
+                                "] s");
+  const std::string most = std::to_string(kMaxIterations);
   if (o.position_iterations < 1)
     throw std::invalid_argument("simulation options: position_iterations = " +
                                 std::to_string(o.position_iterations) + " must be >= 1");
+  if (o.position_iterations > kMaxIterations)
+    throw std::invalid_argument("simulation options: position_iterations = " +
+                                std::to_string(o.position_iterations) + " must be <= " + most);
   if (o.velocity_iterations < 0)
     throw std::invalid_argument("simulation options: velocity_iterations = " +
                                 std::to_string(o.velocity_iterations) + " must be >= 0");
+  if (o.velocity_iterations > kMaxIterations)
+    throw std::invalid_argument("simulation options: velocity_iterations = " +
+                                std::to_string(o.velocity_iterations) + " must be <= " + most);
 }
 
 Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options)
@@ -120,11 +131,17 @@ void Simulation::set_q(const VecX& q) {
 }
 
 void Simulation::set_clock(double time, long step_count) {
+  if (step_count < 0 || step_count > kMaxStepCount)
+    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
+                                " must be in [0, " + std::to_string(kMaxStepCount) + "]");
   if (!std::isfinite(time) || time < 0.0)
     throw std::invalid_argument("clock: time = " + fmt(time) + " must be finite and >= 0");
-  if (step_count < 0)
-    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
-                                " must be >= 0");
+  // Each step adds one dt <= kMaxDt; the factor 2 covers the rounding of the sum (< n eps).
+  const double most = 2.0 * static_cast<double>(step_count) * kMaxDt;
+  if (time > most)
+    throw std::invalid_argument("clock: time = " + fmt(time) + " s after " +
+                                std::to_string(step_count) + " steps: no run reaches it (at most " +
+                                fmt(most) + " s, 2 * steps * " + fmt(kMaxDt) + " s)");
   time_ = time;
   step_count_ = step_count;
 }
@@ -208,6 +225,12 @@ int Simulation::one_dof_joint(int dof) const {
 
 void Simulation::set_joint_limits(int dof, double lower, double upper) {
   one_dof_joint(dof);
+  // +-inf stand for "no limit" on their own side only; validate_limits does not know that.
+  const std::string& joint = model_->links[model_->dof_link[dof]].joint_name;
+  if (lower == std::numeric_limits<double>::infinity())
+    throw std::invalid_argument("limits on joint '" + joint + "': lower = inf leaves no position");
+  if (upper == -std::numeric_limits<double>::infinity())
+    throw std::invalid_argument("limits on joint '" + joint + "': upper = -inf leaves no position");
   validate_limits(lower, upper, model_->links[model_->dof_link[dof]].joint_name);
   lower_limit_[dof] = lower;
   upper_limit_[dof] = upper;

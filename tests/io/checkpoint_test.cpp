@@ -329,6 +329,135 @@ TEST(Checkpoint, SavingIsAtomicAndLeavesNoTemporaryFiles) {
   fs::remove_all(dir);
 }
 
+// Forging: `bytes` with `size` bytes at `at` set to `value` (little-endian) and the checksum
+// (FNV-1a 64 of everything before it) computed again, so only the field's check can refuse it.
+std::string forged(std::string bytes, size_t at, std::uint64_t value, size_t size = 8) {
+  for (size_t i = 0; i < size; ++i) bytes[at + i] = static_cast<char>(value >> (8 * i));
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (size_t i = 0; i + 8 < bytes.size(); ++i) {
+    h ^= static_cast<unsigned char>(bytes[i]);
+    h *= 0x100000001b3ULL;
+  }
+  for (size_t i = 0; i < 8; ++i) bytes[bytes.size() - 8 + i] = static_cast<char>(h >> (8 * i));
+  return bytes;
+}
+std::uint64_t bits(double v) {
+  return std::bit_cast<std::uint64_t>(v);
+}
+
+// The payload after the 36-byte header: time, step count, dt, solver (1 byte), the iterations,
+// compat (1 byte), q, qd, applied forces, then per dof its drive type (1 byte) and 17 doubles.
+constexpr size_t kTime = 36, kSteps = 44, kDt = 52, kSolver = 60, kPositionIterations = 61,
+                 kVelocityIterations = 69, kCompat = 77, kQ = 78;
+
+TEST(Checkpoint, ForgedFieldsWithAValidChecksumAreRefusedNamingTheFieldAndValue) {
+  Simulation a = busy_simulation(4);
+  a.step(3);
+  const std::string bytes = checkpoint_bytes(a);
+  ASSERT_EQ(forged(bytes, kTime, bits(a.time())), bytes);  // the helper forges nothing by itself
+  Simulation b = busy_simulation(4);                       // the same model, another state
+  b.step();
+  const std::string before = checkpoint_bytes(b);
+  const Model& m = a.model();
+  const size_t dof0 = kQ + 8 * static_cast<size_t>(m.nq + 2 * m.nv);  // dof 0's drive type
+  struct Case {
+    size_t at;
+    std::uint64_t value;
+    size_t size;
+    std::string error;
+  };
+  const std::string clock = " is not one a run reaches (finite, >= 0, at most 2 * steps * 1000 s)";
+  const Case cases[] = {
+      {kSteps, 0x7fffffffffffffffULL, 8,
+       "corrupt checkpoint: step count 9223372036854775807 is outside [0, 9007199254740992]"},
+      {kSteps, (1ULL << 53) + 1, 8,
+       "corrupt checkpoint: step count 9007199254740993 is outside [0, 9007199254740992]"},
+      {kSteps, ~0ULL, 8, "corrupt checkpoint: step count -1 is outside [0, 9007199254740992]"},
+      {kTime, bits(1e308), 8, "corrupt checkpoint: time 1e+308 s after 3 steps" + clock},
+      {kTime, bits(6000.5), 8, "corrupt checkpoint: time 6000.5 s after 3 steps" + clock},
+      {kTime, bits(kInf), 8, "corrupt checkpoint: time inf s after 3 steps" + clock},
+      {kTime, bits(std::nan("")), 8, "corrupt checkpoint: time nan s after 3 steps" + clock},
+      {kTime, bits(-0.5), 8, "corrupt checkpoint: time -0.5 s after 3 steps" + clock},
+      {kDt, bits(1e-310), 8,
+       "bad value in the checkpoint: simulation options: dt = 1e-310 must "
+       "be a normal number in [2.2250738585072014e-308, 1000] s"},
+      {kDt, bits(1e308), 8,
+       "bad value in the checkpoint: simulation options: dt = 1e+308 must "
+       "be a normal number in [2.2250738585072014e-308, 1000] s"},
+      {kSolver, 7, 1, "corrupt checkpoint: solver = 7"},
+      {kCompat, 9, 1, "corrupt checkpoint: compat = 9"},
+      {kPositionIterations, 0, 8,
+       "corrupt checkpoint: position_iterations 0 is outside [1, 1000000]"},
+      {kPositionIterations, 1ULL << 32, 8,
+       "corrupt checkpoint: position_iterations 4294967296 is outside [1, 1000000]"},
+      {kVelocityIterations, ~0ULL, 8,
+       "corrupt checkpoint: velocity_iterations -1 is outside [0, 1000000]"},
+      {kQ, bits(std::nan("")), 8, "bad value in the checkpoint: q[0] = nan is not finite"},
+      {dof0, 3, 1, "corrupt checkpoint: drive type 3 of dof 0"},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(error_of(forged(bytes, c.at, c.value, c.size), b), "state.ckpt: " + c.error);
+    EXPECT_EQ(checkpoint_bytes(b), before);
+  }
+  // The largest clock a run can reach loads.
+  Simulation c = busy_simulation(4);
+  restore_checkpoint(forged(forged(bytes, kSteps, 1ULL << 53), kTime, bits(1e19)), c, "big");
+  EXPECT_EQ(c.step_count(), 1L << 53);
+  EXPECT_EQ(c.time(), 1e19);
+}
+
+// Per-dof and per-link settings go through the setters; settings a joint cannot have must be the
+// simulation's own.
+TEST(Checkpoint, ForgedJointAndLinkSettingsAreRefused) {
+  Simulation a = busy_simulation(4);
+  const std::string bytes = checkpoint_bytes(a);
+  const Model& m = a.model();
+  const size_t dofs = kQ + 8 * static_cast<size_t>(m.nq + 2 * m.nv);
+  const auto field = [&](int dof, int k) {
+    return dofs + 137 * static_cast<size_t>(dof) + 1 + 8 * k;
+  };
+  int one = -1, multi = -1;  // a revolute/prismatic dof and one of the floating root
+  for (int d = 0; d < m.nv; ++d) {
+    const JointType t = m.links[m.dof_link[d]].joint_type;
+    if (one < 0 && (t == JointType::revolute || t == JointType::prismatic)) one = d;
+    if (multi < 0 && t == JointType::floating) multi = d;
+  }
+  ASSERT_GE(one, 0);
+  ASSERT_GE(multi, 0);
+  const std::string joint = m.links[m.dof_link[one]].joint_name;
+  // Fields: 0..5 the drive's doubles, 6 lower, 7 upper, 8 max velocity, 9..11 friction.
+  EXPECT_EQ(error_of(forged(bytes, field(one, 6), bits(kInf)), a),
+            "state.ckpt: bad value in the checkpoint: limits on joint '" + joint +
+                "': lower = inf leaves no position");
+  EXPECT_EQ(error_of(forged(bytes, field(one, 7), bits(-kInf)), a),
+            "state.ckpt: bad value in the checkpoint: limits on joint '" + joint +
+                "': upper = -inf leaves no position");
+  EXPECT_NE(error_of(forged(bytes, field(one, 0), bits(-1.0)), a).find("stiffness = -1"),
+            std::string::npos);
+  EXPECT_NE(error_of(forged(bytes, field(one, 9), bits(std::nan(""))), a).find("static_effort"),
+            std::string::npos);
+  EXPECT_EQ(error_of(forged(bytes, field(multi, 6), bits(0.0)), a),
+            "state.ckpt: corrupt checkpoint: dof " + std::to_string(multi) +
+                " of floating joint '" + m.links[m.dof_link[multi]].joint_name +
+                "' has joint setting #0 = 0, which only a 1-dof joint can change");
+  // Link parameters follow the per-dof block: the first link's cfm_scale of 2 is out of [0, 1].
+  const size_t links = dofs + 137 * static_cast<size_t>(m.nv);
+  EXPECT_NE(error_of(forged(bytes, links, bits(2.0)), a).find("cfm_scale"), std::string::npos);
+}
+
+TEST(Checkpoint, TheClockAcceptsOnlyWhatARunReaches) {
+  Simulation s(test::make_pendulum(1.0, 0.5));
+  EXPECT_THROW(s.set_clock(0.5, 0), std::invalid_argument);  // time passes only with steps
+  EXPECT_THROW(s.set_clock(2001.0, 1), std::invalid_argument);
+  EXPECT_THROW(s.set_clock(1.0, kMaxStepCount + 1), std::invalid_argument);
+  EXPECT_THROW(s.set_clock(1e308, kMaxStepCount), std::invalid_argument);
+  s.set_clock(2000.0, 1);
+  s.set_clock(0.0, kMaxStepCount);
+  EXPECT_EQ(s.step_count(), kMaxStepCount);
+  s.step();  // the count and the clock go on without overflow
+  EXPECT_EQ(s.step_count(), kMaxStepCount + 1);
+}
+
 TEST(Checkpoint, ClockAndRestoreStateValidateTheirArguments) {
   Simulation s(test::make_random_tree(2, 3, true));
   EXPECT_THROW(s.set_clock(-1.0, 0), std::invalid_argument);

@@ -110,7 +110,9 @@ TEST(Files, EveryLoaderRefusesNonRegularInputsWithItsErrorType) {
       {fifo, "is not a regular file (a FIFO)"},
       {"/dev/zero", "is not a regular file (a character device)"},
       {big, "is larger than 64 MiB"}};
-  for (const auto& [path, why] : cases) {
+  for (const auto& c : cases) {
+    const fs::path& path = c.first;  // not a structured binding: clang 14 cannot capture those
+    const std::string& why = c.second;
     const std::string expected = path.string() + ": " + why;
     EXPECT_EQ(message_of<InputError>([&] { load_urdf(path); }).rfind(expected, 0), 0u) << why;
     EXPECT_EQ(message_of<InputError>([&] { load_scene(path); }).rfind(expected, 0), 0u) << why;

@@ -205,6 +205,155 @@ TEST(Scene, BadValuesNameTheFileTheKeyPathAndTheValue) {
   EXPECT_THROW(load_scene(kExamples + "no_such_scene.yaml"), InputError);
 }
 
+std::string repeat(const std::string& s, int n) {
+  std::string out;
+  for (int i = 0; i < n; ++i) out += s;
+  return out;
+}
+
+TEST(Scene, ScenesNestedDeeperThanTheBoundAreRefusedBeforeYamlCppParses) {
+  ASSERT_EQ(kMaxSceneDepth, 64);
+  const std::string head = "model: chain3.urdf\nsteps: 1\n";
+  const std::string at = kExamples + "inline.yaml: line ";
+  const std::string deeper = ": nested deeper than 64 levels (the bound)";
+  // Flow sequences and maps, 100 000 deep, closed or not; the top-level map is one level.
+  EXPECT_EQ(error_of(head + "description: " + repeat("[", 100000)), at + "3" + deeper);
+  EXPECT_EQ(error_of(head + "description: " + repeat("{a: ", 100000) + repeat("}", 100000)),
+            at + "3" + deeper);
+  EXPECT_EQ(error_of(head + "description:\n  " + repeat("[\n", 100000)), at + "66" + deeper);
+  // Block sequences on one line, and block maps one space deeper per line.
+  EXPECT_EQ(error_of(head + "description:\n" + repeat("- ", 100000) + "x"), at + "4" + deeper);
+  std::string block = head + "description:\n";
+  for (int i = 1; i <= 1000; ++i) block += std::string(i, ' ') + "a:\n";
+  EXPECT_EQ(error_of(block), at + "67" + deeper);
+  // Mixed: flow inside block.
+  EXPECT_EQ(error_of(head + "description:\n - - - " + repeat("{a: [", 40)), at + "4" + deeper);
+
+  // Shallow scenes with brackets in quotes, comments, plain and block scalars load.
+  const std::string many = repeat("[{", 500);
+  for (const std::string& text :
+       {"description: \"" + many + "\\\" '" + many + "\"\n", "description: '" + many + "'' \"'\n",
+        "# " + many + "\ndescription: x # " + many + "\n", "description: it's " + many + "\n",
+        "description: |\n  " + many + "\n   \"\n    '\n" + repeat(" ", 200) + "x\n",
+        "description: >-\n  a\n" + repeat(" ", 300) + many + "\n"}) {
+    SCOPED_TRACE(text.substr(0, 80));
+    EXPECT_EQ(error_of(head + text + "drives: {joint1: {type: force, stiffness: 1}}"),
+              "(no error)");
+  }
+}
+
+TEST(Scene, IntegersAreCheckedInSixtyFourBitsBeforeTheyAreNarrowed) {
+  const std::string head = "model: chain3.urdf\n";
+  const std::string file = kExamples + "inline.yaml: ";
+  struct Case {
+    std::string text, error;
+  };
+  const Case cases[] = {
+      {"steps: 1\nsolver: {position_iterations: 4294967297}",
+       "solver.position_iterations = 4294967297: must be <= 1000000"},
+      {"steps: 1\nsolver: {velocity_iterations: 4294967296}",
+       "solver.velocity_iterations = 4294967296: must be <= 1000000"},
+      {"steps: 1\nsolver: {velocity_iterations: 1000001}",
+       "solver.velocity_iterations = 1000001: must be <= 1000000"},
+      {"steps: 1\nsolver: {position_iterations: -4294967295}",
+       "solver.position_iterations = -4294967295: must be >= 1"},
+      {"steps: 2147483648", "steps = 2147483648: must be <= 1000000000"},
+      {"steps: 1000000001", "steps = 1000000001: must be <= 1000000000"},
+      {"steps: 99999999999999999999999", "steps = 99999999999999999999999: must be <= 1000000000"},
+      {"steps: -99999999999999999999999", "steps = -99999999999999999999999: must be >= 0"},
+      {"steps: -9223372036854775808", "steps = -9223372036854775808: must be >= 0"},
+      {"steps: 4.5", "steps = 4.5: must be an integer"},
+      {"steps: 1e3", "steps = 1e3: must be an integer"},
+      {"steps: 0x10", "steps = 0x10: must be an integer"},
+      {"steps: 12abc", "steps = 12abc: must be an integer"},
+      {"steps: +-3", "steps = +-3: must be an integer"},
+      {"steps: ''", "steps = : must be an integer"},
+      {"steps: [1]", "steps = [1]: must be an integer"},
+  };
+  for (const Case& c : cases) EXPECT_EQ(error_of(head + c.text), file + c.error) << c.text;
+  // The largest values load as themselves.
+  const Scene s = scene_from(head +
+                             "steps: +1000000000\n"
+                             "solver: {position_iterations: 1000000, velocity_iterations: 0}");
+  EXPECT_EQ(s.steps, 1000000000);
+  EXPECT_EQ(s.options.position_iterations, 1000000);
+  EXPECT_EQ(s.options.velocity_iterations, 0);
+}
+
+TEST(Scene, ApplyTargetsIsExactForEveryStepIndex) {
+  const Scene scene = load_scene(kExamples + "slider.yaml");
+  Simulation sim = make_simulation(scene);
+  const SineTarget& sine = *scene.drives[0].sine;
+  const double dt = scene.options.dt, w = 2.0 * std::numbers::pi * sine.frequency;
+  for (int k : {0, 1, 1000, std::numeric_limits<int>::max() - 1, std::numeric_limits<int>::max(),
+                -1, std::numeric_limits<int>::min()}) {
+    SCOPED_TRACE(k);
+    apply_targets(scene, sim, k);
+    const double t = (static_cast<double>(k) + 1.0) * dt;
+    EXPECT_EQ(sim.drive(0).target_position,
+              sine.offset + sine.amplitude * std::sin(w * t + sine.phase));
+    EXPECT_EQ(sim.drive(0).target_velocity, sine.amplitude * w * std::cos(w * t + sine.phase));
+  }
+  EXPECT_GT(sim.drive(0).target_position, -1.0);  // INT_MIN: t < 0 is just another time
+}
+
+TEST(Scene, SineTargetsThatOverflowAreRefusedWithTheKey) {
+  const std::string head =
+      "model: slider.urdf\nsteps: 1\ndrives: {slide: {type: force, stiffness: 1, ";
+  const std::string file = kExamples + "inline.yaml: drives.slide.target.sine = ";
+  EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 1e308, offset: 1e308}}}}"),
+            file + "{amplitude: 1e308, offset: 1e308}: offset + amplitude overflows");
+  EXPECT_EQ(error_of(head + "target: {sine: {amplitude: -1.5e308, offset: -1e308}}}}"),
+            file + "{amplitude: -1.5e308, offset: -1e308}: offset + amplitude overflows");
+  EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 1e300, frequency: 1e10}}}}"),
+            file +
+                "{amplitude: 1e300, frequency: 1e10}: the velocity amplitude 2 pi frequency "
+                "amplitude overflows");
+  EXPECT_EQ(error_of(head + "target: {sine: {amplitude: 0, frequency: 1e308}}}}"),
+            file +
+                "{amplitude: 0, frequency: 1e308}: the velocity amplitude 2 pi frequency "
+                "amplitude overflows");
+  // Finite everywhere but at a huge time: 2 pi f t overflows at step 999 (t = 1000 s).
+  const Scene s = scene_from(
+      "model: slider.urdf\nsteps: 1\ndt: 1\ndrives: {slide: {type: force, "
+      "target: {sine: {amplitude: 1, frequency: 1e305}}}}");
+  Simulation sim = make_simulation(s);
+  apply_targets(s, sim, 0);
+  try {
+    apply_targets(s, sim, 999);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              kExamples +
+                  "inline.yaml: drives.slide.target.sine: the target at t = 1000 s is not "
+                  "finite (2 pi frequency t overflows)");
+  }
+}
+
+TEST(Scene, LimitsOfInfOnTheWrongSideAndSubnormalStepsAreRefused) {
+  const std::string head = "model: chain3.urdf\nsteps: 1\n";
+  const std::string file = kExamples + "inline.yaml: ";
+  EXPECT_EQ(error_of(head + "joints: {joint1: {lower: .inf, upper: .inf}}"),
+            file + "joints.joint1.lower = .inf: must be a number below .inf");
+  EXPECT_EQ(error_of(head + "joints: {joint1: {lower: -.inf, upper: -.inf}}"),
+            file + "joints.joint1.upper = -.inf: must be a number above -.inf");
+  EXPECT_EQ(error_of(head + "joints: {joint2: {lower: .Inf}}"),
+            file + "joints.joint2.lower = .Inf: must be a number below .inf");
+  EXPECT_EQ(error_of(head + "joints: {joint3: {upper: -.INF}}"),
+            file + "joints.joint3.upper = -.INF: must be a number above -.inf");
+  const Scene open = scene_from(head + "joints: {joint1: {lower: -.inf, upper: .inf}}");
+  const Simulation sim = make_simulation(open);
+  EXPECT_EQ(sim.lower_limit(0), -kInf);
+  EXPECT_EQ(sim.upper_limit(0), kInf);
+
+  const std::string range = ": must be in [2.2250738585072014e-308, 1000] s (a normal number)";
+  for (const char* dt : {"1e-310", "4.9e-324", "2.2e-308", "1000.5", "1e308"})
+    EXPECT_EQ(error_of(head + "dt: " + dt), file + "dt = " + dt + range) << dt;
+  EXPECT_EQ(scene_from(head + "dt: 2.2250738585072014e-308").options.dt,
+            std::numeric_limits<double>::min());
+  EXPECT_EQ(scene_from(head + "dt: 1000").options.dt, 1000.0);
+}
+
 TEST(Scene, TrajectoryHeaderFollowsTheUrdfJointOrder) {
   const Scene s = scene_from("model: ../tests/data/branches.urdf\nsteps: 1\n");
   std::ostringstream out;

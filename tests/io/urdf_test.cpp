@@ -4,9 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <pthread.h>
+
+#include <functional>
 #include <numbers>
 #include <random>
 
+#include "featherdrive/io/describe.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
@@ -290,6 +294,245 @@ TEST(Urdf, ErrorsNameTheFileAndAreInvalidArgument) {
   }
   EXPECT_THROW(load_urdf(data("does_not_exist.urdf")), InputError);
   EXPECT_THROW(parse_urdf("<robot name='x'><link name='a'/>", "inline.urdf"), InputError);
+}
+
+// Runs f on a thread with a 256 KiB stack: recursion per link or per element would overflow it
+// long before 10 000 levels. Returns f's exception message, or "" when it returned.
+std::string on_small_stack(const std::function<void()>& f) {
+  struct Job {
+    const std::function<void()>* f;
+    std::string error;
+  } job{&f, ""};
+  pthread_attr_t attr;
+  pthread_attr_init(&attr);
+  pthread_attr_setstacksize(&attr, 256 * 1024);
+  pthread_t thread;
+  const auto run = [](void* p) -> void* {
+    auto* j = static_cast<Job*>(p);
+    try {
+      (*j->f)();
+    } catch (const std::exception& e) {
+      j->error = e.what();
+    }
+    return nullptr;
+  };
+  EXPECT_EQ(pthread_create(&thread, &attr, run, &job), 0);
+  pthread_join(thread, nullptr);
+  pthread_attr_destroy(&attr);
+  return job.error;
+}
+
+std::string urdf_error(const std::string& xml) {
+  std::string e;
+  try {
+    parse_urdf(xml, "inline.urdf");
+  } catch (const InputError& error) {
+    e = error.what();
+  }
+  return e;
+}
+
+const std::string kInertial =
+    "<inertial><mass value='1'/><inertia ixx='0.01' ixy='0' ixz='0' iyy='0.01' iyz='0' "
+    "izz='0.01'/></inertial>";
+
+// A robot whose root link holds `inside` (unknown elements urdfdom skips) after its inertial.
+std::string robot_with(const std::string& inside) {
+  return "<robot name='r'><link name='base'>" + kInertial + inside + "</link></robot>";
+}
+
+// n links on `type` joints, each hanging 0.1 m below the last; link names count down when
+// `reversed` (so the map order of urdfdom's links is the opposite of the tree's).
+std::string chain_urdf(int n, const std::string& type, bool reversed = false) {
+  const auto link = [&](int i) { return "l" + std::to_string(reversed ? n - i : i); };
+  std::string xml = "<robot name='chain'>\n<link name='" + link(0) + "'>" + kInertial + "</link>\n";
+  for (int i = 1; i <= n; ++i)
+    xml += "<joint name='j" + std::to_string(i) + "' type='" + type + "'><parent link='" +
+           link(i - 1) + "'/><child link='" + link(i) +
+           "'/><origin xyz='0 0 -0.1'/><axis xyz='0 1 0'/>"
+           "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>\n<link name='" +
+           link(i) + "'>" + kInertial + "</link>\n";
+  return xml + "</robot>\n";
+}
+
+TEST(Urdf, DocumentsNestedDeeperThanTheBoundAreRefusedBeforeAnyReaderRecurses) {
+  ASSERT_EQ(kMaxUrdfDepth, 100);
+  const auto nested = [](int depth, const std::string& open) {
+    std::string s;
+    for (int i = 0; i < depth; ++i) s += open;
+    return s;
+  };
+  // <robot> and <link> are 2 levels: 98 more reach the bound, 99 pass it (line 1, no newline).
+  const std::string deeper = "inline.urdf: line 1: elements nested deeper than 100 (the bound)";
+  EXPECT_EQ(urdf_error(robot_with(nested(99, "<a>"))), deeper);
+  EXPECT_EQ(on_small_stack([&] { parse_urdf(robot_with(nested(100000, "<a>")), "inline.urdf"); }),
+            deeper);
+  // Unclosed, attributes with '>' and '/', whitespace and newlines inside tags.
+  EXPECT_EQ(on_small_stack([&] {
+              parse_urdf("<robot name='r'>\n" + nested(100000, "<a b=\"x>/y\" c='/>'\n>"),
+                         "x.urdf");
+            }),
+            "x.urdf: line 101: elements nested deeper than 100 (the bound)");
+  // Closing tags in comments, CDATA or processing instructions close nothing.
+  EXPECT_EQ(urdf_error(robot_with(nested(50, "<a>") + "<!-- " + nested(60, "</a>") + " -->" +
+                                  "<![CDATA[" + nested(60, "</a>") + "]]>" + nested(60, "<b>"))),
+            deeper);
+  // Exactly at the bound, with the same constructs around: loads.
+  std::string at_bound = nested(98, "<a>") + nested(98, "</a>");
+  at_bound += "<!-- <a><a><a> --><![CDATA[<a><a>]]><?pi data?><c x='>'/><c/><c />";
+  const std::string xml = "<?xml version='1.0'?>\n<!DOCTYPE robot>\n" + robot_with(at_bound);
+  EXPECT_EQ(on_small_stack([&] { EXPECT_EQ(parse_urdf(xml, "ok.urdf").model->nv, 0); }), "");
+  // Many siblings are not depth: 100 000 self-closing and empty elements load.
+  EXPECT_EQ(on_small_stack([&] {
+              parse_urdf(robot_with(nested(50000, "<c/>") + nested(50000, "<d></d>")), "w.urdf");
+            }),
+            "");
+}
+
+TEST(Urdf, ALinkThatIsTheChildOfTwoJointsIsRefusedNamingBoth) {
+  const auto joint = [](const std::string& name, const std::string& parent,
+                        const std::string& child) {
+    return "<joint name='" + name + "' type='revolute'><parent link='" + parent +
+           "'/><child link='" + child +
+           "'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>";
+  };
+  const auto link = [](const std::string& name) {
+    return "<link name='" + name + "'>" + kInertial + "</link>";
+  };
+  const std::string abc = link("a") + link("b") + link("c");
+  // Two parents, no cycle.
+  EXPECT_EQ(urdf_error("<robot name='r'>" + abc + joint("j1", "a", "b") + joint("j2", "c", "b") +
+                       "</robot>"),
+            "inline.urdf: link 'b' is the child of two joints, 'j1' and 'j2'");
+  // A cycle reached through b's second parent (the importer used to loop forever).
+  EXPECT_EQ(urdf_error("<robot name='r'>" + abc + joint("j1", "a", "b") + joint("j2", "b", "c") +
+                       joint("j3", "c", "b") + "</robot>"),
+            "inline.urdf: link 'b' is the child of two joints, 'j1' and 'j3'");
+  // The root itself reached again from below, the second joint first in the document.
+  EXPECT_EQ(urdf_error("<robot name='r'>" + abc + joint("up", "c", "b") + joint("j1", "a", "b") +
+                       joint("j2", "b", "c") + "</robot>"),
+            "inline.urdf: link 'b' is the child of two joints, 'up' and 'j1'");
+  // A cycle with one parent each has no root: still the cycle message, found in O(n).
+  std::string ring = "<robot name='r'>";
+  for (int i = 0; i < 20000; ++i)
+    ring += link("r" + std::to_string(i)) + joint("k" + std::to_string(i), "r" + std::to_string(i),
+                                                  "r" + std::to_string((i + 1) % 20000));
+  EXPECT_NE(
+      urdf_error(ring + "</robot>").find("inline.urdf: the joints form a cycle through link 'r"),
+      std::string::npos);
+}
+
+TEST(Urdf, LongChainsImportAndDescribeWithoutRecursion) {
+  // Names counting down: urdfdom's map frees the leaf first and the root last, which freed the
+  // whole chain recursively from the root.
+  const std::string xml = chain_urdf(10000, "revolute", /*reversed=*/true);
+  std::string text;
+  EXPECT_EQ(on_small_stack([&] {
+              const UrdfRobot robot = parse_urdf(xml, "chain.urdf");
+              EXPECT_EQ(robot.model->nv, 10000);
+              EXPECT_EQ(robot.model->links.back().parent, 9999);
+              text = describe(robot);
+            }),
+            "");
+  // Indentation stops at depth 32; deeper links say their depth: the output grows linearly.
+  EXPECT_NE(text.find("\n" + std::string(64, ' ') + "- (depth 10000) l0  <- j10000: revolute"),
+            std::string::npos);
+  EXPECT_NE(text.find(std::string(64, ' ') + "- l"), std::string::npos);
+  EXPECT_EQ(text.find(std::string(64 + 2, ' ') + "- "), std::string::npos);
+  EXPECT_LT(text.size(), 10001u * 500u);
+  EXPECT_NE(text.find("total mass 10001 kg"), std::string::npos);
+}
+
+// Fixed joints merge the whole chain into the root, walked without recursion too.
+TEST(Urdf, LongChainsOfFixedJointsMergeWithoutRecursion) {
+  EXPECT_EQ(on_small_stack([] {
+              const UrdfRobot robot = parse_urdf(chain_urdf(10000, "fixed"), "fixed.urdf");
+              EXPECT_EQ(robot.model->num_links(), 1);
+              EXPECT_EQ(robot.merged.size(), 10000u);
+              EXPECT_NEAR(robot.model->links[0].mass, 10001.0, 1e-9);
+              // The centre of mass of 10 001 equal masses at 0, -0.1, ..., -1000 m: -500 m.
+              EXPECT_NEAR(robot.model->links[0].com.z(), -500.0, 1e-7);
+            }),
+            "");
+}
+
+TEST(Urdf, NamesWithControlCharactersAreRefused) {
+  const auto named = [](const std::string& link_name, const std::string& joint_name) {
+    return "<robot name='r'><link name='base'/><link name='" + link_name + "'>" + kInertial +
+           "</link><joint name='" + joint_name +
+           "' type='continuous'><parent link='base'/>"
+           "<child link='" +
+           link_name + "'/></joint></robot>";
+  };
+  EXPECT_EQ(urdf_error(named("a&#10;b", "j")),
+            "inline.urdf: link name 'a\\x0ab' contains a control character (0x0a)");
+  EXPECT_EQ(urdf_error(named("a", "j&#9;1")),
+            "inline.urdf: joint name 'j\\x091' contains a control character (0x09)");
+  EXPECT_EQ(urdf_error(named("a", "j&#13;")),
+            "inline.urdf: joint name 'j\\x0d' contains a control character (0x0d)");
+  EXPECT_EQ(urdf_error(named("a\x1f", "j")),
+            "inline.urdf: link name 'a\\x1f' contains a control character (0x1f)");
+  EXPECT_EQ(urdf_error(named("\x7f", "j")),
+            "inline.urdf: link name '\\x7f' contains a control character (0x7f)");
+  // Commas, quotes and non-ASCII letters are names like any other.
+  EXPECT_EQ(parse_urdf(named("a,b \"c\" \xc3\xa9", "j,1"), "ok.urdf").model->nv, 1);
+}
+
+// urdfdom refuses non-finite <limit> values itself ("is not a valid float"); the importer's own
+// check holds for readers that accept them. A joint without limits is written as continuous.
+TEST(Urdf, LimitsOfInfAreRefused) {
+  const auto limited = [](const std::string& lower, const std::string& upper) {
+    return "<robot name='r'><link name='base'/><link name='a'>" + kInertial +
+           "</link><joint name='j' type='revolute'><parent link='base'/><child link='a'/>"
+           "<limit lower='" +
+           lower + "' upper='" + upper +
+           "' effort='1' velocity='1'/>"
+           "</joint></robot>";
+  };
+  for (const auto& [lower, upper] : {std::pair{"inf", "inf"}, std::pair{"-1", "-inf"},
+                                     std::pair{"1e999", "2e999"}, std::pair{"-inf", "-inf"}}) {
+    SCOPED_TRACE(std::string(lower) + " " + upper);
+    const std::string e = urdf_error(limited(lower, upper));
+    EXPECT_EQ(e.rfind("inline.urdf: invalid URDF: ", 0), 0u) << e;
+    EXPECT_NE(e.find("joint [j]"), std::string::npos) << e;
+  }
+}
+
+TEST(Urdf, InertialsThatOverflowAreRefusedNamingTheLinkAndTheValue) {
+  const auto robot = [](const std::string& mass, const std::string& origin,
+                        const std::string& joint_type) {
+    return "<robot name='r'><link name='base'>" + kInertial +
+           "</link><link name='hand'><inertial><origin xyz='" + origin + "'/><mass value='" + mass +
+           "'/><inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial>"
+           "</link><joint name='j' type='" +
+           joint_type +
+           "'><parent link='base'/>"
+           "<child link='hand'/><axis xyz='0 0 1'/></joint></robot>";
+  };
+  // Merged: the parallel axis shift m d^2 overflows (it used to say "inertia(0,0) = -nan").
+  EXPECT_EQ(urdf_error(robot("1e10", "1e200 0 0", "fixed")),
+            "inline.urdf: link 'hand' <inertial><origin xyz> = [1e+200, 0, 0], mass 1e+10: merged "
+            "into link 'base' (fixed joints), the combined inertia overflows");
+  // Merged into a finite body, then too heavy for the model's sums (3 m in the spatial inertia).
+  EXPECT_EQ(urdf_error(robot("1.7e308", "0 0 0", "fixed")),
+            "inline.urdf: link 'base': mass = 1.7e+308, inertia [1.01, 1.01, 1.01]: the model's "
+            "total mass or inertia overflows");
+  // Moving: the spatial inertia m c c^T, or the model's total mass.
+  EXPECT_EQ(urdf_error(robot("1e10", "0 1e150 0", "continuous")),
+            "inline.urdf: link 'hand': mass = 1e+10 at com = [0, 1e+150, 0]: the spatial inertia "
+            "(m c, m c c^T) overflows");
+  const std::string two_heavy =
+      "<robot name='r'><link name='base'><inertial><mass value='5e307'/><inertia ixx='1' "
+      "ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial></link><link name='hand'><inertial>"
+      "<mass value='5e307'/><inertia ixx='1' ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/>"
+      "</inertial></link><joint name='j' type='continuous'><parent link='base'/>"
+      "<child link='hand'/></joint></robot>";
+  EXPECT_NE(urdf_error(two_heavy).find(
+                "inline.urdf: link 'hand': mass = 5e+307, inertia [1, 1, 1]: the model's total"),
+            std::string::npos);
+  // Heavy but summable: describe prints the finite total.
+  const UrdfRobot ok = parse_urdf(robot("1e300", "0 0 0", "continuous"), "ok.urdf");
+  EXPECT_NE(describe(ok).find("total mass 1e+300 kg"), std::string::npos) << describe(ok);
 }
 
 TEST(Urdf, RpyFromRotationInvertsRotationFromRpy) {

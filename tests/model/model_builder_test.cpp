@@ -9,10 +9,12 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
 #include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -346,6 +348,98 @@ TEST(ModelBuilderValidation, LimitIsNaN) {
             "model: joint 'shoulder': lower_limit is NaN");
   EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.joint.upper_limit = kNaN; })),
             "model: joint 'shoulder': upper_limit is NaN");
+}
+
+TEST(ModelBuilderValidation, LimitOfInfOnTheWrongSide) {
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.joint.lower_limit = kInf; })),
+            "model: joint 'shoulder': lower_limit = inf leaves no position");
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) {
+              l.joint.lower_limit = kInf;
+              l.joint.upper_limit = kInf;
+            })),
+            "model: joint 'shoulder': lower_limit = inf leaves no position");
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) {
+              l.joint.lower_limit = -kInf;
+              l.joint.upper_limit = -kInf;
+            })),
+            "model: joint 'shoulder': upper_limit = -inf leaves no position");
+  const Model open = base_and_arm([](LinkSpec&) {}).build();  // -inf, inf: no limits
+  EXPECT_EQ(open.lower_limit[0], -kInf);
+  // The simulation's setter (Python's set_joint_limits and the scene reach it) says the same.
+  Simulation sim(std::make_shared<const Model>(open));
+  for (const auto& [lower, upper, error] :
+       {std::tuple{kInf, kInf, "lower = inf"}, std::tuple{-kInf, -kInf, "upper = -inf"},
+        std::tuple{kInf, 1.0, "lower = inf"}, std::tuple{-1.0, -kInf, "upper = -inf"}}) {
+    try {
+      sim.set_joint_limits(0, lower, upper);
+      ADD_FAILURE() << lower << " " << upper;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string("limits on joint 'shoulder': ") + error + " leaves no position");
+    }
+  }
+  sim.set_joint_limits(0, -kInf, kInf);
+  sim.set_joint_limits(0, -kInf, -1e308);
+  EXPECT_EQ(sim.upper_limit(0), -1e308);
+}
+
+TEST(ModelBuilderValidation, NamesWithControlCharacters) {
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.name = "arm\n2"; })),
+            "model: link name 'arm\\x0a2' contains a control character (0x0a)");
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.joint.name = std::string("a\0b", 3); })),
+            "model: joint name 'a\\x00b' contains a control character (0x00)");
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.joint.name = "\t\x7f"; })),
+            "model: joint name '\\x09\\x7f' contains a control character (0x09)");
+  EXPECT_EQ(name_problem("a, \"b\" \xc3\xa9"), "");
+  EXPECT_EQ(name_problem("\r"), "name '\\x0d' contains a control character (0x0d)");
+}
+
+TEST(ModelBuilderValidation, InertiasWhoseProductsOrSumsOverflow) {
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.com = Vec3(0, 1e160, 0); })),
+            "model: link 'arm': mass = 2 at com = [0, 1e+160, 0]: the spatial inertia (m c, "
+            "m c c^T) overflows");
+  EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) {
+              l.mass = 1e308;
+              l.com = Vec3(0, 0, 10);
+            })),
+            "model: link 'arm': mass = 1e+308 at com = [0, 0, 10]: the spatial inertia (m c, "
+            "m c c^T) overflows");
+  // Each link finite, their sum not.
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 5e307, Vec3::Zero(), Mat3::Identity(), fixed_joint("w")));
+  b.add_link(make_link("arm", "base", 5e307, Vec3::Zero(), Mat3::Identity(),
+                       revolute_joint("j", Vec3::UnitZ())));
+  EXPECT_EQ(build_error(b),
+            "model: link 'arm': mass = 5e+307, inertia [1, 1, 1]: the model's "
+            "total mass or inertia overflows");
+}
+
+// Long chains and long cycles are checked in O(n), without recursion.
+TEST(ModelBuilderValidation, HundredThousandLinkChainsAndCycles) {
+  const int n = 100000;
+  const Mat3 I = test::box_inertia(1.0, Vec3(0.1, 0.1, 0.1));
+  ModelBuilder chain;
+  chain.add_link(make_link("l0", "", 1.0, Vec3::Zero(), I, fixed_joint("j0")));
+  for (int i = 1; i < n; ++i)
+    chain.add_link(make_link("l" + std::to_string(i), "l" + std::to_string(i - 1), 1.0,
+                             Vec3::Zero(), I,
+                             revolute_joint("j" + std::to_string(i), Vec3::UnitZ())));
+  const Model m = chain.build();
+  EXPECT_EQ(m.nv, n - 1);
+  EXPECT_EQ(m.links.back().parent, n - 2);
+  EXPECT_EQ(m.links[0].subtree_end, n);
+
+  // The same links in a ring beside a root: named once around from where the walk closes.
+  ModelBuilder ring;
+  ring.add_link(make_link("root", "", 1.0, Vec3::Zero(), I, fixed_joint("w")));
+  for (int i = 0; i < n; ++i)
+    ring.add_link(make_link("r" + std::to_string(i), "r" + std::to_string((i + 1) % n), 1.0,
+                            Vec3::Zero(), I,
+                            revolute_joint("k" + std::to_string(i), Vec3::UnitZ())));
+  const std::string e = build_error(ring);
+  EXPECT_THAT(e, StartsWith("model: links 'r"));
+  EXPECT_THAT(e, HasSubstr("'r99999' -> 'r0' -> 'r1'"));
+  EXPECT_THAT(e, HasSubstr("' form a cycle (each names the next as parent)"));
 }
 
 TEST(ModelBuilderValidation, EffortAndVelocityLimits) {

@@ -72,6 +72,10 @@ struct Scene {
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };
 
+/// A scene nested deeper than this (block and flow levels together) is refused before it is
+/// parsed; a scene needs 5 (drives.J.target.sine.amplitude).
+inline constexpr int kMaxSceneDepth = 64;
+
 /// Reads a scene file. Throws InputError naming the file, the key path and the value for unknown
 /// keys, missing or unknown joints, wrong types and bad values; errors of the URDF name the URDF.
 Scene load_scene(const std::filesystem::path& path);

@@ -14,6 +14,10 @@
 
 namespace featherdrive {
 
+/// Elements nested deeper than this are refused before any XML reader sees the text (TinyXML
+/// recurses per level); real URDFs are under 10 deep.
+inline constexpr int kMaxUrdfDepth = 100;
+
 struct UrdfOptions {
   /// true: the root link is welded to the world; false: it gets a floating joint.
   bool fixed_base = true;
@@ -60,8 +64,9 @@ struct UrdfRobot {
 };
 
 /// Reads a URDF file. Throws InputError naming the file, the element and the value for a
-/// malformed file, an unsupported joint type (floating, planar) or a moving link without
-/// <inertial>.
+/// malformed file, one nested deeper than kMaxUrdfDepth, a link that is the child of two joints, a
+/// name with a control character, an unsupported joint type (floating, planar) or a moving link
+/// without <inertial>.
 UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options = {});
 
 /// The same from a string; `name` stands for the file in messages.

@@ -45,6 +45,11 @@ struct LinkSpec {
   JointSpec joint;
 };
 
+/// Why a link or joint name is refused ("name 'a\x0a' contains a control character (0x0a)"), or
+/// "" when it is fine. Names go into CSV headers, JSON and one-line messages, so control
+/// characters (0x00 to 0x1f, 0x7f) are refused; the name is shown with them escaped.
+std::string name_problem(const std::string& name);
+
 /// Shorthands for the joint of each type.
 JointSpec fixed_joint(std::string name, const Vec3& xyz = Vec3::Zero(), const Vec3& rpy = Vec3::Zero());
 JointSpec revolute_joint(std::string name, const Vec3& axis, const Vec3& xyz = Vec3::Zero(),

@@ -41,7 +41,10 @@ class Batch {
   Simulation& sim(int i);
   const Simulation& sim(int i) const;
 
-  /// Threads step() uses: 0 = all cores (the default), 1 = serial on the calling thread.
+  /// The most threads set_num_threads accepts.
+  static constexpr int kMaxThreads = 4096;
+  /// Threads step() uses: 0 = all cores (the default), 1 = serial on the calling thread; throws
+  /// std::invalid_argument outside [0, kMaxThreads].
   void set_num_threads(int threads);
   int num_threads() const { return threads_; }
   /// The threads step() will use (num_threads(), or the number of cores for 0).

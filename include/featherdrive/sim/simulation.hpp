@@ -2,6 +2,7 @@
 // forces) and the workspace a step writes. Many simulations may share one Model across threads.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -32,8 +33,18 @@ struct SimulationOptions {
   Compat compat = Compat::none;
 };
 
-/// Throws std::invalid_argument naming the field and value for dt <= 0 or non-finite,
-/// position_iterations < 1, velocity_iterations < 0.
+/// dt must be a normal double (no subnormal: 1 / dt and impulse / dt stay finite) up to kMaxDt, so
+/// that kMaxStepCount steps keep the clock finite.
+inline constexpr double kMinDt = std::numeric_limits<double>::min();
+inline constexpr double kMaxDt = 1e3;
+inline constexpr int kMaxIterations = 1'000'000;  ///< per step, position and velocity each
+/// The most steps a clock may count: 2^53, beyond which neither the count nor t = sum dt is exact
+/// (and no run gets there: 2^53 steps at 1 ns each take 104 days).
+inline constexpr long kMaxStepCount = 1L << 53;
+
+/// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
+/// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
+/// [0, kMaxIterations].
 void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
@@ -60,8 +71,10 @@ class Simulation {
   void set_qd(const VecX& qd);
   double time() const { return time_; }
   long step_count() const { return step_count_; }
-  /// Sets the clock (for resuming from a checkpoint); throws std::invalid_argument for a time
-  /// that is not finite or < 0, or a step count < 0.
+  /// Sets the clock (for resuming from a checkpoint) to one a run could have reached; throws
+  /// std::invalid_argument for a step count outside [0, kMaxStepCount], a time that is not finite
+  /// or < 0, a time > 0 at step 0, or a time above 2 * step_count * kMaxDt (step_count steps of
+  /// at most kMaxDt, with room for the rounding of the sum).
   void set_clock(double time, long step_count);
   /// Restores q exactly as given (no normalisation, unlike set_q; quaternions must have unit norm
   /// within 1e-9) and the outputs of the last step, for resuming from a checkpoint bit for bit.
