@@ -7,7 +7,7 @@ namespace featherdrive {
 
 void check_link_index(const Model& model, int link) {
   if (link < 0 || link >= model.num_links())
-    throw std::invalid_argument("link index " + std::to_string(link) + " out of range [0, " +
+    throw std::invalid_argument("link index " + std::to_string(link) + " is out of range [0, " +
                                 std::to_string(model.num_links()) + ")");
 }
 

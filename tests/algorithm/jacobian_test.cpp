@@ -229,7 +229,7 @@ TEST(Frames, BadLinkIndexIsRefused) {
     frame_jacobian(*model, data, 4, Vec3::Zero(), ReferenceFrame::local, J);
     FAIL() << "no error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "link index 4 out of range [0, 4)");
+    EXPECT_STREQ(e.what(), "link index 4 is out of range [0, 4)");
   }
   EXPECT_THROW(link_velocity(*model, data, -1, ReferenceFrame::local), std::invalid_argument);
   EXPECT_THROW(jacobian_dot_times_v(*model, data, 9, Vec3::Zero(), ReferenceFrame::local),
