@@ -56,6 +56,8 @@ Data::Data(const Model& model) {
   inverse_mass_diagonal = VecX::Zero(model.nv);
   tau = VecX::Zero(model.nv);
   M = MatX::Zero(model.nv, model.nv);
+  subtree_mass.assign(n, 0.0);
+  subtree_moment.assign(n, Vec3::Zero());
 }
 
 }  // namespace featherdrive

@@ -6,11 +6,19 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <random>
 #include <vector>
 
+#include "featherdrive/algorithm/aba.hpp"
+#include "featherdrive/algorithm/center_of_mass.hpp"
+#include "featherdrive/algorithm/crba.hpp"
+#include "featherdrive/algorithm/energy.hpp"
+#include "featherdrive/algorithm/jacobian.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
@@ -182,6 +190,44 @@ TEST(BatchAllocations, PerCallNotPerStep) {
     if (threads == 1) EXPECT_EQ(one, many) << threads << " threads";
     else EXPECT_LE(many, one + 8) << threads << " threads";  // TBB's scheduler may vary a little
     EXPECT_EQ(batch.sim(0).step_count(), 42);
+  }
+}
+
+// The kinematics and dynamics queries on a reused Data and reused outputs: none after the first
+// round (which sizes the Jacobians), on fixed and floating random trees with every joint type.
+TEST(QueryAllocations, NoneOnReusedWorkspace) {
+  for (bool floating : {false, true}) {
+    auto model = test::make_random_tree(13, 24, floating, true, 0.01);
+    Data data(*model);
+    std::mt19937 rng(9);
+    const VecX q = test::random_configuration(*model, rng);
+    const VecX v = test::random_vector(model->nv, rng);
+    const VecX a = test::random_vector(model->nv, rng);
+    const Vec3 point(0.1, -0.2, 0.05);
+    MatX J, J_com;
+    double sink = 0.0;
+    auto round = [&] {
+      forward_kinematics(*model, data, q, v);
+      for (int i = 0; i < model->num_links(); ++i) {
+        for (ReferenceFrame f : {ReferenceFrame::local, ReferenceFrame::world_aligned}) {
+          frame_jacobian(*model, data, i, point, f, J);
+          link_jacobian(*model, data, i, f, J);
+          sink += jacobian_dot_times_v(*model, data, i, point, f).sum();
+          sink += frame_velocity(*model, data, i, point, f).sum();
+          sink += link_velocity(*model, data, i, f).sum();
+        }
+        sink += frame_position(*model, data, i, point).sum();
+      }
+      sink += center_of_mass(*model, data).sum() + center_of_mass_velocity(*model, data).sum();
+      center_of_mass_jacobian(*model, data, J_com);
+      sink += crba(*model, data, q).sum() + rnea(*model, data, q, v, a).sum();
+      sink += nonlinear_effects(*model, data, q, v).sum();
+      sink += generalized_gravity(*model, data, q).sum();
+      sink += aba(*model, data, q, v, a).sum();
+    };
+    round();
+    EXPECT_EQ(allocations_in(round), 0) << (floating ? "floating" : "fixed");
+    EXPECT_TRUE(std::isfinite(sink));
   }
 }
 

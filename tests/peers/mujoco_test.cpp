@@ -34,9 +34,13 @@
 #include <unistd.h>
 
 #include "featherdrive/algorithm/aba.hpp"
+#include "featherdrive/algorithm/center_of_mass.hpp"
 #include "featherdrive/algorithm/crba.hpp"
+#include "featherdrive/algorithm/energy.hpp"
+#include "featherdrive/algorithm/jacobian.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/rnea.hpp"
+#include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 
@@ -69,7 +73,9 @@ void write_body(const Model& model, int i, int depth, std::ostringstream& xml) {
   const std::string indent(2 * static_cast<size_t>(depth), ' ');
   const Transform& X = link.tree_transform;
   const Quat rotation(X.E.transpose());  // the joint frame's orientation in the parent link frame
-  xml << indent << "<body name=\"" << link.name << "\" pos=\"" << nums({X.r.x(), X.r.y(), X.r.z()})
+  // MuJoCo reserves "world" (the name URDF gives a fixed base's root link, as in arm7.urdf).
+  const std::string name = link.name == "world" ? "world_link" : link.name;
+  xml << indent << "<body name=\"" << name << "\" pos=\"" << nums({X.r.x(), X.r.y(), X.r.z()})
       << "\" quat=\"" << nums({rotation.w(), rotation.x(), rotation.y(), rotation.z()}) << "\">\n";
   // Principal axes and moments from Eigen rather than fullinertia: MuJoCo 2.2.2 diagonalises
   // fullinertia with a Jacobi iteration (mju_eig3) that stops once a rotation's cosine is within
@@ -445,6 +451,73 @@ TEST(MuJoCo, FloatingRootAccelerationsMatch) {
     worst = std::max(worst, diff);
   }
   std::printf("[ mujoco   ] floating root, 10 random 10-link trees: max |dqdd| %.3g\n", worst);
+}
+
+TEST(MuJoCo, ArmMassMatrixBiasJacobiansAndCentreOfMassMatch) {
+  // examples/arm7.urdf at random states: M against mj_fullM, the bias and gravity forces against
+  // qfrc_bias, every link's world-aligned Jacobian (origin and an offset point) against mj_jac,
+  // the centre of mass and its Jacobian against subtree_com and mj_jacSubtreeCom of the root.
+  const UrdfRobot robot = load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/arm7.urdf");
+  const Model& model = *robot.model;
+  ASSERT_EQ(model.nv, 7);
+  MjModelPtr m = load_mjcf(to_mjcf(model, kDt));
+  ASSERT_NE(m, nullptr);
+  ASSERT_EQ(m->nbody, model.num_links() + 1);
+  MjDataPtr d(mj_makeData(m.get()));
+  Data data(model);
+  const int nv = model.nv;
+  std::vector<mjtNum> M_mj(static_cast<size_t>(nv * nv)), jacp(3 * static_cast<size_t>(nv)),
+      jacr(3 * static_cast<size_t>(nv));
+  // Row-major 3 x nv from MuJoCo as a matrix.
+  auto rows = [nv](const std::vector<mjtNum>& j) {
+    return Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>>(j.data(), 3,
+                                                                                      nv);
+  };
+  double worst_M = 0.0, worst_bias = 0.0, worst_J = 0.0, worst_com = 0.0;
+  MatX J, J_com;
+  std::mt19937 rng(20);
+  for (int trial = 0; trial < 5; ++trial) {
+    const VecX q = test::random_configuration(model, rng);
+    const VecX v = test::random_vector(nv, rng, 1.5);
+    std::copy(q.data(), q.data() + nv, d->qpos);
+    std::fill(d->qvel, d->qvel + nv, 0.0);
+    mj_forward(m.get(), d.get());
+    worst_bias = std::max(worst_bias, max_abs_diff(generalized_gravity(model, data, q),
+                                                   d->qfrc_bias));
+    std::copy(v.data(), v.data() + nv, d->qvel);
+    mj_forward(m.get(), d.get());
+    worst_bias = std::max(worst_bias, max_abs_diff(nonlinear_effects(model, data, q, v),
+                                                   d->qfrc_bias));
+    mj_fullM(m.get(), M_mj.data(), d->qM);
+    const MatX& M = crba(model, data, q);
+    for (int r = 0; r < nv; ++r)
+      for (int c = 0; c < nv; ++c)
+        worst_M = std::max(worst_M, std::abs(M(r, c) - M_mj[static_cast<size_t>(r * nv + c)]));
+
+    forward_kinematics(model, data, q, v);
+    const Vec3 point(0.03, -0.05, 0.07);
+    for (int i = 0; i < model.num_links(); ++i) {
+      for (const Vec3& p : {Vec3(Vec3::Zero()), point}) {
+        const Vec3 world = frame_position(model, data, i, p);
+        mj_jac(m.get(), d.get(), jacp.data(), jacr.data(), world.data(), i + 1);
+        frame_jacobian(model, data, i, p, ReferenceFrame::world_aligned, J);
+        worst_J = std::max(worst_J, (J.bottomRows<3>() - rows(jacp)).cwiseAbs().maxCoeff());
+        worst_J = std::max(worst_J, (J.topRows<3>() - rows(jacr)).cwiseAbs().maxCoeff());
+      }
+    }
+    const Vec3 com = center_of_mass(model, data);
+    for (int k = 0; k < 3; ++k)
+      worst_com = std::max(worst_com, std::abs(com[k] - d->subtree_com[3 + k]));
+    mj_jacSubtreeCom(m.get(), d.get(), jacp.data(), 1);
+    center_of_mass_jacobian(model, data, J_com);
+    worst_com = std::max(worst_com, (J_com - rows(jacp)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(worst_M, 1e-12);
+  EXPECT_LE(worst_bias, 1e-11);
+  EXPECT_LE(worst_J, 1e-13);
+  EXPECT_LE(worst_com, 1e-13);
+  std::printf("[ mujoco   ] arm7, 5 states: max |dM| %.3g, |d bias| %.3g, |dJ| %.3g, "
+              "|d com, J_com| %.3g\n", worst_M, worst_bias, worst_J, worst_com);
 }
 
 }  // namespace

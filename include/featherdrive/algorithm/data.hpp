@@ -101,6 +101,10 @@ struct Data {
   VecX tau;                                 ///< rnea output (nv)
   std::vector<Mat6> composite_inertia;      ///< Ic_i (crba)
   MatX M;                                   ///< joint-space inertia (nv x nv), armature included
+
+  // Centre-of-mass Jacobian (center_of_mass_jacobian), world coordinates.
+  std::vector<double> subtree_mass;         ///< mass of link i's subtree
+  std::vector<Vec3> subtree_moment;         ///< sum of m_k c_k over link i's subtree
 };
 
 }  // namespace featherdrive
