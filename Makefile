@@ -16,7 +16,7 @@ CMAKE_FLAGS ?=
 # BUILD_TYPE=RelWithDebInfo for a debugger.
 BUILD_TYPE ?= Release
 
-.PHONY: all deps configure build run test test-asan test-main fuzz fuzz-build bench clean format physx
+.PHONY: all deps configure build run test test-asan test-main fuzz fuzz-build fuzz-run bench clean format physx
 
 all: build
 
@@ -76,8 +76,12 @@ else
 FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
 endif
 
-# The targets run side by side, JOBS at a time (each fuzzer is single-threaded).
+# The targets run side by side, JOBS at a time (each fuzzer is single-threaded). fuzz-run runs the
+# targets already built (what .ci/run starts beside the sanitizer build).
 fuzz: fuzz-build
+	@$(MAKE) --no-print-directory fuzz-run
+
+fuzz-run:
 	@$(MAKE) --no-print-directory --output-sync=target -j $(JOBS) \
 	  $(addprefix fuzz-run-,$(FUZZ_TARGETS))
 
