@@ -48,10 +48,11 @@ struct SceneOverrides {
                     "Number of steps, 0 to 2147483647 (overrides the scene)");
     cmd->add_option("--solver", solver, "pgs or tgs (overrides the scene)")
         ->check(CLI::IsMember({"pgs", "tgs"}));
+    const std::string most = std::to_string(featherdrive::kMaxIterations);
     cmd->add_option("--position-iterations", position_text,
-                    "1 to 1000000, overrides the scene" + position_note);
+                    "1 to " + most + ", overrides the scene" + position_note);
     cmd->add_option("--velocity-iterations", velocity_text,
-                    "0 to 1000000, overrides the scene" + velocity_note);
+                    "0 to " + most + ", overrides the scene" + velocity_note);
   }
 
   /// The integer options from their text; throws std::invalid_argument naming the option and
@@ -59,9 +60,11 @@ struct SceneOverrides {
   void parse() {
     if (steps_text) steps = integer_option("--steps", *steps_text, 0, INT_MAX);
     if (position_text)
-      position_iterations = integer_option("--position-iterations", *position_text, 1, 1000000);
+      position_iterations = integer_option("--position-iterations", *position_text, 1,
+                                           featherdrive::kMaxIterations);
     if (velocity_text)
-      velocity_iterations = integer_option("--velocity-iterations", *velocity_text, 0, 1000000);
+      velocity_iterations = integer_option("--velocity-iterations", *velocity_text, 0,
+                                           featherdrive::kMaxIterations);
   }
 
   /// The solver settings given on the command line, over `options`.
