@@ -20,6 +20,7 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/sim/batch.hpp"
+#include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 
@@ -229,6 +230,27 @@ TEST(QueryAllocations, NoneOnReusedWorkspace) {
     EXPECT_EQ(allocations_in(round), 0) << (floating ? "floating" : "fixed");
     EXPECT_TRUE(std::isfinite(sink));
   }
+}
+
+// A control step (sim/control_step.hpp) sets targets and steps: none after the first call, which
+// sizes its per-thread scratch, in both modes and with an observer.
+TEST(ControlStepAllocations, NoneAfterTheFirstCall) {
+  auto model = test::make_random_tree(17, 12, true, true, 0.01);
+  Simulation sim(model, SimulationOptions{});
+  std::mt19937 rng(4);
+  constrain_every_joint(sim, rng);
+  const VecX p = 0.1 * test::random_vector(model->nv, rng), minus_p = -p;
+  const VecX v = VecX::Zero(model->nv);
+  int substeps = 0;
+  const SubstepObserver count_substeps = [&](const Simulation&, int) { ++substeps; };
+  step_control(sim, p, v, ControlStep{2, TargetInterpolation::linear});
+  const long n = allocations_in([&] {
+    step_control(sim, minus_p, v, ControlStep{4, TargetInterpolation::linear}, count_substeps);
+    step_control(sim, p, v, ControlStep{3, TargetInterpolation::hold});
+  });
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(substeps, 4);
+  EXPECT_EQ(sim.step_count(), 9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, StepAllocations,
