@@ -198,6 +198,9 @@ int simulate(const SimulateArgs& args) {
     std::printf("  resumed from %s at step %d\n", args.load_state.c_str(), first);
   std::printf("  solver %s: %d position / %d velocity iterations\n", to_string(options.solver),
               options.position_iterations, options.velocity_iterations);
+  if (scene.control.substeps > 1)
+    std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
+                to_string(scene.control.targets));
   if (n > 0) {
     std::printf("  %-16s %-12s %14s %14s %14s\n", "joint", "drive", "final error", "rms error",
                 "max |force|");

@@ -38,8 +38,9 @@ struct SceneOverrides {
   std::string solver;
   std::optional<int> position_iterations;
   std::optional<int> velocity_iterations;
+  std::optional<int> substeps;
   // The integer options as typed, checked by parse().
-  std::optional<std::string> steps_text, position_text, velocity_text;
+  std::optional<std::string> steps_text, position_text, velocity_text, substeps_text;
 
   /// The notes are appended to the iteration options' help (e.g. PhysX's range).
   void add_options(CLI::App* cmd, const std::string& position_note = "",
@@ -53,6 +54,9 @@ struct SceneOverrides {
                     "1 to " + most + ", overrides the scene" + position_note);
     cmd->add_option("--velocity-iterations", velocity_text,
                     "0 to " + most + ", overrides the scene" + velocity_note);
+    cmd->add_option("--substeps", substeps_text,
+                    "Physics steps per control step (the scene's control.substeps), 1 to " +
+                        std::to_string(featherdrive::kMaxSubsteps));
   }
 
   /// The integer options from their text; throws std::invalid_argument naming the option and
@@ -65,6 +69,8 @@ struct SceneOverrides {
     if (velocity_text)
       velocity_iterations = integer_option("--velocity-iterations", *velocity_text, 0,
                                            featherdrive::kMaxIterations);
+    if (substeps_text)
+      substeps = integer_option("--substeps", *substeps_text, 1, featherdrive::kMaxSubsteps);
   }
 
   /// The solver settings given on the command line, over `options`.
@@ -82,6 +88,7 @@ struct SceneOverrides {
     for (const std::string& w : scene.robot.warnings)
       std::cerr << "featherdrive: warning: " << w << "\n";
     if (steps) scene.steps = *steps;
+    if (substeps) scene.control.substeps = *substeps;
     apply(scene.options);
     featherdrive::validate_options(scene.options);
     return scene;

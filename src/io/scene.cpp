@@ -387,7 +387,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
-         "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links"});
+         "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
+         "control"});
 
   Scene scene;
   scene.path = path;
@@ -445,6 +446,20 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     if (s["velocity_iterations"])
       scene.options.velocity_iterations = static_cast<int>(
           r.integer(s["velocity_iterations"], "solver.velocity_iterations", 0, kMaxIterations));
+  }
+
+  if (const YAML::Node c = root["control"]) {
+    r.map(c, "control", {"substeps", "targets"});
+    if (c["substeps"])
+      scene.control.substeps =
+          static_cast<int>(r.integer(c["substeps"], "control.substeps", 1, kMaxSubsteps));
+    if (c["targets"]) {
+      const std::string targets = r.text(c["targets"], "control.targets");
+      if (targets == "linear")
+        scene.control.targets = TargetInterpolation::linear;
+      else if (targets != "hold")
+        r.fail("control.targets", c["targets"], "must be hold or linear");
+    }
   }
 
   // Joint settings first: armature changes the model.
@@ -649,16 +664,26 @@ Simulation make_simulation(const Scene& scene) {
 }
 
 void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
-  // In double: (step_index + 1) in int overflows for INT_MAX.
-  const double t = (static_cast<double>(step_index) + 1.0) * sim.options().dt;
+  // Control step m, sub-step j of k; times in double: (m + 1) k in int overflows for INT_MAX.
+  const ControlStep& control = scene.control;
+  const int k = control.substeps;
+  const long m = (step_index >= 0 ? step_index : static_cast<long>(step_index) - (k - 1)) / k;
+  const int j = static_cast<int>(step_index - m * k) + 1;  // m rounded down: j in [1, k]
+  const double t = (static_cast<double>(m) + 1.0) * k * sim.options().dt;
+  const double t_prev = static_cast<double>(m) * k * sim.options().dt;
+  const bool linear = control.targets == TargetInterpolation::linear && j < k;
   for (const DriveSpec& d : scene.drives) {
     if (!d.sine) continue;
     const double position = d.sine->position(t), velocity = d.sine->velocity(t);
-    if (!std::isfinite(position) || !std::isfinite(velocity))
+    const double prev_position = linear ? d.sine->position(t_prev) : position;
+    const double prev_velocity = linear ? d.sine->velocity(t_prev) : velocity;
+    if (!std::isfinite(position) || !std::isfinite(velocity) || !std::isfinite(prev_position) ||
+        !std::isfinite(prev_velocity))
       throw InputError(scene.path.string() + ": drives." + d.joint +
                        ".target.sine: the target at t = " + format_double(t) +
                        " s is not finite (2 pi frequency t overflows)");
-    sim.set_drive_target(d.dof, position, velocity);
+    sim.set_drive_target(d.dof, substep_target(prev_position, position, j, k, control.targets),
+                         substep_target(prev_velocity, velocity, j, k, control.targets));
   }
 }
 

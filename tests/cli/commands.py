@@ -60,6 +60,31 @@ def main():
     r = run(cli, "simulate", ex("chain3.yaml"), "--steps", "0")
     check(r.returncode == 0, "--steps 0 runs", r)
 
+    # --substeps: the scene's control.substeps; the sine target changes every 4 steps only.
+    def rows_of(path):
+        with open(path, newline="") as f:
+            return list(csv.reader(f))
+    by_option, by_key, plain = (os.path.join(out_dir, f"slider_{n}.csv")
+                                for n in ("opt", "key", "1"))
+    r = run(cli, "simulate", ex("slider.yaml"), "--steps", "8", "--substeps", "4",
+            "--out", by_option)
+    check(r.returncode == 0 and "control step: 4 physics steps, targets hold" in r.stdout,
+          "--substeps 4 runs and the summary says so", r)
+    keyed = os.path.join(out_dir, "slider_control.yaml")
+    with open(ex("slider.yaml")) as f, open(keyed, "w") as g:
+        g.write(f.read().replace("model: slider.urdf", f"model: {ex('slider.urdf')}")
+                + "control: {substeps: 4}\n")
+    r = run(cli, "simulate", keyed, "--steps", "8", "--out", by_key)
+    check(r.returncode == 0, "a scene with control: {substeps: 4} runs", r)
+    r = run(cli, "simulate", ex("slider.yaml"), "--steps", "8", "--out", plain)
+    opt_rows, key_rows, plain_rows = rows_of(by_option), rows_of(by_key), rows_of(plain)
+    check(len(opt_rows) == 1 + 9, f"--substeps keeps one row per physics step: {len(opt_rows) - 1}")
+    check(opt_rows == key_rows, "--substeps 4 gives the CSV of control: {substeps: 4}")
+    check(opt_rows[:2] == plain_rows[:2] and opt_rows[2:] != plain_rows[2:],
+          "--substeps 4 holds the target of t = 4 dt from step 0 (1 step per target differs)")
+    one_line_error(run(cli, "simulate", ex("slider.yaml"), "--substeps", "0"), 2,
+                   "--substeps = 0: must be between 1 and 1000000")
+
     # Bad command lines and inputs: exit 2, one line.
     one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--solver", "sor"), 2, "--solver")
     one_line_error(run(cli, "simulate", ex("chain3.yaml"), "--position-iterations", "0"), 2,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <numbers>
 #include <sstream>
 
@@ -295,6 +296,61 @@ TEST(Scene, ApplyTargetsIsExactForEveryStepIndex) {
     EXPECT_EQ(sim.drive(0).target_velocity, sine.amplitude * w * std::cos(w * t + sine.phase));
   }
   EXPECT_GT(sim.drive(0).target_position, -1.0);  // INT_MIN: t < 0 is just another time
+}
+
+std::string slider_with(const std::string& control) {
+  std::ifstream in(kExamples + "slider.yaml");
+  std::stringstream text;
+  text << in.rdbuf() << control;
+  return text.str();
+}
+
+TEST(Scene, ControlDefaultsToOneHeldStepAndBadValuesNameTheKey) {
+  const Scene plain = scene_from(slider_with(""));
+  EXPECT_EQ(plain.control.substeps, 1);
+  EXPECT_EQ(plain.control.targets, TargetInterpolation::hold);
+  const Scene four = scene_from(slider_with("control: {substeps: 4, targets: linear}\n"));
+  EXPECT_EQ(four.control.substeps, 4);
+  EXPECT_EQ(four.control.targets, TargetInterpolation::linear);
+  EXPECT_EQ(error_of(slider_with("control: {substeps: 0}\n")),
+            kExamples + "inline.yaml: control.substeps = 0: must be >= 1");
+  EXPECT_EQ(error_of(slider_with("control: {substeps: 1000001}\n")),
+            kExamples + "inline.yaml: control.substeps = 1000001: must be <= 1000000");
+  EXPECT_EQ(error_of(slider_with("control: {targets: cubic}\n")),
+            kExamples + "inline.yaml: control.targets = cubic: must be hold or linear");
+  EXPECT_NE(error_of(slider_with("control: {decimation: 2}\n"))
+                .find("control.decimation: unknown key (expected one of: substeps, targets)"),
+            std::string::npos);
+}
+
+// The scene's per-step rule (what the CLI and compare-physx run) against the core's control step
+// fed the sine at the control times t = (m + 1) k dt, from the sine at t = 0 for linear.
+TEST(Scene, ControlStepsMatchTheCoreControlStepBitForBit) {
+  for (const std::string mode : {"hold", "linear"}) {
+    const int k = 4;
+    const Scene s =
+        scene_from(slider_with("control: {substeps: 4, targets: " + mode + "}\n"));
+    const SineTarget& sine = *s.drives[0].sine;
+    const double dt = s.options.dt;
+    Simulation scene_run = make_simulation(s), core_run = make_simulation(s);
+    core_run.set_drive_target(0, sine.position(0.0), sine.velocity(0.0));
+    for (int m = 0; m < 10; ++m) {
+      for (int j = 0; j < k; ++j) {
+        apply_targets(s, scene_run, m * k + j);
+        scene_run.step();
+      }
+      const double t = static_cast<double>((m + 1) * k) * dt;
+      step_control(core_run, VecX::Constant(1, sine.position(t)),
+                   VecX::Constant(1, sine.velocity(t)), s.control);
+      ASSERT_EQ(scene_run.q()[0], core_run.q()[0]) << mode << " control step " << m;
+      ASSERT_EQ(scene_run.qd()[0], core_run.qd()[0]) << mode << " control step " << m;
+    }
+    // Held targets stay put for k steps; linear ones move every step.
+    apply_targets(s, scene_run, 41);
+    const double at41 = scene_run.drive(0).target_position;
+    apply_targets(s, scene_run, 42);
+    EXPECT_EQ(at41 == scene_run.drive(0).target_position, mode == "hold");
+  }
 }
 
 TEST(Scene, SineTargetsThatOverflowAreRefusedWithTheKey) {

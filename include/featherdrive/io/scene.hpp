@@ -11,6 +11,7 @@
 
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
@@ -68,6 +69,9 @@ struct Scene {
   std::optional<LinkSettings> link_defaults;
   std::vector<LinkSettings> links;    ///< in model link order
   std::optional<JointSettings> joint_defaults;
+  /// control: {substeps: k, targets: hold | linear}: the targets change every k steps
+  /// (apply_targets); the default 1 / hold is one target per step.
+  ControlStep control;
 
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };
@@ -86,8 +90,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path);
 /// targets are those of the first step.
 Simulation make_simulation(const Scene& scene);
 
-/// Sets the time-varying targets for step k (0-based): the sine targets at that step's end time,
-/// t = (k + 1) dt.
+/// Sets the time-varying targets for step k (0-based). With scene.control's K substeps, step k
+/// belongs to control step m = k / K as its sub-step j = k % K + 1: hold sets the sine targets
+/// at the control step's end, t = (m + 1) K dt; linear interpolates from those at t = m K dt
+/// (substep_target, docs/math/control_step.md). For K = 1 both are the targets at t = (k + 1) dt.
 void apply_targets(const Scene& scene, Simulation& sim, int step_index);
 
 /// Runs the scene: on_state(sim, 0) for the initial state, then for each step k apply_targets,
