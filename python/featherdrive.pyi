@@ -294,6 +294,12 @@ class Simulation:
     def step(self, count: Int = 1) -> None:
         """Advances count steps (0 <= count < 2**31, GIL released); DivergenceError on a
         non-finite step; Ctrl-C: KeyboardInterrupt at a whole step."""
+    def step_control(self, target_position: ArrayLike, target_velocity: ArrayLike = 0.0,
+                     substeps: Int = 1, targets: str = "hold") -> None:
+        """One control step: substeps (1..10**6) physics steps with the targets ((nv,) or a
+        scalar) held ('hold') or interpolated from the previous ones ('linear': sub-step j uses
+        prev + j/substeps (new - prev)); GIL released, Ctrl-C acts between control steps.
+        DivergenceError names the sub-step. docs/math/control_step.md."""
     # Kinematics and dynamics at the current q and qd; every result a new array (a copy).
     # Spatial vectors [angular; linear]; frame 'world_aligned' (default) or 'local'.
     def link_pose(self, link: Union[str, Int]) -> tuple[Vector, Vector]:
@@ -387,6 +393,10 @@ class Batch:
     def step(self, count: Int = 1) -> None:
         """Steps every copy (0 <= count < 2**31, GIL released); DivergenceError names the lowest
         diverged copy; Ctrl-C: KeyboardInterrupt with every copy at the same whole step."""
+    def step_control(self, target_position: ArrayLike, target_velocity: ArrayLike = 0.0,
+                     substeps: Int = 1, targets: str = "hold") -> None:
+        """Simulation.step_control for every copy: targets (N, nv), (nv,) for all copies or a
+        scalar; a copy that diverges stops at its sub-step, the others make all of them."""
 
 class UrdfOptions:
     fixed_base: bool

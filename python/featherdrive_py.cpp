@@ -33,6 +33,7 @@
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/batch.hpp"
+#include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace py = pybind11;
@@ -1328,6 +1329,54 @@ PYBIND11_MODULE(featherdrive, m) {
           "stops at that step with its state from before it; the others make all their steps; "
           "then DivergenceError names the lowest diverged copy (sim(i).step_count tells how far "
           "each got). Ctrl-C raises KeyboardInterrupt with every copy at a whole step.");
+
+  // ---- control steps (sim/control_step.hpp): Simulation.step_control, Batch.step_control ------
+  {
+    auto control_of = [](py::handle substeps, py::handle targets) {
+      ControlStep c;
+      c.substeps = to_int(substeps, "step_control: substeps", 1, kMaxSubsteps);
+      const std::string t = to_str(targets, "step_control: targets");
+      if (t != "hold" && t != "linear")
+        throw std::invalid_argument("step_control: targets = '" + t +
+                                    "': must be 'hold' or 'linear'");
+      c.targets = t == "linear" ? TargetInterpolation::linear : TargetInterpolation::hold;
+      return c;
+    };
+    // A scalar for every copy and dof, (nv,) for every copy, or (N, nv).
+    auto batch_targets = [](py::handle obj, const Batch& b, const std::string& what) {
+      const int n = b.size(), nv = model_of(b)->nv;
+      if (as_float_array(obj, what).ndim() == 0)
+        return RowMatrix(RowMatrix::Constant(n, nv, to_vector(obj, 1, what, true)[0]));
+      return to_matrix(obj, n, nv, what);
+    };
+    py::object sim_class = m.attr("Simulation"), batch_class = m.attr("Batch");
+    sim_class.attr("step_control") = py::cpp_function(
+        [control_of](Simulation& s, py::handle position, py::handle velocity,
+                     py::handle substeps, py::handle targets) {
+          const int nv = model_of(s)->nv;
+          const VecX p = to_vector(position, nv, "step_control: target_position", true);
+          const VecX v = to_vector(velocity, nv, "step_control: target_velocity", true);
+          const ControlStep c = control_of(substeps, targets);
+          step_in_chunks(s, 1, [&](int) { step_control(s, p, v, c); });
+        },
+        py::name("step_control"), py::is_method(sim_class), py::arg("target_position"),
+        py::arg("target_velocity") = 0.0, py::arg("substeps") = 1, py::arg("targets") = "hold",
+        "One control step: substeps physics steps of options.dt with the drive targets (nv,) or a "
+        "scalar, held ('hold') or interpolated from the previous ones ('linear'; "
+        "docs/math/control_step.md), without the GIL. DivergenceError names the sub-step.");
+    batch_class.attr("step_control") = py::cpp_function(
+        [control_of, batch_targets](Batch& b, py::handle position, py::handle velocity,
+                                    py::handle substeps, py::handle targets) {
+          const RowMatrix p = batch_targets(position, b, "step_control: target_position");
+          const RowMatrix v = batch_targets(velocity, b, "step_control: target_velocity");
+          const ControlStep c = control_of(substeps, targets);
+          step_in_chunks(b, 1, [&](int) { step_control(b, p, v, c); });
+        },
+        py::name("step_control"), py::is_method(batch_class), py::arg("target_position"),
+        py::arg("target_velocity") = 0.0, py::arg("substeps") = 1, py::arg("targets") = "hold",
+        "Simulation.step_control for every copy: targets (N, nv), (nv,) for all or a scalar; "
+        "divergence as Batch.step, per sub-step.");
+  }
 
   // ---- io -------------------------------------------------------------------------------------
   py::class_<UrdfOptions>(m, "UrdfOptions", "How to import a URDF.")
