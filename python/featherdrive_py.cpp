@@ -812,7 +812,9 @@ PYBIND11_MODULE(featherdrive, m) {
           "remotized_pd: (n, 2) rows of (position, max effort) (a copy)")
       .def_property(
           "delay", [](const ExplicitActuator& a) { return a.delay; },
-          [](ExplicitActuator& a, py::handle d) { a.delay = to_int(d, "delay", 0, kMaxActuatorDelay); },
+          [](ExplicitActuator& a, py::handle d) {
+            a.delay = to_int(d, "delay", 0, kMaxActuatorDelay);
+          },
           "physics steps between a command and its effort")
       .def("__repr__", [](const ExplicitActuator& a) {
         return std::string("ExplicitActuator('") + to_string(a.kind) + "', stiffness=" +
@@ -1266,7 +1268,9 @@ PYBIND11_MODULE(featherdrive, m) {
           py::arg("joint"), "The ExplicitActuator (a copy) of a joint (name or dof).")
       .def(
           "clear_actuator",
-          [](Simulation& s, py::handle j) { on_joint(s, j, [&](int dof) { s.clear_actuator(dof); }); },
+          [](Simulation& s, py::handle j) {
+            on_joint(s, j, [&](int dof) { s.clear_actuator(dof); });
+          },
           py::arg("joint"), "Removes a joint's explicit actuator.")
       .def(
           "set_actuator_feedforward",

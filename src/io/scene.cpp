@@ -284,7 +284,8 @@ ExplicitActuator read_actuator(const Reader& r, const YAML::Node& node, const st
       const std::string ip = tpath + "[" + std::to_string(i) + "]";
       if (!table[i].IsSequence() || table[i].size() != 2)
         r.fail(ip, table[i], "must be a pair [position, max effort]");
-      a.lookup.emplace_back(r.finite(table[i][0], ip + "[0]"), r.non_negative(table[i][1], ip + "[1]"));
+      a.lookup.emplace_back(r.finite(table[i][0], ip + "[0]"),
+                            r.non_negative(table[i][1], ip + "[1]"));
     }
   }
   try {
@@ -662,8 +663,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     }
   }
   for (int dof : scene.robot.dof_order) {
-    if (auto it = drives.find(dof); it != drives.end() &&
-                                    (it->second.drive.type != DriveType::none || it->second.actuator))
+    if (auto it = drives.find(dof);
+        it != drives.end() && (it->second.drive.type != DriveType::none || it->second.actuator))
       scene.drives.push_back(it->second);
     if (auto it = settings.find(dof); it != settings.end()) scene.joints.push_back(it->second);
   }

@@ -528,8 +528,9 @@ TEST(Checkpoint, ExplicitActuatorsResumeWithTheirDelayHistories) {
   for (int k = 10; k < 20; ++k)
     for (Simulation* s : {&run, &resumed}) command(*s, k), s->step();
   for (int i = 0; i < 3; ++i) {
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(resumed.q()[i]), std::bit_cast<std::uint64_t>(run.q()[i]));
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(resumed.qd()[i]), std::bit_cast<std::uint64_t>(run.qd()[i]));
+    using std::bit_cast;
+    EXPECT_EQ(bit_cast<std::uint64_t>(resumed.q()[i]), bit_cast<std::uint64_t>(run.q()[i]));
+    EXPECT_EQ(bit_cast<std::uint64_t>(resumed.qd()[i]), bit_cast<std::uint64_t>(run.qd()[i]));
     EXPECT_EQ(resumed.actuator_force()[i], run.actuator_force()[i]);
   }
 }

@@ -116,7 +116,8 @@ TEST(ExplicitActuatorSimulation, EachKindAppliesItsFormulaOnTheStepStartState) {
     double x = 0.0, v = 0.0;
     int clipped = 0;
     for (int k = 0; k < 240; ++k) {
-      const double target = 0.4 * std::sin(0.05 * k), target_v = 0.4 * 0.05 / h * std::cos(0.05 * k);
+      const double target = 0.4 * std::sin(0.05 * k);
+      const double target_v = 0.4 * 0.05 / h * std::cos(0.05 * k);
       sim.set_drive_target(0, target, target_v);
       const double demand = kp * (target - x) + kd * (target_v - v) + 2.0;
       double lo = -30.0, hi = 30.0;

@@ -84,11 +84,11 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options = {});
 
 class Simulation;
-/// Gives each moving joint's URDF effort limit (where the URDF has one) to what robot.options.effort
-/// names, on `sim` (a simulation of robot.model) as it is now: a drive of type != none without
-/// its own max_force or max_impulse gets max_force, an explicit actuator without its own
-/// effort_limit gets effort_limit (set again: its delay history starts over). Call it after
-/// setting the drives and actuators, before stepping.
+/// Gives each moving joint's URDF effort limit (where the URDF has one) to what
+/// robot.options.effort names, on `sim` (a simulation of robot.model) as it is now: a drive of
+/// type != none without its own max_force or max_impulse gets max_force, an explicit actuator
+/// without its own effort_limit gets effort_limit (set again: its delay history starts over).
+/// Call it after setting the drives and actuators, before stepping.
 void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim);
 
 /// Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (the inverse of rotation_from_rpy), for

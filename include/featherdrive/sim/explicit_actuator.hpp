@@ -70,11 +70,13 @@ class ExplicitActuators {
 
   /// Sets (or, for kind none, clears) dof's actuator and empties its history. Not validated here.
   void set(int dof, const ExplicitActuator& actuator);
-  const ExplicitActuator& actuator(int dof) const { return slots_[static_cast<size_t>(dof)].actuator; }
+  const ExplicitActuator& actuator(int dof) const { return slot(dof).actuator; }
   bool active(int dof) const { return actuator(dof).kind != ActuatorKind::none; }
   bool any() const { return !active_.empty(); }
-  void set_feedforward(int dof, double effort) { slots_[static_cast<size_t>(dof)].feedforward = effort; }
-  double feedforward(int dof) const { return slots_[static_cast<size_t>(dof)].feedforward; }
+  void set_feedforward(int dof, double effort) {
+    slots_[static_cast<size_t>(dof)].feedforward = effort;
+  }
+  double feedforward(int dof) const { return slot(dof).feedforward; }
   /// Empties every history: the next step starts over with eq. (9).
   void reset_history();
 
@@ -86,8 +88,8 @@ class ExplicitActuators {
   void undo_push();
 
   /// A dof's history, for checkpoints: pushes since set (or reset) and the ring (delay + 1).
-  long pushes(int dof) const { return slots_[static_cast<size_t>(dof)].pushes; }
-  const std::vector<ActuatorCommand>& ring(int dof) const { return slots_[static_cast<size_t>(dof)].ring; }
+  long pushes(int dof) const { return slot(dof).pushes; }
+  const std::vector<ActuatorCommand>& ring(int dof) const { return slot(dof).ring; }
   /// Throws std::invalid_argument for pushes < 0 or a ring of another size than delay + 1.
   void restore_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
 
@@ -98,6 +100,7 @@ class ExplicitActuators {
     long pushes = 0;
     std::vector<ActuatorCommand> ring;
   };
+  const Slot& slot(int dof) const { return slots_[static_cast<size_t>(dof)]; }
   std::vector<Slot> slots_;
   std::vector<int> active_;  ///< dofs with an actuator, ascending
 };
