@@ -93,6 +93,36 @@ class ActuatorEnvelope:
     def active(self) -> bool:
         """Whether the envelope limits the drive."""
 
+class ActuatorKind(enum.Enum):
+    """Which explicit actuator model (Isaac Lab's); docs/math/explicit_actuators.md."""
+    none = 0
+    ideal_pd = 1
+    dc_motor = 2
+    remotized_pd = 3
+
+class ExplicitActuator:
+    """An explicit actuator of one joint; checked when given to Simulation.set_actuator."""
+    kind: ActuatorKind
+    stiffness: float
+    damping: float
+    effort_limit: float
+    saturation_effort: float
+    velocity_limit: float
+    lookup: Vector
+    delay: int
+    def __init__(self, kind: Union[ActuatorKind, str] = ActuatorKind.ideal_pd, *,
+                 stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
+                 saturation_effort: float = 0.0, velocity_limit: float = 0.0,
+                 lookup: ArrayLike | None = None, delay: Int = 0) -> None: ...
+
+def IdealPD(*, stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
+            delay: Int = 0) -> ExplicitActuator: ...
+def DCMotor(*, stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
+            saturation_effort: float, velocity_limit: float,
+            delay: Int = 0) -> ExplicitActuator: ...
+def RemotizedPD(*, stiffness: float = 0.0, damping: float = 0.0, lookup: ArrayLike,
+                effort_limit: float = ..., delay: Int = 0) -> ExplicitActuator: ...
+
 class Compat(enum.Enum):
     """Whose defaults and step details a simulation follows."""
     none = 0
@@ -283,6 +313,14 @@ class Simulation:
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
+    def set_actuator(self, joint: Joint, actuator: ExplicitActuator) -> None:
+        """ValueError beside a drive whose type is not 'none'; empties the delay history."""
+    def actuator(self, joint: Joint) -> ExplicitActuator: ...
+    def clear_actuator(self, joint: Joint) -> None: ...
+    def set_actuator_feedforward(self, joint: Joint, effort: float) -> None: ...
+    def reset_actuator_history(self) -> None: ...
+    @property
+    def actuator_force(self) -> Vector: ...
     @property
     def drive_force(self) -> Vector: ...
     @property
@@ -390,6 +428,9 @@ class Batch:
     def set_drive_gains(self, stiffness: ArrayLike, damping: ArrayLike,
                         type: Union[DriveType, str] = DriveType.force) -> None: ...
     def set_drive(self, joint: str, drive: Drive) -> None: ...
+    def set_actuator(self, joint: Joint, actuator: ExplicitActuator,
+                     env_ids: ArrayLike | None = None) -> None:
+        """The same actuator on one joint of the copies env_ids (None: all); all or nothing."""
     def step(self, count: Int = 1) -> None:
         """Steps every copy (0 <= count < 2**31, GIL released); DivergenceError names the lowest
         diverged copy; Ctrl-C: KeyboardInterrupt with every copy at the same whole step."""
@@ -398,10 +439,18 @@ class Batch:
         """Simulation.step_control for every copy: targets (N, nv), (nv,) for all copies or a
         scalar; a copy that diverges stops at its sub-step, the others make all of them."""
 
+class UrdfEffort(enum.Enum):
+    """What a URDF <limit effort> becomes (apply_urdf_effort_limits)."""
+    none = 0
+    max_force = 1
+    effort_limit = 2
+
 class UrdfOptions:
     fixed_base: bool
     gravity: ArrayLike
-    def __init__(self, fixed_base: bool = True, gravity: ArrayLike = (0.0, 0.0, -9.81)) -> None: ...
+    effort: UrdfEffort
+    def __init__(self, fixed_base: bool = True, gravity: ArrayLike = (0.0, 0.0, -9.81),
+                 effort: Union[UrdfEffort, str] = UrdfEffort.none) -> None: ...
 
 class UrdfMimic:
     joint: str
@@ -426,6 +475,8 @@ class UrdfRobot:
     def model(self) -> Model: ...
     def rebuild(self) -> None: ...
 
+def apply_urdf_effort_limits(robot: UrdfRobot, sim: Simulation) -> None:
+    """The URDF effort limits as max_force or effort_limit where none is set (robot.options)."""
 def load_urdf(path: PathLike, options: UrdfOptions = ...) -> UrdfRobot:
     """Raises InputError (a ValueError) naming the file."""
 def parse_urdf(xml: str, name: str, options: UrdfOptions = ...) -> UrdfRobot: ...
@@ -443,6 +494,7 @@ class DriveSpec:
     dof: int
     drive: Drive
     sine: SineTarget | None
+    actuator: ExplicitActuator | None
     def target_at(self, t: float) -> tuple[float, float]: ...
 
 class Scene:

@@ -330,9 +330,53 @@ DriveType to_drive_type(py::handle obj) {
                             "'none', 'force' or 'acceleration'");
 }
 
+UrdfEffort to_urdf_effort(py::handle obj) {
+  return to_enum<UrdfEffort>(obj, "effort",
+                             {{"none", UrdfEffort::none},
+                              {"max_force", UrdfEffort::max_force},
+                              {"effort_limit", UrdfEffort::effort_limit}},
+                             "'none', 'max_force' or 'effort_limit'");
+}
+
 Compat to_compat(py::handle obj) {
   return to_enum<Compat>(obj, "compat", {{"none", Compat::none}, {"physx", Compat::physx}},
                          "'none' or 'physx'");
+}
+
+// Explicit actuators: the kind by name, the remotized table as an (n, 2) array or None.
+ActuatorKind to_actuator_kind(py::handle obj) {
+  return to_enum<ActuatorKind>(obj, "actuator kind",
+                               {{"none", ActuatorKind::none},
+                                {"ideal_pd", ActuatorKind::ideal_pd},
+                                {"dc_motor", ActuatorKind::dc_motor},
+                                {"remotized_pd", ActuatorKind::remotized_pd}},
+                               "'none', 'ideal_pd', 'dc_motor' or 'remotized_pd'");
+}
+
+std::vector<std::pair<double, double>> to_lookup(py::handle obj) {
+  std::vector<std::pair<double, double>> table;
+  if (obj.is_none()) return table;
+  const auto a = as_float_array(obj, "lookup");
+  if (a.ndim() != 2 || a.shape(1) != 2)
+    throw std::invalid_argument("lookup has shape " + shape_of(a) +
+                                ", expected (n, 2): rows of (position, max effort)");
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) table.emplace_back(a.at(i, 0), a.at(i, 1));
+  return table;
+}
+
+ExplicitActuator make_actuator(ActuatorKind kind, double stiffness, double damping,
+                               double effort_limit, double saturation_effort,
+                               double velocity_limit, py::handle lookup, py::handle delay) {
+  ExplicitActuator a;
+  a.kind = kind;
+  a.stiffness = stiffness;
+  a.damping = damping;
+  a.effort_limit = effort_limit;
+  a.saturation_effort = saturation_effort;
+  a.velocity_limit = velocity_limit;
+  a.lookup = to_lookup(lookup);
+  a.delay = to_int(delay, "delay", 0, kMaxActuatorDelay);
+  return a;
 }
 
 SimulationOptions make_options(double dt, py::handle solver, py::handle position_iterations,
@@ -726,6 +770,88 @@ PYBIND11_MODULE(featherdrive, m) {
                      &ActuatorEnvelope::velocity_dependent_resistance,
                      "opposing effort per unit speed")
       .def("active", &ActuatorEnvelope::active, "Whether the envelope limits the drive.");
+
+  // Explicit actuators (docs/math/explicit_actuators.md): one class with a kind, and a factory
+  // per Isaac Lab model with keyword arguments.
+  py::enum_<ActuatorKind>(m, "ActuatorKind", "Which explicit actuator model (Isaac Lab's).")
+      .value("none", ActuatorKind::none, "no explicit actuator")
+      .value("ideal_pd", ActuatorKind::ideal_pd, "IdealPDActuator: PD clipped to effort_limit")
+      .value("dc_motor", ActuatorKind::dc_motor, "DCMotor: within the torque-speed line")
+      .value("remotized_pd", ActuatorKind::remotized_pd,
+             "RemotizedPDActuator: within a position-dependent limit");
+  py::class_<ExplicitActuator>(m, "ExplicitActuator",
+                               "An explicit actuator of one joint; checked when given to "
+                               "Simulation.set_actuator.")
+      .def(py::init([](py::handle kind, double kp, double kd, double effort_limit, double sat,
+                       double speed, py::handle lookup, py::handle delay) {
+             return make_actuator(to_actuator_kind(kind), kp, kd, effort_limit, sat, speed,
+                                  lookup, delay);
+           }),
+           py::arg("kind") = ActuatorKind::ideal_pd, py::kw_only(), py::arg("stiffness") = 0.0,
+           py::arg("damping") = 0.0, py::arg("effort_limit") = kInf,
+           py::arg("saturation_effort") = 0.0, py::arg("velocity_limit") = 0.0,
+           py::arg("lookup") = py::none(), py::arg("delay") = 0,
+           "kind: an ActuatorKind or its name; lookup: (n, 2) rows of (position, max effort).")
+      .def_readwrite("kind", &ExplicitActuator::kind, "ActuatorKind")
+      .def_readwrite("stiffness", &ExplicitActuator::stiffness, "N/m or Nm/rad")
+      .def_readwrite("damping", &ExplicitActuator::damping, "Ns/m or Nms/rad")
+      .def_readwrite("effort_limit", &ExplicitActuator::effort_limit,
+                     "the actuator's clip (N or Nm), apart from a drive's max_force")
+      .def_readwrite("saturation_effort", &ExplicitActuator::saturation_effort,
+                     "dc_motor: stall effort")
+      .def_readwrite("velocity_limit", &ExplicitActuator::velocity_limit,
+                     "dc_motor: no-load speed")
+      .def_property(
+          "lookup",
+          [](const ExplicitActuator& a) {
+            RowMatrix t(static_cast<Eigen::Index>(a.lookup.size()), 2);
+            for (size_t i = 0; i < a.lookup.size(); ++i)
+              t.row(static_cast<Eigen::Index>(i)) << a.lookup[i].first, a.lookup[i].second;
+            return read_only(std::move(t));
+          },
+          [](ExplicitActuator& a, py::handle t) { a.lookup = to_lookup(t); },
+          "remotized_pd: (n, 2) rows of (position, max effort) (a copy)")
+      .def_property(
+          "delay", [](const ExplicitActuator& a) { return a.delay; },
+          [](ExplicitActuator& a, py::handle d) {
+            a.delay = to_int(d, "delay", 0, kMaxActuatorDelay);
+          },
+          "physics steps between a command and its effort")
+      .def("__repr__", [](const ExplicitActuator& a) {
+        return std::string("ExplicitActuator('") + to_string(a.kind) + "', stiffness=" +
+               fmt(a.stiffness) + ", damping=" + fmt(a.damping) + ", effort_limit=" +
+               fmt(a.effort_limit) + ", saturation_effort=" + fmt(a.saturation_effort) +
+               ", velocity_limit=" + fmt(a.velocity_limit) + ", lookup=" +
+               std::to_string(a.lookup.size()) + " points, delay=" + std::to_string(a.delay) + ")";
+      });
+  m.def(
+      "IdealPD",
+      [](double kp, double kd, double effort_limit, py::handle delay) {
+        return make_actuator(ActuatorKind::ideal_pd, kp, kd, effort_limit, 0.0, 0.0, py::none(),
+                             delay);
+      },
+      py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
+      py::arg("effort_limit") = kInf, py::arg("delay") = 0,
+      "Isaac Lab's IdealPDActuator (DelayedPDActuator with a delay): an ExplicitActuator.");
+  m.def(
+      "DCMotor",
+      [](double kp, double kd, double effort_limit, double sat, double speed, py::handle delay) {
+        return make_actuator(ActuatorKind::dc_motor, kp, kd, effort_limit, sat, speed,
+                             py::none(), delay);
+      },
+      py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
+      py::arg("effort_limit") = kInf, py::arg("saturation_effort"), py::arg("velocity_limit"),
+      py::arg("delay") = 0, "Isaac Lab's DCMotor: an ExplicitActuator.");
+  m.def(
+      "RemotizedPD",
+      [](double kp, double kd, py::handle lookup, double effort_limit, py::handle delay) {
+        return make_actuator(ActuatorKind::remotized_pd, kp, kd, effort_limit, 0.0, 0.0, lookup,
+                             delay);
+      },
+      py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0, py::arg("lookup"),
+      py::arg("effort_limit") = kInf, py::arg("delay") = 0,
+      "Isaac Lab's RemotizedPDActuator: an ExplicitActuator; lookup (n, 2) rows of (position, "
+      "max effort).");
 
   py::enum_<Compat>(m, "Compat", "Whose defaults and step details a simulation follows.")
       .value("none", Compat::none, "featherdrive's ideal articulation")
@@ -1127,6 +1253,39 @@ PYBIND11_MODULE(featherdrive, m) {
             return on_joint(s, j, [&](int dof) { return s.actuator_envelope(dof); });
           },
           py::arg("joint"), "The ActuatorEnvelope (a copy) of a joint (name or dof).")
+      .def(
+          "set_actuator",
+          [](Simulation& s, py::handle joint, const ExplicitActuator& a) {
+            on_joint(s, joint, [&](int dof) { s.set_actuator(dof, a); });
+          },
+          py::arg("joint"), py::arg("actuator"),
+          "Sets the ExplicitActuator of a joint (name or dof; kind 'none' clears it) and empties "
+          "its delay history. ValueError beside a drive whose type is not 'none'.")
+      .def(
+          "actuator",
+          [](const Simulation& s, py::handle j) {
+            return on_joint(s, j, [&](int dof) { return s.actuator(dof); });
+          },
+          py::arg("joint"), "The ExplicitActuator (a copy) of a joint (name or dof).")
+      .def(
+          "clear_actuator",
+          [](Simulation& s, py::handle j) {
+            on_joint(s, j, [&](int dof) { s.clear_actuator(dof); });
+          },
+          py::arg("joint"), "Removes a joint's explicit actuator.")
+      .def(
+          "set_actuator_feedforward",
+          [](Simulation& s, py::handle j, double effort) {
+            on_joint(s, j, [&](int dof) { s.set_actuator_feedforward(dof, effort); });
+          },
+          py::arg("joint"), py::arg("effort"),
+          "Feed-forward effort of a joint's actuator, delayed and clipped with its PD effort.")
+      .def(
+          "reset_actuator_history",
+          [](Simulation& s) { locked(s, [&] { s.reset_actuator_history(); }); },
+          "Empties every actuator's delay history (the next step sees its own command).")
+      .def_property_readonly("actuator_force", &Simulation::actuator_force, ref,
+                             "Explicit actuators' effort in the last step (nv,), read-only view.")
       .def_property_readonly("drive_force", &Simulation::drive_force, ref,
                              "Drive force of each dof in the last step (nv,), read-only view.")
       .def_property_readonly("limit_force", &Simulation::limit_force, ref,
@@ -1308,6 +1467,30 @@ PYBIND11_MODULE(featherdrive, m) {
           },
           py::arg("joint"), py::arg("drive"), "The same Drive on one joint (name) of every copy.")
       .def(
+          "set_actuator",
+          [](Batch& b, py::handle joint, const ExplicitActuator& a, py::handle env_ids) {
+            const NameOrIndex j = joint_arg(joint);
+            const int n = b.size();
+            std::vector<int> ids;
+            if (env_ids.is_none())
+              for (int i = 0; i < n; ++i) ids.push_back(i);
+            else
+              for (py::handle id : py::iter(env_ids))
+                ids.push_back(to_int(id, "env_ids[" + std::to_string(ids.size()) + "]", 0, n - 1));
+            locked(b, [&] {
+              // A copy with a drive refuses first (set_actuator's message, nothing set yet);
+              // then the first copy checks what all share (joint, values).
+              const int dof = dof_of(b.model(), j);
+              for (int i : ids)
+                if (a.kind != ActuatorKind::none && b.sim(i).drive(dof).type != DriveType::none)
+                  b.sim(i).set_actuator(dof, a);
+              for (int i : ids) b.sim(i).set_actuator(dof, a);
+            });
+          },
+          py::arg("joint"), py::arg("actuator"), py::arg("env_ids") = py::none(),
+          "The same ExplicitActuator on one joint (name or dof) of the copies env_ids (all for "
+          "None), each with an empty delay history. Nothing changes on a ValueError.")
+      .def(
           "step",
           [](Batch& b, py::handle count) {
             const int n = to_int(count, "step: count", 0);
@@ -1379,15 +1562,26 @@ PYBIND11_MODULE(featherdrive, m) {
   }
 
   // ---- io -------------------------------------------------------------------------------------
+  py::enum_<UrdfEffort>(m, "UrdfEffort", "What a URDF <limit effort> becomes.")
+      .value("none", UrdfEffort::none, "informative only")
+      .value("max_force", UrdfEffort::max_force, "every implicit drive's max_force")
+      .value("effort_limit", UrdfEffort::effort_limit, "every explicit actuator's effort_limit");
   py::class_<UrdfOptions>(m, "UrdfOptions", "How to import a URDF.")
-      .def(py::init([](bool fixed_base, py::handle gravity) {
+      .def(py::init([](bool fixed_base, py::handle gravity, py::handle effort) {
              UrdfOptions o;
              o.fixed_base = fixed_base;
              o.gravity = to_vec3(gravity, "gravity");
+             o.effort = to_urdf_effort(effort);
              return o;
            }),
            py::arg("fixed_base") = true, py::arg("gravity") = py::make_tuple(0.0, 0.0, -9.81),
-           "fixed_base False gives the root a floating joint.")
+           py::arg("effort") = UrdfEffort::none,
+           "fixed_base False gives the root a floating joint; effort: what <limit effort> "
+           "becomes, 'none' | 'max_force' | 'effort_limit' (apply_urdf_effort_limits).")
+      .def_property(
+          "effort", [](const UrdfOptions& o) { return o.effort; },
+          [](UrdfOptions& o, py::handle e) { o.effort = to_urdf_effort(e); },
+          "UrdfEffort: none, max_force (drives) or effort_limit (explicit actuators)")
       .def_readwrite("fixed_base", &UrdfOptions::fixed_base, "root welded to the world")
       .def_property(
           "gravity", [](const UrdfOptions& o) { return o.gravity; },
@@ -1418,6 +1612,14 @@ PYBIND11_MODULE(featherdrive, m) {
       .def_readonly("effort_limits", &UrdfRobot::effort_limits, "URDF effort limit per joint")
       .def("rebuild", &UrdfRobot::rebuild, "Builds model from links again.");
 
+  m.def(
+      "apply_urdf_effort_limits",
+      [](const UrdfRobot& robot, Simulation& sim) {
+        locked(sim, [&] { apply_urdf_effort_limits(robot, sim); });
+      },
+      py::arg("robot"), py::arg("sim"),
+      "Gives the URDF effort limits to sim's drives (max_force) or explicit actuators "
+      "(effort_limit) that have none, as robot.options.effort says.");
   m.def("load_urdf", &load_urdf, py::arg("path"), py::arg("options") = UrdfOptions{},
         "Reads a URDF file; InputError (a ValueError) naming the file, element and value.");
   m.def("parse_urdf", &parse_urdf, py::arg("xml"), py::arg("name"),
@@ -1437,6 +1639,7 @@ PYBIND11_MODULE(featherdrive, m) {
       .def_readonly("dof", &DriveSpec::dof, "dof index")
       .def_readonly("drive", &DriveSpec::drive, "the Drive")
       .def_readonly("sine", &DriveSpec::sine, "SineTarget or None")
+      .def_readonly("actuator", &DriveSpec::actuator, "ExplicitActuator or None")
       .def("target_at", &DriveSpec::target_at, py::arg("t"), "(position, velocity) at t.");
 
   py::class_<Scene>(m, "Scene", "A scene file: robot, options, initial state and drives.")

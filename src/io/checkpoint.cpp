@@ -109,6 +109,62 @@ void hash_double(Writer& w, double v) { w.f64(v); }
   throw CheckpointError(name + ": " + why);
 }
 
+// Version 3: per dof the explicit actuator and its delay history, then the actuator forces.
+void write_actuators(Writer& p, const Simulation& sim) {
+  const ExplicitActuators& actuators = sim.actuators();
+  for (int d = 0; d < sim.model().nv; ++d) {
+    const ExplicitActuator& a = actuators.actuator(d);
+    p.u8(static_cast<std::uint8_t>(a.kind));
+    if (a.kind == ActuatorKind::none) continue;
+    for (double v : {a.stiffness, a.damping, a.effort_limit, a.saturation_effort, a.velocity_limit})
+      p.f64(v);
+    p.i64(a.delay);
+    p.u64(a.lookup.size());
+    for (const auto& [position, effort] : a.lookup) p.f64(position), p.f64(effort);
+    p.f64(actuators.feedforward(d));
+    p.i64(actuators.pushes(d));
+    for (const ActuatorCommand& c : actuators.ring(d))
+      p.f64(c.position), p.f64(c.velocity), p.f64(c.effort);
+  }
+  p.vec(sim.actuator_force());
+}
+
+void read_actuators(Reader& r, Simulation& next, const std::string& name) {
+  const Model& model = next.model();
+  for (int d = 0; d < model.nv; ++d) {
+    ExplicitActuator a;
+    const std::uint8_t kind = r.u8();
+    if (kind > static_cast<std::uint8_t>(ActuatorKind::remotized_pd))
+      fail(name, "corrupt checkpoint: actuator kind " + std::to_string(kind) + " of dof " +
+                     std::to_string(d));
+    a.kind = static_cast<ActuatorKind>(kind);
+    if (a.kind == ActuatorKind::none) continue;  // cleared before the drives were set
+    a.stiffness = r.f64();
+    a.damping = r.f64();
+    a.effort_limit = r.f64();
+    a.saturation_effort = r.f64();
+    a.velocity_limit = r.f64();
+    const std::int64_t delay = r.i64();
+    if (delay < 0 || delay > kMaxActuatorDelay)
+      fail(name, "corrupt checkpoint: actuator delay " + std::to_string(delay) + " of dof " +
+                     std::to_string(d) + " is outside [0, " + std::to_string(kMaxActuatorDelay) +
+                     "]");
+    a.delay = static_cast<int>(delay);
+    // Read pair by pair: a forged size runs into the payload's end, not into a huge allocation.
+    for (std::uint64_t i = 0, n = r.u64(); i < n; ++i) {
+      const double position = r.f64();
+      a.lookup.emplace_back(position, r.f64());
+    }
+    next.set_actuator(d, a);
+    next.set_actuator_feedforward(d, r.f64());
+    const std::int64_t pushes = r.i64();
+    std::vector<ActuatorCommand> ring(static_cast<size_t>(a.delay) + 1);
+    for (ActuatorCommand& c : ring) c = {r.f64(), r.f64(), r.f64()};
+    next.restore_actuator_history(d, static_cast<long>(pushes), ring);
+  }
+  next.restore_actuator_force(r.vec(model.nv));
+}
+
 }  // namespace
 
 std::uint64_t model_fingerprint(const Model& model) {
@@ -179,6 +235,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   p.vec(sim.limit_force());
   p.vec(sim.friction_force());
   p.vec(sim.velocity_limit_force());
+  write_actuators(p, sim);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -235,6 +292,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
 
   // Restore into a copy, so that sim stays as it was if any value is refused.
   Simulation next = sim;
+  for (int d = 0; d < model.nv; ++d) next.clear_actuator(d);  // the checkpoint's, or none
   Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
   try {
     const double time = r.f64();
@@ -362,6 +420,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     }
     const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
                friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
+    read_actuators(r, next, name);
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

@@ -220,7 +220,8 @@ void check_nesting(const std::string& text, const std::string& file) {
 
 const std::vector<std::string> kDriveKeys = {"type",          "stiffness",       "damping",
                                              "max_force",     "max_impulse",     "target_position",
-                                             "target_velocity", "target",        "envelope"};
+                                             "target_velocity", "target",        "envelope",
+                                             "actuator"};
 const std::vector<std::string> kLinkKeys = {"cfm_scale", "linear_damping", "angular_damping",
                                             "max_linear_velocity", "max_angular_velocity"};
 
@@ -242,6 +243,57 @@ LinkSettings read_link(const Reader& r, const YAML::Node& node, const std::strin
   if (node["max_angular_velocity"])
     ls.max_angular_velocity = r.positive(node["max_angular_velocity"], at("max_angular_velocity"));
   return ls;
+}
+
+// drives.J.actuator: an explicit actuator (explicit_actuator.hpp); keys left out keep their
+// defaults, or those of drive_defaults.actuator.
+ExplicitActuator read_actuator(const Reader& r, const YAML::Node& node, const std::string& path,
+                               ExplicitActuator a, const std::string& joint) {
+  r.map(node, path,
+        {"type", "stiffness", "damping", "effort_limit", "saturation_effort", "velocity_limit",
+         "lookup", "delay"});
+  const auto at = [&](const char* key) { return Reader::join(path, key); };
+  if (node["type"]) {
+    const std::string type = r.text(node["type"], at("type"));
+    if (type == "ideal_pd")
+      a.kind = ActuatorKind::ideal_pd;
+    else if (type == "dc_motor")
+      a.kind = ActuatorKind::dc_motor;
+    else if (type == "remotized_pd")
+      a.kind = ActuatorKind::remotized_pd;
+    else
+      r.fail(at("type"), node["type"], "must be ideal_pd, dc_motor or remotized_pd");
+  } else if (a.kind == ActuatorKind::none) {
+    r.fail(at("type"), "missing (ideal_pd, dc_motor or remotized_pd)");
+  }
+  if (node["stiffness"]) a.stiffness = r.non_negative(node["stiffness"], at("stiffness"));
+  if (node["damping"]) a.damping = r.non_negative(node["damping"], at("damping"));
+  if (node["effort_limit"]) a.effort_limit = r.positive(node["effort_limit"], at("effort_limit"));
+  if (node["saturation_effort"])
+    a.saturation_effort = r.positive(node["saturation_effort"], at("saturation_effort"));
+  if (node["velocity_limit"])
+    a.velocity_limit = r.positive(node["velocity_limit"], at("velocity_limit"));
+  if (node["delay"])
+    a.delay = static_cast<int>(r.integer(node["delay"], at("delay"), 0, kMaxActuatorDelay));
+  if (const YAML::Node table = node["lookup"]) {
+    const std::string tpath = at("lookup");
+    if (!table.IsSequence() || table.size() == 0)
+      r.fail(tpath, table, "must be a list of [position, max effort] pairs");
+    a.lookup.clear();
+    for (size_t i = 0; i < table.size(); ++i) {
+      const std::string ip = tpath + "[" + std::to_string(i) + "]";
+      if (!table[i].IsSequence() || table[i].size() != 2)
+        r.fail(ip, table[i], "must be a pair [position, max effort]");
+      a.lookup.emplace_back(r.finite(table[i][0], ip + "[0]"),
+                            r.non_negative(table[i][1], ip + "[1]"));
+    }
+  }
+  try {
+    validate_actuator(a, joint);
+  } catch (const std::invalid_argument& e) {
+    r.fail(path, e.what());
+  }
+  return a;
 }
 
 DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string& path,
@@ -320,6 +372,13 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
                                                          epath + ".velocity_dependent_resistance");
     spec.envelope = env;
   }
+  if (node["actuator"])
+    spec.actuator = read_actuator(r, node["actuator"], at("actuator"),
+                                  spec.actuator.value_or(ExplicitActuator{}),
+                                  spec.joint.empty() ? "(every joint)" : spec.joint);
+  if (spec.actuator && spec.drive.type != DriveType::none)
+    r.fail(path, std::string("an explicit actuator and a ") + to_string(spec.drive.type) +
+                     " drive on one joint: give the drive type: none");
   return spec;
 }
 
@@ -388,7 +447,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
-         "control"});
+         "control", "urdf_effort"});
 
   Scene scene;
   scene.path = path;
@@ -407,6 +466,15 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   UrdfOptions urdf;
   if (root["fixed_base"]) urdf.fixed_base = r.boolean(root["fixed_base"], "fixed_base");
   if (root["gravity"]) urdf.gravity = r.vec3(root["gravity"], "gravity");
+  if (root["urdf_effort"]) {
+    const std::string effort = r.text(root["urdf_effort"], "urdf_effort");
+    if (effort == "max_force")
+      urdf.effort = UrdfEffort::max_force;
+    else if (effort == "effort_limit")
+      urdf.effort = UrdfEffort::effort_limit;
+    else if (effort != "none")
+      r.fail("urdf_effort", root["urdf_effort"], "must be none, max_force or effort_limit");
+  }
   scene.robot = load_urdf(scene.model_path, urdf);
   const Model* m = scene.robot.model.get();
 
@@ -602,14 +670,15 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       DriveSpec base = defaults.value_or(DriveSpec{});
       if (!defaults && kv.second.IsMap() && !kv.second["type"])
         r.fail(p + ".type", "missing (force, acceleration or none)");
+      base.joint = name;
       DriveSpec spec = read_drive(r, kv.second, p, base);
-      spec.joint = name;
       spec.dof = dof;
       drives[dof] = spec;
     }
   }
   for (int dof : scene.robot.dof_order) {
-    if (auto it = drives.find(dof); it != drives.end() && it->second.drive.type != DriveType::none)
+    if (auto it = drives.find(dof);
+        it != drives.end() && (it->second.drive.type != DriveType::none || it->second.actuator))
       scene.drives.push_back(it->second);
     if (auto it = settings.find(dof); it != settings.end()) scene.joints.push_back(it->second);
   }
@@ -653,7 +722,9 @@ Simulation make_simulation(const Scene& scene) {
     for (const DriveSpec& d : scene.drives) {
       sim.set_drive(d.dof, d.drive);
       if (d.envelope) sim.set_actuator_envelope(d.dof, *d.envelope);
+      if (d.actuator) sim.set_actuator(d.dof, *d.actuator);
     }
+    apply_urdf_effort_limits(scene.robot, sim);
     apply_targets(scene, sim, 0);
     return sim;
   } catch (const InputError&) {

@@ -14,6 +14,7 @@
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
+#include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
 namespace {
@@ -560,6 +561,37 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(dof_of.at(name));
   }
   return robot;
+}
+
+const char* to_string(UrdfEffort effort) {
+  switch (effort) {
+    case UrdfEffort::none: return "none";
+    case UrdfEffort::max_force: return "max_force";
+    case UrdfEffort::effort_limit: return "effort_limit";
+  }
+  return "unknown";
+}
+
+void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim) {
+  if (robot.options.effort == UrdfEffort::none) return;
+  const Model& model = sim.model();
+  for (const Link& link : model.links) {
+    const auto it = robot.effort_limits.find(link.joint_name);
+    if (link.nv != 1 || it == robot.effort_limits.end() || !std::isfinite(it->second)) continue;
+    const int dof = link.v_index;
+    if (robot.options.effort == UrdfEffort::max_force) {
+      Drive drive = sim.drive(dof);
+      if (drive.type == DriveType::none || std::isfinite(drive.max_force) ||
+          std::isfinite(drive.max_impulse))
+        continue;
+      drive.max_force = it->second;
+      sim.set_drive(dof, drive);
+    } else if (sim.has_actuator(dof) && !std::isfinite(sim.actuator(dof).effort_limit)) {
+      ExplicitActuator actuator = sim.actuator(dof);
+      actuator.effort_limit = it->second;
+      sim.set_actuator(dof, actuator);
+    }
+  }
 }
 
 }  // namespace featherdrive

@@ -91,6 +91,9 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     if (type != JointType::revolute && type != JointType::prismatic) continue;
     friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
   }
+  actuators_ = ExplicitActuators(nv);
+  actuator_force_ = VecX::Zero(nv);
+  joint_force_ = VecX::Zero(nv);
   save_step_start();  // sizes the copies, so that a step allocates nothing
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
@@ -195,6 +198,11 @@ void Simulation::set_drive(int dof, const Drive& drive) {
                                 to_string(link.joint_type) +
                                 ": drives act on revolute and prismatic joints only");
   validate_drive(drive, link.joint_name);
+  if (drive.type != DriveType::none && actuators_.active(dof))
+    throw std::invalid_argument("joint '" + link.joint_name + "' has an explicit actuator (" +
+                                to_string(actuators_.actuator(dof).kind) + "): a " +
+                                to_string(drive.type) + " drive cannot act beside it (clear the "
+                                "actuator first; a drive of type none sets its targets)");
   drives_[static_cast<size_t>(dof)] = drive;
 }
 
@@ -304,6 +312,69 @@ void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorE
   set_actuator_envelope(driven_dof(joint), envelope);
 }
 
+void Simulation::set_actuator(int dof, const ExplicitActuator& actuator) {
+  check_dof(dof);
+  const Link& link = model_->links[model_->dof_link[dof]];
+  if (actuator.kind == ActuatorKind::none) {
+    actuators_.set(dof, actuator);
+    return;
+  }
+  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
+                                to_string(link.joint_type) +
+                                ": explicit actuators act on revolute and prismatic joints only");
+  validate_actuator(actuator, link.joint_name);
+  if (drives_[static_cast<size_t>(dof)].type != DriveType::none)
+    throw std::invalid_argument("joint '" + link.joint_name + "' has a " +
+                                to_string(drives_[static_cast<size_t>(dof)].type) +
+                                " drive: an explicit " + to_string(actuator.kind) +
+                                " actuator cannot act beside it (set the drive's type to none)");
+  actuators_.set(dof, actuator);
+}
+void Simulation::set_actuator(const std::string& joint, const ExplicitActuator& actuator) {
+  set_actuator(driven_dof(joint), actuator);
+}
+
+void Simulation::set_actuator_feedforward(int dof, double effort) {
+  check_dof(dof);
+  const std::string& joint = model_->links[model_->dof_link[dof]].joint_name;
+  if (!actuators_.active(dof))
+    throw std::invalid_argument("joint '" + joint + "' has no explicit actuator to take a "
+                                "feed-forward effort (use set_applied_force)");
+  if (!std::isfinite(effort))
+    throw std::invalid_argument("actuator on joint '" + joint + "': feedforward = " + fmt(effort) +
+                                " must be finite");
+  actuators_.set_feedforward(dof, effort);
+}
+void Simulation::set_actuator_feedforward(const std::string& joint, double effort) {
+  set_actuator_feedforward(driven_dof(joint), effort);
+}
+
+void Simulation::restore_actuator_history(int dof, long pushes,
+                                          const std::vector<ActuatorCommand>& ring) {
+  actuators_.restore_history(check_dof(dof), pushes, ring);
+}
+
+void Simulation::restore_actuator_force(const VecX& force) {
+  check_vector(force, model_->nv, "actuator_force");
+  actuator_force_ = force;
+  actuated_ = true;
+}
+
+// Called by step() first: the efforts on the state the step starts from, added to the applied
+// force for the whole step (eq. 10 of docs/math/explicit_actuators.md).
+const VecX& Simulation::apply_actuators() {
+  if (!actuators_.any()) {
+    if (actuated_) actuator_force_.setZero();
+    actuated_ = false;
+    return applied_force_;
+  }
+  actuators_.compute(*model_, q_, qd_, drives_, actuator_force_);
+  joint_force_ = applied_force_ + actuator_force_;
+  actuated_ = true;
+  return joint_force_;
+}
+
 void Simulation::step(int count) {
   if (count < 0) throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
   for (int i = 0; i < count; ++i) step();
@@ -317,6 +388,7 @@ void Simulation::save_step_start() {
   limit_force_start_ = limit_force_;
   friction_force_start_ = friction_force_;
   velocity_limit_force_start_ = velocity_limit_force_;
+  actuator_force_start_ = actuator_force_;
 }
 
 // The state and outputs the step started from (kept by step()).
@@ -327,6 +399,8 @@ void Simulation::restore_step_start() {
   limit_force_ = limit_force_start_;
   friction_force_ = friction_force_start_;
   velocity_limit_force_ = velocity_limit_force_start_;
+  actuator_force_ = actuator_force_start_;
+  actuators_.undo_push();  // restored only after apply_actuators() pushed
 }
 
 void Simulation::check_finite_or_restore() {

@@ -25,6 +25,8 @@ void Simulation::step() {
   const Model& model = *model_;
   const double dt = options_.dt;
   save_step_start();  // restored if the step diverges
+  // Explicit actuators on the step-start state; tau = applied force + their efforts.
+  const VecX& tau = apply_actuators();
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
@@ -37,7 +39,7 @@ void Simulation::step() {
       link_damping_active_ && link_damping_forces(model, data_, link_parameters_, dt, link_force_);
   const std::vector<Vec6>* link_force = any_link_force_ ? &link_force_ : nullptr;
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1).
-  aba_from_kinematics(model, data_, qd_, applied_force_, link_force);
+  aba_from_kinematics(model, data_, qd_, tau, link_force);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((friction_coefficient_.array() > 0.0).any())
     transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
@@ -46,7 +48,7 @@ void Simulation::step() {
   if (physx()) {
     compute_link_bias(model, data_, qd_, dt, departures_);
     if (model.floating_base())
-      correct_free_velocity_momentum(model, data_, applied_force_, link_force, dt, departures_, qd_);
+      correct_free_velocity_momentum(model, data_, tau, link_force, dt, departures_, qd_);
   }
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);

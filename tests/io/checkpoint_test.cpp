@@ -277,7 +277,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   std::string bytes = checkpoint_bytes(a);
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
-            "state.ckpt: checkpoint format version 1 is not supported (this build reads version 2)");
+            "state.ckpt: checkpoint format version 1 is not supported (this build reads version 3)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -482,6 +482,57 @@ TEST(Checkpoint, ClockAndRestoreStateValidateTheirArguments) {
   bad[0] = std::nan("");
   EXPECT_THROW(s.restore_state(s.q(), z, bad, z, z), std::invalid_argument);
   EXPECT_EQ(s.q()[3], 1.0);
+}
+
+// Explicit actuators with delays resume bit for bit: their settings, feed-forward, delay rings
+// and push counts are in the checkpoint (version 3).
+TEST(Checkpoint, ExplicitActuatorsResumeWithTheirDelayHistories) {
+  auto model = test::make_planar_chain(3, 1.0, 0.5);
+  auto setup = [&] {
+    Simulation sim(model);
+    ExplicitActuator pd;
+    pd.kind = ActuatorKind::ideal_pd;
+    pd.stiffness = 40.0;
+    pd.damping = 2.0;
+    pd.effort_limit = 6.0;
+    pd.delay = 3;
+    ExplicitActuator motor = pd;
+    motor.kind = ActuatorKind::dc_motor;
+    motor.saturation_effort = 9.0;
+    motor.velocity_limit = 2.0;
+    motor.delay = 1;
+    ExplicitActuator table = pd;
+    table.kind = ActuatorKind::remotized_pd;
+    table.effort_limit = kInf;
+    table.lookup = {{-0.5, 2.0}, {0.5, 5.0}};
+    sim.set_actuator(0, pd);
+    sim.set_actuator(1, motor);
+    sim.set_actuator(2, table);
+    return sim;
+  };
+  auto command = [](Simulation& sim, int k) {
+    for (int d = 0; d < 3; ++d) {
+      sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
+      sim.set_actuator_feedforward(d, 0.05 * k - d);
+    }
+  };
+  Simulation run = setup();
+  for (int k = 0; k < 10; ++k) command(run, k), run.step();
+  const std::string bytes = checkpoint_bytes(run);
+  Simulation resumed(model);  // no actuators: the checkpoint brings them
+  resumed.set_drive(1, Drive{DriveType::force, 5.0, 1.0});  // and clears what is not in it
+  restore_checkpoint(bytes, resumed, "state.ckpt");
+  EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+  EXPECT_EQ(resumed.actuators().pushes(0), 10);
+  EXPECT_EQ(resumed.actuator_force(), run.actuator_force());
+  for (int k = 10; k < 20; ++k)
+    for (Simulation* s : {&run, &resumed}) command(*s, k), s->step();
+  for (int i = 0; i < 3; ++i) {
+    using std::bit_cast;
+    EXPECT_EQ(bit_cast<std::uint64_t>(resumed.q()[i]), bit_cast<std::uint64_t>(run.q()[i]));
+    EXPECT_EQ(bit_cast<std::uint64_t>(resumed.qd()[i]), bit_cast<std::uint64_t>(run.qd()[i]));
+    EXPECT_EQ(resumed.actuator_force()[i], run.actuator_force()[i]);
+  }
 }
 
 }  // namespace

@@ -425,5 +425,73 @@ TEST(Scene, TrajectoryHeaderFollowsTheUrdfJointOrder) {
   EXPECT_EQ(out.str().substr(out.str().find('\n') + 1), "0,0,0.125,0.1,-0.5,0,0,0,0,0,0\n");
 }
 
+// drives.J.actuator: an explicit actuator on a joint whose drive type is none; urdf_effort gives
+// the URDF's <limit effort> (200 N on the slider) to the actuators or the drives without a limit.
+TEST(Scene, ActuatorsAndUrdfEffortReachTheSimulation) {
+  const std::string head = "model: slider.urdf\nsteps: 1\n";
+  const std::string motor =
+      "drives:\n  slide: {type: none, target_position: 0.3, actuator: {type: dc_motor, "
+      "stiffness: 500, damping: 20, saturation_effort: 300, velocity_limit: 4, delay: 2}}\n";
+  for (const char* mode : {"none", "effort_limit", "max_force"}) {
+    const Scene s = scene_from(head + "urdf_effort: " + mode + "\n" + motor);
+    Simulation sim = make_simulation(s);
+    const ExplicitActuator& a = sim.actuator(0);
+    EXPECT_EQ(a.kind, ActuatorKind::dc_motor);
+    EXPECT_EQ(a.stiffness, 500.0);
+    EXPECT_EQ(a.damping, 20.0);
+    EXPECT_EQ(a.saturation_effort, 300.0);
+    EXPECT_EQ(a.velocity_limit, 4.0);
+    EXPECT_EQ(a.delay, 2);
+    EXPECT_EQ(a.effort_limit, std::string(mode) == "effort_limit" ? 200.0 : kInf) << mode;
+    EXPECT_EQ(sim.drive(0).type, DriveType::none);
+    // The first step: x = v = 0, demand 500 * 0.3 = 150 within min(S, E) = 200 (or 300).
+    sim.step();
+    EXPECT_EQ(sim.actuator_force()[0], 150.0);
+  }
+  // An actuator's own effort_limit stands; drives get the URDF's as max_force.
+  Simulation own = make_simulation(scene_from(
+      head + "urdf_effort: effort_limit\ndrives:\n  slide: {type: none, actuator: {type: "
+             "ideal_pd, stiffness: 10, effort_limit: 50}}\n"));
+  EXPECT_EQ(own.actuator(0).effort_limit, 50.0);
+  for (const char* mode : {"none", "max_force"}) {
+    Simulation drive = make_simulation(scene_from(
+        head + "urdf_effort: " + mode + "\ndrives:\n  slide: {type: force, stiffness: 10}\n"));
+    EXPECT_EQ(drive.drive(0).max_force, std::string(mode) == "max_force" ? 200.0 : kInf);
+    EXPECT_FALSE(drive.has_actuator(0));
+  }
+  const Scene table = scene_from(
+      head + "drives:\n  slide: {type: none, actuator: {type: remotized_pd, stiffness: 10, "
+             "lookup: [[-0.5, 10], [0.5, 40]]}}\n");
+  ASSERT_EQ(table.drives.size(), 1u);
+  ASSERT_TRUE(table.drives[0].actuator);
+  EXPECT_EQ(table.drives[0].actuator->lookup,
+            (std::vector<std::pair<double, double>>{{-0.5, 10.0}, {0.5, 40.0}}));
+}
+
+TEST(Scene, BadActuatorsNameTheKeyPath) {
+  const std::string head = "model: slider.urdf\nsteps: 1\n";
+  const std::string file = kExamples + "inline.yaml: ";
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: force, actuator: {type: ideal_pd}}\n"),
+            file + "drives.slide: an explicit actuator and a force drive on one joint: give the "
+                   "drive type: none");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: servo}}\n"),
+            file + "drives.slide.actuator.type = servo: must be ideal_pd, dc_motor or "
+                   "remotized_pd");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {stiffness: 1}}\n"),
+            file + "drives.slide.actuator.type: missing (ideal_pd, dc_motor or remotized_pd)");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: dc_motor}}\n"),
+            file + "drives.slide.actuator: actuator on joint 'slide': saturation_effort = 0 must "
+                   "be finite and > 0 for a dc_motor");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: remotized_pd, "
+                            "lookup: [[0, 1, 2]]}}\n"),
+            file + "drives.slide.actuator.lookup[0] = [0, 1, 2]: must be a pair [position, max "
+                   "effort]");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: ideal_pd, "
+                            "delay: -1}}\n"),
+            file + "drives.slide.actuator.delay = -1: must be >= 0");
+  EXPECT_EQ(error_of(head + "urdf_effort: sim\n"),
+            file + "urdf_effort = sim: must be none, max_force or effort_limit");
+}
+
 }  // namespace
 }  // namespace featherdrive

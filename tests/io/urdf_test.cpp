@@ -550,5 +550,28 @@ TEST(Urdf, RpyFromRotationInvertsRotationFromRpy) {
   }
 }
 
+// UrdfOptions::effort: the slider's <limit effort="200"> as every drive's max_force or every
+// explicit actuator's effort_limit, only where they have none of their own.
+TEST(Urdf, EffortLimitBecomesMaxForceOrTheActuatorsClipByOption) {
+  for (UrdfEffort mode : {UrdfEffort::none, UrdfEffort::max_force, UrdfEffort::effort_limit}) {
+    UrdfOptions options;
+    options.effort = mode;
+    const UrdfRobot robot = load_urdf(kSource + "/examples/slider.urdf", options);
+    Simulation driven(robot.model), limited(robot.model), actuated(robot.model);
+    driven.set_drive(0, Drive{DriveType::force, 10.0, 1.0});
+    limited.set_drive(0, Drive{DriveType::force, 10.0, 1.0, 50.0});
+    ExplicitActuator a;
+    a.kind = ActuatorKind::ideal_pd;
+    actuated.set_actuator(0, a);
+    for (Simulation* s : {&driven, &limited, &actuated}) apply_urdf_effort_limits(robot, *s);
+    EXPECT_EQ(driven.drive(0).max_force, mode == UrdfEffort::max_force ? 200.0 : kInf)
+        << to_string(mode);
+    EXPECT_EQ(limited.drive(0).max_force, 50.0);
+    EXPECT_EQ(actuated.actuator(0).effort_limit, mode == UrdfEffort::effort_limit ? 200.0 : kInf)
+        << to_string(mode);
+    EXPECT_EQ(actuated.drive(0).max_force, kInf);
+  }
+}
+
 }  // namespace
 }  // namespace featherdrive

@@ -10,7 +10,9 @@
 //   payload       time, step count, solver options (compat included), q, qd, applied forces, per
 //                 dof the drive, limits, friction, max velocity, envelope and friction
 //                 coefficient, per link its LinkParameters, then the last step's drive, limit,
-//                 friction and velocity-limit forces
+//                 friction and velocity-limit forces, then per dof its explicit actuator (kind;
+//                 if any: settings, table, feed-forward, pushes and its delay ring of
+//                 delay + 1 commands) and the last step's actuator forces
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
@@ -25,7 +27,8 @@
 namespace featherdrive {
 
 /// 2: compat, the joint friction coefficient and the link parameters (PhysX's) added.
-inline constexpr std::uint32_t kCheckpointVersion = 2;
+/// 3: explicit actuators with their delay histories, so a delayed actuator resumes bit for bit.
+inline constexpr std::uint32_t kCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file
 /// and what is wrong (truncated, corrupt, another format version, another model).

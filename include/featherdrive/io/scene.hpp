@@ -33,6 +33,8 @@ struct DriveSpec {
   Drive drive;                     ///< the targets in it hold for a constant target
   std::optional<SineTarget> sine;  ///< replaces the drive's targets at every step
   std::optional<ActuatorEnvelope> envelope;
+  /// An explicit actuator (key actuator; the drive's type must be none): the targets are its.
+  std::optional<ExplicitActuator> actuator;
   /// The target position and velocity at time t.
   std::pair<double, double> target_at(double t) const;
 };

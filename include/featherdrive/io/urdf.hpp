@@ -18,10 +18,20 @@ namespace featherdrive {
 /// recurses per level); real URDFs are under 10 deep.
 inline constexpr int kMaxUrdfDepth = 100;
 
+/// What a URDF <limit effort> becomes (apply_urdf_effort_limits): Isaac Lab's effort_limit_sim or
+/// effort_limit (docs/conventions.md, "Actuators").
+enum class UrdfEffort {
+  none,          ///< informative only (UrdfRobot::effort_limits)
+  max_force,     ///< every implicit drive's max_force, the solver's bound
+  effort_limit,  ///< every explicit actuator's effort_limit, its clip
+};
+const char* to_string(UrdfEffort effort);
+
 struct UrdfOptions {
   /// true: the root link is welded to the world; false: it gets a floating joint.
   bool fixed_base = true;
   Vec3 gravity{0.0, 0.0, -9.81};
+  UrdfEffort effort = UrdfEffort::none;
 };
 
 /// A <mimic> tag: joint = multiplier * leader + offset. Read and reported, not simulated.
@@ -72,6 +82,14 @@ UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& option
 /// The same from a string; `name` stands for the file in messages.
 UrdfRobot parse_urdf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options = {});
+
+class Simulation;
+/// Gives each moving joint's URDF effort limit (where the URDF has one) to what
+/// robot.options.effort names, on `sim` (a simulation of robot.model) as it is now: a drive of
+/// type != none without its own max_force or max_impulse gets max_force, an explicit actuator
+/// without its own effort_limit gets effort_limit (set again: its delay history starts over).
+/// Call it after setting the drives and actuators, before stepping.
+void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim);
 
 /// Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (the inverse of rotation_from_rpy), for
 /// joint origins composed through merged fixed joints.

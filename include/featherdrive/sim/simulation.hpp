@@ -10,6 +10,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
+#include "featherdrive/sim/explicit_actuator.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/physx_departures.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
@@ -116,6 +117,27 @@ class Simulation {
   void set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope);
   const ActuatorEnvelope& actuator_envelope(int dof) const { return envelopes_.at(static_cast<size_t>(check_dof(dof))); }
 
+  // Explicit actuators (explicit_actuator.hpp), on revolute and prismatic dofs without an implicit
+  // drive: the dof's drive targets are their targets. Setting one (kind none clears) empties its
+  // delay history; a dof with a drive of type != none is refused, as set_drive is on a dof with an
+  // actuator. Throw std::invalid_argument naming the joint, the field and the value.
+  void set_actuator(int dof, const ExplicitActuator& actuator);
+  void set_actuator(const std::string& joint, const ExplicitActuator& actuator);
+  const ExplicitActuator& actuator(int dof) const { return actuators_.actuator(check_dof(dof)); }
+  bool has_actuator(int dof) const { return actuators_.active(check_dof(dof)); }
+  void clear_actuator(int dof) { set_actuator(dof, ExplicitActuator{}); }
+  /// The feed-forward effort of the dof's actuator (eq. 1), delayed with its targets.
+  void set_actuator_feedforward(int dof, double effort);
+  void set_actuator_feedforward(const std::string& joint, double effort);
+  /// Empties every actuator's delay history (eq. 9), e.g. when an episode starts over.
+  void reset_actuator_history() { actuators_.reset_history(); }
+  const ExplicitActuators& actuators() const { return actuators_; }
+  /// For checkpoints: a dof's pushes and ring (ExplicitActuators::restore_history).
+  void restore_actuator_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
+  void restore_actuator_force(const VecX& force);  ///< the last step's, for checkpoints
+  /// The effort each actuator applied in the last step (nv; 0 on dofs without one), clipped.
+  const VecX& actuator_force() const { return actuator_force_; }
+
   // Link parameters (link_parameters.hpp): inert by default; PhysX 5.6.1's defaults with
   // Compat::physx. Throw std::invalid_argument naming the link, field and value.
   void set_link_parameters(int link, const LinkParameters& parameters);
@@ -157,6 +179,8 @@ class Simulation {
   void update_link_damping_active();
   bool physx() const { return options_.compat == Compat::physx; }
   void integrate_positions(double h);
+  /// The actuators' efforts of this step on the step-start state; the joint force the step uses.
+  const VecX& apply_actuators();
 
   std::shared_ptr<const Model> model_;
   SimulationOptions options_;
@@ -190,6 +214,10 @@ class Simulation {
   std::vector<Vec6> subtree_force_;  ///< scratch of transmitted_force_magnitudes
   VecX transmitted_force_;           ///< |F| through each link's inbound joint
   VecX link_cfm_;
+  // Explicit actuators: their efforts, the applied force plus them, and the copy for a restore.
+  ExplicitActuators actuators_;
+  VecX actuator_force_, joint_force_, actuator_force_start_;
+  bool actuated_ = false;  ///< the last step had actuators (actuator_force_ may be nonzero)
 };
 
 }  // namespace featherdrive

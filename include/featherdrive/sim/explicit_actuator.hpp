@@ -1,0 +1,108 @@
+// Isaac Lab's explicit actuators (isaaclab.actuators: IdealPDActuator, DCMotor,
+// RemotizedPDActuator, with DelayedPDActuator's delay): a joint effort computed from the state at
+// the start of a step and applied through the whole step, beside (never on the same dof as) the
+// implicit drive. docs/math/explicit_actuators.md has the equations.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/model/model.hpp"
+
+namespace featherdrive {
+
+enum class ActuatorKind {
+  none,          ///< no explicit actuator on this dof
+  ideal_pd,      ///< PD + feed-forward clipped to +-effort_limit, eq. (1)-(2)
+  dc_motor,      ///< ideal PD within the torque-speed line of a DC motor, eq. (3)-(5)
+  remotized_pd,  ///< ideal PD within a position-dependent limit from a table, eq. (6)-(7)
+};
+const char* to_string(ActuatorKind kind);
+
+/// The most steps an actuator may delay its commands (a ring of delay + 1 commands per dof).
+inline constexpr int kMaxActuatorDelay = 100'000;
+
+/// One dof's explicit actuator. Fields a kind does not use must keep their defaults.
+struct ExplicitActuator {
+  ActuatorKind kind = ActuatorKind::none;
+  double stiffness = 0.0;  ///< N/m or Nm/rad
+  double damping = 0.0;    ///< Ns/m or Nms/rad
+  /// The actuator's clip |effort| <= effort_limit (N or Nm; Isaac Lab's effort_limit), apart from
+  /// the implicit drive's max_force (Isaac Lab's effort_limit_sim).
+  double effort_limit = std::numeric_limits<double>::infinity();
+  double saturation_effort = 0.0;  ///< dc_motor: the stall effort at zero speed (N or Nm)
+  double velocity_limit = 0.0;     ///< dc_motor: the no-load speed (m/s or rad/s)
+  /// remotized_pd: (joint position, largest |effort|) pairs, positions strictly increasing;
+  /// linear between them, the end values beyond them.
+  std::vector<std::pair<double, double>> lookup;
+  int delay = 0;  ///< physics steps between a command and the effort it gives, eq. (8)
+};
+
+/// Throws std::invalid_argument naming the joint, the field and the value: gains not finite or
+/// < 0, effort_limit not > 0, a dc_motor without a finite saturation_effort > 0 and velocity_limit
+/// > 0, a remotized_pd without a table or with positions not strictly increasing or efforts not
+/// finite and >= 0, a field the kind does not use, delay outside [0, kMaxActuatorDelay].
+void validate_actuator(const ExplicitActuator& actuator, const std::string& joint);
+
+/// What an actuator is told: target position and velocity, feed-forward effort.
+struct ActuatorCommand {
+  double position = 0.0;
+  double velocity = 0.0;
+  double effort = 0.0;
+};
+
+/// The effort the actuator applies at joint position q and velocity qd for `command`, eq. (1)-(7).
+double actuator_effort(const ExplicitActuator& actuator, double q, double qd,
+                       const ActuatorCommand& command);
+
+/// The remotized table's limit at q, eq. (6).
+double lookup_effort_limit(const std::vector<std::pair<double, double>>& lookup, double q);
+
+/// The explicit actuators of one simulation: per dof the actuator, its feed-forward effort and a
+/// ring of its last delay + 1 commands, sized when the actuator is set, so a step allocates
+/// nothing.
+class ExplicitActuators {
+ public:
+  explicit ExplicitActuators(int nv = 0);
+
+  /// Sets (or, for kind none, clears) dof's actuator and empties its history. Not validated here.
+  void set(int dof, const ExplicitActuator& actuator);
+  const ExplicitActuator& actuator(int dof) const { return slot(dof).actuator; }
+  bool active(int dof) const { return actuator(dof).kind != ActuatorKind::none; }
+  bool any() const { return !active_.empty(); }
+  void set_feedforward(int dof, double effort) {
+    slots_[static_cast<size_t>(dof)].feedforward = effort;
+  }
+  double feedforward(int dof) const { return slot(dof).feedforward; }
+  /// Empties every history: the next step starts over with eq. (9).
+  void reset_history();
+
+  /// Once per step: pushes every active dof's command (the targets of `drives`, the feed-forward)
+  /// and writes the effort each applies at the step-start q, qd into `effort` (nv; 0 elsewhere).
+  void compute(const Model& model, const VecX& q, const VecX& qd, const std::vector<Drive>& drives,
+               VecX& effort);
+  /// Takes back the last compute()'s pushes (a step that diverged).
+  void undo_push();
+
+  /// A dof's history, for checkpoints: pushes since set (or reset) and the ring (delay + 1).
+  long pushes(int dof) const { return slot(dof).pushes; }
+  const std::vector<ActuatorCommand>& ring(int dof) const { return slot(dof).ring; }
+  /// Throws std::invalid_argument for pushes < 0 or a ring of another size than delay + 1.
+  void restore_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
+
+ private:
+  struct Slot {
+    ExplicitActuator actuator;
+    double feedforward = 0.0;
+    long pushes = 0;
+    std::vector<ActuatorCommand> ring;
+  };
+  const Slot& slot(int dof) const { return slots_[static_cast<size_t>(dof)]; }
+  std::vector<Slot> slots_;
+  std::vector<int> active_;  ///< dofs with an actuator, ascending
+};
+
+}  // namespace featherdrive

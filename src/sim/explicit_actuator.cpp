@@ -1,0 +1,172 @@
+#include "featherdrive/sim/explicit_actuator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "featherdrive/core/format.hpp"
+
+namespace featherdrive {
+namespace {
+
+[[noreturn]] void reject(const std::string& joint, const std::string& field, double value,
+                         const char* expected) {
+  throw std::invalid_argument("actuator on joint '" + joint + "': " + field + " = " +
+                              format_double(value) + " " + expected);
+}
+
+}  // namespace
+
+const char* to_string(ActuatorKind kind) {
+  switch (kind) {
+    case ActuatorKind::none: return "none";
+    case ActuatorKind::ideal_pd: return "ideal_pd";
+    case ActuatorKind::dc_motor: return "dc_motor";
+    case ActuatorKind::remotized_pd: return "remotized_pd";
+  }
+  return "unknown";
+}
+
+void validate_actuator(const ExplicitActuator& a, const std::string& joint) {
+  if (a.kind == ActuatorKind::none) return;
+  const char* kind = to_string(a.kind);
+  if (!std::isfinite(a.stiffness) || a.stiffness < 0.0)
+    reject(joint, "stiffness", a.stiffness, "must be finite and >= 0");
+  if (!std::isfinite(a.damping) || a.damping < 0.0)
+    reject(joint, "damping", a.damping, "must be finite and >= 0");
+  if (std::isnan(a.effort_limit) || a.effort_limit <= 0.0)
+    reject(joint, "effort_limit", a.effort_limit, "must be > 0");
+  if (a.kind == ActuatorKind::dc_motor) {
+    if (!std::isfinite(a.saturation_effort) || a.saturation_effort <= 0.0)
+      reject(joint, "saturation_effort", a.saturation_effort,
+             "must be finite and > 0 for a dc_motor");
+    if (!std::isfinite(a.velocity_limit) || a.velocity_limit <= 0.0)
+      reject(joint, "velocity_limit", a.velocity_limit, "must be finite and > 0 for a dc_motor");
+  } else {
+    if (a.saturation_effort != 0.0)
+      reject(joint, "saturation_effort", a.saturation_effort,
+             (std::string("is for a dc_motor only, not ") + kind).c_str());
+    if (a.velocity_limit != 0.0)
+      reject(joint, "velocity_limit", a.velocity_limit,
+             (std::string("is for a dc_motor only, not ") + kind).c_str());
+  }
+  if (a.kind == ActuatorKind::remotized_pd) {
+    if (a.lookup.empty())
+      throw std::invalid_argument("actuator on joint '" + joint +
+                                  "': a remotized_pd needs a lookup table of (position, effort)");
+    for (size_t i = 0; i < a.lookup.size(); ++i) {
+      const std::string at = "lookup[" + std::to_string(i) + "]";
+      const auto [position, effort] = a.lookup[i];
+      if (!std::isfinite(position)) reject(joint, at + ".position", position, "must be finite");
+      if (i > 0 && !(position > a.lookup[i - 1].first))
+        reject(joint, at + ".position", position,
+               ("must be above the previous position " + format_double(a.lookup[i - 1].first))
+                   .c_str());
+      if (!std::isfinite(effort) || effort < 0.0)
+        reject(joint, at + ".effort", effort, "must be finite and >= 0");
+    }
+  } else if (!a.lookup.empty()) {
+    throw std::invalid_argument("actuator on joint '" + joint + "': a lookup table (" +
+                                std::to_string(a.lookup.size()) +
+                                " points) is for a remotized_pd only, not " + kind);
+  }
+  if (a.delay < 0 || a.delay > kMaxActuatorDelay)
+    throw std::invalid_argument("actuator on joint '" + joint + "': delay = " +
+                                std::to_string(a.delay) + " must be in [0, " +
+                                std::to_string(kMaxActuatorDelay) + "] steps");
+}
+
+// eq. (6): linear between the table's points, the end values beyond them.
+double lookup_effort_limit(const std::vector<std::pair<double, double>>& lookup, double q) {
+  if (q <= lookup.front().first) return lookup.front().second;
+  if (q >= lookup.back().first) return lookup.back().second;
+  // The first point above q; the one before it is at or below q.
+  const auto hi = std::upper_bound(lookup.begin(), lookup.end(), q,
+                                   [](double x, const auto& p) { return x < p.first; });
+  const auto lo = hi - 1;
+  const double w = (q - lo->first) / (hi->first - lo->first);
+  return lo->second + w * (hi->second - lo->second);
+}
+
+double actuator_effort(const ExplicitActuator& a, double q, double qd, const ActuatorCommand& c) {
+  if (a.kind == ActuatorKind::none) return 0.0;
+  // eq. (1)
+  const double computed =
+      a.stiffness * (c.position - q) + a.damping * (c.velocity - qd) + c.effort;
+  double low = -a.effort_limit, high = a.effort_limit;  // eq. (2)
+  if (a.kind == ActuatorKind::dc_motor) {
+    // eq. (3)-(5): the velocity held within the corner speeds, where the line meets the limit.
+    const double S = a.saturation_effort, v_max = a.velocity_limit, E = a.effort_limit;
+    const double corner = v_max * (1.0 + E / S);
+    const double v = std::clamp(qd, -corner, corner);
+    high = std::min(S * (1.0 - v / v_max), E);
+    low = std::max(S * (-1.0 - v / v_max), -E);
+  } else if (a.kind == ActuatorKind::remotized_pd) {
+    high = std::min(a.effort_limit, lookup_effort_limit(a.lookup, q));  // eq. (7)
+    low = -high;
+  }
+  return std::min(std::max(computed, low), high);
+}
+
+ExplicitActuators::ExplicitActuators(int nv) : slots_(static_cast<size_t>(nv)) {}
+
+void ExplicitActuators::set(int dof, const ExplicitActuator& actuator) {
+  Slot& s = slots_[static_cast<size_t>(dof)];
+  s.actuator = actuator;
+  s.pushes = 0;
+  if (actuator.kind == ActuatorKind::none) s.feedforward = 0.0;
+  s.ring.assign(actuator.kind == ActuatorKind::none ? 0 : static_cast<size_t>(actuator.delay) + 1,
+                ActuatorCommand{});
+  active_.erase(std::remove(active_.begin(), active_.end(), dof), active_.end());
+  if (actuator.kind != ActuatorKind::none)
+    active_.insert(std::upper_bound(active_.begin(), active_.end(), dof), dof);
+}
+
+void ExplicitActuators::reset_history() {
+  for (Slot& s : slots_) s.pushes = 0;
+}
+
+// eq. (8)-(9): the command of `delay` pushes ago, or the oldest one there is.
+void ExplicitActuators::compute(const Model& model, const VecX& q, const VecX& qd,
+                                const std::vector<Drive>& drives, VecX& effort) {
+  effort.setZero();
+  for (const int d : active_) {
+    Slot& s = slots_[static_cast<size_t>(d)];
+    const Drive& drive = drives[static_cast<size_t>(d)];
+    const long n = static_cast<long>(s.ring.size());
+    s.ring[static_cast<size_t>(s.pushes % n)] = {drive.target_position, drive.target_velocity,
+                                                 s.feedforward};
+    const long lag = std::min<long>(s.actuator.delay, s.pushes);
+    const ActuatorCommand& seen = s.ring[static_cast<size_t>((s.pushes - lag) % n)];
+    ++s.pushes;
+    effort[d] = actuator_effort(s.actuator, q[model.links[model.dof_link[d]].q_index], qd[d], seen);
+  }
+}
+
+// The push overwrote the command delay + 1 pushes old, which no step reads again.
+void ExplicitActuators::undo_push() {
+  for (const int d : active_) {
+    Slot& s = slots_[static_cast<size_t>(d)];
+    if (s.pushes > 0) --s.pushes;
+  }
+}
+
+void ExplicitActuators::restore_history(int dof, long pushes,
+                                        const std::vector<ActuatorCommand>& ring) {
+  Slot& s = slots_[static_cast<size_t>(dof)];
+  if (pushes < 0)
+    throw std::invalid_argument("actuator history of dof " + std::to_string(dof) + ": pushes = " +
+                                std::to_string(pushes) + " must be >= 0");
+  if (ring.size() != s.ring.size())
+    throw std::invalid_argument("actuator history of dof " + std::to_string(dof) + ": " +
+                                std::to_string(ring.size()) + " commands, expected " +
+                                std::to_string(s.ring.size()) + " (delay + 1)");
+  for (const ActuatorCommand& c : ring)
+    if (!std::isfinite(c.position) || !std::isfinite(c.velocity) || !std::isfinite(c.effort))
+      throw std::invalid_argument("actuator history of dof " + std::to_string(dof) +
+                                  ": a command is not finite");
+  s.pushes = pushes;
+  s.ring = ring;
+}
+
+}  // namespace featherdrive
