@@ -56,7 +56,7 @@ def test_scalars_and_rows_broadcast_over_env_ids(arm):
         if i == 4:
             sim.set_drive_targets(np.linspace(-0.2, 0.2, arm.nv), np.full(arm.nv, 0.1))
         if i in (0, 2):
-            sim.set_qd(np.arange(arm.nv) * 0.01 + (arm.nv * 0.01 if i == 2 else 0.0))
+            sim.set_qd((np.arange(arm.nv) + (arm.nv if i == 2 else 0)) * 0.01)
         sim.step(30)
         np.testing.assert_array_equal(bits(batch.q[i]), bits(sim.q), err_msg=f"env {i}")
         np.testing.assert_array_equal(bits(batch.drive_force[i]), bits(sim.drive_force))

@@ -169,7 +169,8 @@ void Batch::lend_rows() {
     rows_[static_cast<size_t>(f)].resize(size(), sims_.front().state_.size(StateStorage::Field(f)));
   for (int i = 0; i < size(); ++i) {
     std::array<double*, StateStorage::kFields> row{};
-    for (size_t f = 0; f < row.size(); ++f) row[f] = rows_[f].data() + i * rows_[f].cols();
+    for (size_t f = 0; f < row.size(); ++f)
+      row[f] = rows_[f].cols() > 0 ? rows_[f].data() + i * rows_[f].cols() : nullptr;
     sims_[static_cast<size_t>(i)].state_.lend(row);
   }
 }

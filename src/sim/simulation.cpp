@@ -42,11 +42,11 @@ void check_quaternions(const Model& model, const VecX& q, bool unit) {
 }  // namespace
 
 StateStorage::StateStorage(Eigen::Index nq, Eigen::Index nv) : own_(VecX::Zero(nq + 6 * nv)) {
-  double* p = own_.data();
+  Eigen::Index offset = 0;  // no arithmetic on the null data() of an empty block
   for (int f = 0; f < kFields; ++f) {
     size_[f] = f == q ? nq : nv;
-    data_[f] = p;
-    p += size_[f];
+    data_[f] = size_[f] > 0 ? own_.data() + offset : nullptr;
+    offset += size_[f];
   }
 }
 
