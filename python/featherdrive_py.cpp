@@ -295,6 +295,13 @@ RowMatrix to_rows(py::handle obj, size_t k, Eigen::Index cols, const std::string
   return m;
 }
 
+/// A new array the caller cannot write to (a copy of a setting, not a view of the state).
+py::array read_only(RowMatrix m) {
+  py::array a = py::cast(std::move(m));
+  a.attr("flags").attr("writeable") = false;
+  return a;
+}
+
 /// env_ids of a batch of n: None for all, an integer, or a sequence or array of integers (range
 /// and repeats are checked by Batch).
 std::vector<int> to_env_ids(py::handle obj, int n) {
@@ -1714,10 +1721,9 @@ PYBIND11_MODULE(featherdrive, m) {
     };
     // A scalar for every copy and dof, (nv,) for every copy, or (N, nv).
     auto batch_targets = [](py::handle obj, const Batch& b, const std::string& what) {
-      const int n = b.size(), nv = model_of(b)->nv;
-      if (as_float_array(obj, what).ndim() == 0)
-        return RowMatrix(RowMatrix::Constant(n, nv, to_vector(obj, 1, what, true)[0]));
-      return to_matrix(obj, n, nv, what);
+      const int n = b.size();
+      const RowMatrix rows = to_rows(obj, static_cast<size_t>(n), model_of(b)->nv, what);
+      return rows.rows() == n ? rows : RowMatrix(rows.replicate(n, 1));
     };
     py::object sim_class = m.attr("Simulation"), batch_class = m.attr("Batch");
     sim_class.attr("step_control") = py::cpp_function(

@@ -65,6 +65,11 @@ std::vector<Drive> drives_with_gains(const Simulation& sim, const VecX& stiffnes
     drive.damping = damping[d];
     if (drivable(model, d)) {
       drive.type = type;
+      // Refused here, before anything changes, rather than half-way by set_drive.
+      if (type != DriveType::none && sim.has_actuator(d))
+        throw std::invalid_argument("set_drive_gains: dof " + std::to_string(d) + " of joint '" +
+                                    link.joint_name + "' has an explicit actuator: clear it "
+                                    "before giving the dof a " + to_string(type) + " drive");
     } else if (stiffness[d] != 0.0 || damping[d] != 0.0) {
       throw std::invalid_argument("set_drive_gains: dof " + std::to_string(d) + " of joint '" +
                                   link.joint_name + "' is " + to_string(link.joint_type) +
@@ -309,6 +314,7 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
     for (int f = StateStorage::applied_force; f < StateStorage::kFields; ++f)
       rows_[static_cast<size_t>(f)].row(i).setZero();
     sims_[static_cast<size_t>(i)].set_clock(0.0, 0);
+    sims_[static_cast<size_t>(i)].reset_actuator_history();  // as Isaac Lab's delay buffers
   }
 }
 
