@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -275,30 +276,79 @@ Mat3 to_mat3(py::handle obj, const std::string& what) {
   return m;
 }
 
-/// A (rows, cols) matrix: an array of that shape, or one row of shape (cols,) for every row.
-RowMatrix to_matrix(py::handle obj, Eigen::Index rows, Eigen::Index cols, const std::string& what) {
+/// Values for k environments with `cols` columns: a scalar (unless scalar_ok is false) or one row
+/// (cols,) for all of them, as (1, cols); or (k, cols), one row each.
+RowMatrix to_rows(py::handle obj, size_t k, Eigen::Index cols, const std::string& what,
+                  bool scalar_ok = true) {
   const auto a = as_float_array(obj, what);
-  if (a.ndim() == 1 && a.shape(0) == cols) {
-    RowMatrix m(rows, cols);
-    for (Eigen::Index i = 0; i < rows; ++i)
-      for (Eigen::Index j = 0; j < cols; ++j) m(i, j) = a.data()[j];
+  const auto rows = static_cast<Eigen::Index>(k);
+  if ((scalar_ok && a.ndim() == 0) || (a.ndim() == 1 && a.shape(0) == cols)) {
+    RowMatrix m(1, cols);
+    for (Eigen::Index j = 0; j < cols; ++j) m(0, j) = a.data()[a.ndim() == 0 ? 0 : j];
     return m;
   }
   if (a.ndim() != 2 || a.shape(0) != rows || a.shape(1) != cols)
     throw std::invalid_argument(what + " has shape " + shape_of(a) + ", expected (" +
                                 std::to_string(rows) + ", " + std::to_string(cols) + ") or (" +
-                                std::to_string(cols) + ",)");
+                                std::to_string(cols) + ",)" + (scalar_ok ? " or a scalar" : ""));
   RowMatrix m(rows, cols);
   if (m.size() > 0) std::memcpy(m.data(), a.data(), sizeof(double) * static_cast<size_t>(m.size()));
   return m;
 }
 
-/// A (rows, cols) numpy array that owns a copy of m and is read-only (writing to it would not
-/// reach the batch).
-py::array read_only(RowMatrix m) {
-  py::array a = py::cast(std::move(m));
-  a.attr("flags").attr("writeable") = false;
-  return a;
+/// env_ids of a batch of n: None for all, an integer, or a sequence or array of integers (range
+/// and repeats are checked by Batch).
+std::vector<int> to_env_ids(py::handle obj, int n) {
+  std::vector<int> ids;
+  if (obj.is_none()) {
+    for (int i = 0; i < n; ++i) ids.push_back(i);
+    return ids;
+  }
+  constexpr long long lo = std::numeric_limits<int>::min();
+  // A numpy array has __index__ too (raising for more than one element): not an integer here.
+  if (!py::isinstance<py::array>(obj) && is_integer(obj)) return {to_int(obj, "env_ids", lo)};
+  const py::array a = py::module_::import("numpy").attr("asarray")(obj);
+  const char kind = a.dtype().kind();
+  if (a.size() > 0 && kind != 'i' && kind != 'u')
+    throw py::type_error("env_ids must hold integers, not " +
+                         py::str(a.dtype()).cast<std::string>());
+  if (a.ndim() != 1)
+    throw std::invalid_argument("env_ids has shape " + shape_of(a) + ", expected (k,)");
+  const py::list values = a.attr("tolist")();
+  for (size_t j = 0; j < values.size(); ++j)
+    ids.push_back(to_int(values[j], "env_ids[" + std::to_string(j) + "]", lo));
+  return ids;
+}
+
+/// Batch.observe's field names.
+std::vector<Observation> to_observations(py::handle fields) {
+  static const std::pair<const char*, Observation> kNames[] = {
+      {"q", Observation::q},
+      {"qd", Observation::qd},
+      {"applied_force", Observation::applied_force},
+      {"drive_force", Observation::drive_force},
+      {"limit_force", Observation::limit_force},
+      {"friction_force", Observation::friction_force},
+      {"velocity_limit_force", Observation::velocity_limit_force},
+      {"target_position", Observation::target_position},
+      {"target_velocity", Observation::target_velocity}};
+  if (py::isinstance<py::str>(fields))
+    throw py::type_error("observe: fields must be a list of names, not a str");
+  std::vector<Observation> out;
+  for (py::handle f : py::iter(fields)) {
+    const std::string name = to_str(f, "observe: field");
+    bool found = false;
+    for (const auto& [n, o] : kNames)
+      if (name == n) {
+        out.push_back(o);
+        found = true;
+      }
+    if (!found)
+      throw std::invalid_argument("observe: field '" + name + "' is not one of q, qd, "
+                                  "applied_force, drive_force, limit_force, friction_force, "
+                                  "velocity_limit_force, target_position, target_velocity");
+  }
+  return out;
 }
 
 // An enum argument: the enum itself or its name; ValueError for an unknown name, TypeError for
@@ -1387,11 +1437,14 @@ PYBIND11_MODULE(featherdrive, m) {
       "The C++ free function; the same as sim.set_drive_gains(stiffness, damping, type).");
 
   // ---- batch ----------------------------------------------------------------------------------
+  // States are read-only (N, n) views of the batch's arrays (reference_internal keeps the batch
+  // alive); setters take env_ids (None: all) and values as a scalar, one row for every
+  // environment named, or one row each.
   py::class_<Batch, BatchHolder>(m, "Batch",
-                                 "N independent copies of one Model stepped together on all "
-                                 "cores. Each copy's result is bit-identical to stepping it "
-                                 "alone, for any num_threads. States read as (N, nq) / (N, nv) "
-                                 "arrays (read-only copies).")
+                                 "N environments of one robot stepped together on all cores, "
+                                 "each bit-identical to stepping it alone, for any num_threads. "
+                                 "States are read-only (N, nq) / (N, nv) views of the batch's "
+                                 "arrays; sim(i) is environment i, live.")
       .def(py::init([](ModelPtr model, py::handle count, double dt, py::handle solver,
                        py::handle pi, py::handle vi, py::handle compat) {
              const int n = to_int(count, "count", 1);
@@ -1401,31 +1454,31 @@ PYBIND11_MODULE(featherdrive, m) {
            py::arg("model"), py::arg("count"), py::arg("dt") = 1.0 / 60.0,
            py::arg("solver") = "pgs", py::arg("position_iterations") = 4,
            py::arg("velocity_iterations") = 1, py::arg("compat") = "none",
-           "count copies of a new Simulation of model (as Simulation(model, dt, solver, ...)).")
+           "count environments, each a new Simulation of model (as Simulation(model, dt, ...)).")
       .def(py::init([](const Simulation& prototype, py::handle count) {
              const int n = to_int(count, "count", 1);
              return locked(prototype, [&] { return BatchHolder(new Batch(prototype, n)); });
            }),
            py::arg("prototype"), py::arg("count"),
            "count copies of prototype: its state, drives, limits and other settings.")
-      .def("__len__", &Batch::size, "Number of copies.")  // fixed at construction: no lock
-      .def("size", &Batch::size, "Number of copies.")
+      .def("__len__", &Batch::size, "Number of environments.")  // fixed at construction: no lock
+      .def("size", &Batch::size, "Number of environments.")
       .def_property_readonly("model", [](const Batch& b) { return to_python(model_of(b)); },
-                             "The shared Model.")
+                             "Environment 0's Model (all share its topology).")
       .def(
           "sim",
           [](Batch& b, py::handle i) -> Simulation& {
             constexpr auto lo = std::numeric_limits<long long>::min();
             constexpr auto hi = std::numeric_limits<long long>::max();
-            const long long index = to_int64(i, "copy index", lo, hi);
-            Simulation& s = b.sim(index_in(index, b.size(), "copy index"));
+            const long long index = to_int64(i, "environment index", lo, hi);
+            Simulation& s = b.sim(index_in(index, b.size(), "environment index"));
             auto lock = lock_for(&b);
-            lock_table()[&s] = std::move(lock);  // the copy shares the batch's lock
+            lock_table()[&s] = std::move(lock);  // the environment shares the batch's lock
             return s;
           },
           py::arg("i"), ref,
-          "Copy i as a Simulation (a reference into the batch, for per-copy settings; it shares "
-          "the batch's lock).")
+          "Environment i as a live Simulation (a reference into the batch: its q is row i of "
+          "batch.q; it keeps the batch alive and shares its lock).")
       .def_property(
           "num_threads", [](const Batch& b) { return locked(b, [&] { return b.num_threads(); }); },
           [](Batch& b, py::handle threads) {
@@ -1447,75 +1500,74 @@ PYBIND11_MODULE(featherdrive, m) {
       .def(
           "set_options",
           [](Batch& b, const SimulationOptions& o) { locked(b, [&] { b.set_options(o); }); },
-          py::arg("options"), "Sets every copy's options.")
-      .def_property_readonly(
-          "q", [](const Batch& b) { return read_only(locked(b, [&] { return b.q(); })); },
-          "Configurations (N, nq), a read-only copy.")
-      .def_property_readonly(
-          "qd", [](const Batch& b) { return read_only(locked(b, [&] { return b.qd(); })); },
-          "Joint velocities (N, nv), a read-only copy.")
-      .def_property_readonly(
-          "drive_force",
-          [](const Batch& b) { return read_only(locked(b, [&] { return b.drive_force(); })); },
-          "Drive forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly(
-          "limit_force",
-          [](const Batch& b) { return read_only(locked(b, [&] { return b.limit_force(); })); },
-          "Position-limit forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly(
-          "friction_force",
-          [](const Batch& b) { return read_only(locked(b, [&] { return b.friction_force(); })); },
-          "Joint-friction forces of the last step (N, nv), a read-only copy.")
-      .def_property_readonly(
-          "velocity_limit_force",
-          [](const Batch& b) {
-            return read_only(locked(b, [&] { return b.velocity_limit_force(); }));
-          },
-          "Velocity-limit forces of the last step (N, nv), a read-only copy.")
+          py::arg("options"), "Sets every environment's options.")
+      .def_property_readonly("q", &Batch::q, ref, "Configurations (N, nq), a read-only view.")
+      .def_property_readonly("qd", &Batch::qd, ref, "Joint velocities (N, nv), a read-only view.")
+      .def_property_readonly("applied_force", &Batch::applied_force, ref,
+                             "Applied joint forces (N, nv), a read-only view.")
+      .def_property_readonly("drive_force", &Batch::drive_force, ref,
+                             "Drive forces of the last step (N, nv), a read-only view.")
+      .def_property_readonly("limit_force", &Batch::limit_force, ref,
+                             "Position-limit forces of the last step (N, nv), a read-only view.")
+      .def_property_readonly("friction_force", &Batch::friction_force, ref,
+                             "Joint-friction forces of the last step (N, nv), a read-only view.")
+      .def_property_readonly("velocity_limit_force", &Batch::velocity_limit_force, ref,
+                             "Velocity-limit forces of the last step (N, nv), a read-only view.")
       .def(
           "set_q",
-          [](Batch& b, py::handle q) {
-            const RowMatrix v = to_matrix(q, b.size(), model_of(b)->nq, "q");
-            locked(b, [&] { b.set_q(v); });
+          [](Batch& b, py::handle values, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix v = to_rows(values, ids.size(), model_of(b)->nq, "q");
+            locked(b, [&] { b.set_q(ids, v); });
           },
-          py::arg("q"), "Sets the configurations (N, nq), or (nq,) for all copies.")
+          py::arg("values"), py::arg("env_ids") = py::none(),
+          "Sets the configurations of env_ids (None: all): a scalar, (nq,) for each or (k, nq); "
+          "quaternions are normalised.")
       .def(
           "set_qd",
-          [](Batch& b, py::handle qd) {
-            const RowMatrix v = to_matrix(qd, b.size(), model_of(b)->nv, "qd");
-            locked(b, [&] { b.set_qd(v); });
+          [](Batch& b, py::handle values, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix v = to_rows(values, ids.size(), model_of(b)->nv, "qd");
+            locked(b, [&] { b.set_qd(ids, v); });
           },
-          py::arg("qd"), "Sets the joint velocities (N, nv), or (nv,) for all copies.")
+          py::arg("values"), py::arg("env_ids") = py::none(),
+          "Sets the joint velocities of env_ids (None: all): a scalar, (nv,) or (k, nv).")
       .def(
           "set_applied_force",
-          [](Batch& b, py::handle tau) {
-            const RowMatrix v = to_matrix(tau, b.size(), model_of(b)->nv, "applied_force");
-            locked(b, [&] { b.set_applied_force(v); });
+          [](Batch& b, py::handle values, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix v = to_rows(values, ids.size(), model_of(b)->nv, "applied_force");
+            locked(b, [&] { b.set_applied_force(ids, v); });
           },
-          py::arg("tau"), "Sets the applied joint forces (N, nv), or (nv,) for all copies.")
+          py::arg("values"), py::arg("env_ids") = py::none(),
+          "Sets the applied joint forces of env_ids (None: all): a scalar, (nv,) or (k, nv).")
       .def(
           "set_drive_targets",
-          [](Batch& b, py::handle positions, py::object velocities) {
-            const int n = b.size(), nv = model_of(b)->nv;
-            const RowMatrix p = to_matrix(positions, n, nv, "positions");
-            const RowMatrix v = velocities.is_none() ? RowMatrix::Zero(n, nv)
-                                                     : to_matrix(velocities, n, nv, "velocities");
-            locked(b, [&] { b.set_drive_targets(p, v); });
+          [](Batch& b, py::handle positions, py::handle velocities, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const int nv = model_of(b)->nv;
+            const RowMatrix p = to_rows(positions, ids.size(), nv, "positions");
+            const RowMatrix v = to_rows(velocities.is_none() ? py::float_(0.0) : velocities,
+                                        ids.size(), nv, "velocities");
+            locked(b, [&] { b.set_drive_targets(ids, p, v); });
           },
-          py::arg("positions"), py::arg("velocities") = py::none(),
-          "Per-copy target positions and velocities, (N, nv) or (nv,) for all copies; "
-          "velocities default to 0. Nothing changes on a ValueError.")
+          py::arg("positions"), py::arg("velocities") = 0.0, py::arg("env_ids") = py::none(),
+          "Target positions and velocities of env_ids (None: all), each a scalar, (nv,) or "
+          "(k, nv); velocities default to 0. Nothing changes on a ValueError.")
       .def(
           "set_drive_gains",
-          [](Batch& b, py::handle stiffness, py::handle damping, py::handle type) {
-            const int n = b.size(), nv = model_of(b)->nv;
-            const RowMatrix kp = to_matrix(stiffness, n, nv, "stiffness");
-            const RowMatrix kd = to_matrix(damping, n, nv, "damping");
+          [](Batch& b, py::handle stiffness, py::handle damping, py::handle type,
+             py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const int nv = model_of(b)->nv;
+            const RowMatrix kp = to_rows(stiffness, ids.size(), nv, "stiffness");
+            const RowMatrix kd = to_rows(damping, ids.size(), nv, "damping");
             const DriveType t = to_drive_type(type);
-            locked(b, [&] { b.set_drive_gains(kp, kd, t); });
+            locked(b, [&] { b.set_drive_gains(ids, kp, kd, t); });
           },
           py::arg("stiffness"), py::arg("damping"), py::arg("type") = DriveType::force,
-          "Per-copy stiffness and damping, (N, nv) or (nv,) for all copies, as "
+          py::arg("env_ids") = py::none(),
+          "Stiffness and damping of env_ids (None: all), each a scalar, (nv,) or (k, nv), as "
           "Simulation.set_drive_gains. Nothing changes on a ValueError.")
       .def(
           "set_drive",
@@ -1524,6 +1576,147 @@ PYBIND11_MODULE(featherdrive, m) {
             locked(b, [&] { b.set_drive(j, d); });
           },
           py::arg("joint"), py::arg("drive"), "The same Drive on one joint (name) of every copy.")
+      .def(
+          "reset",
+          [](Batch& b, py::handle env_ids, py::handle q, py::handle qd) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const auto model = model_of(b);
+            std::optional<RowMatrix> q0, qd0;
+            if (!q.is_none()) q0 = to_rows(q, ids.size(), model->nq, "q");
+            if (!qd.is_none()) qd0 = to_rows(qd, ids.size(), model->nv, "qd");
+            locked(b, [&] { b.reset(ids, q0, qd0); });
+          },
+          py::arg("env_ids"), py::arg("q") = py::none(), py::arg("qd") = py::none(),
+          "Starts env_ids (None: all) again: q (default: the batch's initial configuration), qd "
+          "(default 0), applied and output forces 0, clock 0; drives and settings stay; the "
+          "other environments are untouched.")
+      .def(
+          "set_armature",
+          [](Batch& b, py::handle values, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix v = to_rows(values, ids.size(), model_of(b)->nv, "armature");
+            locked(b, [&] { b.set_armature(ids, v); });
+          },
+          py::arg("values"), py::arg("env_ids") = py::none(),
+          "Armature of env_ids (None: all): a scalar, (nv,) or (k, nv); each gets its own model.")
+      .def(
+          "set_joint_limits",
+          [](Batch& b, py::handle lower, py::handle upper, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const int nv = model_of(b)->nv;
+            const RowMatrix lo = to_rows(lower, ids.size(), nv, "lower");
+            const RowMatrix hi = to_rows(upper, ids.size(), nv, "upper");
+            locked(b, [&] { b.set_joint_limits(ids, lo, hi); });
+          },
+          py::arg("lower"), py::arg("upper"), py::arg("env_ids") = py::none(),
+          "Joint limits of env_ids (None: all), each a scalar, (nv,) or (k, nv); dofs of "
+          "spherical and floating joints must be given the -inf / inf they have.")
+      .def(
+          "set_joint_friction",
+          [](Batch& b, py::handle static_effort, py::handle dynamic_effort, py::handle viscous,
+             py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const int nv = model_of(b)->nv;
+            const RowMatrix s = to_rows(static_effort, ids.size(), nv, "static");
+            const RowMatrix d = dynamic_effort.is_none()
+                                    ? s
+                                    : to_rows(dynamic_effort, ids.size(), nv, "dynamic");
+            const RowMatrix v = to_rows(viscous, ids.size(), nv, "viscous");
+            locked(b, [&] { b.set_joint_friction(ids, s, d, v); });
+          },
+          py::arg("static"), py::arg("dynamic") = py::none(), py::arg("viscous") = 0.0,
+          py::arg("env_ids") = py::none(),
+          "Joint friction of env_ids (None: all), each a scalar, (nv,) or (k, nv); dynamic "
+          "defaults to static.")
+      .def(
+          "set_max_joint_velocity",
+          [](Batch& b, py::handle values, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix v = to_rows(values, ids.size(), model_of(b)->nv, "max_velocity");
+            locked(b, [&] { b.set_max_joint_velocity(ids, v); });
+          },
+          py::arg("values"), py::arg("env_ids") = py::none(),
+          "Largest |qd| of env_ids (None: all): a scalar, (nv,) or (k, nv); inf for none.")
+      .def(
+          "set_link_mass",
+          [](Batch& b, py::handle link, py::handle mass, py::handle env_ids, bool scale) {
+            const NameOrIndex l = link_arg(link);
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const bool scalar = as_float_array(mass, "mass").ndim() == 0;
+            const VecX m = to_vector(mass, scalar ? 1 : static_cast<Eigen::Index>(ids.size()),
+                                     "mass", true);
+            locked(b, [&] { b.set_link_mass(ids, link_of(b.model(), l), m, scale); });
+          },
+          py::arg("link"), py::arg("mass"), py::arg("env_ids") = py::none(),
+          py::arg("scale_inertia") = true,
+          "Mass of a link (name or index) in env_ids (None: all): a scalar or (k,). "
+          "scale_inertia: its inertia scales with the mass (Isaac Lab's mass randomisation).")
+      .def(
+          "set_link_com",
+          [](Batch& b, py::handle link, py::handle com, py::handle env_ids) {
+            const NameOrIndex l = link_arg(link);
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix c = to_rows(com, ids.size(), 3, "com", /*scalar_ok=*/false);
+            locked(b, [&] { b.set_link_com(ids, link_of(b.model(), l), c); });
+          },
+          py::arg("link"), py::arg("com"), py::arg("env_ids") = py::none(),
+          "Centre of mass (link frame) of a link in env_ids (None: all): (3,) or (k, 3).")
+      .def(
+          "armature", [](const Batch& b) { return locked(b, [&] { return b.armature(); }); },
+          "Every environment's armature (N, nv), a copy.")
+      .def(
+          "joint_limits",
+          [](const Batch& b) {
+            return locked(b, [&] { return py::make_tuple(b.lower_limit(), b.upper_limit()); });
+          },
+          "(lower, upper), (N, nv) each, copies.")
+      .def(
+          "joint_friction",
+          [](const Batch& b) {
+            return locked(b, [&] {
+              return py::make_tuple(b.static_friction(), b.dynamic_friction(),
+                                    b.viscous_friction());
+            });
+          },
+          "(static, dynamic, viscous), (N, nv) each, copies.")
+      .def(
+          "max_joint_velocity",
+          [](const Batch& b) { return locked(b, [&] { return b.max_joint_velocity(); }); },
+          "(N, nv), a copy.")
+      .def(
+          "link_mass",
+          [](const Batch& b, py::handle link) {
+            const NameOrIndex l = link_arg(link);
+            return locked(b, [&] { return b.link_mass(link_of(b.model(), l)); });
+          },
+          py::arg("link"), "A link's mass in every environment (N,), a copy.")
+      .def(
+          "link_com",
+          [](const Batch& b, py::handle link) {
+            const NameOrIndex l = link_arg(link);
+            return locked(b, [&] { return b.link_com(link_of(b.model(), l)); });
+          },
+          py::arg("link"), "A link's centre of mass in every environment (N, 3), a copy.")
+      .def(
+          "observe",
+          [](const Batch& b, py::handle fields) {
+            const std::vector<Observation> f = to_observations(fields);
+            return locked(b, [&] { return b.observe(f); });
+          },
+          py::arg("fields"),
+          "The fields (names from q, qd, applied_force, drive_force, limit_force, "
+          "friction_force, velocity_limit_force, target_position, target_velocity) side by "
+          "side in one new (N, k) array.")
+      .def(
+          "frame_positions",
+          [](const Batch& b, py::handle link, py::handle point) {
+            const NameOrIndex l = link_arg(link);
+            const Vec3 p = point.is_none() ? Vec3::Zero() : to_vec3(point, "point");
+            return locked(b, [&] { return b.frame_positions(link_of(b.model(), l), p); });
+          },
+          py::arg("link"), py::arg("point") = py::none(),
+          "World position of a point (link coordinates, default its origin) on a link (name or "
+          "index) in every environment, (N, 3), a new array.")
       .def(
           "step",
           [](Batch& b, py::handle count) {

@@ -104,16 +104,16 @@ def test_batch_errors(arm):
         batch.set_drive_gains(np.zeros((4, 7), dtype=complex), np.zeros((4, 7)))
     kp = np.full((4, 7), 10.0)
     kp[2, 1] = -1.0
-    with pytest.raises(ValueError, match="copy 2: set_drive_gains: dof 1: drive on joint 'joint2': stiffness = -1"):
+    with pytest.raises(ValueError, match="environment 2: set_drive_gains: dof 1: drive on joint 'joint2': stiffness = -1"):
         batch.set_drive_gains(kp, np.zeros((4, 7)))
     assert all(batch.sim(i).drive(1).type == fd.DriveType.none for i in range(4))
-    with pytest.raises(ValueError, match=r"qd\[1, 3\] = nan is not finite"):
+    with pytest.raises(ValueError, match=r"environment 1: qd\[3\] = nan is not finite"):
         qd = np.zeros((4, 7))
         qd[1, 3] = np.nan
         batch.set_qd(qd)
     with pytest.raises(ValueError, match="no joint named 'hip'"):
         batch.set_drive("hip", fd.Drive())
-    with pytest.raises(ValueError, match=r"copy index 4 is out of range \[0, 4\)"):
+    with pytest.raises(ValueError, match=r"environment index 4 is out of range \[0, 4\)"):
         batch.sim(4)
     with pytest.raises(ValueError, match=r"num_threads = -1 is out of range \[0, "):
         batch.num_threads = -1
@@ -252,9 +252,9 @@ def test_batch_sizes_indices_and_threads(arm):
     batch = fd.Batch(arm, np.int64(4))
     assert len(batch) == 4 and len(fd.Batch(fd.Simulation(arm), Index(2))) == 2
     for i in [4, 2**32, 2**32 + 1, -1, -2**32]:
-        with pytest.raises(ValueError, match=rf"copy index {i} is out of range \[0, 4\)"):
+        with pytest.raises(ValueError, match=rf"environment index {i} is out of range \[0, 4\)"):
             batch.sim(i)
-    with pytest.raises(ValueError, match=out_of_range("copy index", 2**64, -2**63, 2**63 - 1)):
+    with pytest.raises(ValueError, match=out_of_range("environment index", 2**64, -2**63, 2**63 - 1)):
         batch.sim(2**64)
     assert batch.sim(np.int64(3)).step_count == 0 and batch.sim(Index(1)) is not None
     for t in [2**31, 2**32, -1]:

@@ -117,6 +117,31 @@ JointSpec floating_joint(std::string name) {
   return joint_of(std::move(name), JointType::floating, Vec3::UnitX(), Vec3::Zero(), Vec3::Zero());
 }
 
+void set_link_inertial(Link& link, double mass, const Vec3& com, const Mat3& inertia,
+                       bool can_move) {
+  const std::string who_link = "link '" + link.name + "'";
+  check_finite(who_link, "mass", mass);
+  check_finite(who_link, "com", com);
+  if (can_move || mass != 0.0) {
+    if (!(mass > 0.0))
+      fail(who_link + ": mass = " + fmt(mass) +
+           (can_move ? " must be > 0 for a link that can move" : " must be >= 0"));
+    check_inertia(who_link, inertia);
+  } else if (!inertia.allFinite() || !inertia.isZero(0.0)) {
+    check_inertia(who_link, inertia);  // names a non-finite entry first
+    fail(who_link + ": inertia must be zero for a massless link (mass = 0), got principal moments " +
+         fmt(Eigen::SelfAdjointEigenSolver<Mat3>(0.5 * (inertia + inertia.transpose())).eigenvalues()));
+  }
+  link.mass = mass;
+  link.com = com;
+  link.inertia_com = 0.5 * (inertia + inertia.transpose());
+  link.inertia = spatial_inertia(mass, com, link.inertia_com);
+  // Finite inputs whose products or sums overflow would fail later, naming no field.
+  if (!link.inertia.allFinite())
+    fail(who_link + ": mass = " + fmt(mass) + " at com = " + fmt(com) +
+         ": the spatial inertia (m c, m c c^T) overflows");
+}
+
 LinkSpec make_link(std::string name, std::string parent, double mass, const Vec3& com,
                    const Mat3& inertia, JointSpec joint) {
   LinkSpec l;
@@ -257,27 +282,7 @@ Model ModelBuilder::build() const {
       case JointType::fixed: break;
     }
 
-    // Inertial.
-    check_finite(who_link, "mass", s.mass);
-    check_finite(who_link, "com", s.com);
-    if (can_move[k] || s.mass != 0.0) {
-      if (!(s.mass > 0.0))
-        fail(who_link + ": mass = " + fmt(s.mass) +
-             (can_move[k] ? " must be > 0 for a link that can move" : " must be >= 0"));
-      check_inertia(who_link, s.inertia);
-    } else if (!s.inertia.allFinite() || !s.inertia.isZero(0.0)) {
-      check_inertia(who_link, s.inertia);  // names a non-finite entry first
-      fail(who_link + ": inertia must be zero for a massless link (mass = 0), got principal moments " +
-           fmt(Eigen::SelfAdjointEigenSolver<Mat3>(0.5 * (s.inertia + s.inertia.transpose())).eigenvalues()));
-    }
-    link.mass = s.mass;
-    link.com = s.com;
-    link.inertia_com = 0.5 * (s.inertia + s.inertia.transpose());
-    link.inertia = spatial_inertia(s.mass, s.com, link.inertia_com);
-    // Finite inputs whose products or sums overflow would fail later, naming no field.
-    if (!link.inertia.allFinite())
-      fail(who_link + ": mass = " + fmt(s.mass) + " at com = " + fmt(s.com) +
-           ": the spatial inertia (m c, m c c^T) overflows");
+    set_link_inertial(link, s.mass, s.com, s.inertia, can_move[k]);
     total_mass += s.mass;
     inertia_sum += link.inertia.cwiseAbs().sum();
     if (!std::isfinite(total_mass) || !std::isfinite(inertia_sum))

@@ -1,14 +1,20 @@
 #include "featherdrive/sim/batch.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
-#include <sstream>
+#include <map>
 #include <string>
 
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/core/format.hpp"
+#include "featherdrive/model/model_variant.hpp"
 
 namespace featherdrive {
 namespace {
@@ -94,6 +100,58 @@ void set_drive_gains(Simulation& sim, const VecX& stiffness, const VecX& damping
   apply_drives(sim, drives_with_gains(sim, stiffness, damping, type));
 }
 
+namespace {
+
+/// Row j of values given per environment, or their one row for all.
+auto row_of(const RowMatrix& m, size_t j) {
+  return m.row(m.rows() == 1 ? 0 : static_cast<Eigen::Index>(j));
+}
+
+/// Throws unless m is (k, cols) or (1, cols).
+void check_values(const RowMatrix& m, size_t k, Eigen::Index cols, const std::string& what) {
+  if (m.cols() == cols && (m.rows() == 1 || m.rows() == static_cast<Eigen::Index>(k))) return;
+  throw std::invalid_argument("Batch: " + what + " has shape (" + std::to_string(m.rows()) + ", " +
+                              std::to_string(m.cols()) + "), expected (" + std::to_string(k) +
+                              ", " + std::to_string(cols) + ") for " + std::to_string(k) +
+                              " environments, or (1, " + std::to_string(cols) + ") for all");
+}
+
+[[noreturn]] void rethrow_for(int env, const std::exception& e) {
+  throw std::invalid_argument("Batch: environment " + std::to_string(env) + ": " + e.what());
+}
+
+std::vector<int> every(int n) {
+  std::vector<int> ids(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) ids[static_cast<size_t>(i)] = i;
+  return ids;
+}
+
+/// The drives make(sim, j) of every environment envs[j], all made (and checked) before any is set.
+template <class Make>
+void set_drives(std::vector<Simulation>& sims, const std::vector<int>& envs, Make make) {
+  std::vector<std::vector<Drive>> drives(envs.size());
+  for (size_t j = 0; j < envs.size(); ++j) {
+    try {
+      drives[j] = make(sims[static_cast<size_t>(envs[j])], j);
+    } catch (const std::invalid_argument& e) {
+      rethrow_for(envs[j], e);
+    }
+  }
+  for (size_t j = 0; j < envs.size(); ++j) apply_drives(sims[static_cast<size_t>(envs[j])], drives[j]);
+}
+
+/// (N, nv) of value(sim, dof) over every environment.
+template <class F>
+RowMatrix per_dof_matrix(const std::vector<Simulation>& sims, F value) {
+  const int nv = sims.front().model().nv;
+  RowMatrix m(static_cast<Eigen::Index>(sims.size()), nv);
+  for (size_t i = 0; i < sims.size(); ++i)
+    for (int d = 0; d < nv; ++d) m(static_cast<Eigen::Index>(i), d) = value(sims[i], d);
+  return m;
+}
+
+}  // namespace
+
 Batch::Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options)
     : Batch(Simulation(std::move(model), options), count) {}
 
@@ -101,12 +159,31 @@ Batch::Batch(const Simulation& prototype, int count) {
   if (count < 1)
     throw std::invalid_argument("Batch: count = " + std::to_string(count) + " must be >= 1");
   sims_.assign(static_cast<size_t>(count), prototype);
+  initial_q_ = prototype.q();
+  lend_rows();
+}
+
+Batch::Batch(const Batch& other)
+    : sims_(other.sims_), initial_q_(other.initial_q_), threads_(other.threads_) {
+  lend_rows();
+}
+
+// Row i of every array becomes environment i's storage (its values copied there).
+void Batch::lend_rows() {
+  for (int f = 0; f < StateStorage::kFields; ++f)
+    rows_[static_cast<size_t>(f)].resize(size(), sims_.front().state_.size(StateStorage::Field(f)));
+  for (int i = 0; i < size(); ++i) {
+    std::array<double*, StateStorage::kFields> row{};
+    for (size_t f = 0; f < row.size(); ++f)
+      row[f] = rows_[f].cols() > 0 ? rows_[f].data() + i * rows_[f].cols() : nullptr;
+    sims_[static_cast<size_t>(i)].state_.lend(row);
+  }
 }
 
 Simulation& Batch::sim(int i) {
   if (i < 0 || i >= size())
-    throw std::invalid_argument("Batch: copy index " + std::to_string(i) + " is out of range [0, " +
-                                std::to_string(size()) + ")");
+    throw std::invalid_argument("Batch: environment index " + std::to_string(i) +
+                                " is out of range [0, " + std::to_string(size()) + ")");
   return sims_[static_cast<size_t>(i)];
 }
 
@@ -130,131 +207,371 @@ void Batch::set_options(const SimulationOptions& options) {
   for (Simulation& s : sims_) s.set_options(options);
 }
 
-RowMatrix Batch::gather(const VecX& (Simulation::*get)() const, Eigen::Index cols) const {
-  RowMatrix m(size(), cols);
-  for (int i = 0; i < size(); ++i) m.row(i) = (sims_[static_cast<size_t>(i)].*get)().transpose();
-  return m;
+std::vector<int> Batch::check_env_ids(std::span<const int> env_ids) const {
+  std::vector<int> first(static_cast<size_t>(size()), -1);
+  for (size_t j = 0; j < env_ids.size(); ++j) {
+    const int i = env_ids[j];
+    const std::string entry = "Batch: env_ids[" + std::to_string(j) + "] = " + std::to_string(i);
+    if (i < 0 || i >= size())
+      throw std::invalid_argument(entry + " is out of range [0, " + std::to_string(size()) + ")");
+    if (first[static_cast<size_t>(i)] >= 0)
+      throw std::invalid_argument(entry + " appears twice (also env_ids[" +
+                                  std::to_string(first[static_cast<size_t>(i)]) + "])");
+    first[static_cast<size_t>(i)] = static_cast<int>(j);
+  }
+  return {env_ids.begin(), env_ids.end()};
 }
 
-RowMatrix Batch::q() const { return gather(&Simulation::q, model().nq); }
-RowMatrix Batch::qd() const { return gather(&Simulation::qd, model().nv); }
-RowMatrix Batch::drive_force() const { return gather(&Simulation::drive_force, model().nv); }
-RowMatrix Batch::limit_force() const { return gather(&Simulation::limit_force, model().nv); }
-RowMatrix Batch::friction_force() const { return gather(&Simulation::friction_force, model().nv); }
-RowMatrix Batch::velocity_limit_force() const {
-  return gather(&Simulation::velocity_limit_force, model().nv);
-}
-
-void Batch::check_rows(const RowMatrix& m, Eigen::Index cols, const char* what) const {
-  if (m.rows() != size() || m.cols() != cols)
-    throw std::invalid_argument(std::string("Batch: ") + what + " has shape (" +
-                                std::to_string(m.rows()) + ", " + std::to_string(m.cols()) +
-                                "), expected (" + std::to_string(size()) + ", " +
-                                std::to_string(cols) + ")");
-}
-
-namespace {
-
-/// Runs set(copy i, row i) for every copy after a dry run of check(copy i, row i) for every copy,
-/// so that a bad row changes nothing.
-template <class Check, class Set>
-void per_copy(std::vector<Simulation>& sims, Check check, Set set) {
-  for (size_t i = 0; i < sims.size(); ++i) {
+// set(sim, row) for the environments env_ids, each row first set on a scratch simulation so that
+// a bad one throws before anything changes.
+template <class Set>
+void Batch::set_rows(std::span<const int> env_ids, const RowMatrix& values, Eigen::Index cols,
+                     const char* what, Set set) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(values, envs.size(), cols, what);
+  Simulation scratch(model_ptr());
+  for (size_t j = 0; j < envs.size(); ++j) {
     try {
-      check(sims[i], static_cast<Eigen::Index>(i));
+      set(scratch, row_of(values, j).transpose());
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("Batch: copy " + std::to_string(i) + ": " + e.what());
+      rethrow_for(envs[j], e);
     }
   }
-  for (size_t i = 0; i < sims.size(); ++i) set(sims[i], static_cast<Eigen::Index>(i));
+  for (size_t j = 0; j < envs.size(); ++j)
+    set(sims_[static_cast<size_t>(envs[j])], row_of(values, j).transpose());
 }
 
-}  // namespace
-
-namespace {
-
-void check_finite(const RowMatrix& m, const char* what) {
-  for (Eigen::Index i = 0; i < m.rows(); ++i)
-    for (Eigen::Index j = 0; j < m.cols(); ++j)
-      if (!std::isfinite(m(i, j))) {
-        std::ostringstream s;
-        s << "Batch: " << what << "[" << i << ", " << j << "] = " << m(i, j) << " is not finite";
-        throw std::invalid_argument(s.str());
-      }
+void Batch::set_q(const RowMatrix& q) { set_q(every(size()), q); }
+void Batch::set_q(std::span<const int> env_ids, const RowMatrix& q) {
+  set_rows(env_ids, q, model().nq, "q", [](Simulation& s, const VecX& v) { s.set_q(v); });
 }
-
-}  // namespace
-
-void Batch::set_q(const RowMatrix& q) {
-  check_rows(q, model().nq, "q");
-  check_finite(q, "q");
-  for (size_t i = 0; i < sims_.size(); ++i) sims_[i].set_q(q.row(static_cast<Eigen::Index>(i)).transpose());
+void Batch::set_qd(const RowMatrix& qd) { set_qd(every(size()), qd); }
+void Batch::set_qd(std::span<const int> env_ids, const RowMatrix& qd) {
+  set_rows(env_ids, qd, model().nv, "qd", [](Simulation& s, const VecX& v) { s.set_qd(v); });
 }
-
-void Batch::set_qd(const RowMatrix& qd) {
-  check_rows(qd, model().nv, "qd");
-  check_finite(qd, "qd");
-  for (size_t i = 0; i < sims_.size(); ++i) sims_[i].set_qd(qd.row(static_cast<Eigen::Index>(i)).transpose());
-}
-
-void Batch::set_applied_force(const RowMatrix& tau) {
-  check_rows(tau, model().nv, "applied_force");
-  check_finite(tau, "applied_force");
-  for (size_t i = 0; i < sims_.size(); ++i)
-    sims_[i].set_applied_force(tau.row(static_cast<Eigen::Index>(i)).transpose());
+void Batch::set_applied_force(const RowMatrix& tau) { set_applied_force(every(size()), tau); }
+void Batch::set_applied_force(std::span<const int> env_ids, const RowMatrix& tau) {
+  set_rows(env_ids, tau, model().nv, "applied_force",
+           [](Simulation& s, const VecX& v) { s.set_applied_force(v); });
 }
 
 void Batch::set_drive_targets(const RowMatrix& positions, const RowMatrix& velocities) {
-  check_rows(positions, model().nv, "positions");
-  check_rows(velocities, model().nv, "velocities");
-  std::vector<std::vector<Drive>> drives(sims_.size());
-  per_copy(sims_, [&](Simulation& s, Eigen::Index i) {
-    drives[static_cast<size_t>(i)] = drives_with_targets(s, positions.row(i).transpose(), velocities.row(i).transpose());
-  }, [&](Simulation& s, Eigen::Index i) { apply_drives(s, drives[static_cast<size_t>(i)]); });
+  set_drive_targets(every(size()), positions, velocities);
+}
+void Batch::set_drive_targets(std::span<const int> env_ids, const RowMatrix& positions,
+                              const RowMatrix& velocities) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(positions, envs.size(), model().nv, "positions");
+  check_values(velocities, envs.size(), model().nv, "velocities");
+  set_drives(sims_, envs, [&](const Simulation& s, size_t j) {
+    return drives_with_targets(s, row_of(positions, j).transpose(),
+                               row_of(velocities, j).transpose());
+  });
 }
 
 void Batch::set_drive_gains(const RowMatrix& stiffness, const RowMatrix& damping, DriveType type) {
-  check_rows(stiffness, model().nv, "stiffness");
-  check_rows(damping, model().nv, "damping");
-  std::vector<std::vector<Drive>> drives(sims_.size());
-  per_copy(sims_, [&](Simulation& s, Eigen::Index i) {
-    drives[static_cast<size_t>(i)] = drives_with_gains(s, stiffness.row(i).transpose(), damping.row(i).transpose(), type);
-  }, [&](Simulation& s, Eigen::Index i) { apply_drives(s, drives[static_cast<size_t>(i)]); });
+  set_drive_gains(every(size()), stiffness, damping, type);
+}
+void Batch::set_drive_gains(std::span<const int> env_ids, const RowMatrix& stiffness,
+                            const RowMatrix& damping, DriveType type) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(stiffness, envs.size(), model().nv, "stiffness");
+  check_values(damping, envs.size(), model().nv, "damping");
+  set_drives(sims_, envs, [&](const Simulation& s, size_t j) {
+    return drives_with_gains(s, row_of(stiffness, j).transpose(), row_of(damping, j).transpose(),
+                             type);
+  });
 }
 
 void Batch::set_drive(const std::string& joint, const Drive& drive) {
-  // The check on copy 0 is the check for all: the joint and the drive are the same for every copy.
+  // The check on environment 0 is the check for all: the joint and the drive are the same.
   sims_.front().set_drive(joint, drive);
   for (Simulation& s : sims_) s.set_drive(joint, drive);
+}
+
+void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& q,
+                  const std::optional<RowMatrix>& qd) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  if (q) check_values(*q, envs.size(), model().nq, "q");
+  if (qd) check_values(*qd, envs.size(), model().nv, "qd");
+  Simulation scratch(model_ptr());
+  for (size_t j = 0; j < envs.size(); ++j) {
+    try {
+      if (q) scratch.set_q(row_of(*q, j).transpose());
+      if (qd) scratch.set_qd(row_of(*qd, j).transpose());
+    } catch (const std::invalid_argument& e) {
+      rethrow_for(envs[j], e);
+    }
+  }
+  for (size_t j = 0; j < envs.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(envs[j]);
+    // The default q is the prototype's, already normalised: copied, not normalised again.
+    if (q) sims_[static_cast<size_t>(i)].set_q(row_of(*q, j).transpose());
+    else rows_[StateStorage::q].row(i) = initial_q_.transpose();
+    if (qd) rows_[StateStorage::qd].row(i) = row_of(*qd, j);
+    else rows_[StateStorage::qd].row(i).setZero();
+    for (int f = StateStorage::applied_force; f < StateStorage::kFields; ++f)
+      rows_[static_cast<size_t>(f)].row(i).setZero();
+    sims_[static_cast<size_t>(i)].set_clock(0.0, 0);
+  }
+}
+
+// For every environment envs[j] and dof d: apply(sim, d, x) with x[k] = values[k] at (j, d), on
+// dofs of revolute and prismatic joints, tried on a scratch simulation first; dofs of other
+// joints take no such setting and must be given what they have (same(sim, d, x)).
+template <class Apply, class Same>
+void Batch::set_per_dof(const std::vector<int>& envs,
+                        std::initializer_list<const RowMatrix*> values, const char* what,
+                        Apply apply, Same same) {
+  const Model& model = this->model();
+  Simulation scratch(model_ptr());
+  std::vector<double> x(values.size());
+  auto at = [&](size_t j, int d) {
+    size_t k = 0;
+    for (const RowMatrix* v : values) x[k++] = row_of(*v, j)[d];
+    return x.data();
+  };
+  for (size_t j = 0; j < envs.size(); ++j) {
+    const Simulation& sim = sims_[static_cast<size_t>(envs[j])];
+    for (int d = 0; d < model.nv; ++d) {
+      try {
+        if (drivable(model, d)) {
+          apply(scratch, d, at(j, d));
+        } else if (!same(sim, d, at(j, d))) {
+          const Link& link = model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])];
+          throw std::invalid_argument(std::string(what) + ": dof " + std::to_string(d) +
+                                      " of joint '" + link.joint_name + "' is " +
+                                      to_string(link.joint_type) +
+                                      ": it takes no such setting and must be given the value "
+                                      "it has, not " + std::to_string(x[0]));
+        }
+      } catch (const std::invalid_argument& e) {
+        rethrow_for(envs[j], e);
+      }
+    }
+  }
+  for (size_t j = 0; j < envs.size(); ++j)
+    for (int d = 0; d < model.nv; ++d)
+      if (drivable(model, d)) apply(sims_[static_cast<size_t>(envs[j])], d, at(j, d));
+}
+
+void Batch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& lower,
+                             const RowMatrix& upper) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(lower, envs.size(), model().nv, "lower");
+  check_values(upper, envs.size(), model().nv, "upper");
+  set_per_dof(
+      envs, {&lower, &upper}, "joint limits",
+      [](Simulation& s, int d, const double* x) { s.set_joint_limits(d, x[0], x[1]); },
+      [](const Simulation& s, int d, const double* x) {
+        return x[0] == s.lower_limit(d) && x[1] == s.upper_limit(d);
+      });
+}
+
+void Batch::set_joint_friction(std::span<const int> env_ids, const RowMatrix& static_effort,
+                               const RowMatrix& dynamic_effort, const RowMatrix& viscous) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(static_effort, envs.size(), model().nv, "static friction");
+  check_values(dynamic_effort, envs.size(), model().nv, "dynamic friction");
+  check_values(viscous, envs.size(), model().nv, "viscous friction");
+  set_per_dof(
+      envs, {&static_effort, &dynamic_effort, &viscous}, "joint friction",
+      [](Simulation& s, int d, const double* x) {
+        s.set_joint_friction(d, JointFriction{x[0], x[1], x[2]});
+      },
+      [](const Simulation& s, int d, const double* x) {
+        const JointFriction& f = s.joint_friction(d);
+        return x[0] == f.static_effort && x[1] == f.dynamic_effort && x[2] == f.viscous;
+      });
+}
+
+void Batch::set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix& max_velocity) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(max_velocity, envs.size(), model().nv, "max joint velocity");
+  set_per_dof(
+      envs, {&max_velocity}, "max joint velocity",
+      [](Simulation& s, int d, const double* x) { s.set_max_joint_velocity(d, x[0]); },
+      [](const Simulation& s, int d, const double* x) { return x[0] == s.max_joint_velocity(d); });
+}
+
+// Each environment envs[j] gets the model make(its model, j); with broadcast values, one new
+// model per distinct old one. All are made (and checked) before any is set.
+template <class Make>
+void Batch::vary_models(const std::vector<int>& envs, bool broadcast, Make make) {
+  std::vector<std::shared_ptr<const Model>> models(envs.size());
+  std::map<const Model*, std::shared_ptr<const Model>> made;
+  for (size_t j = 0; j < envs.size(); ++j) {
+    const Model& old = sims_[static_cast<size_t>(envs[j])].model();
+    if (broadcast && made.count(&old)) {
+      models[j] = made[&old];
+      continue;
+    }
+    try {
+      models[j] = std::make_shared<const Model>(make(old, j));
+    } catch (const std::invalid_argument& e) {
+      rethrow_for(envs[j], e);
+    }
+    if (broadcast) made[&old] = models[j];
+  }
+  for (size_t j = 0; j < envs.size(); ++j)
+    sims_[static_cast<size_t>(envs[j])].set_model(std::move(models[j]));
+}
+
+void Batch::set_armature(std::span<const int> env_ids, const RowMatrix& armature) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(armature, envs.size(), model().nv, "armature");
+  vary_models(envs, armature.rows() == 1, [&](const Model& m, size_t j) {
+    return with_armature(m, row_of(armature, j).transpose());
+  });
+}
+
+void Batch::set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
+                          bool scale_inertia) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_link_index(model(), link);
+  if (mass.size() != 1 && mass.size() != static_cast<Eigen::Index>(envs.size()))
+    throw std::invalid_argument("Batch: mass has " + std::to_string(mass.size()) +
+                                " values, expected " + std::to_string(envs.size()) +
+                                " (one per environment) or 1");
+  vary_models(envs, mass.size() == 1, [&](const Model& m, size_t j) {
+    const Link& l = m.links[static_cast<size_t>(link)];
+    const double x = mass[mass.size() == 1 ? 0 : static_cast<Eigen::Index>(j)];
+    if (scale_inertia && !(l.mass > 0.0))
+      throw std::invalid_argument("link '" + l.name +
+                                  "' has mass 0: its inertia cannot scale with the mass "
+                                  "(give scale_inertia = false)");
+    const Mat3 inertia = scale_inertia ? Mat3(l.inertia_com * (x / l.mass)) : l.inertia_com;
+    return with_link_inertial(m, link, x, l.com, inertia);
+  });
+}
+
+void Batch::set_link_com(std::span<const int> env_ids, int link, const RowMatrix& com) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_link_index(model(), link);
+  check_values(com, envs.size(), 3, "com");
+  vary_models(envs, com.rows() == 1, [&](const Model& m, size_t j) {
+    const Link& l = m.links[static_cast<size_t>(link)];
+    return with_link_inertial(m, link, l.mass, row_of(com, j).transpose(), l.inertia_com);
+  });
+}
+
+RowMatrix Batch::armature() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.model().armature[d]; });
+}
+RowMatrix Batch::lower_limit() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.lower_limit(d); });
+}
+RowMatrix Batch::upper_limit() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.upper_limit(d); });
+}
+RowMatrix Batch::static_friction() const {
+  return per_dof_matrix(
+      sims_, [](const Simulation& s, int d) { return s.joint_friction(d).static_effort; });
+}
+RowMatrix Batch::dynamic_friction() const {
+  return per_dof_matrix(
+      sims_, [](const Simulation& s, int d) { return s.joint_friction(d).dynamic_effort; });
+}
+RowMatrix Batch::viscous_friction() const {
+  return per_dof_matrix(sims_,
+                        [](const Simulation& s, int d) { return s.joint_friction(d).viscous; });
+}
+RowMatrix Batch::max_joint_velocity() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.max_joint_velocity(d); });
+}
+
+VecX Batch::link_mass(int link) const {
+  check_link_index(model(), link);
+  VecX m(size());
+  for (int i = 0; i < size(); ++i)
+    m[i] = sims_[static_cast<size_t>(i)].model().links[static_cast<size_t>(link)].mass;
+  return m;
+}
+
+RowMatrix Batch::link_com(int link) const {
+  check_link_index(model(), link);
+  RowMatrix m(size(), 3);
+  for (int i = 0; i < size(); ++i)
+    m.row(i) = sims_[static_cast<size_t>(i)].model().links[static_cast<size_t>(link)].com.transpose();
+  return m;
+}
+
+RowMatrix Batch::observe(std::span<const Observation> fields) const {
+  const Model& m = model();
+  Eigen::Index width = 0;
+  for (Observation f : fields) width += f == Observation::q ? m.nq : m.nv;
+  RowMatrix out(size(), width);
+  Eigen::Index col = 0;
+  for (Observation f : fields) {
+    if (f == Observation::target_position || f == Observation::target_velocity) {
+      const bool position = f == Observation::target_position;
+      for (int i = 0; i < size(); ++i)
+        for (int d = 0; d < m.nv; ++d) {
+          const Drive& drive = sims_[static_cast<size_t>(i)].drive(d);
+          out(i, col + d) = position ? drive.target_position : drive.target_velocity;
+        }
+      col += m.nv;
+      continue;
+    }
+    // The other fields are the storage arrays, in StateStorage's order.
+    const RowMatrix& rows = rows_[static_cast<size_t>(f)];
+    out.middleCols(col, rows.cols()) = rows;
+    col += rows.cols();
+  }
+  return out;
+}
+
+RowMatrix Batch::frame_positions(int link, const Vec3& point) const {
+  check_link_index(model(), link);
+  if (!point.allFinite())
+    throw std::invalid_argument("frame_positions: point = " + format_vec3(point) +
+                                " is not finite");
+  RowMatrix out(size(), 3);
+  // Chunks of environments share a workspace; the topology, all the kinematics reads, is shared.
+  const int grain = std::max(1, size() / (8 * effective_num_threads()));
+  parallel(size(), grain, [&](int begin, int end) {
+    Data data(model());
+    VecX q(model().nq);
+    for (int i = begin; i < end; ++i) {
+      const Simulation& s = sims_[static_cast<size_t>(i)];
+      q = s.q();
+      forward_kinematics(s.model(), data, q);
+      out.row(i) = frame_position(s.model(), data, link, point).transpose();
+    }
+  });
+  return out;
+}
+
+// f(begin, end) over ranges of [0, n) of at least `grain`, on effective_num_threads() threads.
+template <class F>
+void Batch::parallel(int n, int grain, F f) const {
+  const int threads = effective_num_threads();
+  if (threads <= 1 || n == 1) return f(0, n);
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, static_cast<size_t>(grain)),
+                      [&](const tbb::blocked_range<int>& r) { f(r.begin(), r.end()); });
+  });
 }
 
 void Batch::step(int count) {
   if (count < 0)
     throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
   const int n = size();
-  // One slot per copy: copies never share anything a step writes.
+  // One slot per environment: environments never share anything a step writes.
   std::vector<std::string> diverged(static_cast<size_t>(n));
   std::vector<std::exception_ptr> failed(static_cast<size_t>(n));
-  auto run = [&](int i) {
-    try {
-      sims_[static_cast<size_t>(i)].step(count);
-    } catch (const DivergenceError& e) {
-      diverged[static_cast<size_t>(i)] = e.what();
-    } catch (...) {
-      failed[static_cast<size_t>(i)] = std::current_exception();
+  parallel(n, 1, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      try {
+        sims_[static_cast<size_t>(i)].step(count);
+      } catch (const DivergenceError& e) {
+        diverged[static_cast<size_t>(i)] = e.what();
+      } catch (...) {
+        failed[static_cast<size_t>(i)] = std::current_exception();
+      }
     }
-  };
-  const int threads = effective_num_threads();
-  if (threads <= 1 || n == 1) {
-    for (int i = 0; i < n; ++i) run(i);
-  } else {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<int>(0, n, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int i = r.begin(); i < r.end(); ++i) run(i);
-      });
-    });
-  }
+  });
   for (const std::exception_ptr& e : failed)
     if (e) std::rethrow_exception(e);
   int first = -1, count_diverged = 0;

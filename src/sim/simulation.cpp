@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/model/model_variant.hpp"
 
 namespace featherdrive {
 namespace {
@@ -41,6 +42,46 @@ void check_quaternions(const Model& model, const VecX& q, bool unit) {
 
 }  // namespace
 
+StateStorage::StateStorage(Eigen::Index nq, Eigen::Index nv) : own_(VecX::Zero(nq + 6 * nv)) {
+  Eigen::Index offset = 0;  // no arithmetic on the null data() of an empty block
+  for (int f = 0; f < kFields; ++f) {
+    size_[f] = f == q ? nq : nv;
+    data_[f] = size_[f] > 0 ? own_.data() + offset : nullptr;
+    offset += size_[f];
+  }
+}
+
+StateStorage::StateStorage(const StateStorage& other) : StateStorage(other.size_[q], other.size_[qd]) {
+  for (int f = 0; f < kFields; ++f) (*this)[Field(f)] = other[Field(f)];
+}
+
+StateStorage& StateStorage::operator=(const StateStorage& other) {
+  if (this == &other) return *this;
+  if (size_ != other.size_) {
+    if (lent_)
+      throw std::invalid_argument("Simulation: cannot assign a simulation of nq = " +
+                                  std::to_string(other.size_[q]) + ", nv = " +
+                                  std::to_string(other.size_[qd]) + " to a batch environment of nq = " +
+                                  std::to_string(size_[q]) + ", nv = " + std::to_string(size_[qd]));
+    StateStorage copy(other);  // its block moves here with the addresses copy.data_ holds
+    own_ = std::move(copy.own_);
+    data_ = copy.data_;
+    size_ = copy.size_;
+    return *this;
+  }
+  for (int f = 0; f < kFields; ++f) (*this)[Field(f)] = other[Field(f)];
+  return *this;
+}
+
+void StateStorage::lend(const std::array<double*, kFields>& rows) {
+  for (int f = 0; f < kFields; ++f) {
+    Eigen::Map<VecX>(rows[f], size_[f]) = (*this)[Field(f)];
+    data_[f] = rows[f];
+  }
+  own_.resize(0);
+  lent_ = true;
+}
+
 const char* to_string(SolverType type) { return type == SolverType::pgs ? "pgs" : "tgs"; }
 const char* to_string(Compat compat) { return compat == Compat::physx ? "physx" : "none"; }
 
@@ -74,14 +115,9 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
       departures_(*model_) {
   validate_options(options_);
   const int nv = model_->nv;
-  q_ = model_->neutral_configuration();
-  qd_ = VecX::Zero(nv);
-  applied_force_ = VecX::Zero(nv);
+  state_ = StateStorage(model_->nq, nv);
+  state_[StateStorage::q] = model_->neutral_configuration();
   drives_.assign(static_cast<size_t>(nv), Drive{});
-  drive_force_ = VecX::Zero(nv);
-  limit_force_ = VecX::Zero(nv);
-  friction_force_ = VecX::Zero(nv);
-  velocity_limit_force_ = VecX::Zero(nv);
   lower_limit_ = model_->lower_limit;
   upper_limit_ = model_->upper_limit;
   max_velocity_ = model_->velocity_limit;
@@ -92,7 +128,8 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     if (type != JointType::revolute && type != JointType::prismatic) continue;
     friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
   }
-  save_step_start();  // sizes the copies, so that a step allocates nothing
+  load_state();  // sizes the working copies, so that a step allocates nothing
+  drive_force_ = limit_force_ = friction_force_ = velocity_limit_force_ = VecX::Zero(nv);
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   delta_x_ = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model_->num_links());
@@ -124,11 +161,24 @@ void Simulation::set_options(const SimulationOptions& options) {
   options_ = options;
 }
 
+void Simulation::set_model(std::shared_ptr<const Model> model) {
+  if (!model) throw std::invalid_argument("set_model: model is null");
+  const std::string difference = topology_difference(*model_, *model);
+  if (!difference.empty())
+    throw std::invalid_argument("set_model: the model has another topology: " + difference);
+  // The workspaces hold copies of inertial parameters (Data::constants, the total mass).
+  data_ = Data(*model);
+  sweep_ = SweepWorkspace(*model);
+  departures_ = PhysxDepartures(*model);
+  model_ = std::move(model);
+}
+
 void Simulation::set_q(const VecX& q) {
   check_vector(q, model_->nq, "q");
   check_quaternions(*model_, q, /*unit=*/false);
-  q_ = q;
-  normalize_configuration(*model_, q_);
+  VecX normalized = q;
+  normalize_configuration(*model_, normalized);
+  state_[StateStorage::q] = normalized;
 }
 
 void Simulation::set_clock(double time, long step_count) {
@@ -155,21 +205,21 @@ void Simulation::restore_state(const VecX& q, const VecX& drive_force, const Vec
   check_vector(limit_force, model_->nv, "limit_force");
   check_vector(friction_force, model_->nv, "friction_force");
   check_vector(velocity_limit_force, model_->nv, "velocity_limit_force");
-  q_ = q;
-  drive_force_ = drive_force;
-  limit_force_ = limit_force;
-  friction_force_ = friction_force;
-  velocity_limit_force_ = velocity_limit_force;
+  state_[StateStorage::q] = q;
+  state_[StateStorage::drive_force] = drive_force;
+  state_[StateStorage::limit_force] = limit_force;
+  state_[StateStorage::friction_force] = friction_force;
+  state_[StateStorage::velocity_limit_force] = velocity_limit_force;
 }
 
 void Simulation::set_qd(const VecX& qd) {
   check_vector(qd, model_->nv, "qd");
-  qd_ = qd;
+  state_[StateStorage::qd] = qd;
 }
 
 void Simulation::set_applied_force(const VecX& tau) {
   check_vector(tau, model_->nv, "applied_force");
-  applied_force_ = tau;
+  state_[StateStorage::applied_force] = tau;
 }
 
 int Simulation::check_dof(int dof) const {
@@ -332,33 +382,29 @@ void Simulation::step(int count) {
   for (int i = 0; i < count; ++i) step();
 }
 
-// The state and outputs a step starts from, kept to be restored if it diverges.
-void Simulation::save_step_start() {
-  q_start_ = q_;
-  qd_start_ = qd_;
-  drive_force_start_ = drive_force_;
-  limit_force_start_ = limit_force_;
-  friction_force_start_ = friction_force_;
-  velocity_limit_force_start_ = velocity_limit_force_;
+// The step's working copies of the state it starts from (the step writes every force); the storage keeps it until the step is
+// committed, so a step that diverges leaves it as it was.
+void Simulation::load_state() {
+  q_ = state_[StateStorage::q];
+  qd_ = state_[StateStorage::qd];
+  applied_force_ = state_[StateStorage::applied_force];
 }
 
-// The state and outputs the step started from (kept by step()).
-void Simulation::restore_step_start() {
-  q_ = q_start_;
-  qd_ = qd_start_;
-  drive_force_ = drive_force_start_;
-  limit_force_ = limit_force_start_;
-  friction_force_ = friction_force_start_;
-  velocity_limit_force_ = velocity_limit_force_start_;
+void Simulation::commit_state() {
+  state_[StateStorage::q] = q_;
+  state_[StateStorage::qd] = qd_;
+  state_[StateStorage::drive_force] = drive_force_;
+  state_[StateStorage::limit_force] = limit_force_;
+  state_[StateStorage::friction_force] = friction_force_;
+  state_[StateStorage::velocity_limit_force] = velocity_limit_force_;
 }
 
-void Simulation::check_finite_or_restore() {
+void Simulation::check_finite_or_throw() {
   const Model& model = *model_;
   auto fail = [&](const char* quantity, int dof, double value) {
     const std::string joint = model.links[model.dof_link[dof]].joint_name;
     const long step = step_count_ + 1;
     const double t = time_;
-    restore_step_start();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint
@@ -389,7 +435,6 @@ void Simulation::check_finite_or_restore() {
       }
   // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
   if (!std::isfinite(time_ + options_.dt)) {
-    restore_step_start();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_

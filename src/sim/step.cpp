@@ -24,7 +24,7 @@ double limit_erp(SolverType solver, int position_iterations) {
 void Simulation::step() {
   const Model& model = *model_;
   const double dt = options_.dt;
-  save_step_start();  // restored if the step diverges
+  load_state();  // the storage keeps the step's start until commit_state
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
@@ -64,7 +64,8 @@ void Simulation::step() {
     friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
   }
-  check_finite_or_restore();
+  check_finite_or_throw();
+  commit_state();
   time_ += dt;
   ++step_count_;
 }

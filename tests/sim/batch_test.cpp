@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "featherdrive/model/model_variant.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
@@ -15,7 +16,8 @@
 namespace featherdrive {
 namespace {
 
-bool same_bits(const VecX& a, const VecX& b) {
+template <class A, class B>
+bool same_bits(const A& a, const B& b) {
   return a.size() == b.size() &&
          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
 }
@@ -107,6 +109,323 @@ TEST(Batch, DriveSettersCheckEverythingFirst) {
   EXPECT_THROW(batch.set_num_threads(-1), std::invalid_argument);
   EXPECT_THROW(batch.set_num_threads(Batch::kMaxThreads + 1), std::invalid_argument);
   EXPECT_NO_THROW(batch.set_num_threads(Batch::kMaxThreads));
+}
+
+// The (N, n) arrays are the environments' storage: row i of q() is sim(i).q(), written by every
+// step and setter; a copy of a batch has rows of its own; an environment assigned a Simulation
+// keeps its row, and refuses one of other sizes.
+TEST(Batch, StateArraysAreTheEnvironmentsStorage) {
+  const auto model = test::make_random_tree(4, 6, /*floating=*/true);
+  Batch batch(model, 5);
+  for (int i = 0; i < batch.size(); ++i) configure(batch.sim(i), i);
+  batch.step(3);
+  for (int i = 0; i < batch.size(); ++i) {
+    const Simulation& s = batch.sim(i);
+    EXPECT_EQ(s.q().data(), batch.q().row(i).data());
+    EXPECT_EQ(s.qd().data(), batch.qd().row(i).data());
+    EXPECT_EQ(s.applied_force().data(), batch.applied_force().row(i).data());
+    EXPECT_EQ(s.drive_force().data(), batch.drive_force().row(i).data());
+    EXPECT_EQ(s.limit_force().data(), batch.limit_force().row(i).data());
+    EXPECT_EQ(s.friction_force().data(), batch.friction_force().row(i).data());
+    EXPECT_EQ(s.velocity_limit_force().data(), batch.velocity_limit_force().row(i).data());
+  }
+  // Stepped alone from the same start, environment 2 gives what its row holds.
+  Simulation alone(model);
+  configure(alone, 2);
+  alone.step(3);
+  EXPECT_TRUE(same_bits(batch.q().row(2).transpose(), alone.q()));
+  EXPECT_TRUE(same_bits(batch.drive_force().row(2).transpose(), alone.drive_force()));
+  const Batch copy(batch);
+  EXPECT_NE(copy.q().data(), batch.q().data());
+  EXPECT_EQ(copy.sim(1).q().data(), copy.q().row(1).data());
+  EXPECT_TRUE(same_bits(copy.q(), batch.q()));
+  const double* row = batch.q().row(3).data();
+  batch.sim(3) = alone;
+  EXPECT_EQ(batch.sim(3).q().data(), row);
+  EXPECT_TRUE(same_bits(batch.q().row(3).transpose(), alone.q()));
+  EXPECT_THROW(batch.sim(3) = Simulation(test::make_planar_chain(2, 1.0, 0.5)),
+               std::invalid_argument);
+  EXPECT_TRUE(same_bits(batch.q().row(3).transpose(), alone.q()));
+}
+
+// Values for some environments: one row broadcast or one row each; bad indices, shapes and values
+// change nothing.
+TEST(Batch, EnvIdsAndBroadcastRows) {
+  const auto model = test::make_planar_chain(3, 1.0, 0.5);
+  Batch batch(model, 4);
+  const std::vector<int> ids{3, 1};
+  batch.set_qd(ids, RowMatrix::Constant(1, 3, 0.25));
+  RowMatrix per(2, 3);
+  per << 1, 2, 3, 4, 5, 6;
+  batch.set_q(ids, per);
+  EXPECT_EQ(batch.q().row(3), per.row(0));
+  EXPECT_EQ(batch.q().row(1), per.row(1));
+  EXPECT_TRUE(batch.q().row(0).isZero(0.0) && batch.q().row(2).isZero(0.0));
+  EXPECT_TRUE(batch.qd().row(1).isConstant(0.25, 0.0) && batch.qd().row(3).isConstant(0.25, 0.0));
+  EXPECT_TRUE(batch.qd().row(0).isZero(0.0));
+  const RowMatrix q = batch.q(), qd = batch.qd();
+  auto message = [&](auto f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no throw");
+  };
+  EXPECT_EQ(message([&] { batch.set_q(std::vector<int>{0, 4}, per); }),
+            "Batch: env_ids[1] = 4 is out of range [0, 4)");
+  EXPECT_EQ(message([&] { batch.set_q(std::vector<int>{2, 2}, per); }),
+            "Batch: env_ids[1] = 2 appears twice (also env_ids[0])");
+  EXPECT_EQ(message([&] { batch.set_qd(ids, RowMatrix::Zero(3, 3)); }),
+            "Batch: qd has shape (3, 3), expected (2, 3) for 2 environments, or (1, 3) for all");
+  per(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(message([&] { batch.set_q(ids, per); }), "Batch: environment 1: q[2] = nan is not finite");
+  RowMatrix kp = RowMatrix::Constant(2, 3, 100.0);
+  kp(0, 1) = -1.0;
+  EXPECT_NE(message([&] { batch.set_drive_gains(ids, kp, RowMatrix::Zero(1, 3)); })
+                .find("Batch: environment 3: set_drive_gains: dof 1"),
+            std::string::npos);
+  EXPECT_TRUE(same_bits(batch.q(), q));
+  EXPECT_TRUE(same_bits(batch.qd(), qd));
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(batch.sim(i).drive(1).type, DriveType::none);
+}
+
+// reset: the environments named start again (the batch's initial q, or the q given; qd, forces
+// and clock 0; drives stay), equal to a fresh copy of the prototype with their targets; every
+// other environment's bits stay.
+TEST(Batch, ResetStartsAgainAndLeavesTheOthersBitForBit) {
+  const auto model = test::make_random_tree(9, 6, /*floating=*/true);
+  Simulation prototype(model);
+  std::mt19937 rng(3);
+  prototype.set_q(test::random_configuration(*model, rng));
+  test::drive_every_joint(prototype, rng, 300.0, 8.0);
+  Batch batch(prototype, 5);
+  for (int i = 0; i < 5; ++i) {
+    std::mt19937 r(static_cast<unsigned>(40 + i));
+    batch.sim(i).set_qd(test::random_vector(model->nv, r, 0.5));
+    batch.sim(i).set_applied_force(test::random_vector(model->nv, r, 2.0));
+  }
+  batch.step(25);
+  std::vector<Simulation> before;
+  for (int i = 0; i < 5; ++i) before.push_back(batch.sim(i));
+  const std::vector<int> ids{3, 0};
+  batch.reset(ids);
+  for (int i : {1, 2, 4}) {
+    const Simulation& s = batch.sim(i);
+    const Simulation& b = before[static_cast<size_t>(i)];
+    EXPECT_TRUE(same_bits(s.q(), b.q()) && same_bits(s.qd(), b.qd()) &&
+                same_bits(s.applied_force(), b.applied_force()) &&
+                same_bits(s.drive_force(), b.drive_force()) &&
+                same_bits(s.limit_force(), b.limit_force()) &&
+                same_bits(s.friction_force(), b.friction_force()) &&
+                same_bits(s.velocity_limit_force(), b.velocity_limit_force()))
+        << i;
+    EXPECT_EQ(s.step_count(), 25);
+    const double t = s.time(), t0 = b.time();
+    EXPECT_EQ(std::memcmp(&t, &t0, sizeof(double)), 0);
+  }
+  for (int i : ids) {
+    const Simulation& s = batch.sim(i);
+    EXPECT_TRUE(same_bits(s.q(), prototype.q()));
+    EXPECT_TRUE(s.qd().isZero(0.0) && s.applied_force().isZero(0.0) && s.drive_force().isZero(0.0));
+    EXPECT_EQ(s.step_count(), 0);
+    EXPECT_EQ(s.time(), 0.0);
+  }
+  batch.step(20);
+  Simulation fresh = prototype;
+  fresh.step(20);
+  EXPECT_TRUE(same_bits(batch.sim(3).q(), fresh.q()));
+  EXPECT_TRUE(same_bits(batch.sim(0).drive_force(), fresh.drive_force()));
+  // A q and qd given: one row for both environments; a bad row changes nothing.
+  RowMatrix q0 = prototype.q().transpose();
+  q0(0, 0) += 0.1;
+  batch.reset(ids, q0, RowMatrix::Constant(1, model->nv, 0.5));
+  EXPECT_EQ(batch.q()(3, 0), q0(0, 0));
+  EXPECT_TRUE(batch.qd().row(0).isConstant(0.5, 0.0));
+  const RowMatrix q = batch.q();
+  RowMatrix bad = RowMatrix::Zero(2, model->nv);
+  bad(1, 0) = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(batch.reset(ids, std::nullopt, bad), std::invalid_argument);
+  EXPECT_TRUE(same_bits(batch.q(), q));
+}
+
+// A chain of a revolute, a prismatic and a revolute joint, with its inertial parameters, armature
+// and joint settings given.
+struct ChainParameters {
+  double mass[3] = {1.2, 0.8, 0.5};
+  Vec3 com[3] = {Vec3(0.02, 0, -0.2), Vec3(0.1, 0.01, 0), Vec3(0, 0, -0.15)};
+  Mat3 inertia[3] = {test::box_inertia(1.2, Vec3(0.05, 0.06, 0.4)),
+                     test::box_inertia(0.8, Vec3(0.3, 0.05, 0.05)),
+                     test::box_inertia(0.5, Vec3(0.04, 0.04, 0.3))};
+  double armature[3] = {0.01, 0.02, 0.005};
+};
+
+std::shared_ptr<const Model> chain(const ChainParameters& p) {
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 1.0, Vec3::Zero(), test::box_inertia(1, Vec3(.1, .1, .1)),
+                       fixed_joint("weld")));
+  JointSpec j[3] = {revolute_joint("shoulder", Vec3::UnitY()),
+                    prismatic_joint("slide", Vec3(1, 0, 0.2), Vec3(0, 0, -0.4)),
+                    revolute_joint("wrist", Vec3::UnitX(), Vec3(0.3, 0, 0))};
+  const char* names[3] = {"upper", "carriage", "hand"};
+  const char* parent = "base";
+  for (int k = 0; k < 3; ++k) {
+    j[k].armature = {p.armature[k]};
+    j[k].lower_limit = -2.0;
+    j[k].upper_limit = 2.0;
+    b.add_link(make_link(names[k], parent, p.mass[k], p.com[k], p.inertia[k], j[k]));
+    parent = names[k];
+  }
+  return std::make_shared<const Model>(b.build());
+}
+
+// The settings every environment shares, and the per-environment joint settings of env 1 and 3.
+void drive_chain(Simulation& s) {
+  set_drive_gains(s, VecX::Constant(3, 400.0), VecX::Constant(3, 20.0));
+  set_drive_targets(s, Vec3(1.5, 0.3, -1.0), Vec3::Zero());
+}
+
+TEST(Batch, RandomisedEnvironmentsEqualSimulationsBuiltWithTheirParameters) {
+  const ChainParameters nominal;
+  ChainParameters p1 = nominal, p3 = nominal;
+  p1.mass[2] = 0.9;  // scale_inertia: the inertia scales by 0.9 / 0.5
+  p1.inertia[2] = nominal.inertia[2] * (0.9 / nominal.mass[2]);
+  p1.com[0] = Vec3(0.05, 0, -0.25);
+  p3.com[0] = Vec3(-0.01, 0.02, -0.1);
+  p3.armature[0] = 0.2;
+  p3.armature[2] = 0.05;
+  p3.mass[1] = 2.5;  // scale_inertia false: the inertia stays
+  SimulationOptions options;
+  options.dt = 0.005;
+  options.solver = SolverType::tgs;
+  for (int threads : {1, 2}) {
+    Simulation prototype(chain(nominal), options);
+    drive_chain(prototype);
+    Batch batch(prototype, 4);
+    batch.set_num_threads(threads);
+    const std::vector<int> one{1}, three{3}, both{1, 3};
+    batch.set_link_mass(one, 3, VecX::Constant(1, 0.9));
+    batch.set_link_mass(three, 2, VecX::Constant(1, 2.5), /*scale_inertia=*/false);
+    RowMatrix com(2, 3);
+    com.row(0) = p1.com[0].transpose();
+    com.row(1) = p3.com[0].transpose();
+    batch.set_link_com(both, 1, com);
+    RowMatrix armature(1, 3);
+    armature << 0.2, 0.02, 0.05;
+    batch.set_armature(three, armature);
+    RowMatrix lower(1, 3), upper(1, 3), max_velocity(1, 3), kp(1, 3);
+    lower << -0.5, -0.1, -0.3;
+    upper << 0.4, 0.1, 0.2;
+    max_velocity << 1.0, 0.5, 2.0;
+    kp << 900.0, 50.0, 10.0;
+    batch.set_joint_limits(one, lower, upper);
+    batch.set_max_joint_velocity(one, max_velocity);
+    batch.set_joint_friction(three, RowMatrix::Constant(1, 3, 0.3), RowMatrix::Constant(1, 3, 0.2),
+                             RowMatrix::Constant(1, 3, 0.05));
+    batch.set_drive_gains(three, kp, RowMatrix::Constant(1, 3, 7.0));
+    batch.step(300);
+
+    Simulation plain(chain(nominal), options), env1(chain(p1), options), env3(chain(p3), options);
+    for (Simulation* s : {&plain, &env1, &env3}) drive_chain(*s);
+    for (int d = 0; d < 3; ++d) {
+      env1.set_joint_limits(d, lower(0, d), upper(0, d));
+      env1.set_max_joint_velocity(d, max_velocity(0, d));
+      env3.set_joint_friction(d, JointFriction{0.3, 0.2, 0.05});
+    }
+    set_drive_gains(env3, kp.row(0).transpose(), VecX::Constant(3, 7.0));
+    for (Simulation* s : {&plain, &env1, &env3}) s->step(300);
+    const Simulation* expected[4] = {&plain, &env1, &plain, &env3};
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_TRUE(same_bits(batch.sim(i).q(), expected[i]->q())) << i << ", threads " << threads;
+      EXPECT_TRUE(same_bits(batch.sim(i).qd(), expected[i]->qd())) << i;
+      EXPECT_TRUE(same_bits(batch.sim(i).drive_force(), expected[i]->drive_force())) << i;
+      EXPECT_TRUE(same_bits(batch.sim(i).limit_force(), expected[i]->limit_force())) << i;
+      EXPECT_TRUE(same_bits(batch.sim(i).friction_force(), expected[i]->friction_force())) << i;
+    }
+    // The randomisations really change the motion.
+    EXPECT_FALSE(same_bits(env1.q(), plain.q()));
+    EXPECT_FALSE(same_bits(env3.q(), plain.q()));
+    // Read back.
+    EXPECT_EQ(batch.link_mass(3), Eigen::Vector4d(0.5, 0.9, 0.5, 0.5));
+    EXPECT_EQ(batch.link_com(1).row(3), p3.com[0].transpose());
+    EXPECT_EQ(batch.armature()(3, 0), 0.2);
+    EXPECT_EQ(batch.lower_limit()(1, 1), -0.1);
+    EXPECT_EQ(batch.upper_limit()(0, 1), 2.0);
+    EXPECT_EQ(batch.static_friction()(3, 2), 0.3);
+    EXPECT_EQ(batch.max_joint_velocity()(1, 0), 1.0);
+  }
+}
+
+TEST(Batch, RandomisationRefusesBadValuesAndChangesNothing) {
+  const auto model = test::make_random_tree(5, 5, /*floating=*/true, /*spherical=*/false);
+  Batch batch(model, 3);
+  const std::vector<int> ids{0, 2};
+  const auto* before = &batch.sim(2).model();
+  EXPECT_THROW(batch.set_link_mass(ids, 2, Eigen::Vector2d(1.0, -1.0)), std::invalid_argument);
+  EXPECT_THROW(batch.set_link_mass(ids, 99, VecX::Ones(1)), std::invalid_argument);
+  EXPECT_THROW(batch.set_armature(ids, RowMatrix::Constant(1, model->nv, -0.1)),
+               std::invalid_argument);
+  EXPECT_EQ(&batch.sim(2).model(), before);
+  EXPECT_EQ(&batch.sim(0).model(), before);
+  // The floating root's six dofs take no limits: they must be given the +-inf they have.
+  try {
+    batch.set_joint_limits(ids, RowMatrix::Constant(1, model->nv, -1.0),
+                           RowMatrix::Constant(1, model->nv, 1.0));
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("Batch: environment 0: joint limits: dof 0 of joint"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(batch.sim(0).lower_limit(6), model->lower_limit[6]);
+  // A model of another topology is refused by set_model, naming the difference.
+  Simulation sim(test::make_planar_chain(3, 1.0, 0.5));
+  try {
+    sim.set_model(test::make_planar_chain(3, 1.0, 0.6));
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("set_model: the model has another topology: link 2 "
+                                         "('link2'): joint origin"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(sim.set_model(test::make_planar_chain(4, 1.0, 0.5)), std::invalid_argument);
+}
+
+// observe() puts the fields side by side; frame_positions() is each environment's tip of a planar
+// chain, sum of l (-sin phi_k, 0, -cos phi_k) over the links with phi_k the sum of the angles.
+TEST(Batch, ObserveAndFramePositions) {
+  const double l = 0.5;
+  const auto model = test::make_planar_chain(3, 1.0, l);
+  for (int threads : {1, 2}) {
+    Batch batch(model, 7);
+    batch.set_num_threads(threads);
+    std::mt19937 rng(11);
+    for (int i = 0; i < 7; ++i) {
+      batch.sim(i).set_q(test::random_vector(3, rng, 2.0));
+      test::drive_every_joint(batch.sim(i), rng, 100.0, 3.0);
+    }
+    batch.step(4);
+    const std::vector<Observation> fields{Observation::qd, Observation::target_position,
+                                          Observation::drive_force, Observation::q};
+    const RowMatrix obs = batch.observe(fields);
+    ASSERT_EQ(obs.cols(), 12);
+    const RowMatrix tip = batch.frame_positions(3, Vec3(0, 0, -l));
+    for (int i = 0; i < 7; ++i) {
+      const Simulation& s = batch.sim(i);
+      EXPECT_EQ(obs.row(i).segment(0, 3).transpose(), s.qd());
+      EXPECT_EQ(obs(i, 4), s.drive(1).target_position);
+      EXPECT_EQ(obs.row(i).segment(6, 3).transpose(), s.drive_force());
+      EXPECT_EQ(obs.row(i).segment(9, 3).transpose(), s.q());
+      Vec3 expected = Vec3::Zero();
+      double phi = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        phi += s.q()[k];
+        expected += l * Vec3(-std::sin(phi), 0.0, -std::cos(phi));
+      }
+      EXPECT_LT((tip.row(i).transpose() - expected).norm(), 1e-14) << i;
+    }
+  }
 }
 
 }  // namespace

@@ -1,9 +1,16 @@
-// N copies of one Model stepped together on all cores (TBB): independent Simulation objects that
-// share the Model and nothing else, so each copy's result is bit-identical to stepping it alone,
-// whatever the number of threads. Also whole-vector drive setters for one Simulation.
+// N environments of one robot stepped together on all cores (TBB): independent Simulations that
+// share nothing a step writes, so each environment's result is bit-identical to stepping it alone,
+// whatever the number of threads. Their states lie in (N, n) row-major arrays, one row per
+// environment (each Simulation's storage is its row), and each may have its own model parameters
+// (masses, centres of mass, armature) over one topology. Also whole-vector drive setters for one
+// Simulation. docs/conventions.md, "Batch".
 #pragma once
 
+#include <array>
+#include <initializer_list>
 #include <memory>
+#include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,7 +19,7 @@
 
 namespace featherdrive {
 
-/// One row per copy: (N, nq) or (N, nv), row-major like numpy's default.
+/// One row per environment: (N, nq) or (N, nv), row-major like numpy's default.
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// Sets the target position and velocity of every dof (nv each). Throws std::invalid_argument
@@ -26,18 +33,30 @@ void set_drive_targets(Simulation& sim, const VecX& positions, const VecX& veloc
 void set_drive_gains(Simulation& sim, const VecX& stiffness, const VecX& damping,
                      DriveType type = DriveType::force);
 
+/// What Batch::observe gathers: the state and outputs, and the drives' targets.
+enum class Observation {
+  q, qd, applied_force, drive_force, limit_force, friction_force, velocity_limit_force,
+  target_position, target_velocity
+};
+
 class Batch {
  public:
-  /// `count` (>= 1) copies of a new Simulation of `model` with `options`.
+  /// `count` (>= 1) environments, each a new Simulation of `model` with `options`.
   Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options = {});
   /// `count` (>= 1) copies of `prototype`: state, drives, limits and all other settings.
   Batch(const Simulation& prototype, int count);
+  Batch(const Batch& other);  ///< environments with their own rows
+  Batch& operator=(const Batch&) = delete;
+  Batch(Batch&&) noexcept = default;
+  Batch& operator=(Batch&&) noexcept = default;
 
   int size() const { return static_cast<int>(sims_.size()); }
+  /// Environment 0's model; every environment's model has its topology.
   const Model& model() const { return sims_.front().model(); }
   const std::shared_ptr<const Model>& model_ptr() const { return sims_.front().model_ptr(); }
 
-  /// Copy i, for any per-copy setting; throws std::invalid_argument for i out of [0, size()).
+  /// Environment i, live: its vectors are row i of q(), qd(), ...; throws std::invalid_argument
+  /// for i out of [0, size()). Assigning it a Simulation of other sizes throws.
   Simulation& sim(int i);
   const Simulation& sim(int i) const;
 
@@ -50,39 +69,103 @@ class Batch {
   /// The threads step() will use (num_threads(), or the number of cores for 0).
   int effective_num_threads() const;
 
-  /// Sets every copy's options.
+  /// Sets every environment's options.
   void set_options(const SimulationOptions& options);
 
-  // States and outputs as (N, nq) / (N, nv) copies.
-  RowMatrix q() const;
-  RowMatrix qd() const;
-  RowMatrix drive_force() const;
-  RowMatrix limit_force() const;
-  RowMatrix friction_force() const;
-  RowMatrix velocity_limit_force() const;
-  void set_q(const RowMatrix& q);    ///< (N, nq); quaternions are normalised
-  void set_qd(const RowMatrix& qd);  ///< (N, nv)
-  void set_applied_force(const RowMatrix& tau);  ///< (N, nv)
+  // States and outputs, (N, nq) / (N, nv): the environments' storage itself (no copy).
+  const RowMatrix& q() const { return rows_[StateStorage::q]; }
+  const RowMatrix& qd() const { return rows_[StateStorage::qd]; }
+  const RowMatrix& applied_force() const { return rows_[StateStorage::applied_force]; }
+  const RowMatrix& drive_force() const { return rows_[StateStorage::drive_force]; }
+  const RowMatrix& limit_force() const { return rows_[StateStorage::limit_force]; }
+  const RowMatrix& friction_force() const { return rows_[StateStorage::friction_force]; }
+  const RowMatrix& velocity_limit_force() const {
+    return rows_[StateStorage::velocity_limit_force];
+  }
 
-  /// Per-copy targets and gains, (N, nv) each, as set_drive_targets / set_drive_gains do for one
-  /// copy. Everything is checked before anything changes.
+  // Setters for every environment, or for the environments env_ids (distinct, in [0, size());
+  // std::invalid_argument naming the entry otherwise). Values have one row per environment given
+  // (N or k = env_ids.size() rows), or one row for all of them. Each is checked by the
+  // Simulation's own setter before anything changes: on a throw nothing changed.
+  void set_q(const RowMatrix& q);  ///< quaternions are normalised
+  void set_q(std::span<const int> env_ids, const RowMatrix& q);
+  void set_qd(const RowMatrix& qd);
+  void set_qd(std::span<const int> env_ids, const RowMatrix& qd);
+  void set_applied_force(const RowMatrix& tau);
+  void set_applied_force(std::span<const int> env_ids, const RowMatrix& tau);
+  /// As set_drive_targets / set_drive_gains do for one Simulation.
   void set_drive_targets(const RowMatrix& positions, const RowMatrix& velocities);
+  void set_drive_targets(std::span<const int> env_ids, const RowMatrix& positions,
+                         const RowMatrix& velocities);
   void set_drive_gains(const RowMatrix& stiffness, const RowMatrix& damping,
                        DriveType type = DriveType::force);
-  /// The same drive on one joint of every copy.
+  void set_drive_gains(std::span<const int> env_ids, const RowMatrix& stiffness,
+                       const RowMatrix& damping, DriveType type = DriveType::force);
+  /// The same drive on one joint of every environment.
   void set_drive(const std::string& joint, const Drive& drive);
 
-  /// Steps every copy `count` times (>= 0), copies in parallel. A copy that diverges stops at the
+  /// Puts environments env_ids back at the start: q (default: the configuration the batch was
+  /// made with, initial_q()), qd (default 0), applied force, output forces and clock 0. Drives,
+  /// targets and every other setting stay; other environments are untouched.
+  void reset(std::span<const int> env_ids, const std::optional<RowMatrix>& q = std::nullopt,
+             const std::optional<RowMatrix>& qd = std::nullopt);
+  const VecX& initial_q() const { return initial_q_; }
+
+  // Per-environment parameters (randomisation), values as for the setters above. Per-dof
+  // settings act on revolute and prismatic joints; dofs of other joints must be given the value
+  // they have. Armature and inertial parameters give each environment its own model
+  // (model_variant.hpp, Simulation::set_model).
+  void set_armature(std::span<const int> env_ids, const RowMatrix& armature);
+  void set_joint_limits(std::span<const int> env_ids, const RowMatrix& lower,
+                        const RowMatrix& upper);
+  void set_joint_friction(std::span<const int> env_ids, const RowMatrix& static_effort,
+                          const RowMatrix& dynamic_effort, const RowMatrix& viscous);
+  void set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix& max_velocity);
+  /// Mass (k values or one) of `link`; scale_inertia: its inertia about the centre of mass scales
+  /// with the mass (Isaac Lab's mass randomisation), else it stays.
+  void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
+                     bool scale_inertia = true);
+  void set_link_com(std::span<const int> env_ids, int link, const RowMatrix& com);  ///< (k|1, 3)
+  // The same read back, (N, nv) / (N,) / (N, 3) copies.
+  RowMatrix armature() const;
+  RowMatrix lower_limit() const;
+  RowMatrix upper_limit() const;
+  RowMatrix static_friction() const;
+  RowMatrix dynamic_friction() const;
+  RowMatrix viscous_friction() const;
+  RowMatrix max_joint_velocity() const;
+  VecX link_mass(int link) const;
+  RowMatrix link_com(int link) const;
+
+  /// The fields side by side, (N, sum of their widths), in the order given.
+  RowMatrix observe(std::span<const Observation> fields) const;
+  /// World position of `point` (link coordinates) on `link` in every environment, (N, 3), by
+  /// forward kinematics of each environment's q, on num_threads() threads.
+  RowMatrix frame_positions(int link, const Vec3& point) const;
+
+  /// Steps every environment `count` times (>= 0), in parallel. One that diverges stops at the
   /// step that diverged with the state it had before that step (as Simulation::step does); every
-  /// other copy still makes all its steps. Then throws DivergenceError naming the lowest diverged
-  /// copy, its message and how many copies diverged; step_count() of each copy tells how far it got.
+  /// other one still makes all its steps. Then throws DivergenceError naming the lowest diverged
+  /// one, its message and how many diverged; step_count() of each tells how far it got.
   void step(int count = 1);
 
  private:
-  RowMatrix gather(const VecX& (Simulation::*get)() const, Eigen::Index cols) const;
-  void check_rows(const RowMatrix& m, Eigen::Index cols, const char* what) const;
+  void lend_rows();
+  std::vector<int> check_env_ids(std::span<const int> env_ids) const;
+  template <class F>
+  void parallel(int n, int grain, F f) const;
+  template <class Set>
+  void set_rows(std::span<const int> env_ids, const RowMatrix& values, Eigen::Index cols,
+                const char* what, Set set);
+  template <class Apply, class Same>
+  void set_per_dof(const std::vector<int>& envs, std::initializer_list<const RowMatrix*> values,
+                   const char* what, Apply apply, Same same);
+  template <class Make>
+  void vary_models(const std::vector<int>& envs, bool broadcast, Make make);
 
   std::vector<Simulation> sims_;
+  std::array<RowMatrix, StateStorage::kFields> rows_;
+  VecX initial_q_;
   int threads_ = 0;
 };
 

@@ -2,6 +2,7 @@
 // forces) and the workspace a step writes. Many simulations may share one Model across threads.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -54,6 +55,39 @@ class DivergenceError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A read-only view of one of a simulation's vectors (q, qd, forces): valid as long as the
+/// simulation is, and it shows the current values.
+using VecView = Eigen::Map<const VecX>;
+
+/// Where a simulation keeps q, qd, the applied force and the four output forces: a block of its
+/// own, or rows a Batch lends it (batch.hpp), so that a batch's states lie in (N, n) arrays. A
+/// copy gets a block of its own with the same values; an assignment copies the values into the
+/// storage in place (the addresses stay; a lent storage refuses other sizes).
+class StateStorage {
+ public:
+  enum Field : int { q, qd, applied_force, drive_force, limit_force, friction_force,
+                     velocity_limit_force };
+  static constexpr int kFields = 7;
+  StateStorage() = default;
+  StateStorage(Eigen::Index nq, Eigen::Index nv);  ///< an own block of zeros
+  StateStorage(const StateStorage& other);
+  StateStorage(StateStorage&& other) noexcept = default;
+  StateStorage& operator=(const StateStorage& other);
+  StateStorage& operator=(StateStorage&& other) { return *this = other; }
+  Eigen::Map<VecX> operator[](Field f) { return {data_[f], size_[f]}; }
+  VecView operator[](Field f) const { return {data_[f], size_[f]}; }
+  Eigen::Index size(Field f) const { return size_[f]; }
+  /// Copies the values to rows[f] (size(f) doubles each, kept alive by the lender) and uses them
+  /// from now on.
+  void lend(const std::array<double*, kFields>& rows);
+
+ private:
+  VecX own_;
+  std::array<double*, kFields> data_{};
+  std::array<Eigen::Index, kFields> size_{};
+  bool lent_ = false;
+};
+
 class Simulation {
  public:
   explicit Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options = {});
@@ -63,10 +97,15 @@ class Simulation {
   const SimulationOptions& options() const { return options_; }
   /// Throws std::invalid_argument for invalid options or a different compat.
   void set_options(const SimulationOptions& options);
+  /// Replaces the model by one of the same topology (link and joint names, parents, joint types
+  /// and axes, tree transforms, nq, nv), e.g. other masses, centres of mass or armature
+  /// (model_builder.hpp: with_link_inertial, with_armature); state and settings stay. Throws
+  /// std::invalid_argument naming the first difference; nothing changes then.
+  void set_model(std::shared_ptr<const Model> model);
 
   // State.
-  const VecX& q() const { return q_; }    ///< configuration (nq)
-  const VecX& qd() const { return qd_; }  ///< joint velocities (nv)
+  VecView q() const { return state_[StateStorage::q]; }    ///< configuration (nq)
+  VecView qd() const { return state_[StateStorage::qd]; }  ///< joint velocities (nv)
   void set_q(const VecX& q);              ///< quaternions are normalised
   void set_qd(const VecX& qd);
   double time() const { return time_; }
@@ -85,7 +124,7 @@ class Simulation {
   // Inputs.
   /// Joint forces applied through the whole step (nv), e.g. feed-forward torques.
   void set_applied_force(const VecX& tau);
-  const VecX& applied_force() const { return applied_force_; }
+  VecView applied_force() const { return state_[StateStorage::applied_force]; }
   void set_drive(int dof, const Drive& drive);
   void set_drive(const std::string& joint, const Drive& drive);
   const Drive& drive(int dof) const { return drives_.at(static_cast<size_t>(check_dof(dof))); }
@@ -130,13 +169,13 @@ class Simulation {
 
   // Outputs of the last step.
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
-  const VecX& drive_force() const { return drive_force_; }
+  VecView drive_force() const { return state_[StateStorage::drive_force]; }
   /// The position-limit force of each dof (impulse / dt; positive pushes towards +q).
-  const VecX& limit_force() const { return limit_force_; }
+  VecView limit_force() const { return state_[StateStorage::limit_force]; }
   /// The joint-friction force of each dof (impulse / dt), both friction models.
-  const VecX& friction_force() const { return friction_force_; }
+  VecView friction_force() const { return state_[StateStorage::friction_force]; }
   /// The force the joint velocity limit applied on each dof (impulse / dt).
-  const VecX& velocity_limit_force() const { return velocity_limit_force_; }
+  VecView velocity_limit_force() const { return state_[StateStorage::velocity_limit_force]; }
 
   /// Advances by one step of options().dt; throws DivergenceError (state unchanged) if it would
   /// produce a non-finite value.
@@ -148,6 +187,7 @@ class Simulation {
   const Data& data() const { return data_; }
 
  private:
+  friend class Batch;  // lends the storage of state_
   int check_dof(int dof) const;
   int one_dof_joint(int dof) const;
   int driven_dof(const std::string& joint) const;
@@ -159,9 +199,9 @@ class Simulation {
   void sweep(RowPhase& phase);
   void solve_pgs();
   void solve_tgs();
-  void check_finite_or_restore();
-  void save_step_start();
-  void restore_step_start();
+  void check_finite_or_throw();
+  void load_state();
+  void commit_state();
   void update_link_damping_active();
   bool physx() const { return options_.compat == Compat::physx; }
   void integrate_positions(double h);
@@ -171,6 +211,9 @@ class Simulation {
   Data data_;
   SweepWorkspace sweep_;
 
+  StateStorage state_;  ///< q, qd, applied force and outputs, written after each whole step
+  // The step works on copies of them (load_state, commit_state), so a diverging step leaves the
+  // storage as it was.
   VecX q_, qd_;
   double time_ = 0.0;
   long step_count_ = 0;
@@ -184,8 +227,6 @@ class Simulation {
   VecX drive_force_, limit_force_, friction_force_, velocity_limit_force_;
 
   // Per-step scratch.
-  VecX q_start_, qd_start_;
-  VecX drive_force_start_, limit_force_start_, friction_force_start_, velocity_limit_force_start_;
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
   bool any_undriven_rows_ = false;  ///< a row other than a lone drive (acts in TGS velocity iterations)
