@@ -33,26 +33,6 @@ class Box:
         return f"Box({self.low.min()}, {self.high.max()}, {self.shape}, {self.dtype})"
 
 
-class _ArmBatch:
-    """The Batch calls ReachEnv makes, in one place: today's API (whole-batch set_q and set_qd,
-    fd.frame_position per copy); h20-batch's reset(env_ids, q, qd) and frame_positions(link,
-    point) replace the bodies when they arrive."""
-
-    def __init__(self, model, count, dt):
-        self.model = model
-        self.batch = fd.Batch(model, count, dt=dt, solver="tgs", position_iterations=4)
-        self.batch.num_threads = 1  # small arms: threads cost more than they save
-
-    def reset(self, env_ids, q, qd):
-        all_q, all_qd = np.array(self.batch.q), np.array(self.batch.qd)
-        all_q[env_ids], all_qd[env_ids] = q, qd
-        self.batch.set_q(all_q)
-        self.batch.set_qd(all_qd)
-
-    def frame_positions(self, link, point):
-        return np.array([fd.frame_position(self.model, q, link, point) for q in self.batch.q])
-
-
 class ReachEnv:
     """num_envs arms; each episode a goal point and drive gains are drawn per env.
 
@@ -95,7 +75,9 @@ class ReachEnv:
             raise ValueError(f"ReachEnv: {self.urdf}: expected a fixed-base 7-dof arm, "
                              f"got nv = {self.model.nv}")
         self.dt = float(dt) * self.decimation  # one env step
-        self._arm = _ArmBatch(self.model, self.num_envs, float(dt))
+        self.batch = fd.Batch(self.model, self.num_envs, dt=float(dt), solver="tgs",
+                              position_iterations=4)
+        self.batch.num_threads = 1  # small arms: threads cost more than they save
         self.lower = np.asarray(self.model.lower_limit)
         self.upper = np.asarray(self.model.upper_limit)
         self.hand_home = fd.frame_position(self.model, self.home, self.hand_link, self.hand_point)
@@ -137,8 +119,8 @@ class ReachEnv:
         if resetting.size:
             self._reset_envs(resetting)
         targets = np.clip(self.home + self.action_scale * a, self.lower, self.upper)
-        self._arm.batch.set_drive_targets(targets)
-        self._arm.batch.step(self.decimation)
+        self.batch.set_drive_targets(targets)
+        self.batch.step(self.decimation)
         self.episode_steps += 1
         obs = self._observe()
         distance = np.linalg.norm(obs[:, -6:-3] - self.goal, axis=1)
@@ -150,7 +132,7 @@ class ReachEnv:
         return obs, rewards, terminated, truncated, {"distance": distance}
 
     def close(self):
-        self._arm = None
+        self.batch = None
 
     # ---- internals ---------------------------------------------------------------------------
     def _reset_envs(self, ids):
@@ -159,12 +141,13 @@ class ReachEnv:
                                                             (n, 3))
         self.gain_scale[ids] = self._rng.uniform(*self.randomize_gains, n)
         q = self.home + self._rng.uniform(-0.1, 0.1, (n, nv))
-        self._arm.reset(ids, q, np.zeros((n, nv)))
-        scale = self.gain_scale[:, None] * np.ones((1, nv))
-        self._arm.batch.set_drive_gains(self.stiffness * scale, self.damping * np.sqrt(scale))
+        self.batch.reset(ids, q, np.zeros((n, nv)))
+        scale = self.gain_scale[ids, None] * np.ones((1, nv))
+        self.batch.set_drive_gains(self.stiffness * scale, self.damping * np.sqrt(scale),
+                                   env_ids=ids)
         self.episode_steps[ids] = 0
         self._needs_reset[ids] = False
 
     def _observe(self):
-        hand = self._arm.frame_positions(self.hand_link, np.array(self.hand_point))
-        return np.hstack([self._arm.batch.q, self._arm.batch.qd, hand, self.goal])
+        hand = self.batch.frame_positions(self.hand_link, self.hand_point)
+        return np.hstack([self.batch.q, self.batch.qd, hand, self.goal])

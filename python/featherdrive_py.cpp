@@ -722,7 +722,7 @@ struct JointAccessor {
     });
   }
   /// The joint's entries of an (nv,) vector: a float or a new array.
-  py::object slice(const VecX& (Simulation::*v)() const) const {
+  py::object slice(VecView (Simulation::*v)() const) const {
     const Link& l = info();
     return locked(*sim, [&]() -> py::object {
       if (l.nv == 1) return py::float_((sim->*v)()[l.v_index]);
@@ -837,7 +837,7 @@ void bind_names(py::module_& m) {
         return "JointAccessor('" + j.info().joint_name + "', " + to_string(j.info().joint_type) +
                ", dof " + std::to_string(j.info().v_index) + ")";
       });
-  using Vector = const VecX& (Simulation::*)() const;
+  using Vector = VecView (Simulation::*)() const;
   for (const auto& [name, vector] : {std::pair<const char*, Vector>{"qd", &Simulation::qd},
                                      {"drive_force", &Simulation::drive_force},
                                      {"limit_force", &Simulation::limit_force},

@@ -43,7 +43,7 @@ def test_observation_and_reward_are_the_closed_form_of_the_state():
     a = np.full((2, 7), 0.5)
     a[1] = -2.0  # clipped to -1
     obs, rewards, *_ = env.step(a)
-    batch = env._arm.batch
+    batch = env.batch
     q, qd = np.array(batch.q), np.array(batch.qd)
     np.testing.assert_array_equal(obs[:, :7], q)
     np.testing.assert_array_equal(obs[:, 7:14], qd)
@@ -59,6 +59,30 @@ def test_observation_and_reward_are_the_closed_form_of_the_state():
     # The drive targets are home + 0.5 * clipped action, inside the limits.
     expected = np.clip(env.home - 0.5, np.asarray(env.model.lower_limit), None)
     assert [batch.sim(1).drive(k).target_position for k in range(7)] == list(expected)
+
+
+def test_each_env_steps_as_a_lone_simulation_with_its_gains():
+    env = make(3)
+    obs, _ = env.reset()
+    rng = np.random.default_rng(3)
+    actions = rng.uniform(-1.2, 1.2, (4, 3, 7))
+    model = fd.load_urdf(str(ARM)).model
+    for i in range(3):
+        u = env.gain_scale[i]
+        sim = fd.Simulation(model, dt=1.0 / 120.0, solver="tgs", position_iterations=4,
+                            stiffness=600.0 * u, damping=40.0 * np.sqrt(u))
+        sim.set_q(obs[i, :7])
+        alone = []
+        for a in actions:
+            target = np.clip(env.home + 0.5 * np.clip(a[i], -1, 1), model.lower_limit,
+                             model.upper_limit)
+            sim.set_drive_targets(target)
+            sim.step(4)
+            alone.append(np.concatenate([sim.q, sim.qd]))
+        env_i = make(3)
+        env_i.reset()
+        batched = [env_i.step(a)[0][i, :14] for a in actions]
+        assert np.array(alone).tobytes() == np.array(batched).tobytes(), i
 
 
 def test_seeding_is_deterministic():
@@ -92,7 +116,7 @@ def test_truncation_and_next_step_autoreset():
     assert list(rewards) == [0.0, 0.0] and not terminated.any() and not truncated.any()
     assert not np.array_equal(obs[:, 17:], goals0)
     assert list(env.episode_steps) == [1, 1]
-    assert [env._arm.batch.sim(0).drive(k).target_position for k in range(7)] == list(env.home)
+    assert [env.batch.sim(0).drive(k).target_position for k in range(7)] == list(env.home)
 
 
 def test_reaching_the_goal_terminates():
