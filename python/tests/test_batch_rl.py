@@ -45,7 +45,8 @@ def test_scalars_and_rows_broadcast_over_env_ids(arm):
     batch = fd.Batch(arm, 5, solver="tgs")
     batch.set_drive_gains(2000.0, 80.0)
     batch.set_drive_targets(0.3, env_ids=[1, 3])
-    batch.set_drive_targets(np.linspace(-0.2, 0.2, arm.nv), 0.1, env_ids=np.array([4], dtype=np.uint8))
+    batch.set_drive_targets(np.linspace(-0.2, 0.2, arm.nv), 0.1,
+                            env_ids=np.array([4], dtype=np.uint8))
     batch.set_qd(np.arange(2 * arm.nv).reshape(2, arm.nv) * 0.01, env_ids=(0, 2))
     batch.step(30)
     for i in range(5):
@@ -184,8 +185,8 @@ def test_randomised_environments_equal_simulations_built_with_their_parameters(a
             np.testing.assert_array_equal(bits(getattr(batch, f)[i]), bits(getattr(sim, f)),
                                           err_msg=f"env {i} {f}")
     assert not np.array_equal(env1.q, plain.q) and not np.array_equal(env3.q, plain.q)
-    np.testing.assert_array_equal(batch.link_mass("link3"),
-                                  [arm.links[arm.link_index("link3")].mass, 1.9, arm.links[arm.link_index("link3")].mass, 0.7])
+    m3 = arm.links[arm.link_index("link3")].mass
+    np.testing.assert_array_equal(batch.link_mass("link3"), [m3, 1.9, m3, 0.7])
     np.testing.assert_array_equal(batch.link_com("link2")[3], [0.01, 0.02, 0.05])
     assert batch.armature()[1, 0] == 0.05 and batch.armature()[0, 0] == arm.armature[0]
     lower, upper = batch.joint_limits()
@@ -217,6 +218,6 @@ def test_observe_and_frame_positions_gather_every_environment(arm):
         tip = batch.frame_positions("link7", point)
         base = batch.frame_positions(0)
         for i in range(6):
-            np.testing.assert_allclose(tip[i], fd.frame_position(arm, batch.q[i], "link7", point),
-                                       rtol=0, atol=1e-15)
+            expected = fd.frame_position(arm, batch.q[i], "link7", point)
+            np.testing.assert_allclose(tip[i], expected, rtol=0, atol=1e-15)
             np.testing.assert_array_equal(base[i], fd.link_pose(arm, batch.q[i], 0)[1])

@@ -254,7 +254,8 @@ def test_batch_sizes_indices_and_threads(arm):
     for i in [4, 2**32, 2**32 + 1, -1, -2**32]:
         with pytest.raises(ValueError, match=rf"environment index {i} is out of range \[0, 4\)"):
             batch.sim(i)
-    with pytest.raises(ValueError, match=out_of_range("environment index", 2**64, -2**63, 2**63 - 1)):
+    with pytest.raises(ValueError,
+                       match=out_of_range("environment index", 2**64, -2**63, 2**63 - 1)):
         batch.sim(2**64)
     assert batch.sim(np.int64(3)).step_count == 0 and batch.sim(Index(1)) is not None
     for t in [2**31, 2**32, -1]:

@@ -129,8 +129,9 @@ void set_link_inertial(Link& link, double mass, const Vec3& com, const Mat3& ine
     check_inertia(who_link, inertia);
   } else if (!inertia.allFinite() || !inertia.isZero(0.0)) {
     check_inertia(who_link, inertia);  // names a non-finite entry first
-    fail(who_link + ": inertia must be zero for a massless link (mass = 0), got principal moments " +
-         fmt(Eigen::SelfAdjointEigenSolver<Mat3>(0.5 * (inertia + inertia.transpose())).eigenvalues()));
+    const Mat3 sym = 0.5 * (inertia + inertia.transpose());
+    fail(who_link + ": inertia must be zero for a massless link (mass = 0), got principal " +
+         "moments " + fmt(Eigen::SelfAdjointEigenSolver<Mat3>(sym).eigenvalues()));
   }
   link.mass = mass;
   link.com = com;

@@ -73,7 +73,8 @@ Model with_armature(const Model& model, const VecX& armature) {
   for (int d = 0; d < model.nv; ++d)
     if (!std::isfinite(armature[d]) || armature[d] < 0.0)
       throw ModelError("model: joint '" +
-                       model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])].joint_name +
+                       model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])]
+                           .joint_name +
                        "': armature = " + format_double(armature[d]) +
                        " must be finite and >= 0 (dof " + std::to_string(d) + ")");
   Model out = model;

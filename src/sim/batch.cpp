@@ -137,7 +137,8 @@ void set_drives(std::vector<Simulation>& sims, const std::vector<int>& envs, Mak
       rethrow_for(envs[j], e);
     }
   }
-  for (size_t j = 0; j < envs.size(); ++j) apply_drives(sims[static_cast<size_t>(envs[j])], drives[j]);
+  for (size_t j = 0; j < envs.size(); ++j)
+    apply_drives(sims[static_cast<size_t>(envs[j])], drives[j]);
 }
 
 /// (N, nv) of value(sim, dof) over every environment.
@@ -338,7 +339,8 @@ void Batch::set_per_dof(const std::vector<int>& envs,
         if (drivable(model, d)) {
           apply(scratch, d, at(j, d));
         } else if (!same(sim, d, at(j, d))) {
-          const Link& link = model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])];
+          const Link& link =
+              model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])];
           throw std::invalid_argument(std::string(what) + ": dof " + std::to_string(d) +
                                       " of joint '" + link.joint_name + "' is " +
                                       to_string(link.joint_type) +
@@ -492,7 +494,8 @@ RowMatrix Batch::link_com(int link) const {
   check_link_index(model(), link);
   RowMatrix m(size(), 3);
   for (int i = 0; i < size(); ++i)
-    m.row(i) = sims_[static_cast<size_t>(i)].model().links[static_cast<size_t>(link)].com.transpose();
+    m.row(i) =
+        sims_[static_cast<size_t>(i)].model().links[static_cast<size_t>(link)].com.transpose();
   return m;
 }
 

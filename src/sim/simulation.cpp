@@ -51,7 +51,8 @@ StateStorage::StateStorage(Eigen::Index nq, Eigen::Index nv) : own_(VecX::Zero(n
   }
 }
 
-StateStorage::StateStorage(const StateStorage& other) : StateStorage(other.size_[q], other.size_[qd]) {
+StateStorage::StateStorage(const StateStorage& other)
+    : StateStorage(other.size_[q], other.size_[qd]) {
   for (int f = 0; f < kFields; ++f) (*this)[Field(f)] = other[Field(f)];
 }
 
@@ -61,7 +62,8 @@ StateStorage& StateStorage::operator=(const StateStorage& other) {
     if (lent_)
       throw std::invalid_argument("Simulation: cannot assign a simulation of nq = " +
                                   std::to_string(other.size_[q]) + ", nv = " +
-                                  std::to_string(other.size_[qd]) + " to a batch environment of nq = " +
+                                  std::to_string(other.size_[qd]) +
+                                  " to a batch environment of nq = " +
                                   std::to_string(size_[q]) + ", nv = " + std::to_string(size_[qd]));
     StateStorage copy(other);  // its block moves here with the addresses copy.data_ holds
     own_ = std::move(copy.own_);
@@ -382,8 +384,8 @@ void Simulation::step(int count) {
   for (int i = 0; i < count; ++i) step();
 }
 
-// The step's working copies of the state it starts from (the step writes every force); the storage keeps it until the step is
-// committed, so a step that diverges leaves it as it was.
+// The step's working copies of the state it starts from (the step writes every force); the
+// storage keeps it until the step is committed, so a step that diverges leaves it as it was.
 void Simulation::load_state() {
   q_ = state_[StateStorage::q];
   qd_ = state_[StateStorage::qd];

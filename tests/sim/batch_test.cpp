@@ -179,7 +179,8 @@ TEST(Batch, EnvIdsAndBroadcastRows) {
   EXPECT_EQ(message([&] { batch.set_qd(ids, RowMatrix::Zero(3, 3)); }),
             "Batch: qd has shape (3, 3), expected (2, 3) for 2 environments, or (1, 3) for all");
   per(1, 2) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(message([&] { batch.set_q(ids, per); }), "Batch: environment 1: q[2] = nan is not finite");
+  EXPECT_EQ(message([&] { batch.set_q(ids, per); }),
+            "Batch: environment 1: q[2] = nan is not finite");
   RowMatrix kp = RowMatrix::Constant(2, 3, 100.0);
   kp(0, 1) = -1.0;
   EXPECT_NE(message([&] { batch.set_drive_gains(ids, kp, RowMatrix::Zero(1, 3)); })

@@ -63,7 +63,8 @@ JointSpec floating_joint(std::string name);
 /// Sets link's mass, com, inertia about the com (symmetrised) and spatial inertia, validated as
 /// ModelBuilder::build() validates a LinkSpec's (`can_move`: the link or an ancestor has a dof);
 /// throws ModelError naming link.name, the field and the value.
-void set_link_inertial(Link& link, double mass, const Vec3& com, const Mat3& inertia, bool can_move);
+void set_link_inertial(Link& link, double mass, const Vec3& com, const Mat3& inertia,
+                       bool can_move);
 
 /// A link description in one call.
 LinkSpec make_link(std::string name, std::string parent, double mass, const Vec3& com,
