@@ -707,7 +707,8 @@ struct JointAccessor {
   py::object owner;  // the Simulation's Python object
   Simulation* sim;
   int link;
-  const Link& info() const { return sim->model().links[static_cast<size_t>(link)]; }
+  Link joint;  // a copy: its names and indices are every model variant's
+  const Link& info() const { return joint; }
   int dof() const { return info().v_index; }
 
   /// f(sim, dof) for a one-dof joint, else [f(sim, dof) for each dof], under the lock.
@@ -740,7 +741,7 @@ JointAccessor joint_accessor(py::object sim_obj, py::handle joint) {
     const Link& l = model->links[static_cast<size_t>(i)];
     if (l.joint_name == name && l.nv == 0)
       throw std::invalid_argument("joint '" + name + "' is fixed: it has no degree of freedom");
-    if (l.joint_name == name) return JointAccessor{std::move(sim_obj), &s, i};
+    if (l.joint_name == name) return JointAccessor{std::move(sim_obj), &s, i, l};
     if (l.nv > 0) moving.push_back(l.joint_name);
   }
   throw std::invalid_argument(unknown_name("joint", name, moving));
