@@ -214,6 +214,12 @@ class Model:
     def dof_link(self) -> list[int]: ...
     @property
     def dof_names(self) -> list[str]: ...
+    @property
+    def link_names(self) -> list[str]:
+        """Link names in link order (depth-first preorder)."""
+    @property
+    def joint_names(self) -> list[str]:
+        """Each link's inbound joint name in link order (the root's joint first)."""
     def floating_base(self) -> bool: ...
     def num_links(self) -> int: ...
     def link_index(self, name: str) -> int: ...
@@ -270,7 +276,14 @@ class Simulation:
     """One simulation of a Model: state, drives, joint settings and the last step's forces."""
     def __init__(self, model: Model, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
                  position_iterations: Int = 4, velocity_iterations: Int = 1,
-                 compat: Union[str, Compat] = "none") -> None: ...
+                 compat: Union[str, Compat] = "none",
+                 stiffness: Union[float, ArrayLike, None] = None,
+                 damping: Union[float, ArrayLike, None] = None,
+                 drive_type: Union[str, DriveType] = "force") -> None:
+        """Given stiffness or damping (scalar: every revolute and prismatic dof; or (nv,)),
+        those dofs get drives of drive_type; else no dof has a drive."""
+    def joint(self, name: str) -> JointAccessor:
+        """A live accessor of a joint; ValueError naming the nearest names if unknown."""
     def copy(self) -> Simulation: ...
     @property
     def model(self) -> Model: ...
@@ -364,6 +377,38 @@ class Simulation:
 def set_drive_targets(sim: Simulation, positions: ArrayLike, velocities: ArrayLike) -> None: ...
 def set_drive_gains(sim: Simulation, stiffness: ArrayLike, damping: ArrayLike,
                     type: Union[DriveType, str] = DriveType.force) -> None: ...
+
+class JointAccessor:
+    """One joint of a Simulation (Simulation.joint(name)), read and written at call time.
+    One-dof joints give floats; multi-dof joints arrays (values) or lists (settings)."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def type(self) -> JointType: ...
+    @property
+    def dof(self) -> int: ...
+    @property
+    def nv(self) -> int: ...
+    @property
+    def link(self) -> int: ...
+    @property
+    def q(self) -> Union[float, Vector]: ...
+    @property
+    def qd(self) -> Union[float, Vector]: ...
+    @property
+    def drive_force(self) -> Union[float, Vector]: ...
+    @property
+    def limit_force(self) -> Union[float, Vector]: ...
+    @property
+    def friction_force(self) -> Union[float, Vector]: ...
+    @property
+    def applied_force(self) -> Union[float, Vector]: ...
+    drive: Drive
+    limits: tuple[float, float]
+    friction: JointFriction
+    max_velocity: float
+    def set_target(self, position: float, velocity: float = 0.0) -> None:
+        """ValueError if the joint has no drive."""
 
 class ReferenceFrame(enum.Enum):
     local = ...
@@ -502,6 +547,18 @@ class UrdfRobot:
     links: list[LinkSpec]
     joint_order: list[str]
     dof_order: list[int]
+    @property
+    def urdf_joint_names(self) -> list[str]:
+        """Every <joint> in file order (fixed ones included)."""
+    @property
+    def dof_of_urdf_joint(self) -> npt.NDArray[np.int64]:
+        """First dof of each urdf_joint_names entry; -1 for fixed joints."""
+    @property
+    def link_of_urdf_joint(self) -> npt.NDArray[np.int64]:
+        """Model link of each joint's child (fixed: the link it was merged into)."""
+    @property
+    def urdf_joint_of_dof(self) -> npt.NDArray[np.int64]:
+        """Index in urdf_joint_names of each dof's joint; -1 for a floating root's dofs."""
     mimics: list[UrdfMimic]
     warnings: list[str]
     effort_limits: dict[str, float]

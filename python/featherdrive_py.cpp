@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <memory>
@@ -22,6 +23,7 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "featherdrive/algorithm/center_of_mass.hpp"
 #include "featherdrive/algorithm/crba.hpp"
@@ -708,6 +710,218 @@ void bind_dynamics(py::module_& m) {
   }, model, q, qd, py::arg("qdd"), (id_doc + at_qd).c_str());
 }
 
+// Simulation(model, ..., stiffness, damping, drive_type): drives on every revolute and prismatic
+// dof at construction, so that targets act from the first snippet on (set_drive_gains' rules).
+void initial_drives(Simulation& s, py::handle stiffness, py::handle damping, py::handle type) {
+  const DriveType t = to_drive_type(type);
+  if (stiffness.is_none() && damping.is_none()) {
+    if (t != DriveType::force)
+      throw std::invalid_argument("Simulation: drive_type = '" + std::string(to_string(t)) +
+                                  "' needs stiffness or damping");
+    return;
+  }
+  const Model& model = s.model();
+  // A scalar goes to the revolute and prismatic dofs only; an (nv,) array as given.
+  auto gains = [&](py::handle g, const char* what) -> VecX {
+    VecX v = VecX::Zero(model.nv);
+    if (g.is_none()) return v;
+    if (as_float_array(g, what).ndim() != 0) return to_vector(g, model.nv, what);
+    const double value = to_vector(g, 1, what, true)[0];
+    for (const Link& l : model.links)
+      if (l.joint_type == JointType::revolute || l.joint_type == JointType::prismatic)
+        v[l.v_index] = value;
+    return v;
+  };
+  set_drive_gains(s, gains(stiffness, "stiffness"), gains(damping, "damping"), t);
+}
+
+// ---- names and the joint accessor (issue 20) --------------------------------------------------
+// sim.joint(name) returns a JointAccessor: it holds the Simulation's Python object (so the
+// simulation lives as long as it) and reads or writes the simulation at call time, under its lock.
+// One-dof joints give floats, multi-dof joints arrays (or lists of settings).
+
+/// A ValueError message for a name that is not among `names`: the nearest ones, or the valid ones.
+std::string unknown_name(const std::string& what, const std::string& name,
+                         const std::vector<std::string>& names) {
+  const auto near = py::module_::import("difflib")
+                        .attr("get_close_matches")(name, names, 3, 0.6)
+                        .cast<std::vector<std::string>>();
+  const bool some = !near.empty();
+  const std::vector<std::string>& list = some ? near : names;
+  std::string msg = "no " + what + " named '" + name + "'; " +
+                    (some ? "did you mean: " : "the " + what + "s are: ");
+  for (size_t i = 0; i < std::min<size_t>(list.size(), 12); ++i) msg += (i ? ", " : "") + list[i];
+  if (list.size() > 12) msg += ", ... (" + std::to_string(list.size()) + " in all)";
+  return msg;
+}
+
+struct JointAccessor {
+  py::object owner;  // the Simulation's Python object
+  Simulation* sim;
+  int link;
+  Link joint;  // a copy: its names and indices are every model variant's
+  const Link& info() const { return joint; }
+  int dof() const { return info().v_index; }
+
+  /// f(sim, dof) for a one-dof joint, else [f(sim, dof) for each dof], under the lock.
+  template <class F>
+  py::object per_dof(F f) const {
+    const Link& l = info();
+    return locked(*sim, [&]() -> py::object {
+      if (l.nv == 1) return py::cast(std::invoke(f, *sim, l.v_index));
+      py::list out;
+      for (int k = 0; k < l.nv; ++k) out.append(py::cast(std::invoke(f, *sim, l.v_index + k)));
+      return out;
+    });
+  }
+  /// The joint's entries of an (nv,) vector: a float or a new array.
+  py::object slice(VecView (Simulation::*v)() const) const {
+    const Link& l = info();
+    return locked(*sim, [&]() -> py::object {
+      if (l.nv == 1) return py::float_((sim->*v)()[l.v_index]);
+      return py::cast(VecX((sim->*v)().segment(l.v_index, l.nv)));
+    });
+  }
+};
+
+JointAccessor joint_accessor(py::object sim_obj, py::handle joint) {
+  Simulation& s = sim_obj.cast<Simulation&>();
+  const std::string name = to_str(joint, "joint");
+  const std::shared_ptr<const Model> model = model_of(s);
+  std::vector<std::string> moving;
+  for (int i = 0; i < model->num_links(); ++i) {
+    const Link& l = model->links[static_cast<size_t>(i)];
+    if (l.joint_name == name && l.nv == 0)
+      throw std::invalid_argument("joint '" + name + "' is fixed: it has no degree of freedom");
+    if (l.joint_name == name) return JointAccessor{std::move(sim_obj), &s, i, l};
+    if (l.nv > 0) moving.push_back(l.joint_name);
+  }
+  throw std::invalid_argument(unknown_name("joint", name, moving));
+}
+
+py::array int_array(const std::vector<int>& v) {
+  py::array_t<long long> a(static_cast<py::ssize_t>(v.size()));
+  for (size_t i = 0; i < v.size(); ++i) a.mutable_data()[i] = v[i];
+  a.attr("flags").attr("writeable") = false;
+  return a;
+}
+
+void bind_names(py::module_& m) {
+  auto model = py::reinterpret_borrow<py::class_<Model, ModelPtr>>(m.attr("Model"));
+  model.def_property_readonly("link_names", [](const Model& mo) {
+        std::vector<std::string> names;
+        for (const Link& l : mo.links) names.push_back(l.name);
+        return names;
+      }, "Link names in link order (depth-first preorder; a new list).")
+      .def_property_readonly("joint_names", [](const Model& mo) {
+        std::vector<std::string> names;
+        for (const Link& l : mo.links) names.push_back(l.joint_name);
+        return names;
+      }, "Each link's inbound joint name, in link order (the root's joint first; a new list).");
+  auto robot = py::reinterpret_borrow<py::class_<UrdfRobot>>(m.attr("UrdfRobot"));
+  robot.def_property_readonly("urdf_joint_names", [](const UrdfRobot& r) { return r.joint_order; },
+                              "Every <joint> name in file order, fixed ones included.")
+      .def_property_readonly("dof_of_urdf_joint",
+                             [](const UrdfRobot& r) { return int_array(r.dof_of_urdf_joint); },
+                             "First dof of each urdf_joint_names entry, -1 for a fixed joint.")
+      .def_property_readonly("link_of_urdf_joint",
+                             [](const UrdfRobot& r) { return int_array(r.link_of_urdf_joint); },
+                             "Model link of each joint's child (fixed: the link it merged into).")
+      .def_property_readonly("urdf_joint_of_dof",
+                             [](const UrdfRobot& r) { return int_array(r.urdf_joint_of_dof); },
+                             "Index in urdf_joint_names of each dof's joint, -1 for a floating "
+                             "root's dofs.");
+
+  py::class_<JointAccessor> joint(m, "JointAccessor",
+                            "One joint of a Simulation by name (Simulation.joint): reads and "
+                            "writes the simulation at call time. One-dof joints give floats, "
+                            "multi-dof joints arrays or lists.");
+  joint.def_property_readonly("name", [](const JointAccessor& j) { return j.info().joint_name; },
+                             "joint name")
+      .def_property_readonly("type", [](const JointAccessor& j) { return j.info().joint_type; },
+                             "JointType")
+      .def_property_readonly("dof", [](const JointAccessor& j) { return j.info().v_index; },
+                             "first dof index (into qd and the forces)")
+      .def_property_readonly("nv", [](const JointAccessor& j) { return j.info().nv; }, "dofs")
+      .def_property_readonly("link", [](const JointAccessor& j) { return j.link; },
+                             "index of the joint's child link")
+      .def_property_readonly("q", [](const JointAccessor& j) -> py::object {
+            const Link& l = j.info();
+            return locked(*j.sim, [&]() -> py::object {
+              if (l.nq == 1) return py::float_(j.sim->q()[l.q_index]);
+              return py::cast(VecX(j.sim->q().segment(l.q_index, l.nq)));
+            });
+          }, "position (float) or the joint's q entries (a new array)")
+      .def("set_target", [](JointAccessor& j, double position, double velocity) {
+             locked(*j.sim, [&] { j.sim->set_drive_target(j.dof(), position, velocity); });
+           }, py::arg("position"), py::arg("velocity") = 0.0,
+           "Sets the drive's target; ValueError if the joint has no drive.")
+      .def_property("drive",
+                    [](const JointAccessor& j) { return j.per_dof(&Simulation::drive); },
+                    [](JointAccessor& j, const Drive& d) {
+                      locked(*j.sim, [&] { j.sim->set_drive(j.dof(), d); });
+                    },
+                    "the Drive (a copy); assign a Drive to set it")
+      .def_property("limits",
+                    [](const JointAccessor& j) {
+                      return j.per_dof([](const Simulation& s, int d) {
+                        return std::make_pair(s.lower_limit(d), s.upper_limit(d));
+                      });
+                    },
+                    [](JointAccessor& j, std::pair<double, double> l) {
+                      locked(*j.sim, [&] { j.sim->set_joint_limits(j.dof(), l.first, l.second); });
+                    },
+                    "(lower, upper) position limits; assign a pair to set them (+-inf: none)")
+      .def_property("friction",
+                    [](const JointAccessor& j) { return j.per_dof(&Simulation::joint_friction); },
+                    [](JointAccessor& j, const JointFriction& f) {
+                      locked(*j.sim, [&] { j.sim->set_joint_friction(j.dof(), f); });
+                    },
+                    "the JointFriction (a copy); assign one to set it")
+      .def_property("max_velocity",
+                    [](const JointAccessor& j) {
+                      return j.per_dof(&Simulation::max_joint_velocity);
+                    },
+                    [](JointAccessor& j, double v) {
+                      locked(*j.sim, [&] { j.sim->set_max_joint_velocity(j.dof(), v); });
+                    },
+                    "largest |qd| (inf: none)")
+      .def("__repr__", [](const JointAccessor& j) {
+        return "JointAccessor('" + j.info().joint_name + "', " + to_string(j.info().joint_type) +
+               ", dof " + std::to_string(j.info().v_index) + ")";
+      });
+  using Vector = VecView (Simulation::*)() const;
+  for (const auto& [name, vector] : {std::pair<const char*, Vector>{"qd", &Simulation::qd},
+                                     {"drive_force", &Simulation::drive_force},
+                                     {"limit_force", &Simulation::limit_force},
+                                     {"friction_force", &Simulation::friction_force},
+                                     {"applied_force", &Simulation::applied_force}})
+    joint.def_property_readonly(name, [v = vector](const JointAccessor& j) { return j.slice(v); },
+                                "the joint's entries of the simulation's vector of that name "
+                                "(a float, or a new array), read now");
+
+  m.def("example_path", [](py::handle name) {
+        const std::string n = to_str(name, "name");
+        const auto os = py::module_::import("os");
+        const py::object dir = os.attr("path").attr("join")(
+            os.attr("path").attr("dirname")(py::module_::import("featherdrive").attr("__file__")),
+            "examples");
+        const auto robots = py::module_::import("builtins")
+                                .attr("sorted")(os.attr("listdir")(dir))
+                                .cast<std::vector<std::string>>();
+        if (std::find(robots.begin(), robots.end(), n) == robots.end())
+          throw std::invalid_argument("example_path: " + unknown_name("example robot", n, robots));
+        return os.attr("path").attr("join")(dir, n).cast<std::string>();
+      }, py::arg("name"),
+      "The path of an example robot (examples/NAME, copied beside the module when it was built), "
+      "e.g. example_path('arm7.urdf'); ValueError naming the ones there are.");
+
+  auto sim = py::reinterpret_borrow<py::class_<Simulation, SimulationHolder>>(m.attr("Simulation"));
+  sim.def("joint", &joint_accessor, py::arg("name"),
+          "A live accessor of the named joint (q, qd, forces, drive, set_target, limits, friction, "
+          "max_velocity); ValueError naming the nearest joint names for an unknown one.");
+}
+
 }  // namespace
 
 PYBIND11_MODULE(featherdrive, m) {
@@ -1126,14 +1340,19 @@ PYBIND11_MODULE(featherdrive, m) {
                                            "One simulation of a Model: state, drives, joint "
                                            "settings and the forces of the last step.")
       .def(py::init([](ModelPtr model, double dt, py::handle solver, py::handle pi, py::handle vi,
-                       py::handle compat) {
-             return Simulation(std::move(model), make_options(dt, solver, pi, vi, compat));
+                       py::handle compat, py::handle kp, py::handle kd, py::handle type) {
+             Simulation s(std::move(model), make_options(dt, solver, pi, vi, compat));
+             initial_drives(s, kp, kd, type);
+             return s;
            }),
            py::arg("model"), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
            py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
-           py::arg("compat") = "none",
-           (std::string("A simulation at the neutral configuration, at rest, without drives; "
-                         "solver ") + kSolverDoc + ".").c_str())
+           py::arg("compat") = "none", py::arg("stiffness") = py::none(),
+           py::arg("damping") = py::none(), py::arg("drive_type") = "force",
+           (std::string("A simulation at the neutral configuration, at rest; solver ") +
+            kSolverDoc + ". Given stiffness or damping (a scalar for every revolute and "
+            "prismatic dof, or (nv,) with 0 on other dofs), every such dof gets a drive of "
+            "drive_type ('force' or 'acceleration'); else no dof has a drive.").c_str())
       .def(py::init([](ModelPtr model, const SimulationOptions& o) {
              return Simulation(std::move(model), o);
            }),
@@ -1888,4 +2107,5 @@ PYBIND11_MODULE(featherdrive, m) {
       "the restored state. CheckpointError and sim unchanged otherwise.");
 
   bind_dynamics(m);
+  bind_names(m);
 }

@@ -7,7 +7,7 @@ import featherdrive as fd
 
 @pytest.fixture
 def sim(arm):
-    return fd.Simulation(arm)
+    return fd.Simulation(arm, stiffness=100.0, damping=10.0)  # targets need drives
 
 
 @pytest.mark.parametrize("method, args, message", [

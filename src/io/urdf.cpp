@@ -245,6 +245,30 @@ std::string joint_type_name(int type) {
   }
 }
 
+// The maps between joint_order and the model's dofs and links (UrdfRobot), one lookup per joint.
+void map_urdf_joints(UrdfRobot& robot, const urdf::ModelInterface& urdf_model) {
+  const Model& model = *robot.model;
+  std::map<std::string, int> link_of;
+  for (int i = 0; i < model.num_links(); ++i) link_of.emplace(model.links[i].name, i);
+  const size_t n = robot.joint_order.size();
+  robot.dof_of_urdf_joint.assign(n, -1);
+  robot.link_of_urdf_joint.assign(n, -1);
+  robot.urdf_joint_of_dof.assign(static_cast<size_t>(model.nv), -1);
+  for (size_t j = 0; j < n; ++j) {
+    const urdf::JointConstSharedPtr joint = urdf_model.getJoint(robot.joint_order[j]);
+    if (!joint) continue;
+    std::string child = joint->child_link_name;
+    if (const auto m = robot.merged.find(child); m != robot.merged.end()) child = m->second.into;
+    const auto link = link_of.find(child);
+    if (link == link_of.end()) continue;
+    robot.link_of_urdf_joint[j] = link->second;
+    if (joint->type == urdf::Joint::FIXED) continue;
+    const int dof = model.links[link->second].v_index;
+    robot.dof_of_urdf_joint[j] = dof;
+    robot.urdf_joint_of_dof[static_cast<size_t>(dof)] = static_cast<int>(j);
+  }
+}
+
 }  // namespace
 
 Vec3 rpy_from_rotation(const Mat3& R) {
@@ -560,6 +584,7 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
     if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(dof_of.at(name));
   }
+  map_urdf_joints(robot, *urdf_model);
   return robot;
 }
 

@@ -37,6 +37,11 @@ std::vector<Drive> drives_with_targets(const Simulation& sim, const VecX& positi
   const Model& model = sim.model();
   check_size(positions, model.nv, "set_drive_targets", "positions");
   check_size(velocities, model.nv, "set_drive_targets", "velocities");
+  try {
+    sim.check_targets_have_drives(positions, velocities);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("set_drive_targets: ") + e.what());
+  }
   std::vector<Drive> drives(static_cast<size_t>(model.nv));
   for (int d = 0; d < model.nv; ++d) {
     Drive drive = sim.drive(d);

@@ -2,6 +2,7 @@
 
 #include "featherdrive/core/format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -261,7 +262,29 @@ void Simulation::set_drive(const std::string& joint, const Drive& drive) {
   set_drive(driven_dof(joint), drive);
 }
 
+bool Simulation::accepts_targets(int dof) const {
+  return drives_[static_cast<size_t>(dof)].type != DriveType::none;
+}
+
+std::string Simulation::no_drive_message(int dof) const {
+  const Link& link = model_->links[model_->dof_link[dof]];
+  const std::string joint = "joint '" + model_->dof_names[dof] + "' (dof " + std::to_string(dof);
+  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+    return joint + ") is " + to_string(link.joint_type) + ": it takes no drive, so no target";
+  return joint + ") has no drive (type none), so a target would do nothing: give it one first "
+                 "(set_drive, or set_drive_gains for every joint)";
+}
+
+void Simulation::check_targets_have_drives(const VecX& positions, const VecX& velocities) const {
+  for (int d = 0; d < std::min(positions.size(), velocities.size()); ++d)
+    if ((positions[d] != 0.0 || velocities[d] != 0.0) && !accepts_targets(d))
+      throw std::invalid_argument(no_drive_message(d) + "; this vector sets its target to " +
+                                  fmt(positions[d]) + ", velocity " + fmt(velocities[d]));
+}
+
 void Simulation::set_drive_target(int dof, double position, double velocity) {
+  check_dof(dof);
+  if (!accepts_targets(dof)) throw std::invalid_argument(no_drive_message(dof));
   Drive d = drive(dof);
   d.target_position = position;
   d.target_velocity = velocity;

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "featherdrive/io/describe.hpp"
+#include "featherdrive/io/trajectory.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
@@ -282,6 +283,44 @@ TEST(Urdf, FloatingRootComesFirstInTheDofOrder) {
   EXPECT_EQ(robot.dof_order, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8}));
   // A floating root needs an inertial of its own (after merging).
   EXPECT_THROW(load_urdf(example("slider.urdf"), options), InputError);
+}
+
+// The file lists l_knee, neck (fixed), l_hip, waist, head_tilt; the model orders links depth
+// first, children in the file's link order: body, torso (+ head merged), camera, l_thigh, l_shin,
+// so the dofs are waist, head_tilt, l_hip, l_knee (worked out by hand from the file).
+TEST(Urdf, FileJointOrderAndDofOrderMapBothWays) {
+  for (const bool floating : {false, true}) {
+    UrdfOptions options;
+    options.fixed_base = !floating;
+    const UrdfRobot robot = load_urdf(data("leaf_joint_first.urdf"), options);
+    const Model& m = *robot.model;
+    const int o = floating ? 6 : 0;  // a floating root's dofs come first
+    EXPECT_EQ(robot.joint_order,
+              (std::vector<std::string>{"l_knee", "neck", "l_hip", "waist", "head_tilt"}));
+    std::vector<std::string> names(m.dof_names.begin() + o, m.dof_names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"waist", "head_tilt", "l_hip", "l_knee"}));
+    EXPECT_EQ(robot.dof_of_urdf_joint, (std::vector<int>{o + 3, -1, o + 2, o + 0, o + 1}));
+    EXPECT_EQ(robot.link_of_urdf_joint, (std::vector<int>{4, 1, 3, 1, 2}));
+    EXPECT_EQ(m.links[robot.link_of_urdf_joint[1]].name, "torso");  // head merged into torso
+    std::vector<int> joint_of_dof(static_cast<size_t>(o), -1);
+    for (const int j : {3, 4, 2, 0}) joint_of_dof.push_back(j);
+    EXPECT_EQ(robot.urdf_joint_of_dof, joint_of_dof);
+    std::vector<int> dof_order;
+    for (int d = 0; d < o; ++d) dof_order.push_back(d);
+    for (const int d : {3, 2, 0, 1}) dof_order.push_back(o + d);
+    EXPECT_EQ(robot.dof_order, dof_order);
+    // Every table follows the file's order: the CSV header and describe's dof line.
+    std::vector<std::string> columns = trajectory_columns(robot);
+    columns.erase(columns.begin(), columns.begin() + (floating ? 7 : 0));
+    EXPECT_EQ(columns[0], "q:l_knee");
+    EXPECT_EQ(columns[3], "q:head_tilt");
+    EXPECT_EQ(columns[4 + o], "qd:l_knee");
+    EXPECT_EQ(columns.back(), "f:head_tilt");
+    EXPECT_NE(describe(robot).find("dofs in URDF order:" +
+                                   std::string(floating ? " " + robot.root_joint + ":wx" : "")),
+              std::string::npos);
+    EXPECT_NE(describe(robot).find("l_knee l_hip waist head_tilt\n"), std::string::npos);
+  }
 }
 
 TEST(Urdf, ErrorsNameTheFileAndAreInvalidArgument) {

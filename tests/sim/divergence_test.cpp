@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 
@@ -261,6 +262,12 @@ TEST(BadArguments, JointsDofsAndSettings) {
             "drive on joint 'slide': damping = nan must be finite and >= 0");
   EXPECT_EQ(invalid_of([&] { s.set_drive("slide", Drive{DriveType::force, 1.0, 1.0, 0.0}); }),
             "drive on joint 'slide': max_force = 0 must be > 0");
+  // A target on a dof without a drive would do nothing: refused, naming the joint.
+  EXPECT_EQ(invalid_of([&] { s.set_drive_target("slide", 0.5, 0.0); }),
+            "joint 'slide' (dof 0) has no drive (type none), so a target would do nothing: give "
+            "it one first (set_drive, or set_drive_gains for every joint)");
+  EXPECT_EQ(s.drive(0).target_position, 0.0);
+  s.set_drive("slide", Drive{DriveType::force, 1.0, 1.0});
   EXPECT_EQ(invalid_of([&] { s.set_drive_target("slide", kNaN, 0.0); }),
             "drive on joint 'slide': target_position = nan must be finite");
   EXPECT_EQ(invalid_of([&] { s.set_drive_target(0, 0.0, kInf); }),
@@ -276,9 +283,48 @@ TEST(BadArguments, JointsDofsAndSettings) {
   EXPECT_EQ(invalid_of([&] { s.set_actuator_envelope("slide", {1.0, kNaN, 0.0, 0.0}); }),
             "actuator envelope on joint 'slide': max_actuator_velocity = nan must be > 0");
   // Nothing changed.
-  EXPECT_EQ(s.drive(0).type, DriveType::none);
+  EXPECT_EQ(s.drive(0).type, DriveType::force);
+  EXPECT_EQ(s.drive(0).target_position, 0.0);
   EXPECT_EQ(s.lower_limit(0), -kInf);
   EXPECT_EQ(s.max_joint_velocity(0), kInf);
+}
+
+// Whole-vector target setters refuse a nonzero target on a dof without a drive (a floating root's,
+// or a joint whose drive type is none) and accept zeros there; a refused vector changes nothing.
+TEST(BadArguments, TargetVectorsNeedDrivesWhereTheyAreNonzero) {
+  const auto model = test::make_random_tree(3, 5, /*floating=*/true, /*spherical=*/false);
+  const int nv = model->nv;
+  Simulation sim(model);
+  VecX kp = VecX::Zero(nv);
+  kp.tail(nv - 7).setConstant(10.0);
+  set_drive_gains(sim, kp, VecX::Zero(nv));
+  sim.set_drive(6, Drive{});  // dof 6 (the first joint after the root): no drive
+  ASSERT_EQ(sim.drive(6).type, DriveType::none);
+  VecX targets = VecX::Zero(nv);
+  targets.tail(nv - 7).setConstant(0.25);
+  set_drive_targets(sim, targets, VecX::Zero(nv));  // zeros on the root and on dof 6: accepted
+  EXPECT_EQ(sim.drive(nv - 1).target_position, 0.25);
+  targets[6] = 0.5;
+  targets[nv - 1] = 0.75;
+  EXPECT_EQ(invalid_of([&] { set_drive_targets(sim, targets, VecX::Zero(nv)); }),
+            "set_drive_targets: joint '" + model->dof_names[6] +
+                "' (dof 6) has no drive (type none), so a target would do nothing: give it one "
+                "first (set_drive, or set_drive_gains for every joint); this vector sets its "
+                "target to 0.5, velocity 0");
+  EXPECT_EQ(sim.drive(nv - 1).target_position, 0.25);  // nothing changed
+  VecX velocities = VecX::Zero(nv);
+  velocities[1] = -1.0;
+  EXPECT_EQ(invalid_of([&] { set_drive_targets(sim, VecX::Zero(nv), velocities); }),
+            "set_drive_targets: joint '" + model->dof_names[1] +
+                "' (dof 1) is floating: it takes no drive, so no target; this vector sets its "
+                "target to 0, velocity -1");
+  Batch batch(sim, 2);
+  RowMatrix rows = RowMatrix::Zero(2, nv);
+  rows(1, 6) = 0.5;
+  EXPECT_THROW(batch.set_drive_targets(rows, RowMatrix::Zero(2, nv)), std::invalid_argument);
+  EXPECT_EQ(batch.sim(1).drive(nv - 1).target_position, 0.25);
+  EXPECT_NE(invalid_of([&] { sim.set_drive_target(6, 0.0, 0.0); }).find("(dof 6) has no drive"),
+            std::string::npos);  // one dof: even a zero target is refused
 }
 
 TEST(BadArguments, ModelBuilderNamesTheField) {

@@ -63,6 +63,10 @@ struct UrdfRobot {
   std::vector<std::string> joint_order;
   /// The model dofs in URDF document order: the floating root's first, then one per moving joint.
   std::vector<int> dof_order;
+  /// Maps between the file's joint order (joint_order, index j) and the model's: the first dof of
+  /// joint j (-1 for a fixed joint), the model link its child is (for a fixed joint, the link the
+  /// child was merged into), and the joint_order index of each dof (-1 for a floating root's).
+  std::vector<int> dof_of_urdf_joint, link_of_urdf_joint, urdf_joint_of_dof;
   std::vector<UrdfMimic> mimics;
   std::map<std::string, MergedLink> merged;  ///< merged link name -> where it went
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)

@@ -129,8 +129,13 @@ class Simulation {
   void set_drive(int dof, const Drive& drive);
   void set_drive(const std::string& joint, const Drive& drive);
   const Drive& drive(int dof) const { return drives_.at(static_cast<size_t>(check_dof(dof))); }
+  /// Throws std::invalid_argument naming the joint if the dof has no drive (a target would do
+  /// nothing): give it one first (set_drive, set_drive_gains).
   void set_drive_target(int dof, double position, double velocity);
   void set_drive_target(const std::string& joint, double position, double velocity);
+  /// For whole-vector setters (nv each): throws std::invalid_argument naming the first dof that
+  /// has no drive and a nonzero target position or velocity; zeros there are accepted.
+  void check_targets_have_drives(const VecX& positions, const VecX& velocities) const;
 
   // Joint constraints per dof of revolute and prismatic joints. Initialised from the model: limits
   // from lower_limit/upper_limit (enforced where finite), friction static = dynamic =
@@ -208,6 +213,9 @@ class Simulation {
   int check_dof(int dof) const;
   int one_dof_joint(int dof) const;
   int driven_dof(const std::string& joint) const;
+  /// Whether a drive target on this dof acts: the one test of every target setter.
+  bool accepts_targets(int dof) const;
+  std::string no_drive_message(int dof) const;
   void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
   void sweep(RowPhase& phase);
