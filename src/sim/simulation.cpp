@@ -262,8 +262,9 @@ void Simulation::set_drive(const std::string& joint, const Drive& drive) {
   set_drive(driven_dof(joint), drive);
 }
 
+// Driven by the implicit drive or by an explicit actuator, which reads the drive's targets.
 bool Simulation::accepts_targets(int dof) const {
-  return drives_[static_cast<size_t>(dof)].type != DriveType::none;
+  return drives_[static_cast<size_t>(dof)].type != DriveType::none || has_actuator(dof);
 }
 
 std::string Simulation::no_drive_message(int dof) const {
@@ -272,7 +273,7 @@ std::string Simulation::no_drive_message(int dof) const {
   if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
     return joint + ") is " + to_string(link.joint_type) + ": it takes no drive, so no target";
   return joint + ") has no drive (type none), so a target would do nothing: give it one first "
-                 "(set_drive, or set_drive_gains for every joint)";
+                 "(set_drive, set_drive_gains for every joint, or set_actuator)";
 }
 
 void Simulation::check_targets_have_drives(const VecX& positions, const VecX& velocities) const {

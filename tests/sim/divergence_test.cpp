@@ -265,7 +265,7 @@ TEST(BadArguments, JointsDofsAndSettings) {
   // A target on a dof without a drive would do nothing: refused, naming the joint.
   EXPECT_EQ(invalid_of([&] { s.set_drive_target("slide", 0.5, 0.0); }),
             "joint 'slide' (dof 0) has no drive (type none), so a target would do nothing: give "
-            "it one first (set_drive, or set_drive_gains for every joint)");
+            "it one first (set_drive, set_drive_gains for every joint, or set_actuator)");
   EXPECT_EQ(s.drive(0).target_position, 0.0);
   s.set_drive("slide", Drive{DriveType::force, 1.0, 1.0});
   EXPECT_EQ(invalid_of([&] { s.set_drive_target("slide", kNaN, 0.0); }),
@@ -309,8 +309,8 @@ TEST(BadArguments, TargetVectorsNeedDrivesWhereTheyAreNonzero) {
   EXPECT_EQ(invalid_of([&] { set_drive_targets(sim, targets, VecX::Zero(nv)); }),
             "set_drive_targets: joint '" + model->dof_names[6] +
                 "' (dof 6) has no drive (type none), so a target would do nothing: give it one "
-                "first (set_drive, or set_drive_gains for every joint); this vector sets its "
-                "target to 0.5, velocity 0");
+                "first (set_drive, set_drive_gains for every joint, or set_actuator); this vector "
+                "sets its target to 0.5, velocity 0");
   EXPECT_EQ(sim.drive(nv - 1).target_position, 0.25);  // nothing changed
   VecX velocities = VecX::Zero(nv);
   velocities[1] = -1.0;
