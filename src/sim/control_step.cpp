@@ -81,13 +81,21 @@ void step_control(Simulation& sim, const VecX& target_position, const VecX& targ
     check_targets(model, target_position[d], target_velocity[d], drive.target_position,
                   drive.target_velocity, d, control.targets, "");
   }
+  try {
+    sim.check_targets_have_drives(target_position, target_velocity);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("step_control: ") + e.what());
+  }
   const int k = control.substeps;
   for (int j = 1; j <= k; ++j) {
-    // Nothing left to fail here: the gains were valid and the targets are finite.
+    // Nothing left to fail here: the gains were valid and the targets are finite. Through
+    // set_drive, which keeps the zero targets of undriven dofs (set_drive_target refuses them).
     for (int d = 0; d < nv; ++d) {
       const size_t i = 2 * static_cast<size_t>(d);
-      sim.set_drive_target(d, substep_target(prev[i], target_position[d], j, k, control.targets),
-                           substep_target(prev[i + 1], target_velocity[d], j, k, control.targets));
+      Drive drive = sim.drive(d);
+      drive.target_position = substep_target(prev[i], target_position[d], j, k, control.targets);
+      drive.target_velocity = substep_target(prev[i + 1], target_velocity[d], j, k, control.targets);
+      sim.set_drive(d, drive);
     }
     try {
       sim.step();
