@@ -166,7 +166,8 @@ int simulate(const SimulateArgs& args) {
     for (size_t i = 0; i < n; ++i) {
       const DriveSpec& d = scene.drives[i];
       rms[i].add(d.target_at(t).first - sim.q()[model.links[model.dof_link[d.dof]].q_index]);
-      max_force[i] = std::max(max_force[i], std::abs(sim.drive_force()[d.dof]));
+      const double force = sim.drive_force()[d.dof] + sim.actuator_force()[d.dof];
+      max_force[i] = std::max(max_force[i], std::abs(force));
     }
     if (csv) csv->write(k + 1, sim);
     if (targets) targets->write(k + 1, t);

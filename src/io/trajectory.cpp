@@ -51,7 +51,9 @@ void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
   out_ << step << ',' << format_double(sim.time());
   for (int i : q_order_) out_ << ',' << format_double(sim.q()[i]);
   for (int d : v_order_) out_ << ',' << format_double(sim.qd()[d]);
-  for (int d : v_order_) out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d]);
+  // The dof's driver: its implicit drive or its explicit actuator (a dof has at most one).
+  for (int d : v_order_)
+    out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d] + sim.actuator_force()[d]);
   out_ << '\n';
 }
 

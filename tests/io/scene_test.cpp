@@ -447,6 +447,10 @@ TEST(Scene, ActuatorsAndUrdfEffortReachTheSimulation) {
     // The first step: x = v = 0, demand 500 * 0.3 = 150 within min(S, E) = 200 (or 300).
     sim.step();
     EXPECT_EQ(sim.actuator_force()[0], 150.0);
+    // The CSV's f: column is the dof's driver, here the actuator: 150, as computed above.
+    std::ostringstream out;
+    TrajectoryWriter(out, s.robot).write(1, sim, false);
+    EXPECT_EQ(out.str().substr(out.str().rfind(',') + 1), "150\n") << mode;
   }
   // An actuator's own effort_limit stands; drives get the URDF's as max_force.
   Simulation own = make_simulation(scene_from(
