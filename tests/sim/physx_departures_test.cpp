@@ -135,7 +135,7 @@ TEST(PhysxDepartures, CompatChangesTreesWithPrismaticJointsOnMovingParents) {
       if (l.nv == 1) sim.set_drive(l.v_index, Drive{DriveType::force, 300, 10, kInf, 0.2, 0.0});
     sim.set_qd(VecX::Constant(model->nv, 1.5));
     sim.step(50);
-    return sim.qd();
+    return VecX(sim.qd());  // a copy: sim.qd() is a view of sim, which dies here
   };
   EXPECT_GT((run(Compat::none) - run(Compat::physx)).norm(), 1e-9);
 }

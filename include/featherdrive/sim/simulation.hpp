@@ -57,7 +57,8 @@ class DivergenceError : public std::runtime_error {
 };
 
 /// A read-only view of one of a simulation's vectors (q, qd, forces): valid as long as the
-/// simulation is, and it shows the current values.
+/// simulation is, and it shows the current values. `auto x = sim.q()` is such a view, not a
+/// copy: keep one with `VecX x = sim.q()`.
 using VecView = Eigen::Map<const VecX>;
 
 /// Where a simulation keeps q, qd, the applied force and the four output forces: a block of its
