@@ -1614,15 +1614,20 @@ PYBIND11_MODULE(featherdrive, m) {
                                  "States are read-only (N, nq) / (N, nv) views of the batch's "
                                  "arrays; sim(i) is environment i, live.")
       .def(py::init([](ModelPtr model, py::handle count, double dt, py::handle solver,
-                       py::handle pi, py::handle vi, py::handle compat) {
+                       py::handle pi, py::handle vi, py::handle compat, py::handle kp,
+                       py::handle kd, py::handle type) {
              const int n = to_int(count, "count", 1);
-             return BatchHolder(new Batch(std::move(model), n,
-                                          make_options(dt, solver, pi, vi, compat)));
+             Simulation prototype(std::move(model), make_options(dt, solver, pi, vi, compat));
+             initial_drives(prototype, kp, kd, type);
+             return BatchHolder(new Batch(prototype, n));
            }),
            py::arg("model"), py::arg("count"), py::arg("dt") = 1.0 / 60.0,
            py::arg("solver") = "pgs", py::arg("position_iterations") = 4,
            py::arg("velocity_iterations") = 1, py::arg("compat") = "none",
-           "count environments, each a new Simulation of model (as Simulation(model, dt, ...)).")
+           py::arg("stiffness") = py::none(), py::arg("damping") = py::none(),
+           py::arg("drive_type") = "force",
+           "count environments, each a new Simulation of model, with the arguments of "
+           "Simulation(model, dt, ..., stiffness, damping, drive_type).")
       .def(py::init([](const Simulation& prototype, py::handle count) {
              const int n = to_int(count, "count", 1);
              return locked(prototype, [&] { return BatchHolder(new Batch(prototype, n)); });

@@ -167,3 +167,22 @@ def test_constructor_gains_equal_set_drive_gains(arm):
         fd.Simulation(arm, drive_type="acceleration")
     with pytest.raises(ValueError, match="drive type = 'spring'"):
         fd.Simulation(arm, stiffness=1.0, drive_type="spring")
+
+
+def test_batch_constructor_gains_equal_single_simulations(arm):
+    # Batch(model, ..., stiffness, damping) as Simulation's constructor: every environment equals
+    # a lone simulation given the gains by set_drive_gains.
+    batch = fd.Batch(arm, 3, dt=0.01, stiffness=2e4, damping=100.0)
+    lone = fd.Simulation(arm, dt=0.01)
+    lone.set_drive_gains(np.full(7, 2e4), np.full(7, 100.0))
+    targets = np.linspace(-0.3, 0.3, 7)
+    batch.set_drive_targets(targets)
+    lone.set_drive_targets(targets)
+    batch.step(30)
+    lone.step(30)
+    for i in range(3):
+        assert batch.q[i].tobytes() == lone.q.tobytes()
+    with pytest.raises(ValueError, match="stiffness = -1"):
+        fd.Batch(arm, 2, stiffness=-1.0)
+    with pytest.raises(ValueError, match="has no drive"):
+        fd.Batch(arm, 2).set_drive_targets(targets)
