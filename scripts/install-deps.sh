@@ -7,7 +7,10 @@ packages=(
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev liburdfdom-dev libcli11-dev libtbb-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
+  python3-scipy python3-distributed
   libmujoco-dev libbullet-dev
+  # real robots the tests load: MuJoCo's sample MJCF models, DART's URDFs
+  libmujoco-samples dart-doc
   clang libclang-rt-14-dev
   nodejs
 )
