@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <sstream>
 
 #include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/core/format.hpp"
@@ -135,7 +136,8 @@ bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator&
   const int j = m->actuator_trnid[2 * i];
   out.joint = name_of(m, mjOBJ_JOINT, j, "joint");
   if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
-    why_not = who + " on joint '" + out.joint + "': only hinge and slide joints are driven; ignored";
+    why_not = who + " on joint '" + out.joint +
+              "': only hinge and slide joints are driven; ignored";
     return false;
   }
   if (m->actuator_dyntype[i] != mjDYN_NONE || m->actuator_gaintype[i] != mjGAIN_FIXED) {
@@ -184,6 +186,15 @@ bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator&
     if (std::isfinite(force) && force > 0.0) out.actuator.effort_limit = std::abs(out.gear) * force;
   }
   return true;
+}
+
+// The largest joint effort an actuator gives: gear times its force bound (forcerange, and for a
+// motor gain times ctrlrange).
+double effort_of(const MjcfActuator& a) {
+  double force = std::max(std::abs(a.force_lower), std::abs(a.force_upper));
+  const double ctrl = std::max(std::abs(a.ctrl_lower), std::abs(a.ctrl_upper));
+  if (a.kind == MjcfActuatorKind::motor) force = std::min(force, std::abs(a.gain) * ctrl);
+  return std::abs(a.gear) * force;
 }
 
 // The tree: one link per body, or a chain of links for a body with several joints (every link
@@ -247,8 +258,8 @@ struct Converter {
       spec.name = body;
       if (is_root) {
         robot.root_link = body;
-        robot.root_joint = n ? name_of(m, mjOBJ_JOINT, first, "joint")
-                             : free_name("root_joint", joint_names);
+        const char* free = n ? mj_id2name(m, mjOBJ_JOINT, first) : nullptr;
+        robot.root_joint = free && *free ? free : free_name("root_joint", joint_names);
       }
       const bool floating = n && !options.fixed_base;
       spec.joint = floating ? floating_joint(robot.root_joint)
@@ -333,7 +344,8 @@ struct Converter {
 void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions& options,
                         std::vector<std::string>& warnings) {
   int colliding = 0;
-  for (int g = 0; g < m->ngeom; ++g) colliding += (m->geom_contype[g] | m->geom_conaffinity[g]) != 0;
+  for (int g = 0; g < m->ngeom; ++g)
+    colliding += (m->geom_contype[g] | m->geom_conaffinity[g]) != 0;
   if (colliding > 0 && !(m->opt.disableflags & mjDSBL_CONTACT))
     warnings.push_back("contacts are not simulated (" + std::to_string(colliding) +
                        " geoms collide in MuJoCo)");
@@ -415,6 +427,7 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
         robot.urdf_joint_of_dof[static_cast<size_t>(link.v_index + d)] = static_cast<int>(j);
     }
 
+  std::map<std::string, double> effort;  // summed over each joint's actuators
   for (int i = 0; i < m->nu; ++i) {
     MjcfActuator actuator;
     std::string why_not;
@@ -427,11 +440,17 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
                          format_double(actuator.force_lower) + ", " +
                          format_double(actuator.force_upper) +
                          "] is not symmetric; effort_limit takes the larger bound");
-    robot.effort_limits[actuator.joint] =
-        std::abs(actuator.gear) * std::max(std::abs(actuator.force_lower),
-                                           std::abs(actuator.force_upper));
+    effort[actuator.joint] += effort_of(actuator);
     robot.actuators.push_back(std::move(actuator));
   }
+  // Model::effort_limit and effort_limits are informative, as a URDF's <limit effort>.
+  for (LinkSpec& spec : robot.links)
+    if (spec.joint.type == JointType::revolute || spec.joint.type == JointType::prismatic) {
+      const auto it = effort.find(spec.joint.name);
+      robot.effort_limits[spec.joint.name] = spec.joint.effort_limit =
+          it == effort.end() ? kInf : it->second;
+    }
+  if (!effort.empty()) robot.rebuild();
   warn_about_ignored(m, c, options, warnings);
   robot.warnings = std::move(warnings);
   check_well_posed(robot, file);
@@ -490,6 +509,35 @@ MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
   }
   mj_deleteVFS(vfs.get());
   return robot;
+}
+
+std::string describe_actuators(const MjcfRobot& robot) {
+  if (robot.actuators.empty()) return "";
+  std::ostringstream out;
+  out << "\nMJCF actuators (" << robot.actuators.size() << "):\n";
+  auto range = [](double lo, double hi) {
+    return std::isfinite(lo) || std::isfinite(hi)
+               ? "[" + format_double(lo) + ", " + format_double(hi) + "]"
+               : std::string("none");
+  };
+  for (const MjcfActuator& a : robot.actuators) {
+    out << "  " << a.name << ": " << to_string(a.kind) << " on " << a.joint << ", gain "
+        << format_double(a.gain) << ", gear " << format_double(a.gear) << ", forcerange "
+        << range(a.force_lower, a.force_upper) << ", ctrlrange "
+        << range(a.ctrl_lower, a.ctrl_upper) << " -> ";
+    if (a.actuator.kind == ActuatorKind::none)
+      out << "no drive (give one in the scene)\n";
+    else
+      out << "ideal_pd stiffness " << format_double(a.actuator.stiffness) << ", damping "
+          << format_double(a.actuator.damping) << ", effort_limit "
+          << format_double(a.actuator.effort_limit) << ", target ctrl / gear\n";
+  }
+  return out.str();
+}
+
+UrdfRobot load_robot(const std::filesystem::path& path, const UrdfOptions& options) {
+  if (is_mjcf_file(path)) return load_mjcf(path, options);
+  return load_urdf(path, options);
 }
 
 bool is_mjcf_file(const std::filesystem::path& path) {

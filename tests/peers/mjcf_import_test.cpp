@@ -7,6 +7,7 @@
 // [world velocity of the body origin; body-frame angular velocity], ours the body-frame [w; v], so
 // qvel = T v with T = [0 R; 1 0], and qacc = T a + c with c = [R (w x v); 0] (R turns with w).
 // Then our M = T^T M_mj T, our bias = T^T (b_mj + M_mj c) and our a = T^-1 (qacc - c).
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
@@ -224,6 +225,157 @@ TEST(MjcfImport, SeveralJointsInOneBodyMatchMuJoCo) { expect_matches(kMultiJoint
 TEST(MjcfImport, BallJointsMatchMuJoCo) { expect_matches(kBall, "ball"); }
 TEST(MjcfImport, FreeRootMatchesMuJoCo) { expect_matches(kFree, "free"); }
 TEST(MjcfImport, HumanoidMatchesMuJoCo) { expect_matches(read(kHumanoid), "humanoid"); }
+
+// What load_mjcf says about the humanoid, against the file and MuJoCo's compile of it.
+TEST(MjcfImport, HumanoidLoadsWithItsWarnings) {
+  UrdfOptions floating;
+  floating.fixed_base = false;
+  const MjcfRobot robot = load_mjcf(kHumanoid, floating);
+  MjModelPtr m = mujoco_model(read(kHumanoid));
+  ASSERT_NE(m, nullptr);
+  const Model& model = *robot.model;
+  EXPECT_EQ(model.nv, 27);
+  EXPECT_TRUE(model.floating_base());
+  EXPECT_EQ(robot.root_link, "torso");
+  EXPECT_EQ(robot.root_joint, "root");
+  double mass = 0.0;
+  for (const Link& link : model.links) mass += link.mass;
+  EXPECT_NEAR(mass, mj_getTotalmass(m.get()), 1e-12);
+  // The free root starts where the file puts the torso: pos="0 0 1.5", identity orientation.
+  EXPECT_EQ(robot.q0.head<7>(), (VecX(7) << 0, 0, 1.5, 1, 0, 0, 0).finished());
+  EXPECT_EQ(robot.joint_order.size(), 21u);
+  EXPECT_EQ(robot.joint_order.front(), "abdomen_z");
+  ASSERT_EQ(robot.actuators.size(), 21u);
+  // <motor name="right_hip_y" gear="120" joint="right_hip_y"/> with ctrlrange -1 1 (defaults).
+  const MjcfActuator& hip = robot.actuators[5];
+  EXPECT_EQ(hip.name, "right_hip_y");
+  EXPECT_EQ(hip.kind, MjcfActuatorKind::motor);
+  EXPECT_EQ(hip.gear, 120.0);
+  EXPECT_EQ(hip.ctrl_upper, 1.0);
+  EXPECT_EQ(hip.actuator.kind, ActuatorKind::none);
+  EXPECT_EQ(robot.effort_limits.at("right_hip_y"), 120.0);
+  EXPECT_EQ(model.dof_names[static_cast<size_t>(hip.dof)], "right_hip_y");
+  // armature=".01" for every joint (class "body").
+  EXPECT_EQ(model.armature[hip.dof], 0.01);
+  // One line each: contacts (20 colliding geoms, the floor among them), the springs (every joint
+  // but the elbows, stiffness="0"), damping.
+  ASSERT_EQ(robot.warnings.size(), 3u);
+  EXPECT_EQ(robot.warnings[0], "contacts are not simulated (20 geoms collide in MuJoCo)");
+  EXPECT_NE(robot.warnings[1].find("stiffness"), std::string::npos);
+  EXPECT_NE(robot.warnings[1].find("'left_ankle_x'"), std::string::npos);
+  EXPECT_EQ(robot.warnings[1].find("elbow"), std::string::npos);
+  EXPECT_NE(robot.warnings[2].find("damping"), std::string::npos);
+  for (const std::string& w : robot.warnings) EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+}
+
+// fixed_base welds the free root where the file puts it: our fixed-base mass matrix and gravity
+// torques are the hinge block of MuJoCo's floating ones with the root at that pose.
+TEST(MjcfImport, FixedBaseWeldsTheFreeRootWhereItStands) {
+  const char* const tilted = R"(<mujoco>
+  <worldbody>
+    <body name="trunk" pos="0.3 -0.2 1" euler="20 -30 45">
+      <freejoint/>
+      <inertial pos="0 0 0" mass="4" diaginertia="0.1 0.1 0.1"/>
+      <body name="arm" pos="0.2 0 0">
+        <joint name="shoulder" axis="0 1 0" pos="0 0 0.05"/>
+        <inertial pos="0.2 0 0.1" mass="1" diaginertia="0.01 0.02 0.02"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)";
+  const MjcfRobot robot = parse_mjcf(tilted, "tilted.xml");
+  MjModelPtr m = mujoco_model(tilted);
+  ASSERT_NE(m, nullptr);
+  ASSERT_EQ(robot.model->nv, 1);
+  EXPECT_EQ(robot.root_joint, "root_joint");  // the free joint has no name
+  MjDataPtr d(mj_makeData(m.get()));
+  m->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_PASSIVE | mjDSBL_ACTUATION;
+  Data data(*robot.model);
+  for (double angle : {-1.0, 0.3, 2.0}) {
+    std::copy(m->qpos0, m->qpos0 + m->nq, d->qpos);
+    d->qpos[7] = angle;
+    mj_forward(m.get(), d.get());
+    MatX M(m->nv, m->nv);
+    mj_fullM(m.get(), M.data(), d->qM);
+    const VecX q = VecX::Constant(1, angle);
+    EXPECT_NEAR(crba(*robot.model, data, q)(0, 0), M(6, 6), 1e-12);
+    EXPECT_NEAR(generalized_gravity(*robot.model, data, q)[0], d->qfrc_bias[6], 1e-12);
+  }
+}
+
+// With a force drive of stiffness k on every hinge and the torso welded, the humanoid comes to a
+// standstill where the drives hold it against gravity: each drive's force equals MuJoCo's
+// gravity torque at the final q (its bias forces at rest, hinge rows), and no joint deflects
+// further than the largest gravity torque over k. (The solver's stored qd is not zero at that
+// standstill: PhysX's velocity iteration leaves the drive's bias out of it, so q is what stays.)
+TEST(MjcfImport, HumanoidHoldsItsPoseWithDrivesOnAWeldedTorso) {
+  const MjcfRobot robot = load_mjcf(kHumanoid);
+  const double k = 2000.0;
+  SimulationOptions options;
+  options.dt = 0.005;
+  options.solver = SolverType::tgs;
+  Simulation sim(robot.model, options);
+  for (int dof = 0; dof < robot.model->nv; ++dof)
+    sim.set_drive(dof, Drive{DriveType::force, k, 100.0});
+  sim.step(500);
+  const VecX q_before = sim.q();
+  sim.step(100);
+  MjModelPtr m = mujoco_model(read(kHumanoid));
+  ASSERT_NE(m, nullptr);
+  MjDataPtr d(mj_makeData(m.get()));
+  std::copy(m->qpos0, m->qpos0 + 7, d->qpos);  // the torso where the file puts it
+  for (int i = 0; i < robot.model->nv; ++i) d->qpos[7 + i] = sim.q()[i];
+  mj_forward(m.get(), d.get());
+  const VecX g = Eigen::Map<const VecX>(d->qfrc_bias + 6, robot.model->nv);
+  const double g_max = g.cwiseAbs().maxCoeff();
+  const VecX q = sim.q();
+  EXPECT_LT((q - q_before).cwiseAbs().maxCoeff(), 1e-8);  // settled: 1e-9 in the last 100 steps
+  EXPECT_LT((VecX(sim.drive_force()) - g).cwiseAbs().maxCoeff(), 0.01 * g_max)
+      << "drive " << VecX(sim.drive_force()).transpose() << "\ngravity " << g.transpose();
+  EXPECT_LT(q.cwiseAbs().maxCoeff(), g_max / k);
+  std::printf("humanoid hold: largest deflection %.4e rad (|g| / k = %.4e), |f - g| %.2e Nm of "
+              "|g| %.3f Nm\n", q.cwiseAbs().maxCoeff(), g_max / k,
+              (VecX(sim.drive_force()) - g).cwiseAbs().maxCoeff(), g_max);
+}
+
+std::string load_error(const std::string& xml, const std::string& name) {
+  try {
+    parse_mjcf(xml, name);
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(MjcfImport, BadFilesGiveOneLineNamingTheFile) {
+  try {
+    load_mjcf("/nonexistent/robot.xml");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("/nonexistent/robot.xml: cannot open", 0), 0u)
+        << e.what();
+  }
+  EXPECT_THAT(load_error("<mujoco><worldbody><body></worldbody></mujoco>", "bad.xml"),
+              testing::StartsWith("bad.xml: MuJoCo cannot load it: XML parse error"));
+  EXPECT_EQ(load_error(R"(<mujoco><worldbody><body name="a"><joint name="j"/>
+      <geom size=".1"/><site name="s1"/><body name="b"><joint name="k"/><geom size=".1"/>
+      <site name="s2"/></body></body></worldbody>
+      <tendon><spatial name="cable"><site site="s1"/><site site="s2"/></spatial></tendon>
+      </mujoco>)", "tendon.xml"),
+            "tendon.xml: <tendon> 'cable' (1 in all): tendons are not supported (featherdrive "
+            "has no tendon constraints or tendon actuators)");
+  EXPECT_EQ(load_error(R"(<mujoco><worldbody><body name="a"><joint name="j"/><geom size=".1"/>
+      <body name="b"><joint name="k"/><geom size=".1"/></body></body></worldbody>
+      <equality><joint name="couple" joint1="j" joint2="k"/></equality></mujoco>)", "eq.xml"),
+            "eq.xml: <equality><joint> 'couple' (1 in all): equality constraints are not "
+            "supported");
+  EXPECT_EQ(load_error(R"(<mujoco><worldbody>
+      <body name="a"><freejoint/><geom size=".1"/></body>
+      <body name="b"><freejoint/><geom size=".1"/></body></worldbody></mujoco>)", "two.xml"),
+            "two.xml: free bodies 'a', 'b': featherdrive simulates one articulation with at "
+            "most one free root");
+}
 
 }  // namespace
 }  // namespace featherdrive

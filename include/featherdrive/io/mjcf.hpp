@@ -61,6 +61,14 @@ MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& option
 MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options = {});
 
+/// The actuators as `featherdrive info` lists them: per actuator its joint, kind, gains, ranges
+/// and the featherdrive actuator it maps to (empty when there are none).
+std::string describe_actuators(const MjcfRobot& robot);
+
+/// A robot file of either kind, chosen by is_mjcf_file: load_mjcf's robot (the UrdfRobot part)
+/// or load_urdf's. Scenes' `model` key reads it.
+UrdfRobot load_robot(const std::filesystem::path& path, const UrdfOptions& options = {});
+
 /// Whether `path` names an MJCF file: a .xml extension, or else a root element <mujoco> (the
 /// first element of the file). URDF files have the extension .urdf or the root <robot>.
 bool is_mjcf_file(const std::filesystem::path& path);
