@@ -27,7 +27,9 @@
 #include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
-namespace featherdrive {
+// Names live in a namespace of their own: test files may be compiled several to a translation
+// unit (featherdrive_test_batches).
+namespace featherdrive::mjcf_import {
 namespace {
 
 const char* const kHumanoid = "/usr/share/mujoco/model/humanoid/humanoid.xml";
@@ -378,4 +380,4 @@ TEST(MjcfImport, BadFilesGiveOneLineNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace featherdrive
+}  // namespace featherdrive::mjcf_import
