@@ -394,7 +394,8 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
   c.convert_bodies();
   MjcfRobot& robot = c.robot;
   robot.rebuild();
-  const Model& model = *robot.model;
+  const std::shared_ptr<const Model> built = robot.model;  // rebuilt below with effort limits
+  const Model& model = *built;
 
   // MuJoCo's qpos0 in our q: same joint order, same layout per joint.
   robot.q0 = VecX::Zero(model.nq);
@@ -452,6 +453,8 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
     }
   if (!effort.empty()) robot.rebuild();
   warn_about_ignored(m, c, options, warnings);
+  if (!options.fixed_base && !robot.model->floating_base())
+    warnings.push_back("fixed_base is false but no body has a free joint: the root stays welded");
   robot.warnings = std::move(warnings);
   check_well_posed(robot, file);
   return std::move(robot);
