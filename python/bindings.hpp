@@ -50,6 +50,7 @@ void bind_model(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_batch(py::module_& m);
 void bind_io(py::module_& m);
+void bind_mjcf(py::module_& m);  // after bind_io: MjcfRobot is a UrdfRobot
 void bind_dynamics(py::module_& m);
 void bind_names(py::module_& m);
 

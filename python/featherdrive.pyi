@@ -575,6 +575,32 @@ def load_urdf(path: PathLike, options: UrdfOptions = ...) -> UrdfRobot:
     """Raises InputError (a ValueError) naming the file."""
 def parse_urdf(xml: str, name: str, options: UrdfOptions = ...) -> UrdfRobot: ...
 
+class MjcfActuator:
+    """An MJCF actuator on a hinge or slide and its featherdrive form."""
+    name: str
+    joint: str
+    dof: int
+    kind: str  # "motor" | "position" | "velocity"
+    gear: float
+    gain: float
+    force_lower: float
+    force_upper: float
+    ctrl_lower: float
+    ctrl_upper: float
+    actuator: ExplicitActuator
+
+class MjcfRobot(UrdfRobot):
+    """A robot read from MJCF (docs/mujoco_bridge.md): q is MuJoCo's qpos."""
+    actuators: list[MjcfActuator]
+    @property
+    def q0(self) -> Vector: ...
+
+def load_mjcf(path: PathLike, options: UrdfOptions | None = None,
+              fixed_base: bool | None = None) -> MjcfRobot:
+    """Through MuJoCo 2.2.2's compiler; raises InputError (a ValueError) naming the file."""
+def parse_mjcf(xml: str, name: str, options: UrdfOptions | None = None,
+               fixed_base: bool | None = None) -> MjcfRobot: ...
+
 class SineTarget:
     amplitude: float
     frequency: float

@@ -49,6 +49,7 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_simulation(m);
   bind_batch(m);
   bind_io(m);
+  bind_mjcf(m);
   bind_dynamics(m);
   bind_names(m);
 }

@@ -1,0 +1,55 @@
+"""fd.load_mjcf: MJCF robots through MuJoCo's compiler, the same robot type as fd.load_urdf.
+Expectations come from the file itself, read with xml.etree."""
+import math
+import pathlib
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+import featherdrive as fd
+
+HUMANOID = pathlib.Path("/usr/share/mujoco/model/humanoid/humanoid.xml")
+
+
+def file_joints():
+    """(name, range in degrees) of every <joint> in the file, in document order."""
+    root = ET.parse(HUMANOID).getroot()
+    return [(j.get("name"), [float(x) for x in j.get("range").split()])
+            for j in root.find("worldbody").iter("joint")]
+
+
+def test_humanoid_loads_as_a_urdf_robot():
+    robot = fd.load_mjcf(str(HUMANOID))
+    assert isinstance(robot, fd.UrdfRobot)
+    joints = file_joints()
+    assert robot.joint_order == [name for name, _ in joints]
+    model = robot.model
+    assert model.nv == len(joints) == 21
+    for name, (lower, upper) in joints:  # <compiler> default: degrees
+        dof = robot.joint_order.index(name)
+        assert model.lower_limit[dof] == pytest.approx(math.radians(lower), abs=1e-15)
+        assert model.upper_limit[dof] == pytest.approx(math.radians(upper), abs=1e-15)
+    np.testing.assert_array_equal(model.armature, np.full(21, 0.01))  # class "body"
+    assert robot.warnings[0] == "contacts are not simulated (20 geoms collide in MuJoCo)"
+    actuators = ET.parse(HUMANOID).getroot().find("actuator")
+    gears = {m.get("joint"): float(m.get("gear")) for m in actuators.iter("motor")}
+    assert {a.joint: a.gear for a in robot.actuators} == gears
+    assert all(a.kind == "motor" for a in robot.actuators)
+
+
+def test_free_root_and_qpos0():
+    robot = fd.load_mjcf(HUMANOID, fixed_base=False)
+    assert robot.model.nv == 27 and robot.root_joint == "root"
+    np.testing.assert_array_equal(robot.q0[:7], [0, 0, 1.5, 1, 0, 0, 0])  # <body pos="0 0 1.5">
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="no_such.xml: cannot open"):
+        fd.load_mjcf("no_such.xml")
+    with pytest.raises(ValueError, match=r"tendon.xml: <tendon> 'c'"):
+        fd.parse_mjcf('<mujoco><worldbody><body><joint/><geom size=".1"/><site name="a"/>'
+                      '<site name="b" pos="0 0 1"/></body></worldbody><tendon><spatial name="c">'
+                      '<site site="a"/><site site="b"/></spatial></tendon></mujoco>', "tendon.xml")
+    with pytest.raises(TypeError):
+        fd.load_mjcf(str(HUMANOID), fixed_base="yes")
