@@ -2,7 +2,7 @@
 
 #include <mujoco/mujoco.h>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -364,21 +364,21 @@ void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions&
                        " is not used; gravity is " + format_vec3(options.gravity));
 }
 
-// A massless link or parallel axes in one body can leave a dof without inertia; ABA would divide
-// by zero. MuJoCo's mass matrix (armature included) is checked at qpos0.
+// A massless link or parallel axes in one body can leave a direction of motion without inertia;
+// ABA would divide by zero. The mass matrix (armature included) is checked at qpos0.
 void check_well_posed(const MjcfRobot& robot, const std::string& file) {
   const Model& model = *robot.model;
   if (model.nv == 0) return;
   Data data(model);
-  const MatX& M = crba(model, data, robot.q0);
-  const Eigen::LDLT<MatX> ldlt(M);
-  const double scale = M.diagonal().cwiseAbs().maxCoeff();
-  const VecX pivots = ldlt.vectorD();
-  for (int i = 0; i < model.nv; ++i)
-    if (!(pivots[i] > 1e-12 * scale))
-      fail(file, "the mass matrix is singular at qpos0 (dof '" +
-                     model.dof_names[static_cast<size_t>(i)] +
-                     "' has no inertia of its own: a massless body, or joints with one axis)");
+  const Eigen::SelfAdjointEigenSolver<MatX> eigen(crba(model, data, robot.q0));
+  const VecX& lambda = eigen.eigenvalues();  // ascending
+  if (lambda[0] > 1e-12 * lambda[model.nv - 1]) return;
+  Eigen::Index dof = 0;
+  eigen.eigenvectors().col(0).cwiseAbs().maxCoeff(&dof);
+  fail(file, "the mass matrix is singular at qpos0 (eigenvalue " + format_double(lambda[0]) +
+                 " of largest " + format_double(lambda[model.nv - 1]) + ", mostly dof '" +
+                 model.dof_names[static_cast<size_t>(dof)] +
+                 "'): a massless body, or two joints of one body on one axis");
 }
 
 MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& options,

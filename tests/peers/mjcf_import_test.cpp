@@ -377,6 +377,12 @@ TEST(MjcfImport, BadFilesGiveOneLineNamingTheFile) {
       <body name="b"><freejoint/><geom size=".1"/></body></worldbody></mujoco>)", "two.xml"),
             "two.xml: free bodies 'a', 'b': featherdrive simulates one articulation with at "
             "most one free root");
+  // Two hinges of one body on one axis: M = [I I; I I] has no inertia along (1, -1).
+  EXPECT_THAT(load_error(R"(<mujoco><worldbody><body name="a"><joint name="j1" axis="0 0 1"/>
+      <joint name="j2" axis="0 0 1"/><geom size=".1"/></body></worldbody></mujoco>)", "axis.xml"),
+              testing::MatchesRegex("axis.xml: the mass matrix is singular at qpos0 \\(eigenvalue "
+                                    ".* mostly dof 'j[12]'\\): a massless body, or two joints of "
+                                    "one body on one axis"));
 }
 
 }  // namespace
