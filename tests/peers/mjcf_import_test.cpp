@@ -25,6 +25,7 @@
 #include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/io/mjcf.hpp"
+#include "featherdrive/sim/explicit_actuator.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 // Names live in a namespace of their own: test files may be compiled several to a translation
@@ -338,6 +339,67 @@ TEST(MjcfImport, HumanoidHoldsItsPoseWithDrivesOnAWeldedTorso) {
   std::printf("humanoid hold: largest deflection %.4e rad (|g| / k = %.4e), |f - g| %.2e Nm of "
               "|g| %.3f Nm\n", q.cwiseAbs().maxCoeff(), g_max / k,
               (VecX(sim.drive_force()) - g).cwiseAbs().maxCoeff(), g_max);
+}
+
+// Position and velocity actuators with gears and force ranges: the featherdrive form of each
+// (ideal_pd, target ctrl / gear) gives the joint effort MuJoCo's actuator gives (qfrc_actuator)
+// at random states and controls, saturated ones included.
+TEST(MjcfImport, PositionAndVelocityActuatorsGiveMuJoCosEfforts) {
+  const char* const xml = R"(<mujoco>
+  <worldbody>
+    <body name="a">
+      <joint name="hinge" axis="0 1 0"/>
+      <geom size=".1"/>
+      <body name="b" pos="0 0 -0.5">
+        <joint name="slide" type="slide" axis="1 0 0"/>
+        <geom size=".1"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="p" joint="hinge" kp="300" gear="2.5" forcelimited="true" forcerange="-40 40"/>
+    <velocity name="v" joint="slide" kv="20" gear="-3"/>
+    <motor name="m" joint="slide" gear="7" ctrllimited="true" ctrlrange="-2 2"/>
+  </actuator>
+</mujoco>)";
+  const MjcfRobot robot = parse_mjcf(xml, "actuators.xml");
+  MjModelPtr m = mujoco_model(xml);
+  ASSERT_NE(m, nullptr);
+  ASSERT_EQ(robot.actuators.size(), 3u);
+  const MjcfActuator& p = robot.actuators[0];
+  const MjcfActuator& v = robot.actuators[1];
+  EXPECT_EQ(p.kind, MjcfActuatorKind::position);
+  EXPECT_EQ(v.kind, MjcfActuatorKind::velocity);
+  EXPECT_EQ(robot.actuators[2].kind, MjcfActuatorKind::motor);
+  EXPECT_EQ(p.actuator.stiffness, 300.0 * 2.5 * 2.5);
+  EXPECT_EQ(p.actuator.effort_limit, 2.5 * 40.0);
+  EXPECT_EQ(v.actuator.damping, 20.0 * 9.0);
+  // Informative joint limits, summed per joint: 2.5 * 40 on the hinge; the slide's velocity
+  // actuator has no force bound, so its 7 * 2 from the motor becomes unbounded.
+  EXPECT_EQ(robot.effort_limits.at("hinge"), 100.0);
+  EXPECT_EQ(robot.effort_limits.at("slide"), std::numeric_limits<double>::infinity());
+  MjDataPtr d(mj_makeData(m.get()));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int saturated = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    for (int i = 0; i < 2; ++i) {
+      d->qpos[i] = 0.2 * u(rng);
+      d->qvel[i] = u(rng);
+    }
+    d->ctrl[0] = 0.5 * u(rng);
+    d->ctrl[1] = u(rng);
+    d->ctrl[2] = 0.0;
+    mj_forward(m.get(), d.get());
+    const double hinge = actuator_effort(p.actuator, d->qpos[p.dof], d->qvel[p.dof],
+                                         {d->ctrl[0] / p.gear, 0.0, 0.0});
+    const double slide = actuator_effort(v.actuator, d->qpos[v.dof], d->qvel[v.dof],
+                                         {0.0, d->ctrl[1] / v.gear, 0.0});
+    EXPECT_NEAR(hinge, d->qfrc_actuator[p.dof], 1e-12);
+    EXPECT_NEAR(slide, d->qfrc_actuator[v.dof], 1e-12);
+    saturated += std::abs(hinge) == 100.0;
+  }
+  EXPECT_GT(saturated, 0);  // the forcerange clip was exercised
 }
 
 std::string load_error(const std::string& xml, const std::string& name) {
