@@ -402,6 +402,30 @@ TEST(MjcfImport, PositionAndVelocityActuatorsGiveMuJoCosEfforts) {
   EXPECT_GT(saturated, 0);  // the forcerange clip was exercised
 }
 
+// Scenes and `info` pick the loader by the file's first element; .urdf is always URDF.
+TEST(MjcfImport, LoadRobotTellsMjcfFromUrdf) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() /
+                       ("featherdrive_mjcf_kind_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string mjcf = "<?xml version=\"1.0\"?>\n<!-- <robot> in a comment -->\n"
+                           "<mujoco model=\"m\"><worldbody><body name=\"b\"><joint/>"
+                           "<geom size=\".1\"/></body></worldbody></mujoco>\n";
+  const std::string urdf = "<?xml version=\"1.0\"?>\n<robot name=\"r\"><link name=\"base\"/>"
+                           "</robot>\n";
+  std::ofstream(dir / "mjcf.xml") << mjcf;
+  std::ofstream(dir / "urdf.xml") << urdf;
+  std::ofstream(dir / "mjcf.urdf") << mjcf;
+  EXPECT_TRUE(is_mjcf_file(dir / "mjcf.xml"));
+  EXPECT_FALSE(is_mjcf_file(dir / "urdf.xml"));
+  EXPECT_FALSE(is_mjcf_file(dir / "mjcf.urdf"));
+  EXPECT_TRUE(is_mjcf_file(dir / "missing.xml"));  // the MJCF loader reports it
+  EXPECT_EQ(load_robot(dir / "mjcf.xml").name, "m");
+  EXPECT_EQ(load_robot(dir / "urdf.xml").name, "r");
+  EXPECT_THROW(load_robot(dir / "mjcf.urdf"), InputError);  // urdfdom refuses <mujoco>
+  fs::remove_all(dir);
+}
+
 std::string load_error(const std::string& xml, const std::string& name) {
   try {
     parse_mjcf(xml, name);
