@@ -57,6 +57,14 @@ void featherdrive::python::bind_mjcf(py::module_& m) {
           "MuJoCo's qpos0 as featherdrive's q (nq,), a copy: q equals MuJoCo's qpos");
 
   m.def(
+      "apply_mjcf_actuators",
+      [](const MjcfRobot& robot, Simulation& sim) {
+        locked(sim, [&] { apply_mjcf_actuators(robot, sim); });
+      },
+      py::arg("robot"), py::arg("sim"),
+      "Gives sim the explicit ideal_pd form of robot's position and velocity actuators (one per "
+      "joint, gains summed); targets are ctrl / gear.");
+  m.def(
       "load_mjcf",
       [](const std::filesystem::path& path, py::handle options, py::handle fixed_base) {
         return load_mjcf(path, mjcf_options(options, fixed_base, "load_mjcf"));

@@ -595,6 +595,8 @@ class MjcfRobot(UrdfRobot):
     @property
     def q0(self) -> Vector: ...
 
+def apply_mjcf_actuators(robot: MjcfRobot, sim: Simulation) -> None:
+    """Position and velocity actuators as explicit ideal_pd actuators; targets ctrl / gear."""
 def load_mjcf(path: PathLike, options: UrdfOptions | None = None,
               fixed_base: bool | None = None) -> MjcfRobot:
     """Through MuJoCo 2.2.2's compiler; raises InputError (a ValueError) naming the file."""

@@ -53,3 +53,17 @@ def test_bad_input():
                       '<site site="a"/><site site="b"/></spatial></tendon></mujoco>', "tendon.xml")
     with pytest.raises(TypeError):
         fd.load_mjcf(str(HUMANOID), fixed_base="yes")
+
+
+def test_position_actuator_becomes_an_explicit_pd():
+    xml = ('<mujoco><worldbody><body><joint name="j"/><geom size=".1"/></body></worldbody>'
+           '<actuator><position joint="j" kp="30" gear="2" forcelimited="true" '
+           'forcerange="-5 5"/></actuator></mujoco>')
+    robot = fd.parse_mjcf(xml, "pd.xml")
+    (a,) = robot.actuators
+    assert a.kind == "position" and a.gain == 30 and a.gear == 2
+    sim = fd.Simulation(robot.model)
+    fd.apply_mjcf_actuators(robot, sim)
+    # MuJoCo: joint effort = gear * clip(kp (ctrl - gear q), forcerange).
+    assert sim.actuator("j").stiffness == 30 * 2 ** 2
+    assert sim.actuator("j").effort_limit == 2 * 5

@@ -15,6 +15,7 @@
 #include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
+#include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
 namespace {
@@ -512,6 +513,20 @@ MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
   }
   mj_deleteVFS(vfs.get());
   return robot;
+}
+
+void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim) {
+  std::map<int, ExplicitActuator> by_dof;
+  for (const MjcfActuator& a : robot.actuators) {
+    if (a.actuator.kind == ActuatorKind::none) continue;
+    const auto [it, first] = by_dof.emplace(a.dof, a.actuator);
+    if (first) continue;
+    ExplicitActuator& both = it->second;
+    both.stiffness += a.actuator.stiffness;
+    both.damping += a.actuator.damping;
+    both.effort_limit += a.actuator.effort_limit;
+  }
+  for (const auto& [dof, actuator] : by_dof) sim.set_actuator(dof, actuator);
 }
 
 std::string describe_actuators(const MjcfRobot& robot) {

@@ -402,6 +402,36 @@ TEST(MjcfImport, PositionAndVelocityActuatorsGiveMuJoCosEfforts) {
   EXPECT_GT(saturated, 0);  // the forcerange clip was exercised
 }
 
+// A position and a velocity actuator on one hinge (MuJoCo 2.2's PD idiom) become one ideal_pd
+// actuator in a Simulation, whose effort is the sum of MuJoCo's two while neither saturates.
+TEST(MjcfImport, PositionAndVelocityOnOneJointBecomeOnePdActuator) {
+  const char* const xml = R"(<mujoco>
+  <worldbody>
+    <body name="a"><joint name="hinge" axis="0 1 0"/><geom size=".1"/></body>
+  </worldbody>
+  <actuator>
+    <position name="p" joint="hinge" kp="50" gear="2"/>
+    <velocity name="v" joint="hinge" kv="4" gear="2"/>
+  </actuator>
+</mujoco>)";
+  const MjcfRobot robot = parse_mjcf(xml, "pd.xml");
+  MjModelPtr m = mujoco_model(xml);
+  ASSERT_NE(m, nullptr);
+  Simulation sim(robot.model);
+  apply_mjcf_actuators(robot, sim);
+  ASSERT_TRUE(sim.has_actuator(0));
+  EXPECT_EQ(sim.actuator(0).stiffness, 200.0);
+  EXPECT_EQ(sim.actuator(0).damping, 16.0);
+  MjDataPtr d(mj_makeData(m.get()));
+  d->qpos[0] = 0.3;
+  d->qvel[0] = -1.2;
+  d->ctrl[0] = 0.4;
+  d->ctrl[1] = 0.5;
+  mj_forward(m.get(), d.get());
+  EXPECT_NEAR(actuator_effort(sim.actuator(0), 0.3, -1.2, {0.4 / 2, 0.5 / 2, 0.0}),
+              d->qfrc_actuator[0], 1e-12);
+}
+
 // Scenes and `info` pick the loader by the file's first element; .urdf is always URDF.
 TEST(MjcfImport, LoadRobotTellsMjcfFromUrdf) {
   namespace fs = std::filesystem;

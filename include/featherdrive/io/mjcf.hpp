@@ -61,6 +61,14 @@ MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& option
 MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options = {});
 
+class Simulation;
+/// Gives `sim` (a simulation of robot.model) each position and velocity actuator's explicit
+/// ideal_pd form (MjcfActuator::actuator); a position and a velocity actuator on one joint become
+/// one actuator with both gains and the sum of their effort limits (the same effort while neither
+/// saturates). Motors give nothing. Targets stay the caller's: ctrl / gear. Throws
+/// std::invalid_argument when a dof already has an implicit drive.
+void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim);
+
 /// The actuators as `featherdrive info` lists them: per actuator its joint, kind, gains, ranges
 /// and the featherdrive actuator it maps to (empty when there are none).
 std::string describe_actuators(const MjcfRobot& robot);
