@@ -180,7 +180,8 @@ const char* const kMultiJoint = R"(<mujoco model="multi">
   </worldbody>
 </mujoco>)";
 
-// Ball joints: one at the body origin, one at an offset below a hinge.
+// Ball joints: one at the body origin, one at an offset below a hinge, one after a hinge in the
+// same body (MuJoCo refuses a ball followed by a rotation).
 const char* const kBall = R"(<mujoco model="ball">
   <compiler angle="radian"/>
   <worldbody>
@@ -193,6 +194,11 @@ const char* const kBall = R"(<mujoco model="ball">
         <body name="low" pos="0.1 0 -0.4">
           <joint name="b2" type="ball" pos="0.02 -0.03 0.04"/>
           <inertial pos="0 0.1 -0.1" quat="0.6 0.8 0 0" mass="0.5" diaginertia="0.004 0.003 0.002"/>
+        </body>
+        <body name="wrist" pos="0 0.2 -0.3" euler="0.4 0 0.2">
+          <joint name="twist" type="hinge" axis="0 0 1" pos="0 0.03 0"/>
+          <joint name="b3" type="ball" pos="0.01 0 0.02"/>
+          <inertial pos="0.02 0 -0.1" mass="0.3" diaginertia="0.002 0.003 0.001"/>
         </body>
       </body>
     </body>
