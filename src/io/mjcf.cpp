@@ -9,6 +9,7 @@
 #include <cstring>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -57,7 +58,7 @@ Mat3 rotation(const mjtNum* quat) {
 
 // MuJoCo's compiler reports warnings through mju_user_warning while it loads; keep them for
 // UrdfRobot::warnings instead of MuJoCo's default (stdout and MUJOCO_LOG.TXT).
-thread_local std::vector<std::string>* collected_warnings = nullptr;
+std::vector<std::string>* collected_warnings = nullptr;  // set while `loading` is held
 void collect_warning(const char* text) {
   if (collected_warnings) collected_warnings->push_back("MuJoCo: " + one_line(text));
 }
@@ -467,6 +468,9 @@ MjcfRobot load(const char* filename, const mjVFS* vfs, const std::string& file,
   char error[1024] = "";
   MjModelPtr m;
   {
+    // mju_user_warning is MuJoCo's global: one load at a time swaps it.
+    static std::mutex loading;
+    const std::lock_guard<std::mutex> lock(loading);
     const WarningCapture capture(warnings);
     m.reset(mj_loadXML(filename, vfs, error, sizeof error));
   }

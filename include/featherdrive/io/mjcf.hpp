@@ -54,6 +54,7 @@ struct MjcfRobot : UrdfRobot {
 /// line naming the file: MuJoCo's own load error, a tendon or equality constraint (refused,
 /// naming the element and its name), several free bodies, a free joint not alone in its body.
 /// Contacts, joint springs, ball ranges and unsupported actuators are warned about and ignored.
+/// Loads from several threads run one at a time (MuJoCo's warning hook is a global).
 MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options = {});
 
 /// The same from a string (through MuJoCo's virtual file system); `name` stands for the file in
