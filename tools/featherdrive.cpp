@@ -23,6 +23,7 @@
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/files.hpp"
+#include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/trajectory.hpp"
 
@@ -233,6 +234,12 @@ int simulate(const SimulateArgs& args) {
 int info(const std::string& urdf, bool floating) {
   UrdfOptions options;
   options.fixed_base = !floating;
+  if (is_mjcf_file(urdf)) {  // MJCF: the robot, then what its actuators become
+    const MjcfRobot robot = load_mjcf(urdf, options);
+    print_warnings(robot.warnings);
+    std::cout << describe(robot) << describe_actuators(robot);
+    return 0;
+  }
   const UrdfRobot robot = load_urdf(urdf, options);
   print_warnings(robot.warnings);
   std::cout << describe(robot);
@@ -270,8 +277,8 @@ int main(int argc, char** argv) {
   std::string urdf;
   bool floating = false;
   CLI::App* info_cmd =
-      app.add_subcommand("info", "Show a URDF robot: tree, dofs, masses, inertias, limits");
-  info_cmd->add_option("robot", urdf, "URDF file")->required();
+      app.add_subcommand("info", "Show a URDF or MJCF robot: tree, dofs, masses, inertias, limits");
+  info_cmd->add_option("robot", urdf, "URDF or MJCF (.xml) file")->required();
   info_cmd->add_flag("--floating", floating, "Import with a floating root instead of a fixed base");
 
   ComparePhysxArgs cmp_args;

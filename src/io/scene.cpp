@@ -17,6 +17,7 @@
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
+#include "featherdrive/io/mjcf.hpp"
 
 namespace featherdrive {
 namespace {
@@ -475,7 +476,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     else if (effort != "none")
       r.fail("urdf_effort", root["urdf_effort"], "must be none, max_force or effort_limit");
   }
-  scene.robot = load_urdf(scene.model_path, urdf);
+  scene.robot = load_robot(scene.model_path, urdf);  // URDF or MJCF
   const Model* m = scene.robot.model.get();
 
   if (root["dt"]) {

@@ -242,6 +242,13 @@ Model ModelBuilder::build() const {
   model.links.resize(order.size());
   std::vector<double> armature, lower, upper, effort, velocity, damping, friction;
   std::vector<bool> can_move(order.size(), false);
+  // A moving link may be massless when a link below it has mass (the links of an MJCF body with
+  // several joints): its dof then moves that mass, so ABA's divisor is not zero.
+  std::vector<bool> mass_below(order.size(), false);
+  for (int k = static_cast<int>(order.size()) - 1; k > 0; --k) {
+    const int p = new_index[parent[order[k]]];
+    mass_below[p] = mass_below[p] || mass_below[k] || links_[order[k]].mass > 0.0;
+  }
   double total_mass = 0.0, inertia_sum = 0.0;
   for (int k = 0; k < static_cast<int>(order.size()); ++k) {
     const LinkSpec& s = links_[order[k]];
@@ -283,7 +290,7 @@ Model ModelBuilder::build() const {
       case JointType::fixed: break;
     }
 
-    set_link_inertial(link, s.mass, s.com, s.inertia, can_move[k]);
+    set_link_inertial(link, s.mass, s.com, s.inertia, can_move[k] && !mass_below[k]);
     total_mass += s.mass;
     inertia_sum += link.inertia.cwiseAbs().sum();
     if (!std::isfinite(total_mass) || !std::isfinite(inertia_sum))

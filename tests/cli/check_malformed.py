@@ -18,7 +18,7 @@ def main():
     for line in lines[1:]:
         if line.startswith("file: "):
             named = line[len("file: "):]
-    command = "info" if path.endswith(".urdf") else "simulate"
+    command = "info" if path.endswith((".urdf", ".xml")) else "simulate"
     args = [cli, command, path] + (["--steps", "2"] if command == "simulate" else [])
     run = subprocess.run(args, capture_output=True, text=True, timeout=60)
     errors = []

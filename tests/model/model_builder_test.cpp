@@ -13,9 +13,11 @@
 #include <type_traits>
 #include <vector>
 
+#include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
@@ -26,7 +28,7 @@ using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 static_assert(std::is_base_of_v<std::invalid_argument, ModelError>);
 
@@ -241,6 +243,27 @@ TEST(ModelBuilderValidation, MassNotPositiveOnAMovingLink) {
             "model: link 'arm': mass = 0 must be > 0 for a link that can move");
   EXPECT_EQ(build_error(base_and_arm([](LinkSpec& l) { l.mass = -2.0; })),
             "model: link 'arm': mass = -2 must be > 0 for a link that can move");
+}
+
+TEST(ModelBuilderValidation, MasslessMovingLinkAboveAMass) {
+  // Two hinges at one point (an MJCF body with two joints): the first link is massless, its dof
+  // moves the second link's mass. At q = 0 the mass matrix is the inertia about the joint point,
+  // I_o = I_c + m (|c|^2 1 - c c^T), projected on the axes y and x.
+  const double m = 2.0;
+  const Vec3 c(0.1, 0.05, -0.5);
+  const Mat3 I_c = test::box_inertia(m, Vec3(0.1, 0.2, 1.0));
+  ModelBuilder b;
+  b.add_link(base_link());
+  b.add_link(make_link("arm", "base", 0.0, Vec3::Zero(), Mat3::Zero(),
+                       revolute_joint("pitch", Vec3::UnitY(), Vec3(0, 0, 0.25))));
+  b.add_link(make_link("fore", "arm", m, c, I_c, revolute_joint("roll", Vec3::UnitX())));
+  const Model model = b.build();
+  Data data(model);
+  const MatX& M = crba(model, data, VecX::Zero(2));
+  const Mat3 I_o = I_c + m * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
+  EXPECT_NEAR(M(0, 0), I_o(1, 1), 1e-15);
+  EXPECT_NEAR(M(0, 1), I_o(1, 0), 1e-15);
+  EXPECT_NEAR(M(1, 1), I_o(0, 0), 1e-15);
 }
 
 TEST(ModelBuilderValidation, MasslessLinkFixedToAMovingLink) {

@@ -1,0 +1,564 @@
+#include "featherdrive/io/mjcf.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include "featherdrive/algorithm/crba.hpp"
+#include "featherdrive/core/format.hpp"
+#include "featherdrive/io/files.hpp"
+
+namespace featherdrive {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  throw InputError(file + ": " + what);
+}
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+using MjModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
+
+// MuJoCo's messages span lines ("Error: ...\nElement 'body', line 3"); ours are one line.
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n' || c == '\r') {
+      if (!out.empty() && out.back() != ' ') out += out.back() == ':' ? " " : "; ";
+    } else {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  return out;
+}
+
+std::string name_of(const mjModel* m, mjtObj type, int id, const char* fallback) {
+  const char* name = mj_id2name(m, type, id);
+  return name && *name ? std::string(name) : std::string(fallback) + std::to_string(id);
+}
+
+Vec3 vec3(const mjtNum* p) { return Vec3(p[0], p[1], p[2]); }
+Mat3 rotation(const mjtNum* quat) {
+  return Quat(quat[0], quat[1], quat[2], quat[3]).normalized().toRotationMatrix();
+}
+
+// MuJoCo's compiler reports warnings through mju_user_warning while it loads; keep them for
+// UrdfRobot::warnings instead of MuJoCo's default (stdout and MUJOCO_LOG.TXT).
+thread_local std::vector<std::string>* collected_warnings = nullptr;
+void collect_warning(const char* text) {
+  if (collected_warnings) collected_warnings->push_back("MuJoCo: " + one_line(text));
+}
+
+struct WarningCapture {
+  explicit WarningCapture(std::vector<std::string>& into) : saved(mju_user_warning) {
+    collected_warnings = &into;
+    mju_user_warning = collect_warning;
+  }
+  ~WarningCapture() {
+    mju_user_warning = saved;
+    collected_warnings = nullptr;
+  }
+  WarningCapture(const WarningCapture&) = delete;
+  WarningCapture& operator=(const WarningCapture&) = delete;
+  void (*saved)(const char*);
+};
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "'" : ", '") + n + "'";
+  return out;
+}
+
+const char* equality_name(int type) {
+  switch (type) {
+    case mjEQ_CONNECT: return "connect";
+    case mjEQ_WELD: return "weld";
+    case mjEQ_JOINT: return "joint";
+    case mjEQ_TENDON: return "tendon";
+    case mjEQ_DISTANCE: return "distance";
+    default: return "unknown";
+  }
+}
+
+// A name no joint in `taken` has: base, then base_, base__, ...
+std::string free_name(std::string base, const std::set<std::string>& taken) {
+  while (taken.count(base)) base += "_";
+  return base;
+}
+
+// What MJCF cannot bring over whole: refused with one line, before anything is built.
+void refuse_unsupported(const mjModel* m, const std::string& file) {
+  if (m->ntendon > 0)
+    fail(file, "<tendon> '" + name_of(m, mjOBJ_TENDON, 0, "tendon") + "' (" +
+                   std::to_string(m->ntendon) +
+                   " in all): tendons are not supported (featherdrive has no tendon "
+                   "constraints or tendon actuators)");
+  if (m->neq > 0)
+    fail(file, "<equality><" + std::string(equality_name(m->eq_type[0])) + "> '" +
+                   name_of(m, mjOBJ_EQUALITY, 0, "equality") + "' (" + std::to_string(m->neq) +
+                   " in all): equality constraints are not supported");
+  std::vector<std::string> free_bodies;
+  for (int j = 0; j < m->njnt; ++j) {
+    if (m->jnt_type[j] != mjJNT_FREE) continue;
+    const int b = m->jnt_bodyid[j];
+    if (m->body_jntnum[b] != 1)
+      fail(file, "body '" + name_of(m, mjOBJ_BODY, b, "body") + "': free joint '" +
+                     name_of(m, mjOBJ_JOINT, j, "joint") +
+                     "' is not the body's only joint (not supported)");
+    free_bodies.push_back(name_of(m, mjOBJ_BODY, b, "body"));
+  }
+  if (free_bodies.size() > 1)
+    fail(file, "free bodies " + joined(free_bodies) +
+                   ": featherdrive simulates one articulation with at most one free root");
+}
+
+// The featherdrive form of actuator i, or a warning saying why it has none.
+bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator& out,
+                  std::string& why_not) {
+  out.name = name_of(m, mjOBJ_ACTUATOR, i, "actuator");
+  const std::string who = "actuator '" + out.name + "'";
+  if (m->actuator_trntype[i] != mjTRN_JOINT && m->actuator_trntype[i] != mjTRN_JOINTINPARENT) {
+    why_not = who + ": its transmission is not a joint; ignored";
+    return false;
+  }
+  const int j = m->actuator_trnid[2 * i];
+  out.joint = name_of(m, mjOBJ_JOINT, j, "joint");
+  if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
+    why_not = who + " on joint '" + out.joint +
+              "': only hinge and slide joints are driven; ignored";
+    return false;
+  }
+  if (m->actuator_dyntype[i] != mjDYN_NONE || m->actuator_gaintype[i] != mjGAIN_FIXED) {
+    why_not = who + ": activation dynamics or a non-fixed gain are not supported; ignored";
+    return false;
+  }
+  const mjtNum* gain = m->actuator_gainprm + mjNGAIN * i;
+  const mjtNum* bias = m->actuator_biasprm + mjNBIAS * i;
+  out.gain = gain[0];
+  out.gear = m->actuator_gear[6 * i];
+  const bool no_bias = m->actuator_biastype[i] == mjBIAS_NONE ||
+                       (bias[0] == 0.0 && bias[1] == 0.0 && bias[2] == 0.0);
+  if (m->actuator_biastype[i] != mjBIAS_NONE && m->actuator_biastype[i] != mjBIAS_AFFINE) {
+    why_not = who + ": a bias other than affine is not supported; ignored";
+    return false;
+  }
+  if (no_bias) {
+    out.kind = MjcfActuatorKind::motor;
+  } else if (bias[0] == 0.0 && bias[1] == -gain[0] && bias[2] == 0.0 && gain[0] > 0.0) {
+    out.kind = MjcfActuatorKind::position;
+  } else if (bias[0] == 0.0 && bias[1] == 0.0 && bias[2] == -gain[0] && gain[0] > 0.0) {
+    out.kind = MjcfActuatorKind::velocity;
+  } else {
+    why_not = who + ": gain " + format_double(gain[0]) + " with bias [" + format_double(bias[0]) +
+              ", " + format_double(bias[1]) + ", " + format_double(bias[2]) +
+              "] is neither a motor, a position nor a velocity actuator; ignored";
+    return false;
+  }
+  if (m->actuator_forcelimited[i]) {
+    out.force_lower = m->actuator_forcerange[2 * i];
+    out.force_upper = m->actuator_forcerange[2 * i + 1];
+  }
+  if (m->actuator_ctrllimited[i]) {
+    out.ctrl_lower = m->actuator_ctrlrange[2 * i];
+    out.ctrl_upper = m->actuator_ctrlrange[2 * i + 1];
+  }
+  out.dof = -1;
+  for (const Link& link : robot.model->links)
+    if (link.joint_name == out.joint) out.dof = link.v_index;
+  if (out.kind != MjcfActuatorKind::motor) {
+    const double gear2 = out.gear * out.gear;
+    out.actuator.kind = ActuatorKind::ideal_pd;
+    (out.kind == MjcfActuatorKind::position ? out.actuator.stiffness : out.actuator.damping) =
+        out.gain * gear2;
+    const double force = std::max(std::abs(out.force_lower), std::abs(out.force_upper));
+    if (std::isfinite(force) && force > 0.0) out.actuator.effort_limit = std::abs(out.gear) * force;
+  }
+  return true;
+}
+
+// The largest joint effort an actuator gives: gear times its force bound (forcerange, and for a
+// motor gain times ctrlrange).
+double effort_of(const MjcfActuator& a) {
+  double force = std::max(std::abs(a.force_lower), std::abs(a.force_upper));
+  const double ctrl = std::max(std::abs(a.ctrl_lower), std::abs(a.ctrl_upper));
+  if (a.kind == MjcfActuatorKind::motor) force = std::min(force, std::abs(a.gain) * ctrl);
+  return std::abs(a.gear) * force;
+}
+
+// The tree: one link per body, or a chain of links for a body with several joints (every link
+// but the last massless). A link frame is its body's frame moved by the body's joints so far and
+// shifted to the last joint's anchor (jnt_pos), so that a hinge turns it about its own origin.
+struct Converter {
+  const mjModel* m = nullptr;
+  std::string file;
+  UrdfOptions options;
+  MjcfRobot robot;
+  std::vector<std::string> link_of_body;  // the link a body's children hang from
+  std::vector<Vec3> anchor_of_body;       // that link's origin in the body frame
+  std::set<std::string> joint_names;
+  bool world_root = false;  // several top-level bodies, or one with hinge/slide/ball joints
+
+  void add(LinkSpec spec) { robot.links.push_back(std::move(spec)); }
+
+  void convert_bodies() {
+    for (int j = 0; j < m->njnt; ++j) joint_names.insert(name_of(m, mjOBJ_JOINT, j, "joint"));
+    std::vector<int> tops;
+    for (int b = 1; b < m->nbody; ++b)
+      if (m->body_parentid[b] == 0) tops.push_back(b);
+    if (tops.empty()) fail(file, "<worldbody> has no <body>: nothing to simulate");
+    const int first = tops.front();
+    const bool first_free = m->body_jntnum[first] == 1 &&
+                            m->jnt_type[m->body_jntadr[first]] == mjJNT_FREE;
+    world_root = tops.size() > 1 || !(m->body_jntnum[first] == 0 || first_free);
+    if (world_root && !options.fixed_base)
+      for (int b : tops)
+        if (m->body_jntnum[b] == 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE)
+          fail(file, "body '" + name_of(m, mjOBJ_BODY, b, "body") +
+                         "': a free body beside other top-level bodies or joints (one "
+                         "articulation with one root is supported; fixed_base welds it)");
+    link_of_body.assign(static_cast<size_t>(m->nbody), "");
+    anchor_of_body.assign(static_cast<size_t>(m->nbody), Vec3::Zero());
+    if (world_root) {
+      // MuJoCo's world body (a name no MJCF body may take) as a massless fixed root.
+      robot.root_link = "world";
+      robot.root_joint = free_name("root_joint", joint_names);
+      LinkSpec world;
+      world.name = "world";
+      world.joint = fixed_joint(robot.root_joint);
+      add(world);
+      link_of_body[0] = "world";
+    }
+    for (int b = 1; b < m->nbody; ++b) convert_body(b);
+  }
+
+  void convert_body(int b) {
+    const std::string body = name_of(m, mjOBJ_BODY, b, "body");
+    const int parent = m->body_parentid[b];
+    const bool is_root = !world_root && parent == 0;
+    // The body frame (before its joints move it) in the parent link frame.
+    const Vec3 position = vec3(m->body_pos + 3 * b) - anchor_of_body[parent];
+    const Mat3 R = rotation(m->body_quat + 4 * b);
+    const int n = m->body_jntnum[b];
+    const int first = m->body_jntadr[b];
+    LinkSpec spec;
+    spec.parent = is_root ? "" : link_of_body[parent];
+    if (n == 0 || m->jnt_type[first] == mjJNT_FREE) {
+      spec.name = body;
+      if (is_root) {
+        robot.root_link = body;
+        const char* free = n ? mj_id2name(m, mjOBJ_JOINT, first) : nullptr;
+        robot.root_joint = free && *free ? free : free_name("root_joint", joint_names);
+      }
+      const bool floating = n && !options.fixed_base;
+      spec.joint = floating ? floating_joint(robot.root_joint)
+                            : fixed_joint(is_root ? robot.root_joint
+                                                  : free_name(body + "_weld", joint_names),
+                                          position, rpy_from_rotation(R));
+      if (!is_root) joint_names.insert(spec.joint.name);
+      finish_body(b, spec, Vec3::Zero());
+      return;
+    }
+    Vec3 previous_anchor = Vec3::Zero();
+    for (int k = 0; k < n; ++k) {
+      const int j = first + k;
+      const std::string joint = name_of(m, mjOBJ_JOINT, j, "joint");
+      const Vec3 anchor = vec3(m->jnt_pos + 3 * j);
+      const Vec3 axis = vec3(m->jnt_axis + 3 * j);
+      // Joint frame in the previous link frame: the body frame at the anchor (k = 0), or the
+      // previous anchor moved to this one; a hinge's or slide's ref (qpos0) is taken back so
+      // that featherdrive's q equals MuJoCo's qpos.
+      Mat3 joint_R = k == 0 ? R : Mat3::Identity();
+      Vec3 joint_p = k == 0 ? Vec3(position + R * anchor) : Vec3(anchor - previous_anchor);
+      const double ref = m->qpos0[m->jnt_qposadr[j]];
+      JointSpec& js = spec.joint;
+      js = JointSpec{};
+      js.name = joint;
+      js.axis = axis;
+      switch (m->jnt_type[j]) {
+        case mjJNT_HINGE:
+          js.type = JointType::revolute;
+          if (ref != 0.0) joint_R = joint_R * Eigen::AngleAxisd(-ref, axis).toRotationMatrix();
+          break;
+        case mjJNT_SLIDE:
+          js.type = JointType::prismatic;
+          joint_p -= joint_R * (ref * axis);
+          break;
+        case mjJNT_BALL: js.type = JointType::spherical; break;
+        default: fail(file, "joint '" + joint + "': unknown type " +
+                                std::to_string(m->jnt_type[j]));
+      }
+      js.origin_xyz = joint_p;
+      js.origin_rpy = rpy_from_rotation(joint_R);
+      const int dof = m->jnt_dofadr[j];
+      const int nv = js.type == JointType::spherical ? 3 : 1;
+      js.armature.assign(m->dof_armature + dof, m->dof_armature + dof + nv);
+      if (std::all_of(js.armature.begin(), js.armature.end(), [](double a) { return a == 0; }))
+        js.armature.clear();
+      js.damping = m->dof_damping[dof];
+      js.friction = m->dof_frictionloss[dof];
+      if (m->jnt_limited[j] && nv == 1) {
+        js.lower_limit = m->jnt_range[2 * j];
+        js.upper_limit = m->jnt_range[2 * j + 1];
+      } else if (m->jnt_limited[j]) {
+        ball_ranges.push_back(joint);
+      }
+      if (m->jnt_stiffness[j] != 0.0) springs.push_back(joint);
+      if (js.damping != 0.0 || js.friction != 0.0) passive.push_back(joint);
+      robot.joint_order.push_back(joint);
+      spec.name = k + 1 == n ? body : body + "/" + joint;
+      if (k + 1 < n) {
+        add(spec);  // massless: only the body's last link carries its inertia
+        spec.parent = spec.name;
+      }
+      previous_anchor = anchor;
+    }
+    finish_body(b, spec, previous_anchor);
+  }
+
+  // The body's inertia on its last link, whose origin is `anchor` in the body frame.
+  void finish_body(int b, LinkSpec& spec, const Vec3& anchor) {
+    const Mat3 Ri = rotation(m->body_iquat + 4 * b);
+    spec.mass = m->body_mass[b];
+    spec.com = vec3(m->body_ipos + 3 * b) - anchor;
+    spec.inertia = Ri * vec3(m->body_inertia + 3 * b).asDiagonal() * Ri.transpose();
+    link_of_body[static_cast<size_t>(b)] = spec.name;
+    anchor_of_body[static_cast<size_t>(b)] = anchor;
+    add(spec);
+  }
+
+  std::vector<std::string> springs, passive, ball_ranges;
+};
+
+void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions& options,
+                        std::vector<std::string>& warnings) {
+  int colliding = 0;
+  for (int g = 0; g < m->ngeom; ++g)
+    colliding += (m->geom_contype[g] | m->geom_conaffinity[g]) != 0;
+  if (colliding > 0 && !(m->opt.disableflags & mjDSBL_CONTACT))
+    warnings.push_back("contacts are not simulated (" + std::to_string(colliding) +
+                       " geoms collide in MuJoCo)");
+  if (!c.springs.empty())
+    warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on joints " +
+                       joined(c.springs));
+  if (!c.passive.empty())
+    warnings.push_back("joint damping and frictionloss are recorded (Model::damping, friction), "
+                       "not simulated (a scene's joints.<name>.friction {static, dynamic} can "
+                       "give frictionloss) on joints " + joined(c.passive));
+  if (!c.ball_ranges.empty())
+    warnings.push_back("ball joint ranges (cones) are not simulated on joints " +
+                       joined(c.ball_ranges));
+  if (vec3(m->opt.gravity) != options.gravity)
+    warnings.push_back("<option gravity> = " + format_vec3(vec3(m->opt.gravity)) +
+                       " is not used; gravity is " + format_vec3(options.gravity));
+}
+
+// A massless link or parallel axes in one body can leave a dof without inertia; ABA would divide
+// by zero. MuJoCo's mass matrix (armature included) is checked at qpos0.
+void check_well_posed(const MjcfRobot& robot, const std::string& file) {
+  const Model& model = *robot.model;
+  if (model.nv == 0) return;
+  Data data(model);
+  const MatX& M = crba(model, data, robot.q0);
+  const Eigen::LDLT<MatX> ldlt(M);
+  const double scale = M.diagonal().cwiseAbs().maxCoeff();
+  const VecX pivots = ldlt.vectorD();
+  for (int i = 0; i < model.nv; ++i)
+    if (!(pivots[i] > 1e-12 * scale))
+      fail(file, "the mass matrix is singular at qpos0 (dof '" +
+                     model.dof_names[static_cast<size_t>(i)] +
+                     "' has no inertia of its own: a massless body, or joints with one axis)");
+}
+
+MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& options,
+                  std::vector<std::string> warnings) {
+  refuse_unsupported(m, file);
+  Converter c;
+  c.m = m;
+  c.file = file;
+  c.options = options;
+  c.robot.path = file;
+  c.robot.options = options;
+  c.robot.name = m->names;  // the model's name comes first in MuJoCo's name buffer
+  c.convert_bodies();
+  MjcfRobot& robot = c.robot;
+  robot.rebuild();
+  const Model& model = *robot.model;
+
+  // MuJoCo's qpos0 in our q: same joint order, same layout per joint.
+  robot.q0 = VecX::Zero(model.nq);
+  std::map<std::string, int> link_of;
+  for (int i = 0; i < model.num_links(); ++i) link_of.emplace(model.links[i].name, i);
+  for (int j = 0; j < m->njnt; ++j) {
+    const std::string name = name_of(m, mjOBJ_JOINT, j, "joint");
+    for (const Link& link : model.links)
+      if (link.joint_name == name && link.nq > 0)
+        robot.q0.segment(link.q_index, link.nq) =
+            Eigen::Map<const VecX>(m->qpos0 + m->jnt_qposadr[j], link.nq);
+  }
+  for (const Link& link : model.links)
+    if (link.joint_type == JointType::spherical) robot.q0[link.q_index] = 1.0;
+
+  // The file-order maps: MuJoCo's joint order is our link order, so dofs keep their order.
+  const size_t n = robot.joint_order.size();
+  robot.dof_of_urdf_joint.assign(n, -1);
+  robot.link_of_urdf_joint.assign(n, -1);
+  robot.urdf_joint_of_dof.assign(static_cast<size_t>(model.nv), -1);
+  robot.dof_order.clear();
+  for (int d = 0; d < model.nv; ++d) robot.dof_order.push_back(d);
+  for (size_t j = 0; j < n; ++j)
+    for (int i = 0; i < model.num_links(); ++i) {
+      const Link& link = model.links[i];
+      if (link.joint_name != robot.joint_order[j]) continue;
+      robot.link_of_urdf_joint[j] = i;
+      robot.dof_of_urdf_joint[j] = link.v_index;
+      for (int d = 0; d < link.nv; ++d)
+        robot.urdf_joint_of_dof[static_cast<size_t>(link.v_index + d)] = static_cast<int>(j);
+    }
+
+  std::map<std::string, double> effort;  // summed over each joint's actuators
+  for (int i = 0; i < m->nu; ++i) {
+    MjcfActuator actuator;
+    std::string why_not;
+    if (!map_actuator(m, i, robot, actuator, why_not)) {
+      warnings.push_back(why_not);
+      continue;
+    }
+    if (actuator.force_lower != -actuator.force_upper && actuator.kind != MjcfActuatorKind::motor)
+      warnings.push_back("actuator '" + actuator.name + "': forcerange [" +
+                         format_double(actuator.force_lower) + ", " +
+                         format_double(actuator.force_upper) +
+                         "] is not symmetric; effort_limit takes the larger bound");
+    effort[actuator.joint] += effort_of(actuator);
+    robot.actuators.push_back(std::move(actuator));
+  }
+  // Model::effort_limit and effort_limits are informative, as a URDF's <limit effort>.
+  for (LinkSpec& spec : robot.links)
+    if (spec.joint.type == JointType::revolute || spec.joint.type == JointType::prismatic) {
+      const auto it = effort.find(spec.joint.name);
+      robot.effort_limits[spec.joint.name] = spec.joint.effort_limit =
+          it == effort.end() ? kInf : it->second;
+    }
+  if (!effort.empty()) robot.rebuild();
+  warn_about_ignored(m, c, options, warnings);
+  robot.warnings = std::move(warnings);
+  check_well_posed(robot, file);
+  return std::move(robot);
+}
+
+MjcfRobot load(const char* filename, const mjVFS* vfs, const std::string& file,
+               const UrdfOptions& options) {
+  std::vector<std::string> warnings;
+  char error[1024] = "";
+  MjModelPtr m;
+  {
+    const WarningCapture capture(warnings);
+    m.reset(mj_loadXML(filename, vfs, error, sizeof error));
+  }
+  if (!m) fail(file, "MuJoCo cannot load it: " + one_line(error[0] ? error : "unknown error"));
+  if (error[0]) warnings.push_back("MuJoCo: " + one_line(error));
+  return convert(m.get(), file, options, std::move(warnings));
+}
+
+}  // namespace
+
+const char* to_string(MjcfActuatorKind kind) {
+  switch (kind) {
+    case MjcfActuatorKind::motor: return "motor";
+    case MjcfActuatorKind::position: return "position";
+    case MjcfActuatorKind::velocity: return "velocity";
+  }
+  return "unknown";
+}
+
+MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options) {
+  // Refuses folders, FIFOs and huge files with our one-line messages before MuJoCo reads it.
+  (void)read_input_file(path, "the MJCF file");
+  MjcfRobot robot = load(path.c_str(), nullptr, path.string(), options);
+  robot.path = path;
+  return robot;
+}
+
+MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
+                     const UrdfOptions& options) {
+  if (xml.find('\0') != std::string::npos) fail(name, "a NUL character in the text");
+  // mjVFS holds 2000 file names of 1000 bytes: too large for the stack.
+  const auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  const char* filename = "model.xml";
+  if (mj_makeEmptyFileVFS(vfs.get(), filename, static_cast<int>(xml.size())) != 0)
+    fail(name, "MuJoCo's virtual file system refused the text");
+  std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), filename)], xml.data(), xml.size());
+  MjcfRobot robot;
+  try {
+    robot = load(filename, vfs.get(), name, options);
+  } catch (...) {
+    mj_deleteVFS(vfs.get());
+    throw;
+  }
+  mj_deleteVFS(vfs.get());
+  return robot;
+}
+
+std::string describe_actuators(const MjcfRobot& robot) {
+  if (robot.actuators.empty()) return "";
+  std::ostringstream out;
+  out << "\nMJCF actuators (" << robot.actuators.size() << "):\n";
+  auto range = [](double lo, double hi) {
+    return std::isfinite(lo) || std::isfinite(hi)
+               ? "[" + format_double(lo) + ", " + format_double(hi) + "]"
+               : std::string("none");
+  };
+  for (const MjcfActuator& a : robot.actuators) {
+    out << "  " << a.name << ": " << to_string(a.kind) << " on " << a.joint << ", gain "
+        << format_double(a.gain) << ", gear " << format_double(a.gear) << ", forcerange "
+        << range(a.force_lower, a.force_upper) << ", ctrlrange "
+        << range(a.ctrl_lower, a.ctrl_upper) << " -> ";
+    if (a.actuator.kind == ActuatorKind::none)
+      out << "no drive (give one in the scene)\n";
+    else
+      out << "ideal_pd stiffness " << format_double(a.actuator.stiffness) << ", damping "
+          << format_double(a.actuator.damping) << ", effort_limit "
+          << format_double(a.actuator.effort_limit) << ", target ctrl / gear\n";
+  }
+  return out.str();
+}
+
+UrdfRobot load_robot(const std::filesystem::path& path, const UrdfOptions& options) {
+  if (is_mjcf_file(path)) return load_mjcf(path, options);
+  return load_urdf(path, options);
+}
+
+bool is_mjcf_file(const std::filesystem::path& path) {
+  if (path.extension() == ".urdf") return false;
+  std::string text;
+  try {
+    text = read_input_file(path);
+  } catch (const InputError&) {
+    return path.extension() == ".xml";  // the loader chosen reports the error
+  }
+  // The first element that is not a declaration, comment or doctype.
+  for (size_t i = text.find('<'); i != std::string::npos; i = text.find('<', i + 1)) {
+    if (text.compare(i, 4, "<!--") == 0) {
+      i = text.find("-->", i);
+      if (i == std::string::npos) break;
+      continue;
+    }
+    if (text.compare(i, 2, "<?") == 0 || text.compare(i, 2, "<!") == 0) continue;
+    return text.compare(i + 1, 6, "mujoco") == 0;
+  }
+  return path.extension() == ".xml";
+}
+
+}  // namespace featherdrive
