@@ -206,15 +206,20 @@ MujocoCommands::MujocoCommands(CLI::App& app) {
                      "Only the literal gains (the same numbers in both engines)");
   compare_args_.overrides.add_options(compare_);
 
-  translate_ =
-      app.add_subcommand("translate",
-                         "Translate a scene's drives to MuJoCo: write an MJCF with the translated "
-                         "actuators and print the match per joint");
-  translate_->add_option("scene", translate_args_.scene, "Scene file (YAML or JSON)")->required();
-  translate_->add_option("--to", translate_args_.to, "mujoco")
+  translate_ = app.add_subcommand(
+      "translate",
+      "Translate drive gains between engines: --to mujoco writes a scene's robot as MJCF with "
+      "translated actuators; --to physx writes a featherdrive scene from an MJCF's actuators; "
+      "both print the match per joint");
+  translate_
+      ->add_option("input", translate_args_.scene,
+                   "--to mujoco: a scene file; --to physx: an MJCF file")
+      ->required();
+  translate_->add_option("--to", translate_args_.to, "mujoco or physx")
       ->required()
-      ->check(CLI::IsMember({"mujoco"}));
-  translate_->add_option("--out", translate_args_.out, "The MJCF file to write")->required();
+      ->check(CLI::IsMember({"mujoco", "physx"}));
+  translate_->add_option("--out", translate_args_.out, "The MJCF (or scene) file to write")
+      ->required();
   translate_
       ->add_option("--integrator", translate_args_.integrator,
                    "MuJoCo's: euler (default) or implicit")

@@ -4,12 +4,48 @@
 #include "cli_common.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/io/mjcf_export.hpp"
+#include "featherdrive/io/mujoco_scene.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "mujoco_commands.hpp"
 
 using namespace featherdrive;
 
+namespace {
+
+// --to physx: SCENE is an MJCF; the output a featherdrive scene that reads it.
+int translate_to_physx_scene(const TranslateArgs& args) {
+  check_outputs({{"--out", args.out}}, {{"the MJCF", args.scene}});
+  SimulationOptions options;
+  args.overrides.apply(options);
+  const int steps = args.overrides.steps.value_or(240);
+  const SceneTranslation t = translate_mjcf_to_scene(args.scene, args.out, options, steps);
+  make_parent_folders(args.out);
+  AtomicFile out(args.out, "the scene");
+  out.stream() << t.yaml;
+  out.commit();
+  std::printf("%s: MuJoCo %s, timestep %.6g s, integrator %s -> featherdrive %s %d/%d\n",
+              args.scene.c_str(), mujoco_version().c_str(), t.dt, to_string(t.integrator),
+              to_string(options.solver), options.position_iterations, options.velocity_iterations);
+  std::printf(
+      "  per joint, at qpos0 (m = 1 / (M^-1)_jj); match: the largest |q| difference of\n"
+      "  the two 1-dof step responses / the step\n");
+  std::printf("  %-16s %10s %11s %11s %11s %11s %11s %10s  %s\n", "joint", "m", "MuJoCo kp", "kv",
+              "damping", "stiffness", "damping", "match", "");
+  for (const TranslatedJoint& j : t.joints) {
+    const PhysxTranslation& p = j.physx;
+    std::printf("  %-16s %10.4g %11.4g %11.4g %11.4g %11.4g %11.4g %10.2e  %s\n", j.joint.c_str(),
+                j.effective_inertia, j.mujoco.kp, j.mujoco.kv, j.mujoco.damping, p.drive.stiffness,
+                p.drive.damping, p.distance.step_response, p.exact ? "exact" : p.note.c_str());
+  }
+  for (const std::string& note : t.notes) std::printf("  note: %s\n", note.c_str());
+  std::printf("  scene: %s\n", args.out.c_str());
+  return 0;
+}
+
+}  // namespace
+
 int translate(const TranslateArgs& args) {
+  if (args.to == "physx") return translate_to_physx_scene(args);
   Scene scene = args.overrides.load(args.scene);
   check_outputs({{"--out", args.out}},
                 {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});

@@ -86,6 +86,22 @@ def main():
         # kd + dt kp for slider.yaml: 40 + 400 / 60 (eq. B7).
         check('damping="46.666666666666' in text, "the joint damping is kd + dt kp")
 
+    # --to physx: an MJCF slider (position actuator, joint damping 40 >= dt kp = 15) to a scene
+    # that `simulate` runs; PGS reproduces MuJoCo's Euler step exactly (eq. B11).
+    mjcf = os.path.join(out_dir, "mj_slider.xml")
+    with open(mjcf, "w") as f:
+        f.write('<mujoco><option timestep="0.016666666666666666"/><worldbody><body name="cart">'
+                '<joint name="slide" type="slide" axis="1 0 0" damping="40"/>'
+                '<inertial pos="0 0 0" mass="2" diaginertia="0.01 0.01 0.01"/></body></worldbody>'
+                '<actuator><position joint="slide" kp="900"/></actuator></mujoco>\n')
+    translated = os.path.join(out_dir, "mj_slider_scene.yaml")
+    r = run(cli, "translate", mjcf, "--to", "physx", "--out", translated)
+    check(r.returncode == 0, "translate --to physx succeeds", r)
+    check(re.search(r"^\s+slide\s.*\s900\s.*\s25\s.*exact", r.stdout, re.M) is not None,
+          "kp 900 and damping 40 - dt kp = 25, exact", r)
+    r = run(cli, "simulate", translated)
+    check(r.returncode == 0, "the translated scene runs", r)
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)

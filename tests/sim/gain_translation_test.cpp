@@ -7,14 +7,15 @@
 #include <random>
 
 #include "featherdrive/sim/gain_translation.hpp"
+#include "support/compare.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
-SimulationOptions solver(SolverType type, int position, int velocity, double dt) {
+SimulationOptions gain_options(SolverType type, int position, int velocity, double dt) {
   SimulationOptions o;
   o.solver = type;
   o.position_iterations = position;
@@ -34,9 +35,10 @@ TEST(GainTranslation, StepMapIsSimulationsStepOnOneDof) {
   int cases = 0;
   for (const auto& model : {slider, pendulum}) {
     for (DriveType type : {DriveType::force, DriveType::acceleration}) {
-      for (const SimulationOptions& o :
-           {solver(SolverType::pgs, 4, 1, 1.0 / 60), solver(SolverType::pgs, 1, 0, 1.0 / 240),
-            solver(SolverType::tgs, 4, 1, 1.0 / 60), solver(SolverType::tgs, 3, 2, 1.0 / 120)}) {
+      for (const SimulationOptions& o : {gain_options(SolverType::pgs, 4, 1, 1.0 / 60),
+                                         gain_options(SolverType::pgs, 1, 0, 1.0 / 240),
+                                         gain_options(SolverType::tgs, 4, 1, 1.0 / 60),
+                                         gain_options(SolverType::tgs, 3, 2, 1.0 / 120)}) {
         for (double stiffness : {10.0, 1e3, 1e6}) {
           Simulation sim(model, o);
           const double damping = std::abs(u(rng)) * 2.0 * std::sqrt(stiffness);
@@ -74,7 +76,7 @@ TEST(GainTranslation, SubsteppedMujocoWithDampingIsThePhysxStep) {
   // Eq. B7-B8: joint damping kd + h kp at MuJoCo timestep h = dt / n is PhysX's implicit step.
   const double m = 0.8, dt = 1.0 / 60;
   for (int n : {1, 4}) {
-    const SimulationOptions o = solver(n == 1 ? SolverType::pgs : SolverType::tgs, n, 1, dt);
+    const SimulationOptions o = gain_options(n == 1 ? SolverType::pgs : SolverType::tgs, n, 1, dt);
     for (double s : {1e-3, 1.0, 100.0}) {
       const double kp = s * m / (dt * dt), kd = 0.7 * 2.0 * std::sqrt(kp * m);
       const Drive drive{DriveType::force, kp, kd, kInf, 0.0, 0.0};
@@ -109,7 +111,7 @@ TEST(GainTranslation, KeepingTheTimestepForTgsIsNotReproducible) {
   TranslationOptions keep;
   keep.keep_timestep = true;
   const MujocoTranslation t = translate_to_mujoco(m, Drive{DriveType::force, kp, kd, kInf, 0, 0},
-                                                  solver(SolverType::tgs, 4, 1, dt), keep);
+                                                  gain_options(SolverType::tgs, 4, 1, dt), keep);
   EXPECT_FALSE(t.reproducible);
   EXPECT_NE(t.note.find("not reproducible"), std::string::npos) << t.note;
   EXPECT_GE(t.mujoco.armature, 0.0);
@@ -119,10 +121,10 @@ TEST(GainTranslation, KeepingTheTimestepForTgsIsNotReproducible) {
 TEST(GainTranslation, MujocoToPhysxRoundTripsAndRefusesUnderdampedSteps) {
   const double m = 1.3, dt = 1.0 / 60;
   for (int n : {1, 4}) {
-    const SimulationOptions o = solver(n == 1 ? SolverType::pgs : SolverType::tgs, n, 1, dt);
+    const SimulationOptions o = gain_options(n == 1 ? SolverType::pgs : SolverType::tgs, n, 1, dt);
     const Drive drive{DriveType::force, 2e3, 30.0, kInf, 0.0, 0.0};
     const MujocoTranslation there =
-        translate_to_mujoco(m, drive, solver(SolverType::pgs, 1, 0, dt));
+        translate_to_mujoco(m, drive, gain_options(SolverType::pgs, 1, 0, dt));
     const PhysxTranslation back = translate_to_physx(m, there.mujoco, o);
     ASSERT_TRUE(back.reproducible) << back.note;
     EXPECT_LE(back.distance.poles, 1e-9);
@@ -142,7 +144,7 @@ TEST(GainTranslation, MujocoToPhysxRoundTripsAndRefusesUnderdampedSteps) {
   ringing.kp = 2.0 * m / (dt * dt);
   ringing.damping = 0.1 * dt * ringing.kp;
   const PhysxTranslation refused =
-      translate_to_physx(m, ringing, solver(SolverType::pgs, 4, 1, dt));
+      translate_to_physx(m, ringing, gain_options(SolverType::pgs, 4, 1, dt));
   EXPECT_FALSE(refused.reproducible);
   EXPECT_NE(refused.note.find("not reproducible"), std::string::npos);
   EXPECT_GT(refused.distance.step_response, 0.0);
