@@ -52,6 +52,7 @@ void bind_batch(py::module_& m);
 void bind_io(py::module_& m);
 void bind_dynamics(py::module_& m);
 void bind_names(py::module_& m);
+void bind_mujoco_bridge(py::module_& m);  // bind_mujoco_bridge.cpp
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

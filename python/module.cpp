@@ -51,4 +51,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_io(m);
   bind_dynamics(m);
   bind_names(m);
+  bind_mujoco_bridge(m);
 }
