@@ -3,6 +3,7 @@
 #include "bindings.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/mjcf_export.hpp"
+#include "featherdrive/io/mujoco_scene.hpp"
 #include "featherdrive/sim/gain_translation.hpp"
 
 namespace py = pybind11;
@@ -119,4 +120,34 @@ void featherdrive::python::bind_mujoco_bridge(py::module_& m) {
       "The simulation as MJCF with its drives translated (or literal): a dict with xml, "
       "timestep, substeps, notes and per drive its joint, effective_inertia, mujoco and "
       "translation. ValueError for what MuJoCo cannot take (explicit actuators).");
+  m.def(
+      "translate_mjcf_to_scene",
+      [](const std::filesystem::path& mjcf, const std::filesystem::path& scene_path,
+         const SimulationOptions& options, py::handle steps) {
+        const SceneTranslation t =
+            translate_mjcf_to_scene(mjcf, scene_path, options, to_int(steps, "steps", 0, kIntMax));
+        py::dict out;
+        out["yaml"] = t.yaml;
+        out["dt"] = t.dt;
+        out["integrator"] = t.integrator;
+        out["notes"] = t.notes;
+        py::list joints;
+        for (const TranslatedJoint& j : t.joints) {
+          py::dict row;
+          row["joint"] = j.joint;
+          row["effective_inertia"] = j.effective_inertia;
+          row["mujoco"] = j.mujoco;
+          row["physx"] = j.physx;
+          joints.append(row);
+        }
+        out["joints"] = joints;
+        return out;
+      },
+      py::arg("mjcf"), py::arg("scene_path"), py::arg("options") = SimulationOptions{},
+      py::arg("steps") = 240,
+      "An MJCF's position and velocity actuators and joint damping as featherdrive force "
+      "drives (eq. B11-B12): a dict with the scene file's text (yaml; its model is the MJCF's "
+      "path relative to scene_path's folder), dt, integrator, notes and per joint its "
+      "effective_inertia, mujoco and physx translation. Nothing is written. InputError (a "
+      "ValueError) for an MJCF MuJoCo refuses or without actuators to translate.");
 }

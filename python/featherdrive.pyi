@@ -677,3 +677,6 @@ def export_mjcf(sim: Simulation, drives: str | DriveMapping = "translated",
                 integrator: str | MujocoIntegrator = "euler",
                 keep_timestep: bool = False) -> dict[str, object]:
     """xml, timestep, substeps, notes, drives: [{joint, effective_inertia, mujoco, translation}]."""
+def translate_mjcf_to_scene(mjcf: PathLike, scene_path: PathLike,
+                            options: SimulationOptions = ..., steps: Int = 240) -> dict[str, object]:
+    """yaml (the scene's text; nothing is written), dt, integrator, notes, joints."""

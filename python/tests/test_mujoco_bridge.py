@@ -78,3 +78,25 @@ def test_bad_input(slider):
     sim = fd.Simulation(slider, options)
     with pytest.raises(ValueError, match="drives"):
         fd.export_mjcf(sim, drives="copied")
+
+
+def test_mjcf_drives_to_a_scene(tmp_path):
+    """A MuJoCo position actuator with joint damping 40 >= dt kp = 15: PGS's drive is kp and
+    40 - dt kp (eq. B11), and the scene text loads."""
+    xml = tmp_path / "slider.xml"
+    xml.write_text('<mujoco><option timestep="0.016666666666666666"/><worldbody>'
+                   '<body name="cart"><joint name="slide" type="slide" axis="1 0 0" damping="40"/>'
+                   '<inertial pos="0 0 0" mass="2" diaginertia="0.01 0.01 0.01"/></body>'
+                   '</worldbody><actuator><position joint="slide" kp="900"/></actuator></mujoco>')
+    t = fd.translate_mjcf_to_scene(xml, tmp_path / "scene.yaml")
+    (joint,) = t["joints"]
+    assert joint["physx"].exact
+    assert joint["physx"].drive.stiffness == pytest.approx(900.0, rel=1e-12)
+    assert joint["physx"].drive.damping == pytest.approx(40.0 - 900.0 / 60.0, rel=1e-12)
+    scene = fd.parse_scene(t["yaml"], tmp_path / "scene.yaml")
+    assert scene.steps == 240
+    with pytest.raises(ValueError, match="no position or velocity actuator"):
+        bare = tmp_path / "bare.xml"
+        bare.write_text('<mujoco><worldbody><body><joint type="slide"/>'
+                        '<geom size="0.1"/></body></worldbody></mujoco>')
+        fd.translate_mjcf_to_scene(bare, tmp_path / "scene.yaml")
