@@ -216,10 +216,18 @@ MujocoTranslation translate_to_mujoco(double m, const Drive& drive,
       out.reproducible = false;
       out.note = "not reproducible at MuJoCo timestep dt: TGS " + std::to_string(n) +
                  " sub-steps at kp dt^2/m = " + fmt(g.kp * dt * dt / m) + " would need armature " +
-                 fmt(mj.armature) + " and damping " + fmt(mj.damping) +
-                 "; closest: armature 0, damping matching the decay";
-      mj.armature = 0.0;
-      mj.damping = std::max(0.0, (m / det - m) / dt);
+                 fmt(mj.armature) + " and damping " + fmt(mj.damping);
+      // The closer (in step response) of two settings without armature: the damping that
+      // matches TGS's decay (det A), and one implicit step of dt (eq. B7 with h = dt).
+      MujocoDrive decay = mj, one_step = mj;
+      decay.armature = one_step.armature = 0.0;
+      decay.damping = std::max(0.0, (m / det - m) / dt);
+      one_step.damping = g.kd + dt * g.kp;
+      const bool decay_closer = map_distance(physx, mujoco_step_map(m, decay, dt)).step_response <
+                                map_distance(physx, mujoco_step_map(m, one_step, dt)).step_response;
+      mj = decay_closer ? decay : one_step;
+      out.note += decay_closer ? "; closest: armature 0, the damping of TGS's decay"
+                               : "; closest: armature 0, damping kd + dt kp (one implicit step)";
     }
   }
   out.distance = map_distance(physx, mujoco_step_map(m, mj, dt));
