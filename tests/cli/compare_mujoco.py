@@ -102,6 +102,23 @@ def main():
     r = run(cli, "simulate", translated)
     check(r.returncode == 0, "the translated scene runs", r)
 
+    slider_urdf = os.path.abspath(os.path.join(source, "examples", "slider.urdf"))
+    actuated = os.path.join(out_dir, "mj_actuated.yaml")
+    with open(actuated, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                "  slide: {type: none, actuator: {type: ideal_pd, stiffness: 100}}\n")
+    for command in (["compare-mujoco", actuated], ["translate", actuated, "--to", "mujoco",
+                                                   "--out", os.path.join(out_dir, "x.xml")]):
+        r = run(cli, *command)
+        one_line_error(r, ["mj_actuated.yaml", "joint slide", "explicit actuator"],
+                       f"{command[0]} with an explicit actuator")
+    undriven = os.path.join(out_dir, "mj_undriven.yaml")
+    with open(undriven, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\n")
+    r = run(cli, "translate", undriven, "--to", "mujoco", "--out", os.path.join(out_dir, "y.xml"))
+    one_line_error(r, ["mj_undriven.yaml", "nothing to translate"], "translate without drives")
+    check(not os.path.exists(os.path.join(out_dir, "y.xml")), "no MJCF written without drives")
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)
