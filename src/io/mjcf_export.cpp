@@ -161,7 +161,7 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   extras.text.resize(static_cast<size_t>(model.nv));
   std::ostringstream actuators;
   int actuator = 0;
-  std::string friction, velocity_limited, envelopes, clamped;
+  std::string friction, velocity_limited, envelopes, clamped, limited;
   for (const Link& link : model.links) {
     if (link.nv != 1) continue;
     const int d = link.v_index;
@@ -213,6 +213,7 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
     std::string& text = extras.text[static_cast<size_t>(d)];
     const double lo = sim.lower_limit(d), hi = sim.upper_limit(d);
     if (std::isfinite(lo) || std::isfinite(hi)) {
+      limited += " " + link.joint_name;
       // MuJoCo wants both ends; an open end becomes a far one.
       const double far = 1e10;
       text += " limited=\"true\" range=\"" +
@@ -235,6 +236,11 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
         "that carries the drive's implicit share; the engines part where a drive "
         "saturates:" +
         clamped);
+  if (!limited.empty())
+    out.notes.push_back(
+        "joint limits as range: MuJoCo's limit is a soft constraint, PhysX's a "
+        "solver row; they differ where a joint reaches its limit:" +
+        limited);
   if (!envelopes.empty()) out.notes.push_back("actuator envelopes not exported:" + envelopes);
   bool link_parameters = false;
   for (int i = 0; i < model.num_links(); ++i) {

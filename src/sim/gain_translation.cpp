@@ -2,11 +2,10 @@
 // (docs/mujoco_bridge.md, eq. B1-B12).
 #include "featherdrive/sim/gain_translation.hpp"
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 

@@ -119,6 +119,15 @@ def main():
     one_line_error(r, ["mj_undriven.yaml", "nothing to translate"], "translate without drives")
     check(not os.path.exists(os.path.join(out_dir, "y.xml")), "no MJCF written without drives")
 
+    # Past MuJoCo's explicit limit (the arm demo: kp dt^2/m from 15 to 1331 against 4) the tool
+    # says that the literal copy is unstable, while the translation stays exact.
+    arm = os.path.join(source, "examples", "arm7_tgs.yaml")
+    r = run(cli, "translate", arm, "--to", "mujoco", "--out", os.path.join(out_dir, "arm7.xml"))
+    check(r.returncode == 0, "translate arm7_tgs succeeds", r)
+    rows = re.findall(r"^\s+joint\d\s.*$", r.stdout, re.M)
+    check(len(rows) == 7 and all("exact; literal copy unstable in MuJoCo" in x for x in rows),
+          "every arm joint: exact, literal copy unstable", r)
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)
