@@ -53,6 +53,7 @@ void bind_io(py::module_& m);
 void bind_mjcf(py::module_& m);  // after bind_io: MjcfRobot is a UrdfRobot
 void bind_dynamics(py::module_& m);
 void bind_names(py::module_& m);
+void bind_mujoco_bridge(py::module_& m);  // bind_mujoco_bridge.cpp
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

@@ -645,3 +645,66 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike[str]) -> None:
     """Writes the full simulation state atomically, bit-exact."""
 def load_checkpoint(path: str | os.PathLike[str], sim: Simulation) -> None:
     """Restores a checkpoint into sim; CheckpointError (a ValueError) if it is not one of sim's model."""
+
+
+# The MuJoCo bridge (docs/mujoco_bridge.md): gain translation and the MJCF export.
+class MujocoIntegrator(enum.Enum):
+    euler = ...
+    implicit = ...
+
+class DriveMapping(enum.Enum):
+    translated = ...
+    literal = ...
+
+class DriveStepMap:
+    """[q1, qd1] = A [q0, qd0] + B [x_T, v_T, f]."""
+    A: npt.NDArray[np.float64]
+    B: npt.NDArray[np.float64]
+
+class MujocoDrive:
+    kp: float
+    kv: float
+    damping: float
+    armature: float
+    ctrl_velocity_gain: float
+    substeps: int
+    interpolate_target: bool
+    integrator: MujocoIntegrator
+    def __init__(self) -> None: ...
+
+class MapDistance:
+    step_response: float
+    poles: float
+    steps: int
+
+class MujocoTranslation:
+    mujoco: MujocoDrive
+    exact: bool
+    reproducible: bool
+    distance: MapDistance
+    note: str
+
+class PhysxTranslation:
+    drive: Drive
+    exact: bool
+    reproducible: bool
+    distance: MapDistance
+    note: str
+
+def physx_step_map(m: float, drive: Drive, options: SimulationOptions) -> DriveStepMap: ...
+def mujoco_step_map(m: float, drive: MujocoDrive, dt: float) -> DriveStepMap: ...
+def translate_to_mujoco(m: float, drive: Drive, options: SimulationOptions,
+                        integrator: str | MujocoIntegrator = "euler",
+                        keep_timestep: bool = False) -> MujocoTranslation: ...
+def translate_to_physx(m: float, mujoco: MujocoDrive,
+                       options: SimulationOptions) -> PhysxTranslation: ...
+def effective_inertia(model: Model, q: ArrayLike) -> Vector:
+    """1 / diag(M(q)^-1)."""
+def model_to_mjcf(model: Model, dt: float) -> str: ...
+def export_mjcf(sim: Simulation, drives: str | DriveMapping = "translated",
+                integrator: str | MujocoIntegrator = "euler",
+                keep_timestep: bool = False) -> dict[str, object]:
+    """xml, timestep, substeps, notes, drives: [{joint, effective_inertia, mujoco, translation}]."""
+def translate_mjcf_to_scene(mjcf: PathLike, scene_path: PathLike,
+                            options: SimulationOptions = ..., steps: Int = 240) -> dict[str, object]:
+    """yaml (the scene's text; nothing is written), dt, integrator, notes, joints."""

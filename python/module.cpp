@@ -52,4 +52,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_mjcf(m);
   bind_dynamics(m);
   bind_names(m);
+  bind_mujoco_bridge(m);
 }

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "cli_common.hpp"
+#include "compare_table.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/physx_runner.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -32,27 +33,6 @@ void check_physx_iterations(const ComparePhysxArgs& args, const SimulationOption
         "--position-iterations", "solver.position_iterations", 1);
   check(o.velocity_iterations, args.overrides.velocity_iterations.has_value(),
         "--velocity-iterations", "solver.velocity_iterations", 0);
-}
-
-// The differences featherdrive - PhysX per row, for the plot script.
-void write_differences(const fs::path& path, const JointTrajectory& fd, const JointTrajectory& px) {
-  std::ofstream out(path);
-  out << "step,t";
-  for (const char* prefix : {"dq:", "dqd:", "df:"})
-    for (const std::string& j : px.joints) out << ',' << csv_field(prefix + j);
-  out << '\n';
-  std::vector<size_t> in_fd;  // columns matched by name, as compare_trajectories does
-  for (const std::string& j : px.joints)
-    in_fd.push_back(
-        static_cast<size_t>(std::find(fd.joints.begin(), fd.joints.end(), j) - fd.joints.begin()));
-  for (size_t k = 0; k < px.rows(); ++k) {
-    out << k << ',' << format_double(px.t[k]);
-    for (const auto m : {&JointTrajectory::q, &JointTrajectory::qd, &JointTrajectory::f})
-      for (size_t j = 0; j < px.joints.size(); ++j)
-        out << ',' << format_double((fd.*m)[k][in_fd[j]] - (px.*m)[k][j]);
-    out << '\n';
-  }
-  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
 }
 
 }  // namespace
@@ -138,26 +118,7 @@ int compare_physx(const ComparePhysxArgs& args) {
     std::printf("  joint friction off on both sides (PhysX's cannot be set):%s\n",
                 friction_off.c_str());
   if (model.floating_base()) std::printf("  the floating root's pose is not compared\n");
-  std::printf("  largest |featherdrive - PhysX| per joint, at step; relative: / the scale below\n");
-  std::printf("  %-16s %10s %5s %9s  %10s %5s %9s  %10s %5s %9s\n", "joint", "q", "step",
-              "relative", "qd", "step", "relative", "force", "step", "relative");
-  // Against a scale of 0 (PhysX's quantity never leaves 0) any difference is infinitely large.
-  auto rel = [](double v, double scale) {
-    return scale > 0.0 ? v / scale : v > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
-  };
-  for (const JointDifference& j : c.joints)
-    std::printf("  %-16s %10.2e %5zu %9.1e  %10.2e %5zu %9.1e  %10.2e %5zu %9.1e\n",
-                j.joint.c_str(), j.q.value, j.q.row, rel(j.q.value, c.scale_q), j.qd.value,
-                j.qd.row, rel(j.qd.value, c.scale_qd), j.f.value, j.f.row,
-                rel(j.f.value, c.scale_f));
-  std::printf("  %-16s %10.4g %5s %9s  %10.4g %5s %9s  %10.4g\n", "scale", c.scale_q, "", "",
-              c.scale_qd, "", "", c.scale_f);
-  std::printf("  (scale: largest |q|, |qd|, |force| of PhysX's run over all joints and steps%s)\n",
-              c.scale_q > 0.0 && c.scale_qd > 0.0 && c.scale_f > 0.0
-                  ? ""
-                  : "; relative to a scale of 0, any difference is inf");
-  std::printf("  largest relative difference: q %.1e, qd %.1e, force %.1e\n", c.relative_q(),
-              c.relative_qd(), c.relative_f());
+  print_difference_table(c, "PhysX");
 
   if (!args.plot.empty()) {
     std::fflush(stdout);

@@ -18,6 +18,7 @@
 
 #include "cli_common.hpp"
 #include "compare_physx.hpp"
+#include "mujoco_commands.hpp"
 #include "scene_overrides.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
@@ -288,6 +289,7 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("scene", cmp_args.scene, "Scene file (YAML or JSON)")->required();
   cmp_cmd->add_option("--plot", cmp_args.plot, "PNG of the differences over time per joint");
   cmp_args.overrides.add_options(cmp_cmd, " (PhysX: 1 to 255)", " (PhysX: 0 to 255)");
+  MujocoCommands mujoco(app);  // compare-mujoco, translate (compare_mujoco.cpp, translate.cpp)
 
   try {
     app.parse(argc, argv);
@@ -298,9 +300,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";
     if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
-        first != "compare-physx")
-      report("unknown command '" + first +
-             "' (expected simulate, info or compare-physx; see featherdrive --help)");
+        first != "compare-physx" && first != "compare-mujoco" && first != "translate")
+      report("unknown command '" + first + "' (expected simulate, info, compare-physx, "
+             "compare-mujoco or translate; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
@@ -315,6 +317,7 @@ int main(int argc, char** argv) {
       cmp_args.overrides.parse();
       return compare_physx(cmp_args);
     }
+    if (mujoco.selected()) return mujoco.run();
     return info(urdf, floating);
   } catch (const std::invalid_argument& e) {  // bad input: InputError and the core's validation
     report(e.what());

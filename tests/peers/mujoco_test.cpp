@@ -1,22 +1,12 @@
-// Cross-check against MuJoCo 2.2.2: the test writes MJCF from a featherdrive::Model, steps both
-// engines with semi-implicit Euler from the same state and compares joint positions and velocities
-// at every step.
-//
-// MJCF mapping: one <body> per link, nested as in the tree and written in our link order (depth
-// first, children in insertion order), so MuJoCo's body, joint, qpos and qvel order is ours. A
-// body's pos/quat is the joint frame's pose in the parent link frame (tree_transform: E = R^T,
-// r = origin); the joint sits at the body origin with its axis in body coordinates, so the body
-// frame moved by the joint is our link frame; <inertial> takes the centre of mass and the principal
-// axes and moments of our inertia about it. Fixed joints become bodies without a joint (welded to
-// the parent); spherical joints become ball joints; floating roots are not mapped.
-// Nothing else is added: no contacts, limits, damping, armature, stiffness or actuators, so
+// Cross-check against MuJoCo 2.2.2: the io layer writes MJCF from a featherdrive::Model
+// (model_to_mjcf, whose mapping mjcf_export.hpp describes), the test steps both engines with
+// semi-implicit Euler from the same state and compares joint positions and velocities at every
+// step. Nothing else is added: no contacts, limits, damping, armature, stiffness or actuators, so
 // MuJoCo's Euler integrator is explicit in velocity (it goes implicit only for dof_damping > 0) and
 // integrates positions with the new velocity, as Simulation does without drives.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
-
-#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <array>
@@ -24,10 +14,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -40,6 +28,7 @@
 #include "featherdrive/algorithm/jacobian.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/rnea.hpp"
+#include "featherdrive/io/mjcf_export.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
@@ -56,85 +45,9 @@ constexpr double kPositionTolerance = 1e-9;
 // is still far below what any modelling difference (a frame, inertia or bias term) produces.
 constexpr double kVelocityTolerance = 1e-9;
 
-std::string num(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
-  return buffer;
-}
-
-std::string nums(std::initializer_list<double> values) {
-  std::string out;
-  for (double v : values) out += (out.empty() ? "" : " ") + num(v);
-  return out;
-}
-
-void write_body(const Model& model, int i, int depth, std::ostringstream& xml) {
-  const Link& link = model.links[i];
-  const std::string indent(2 * static_cast<size_t>(depth), ' ');
-  const Transform& X = link.tree_transform;
-  const Quat rotation(X.E.transpose());  // the joint frame's orientation in the parent link frame
-  // MuJoCo reserves "world" (the name URDF gives a fixed base's root link, as in arm7.urdf).
-  const std::string name = link.name == "world" ? "world_link" : link.name;
-  xml << indent << "<body name=\"" << name << "\" pos=\"" << nums({X.r.x(), X.r.y(), X.r.z()})
-      << "\" quat=\"" << nums({rotation.w(), rotation.x(), rotation.y(), rotation.z()}) << "\">\n";
-  // Principal axes and moments from Eigen rather than fullinertia: MuJoCo 2.2.2 diagonalises
-  // fullinertia with a Jacobi iteration (mju_eig3) that stops once a rotation's cosine is within
-  // 1e-12 of 1, i.e. up to ~1e-6 rad short of the principal axes, which changes the inertia by
-  // ~1e-10 relative and the dynamics by as much (compare_with_mujoco checks the compiled inertia).
-  Eigen::SelfAdjointEigenSolver<Mat3> eig(link.inertia_com);
-  Mat3 axes = eig.eigenvectors();
-  if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);
-  const Quat principal(axes);
-  const Vec3 moments = eig.eigenvalues();
-  xml << indent << "  <inertial pos=\"" << nums({link.com.x(), link.com.y(), link.com.z()})
-      << "\" quat=\"" << nums({principal.w(), principal.x(), principal.y(), principal.z()})
-      << "\" mass=\"" << num(link.mass) << "\" diaginertia=\""
-      << nums({moments.x(), moments.y(), moments.z()}) << "\"/>\n";
-  const Vec3& a = link.axis;
-  switch (link.joint_type) {
-    case JointType::fixed:
-      break;
-    case JointType::revolute:
-      xml << indent << "  <joint name=\"" << link.joint_name << "\" type=\"hinge\" axis=\""
-          << nums({a.x(), a.y(), a.z()}) << "\"/>\n";
-      break;
-    case JointType::prismatic:
-      xml << indent << "  <joint name=\"" << link.joint_name << "\" type=\"slide\" axis=\""
-          << nums({a.x(), a.y(), a.z()}) << "\"/>\n";
-      break;
-    case JointType::spherical:
-      // MuJoCo's ball joint: quaternion (w, x, y, z) in qpos, child-frame angular velocity in
-      // qvel, integrated as q * exp(w dt / 2) and renormalised, as ours.
-      xml << indent << "  <joint name=\"" << link.joint_name << "\" type=\"ball\"/>\n";
-      break;
-    case JointType::floating:
-      // A free joint: qpos is ours, but qvel is [world linear velocity of the body origin;
-      // body-frame angular velocity] where ours is the body-frame [w; v]. Only accelerations are
-      // compared (FloatingRootAccelerationsMatch): Euler steps on the two velocity coordinates
-      // differ at O(dt^2).
-      xml << indent << "  <joint name=\"" << link.joint_name << "\" type=\"free\"/>\n";
-      break;
-  }
-  for (int c : link.children) write_body(model, c, depth + 1, xml);
-  xml << indent << "</body>\n";
-}
-
-/// MJCF for a model: gravity, time step, Euler, contacts off, nothing else.
-std::string to_mjcf(const Model& model, double dt) {
-  std::ostringstream xml;
-  const Vec3& g = model.gravity;
-  xml << "<mujoco model=\"featherdrive\">\n"
-      << "  <compiler angle=\"radian\"/>\n"
-      << "  <option timestep=\"" << num(dt) << "\" gravity=\"" << nums({g.x(), g.y(), g.z()})
-      << "\" integrator=\"Euler\">\n"
-      << "    <flag contact=\"disable\"/>\n"
-      << "  </option>\n"
-      << "  <worldbody>\n";
-  write_body(model, 0, 2, xml);
-  xml << "  </worldbody>\n"
-      << "</mujoco>\n";
-  return xml.str();
-}
+/// MJCF for a model: gravity, time step, Euler, contacts off, nothing else (the io layer's
+/// writer; this test checks MuJoCo's dynamics of it against ours).
+std::string to_mjcf(const Model& model, double dt) { return model_to_mjcf(model, dt); }
 
 struct MjModelDeleter {
   void operator()(mjModel* m) const { mj_deleteModel(m); }

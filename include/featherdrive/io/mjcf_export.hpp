@@ -1,0 +1,108 @@
+// MJCF export: a featherdrive model, or a simulation with its drives, as a MuJoCo 2.2.2 file
+// (contacts off), and a MuJoCo run of it beside featherdrive's. docs/mujoco_bridge.md.
+//
+// Mapping: one <body> per link, nested as in the tree and written in link order, so MuJoCo's
+// body, joint, qpos and qvel order is ours. A body's pos/quat is the joint frame's pose in the
+// parent link frame (tree_transform: E = R^T, r = origin); the joint sits at the body origin with
+// its axis in body coordinates, so the body frame is our link frame; <inertial> takes the centre
+// of mass and the principal axes and moments of our inertia about it (from Eigen: MuJoCo 2.2.2's
+// own fullinertia diagonalisation stops ~1e-6 rad short of the axes). Fixed joints weld a body to
+// its parent, spherical joints are ball joints, a floating root is a free joint (qvel differs:
+// MuJoCo's is [world linear velocity; body angular velocity]). A link named "world" is written as
+// "world_link" (MuJoCo reserves the name).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "featherdrive/io/error.hpp"
+#include "featherdrive/sim/gain_translation.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+
+/// The model alone: gravity, timestep dt, Euler, contacts off; no limits, damping, armature or
+/// actuators (the bodies and joints above).
+std::string model_to_mjcf(const Model& model, double dt);
+
+enum class DriveMapping {
+  translated,  ///< translate_to_mujoco per drive (gain_translation.hpp)
+  literal,     ///< the same kp and kd as position and velocity actuators
+};
+const char* to_string(DriveMapping mapping);
+
+struct MjcfExportOptions {
+  MujocoIntegrator integrator = MujocoIntegrator::euler;
+  DriveMapping drives = DriveMapping::translated;
+  bool keep_timestep = false;  ///< TranslationOptions::keep_timestep
+};
+
+/// One driven dof in the export: its MuJoCo setting, the translation's verdict and its actuators'
+/// indices in the file (velocity: -1 when there is none).
+struct MjcfDrive {
+  std::string joint;
+  int dof = 0;
+  double effective_inertia = 0.0;  ///< 1 / (M^-1)_jj at the simulation's q
+  MujocoDrive mujoco;
+  MujocoTranslation translation;  ///< translated exports only
+  int position_actuator = -1;
+  int velocity_actuator = -1;
+};
+
+struct MjcfExport {
+  std::string xml;
+  double timestep = 0.0;  ///< MuJoCo's: dt / substeps
+  int substeps = 1;       ///< MuJoCo steps per featherdrive step
+  MujocoIntegrator integrator = MujocoIntegrator::euler;
+  std::vector<MjcfDrive> drives;
+  std::vector<std::string> notes;  ///< what the file does not carry, one line each
+};
+
+/// The simulation as MJCF at its current state's configuration (for the effective inertias):
+/// gravity, timestep, integrator, joint limits -> range, armature, drives -> actuators (position,
+/// plus velocity when kv > 0; max_force / max_impulse -> forcerange) and joint damping as the
+/// mapping says. Joint friction, velocity limits, link parameters and actuator envelopes are not
+/// carried (notes says so). Throws InputError (one line naming the joint and the value) for what
+/// MuJoCo cannot take: explicit actuators, a drive with neither stiffness nor damping.
+MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options = {});
+
+/// MuJoCo 2.2.2 running an export beside featherdrive: same state, the drives' targets read from
+/// a Simulation before each step. Needs no file (MuJoCo's virtual file system).
+class MujocoRun {
+ public:
+  /// Compiles export.xml; throws std::runtime_error with MuJoCo's message when it refuses it.
+  explicit MujocoRun(const MjcfExport& mjcf);
+  ~MujocoRun();
+  MujocoRun(const MujocoRun&) = delete;
+  MujocoRun& operator=(const MujocoRun&) = delete;
+
+  /// q and qd in featherdrive's order and convention (fixed-base models: the same vectors).
+  void set_state(const VecX& q, const VecX& qd);
+  /// One featherdrive step (substeps MuJoCo steps) with the drive targets sim.drive(dof) holds.
+  void step(const Simulation& targets);
+  VecX q() const;
+  VecX qd() const;
+  /// The drive force of the last step per dof (impulse / dt, as featherdrive reports it): the
+  /// actuators' forces and the damping that stands in for the drive, averaged over the sub-steps.
+  const VecX& drive_force() const { return drive_force_; }
+  int nv() const;
+  /// Whether MuJoCo met a non-finite or huge acceleration in some step (it then resets its state
+  /// to the model's reference, as mj_checkAcc does).
+  bool diverged() const { return diverged_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  MjcfExport mjcf_;
+  VecX drive_force_, velocity_start_;
+  bool diverged_ = false;
+};
+
+/// MuJoCo's version, "2.2.2".
+std::string mujoco_version();
+
+/// Compiles MJCF text with MuJoCo and returns "" or MuJoCo's error (for checks and tests).
+std::string mujoco_compile_error(const std::string& xml);
+
+}  // namespace featherdrive

@@ -1,0 +1,350 @@
+// MJCF export and the MuJoCo run beside featherdrive (mjcf_export.hpp).
+#include "featherdrive/io/mjcf_export.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "featherdrive/core/format.hpp"
+
+namespace featherdrive {
+namespace {
+
+std::string nums(std::initializer_list<double> values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : " ") + format_double(v);
+  return out;
+}
+
+// XML attribute text: the five characters XML reserves, escaped.
+std::string attr(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// Per-dof joint attributes beyond the frame: range, damping, armature.
+struct JointExtras {
+  std::vector<std::string> text;  // per dof
+};
+
+void write_body(const Model& model, int i, int depth, const JointExtras* extras,
+                std::ostringstream& xml) {
+  const Link& link = model.links[i];
+  const std::string indent(2 * static_cast<size_t>(depth), ' ');
+  const Transform& X = link.tree_transform;
+  const Quat rotation(X.E.transpose());  // the joint frame's orientation in the parent frame
+  const std::string name = link.name == "world" ? "world_link" : link.name;
+  xml << indent << "<body name=\"" << attr(name) << "\" pos=\"" << nums({X.r.x(), X.r.y(), X.r.z()})
+      << "\" quat=\"" << nums({rotation.w(), rotation.x(), rotation.y(), rotation.z()}) << "\">\n";
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(link.inertia_com);
+  Mat3 axes = eig.eigenvectors();
+  if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);
+  const Quat principal(axes);
+  const Vec3 moments = eig.eigenvalues();
+  xml << indent << "  <inertial pos=\"" << nums({link.com.x(), link.com.y(), link.com.z()})
+      << "\" quat=\"" << nums({principal.w(), principal.x(), principal.y(), principal.z()})
+      << "\" mass=\"" << format_double(link.mass) << "\" diaginertia=\""
+      << nums({moments.x(), moments.y(), moments.z()}) << "\"/>\n";
+  const Vec3& a = link.axis;
+  const std::string joint = indent + "  <joint name=\"" + attr(link.joint_name) + "\" type=\"";
+  const std::string more =
+      extras && link.nv == 1 ? extras->text[static_cast<size_t>(link.v_index)] : "";
+  switch (link.joint_type) {
+    case JointType::fixed:
+      break;
+    case JointType::revolute:
+    case JointType::prismatic:
+      xml << joint << (link.joint_type == JointType::revolute ? "hinge" : "slide") << "\" axis=\""
+          << nums({a.x(), a.y(), a.z()}) << "\"" << more << "/>\n";
+      break;
+    case JointType::spherical:
+      xml << joint << "ball\"/>\n";
+      break;
+    case JointType::floating:
+      xml << joint << "free\"/>\n";
+      break;
+  }
+  for (int c : link.children) write_body(model, c, depth + 1, extras, xml);
+  xml << indent << "</body>\n";
+}
+
+std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator integrator,
+                      const JointExtras* extras, const std::string& actuators) {
+  std::ostringstream xml;
+  const Vec3& g = model.gravity;
+  xml << "<mujoco model=\"featherdrive\">\n"
+      << "  <compiler angle=\"radian\"/>\n"
+      << "  <option timestep=\"" << format_double(timestep) << "\" gravity=\""
+      << nums({g.x(), g.y(), g.z()}) << "\" integrator=\""
+      << (integrator == MujocoIntegrator::euler ? "Euler" : "implicit") << "\">\n"
+      << "    <flag contact=\"disable\"/>\n"
+      << "  </option>\n"
+      << "  <worldbody>\n";
+  write_body(model, 0, 2, extras, xml);
+  xml << "  </worldbody>\n";
+  if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
+  xml << "</mujoco>\n";
+  return xml.str();
+}
+
+struct MjModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+struct MjDataDeleter {
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+
+// Compiles XML text through MuJoCo's virtual file system (no file on disk).
+std::unique_ptr<mjModel, MjModelDeleter> compile(const std::string& xml, std::string& error) {
+  auto vfs = std::make_unique<mjVFS>();  // ~2 MB: not on the stack
+  mj_defaultVFS(vfs.get());
+  const char* name = "featherdrive_export.xml";
+  if (mj_makeEmptyFileVFS(vfs.get(), name, static_cast<int>(xml.size())) != 0) {
+    error = "MuJoCo's virtual file system refused the file";
+    return nullptr;
+  }
+  const int index = mj_findFileVFS(vfs.get(), name);
+  std::memcpy(vfs->filedata[index], xml.data(), xml.size());
+  std::array<char, 1000> message{};
+  std::unique_ptr<mjModel, MjModelDeleter> m(
+      mj_loadXML(name, vfs.get(), message.data(), static_cast<int>(message.size())));
+  mj_deleteVFS(vfs.get());
+  if (!m) error = message.data();
+  return m;
+}
+
+}  // namespace
+
+const char* to_string(DriveMapping mapping) {
+  return mapping == DriveMapping::translated ? "translated" : "literal";
+}
+
+std::string model_to_mjcf(const Model& model, double dt) {
+  return mjcf_text(model, dt, MujocoIntegrator::euler, nullptr, "");
+}
+
+MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) {
+  const Model& model = sim.model();
+  const SimulationOptions& o = sim.options();
+  MjcfExport out;
+  out.integrator = options.integrator;
+  const VecX m = effective_inertia(model, sim.q());
+  JointExtras extras;
+  extras.text.resize(static_cast<size_t>(model.nv));
+  std::ostringstream actuators;
+  int actuator = 0;
+  std::string friction, velocity_limited, envelopes, clamped, limited;
+  for (const Link& link : model.links) {
+    if (link.nv != 1) continue;
+    const int d = link.v_index;
+    if (sim.has_actuator(d))
+      throw InputError("joint " + link.joint_name +
+                       ": an explicit actuator cannot be exported to MuJoCo (use a drive)");
+    if (sim.joint_friction(d).active() || sim.friction_coefficient(d) > 0.0)
+      friction += " " + link.joint_name;
+    if (std::isfinite(sim.max_joint_velocity(d))) velocity_limited += " " + link.joint_name;
+    if (sim.actuator_envelope(d).active()) envelopes += " " + link.joint_name;
+    double damping = 0.0, armature = model.armature[d];
+    const Drive& drive = sim.drive(d);
+    if (drive.type != DriveType::none) {
+      if (drive.stiffness == 0.0 && drive.damping == 0.0)
+        throw InputError("joint " + link.joint_name +
+                         ": a drive with stiffness 0 and damping 0 has nothing to export");
+      MjcfDrive& e = out.drives.emplace_back();
+      e.joint = link.joint_name;
+      e.dof = d;
+      e.effective_inertia = m[d];
+      if (options.drives == DriveMapping::translated) {
+        TranslationOptions t;
+        t.integrator = options.integrator;
+        t.keep_timestep = options.keep_timestep;
+        e.translation = translate_to_mujoco(m[d], drive, o, t);
+        e.mujoco = e.translation.mujoco;
+      } else {
+        e.mujoco = literal_mujoco_drive(m[d], drive, options.integrator);
+      }
+      damping = e.mujoco.damping;
+      armature += e.mujoco.armature;
+      out.substeps = std::max(out.substeps, e.mujoco.substeps);
+      const double max_force = std::min(drive.max_force, drive.max_impulse / o.dt);
+      if (std::isfinite(max_force) && e.mujoco.damping > 0.0) clamped += " " + link.joint_name;
+      const std::string limit = std::isfinite(max_force) ? " forcelimited=\"true\" forcerange=\"" +
+                                                               nums({-max_force, max_force}) + "\""
+                                                         : "";
+      actuators << "    <position name=\"" << attr(link.joint_name + ":position") << "\" joint=\""
+                << attr(link.joint_name) << "\" kp=\"" << format_double(e.mujoco.kp) << "\""
+                << limit << "/>\n";
+      e.position_actuator = actuator++;
+      if (e.mujoco.kv > 0.0) {
+        actuators << "    <velocity name=\"" << attr(link.joint_name + ":velocity") << "\" joint=\""
+                  << attr(link.joint_name) << "\" kv=\"" << format_double(e.mujoco.kv) << "\""
+                  << limit << "/>\n";
+        e.velocity_actuator = actuator++;
+      }
+    }
+    std::string& text = extras.text[static_cast<size_t>(d)];
+    const double lo = sim.lower_limit(d), hi = sim.upper_limit(d);
+    if (std::isfinite(lo) || std::isfinite(hi)) {
+      limited += " " + link.joint_name;
+      // MuJoCo wants both ends; an open end becomes a far one.
+      const double far = 1e10;
+      text += " limited=\"true\" range=\"" +
+              nums({std::isfinite(lo) ? lo : -far, std::isfinite(hi) ? hi : far}) + "\"";
+    }
+    if (damping > 0.0) text += " damping=\"" + format_double(damping) + "\"";
+    if (armature > 0.0) text += " armature=\"" + format_double(armature) + "\"";
+  }
+  // Every translated drive of a TGS scene has the same sub-steps (the position iterations).
+  out.timestep = o.dt / out.substeps;
+  out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str());
+  if (!friction.empty())
+    out.notes.push_back("joint friction not exported (MuJoCo's frictionloss is another law):" +
+                        friction);
+  if (!velocity_limited.empty())
+    out.notes.push_back("joint velocity limits not exported (MuJoCo has none):" + velocity_limited);
+  if (!clamped.empty())
+    out.notes.push_back(
+        "max_force: MuJoCo's forcerange clamps kp (ctrl - q) only, not the damping "
+        "that carries the drive's implicit share; the engines part where a drive "
+        "saturates:" +
+        clamped);
+  if (!limited.empty())
+    out.notes.push_back(
+        "joint limits as range: MuJoCo's limit is a soft constraint, PhysX's a "
+        "solver row; they differ where a joint reaches its limit:" +
+        limited);
+  if (!envelopes.empty()) out.notes.push_back("actuator envelopes not exported:" + envelopes);
+  bool link_parameters = false;
+  for (int i = 0; i < model.num_links(); ++i) {
+    const LinkParameters& p = sim.link_parameters(i);
+    link_parameters = link_parameters || p.cfm_scale > 0.0 || p.linear_damping > 0.0 ||
+                      p.angular_damping > 0.0 || std::isfinite(p.max_linear_velocity) ||
+                      std::isfinite(p.max_angular_velocity);
+  }
+  if (link_parameters) out.notes.push_back("link damping, velocity limits and cfm not exported");
+  if (out.substeps > 1)
+    out.notes.push_back("MuJoCo timestep dt / " + std::to_string(out.substeps) +
+                        " (TGS's sub-steps); the ctrl follows TGS's interpolated target");
+  return out;
+}
+
+std::string mujoco_version() {
+  return mj_versionString();
+}
+
+std::string mujoco_compile_error(const std::string& xml) {
+  std::string error;
+  const auto m = compile(xml, error);
+  return m ? "" : error;
+}
+
+struct MujocoRun::Impl {
+  std::unique_ptr<mjModel, MjModelDeleter> m;
+  std::unique_ptr<mjData, MjDataDeleter> d;
+};
+
+// MuJoCo prints its warnings (e.g. a diverging step) on stdout; MujocoRun reads mjData's warning
+// counters instead and says so in its own words.
+void quiet_warning(const char*) {}
+
+MujocoRun::MujocoRun(const MjcfExport& mjcf) : impl_(std::make_unique<Impl>()), mjcf_(mjcf) {
+  mju_user_warning = quiet_warning;
+  std::string error;
+  impl_->m = compile(mjcf.xml, error);
+  if (!impl_->m) throw std::runtime_error("MuJoCo refused the exported model: " + error);
+  impl_->d.reset(mj_makeData(impl_->m.get()));
+  drive_force_ = VecX::Zero(impl_->m->nv);
+  velocity_start_ = VecX::Zero(impl_->m->nv);
+}
+
+MujocoRun::~MujocoRun() = default;
+
+int MujocoRun::nv() const {
+  return impl_->m->nv;
+}
+
+void MujocoRun::set_state(const VecX& q, const VecX& qd) {
+  mjModel* m = impl_->m.get();
+  if (q.size() != m->nq || qd.size() != m->nv)
+    throw std::invalid_argument("MujocoRun::set_state: sizes " + std::to_string(q.size()) + ", " +
+                                std::to_string(qd.size()) + " for nq " + std::to_string(m->nq) +
+                                ", nv " + std::to_string(m->nv));
+  std::copy(q.data(), q.data() + m->nq, impl_->d->qpos);
+  std::copy(qd.data(), qd.data() + m->nv, impl_->d->qvel);
+  mj_forward(m, impl_->d.get());
+}
+
+void MujocoRun::step(const Simulation& targets) {
+  mjModel* m = impl_->m.get();
+  mjData* d = impl_->d.get();
+  const double dt = targets.options().dt;
+  drive_force_.setZero();
+  for (int i = 1; i <= mjcf_.substeps; ++i) {
+    for (const MjcfDrive& e : mjcf_.drives) {
+      const Drive& drive = targets.drive(e.dof);
+      const auto [position, velocity] =
+          mujoco_ctrl(e.mujoco, drive.target_position, drive.target_velocity, dt, i);
+      d->ctrl[e.position_actuator] = position;
+      if (e.velocity_actuator >= 0) d->ctrl[e.velocity_actuator] = velocity;
+    }
+    // The actuator forces of this sub-step are those of its start state.
+    mj_forward(m, d);
+    for (const MjcfDrive& e : mjcf_.drives) {
+      double f = d->actuator_force[e.position_actuator];
+      if (e.velocity_actuator >= 0) f += d->actuator_force[e.velocity_actuator];
+      drive_force_[e.dof] += f;
+    }
+    for (const MjcfDrive& e : mjcf_.drives) velocity_start_[e.dof] = d->qvel[e.dof];
+    const int bad = d->warning[mjWARN_BADQACC].number;
+    mj_step(m, d);
+    if (d->warning[mjWARN_BADQACC].number != bad) diverged_ = true;
+    // The implicit share at the new velocity: the damping that stands in for the drive, and
+    // under the implicit integrator the velocity actuator's change over the sub-step.
+    for (const MjcfDrive& e : mjcf_.drives) {
+      const double v1 = d->qvel[e.dof];
+      double f = -e.mujoco.damping * v1;
+      if (e.velocity_actuator >= 0 && e.mujoco.integrator == MujocoIntegrator::implicit)
+        f -= e.mujoco.kv * (v1 - velocity_start_[e.dof]);
+      drive_force_[e.dof] += f;
+    }
+  }
+  drive_force_ /= mjcf_.substeps;
+}
+
+VecX MujocoRun::q() const {
+  return Eigen::Map<const VecX>(impl_->d->qpos, impl_->m->nq);
+}
+
+VecX MujocoRun::qd() const {
+  return Eigen::Map<const VecX>(impl_->d->qvel, impl_->m->nv);
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,294 @@
+// The MuJoCo bridge against MuJoCo 2.2.2 itself: featherdrive's step responses and MuJoCo's runs
+// of the exported MJCF with translated gains (and, for the record, with the same numbers), on a
+// slider and on the 7-dof arm, for a grid of stiffness, damping ratio and solver.
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "featherdrive/io/mjcf_export.hpp"
+#include "featherdrive/io/mujoco_scene.hpp"
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/gain_translation.hpp"
+#include "support/models.hpp"
+
+namespace featherdrive {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kDt = 1.0 / 60.0;
+
+SimulationOptions solver(SolverType type, int position, int velocity) {
+  SimulationOptions o;
+  o.dt = kDt;
+  o.solver = type;
+  o.position_iterations = position;
+  o.velocity_iterations = velocity;
+  return o;
+}
+
+struct Response {
+  VecX worst;  ///< per dof: largest |q_featherdrive - q_mujoco| / step size
+  bool finite = true;
+};
+
+// Both engines from q0 at rest, every driven dof's target q0 + step; the largest q difference
+// per dof over `steps` steps, relative to the step.
+Response step_response(const Simulation& start, DriveMapping mapping, double step, int steps) {
+  Simulation sim = start;
+  for (int d = 0; d < sim.model().nv; ++d) {
+    Drive drive = sim.drive(d);
+    drive.target_position = sim.q()[d] + step;
+    sim.set_drive(d, drive);
+  }
+  MjcfExportOptions options;
+  options.drives = mapping;
+  const MjcfExport mjcf = export_mjcf(sim, options);
+  MujocoRun mj(mjcf);
+  mj.set_state(sim.q(), sim.qd());
+  Response run;
+  run.worst = VecX::Zero(sim.model().nv);
+  for (int k = 0; k < steps; ++k) {
+    mj.step(sim);
+    sim.step();
+    const VecX diff = (sim.q() - mj.q()).cwiseAbs() / step;
+    if (mj.diverged() || !diff.allFinite()) {  // MuJoCo resets a diverging run
+      run.finite = false;
+      run.worst.setConstant(kInf);
+      break;
+    }
+    run.worst = run.worst.cwiseMax(diff);
+  }
+  return run;
+}
+
+struct GridPoint {
+  double s;     ///< kp dt^2 / m
+  double zeta;  ///< damping ratio, kd = 2 zeta sqrt(kp m)
+};
+
+const std::vector<GridPoint>& grid() {
+  // kp dt^2 / m from 1e-3 to 3.9, just inside MuJoCo's explicit limit of 4 (undamped).
+  static const std::vector<GridPoint> points = [] {
+    std::vector<GridPoint> p;
+    for (double s : {1e-3, 3e-2, 0.5, 3.9})
+      for (double zeta : {0.1, 0.7, 2.0}) p.push_back({s, zeta});
+    return p;
+  }();
+  return points;
+}
+
+TEST(MujocoBridge, TranslatedSliderTracksFeatherdriveStepResponse) {
+  // A 1.5 kg slider, gravity across its axis: the step response alone (a force along the axis
+  // enters TGS once per step and MuJoCo once per sub-step; compare-mujoco measures that).
+  const double mass = 1.5;
+  const auto model = test::make_slider(mass, Vec3(0.8, 0.6, 0), Vec3(0, 0, -9.81));
+  const double m = effective_inertia(*model, VecX::Zero(1))[0];
+  ASSERT_NEAR(m, mass, 1e-12);
+  const double step = 0.1;
+  double worst_translated = 0.0;
+  std::printf("[ bridge   ] slider: largest |q_fd - q_mj| / step over the run\n");
+  std::printf("[ bridge   ] %-8s %-7s %-5s %12s %12s\n", "solver", "s", "zeta", "translated",
+              "literal");
+  for (const SimulationOptions& o :
+       {solver(SolverType::pgs, 4, 1), solver(SolverType::tgs, 4, 1)}) {
+    for (DriveType type : {DriveType::force, DriveType::acceleration}) {
+      for (const GridPoint& g : grid()) {
+        const double kp = g.s * m / (kDt * kDt), kd = 2.0 * g.zeta * std::sqrt(kp * m);
+        const double scale = type == DriveType::acceleration ? 1.0 / m : 1.0;
+        Simulation sim(model, o);
+        sim.set_drive(0, Drive{type, kp * scale, kd * scale, kInf, 0.0, 0.0});
+        // Settled in ~6 time constants of the slowest mode, 600 steps at most.
+        const int steps = 240;
+        const Response translated = step_response(sim, DriveMapping::translated, step, steps);
+        const Response literal = step_response(sim, DriveMapping::literal, step, steps);
+        EXPECT_LE(translated.worst[0], 0.02)
+            << to_string(o.solver) << " " << to_string(type) << " s " << g.s << " zeta " << g.zeta;
+        worst_translated = std::max(worst_translated, translated.worst[0]);
+        if (type == DriveType::force)
+          std::printf("[ bridge   ] %-8s %-7.3g %-5.2g %12.2e %12.2e\n",
+                      (std::string(to_string(o.solver)) + " 4/1").c_str(), g.s, g.zeta,
+                      translated.worst[0], literal.worst[0]);
+      }
+    }
+  }
+  std::printf("[ bridge   ] slider, worst translated: %.2e of the step\n", worst_translated);
+}
+
+TEST(MujocoBridge, TranslatedArmTracksFeatherdriveStepResponsePerJoint) {
+  const UrdfRobot robot = load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/arm7.urdf");
+  // Without gravity: the drives' step response, not the fall of an arm on soft drives.
+  Model weightless = *robot.model;
+  weightless.gravity.setZero();
+  const auto model = std::make_shared<const Model>(weightless);
+  VecX q0 = VecX::Zero(model->nv);
+  q0 << 0.2, 0.5, -0.3, 1.2, 0.4, 0.6, -0.2;
+  const VecX m = effective_inertia(*model, q0);
+  const double step = 0.1;
+  // MuJoCo solves the coupled implicit step exactly; featherdrive's Gauss-Seidel sweeps converge
+  // to it. With 64 sweeps the engines agree to rounding at every grid point; PGS 4/1 keeps a
+  // residual that grows with stiffness (within 5 % up to kp dt^2/m = 0.5) and TGS 4/1 runs one
+  // sweep per sub-step (printed: docs/mujoco_bridge.md has the figures).
+  for (const SimulationOptions& o : {solver(SolverType::pgs, 64, 1), solver(SolverType::pgs, 4, 1),
+                                     solver(SolverType::tgs, 4, 1)}) {
+    double worst = 0.0, worst_literal = 0.0;
+    for (const GridPoint& g : grid()) {
+      if (g.zeta != 0.7 && g.s != 0.5) continue;  // a cross through the grid
+      Simulation sim(model, o);
+      sim.set_q(q0);
+      for (int d = 0; d < model->nv; ++d) {
+        // MuJoCo gets neither the URDF's <dynamics> friction nor its velocity limits.
+        sim.set_joint_friction(d, JointFriction{});
+        sim.set_max_joint_velocity(d, kInf);
+        const double kp = g.s * m[d] / (kDt * kDt);
+        sim.set_drive(
+            d, Drive{DriveType::force, kp, 2.0 * g.zeta * std::sqrt(kp * m[d]), kInf, 0.0, 0.0});
+      }
+      const Response translated = step_response(sim, DriveMapping::translated, step, 240);
+      const Response literal = step_response(sim, DriveMapping::literal, step, 240);
+      const std::string label = std::string(to_string(o.solver)) + " " +
+                                std::to_string(o.position_iterations) + "/1 s " +
+                                std::to_string(g.s) + " zeta " + std::to_string(g.zeta);
+      for (int d = 0; d < model->nv; ++d) {
+        if (o.position_iterations == 64) {
+          EXPECT_LE(translated.worst[d], 1e-6) << label << " joint " << d;
+        } else if (o.solver == SolverType::pgs && g.s <= 0.5) {
+          EXPECT_LE(translated.worst[d], 0.05) << label << " joint " << d;
+        }
+      }
+      worst = std::max(worst, translated.worst.maxCoeff());
+      worst_literal = std::max(worst_literal, literal.worst.maxCoeff());
+      std::printf("[ bridge   ] arm %s: worst joint translated %.2e, literal %.2e\n", label.c_str(),
+                  translated.worst.maxCoeff(), literal.worst.maxCoeff());
+    }
+    std::printf("[ bridge   ] arm %s %d/1: worst translated %.2e, worst literal %.2e of the step\n",
+                to_string(o.solver), o.position_iterations, worst, worst_literal);
+  }
+}
+
+TEST(MujocoBridge, LiteralCopyPastTheLimitDivergesInMujocoAndTheMapSaysSo) {
+  const auto model = test::make_slider(1.0, Vec3(1, 0, 0), Vec3(0, 0, -9.81));
+  Simulation sim(model, solver(SolverType::pgs, 4, 1));
+  const double kp = 6.0 / (kDt * kDt);  // kp dt^2 / m = 6, past Euler's 4
+  const Drive drive{DriveType::force, kp, 0.1 * std::sqrt(kp), kInf, 0.0, 0.0};
+  sim.set_drive(0, drive);
+  EXPECT_FALSE(
+      stable(mujoco_step_map(1.0, literal_mujoco_drive(1.0, drive, MujocoIntegrator::euler), kDt)));
+  EXPECT_FALSE(step_response(sim, DriveMapping::literal, 0.1, 300).finite);
+  const Response translated = step_response(sim, DriveMapping::translated, 0.1, 300);
+  EXPECT_LE(translated.worst[0], 1e-9);
+}
+
+TEST(MujocoBridge, ExportLoadsWithItsSettings) {
+  const UrdfRobot robot = load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/arm7.urdf");
+  Simulation sim(robot.model, solver(SolverType::tgs, 4, 1));
+  sim.set_drive(0, Drive{DriveType::force, 1e4, 50.0, 20.0, 0.0, 0.0});
+  sim.set_joint_limits(1, -1.0, 1.5);
+  const MjcfExport e = export_mjcf(sim);
+  ASSERT_EQ(mujoco_compile_error(e.xml), "");
+  std::array<char, 1000> error{};
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  ASSERT_EQ(mj_makeEmptyFileVFS(vfs.get(), "a.xml", static_cast<int>(e.xml.size())), 0);
+  std::copy(e.xml.begin(), e.xml.end(), static_cast<char*>(vfs->filedata[0]));
+  mjModel* m = mj_loadXML("a.xml", vfs.get(), error.data(), 1000);
+  mj_deleteVFS(vfs.get());
+  ASSERT_NE(m, nullptr) << error.data();
+  EXPECT_EQ(m->opt.integrator, mjINT_EULER);
+  EXPECT_DOUBLE_EQ(m->opt.timestep, kDt / 4);  // TGS's 4 sub-steps
+  EXPECT_TRUE(m->opt.disableflags & mjDSBL_CONTACT);
+  ASSERT_EQ(m->nu, 1);
+  EXPECT_EQ(m->actuator_gainprm[0], 1e4);
+  EXPECT_EQ(m->actuator_biasprm[1], -1e4);
+  EXPECT_EQ(m->actuator_forcerange[1], 20.0);
+  EXPECT_NEAR(m->dof_damping[0], 50.0 + kDt / 4 * 1e4, 1e-9);
+  EXPECT_EQ(m->jnt_limited[1], 1);
+  EXPECT_EQ(m->jnt_range[2], -1.0);
+  EXPECT_EQ(m->jnt_range[3], 1.5);
+  mj_deleteModel(m);
+}
+
+}  // namespace
+}  // namespace featherdrive
+
+namespace featherdrive {
+namespace {
+
+// translate --to physx: an MJCF slider with a position actuator and joint damping becomes a
+// scene whose featherdrive run reproduces MuJoCo's own run of the MJCF (ctrl = the target).
+TEST(MujocoBridge, MjcfDrivesTranslateToAScene) {
+  namespace fs = std::filesystem;
+  const fs::path dir =
+      fs::temp_directory_path() / ("featherdrive_bridge_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const double kp = 900.0;
+  for (double damping : {40.0, 5.0}) {  // above and below dt kp = 15
+    const fs::path xml = dir / "slider.xml";
+    {
+      std::ofstream out(xml);
+      out << "<mujoco><option timestep=\"0.016666666666666666\" gravity=\"0 0 -9.81\"/>"
+             "<worldbody><body name=\"cart\"><joint name=\"slide\" type=\"slide\" axis=\"1 0 0\""
+             " damping=\""
+          << damping
+          << "\" armature=\"0.1\"/>"
+             "<inertial pos=\"0 0 0\" mass=\"2\" diaginertia=\"0.01 0.01 0.01\"/></body>"
+             "</worldbody><actuator><position joint=\"slide\" kp=\""
+          << kp
+          << "\"/></actuator>"
+             "</mujoco>\n";
+    }
+    const fs::path scene_path = dir / "scene.yaml";
+    SimulationOptions options;  // PGS 4/1
+    const SceneTranslation t = translate_mjcf_to_scene(xml, scene_path, options, 120);
+    ASSERT_EQ(t.joints.size(), 1u);
+    const PhysxTranslation& p = t.joints[0].physx;
+    EXPECT_NEAR(t.joints[0].effective_inertia, 2.1, 1e-12);  // mass + armature
+    if (damping < kp * t.dt) {
+      EXPECT_FALSE(p.reproducible);
+      EXPECT_NE(p.note.find("not reproducible"), std::string::npos) << p.note;
+      continue;
+    }
+    ASSERT_TRUE(p.exact) << p.note;
+    EXPECT_NEAR(p.drive.damping, damping - t.dt * kp, 1e-9);
+    {
+      std::ofstream out(scene_path);
+      out << t.yaml;
+    }
+    const Scene scene = load_scene(scene_path);
+    Simulation sim = make_simulation(scene);
+    std::array<char, 1000> error{};
+    mjModel* m = mj_loadXML(xml.c_str(), nullptr, error.data(), 1000);
+    ASSERT_NE(m, nullptr) << error.data();
+    mjData* d = mj_makeData(m);
+    const double target = 0.1;
+    Drive drive = sim.drive(0);
+    drive.target_position = target;
+    sim.set_drive(0, drive);
+    d->ctrl[0] = target;
+    double worst = 0.0;
+    for (int k = 0; k < scene.steps; ++k) {
+      mj_step(m, d);
+      sim.step();
+      worst = std::max(worst, std::abs(sim.q()[0] - d->qpos[0]));
+    }
+    EXPECT_LE(worst, 1e-12 * target) << t.yaml;
+    std::printf("[ bridge   ] MJCF -> scene, PGS 4/1: largest |q_fd - q_mj| %.2e of the step\n",
+                worst / target);
+    mj_deleteData(d);
+    mj_deleteModel(m);
+  }
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+}
+
+}  // namespace
+}  // namespace featherdrive

@@ -1,0 +1,240 @@
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+
+#include "cli_common.hpp"
+#include "compare_table.hpp"
+#include "featherdrive/io/mjcf_export.hpp"
+#include "featherdrive/io/physx_runner.hpp"
+#include "featherdrive/io/scene.hpp"
+#include "mujoco_commands.hpp"
+
+namespace fs = std::filesystem;
+using namespace featherdrive;
+
+namespace {
+
+MujocoIntegrator integrator_of(const std::string& name) {
+  return name == "implicit" ? MujocoIntegrator::implicit : MujocoIntegrator::euler;
+}
+
+// One row per state of each engine: q, qd of the 1-dof joints and their drive force.
+void append_row(JointTrajectory& out, const Model& model, double t, const VecX& q, const VecX& qd,
+                const VecX& f) {
+  out.t.push_back(t);
+  auto& rq = out.q.emplace_back();
+  auto& rqd = out.qd.emplace_back();
+  auto& rf = out.f.emplace_back();
+  for (const std::string& joint : out.joints) {
+    const Link& link = model.links[static_cast<size_t>(model.joint_link_index(joint))];
+    rq.push_back(q[link.q_index]);
+    rqd.push_back(qd[link.v_index]);
+    rf.push_back(f[link.v_index]);
+  }
+}
+
+struct Compared {
+  JointTrajectory fd, mj;
+  TrajectoryComparison c;
+  MjcfExport mjcf;
+  int diverged_at = -1;  ///< the first step where MuJoCo diverged (and reset), or -1
+};
+
+// Runs the scene from `start` in both engines with the drives mapped as `mapping` says. A MuJoCo
+// run that diverges keeps its rows up to there, and the comparison says inf.
+Compared run_both(const Scene& scene, const Simulation& start, DriveMapping mapping,
+                  MujocoIntegrator integrator) {
+  MjcfExportOptions options;
+  options.drives = mapping;
+  options.integrator = integrator;
+  Compared out;
+  out.mjcf = export_mjcf(start, options);
+  MujocoRun mj(out.mjcf);
+  Simulation sim = start;
+  mj.set_state(sim.q(), sim.qd());
+  const Model& model = sim.model();
+  out.fd = empty_trajectory(model);
+  out.mj = empty_trajectory(model);
+  const VecX zero = VecX::Zero(model.nv);
+  append_row(out.fd, model, 0.0, sim.q(), sim.qd(), zero);
+  append_row(out.mj, model, 0.0, mj.q(), mj.qd(), zero);
+  for (int k = 0; k < scene.steps && !interrupted(); ++k) {
+    apply_targets(scene, sim, k);
+    mj.step(sim);  // the targets sim holds for this step
+    sim.step();
+    append_row(out.fd, model, sim.time(), sim.q(), sim.qd(),
+               sim.drive_force() + sim.actuator_force());
+    append_row(out.mj, model, sim.time(), mj.q(), mj.qd(), mj.drive_force());
+    if (mj.diverged() && out.diverged_at < 0) out.diverged_at = k + 1;
+  }
+  out.c = compare_trajectories(out.fd, out.mj);
+  return out;
+}
+
+void print_drives(const MjcfExport& e, DriveMapping mapping, double dt) {
+  std::printf("  %s drives: MuJoCo timestep %.6g s (%d per step), integrator %s\n",
+              to_string(mapping), e.timestep, e.substeps, to_string(e.integrator));
+  std::printf("  %-16s %10s %11s %11s %11s %11s  %s\n", "joint", "m", "kp dt^2/m", "kp", "kv",
+              "damping", "match");
+  for (const MjcfDrive& d : e.drives) {
+    const MujocoDrive& mj = d.mujoco;
+    std::string match;
+    if (mapping == DriveMapping::translated)
+      match = d.translation.exact ? "exact (1-dof map)" : d.translation.note;
+    std::printf("  %-16s %10.4g %11.4g %11.4g %11.4g %11.4g  %s\n", d.joint.c_str(),
+                d.effective_inertia, mj.kp * dt * dt / d.effective_inertia, mj.kp, mj.kv,
+                mj.damping, match.c_str());
+  }
+}
+
+}  // namespace
+
+int compare_mujoco(const CompareMujocoArgs& args) {
+  install_interrupt_handlers();
+  if (!args.plot.empty()) check_plot_path("--plot", args.plot);
+  if (args.translate_only && args.literal_only)
+    throw std::invalid_argument("--translate and --literal: choose one (or neither for both)");
+  Scene scene = args.overrides.load(args.scene);
+  const Model& model = *scene.model();
+  check_outputs({{"--plot", args.plot}},
+                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});
+  if (model.floating_base())
+    throw std::invalid_argument(args.scene +
+                                ": fixed_base = false: compare-mujoco compares "
+                                "fixed-base robots (MuJoCo's free joint has other velocities)");
+  Simulation start = make_simulation(scene);
+  // MuJoCo's frictionloss is another law and it has no joint velocity limits: both sides run
+  // without them, and the output says so.
+  std::string friction_off, velocity_limits_off;
+  for (const Link& l : model.links) {
+    if (l.nv != 1) continue;
+    if (start.joint_friction(l.v_index).active() || start.friction_coefficient(l.v_index) > 0.0) {
+      start.set_joint_friction(l.v_index, JointFriction{});
+      start.set_friction_coefficient(l.v_index, 0.0);
+      friction_off += " " + l.joint_name;
+    }
+    if (std::isfinite(start.max_joint_velocity(l.v_index))) {
+      start.set_max_joint_velocity(l.v_index, std::numeric_limits<double>::infinity());
+      velocity_limits_off += " " + l.joint_name;
+    }
+  }
+  const MujocoIntegrator integrator = integrator_of(args.integrator);
+  std::vector<DriveMapping> mappings;
+  if (!args.literal_only) mappings.push_back(DriveMapping::translated);
+  if (!args.translate_only) mappings.push_back(DriveMapping::literal);
+
+  std::vector<Compared> runs;
+  for (DriveMapping mapping : mappings) {
+    try {
+      runs.push_back(run_both(scene, start, mapping, integrator));
+    } catch (const InputError& e) {  // what MuJoCo cannot take is the scene's fault
+      throw std::invalid_argument(args.scene + ": " + e.what());
+    }
+    if (const int signal = interrupted()) {
+      std::cerr << "featherdrive: interrupted (signal " << signal_name(signal)
+                << "); nothing was compared\n";
+      return 128 + signal;
+    }
+  }
+
+  const SimulationOptions& o = scene.options;
+  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s), solver %s %d/%d\n",
+              args.scene.c_str(), scene.robot.name.c_str(), model.nv, o.dt, scene.steps,
+              scene.steps * o.dt, to_string(o.solver), o.position_iterations,
+              o.velocity_iterations);
+  std::printf("  featherdrive against MuJoCo %s (exported MJCF, contacts off, integrator %s)\n",
+              mujoco_version().c_str(), to_string(integrator));
+  if (!friction_off.empty())
+    std::printf("  joint friction off on both sides (MuJoCo's frictionloss is another law):%s\n",
+                friction_off.c_str());
+  if (!velocity_limits_off.empty())
+    std::printf("  joint velocity limits off on both sides (MuJoCo has none):%s\n",
+                velocity_limits_off.c_str());
+  for (const std::string& note : runs.front().mjcf.notes) std::printf("  note: %s\n", note.c_str());
+  for (const Compared& r : runs) {
+    const DriveMapping mapping = &r == &runs.front() && !args.literal_only
+                                     ? DriveMapping::translated
+                                     : DriveMapping::literal;
+    std::printf("\n");
+    print_drives(r.mjcf, mapping, o.dt);
+    if (r.diverged_at >= 0)
+      std::printf(
+          "  MuJoCo diverged at step %d (a huge acceleration; MuJoCo resets its state "
+          "then)\n",
+          r.diverged_at);
+    print_difference_table(r.c, std::string("MuJoCo (") + to_string(mapping) + ")");
+  }
+  if (runs.size() == 2)
+    std::printf(
+        "\n  translated against literal, largest relative q difference: %.1e against "
+        "%.1e\n",
+        runs[0].c.relative_q(), runs[1].c.relative_q());
+
+  if (!args.plot.empty()) {
+    std::fflush(stdout);
+    const PrivateTempDir tmp;
+    const fs::path csv = tmp.path() / "mujoco-diff.csv";
+    write_differences(csv, runs.front().fd, runs.front().mj);
+    const std::string title = scene.robot.name + ": featherdrive - MuJoCo (" +
+                              (args.literal_only ? "literal" : "translated") + " drives, " +
+                              to_string(o.solver) + ", " +
+                              fs::path(args.scene).filename().string() + ")";
+    run_plot_script(FEATHERDRIVE_PHYSX_PLOT_SCRIPT, {csv.string()}, args.plot, title, tmp);
+    std::printf("  plot: %s\n", args.plot.c_str());
+  }
+  return 0;
+}
+
+MujocoCommands::MujocoCommands(CLI::App& app) {
+  compare_ = app.add_subcommand(
+      "compare-mujoco",
+      "Run a scene in featherdrive and in MuJoCo 2.2.2 (exported MJCF, contacts off) and show "
+      "the largest differences per joint, with translated and with literal drive gains");
+  compare_->add_option("scene", compare_args_.scene, "Scene file (YAML or JSON)")->required();
+  compare_->add_option("--plot", compare_args_.plot, "PNG of the differences over time per joint");
+  compare_
+      ->add_option("--integrator", compare_args_.integrator,
+                   "MuJoCo's: euler (default) or "
+                   "implicit")
+      ->check(CLI::IsMember({"euler", "implicit"}));
+  compare_->add_flag("--translate", compare_args_.translate_only, "Only the translated gains");
+  compare_->add_flag("--literal", compare_args_.literal_only,
+                     "Only the literal gains (the same numbers in both engines)");
+  compare_args_.overrides.add_options(compare_);
+
+  translate_ = app.add_subcommand(
+      "translate",
+      "Translate drive gains between engines: --to mujoco writes a scene's robot as MJCF with "
+      "translated actuators; --to physx writes a featherdrive scene from an MJCF's actuators; "
+      "both print the match per joint");
+  translate_
+      ->add_option("input", translate_args_.scene,
+                   "--to mujoco: a scene file; --to physx: an MJCF file")
+      ->required();
+  translate_->add_option("--to", translate_args_.to, "mujoco or physx")
+      ->required()
+      ->check(CLI::IsMember({"mujoco", "physx"}));
+  translate_->add_option("--out", translate_args_.out, "The MJCF (or scene) file to write")
+      ->required();
+  translate_
+      ->add_option("--integrator", translate_args_.integrator,
+                   "MuJoCo's: euler (default) or implicit")
+      ->check(CLI::IsMember({"euler", "implicit"}));
+  translate_->add_flag("--keep-timestep", translate_args_.keep_timestep,
+                       "Keep MuJoCo's timestep at the scene's dt for TGS (no sub-steps): the "
+                       "poles are matched with armature, where MuJoCo can");
+  translate_args_.overrides.add_options(translate_);
+}
+
+int MujocoCommands::run() {
+  if (*compare_) {
+    compare_args_.overrides.parse();
+    return compare_mujoco(compare_args_);
+  }
+  translate_args_.overrides.parse();
+  return translate(translate_args_);
+}
