@@ -23,6 +23,7 @@
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define FEATHERDRIVE_ASAN 1
@@ -94,7 +95,7 @@ int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 // Counts the allocations made by `work`.
 template <class Work>

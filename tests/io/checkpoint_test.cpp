@@ -13,19 +13,18 @@
 
 #include "featherdrive/io/scene.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kInf = std::numeric_limits<double>::infinity();
-const std::string kExamples = std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/";
+using test::kInf;
+using test::kExamples;
 
 // Bitwise equality of two vectors (so -0.0 != 0.0 and NaN payloads count).
-bool same_bits(const VecX& a, const VecX& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 void expect_same_state(const Simulation& a, const Simulation& b) {
   EXPECT_TRUE(same_bits(a.q(), b.q()));

@@ -10,13 +10,14 @@
 #include <sstream>
 
 #include "featherdrive/io/trajectory.hpp"
+#include "support/compare.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-const std::string kSource = FEATHERDRIVE_SOURCE_DIR;
-const std::string kExamples = kSource + "/examples/";
+using test::kInf;
+using test::kExamples;
 
 // A scene given as text, placed in examples/ so that model paths resolve there.
 Scene scene_from(const std::string& text) {
