@@ -617,6 +617,9 @@ def parse_scene(text: str, path: PathLike) -> Scene: ...
 def make_simulation(scene: Scene) -> Simulation: ...
 def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
     """0 <= step_index <= 2**31 - 2."""
+def sweep(scene: PathLike, grid: str | dict[str, ArrayLike], joint: str | None = None,
+          client: object = None, num_threads: int = 0, chunk_size: int | None = None) -> object:
+    """featherdrive_sweep.sweep: tracking error over a grid of gains (a SweepResult)."""
 
 
 class CheckpointError(ValueError): ...

@@ -922,7 +922,7 @@ void bind_names(py::module_& m) {
           "max_velocity); ValueError naming the nearest joint names for an unknown one.");
 }
 
-// ---- drive delays (Simulation::set_drive_delay, Batch::set_drive_delay) ---------------------
+// ---- drive delays (Simulation::set_drive_delay, Batch::set_drive_delay) and fd.sweep ----------
 void bind_delay(py::module_& m) {
   auto sim = py::reinterpret_borrow<py::class_<Simulation, SimulationHolder>>(m.attr("Simulation"));
   sim.def(
@@ -963,6 +963,13 @@ void bind_delay(py::module_& m) {
           "The drive delays (N, nv), a new array.");
   auto spec = py::reinterpret_borrow<py::class_<DriveSpec>>(m.attr("DriveSpec"));
   spec.def_readonly("delay", &DriveSpec::delay, "the drive's delay in steps (key delay)");
+  m.def(
+      "sweep",
+      [](py::args args, py::kwargs kwargs) {
+        return py::module_::import("featherdrive_sweep").attr("sweep")(*args, **kwargs);
+      },
+      "sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None): the tracking "
+      "error over a grid of gains, a SweepResult (featherdrive_sweep.sweep; docs/fitting.md).");
 }
 
 }  // namespace
