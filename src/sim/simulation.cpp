@@ -257,6 +257,8 @@ void Simulation::set_drive(int dof, const Drive& drive) {
                                 to_string(drive.type) + " drive cannot act beside it (clear the "
                                 "actuator first; a drive of type none sets its targets)");
   drives_[static_cast<size_t>(dof)] = drive;
+  // No drive, no delay: what set_drive_delay refuses is not kept either (checkpoints restore it).
+  if (drive.type == DriveType::none && drive_delays_.delayed(dof)) drive_delays_.set(dof, 0);
 }
 
 void Simulation::set_drive(const std::string& joint, const Drive& drive) {

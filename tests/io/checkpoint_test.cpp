@@ -598,6 +598,17 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
                                  ~0ULL);
   EXPECT_EQ(error_of(bad, b),
             "state.ckpt: corrupt checkpoint: drive delay -1 of dof 0 is outside [0, 100000]");
+  // A forged push count that a later push would overflow.
+  Simulation c = busy_simulation(5);
+  c.set_drive_delay(driven, 1);
+  c.step();
+  const std::string with_delay = checkpoint_bytes(c);
+  // The delays: 8 bytes per dof, and for `driven` its push count and 2 targets after them.
+  const size_t delays_at = with_delay.size() - 8 - (delays + 8 + 32);
+  const size_t pushes_at = delays_at + 8 * static_cast<size_t>(driven) + 8;
+  EXPECT_EQ(error_of(forged(with_delay, pushes_at, 0x7fffffffffffffffULL), c),
+            "state.ckpt: bad value in the checkpoint: drive delay history of dof " +
+                std::to_string(driven) + ": pushes = 9223372036854775807 must be in [0, 2^53]");
 }
 
 }  // namespace

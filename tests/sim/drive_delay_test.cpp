@@ -110,6 +110,8 @@ TEST(DriveDelay, ConstantTargetFromTheStartIsNotDelayed) {
   EXPECT_EQ(delayed.drive_delays().pushes(2), 0);
   delayed.set_drive(2, Drive{DriveType::force, 10.0, 1.0});  // gains change, the delay stays
   EXPECT_EQ(delayed.drive_delay(2), 4);
+  delayed.set_drive(2, Drive{});  // no drive, no delay
+  EXPECT_EQ(delayed.drive_delay(2), 0);
 }
 
 // A step that diverges takes its push back: the retried step sees what an undisturbed run sees.

@@ -49,11 +49,12 @@ class DelayLine {
   /// For checkpoints: pushes since set_delay (or reset) and the ring (delay + 1 samples).
   long pushes() const { return pushes_; }
   const std::vector<Sample>& ring() const { return ring_; }
-  /// Throws std::invalid_argument starting with `what` for pushes < 0 or a ring of another size.
+  /// Throws std::invalid_argument starting with `what` for pushes outside [0, 2^53] (no run
+  /// makes more steps; more could overflow) or a ring of another size.
   void restore(long pushes, const std::vector<Sample>& ring, const std::string& what) {
-    if (pushes < 0)
+    if (pushes < 0 || pushes > (1L << 53))
       throw std::invalid_argument(what + ": pushes = " + std::to_string(pushes) +
-                                  " must be >= 0");
+                                  " must be in [0, 2^53]");
     if (ring.size() != ring_.size())
       throw std::invalid_argument(what + ": " + std::to_string(ring.size()) +
                                   " samples, expected " + std::to_string(ring_.size()) +

@@ -187,7 +187,8 @@ class Simulation {
   // Actuator delay of the implicit drive (drive_delay.hpp): the dof's drive row uses the targets
   // set `delay` steps before the step (eq. 8-9 of docs/math/explicit_actuators.md), as Isaac Lab's
   // DelayedPDActuator. drive(dof) reports the targets as commanded, not as delayed. Setting a
-  // delay empties the dof's history; set_drive keeps it. 0 (the default) is no delay.
+  // delay empties the dof's history; set_drive keeps it, but a drive of type none removes it.
+  // 0 (the default) is no delay.
   /// Throws std::invalid_argument naming the joint and the value for a delay outside
   /// [0, kMaxDelay], or > 0 on a dof without an implicit drive (type none: it would do nothing;
   /// an explicit actuator has its own delay).
