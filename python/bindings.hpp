@@ -54,6 +54,8 @@ void bind_mjcf(py::module_& m);  // after bind_io: MjcfRobot is a UrdfRobot
 void bind_dynamics(py::module_& m);
 void bind_names(py::module_& m);
 void bind_mujoco_bridge(py::module_& m);  // bind_mujoco_bridge.cpp
+void bind_delay(py::module_& m);
+void bind_sweep(py::module_& m);
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

@@ -53,4 +53,6 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_dynamics(m);
   bind_names(m);
   bind_mujoco_bridge(m);
+  bind_delay(m);
+  bind_sweep(m);
 }

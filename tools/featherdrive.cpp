@@ -1,5 +1,6 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
-// a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp).
+// a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp);
+// `sweep` and `fit` are Python modules (python_tool.cpp).
 // Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else, 130 / 143 after
 // SIGINT / SIGTERM (the run stops after a whole step; simulate keeps the rows written at --out).
 #include <CLI/CLI.hpp>
@@ -19,6 +20,7 @@
 #include "cli_common.hpp"
 #include "compare_physx.hpp"
 #include "mujoco_commands.hpp"
+#include "python_tool.hpp"
 #include "scene_overrides.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
@@ -291,6 +293,11 @@ int main(int argc, char** argv) {
   cmp_args.overrides.add_options(cmp_cmd, " (PhysX: 1 to 255)", " (PhysX: 0 to 255)");
   MujocoCommands mujoco(app);  // compare-mujoco, translate (compare_mujoco.cpp, translate.cpp)
 
+  add_python_tool(app, argc, argv, "sweep", "featherdrive_sweep",
+                  "Map the drives' tracking error over a grid of gains (CSV and heat map)");
+  add_python_tool(app, argc, argv, "fit", "featherdrive_fit",
+                  "Fit drive parameters to a logged trajectory");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -300,9 +307,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";
     if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
-        first != "compare-physx" && first != "compare-mujoco" && first != "translate")
+        first != "compare-physx" && first != "compare-mujoco" && first != "translate" &&
+        first != "sweep" && first != "fit")
       report("unknown command '" + first + "' (expected simulate, info, compare-physx, "
-             "compare-mujoco or translate; see featherdrive --help)");
+             "compare-mujoco, translate, sweep or fit; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
