@@ -42,6 +42,8 @@
 namespace py = pybind11;
 using namespace featherdrive;
 
+void bind_fit(py::module_& m);  // python/bind_fit.cpp
+
 namespace {
 
 using ModelPtr = std::shared_ptr<Model>;
@@ -2113,4 +2115,5 @@ PYBIND11_MODULE(featherdrive, m) {
 
   bind_dynamics(m);
   bind_names(m);
+  bind_fit(m);  // python/bind_fit.cpp
 }

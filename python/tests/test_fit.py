@@ -1,0 +1,235 @@
+"""featherdrive_fit (fd.fit, python -m featherdrive_fit): parameters recovered from logs that
+featherdrive made with known parameters (the truth the fit never sees), the fitted scene replaying
+the log, identical fits on 1 and 2 threads and Dask workers, and one-line errors."""
+import csv
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import featherdrive as fd
+import featherdrive_fit
+from conftest import ARM
+
+DT = 1.0 / 240.0
+ROWS = 301  # 1.25 s
+
+
+def scene_text(solver="pgs", fit="", extra=""):
+    return (f"model: {ARM}\nsteps: {ROWS - 1}\ndt: {DT!r}\n"
+            f"solver: {{type: {solver}, position_iterations: 4, velocity_iterations: 1}}\n"
+            "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
+            "drives: {joint2: {stiffness: 600, damping: 12}, joint4: {stiffness: 300, damping: 6}}\n"
+            "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n" + extra + fit)
+
+
+def write(path, text):
+    path.write_text(text)
+    return path
+
+
+def chirp_targets(nv):
+    """0.3 rad chirps from 0.5 to 4 Hz, a phase apart per joint."""
+    t = DT * np.arange(ROWS)
+    phase = 2 * np.pi * (0.5 * t + 3.5 * t ** 2 / (2 * t[-1]))
+    return 0.3 * np.sin(phase[:, None] + np.arange(nv)[None, :])
+
+
+def make_log(path, scene, delay=0, noise=0.0, seed=0):
+    """Runs the scene's drives on chirp targets, the target of row k - delay acting in step
+    k -> k + 1 (row 0's before the log), and writes featherdrive's CSV columns plus targets."""
+    sim = fd.make_simulation(scene)
+    names = scene.model.dof_names
+    targets = chirp_targets(len(names))
+    q, qd = [sim.q.copy()], [sim.qd.copy()]
+    for k in range(ROWS - 1):
+        sim.set_drive_targets(targets[max(k - delay, 0)])
+        sim.step()
+        q.append(sim.q.copy())
+        qd.append(sim.qd.copy())
+    q = np.array(q) + noise * np.random.default_rng(seed).standard_normal((ROWS, len(names)))
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["step", "t"] + [f"q:{n}" for n in names] + [f"qd:{n}" for n in names] +
+                   [f"target:{n}" for n in names] + ["comment"])
+        for k in range(ROWS):
+            w.writerow([k, repr(k * DT)] + [repr(x) for x in q[k]] + [repr(x) for x in qd[k]] +
+                       [repr(x) for x in targets[k]] + ["ignored"])
+    return q
+
+
+# The starting values are off by 2x (x2 and /2) from the truth of scene_text.
+FIT_GAINS = """fit:
+  parameters:
+    - {quantity: stiffness, joints: [joint2, joint4], bounds: [50, 5000], initial: 1200}
+    - {quantity: damping, joints: [joint2], bounds: [0.5, 100], initial: 6}
+    - {quantity: damping, joints: [joint4], bounds: [0.5, 100], initial: 12}
+    - {quantity: armature, joints: [joint2], bounds: [0.001, 1], initial: 0.04}
+    - {quantity: armature, joints: [joint4], bounds: [0.001, 1], initial: 0.08}
+    - {quantity: delay, joints: all, bounds: [0, 2]}
+"""
+TRUTH = {("stiffness", "joint2"): 600, ("stiffness", "joint4"): 300,
+         ("damping", "joint2"): 12, ("damping", "joint4"): 6,
+         ("armature", "joint2"): 0.08, ("armature", "joint4"): 0.04}
+
+
+def worst_error(result, truth):
+    return max(abs(result.value(q, j) / v - 1) for (q, j), v in truth.items())
+
+
+@pytest.mark.parametrize("solver", ["pgs", "tgs"])
+def test_recovers_gains_armature_and_delay(tmp_path, solver):
+    truth_scene = fd.parse_scene(scene_text(solver), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene, delay=1)
+    scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert result.delay == 1
+    assert worst_error(result, TRUTH) < 0.01, result.table()
+    assert result.rms < 1e-9
+
+
+def test_recovers_friction(tmp_path):
+    friction = "joints: {joint2: {armature: 0.08, friction: {static: 0.6, dynamic: 0.6, viscous: 0.4}}, " \
+               "joint4: {armature: 0.04, friction: {static: 0.3, dynamic: 0.3, viscous: 0.2}}}\n"
+    text = scene_text().replace(
+        "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n", friction)
+    make_log(tmp_path / "log.csv", fd.parse_scene(text, str(tmp_path / "truth.yaml")))
+    fit = """fit:
+  parameters:
+    - {quantity: friction.dynamic, joints: [joint2, joint4], bounds: [0, 5], initial: 1.2}
+    - {quantity: friction.viscous, joints: [joint2, joint4], bounds: [0, 5], initial: 0.2}
+"""
+    scene = write(tmp_path / "fit.yaml", text + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    truth = {("friction.dynamic", "joint2"): 0.6, ("friction.dynamic", "joint4"): 0.3,
+             ("friction.viscous", "joint2"): 0.4, ("friction.viscous", "joint4"): 0.2}
+    assert worst_error(result, truth) < 0.05, result.table()
+
+
+def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
+    noise = 1e-4
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    clean = make_log(tmp_path / "clean.csv", truth_scene)
+    noisy = make_log(tmp_path / "log.csv", truth_scene, noise=noise)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {segment_steps: 100}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1, out=str(tmp_path / "out"))
+    assert worst_error(result, TRUTH) < 0.03, result.table()
+    # The intervals cover the truth (95 %: allow 3 half-widths for the 6 together).
+    for e in result.estimates:
+        assert abs(e.value - TRUTH[(e.quantity, e.names[0])]) < 3 * e.ci95, result.table()
+    # The fitted scene, replayed from the log's start with its targets, matches the clean log
+    # within the noise level and the noisy one at the noise level.
+    fitted = fd.load_scene(result.scene_file)
+    assert fitted.fit is not None and os.path.exists(result.plot_file)
+    sim = fd.make_simulation(fitted)
+    sim.set_q(noisy[0])  # as the fit's first segment starts
+    targets = chirp_targets(fitted.model.nv)
+    q = [sim.q.copy()]
+    for k in range(ROWS - 1):
+        sim.set_drive_targets(targets[k])
+        sim.step()
+        q.append(sim.q.copy())
+    q = np.array(q)
+    assert np.sqrt(np.mean((q - clean) ** 2)) < noise
+    assert 0.9 * noise < np.sqrt(np.mean((q - noisy) ** 2)) < 1.2 * noise
+    assert open(tmp_path / "fit.yaml").read() == scene_text("pgs", fit)  # input untouched
+
+
+def test_resampled_log(tmp_path):
+    """A log at twice the scene's rate, resampled (linear), recovers what the log at dt does."""
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    rows = list(csv.reader(open(tmp_path / "log.csv")))
+    t = rows[0].index("t")
+    fine = [rows[0]] + [r for r in rows[1:]]
+    # Insert a midpoint row between each pair: q linear there, the target held.
+    out = [fine[0]]
+    for a, b in zip(fine[1:-1], fine[2:]):
+        out.append(a)
+        mid = list(a)
+        for i, name in enumerate(rows[0]):
+            if name.startswith(("q:", "qd:")) or name == "t":
+                mid[i] = repr((float(a[i]) + float(b[i])) / 2)
+        out.append(mid)
+    out.append(fine[-1])
+    with open(tmp_path / "fine.csv", "w", newline="") as f:
+        csv.writer(f).writerows(out)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {resample: linear}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
+    result = fd.fit(str(scene), str(tmp_path / "fine.csv"), threads=1)
+    assert result.log.t.size == ROWS
+    assert float(rows[1][t]) == result.log.t[0]
+    assert worst_error(result, TRUTH) < 1e-6, result.table()
+
+
+def fit_with(tmp_path, **kw):
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene, delay=1, noise=1e-4)
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", FIT_GAINS))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), **kw)
+    return [e.value.hex() for e in result.estimates] + [result.delay, result.rms.hex()]
+
+
+def test_identical_on_1_and_2_threads_and_a_local_cluster(tmp_path):
+    one = fit_with(tmp_path, threads=1)
+    assert fit_with(tmp_path, threads=2, chunks=3) == one
+    distributed = pytest.importorskip("distributed")
+    pytest.importorskip("featherdrive_distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        assert fit_with(tmp_path, client=client, threads=1) == one
+
+
+# Bad input: one line naming the file, the key or column and the value.
+
+def test_bad_logs(tmp_path):
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", FIT_GAINS))
+    rows = list(csv.reader(open(tmp_path / "log.csv")))
+
+    def bad(edit, match):
+        edited = [list(r) for r in rows]
+        edit(edited)
+        with open(tmp_path / "bad.csv", "w", newline="") as f:
+            csv.writer(f).writerows(edited)
+        with pytest.raises(ValueError, match=match) as e:
+            fd.fit(str(scene), str(tmp_path / "bad.csv"))
+        assert "\n" not in str(e.value)
+
+    col = rows[0].index("target:joint4")
+    bad(lambda r: [row.pop(col) for row in r], r"bad\.csv: missing column target:joint4$")
+    bad(lambda r: r[6].__setitem__(1, "0.001"),
+        r"bad\.csv: row 6: t = 0\.001 is not after the previous row's 0\.0125 ")
+    bad(lambda r: r[3].__setitem__(3, "nan"), r"bad\.csv: row 3: q:joint2 = nan: must be finite")
+    bad(lambda r: [row.__setitem__(1, repr(float(row[1]) * 2)) for row in r[1:]],
+        r"bad\.csv: rows 2-3: time step 0\.008333333333333333 s is not the scene's dt "
+        r"0\.004166666666666667 s \(set fit\.data\.resample: linear\)")
+
+
+@pytest.mark.parametrize("entry,match", [
+    ("{quantity: stiffness, joints: [elbow], bounds: [1, 2]}",
+     r"fit\.parameters\[0\]\.joints\[0\]: no joint named 'elbow' in arm7\.urdf"),
+    ("{quantity: damping, joints: [joint2], bounds: [50, 5]}",
+     r"fit\.parameters\[0\]\.bounds = \[50, 5\]: lower must be below upper$"),
+    ("{quantity: stiffness, joints: [joint2], bounds: [1, 100]}",
+     r"fit\.parameters\[0\]: the starting value \(the scene's stiffness of joint2; give "
+     r"initial:\) = 600 is outside bounds \[1, 100\]$"),
+])
+def test_bad_fit_sections(tmp_path, entry, match):
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", f"fit:\n  parameters:\n    - {entry}\n"))
+    with pytest.raises(ValueError, match=match):
+        fd.load_scene(str(scene))
+    make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
+    run = subprocess.run([sys.executable, "-m", "featherdrive_fit", str(scene), "--data",
+                          str(tmp_path / "log.csv"), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True)
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and "fit.yaml: fit.parameters[0]" in run.stderr
+    assert not (tmp_path / "out").exists()
