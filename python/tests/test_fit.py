@@ -170,7 +170,9 @@ def test_resampled_log(tmp_path):
 def fit_with(tmp_path, **kw):
     truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
     make_log(tmp_path / "log.csv", truth_scene, delay=1, noise=1e-4)
-    scene = write(tmp_path / "fit.yaml", scene_text("pgs", FIT_GAINS))
+    # Segments of 50 steps: a sixth of the steps per batch (the threads meet at every step).
+    fit = FIT_GAINS.replace("bounds: [0, 2]}\n", "bounds: [0, 1]}\n  data: {segment_steps: 50}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
     result = fd.fit(str(scene), str(tmp_path / "log.csv"), **kw)
     return [e.value.hex() for e in result.estimates] + [result.delay, result.rms.hex()]
 
@@ -205,9 +207,9 @@ def test_bad_logs(tmp_path):
 
     col = rows[0].index("target:joint4")
     bad(lambda r: [row.pop(col) for row in r], r"bad\.csv: missing column target:joint4$")
-    bad(lambda r: r[6].__setitem__(1, "0.001"),
-        r"bad\.csv: row 6: t = 0\.001 is not after the previous row's 0\.0125 ")
-    bad(lambda r: r[3].__setitem__(3, "nan"), r"bad\.csv: row 3: q:joint2 = nan: must be finite")
+    bad(lambda r: r[6].__setitem__(1, "0.001"),  # line 7 of the file
+        r"bad\.csv: row 7: t = 0\.001 is not after the previous row's 0\.016666666666666666 ")
+    bad(lambda r: r[3].__setitem__(3, "nan"), r"bad\.csv: row 4: q:joint2 = nan: must be finite")
     bad(lambda r: [row.__setitem__(1, repr(float(row[1]) * 2)) for row in r[1:]],
         r"bad\.csv: rows 2-3: time step 0\.008333333333333333 s is not the scene's dt "
         r"0\.004166666666666667 s \(set fit\.data\.resample: linear\)")
