@@ -1,10 +1,14 @@
 // Python: a scene's fit: section (Scene.fit, read-only) and fd.fit, which forwards to the
 // pure-Python featherdrive_fit module beside this one (docs/fitting.md).
+#include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "featherdrive/io/fit_spec.hpp"
+#include "featherdrive/io/physx_runner.hpp"
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/sim/batch.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
@@ -50,4 +54,39 @@ void bind_fit(py::module_& m) {
       },
       "fit(scene, data, client=None, threads=None, out=None): featherdrive_fit.fit, the "
       "scene's fit: parameters fitted to the log `data` (docs/fitting.md).");
+
+  // PhysX itself on a simulation, for logs that another engine made (tests, docs/fitting.md).
+  m.def(
+      "run_physx",
+      [](const Simulation& sim, int steps, const RowMatrix& target_position,
+         const std::vector<std::filesystem::path>& harness_dirs) {
+        const Model& model = sim.model();
+        if (target_position.rows() != steps || target_position.cols() != model.nv)
+          throw std::invalid_argument("run_physx: target_position is (" +
+                                      std::to_string(target_position.rows()) + ", " +
+                                      std::to_string(target_position.cols()) + "), expected (" +
+                                      std::to_string(steps) + ", " + std::to_string(model.nv) +
+                                      ")");
+        std::vector<TargetsByJoint> targets(static_cast<size_t>(steps));
+        for (int k = 0; k < steps; ++k)
+          for (int d = 0; d < model.nv; ++d)
+            if (sim.drive(d).type != DriveType::none)
+              targets[static_cast<size_t>(k)][model.dof_names[d]] = {target_position(k, d), 0.0};
+        // With the GIL held: nothing else may step sim while the harness reads it.
+        const JointTrajectory px = run_physx(find_physx(harness_dirs), sim, steps, targets);
+        RowMatrix q(static_cast<Eigen::Index>(px.rows()), model.nv), qd = q;
+        for (size_t j = 0; j < px.joints.size(); ++j) {
+          const int d = model.dof_index(px.joints[j]);
+          for (size_t k = 0; k < px.rows(); ++k) {
+            q(static_cast<Eigen::Index>(k), d) = px.q[k][j];
+            qd(static_cast<Eigen::Index>(k), d) = px.qd[k][j];
+          }
+        }
+        return py::make_tuple(q, qd);
+      },
+      py::arg("sim"), py::arg("steps"), py::arg("target_position"), py::arg("harness_dirs"),
+      "(q, qd), (steps + 1, nv): PhysX 5.6.1 run by the harness of tests/physx (in "
+      "$FEATHERDRIVE_PHYSX_DIR or the first of harness_dirs holding it) on sim's robot, state "
+      "and settings, target_position[k] (velocity 0) set before step k + 1. RuntimeError when "
+      "node or the harness is missing or PhysX refuses the scene.");
 }

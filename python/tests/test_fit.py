@@ -21,7 +21,8 @@ def scene_text(solver="pgs", fit="", extra=""):
     return (f"model: {ARM}\nsteps: {ROWS - 1}\ndt: {DT!r}\n"
             f"solver: {{type: {solver}, position_iterations: 4, velocity_iterations: 1}}\n"
             "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
-            "drives: {joint2: {stiffness: 600, damping: 12}, joint4: {stiffness: 300, damping: 6}}\n"
+            "drives: {joint2: {stiffness: 600, damping: 12},\n"
+            "         joint4: {stiffness: 300, damping: 6}}\n"
             "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n" + extra + fit)
 
 
@@ -91,8 +92,10 @@ def test_recovers_gains_armature_and_delay(tmp_path, solver):
 
 
 def test_recovers_friction(tmp_path):
-    friction = "joints: {joint2: {armature: 0.08, friction: {static: 0.6, dynamic: 0.6, viscous: 0.4}}, " \
-               "joint4: {armature: 0.04, friction: {static: 0.3, dynamic: 0.3, viscous: 0.2}}}\n"
+    friction = ("joints: {joint2: {armature: 0.08, friction: {static: 0.6, dynamic: 0.6, "
+                "viscous: 0.4}},\n"
+                "         joint4: {armature: 0.04, friction: {static: 0.3, dynamic: 0.3, "
+                "viscous: 0.2}}}\n")
     text = scene_text().replace(
         "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n", friction)
     make_log(tmp_path / "log.csv", fd.parse_scene(text, str(tmp_path / "truth.yaml")))
