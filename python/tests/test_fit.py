@@ -51,14 +51,19 @@ def make_log(path, scene, delay=0, noise=0.0, seed=0):
         q.append(sim.q.copy())
         qd.append(sim.qd.copy())
     q = np.array(q) + noise * np.random.default_rng(seed).standard_normal((ROWS, len(names)))
+    write_log(path, names, q, qd, targets)
+    return q
+
+
+def write_log(path, names, q, qd, targets):
+    """featherdrive's CSV columns, the targets and a column the fit ignores."""
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["step", "t"] + [f"q:{n}" for n in names] + [f"qd:{n}" for n in names] +
                    [f"target:{n}" for n in names] + ["comment"])
-        for k in range(ROWS):
+        for k in range(len(q)):
             w.writerow([k, repr(k * DT)] + [repr(x) for x in q[k]] + [repr(x) for x in qd[k]] +
                        [repr(x) for x in targets[k]] + ["ignored"])
-    return q
 
 
 # The starting values are off by 2x (x2 and /2) from the truth of scene_text.
