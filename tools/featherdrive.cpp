@@ -1,5 +1,6 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
-// a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp).
+// a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp);
+// `sweep` and `fit` are Python modules (python_tool.cpp).
 // Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else, 130 / 143 after
 // SIGINT / SIGTERM (the run stops after a whole step; simulate keeps the rows written at --out).
 #include <CLI/CLI.hpp>
@@ -18,6 +19,7 @@
 
 #include "cli_common.hpp"
 #include "compare_physx.hpp"
+#include "python_tool.hpp"
 #include "scene_overrides.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
@@ -282,6 +284,11 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("--plot", cmp_args.plot, "PNG of the differences over time per joint");
   cmp_args.overrides.add_options(cmp_cmd, " (PhysX: 1 to 255)", " (PhysX: 0 to 255)");
 
+  add_python_tool(app, argc, argv, "sweep", "featherdrive_sweep",
+                  "Map the drives' tracking error over a grid of gains (CSV and heat map)");
+  add_python_tool(app, argc, argv, "fit", "featherdrive_fit",
+                  "Fit drive parameters to a logged trajectory");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -291,9 +298,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";
     if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
-        first != "compare-physx")
+        first != "compare-physx" && first != "sweep" && first != "fit")
       report("unknown command '" + first +
-             "' (expected simulate, info or compare-physx; see featherdrive --help)");
+             "' (expected simulate, info, compare-physx, sweep or fit; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
