@@ -23,6 +23,7 @@ import tempfile
 import numpy as np
 
 import featherdrive as fd
+import featherdrive_distributed
 
 # Forward differences: the step relative to a parameter's scale (its starting value, or its
 # bounds' width when that is 0). The simulation is deterministic, so the error is truncation.
@@ -294,11 +295,6 @@ def simulate_batch(job):
     return q.reshape(shape), qd.reshape(shape)
 
 
-def _map(jobs, client):
-    if client is None:
-        return [simulate_batch(j) for j in jobs]
-    import featherdrive_distributed
-    return featherdrive_distributed.map_ordered(simulate_batch, jobs, client=client)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -346,7 +342,7 @@ class _Problem:
         values = np.atleast_2d(values)
         parts = np.array_split(np.arange(values.shape[0]), min(self.chunks, values.shape[0]))
         jobs = [dict(self.base, values=values[p], delay=self.delay) for p in parts]
-        results = _map(jobs, self.client)
+        results = featherdrive_distributed.map_ordered(simulate_batch, jobs, client=self.client)
         self.nfev += values.shape[0]
         return (np.concatenate([r[0] for r in results]), np.concatenate([r[1] for r in results]))
 
@@ -560,8 +556,7 @@ def main(argv=None):
     client = None
     try:
         if args.scheduler:
-            from distributed import Client
-            client = Client(args.scheduler)
+            client = featherdrive_distributed.connect(args.scheduler)
         result = fit(args.scene, args.data, client=client, threads=args.threads, out=args.out)
     except ValueError as e:
         print(f"featherdrive fit: {e}", file=sys.stderr)
