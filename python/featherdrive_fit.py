@@ -498,7 +498,7 @@ def fitted_scene_text(result, scene):
                     doc.setdefault("drives", {}).setdefault(name, {})["delay"] = result.delay
     for p in doc.get("fit", {}).get("parameters", []):
         p.pop("initial", None)  # the scene's values are now the fitted ones
-    return yaml.safe_dump(doc, sort_keys=False)
+    return yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=100)
 
 
 def _write_outputs(result, scene, data, out):
@@ -519,7 +519,7 @@ def _write_outputs(result, scene, data, out):
 
 
 def plot(result, scene, path):
-    """Logged vs fitted q per joint, and the residual, as a PNG."""
+    """Per joint: logged and fitted q, and below it the residual (fitted - logged), as a PNG."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -527,20 +527,24 @@ def plot(result, scene, path):
     n = len(names)
     cols = min(n, 4)
     rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.4 * rows), squeeze=False)
+    fig = plt.figure(figsize=(3.0 * cols, 2.6 * rows), layout="constrained")
+    grid = fig.add_gridspec(2 * rows, cols, height_ratios=[3, 1] * rows)
     t = result.log.t[:result.q_fitted.shape[0]]
     for d, name in enumerate(names):
-        ax = axes[d // cols][d % cols]
-        ax.plot(t, result.log.q[:t.size, d], "k-", lw=1.5, label="logged")
-        ax.plot(t, result.q_fitted[:, d], "r--", lw=1, label="fitted")
-        ax.set_title(f"{name} (rms {result.rms_by_joint[name]:.2g})", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for d in range(n, rows * cols):
-        axes[d // cols][d % cols].axis("off")
-    axes[0][0].legend(fontsize=7)
+        top = fig.add_subplot(grid[2 * (d // cols), d % cols])
+        low = fig.add_subplot(grid[2 * (d // cols) + 1, d % cols], sharex=top)
+        top.plot(t, result.log.q[:t.size, d], "k-", lw=1.5, label="logged")
+        top.plot(t, result.q_fitted[:, d], "r--", lw=1, label="fitted")
+        low.plot(t, result.q_fitted[:, d] - result.log.q[:t.size, d], "r-", lw=0.5)
+        top.set_title(f"{name} (rms {result.rms_by_joint[name]:.2g})", fontsize=8)
+        top.tick_params(labelsize=6, labelbottom=False)
+        low.tick_params(labelsize=6)
+        low.yaxis.get_offset_text().set_fontsize(6)
+        if d == 0:
+            top.legend(fontsize=6)
+            low.set_ylabel("residual", fontsize=6)
     fig.supxlabel("t [s]", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, format="png", dpi=80)
+    fig.savefig(path, format="png", dpi=70)
     plt.close(fig)
 
 
