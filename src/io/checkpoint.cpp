@@ -165,6 +165,33 @@ void read_actuators(Reader& r, Simulation& next, const std::string& name) {
   next.restore_actuator_force(r.vec(model.nv));
 }
 
+// Version 4: per dof the implicit drive's delay and, if any, its pushes and ring of delay + 1
+// targets.
+void write_drive_delays(Writer& p, const Simulation& sim) {
+  const DriveDelays& delays = sim.drive_delays();
+  for (int d = 0; d < sim.model().nv; ++d) {
+    p.i64(delays.delay(d));
+    if (delays.delay(d) == 0) continue;
+    p.i64(delays.pushes(d));
+    for (const DriveTarget& t : delays.ring(d)) p.f64(t.position), p.f64(t.velocity);
+  }
+}
+
+void read_drive_delays(Reader& r, Simulation& next, const std::string& name) {
+  for (int d = 0; d < next.model().nv; ++d) {
+    const std::int64_t delay = r.i64();
+    if (delay < 0 || delay > kMaxDelay)
+      fail(name, "corrupt checkpoint: drive delay " + std::to_string(delay) + " of dof " +
+                     std::to_string(d) + " is outside [0, " + std::to_string(kMaxDelay) + "]");
+    if (delay == 0) continue;  // cleared before the drives were set
+    next.set_drive_delay(d, static_cast<int>(delay));
+    const std::int64_t pushes = r.i64();
+    std::vector<DriveTarget> ring(static_cast<size_t>(delay) + 1);
+    for (DriveTarget& t : ring) t = {r.f64(), r.f64()};
+    next.restore_drive_delay_history(d, static_cast<long>(pushes), ring);
+  }
+}
+
 }  // namespace
 
 std::uint64_t model_fingerprint(const Model& model) {
@@ -236,6 +263,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   p.vec(sim.friction_force());
   p.vec(sim.velocity_limit_force());
   write_actuators(p, sim);
+  write_drive_delays(p, sim);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -257,9 +285,10 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                    " bytes, shorter than the header");
   Reader h(bytes, sizeof(kMagic), kHeaderSize, name);
   const std::uint32_t version = h.u32();
-  if (version != kCheckpointVersion)
+  if (version < kOldestCheckpointVersion || version > kCheckpointVersion)
     fail(name, "checkpoint format version " + std::to_string(version) +
-                   " is not supported (this build reads version " +
+                   " is not supported (this build reads versions " +
+                   std::to_string(kOldestCheckpointVersion) + " to " +
                    std::to_string(kCheckpointVersion) + ")");
   const std::uint64_t fingerprint = h.u64();
   const std::uint32_t nq = h.u32();
@@ -292,7 +321,10 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
 
   // Restore into a copy, so that sim stays as it was if any value is refused.
   Simulation next = sim;
-  for (int d = 0; d < model.nv; ++d) next.clear_actuator(d);  // the checkpoint's, or none
+  for (int d = 0; d < model.nv; ++d) {  // the checkpoint's, or none
+    next.clear_actuator(d);
+    next.set_drive_delay(d, 0);
+  }
   Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
   try {
     const double time = r.f64();
@@ -421,6 +453,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
                friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
     read_actuators(r, next, name);
+    if (version >= 4) read_drive_delays(r, next, name);  // version 3 has none
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

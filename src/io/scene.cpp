@@ -108,7 +108,7 @@ void check_nesting(const std::string& text, const std::string& file) {
 const std::vector<std::string> kDriveKeys = {"type",          "stiffness",       "damping",
                                              "max_force",     "max_impulse",     "target_position",
                                              "target_velocity", "target",        "envelope",
-                                             "actuator"};
+                                             "actuator",      "delay"};
 const std::vector<std::string> kLinkKeys = {"cfm_scale", "linear_damping", "angular_damping",
                                             "max_linear_velocity", "max_angular_velocity"};
 
@@ -266,6 +266,13 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
   if (spec.actuator && spec.drive.type != DriveType::none)
     r.fail(path, std::string("an explicit actuator and a ") + to_string(spec.drive.type) +
                      " drive on one joint: give the drive type: none");
+  if (node["delay"]) {
+    spec.delay = static_cast<int>(r.integer(node["delay"], at("delay"), 0, kMaxDelay));
+    if (spec.delay > 0 && spec.drive.type == DriveType::none)
+      r.fail(at("delay"), node["delay"],
+             "delays a drive of type force or acceleration; this one has type none (an explicit "
+             "actuator takes actuator.delay)");
+  }
   return spec;
 }
 
@@ -587,6 +594,7 @@ Simulation make_simulation(const Scene& scene) {
     }
     for (const DriveSpec& d : scene.drives) {
       sim.set_drive(d.dof, d.drive);
+      if (d.delay > 0 && d.drive.type != DriveType::none) sim.set_drive_delay(d.dof, d.delay);
       if (d.envelope) sim.set_actuator_envelope(d.dof, *d.envelope);
       if (d.actuator) sim.set_actuator(d.dof, *d.actuator);
     }

@@ -320,6 +320,7 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
       rows_[static_cast<size_t>(f)].row(i).setZero();
     sims_[static_cast<size_t>(i)].set_clock(0.0, 0);
     sims_[static_cast<size_t>(i)].reset_actuator_history();  // as Isaac Lab's delay buffers
+    sims_[static_cast<size_t>(i)].reset_drive_delay_history();
   }
 }
 
@@ -400,6 +401,31 @@ void Batch::set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix
       envs, {&max_velocity}, "max joint velocity",
       [](Simulation& s, int d, const double* x) { s.set_max_joint_velocity(d, x[0]); },
       [](const Simulation& s, int d, const double* x) { return x[0] == s.max_joint_velocity(d); });
+}
+
+void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(delay, envs.size(), model().nv, "drive delay");
+  // Checked on the environments themselves: a delay needs the dof's drive.
+  for (size_t j = 0; j < envs.size(); ++j) {
+    const Simulation& sim = sims_[static_cast<size_t>(envs[j])];
+    for (int d = 0; d < model().nv; ++d) {
+      const double k = row_of(delay, j)[d];
+      try {
+        if (k != std::floor(k) || !(std::abs(k) <= kMaxDelay + 1.0))
+          throw std::invalid_argument("drive delay of joint '" + model().dof_names[d] +
+                                      "' = " + format_double(k) +
+                                      " must be a whole number of steps in [0, " +
+                                      std::to_string(kMaxDelay) + "]");
+        sim.check_drive_delay(d, static_cast<int>(k));
+      } catch (const std::invalid_argument& e) {
+        rethrow_for(envs[j], e);
+      }
+    }
+  }
+  for (size_t j = 0; j < envs.size(); ++j)
+    for (int d = 0; d < model().nv; ++d)
+      sims_[static_cast<size_t>(envs[j])].set_drive_delay(d, static_cast<int>(row_of(delay, j)[d]));
 }
 
 // Each environment envs[j] gets the model make(its model, j); with broadcast values, one new
@@ -486,6 +512,10 @@ RowMatrix Batch::viscous_friction() const {
 }
 RowMatrix Batch::max_joint_velocity() const {
   return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.max_joint_velocity(d); });
+}
+
+RowMatrix Batch::drive_delay() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.drive_delay(d); });
 }
 
 VecX Batch::link_mass(int link) const {

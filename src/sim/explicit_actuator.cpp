@@ -113,17 +113,19 @@ ExplicitActuators::ExplicitActuators(int nv) : slots_(static_cast<size_t>(nv)) {
 void ExplicitActuators::set(int dof, const ExplicitActuator& actuator) {
   Slot& s = slots_[static_cast<size_t>(dof)];
   s.actuator = actuator;
-  s.pushes = 0;
-  if (actuator.kind == ActuatorKind::none) s.feedforward = 0.0;
-  s.ring.assign(actuator.kind == ActuatorKind::none ? 0 : static_cast<size_t>(actuator.delay) + 1,
-                ActuatorCommand{});
+  if (actuator.kind == ActuatorKind::none) {
+    s.feedforward = 0.0;
+    s.history.clear();
+  } else {
+    s.history.set_delay(actuator.delay);
+  }
   active_.erase(std::remove(active_.begin(), active_.end(), dof), active_.end());
   if (actuator.kind != ActuatorKind::none)
     active_.insert(std::upper_bound(active_.begin(), active_.end(), dof), dof);
 }
 
 void ExplicitActuators::reset_history() {
-  for (Slot& s : slots_) s.pushes = 0;
+  for (Slot& s : slots_) s.history.reset();
 }
 
 // eq. (8)-(9): the command of `delay` pushes ago, or the oldest one there is.
@@ -133,40 +135,24 @@ void ExplicitActuators::compute(const Model& model, const VecX& q, const VecX& q
   for (const int d : active_) {
     Slot& s = slots_[static_cast<size_t>(d)];
     const Drive& drive = drives[static_cast<size_t>(d)];
-    const long n = static_cast<long>(s.ring.size());
-    s.ring[static_cast<size_t>(s.pushes % n)] = {drive.target_position, drive.target_velocity,
-                                                 s.feedforward};
-    const long lag = std::min<long>(s.actuator.delay, s.pushes);
-    const ActuatorCommand& seen = s.ring[static_cast<size_t>((s.pushes - lag) % n)];
-    ++s.pushes;
+    const ActuatorCommand& seen =
+        s.history.push({drive.target_position, drive.target_velocity, s.feedforward});
     effort[d] = actuator_effort(s.actuator, q[model.links[model.dof_link[d]].q_index], qd[d], seen);
   }
 }
 
-// The push overwrote the command delay + 1 pushes old, which no step reads again.
 void ExplicitActuators::undo_push() {
-  for (const int d : active_) {
-    Slot& s = slots_[static_cast<size_t>(d)];
-    if (s.pushes > 0) --s.pushes;
-  }
+  for (const int d : active_) slots_[static_cast<size_t>(d)].history.undo_push();
 }
 
 void ExplicitActuators::restore_history(int dof, long pushes,
                                         const std::vector<ActuatorCommand>& ring) {
-  Slot& s = slots_[static_cast<size_t>(dof)];
-  if (pushes < 0)
-    throw std::invalid_argument("actuator history of dof " + std::to_string(dof) + ": pushes = " +
-                                std::to_string(pushes) + " must be >= 0");
-  if (ring.size() != s.ring.size())
-    throw std::invalid_argument("actuator history of dof " + std::to_string(dof) + ": " +
-                                std::to_string(ring.size()) + " commands, expected " +
-                                std::to_string(s.ring.size()) + " (delay + 1)");
   for (const ActuatorCommand& c : ring)
     if (!std::isfinite(c.position) || !std::isfinite(c.velocity) || !std::isfinite(c.effort))
       throw std::invalid_argument("actuator history of dof " + std::to_string(dof) +
                                   ": a command is not finite");
-  s.pushes = pushes;
-  s.ring = ring;
+  slots_[static_cast<size_t>(dof)].history.restore(
+      pushes, ring, "actuator history of dof " + std::to_string(dof));
 }
 
 }  // namespace featherdrive

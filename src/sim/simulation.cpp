@@ -131,6 +131,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
   }
   actuators_ = ExplicitActuators(nv);
+  drive_delays_ = DriveDelays(nv);
   actuator_force_ = actuator_force_start_ = joint_force_ = VecX::Zero(nv);
   load_state();  // sizes the working copies, so that a step allocates nothing
   drive_force_ = limit_force_ = friction_force_ = velocity_limit_force_ = VecX::Zero(nv);
@@ -430,6 +431,36 @@ void Simulation::restore_actuator_history(int dof, long pushes,
   actuators_.restore_history(check_dof(dof), pushes, ring);
 }
 
+void Simulation::check_drive_delay(int dof, int delay) const {
+  check_dof(dof);
+  const std::string& joint = model_->dof_names[dof];
+  if (delay < 0 || delay > kMaxDelay)
+    throw std::invalid_argument("drive of joint '" + joint + "': delay = " +
+                                std::to_string(delay) + " must be in [0, " +
+                                std::to_string(kMaxDelay) + "] steps");
+  if (delay == 0) return;
+  if (actuators_.active(dof))
+    throw std::invalid_argument("joint '" + joint + "' has an explicit actuator: a drive delay "
+                                "of " + std::to_string(delay) + " steps would do nothing (give "
+                                "the actuator its own delay)");
+  if (drives_[static_cast<size_t>(dof)].type == DriveType::none)
+    throw std::invalid_argument(no_drive_message(dof) + "; a drive delay of " +
+                                std::to_string(delay) + " steps would do nothing too");
+}
+
+void Simulation::set_drive_delay(int dof, int delay) {
+  check_drive_delay(dof, delay);
+  drive_delays_.set(dof, delay);
+}
+void Simulation::set_drive_delay(const std::string& joint, int delay) {
+  set_drive_delay(driven_dof(joint), delay);
+}
+
+void Simulation::restore_drive_delay_history(int dof, long pushes,
+                                             const std::vector<DriveTarget>& ring) {
+  drive_delays_.restore_history(check_dof(dof), pushes, ring);
+}
+
 void Simulation::restore_actuator_force(const VecX& force) {
   check_vector(force, model_->nv, "actuator_force");
   actuator_force_ = force;
@@ -457,10 +488,11 @@ void Simulation::step(int count) {
   for (int i = 0; i < count; ++i) step();
 }
 
-// What apply_actuators() changed, taken back when the step diverges (the state itself is only
-// committed by a whole step).
+// What apply_actuators() and the drive delays' push changed, taken back when the step diverges
+// (the state itself is only committed by a whole step).
 void Simulation::undo_actuators() {
   if (actuators_.any()) actuators_.undo_push();
+  if (drive_delays_.any()) drive_delays_.undo_push();
   actuator_force_ = actuator_force_start_;
   actuated_ = actuated_start_;
 }
@@ -519,6 +551,7 @@ void Simulation::check_finite_or_throw() {
       }
   // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
   if (!std::isfinite(time_ + options_.dt)) {
+    undo_actuators();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_

@@ -27,6 +27,8 @@ void Simulation::step() {
   load_state();  // the storage keeps the step's start until commit_state
   // Explicit actuators on the step-start state; tau = applied force + their efforts.
   const VecX& tau = apply_actuators();
+  // Delayed drives: the targets their rows use this step (drive_delay.cpp).
+  if (drive_delays_.any()) drive_delays_.push(drives_);
 
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
@@ -111,7 +113,8 @@ void Simulation::setup_rows(double h, bool tgs) {
     const double cfm = std::max(link_cfm_[model.dof_link[d]],
                                 link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
     rows.response = r;
-    const Drive& drive = drives_[static_cast<size_t>(d)];
+    const Drive& drive =
+        drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : drives_[static_cast<size_t>(d)];
     rows.has_drive = drive.type != DriveType::none;
     // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
     rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration

@@ -22,16 +22,16 @@ namespace {
 constexpr double kStep = 1e-5;  // central differences: truncation ~1e-10, rounding ~1e-11
 constexpr double kTol = 1e-7;   // relative agreement with the differences
 
-struct TreeCase {
+struct FrameCase {
   unsigned seed;
   int links;
   bool floating;
 };
 
-class Frames : public ::testing::TestWithParam<TreeCase> {
+class Frames : public ::testing::TestWithParam<FrameCase> {
  protected:
   void SetUp() override {
-    const TreeCase c = GetParam();
+    const FrameCase c = GetParam();
     model = test::make_random_tree(c.seed, c.links, c.floating, true, 0.05);
     data = std::make_unique<Data>(*model);
     std::mt19937 rng(c.seed + 77);
@@ -210,8 +210,8 @@ TEST_P(Frames, CoriolisPowerIsHalfMassMatrixRate) {
   EXPECT_NEAR(v.dot(c), rate, kTol * (1.0 + std::abs(rate)));
 }
 
-std::vector<TreeCase> cases() {
-  std::vector<TreeCase> out;
+std::vector<FrameCase> cases() {
+  std::vector<FrameCase> out;
   unsigned seed = 301;
   for (int n : {1, 3, 7, 12, 20})
     for (bool floating : {false, true}) out.push_back({seed++, n, floating});

@@ -23,6 +23,7 @@
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define FEATHERDRIVE_ASAN 1
@@ -94,7 +95,7 @@ int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 // Counts the allocations made by `work`.
 template <class Work>
@@ -127,7 +128,8 @@ TEST(AllocationCounter, CountsEveryAllocator) {
             2);
 }
 
-// Drives, limits, friction, a velocity limit and an actuator envelope on every 1-dof joint.
+// Drives (some delayed), limits, friction, a velocity limit and an actuator envelope on every
+// 1-dof joint.
 void constrain_every_joint(Simulation& sim, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (const Link& l : sim.model().links) {
@@ -138,6 +140,7 @@ void constrain_every_joint(Simulation& sim, std::mt19937& rng) {
     sim.set_joint_friction(d, JointFriction{0.5, 0.3, 0.1});
     sim.set_max_joint_velocity(d, 3.0);
     if (d % 2 == 0) sim.set_actuator_envelope(d, ActuatorEnvelope{50.0, 10.0, 1.0, 0.1});
+    if (d % 3 == 1) sim.set_drive_delay(d, 1 + d % 4);  // rings sized here, not in the step
   }
 }
 

@@ -13,19 +13,18 @@
 
 #include "featherdrive/io/scene.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kInf = std::numeric_limits<double>::infinity();
-const std::string kExamples = std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/";
+using test::kInf;
+using test::kExamples;
 
 // Bitwise equality of two vectors (so -0.0 != 0.0 and NaN payloads count).
-bool same_bits(const VecX& a, const VecX& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 void expect_same_state(const Simulation& a, const Simulation& b) {
   EXPECT_TRUE(same_bits(a.q(), b.q()));
@@ -277,7 +276,8 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   std::string bytes = checkpoint_bytes(a);
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
-            "state.ckpt: checkpoint format version 1 is not supported (this build reads version 3)");
+            "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
+            "to 4)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -533,6 +533,71 @@ TEST(Checkpoint, ExplicitActuatorsResumeWithTheirDelayHistories) {
     EXPECT_EQ(bit_cast<std::uint64_t>(resumed.qd()[i]), bit_cast<std::uint64_t>(run.qd()[i]));
     EXPECT_EQ(resumed.actuator_force()[i], run.actuator_force()[i]);
   }
+}
+
+// Delayed implicit drives resume bit for bit mid-delay: the pending targets (ring and push count)
+// are in the checkpoint (version 4). Without them the resumed run would differ: checked too.
+TEST(Checkpoint, DriveDelaysResumeMidDelayWithTheirPendingTargets) {
+  auto model = test::make_planar_chain(3, 1.0, 0.5);
+  const int delays[] = {3, 0, 5};
+  auto setup = [&] {
+    Simulation sim(model);
+    for (int d = 0; d < 3; ++d) {
+      sim.set_drive(d, Drive{DriveType::force, 300.0, 15.0});
+      sim.set_drive_delay(d, delays[d]);
+    }
+    return sim;
+  };
+  auto command = [](Simulation& sim, int k) {
+    for (int d = 0; d < 3; ++d) sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
+  };
+  Simulation run = setup();
+  for (int k = 0; k < 10; ++k) command(run, k), run.step();
+  const std::string bytes = checkpoint_bytes(run);
+  Simulation resumed(model);  // no drives, no delays: the checkpoint brings them
+  Simulation naive = setup();  // the same delays with an empty history
+  naive.set_drive_delay(1, 2);  // cleared by the restore, as it is not in the checkpoint
+  restore_checkpoint(bytes, resumed, "state.ckpt");
+  EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+  EXPECT_EQ(resumed.drive_delay(2), 5);
+  EXPECT_EQ(resumed.drive_delays().pushes(2), 10);
+  restore_checkpoint(bytes, naive, "state.ckpt");
+  for (int d = 0; d < 3; ++d) naive.set_drive_delay(d, delays[d]);  // forgets the pending targets
+  for (int k = 10; k < 20; ++k)
+    for (Simulation* s : {&run, &resumed, &naive}) command(*s, k), s->step();
+  expect_same_state(run, resumed);
+  EXPECT_FALSE(same_bits(naive.q(), run.q()));
+}
+
+// Version 3 (before drive delays) is still read: a version-4 file without delays is version 3's
+// bytes plus one zero delay per dof.
+TEST(Checkpoint, VersionThreeIsStillRead) {
+  Simulation a = busy_simulation(5);
+  a.step(4);
+  std::string bytes = checkpoint_bytes(a);
+  const size_t delays = 8 * static_cast<size_t>(a.model().nv);
+  ASSERT_EQ(bytes.substr(bytes.size() - 8 - delays, delays), std::string(delays, '\0'));
+  bytes.erase(bytes.size() - 8 - delays, delays);
+  std::uint64_t payload = 0;
+  for (size_t i = 0; i < 8; ++i)
+    payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[28 + i])) << (8 * i);
+  const std::string v3 = forged(forged(bytes, 8, 3, 4), 28, payload - delays);
+  Simulation b(a.model_ptr());
+  int driven = -1;
+  for (const Link& l : b.model().links)
+    if (l.joint_type == JointType::revolute || l.joint_type == JointType::prismatic)
+      driven = l.v_index;
+  ASSERT_GE(driven, 0);
+  b.set_drive(driven, Drive{DriveType::force, 1.0, 1.0});
+  b.set_drive_delay(driven, 2);  // not in a version 3 file: cleared
+  restore_checkpoint(v3, b, "old.ckpt");
+  expect_same_state(a, b);
+  EXPECT_EQ(checkpoint_bytes(b), checkpoint_bytes(a));
+  // A forged delay is refused naming the dof.
+  const std::string bad = forged(checkpoint_bytes(a), checkpoint_bytes(a).size() - 8 - delays,
+                                 ~0ULL);
+  EXPECT_EQ(error_of(bad, b),
+            "state.ckpt: corrupt checkpoint: drive delay -1 of dof 0 is outside [0, 100000]");
 }
 
 }  // namespace

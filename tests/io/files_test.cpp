@@ -15,12 +15,13 @@
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kExamples = std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/";
+using test::kExamples;
 
 // A fresh, empty folder of this test.
 fs::path fresh_dir(const std::string& name) {

@@ -10,13 +10,14 @@
 #include <sstream>
 
 #include "featherdrive/io/trajectory.hpp"
+#include "support/compare.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-const std::string kSource = FEATHERDRIVE_SOURCE_DIR;
-const std::string kExamples = kSource + "/examples/";
+using test::kInf;
+using test::kExamples;
 
 // A scene given as text, placed in examples/ so that model paths resolve there.
 Scene scene_from(const std::string& text) {
@@ -495,6 +496,36 @@ TEST(Scene, BadActuatorsNameTheKeyPath) {
             file + "drives.slide.actuator.delay = -1: must be >= 0");
   EXPECT_EQ(error_of(head + "urdf_effort: sim\n"),
             file + "urdf_effort = sim: must be none, max_force or effort_limit");
+}
+
+// delay: K in drive_defaults and per drive reaches Simulation::set_drive_delay; a drive of type
+// none (an actuator's) keeps no default delay.
+TEST(Scene, DriveDelaysReachTheSimulation) {
+  const Scene s = scene_from(
+      "model: arm7.urdf\nsteps: 1\ndrive_defaults: {type: force, stiffness: 100, delay: 2}\n"
+      "drives:\n  joint2: {delay: 0}\n  joint3: {delay: 7}\n"
+      "  joint4: {type: none, actuator: {type: ideal_pd, stiffness: 5}}\n");
+  const Simulation sim = make_simulation(s);
+  const int expected[] = {2, 0, 7, 0, 2, 2, 2};
+  for (int d = 0; d < 7; ++d) EXPECT_EQ(sim.drive_delay(d), expected[d]) << d;
+  EXPECT_EQ(s.drives[2].delay, 7);
+}
+
+TEST(Scene, BadDrivesDelaysNameTheKeyAndValue) {
+  const std::string head = "model: slider.urdf\nsteps: 1\n";
+  const std::string file = kExamples + "inline.yaml: ";
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: force, delay: -1}\n"),
+            file + "drives.slide.delay = -1: must be >= 0");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: force, delay: 2.5}\n"),
+            file + "drives.slide.delay = 2.5: must be an integer");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: force, delay: 100001}\n"),
+            file + "drives.slide.delay = 100001: must be <= 100000");
+  EXPECT_EQ(error_of(head + "drive_defaults: {type: force, delay: [1]}\n"),
+            file + "drive_defaults.delay = [1]: must be an integer");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, delay: 3, actuator: {type: "
+                            "ideal_pd}}\n"),
+            file + "drives.slide.delay = 3: delays a drive of type force or acceleration; this "
+                   "one has type none (an explicit actuator takes actuator.delay)");
 }
 
 }  // namespace

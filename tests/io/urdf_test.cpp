@@ -13,11 +13,12 @@
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/trajectory.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 const std::string kSource = FEATHERDRIVE_SOURCE_DIR;
 
 std::string example(const std::string& name) {

@@ -16,6 +16,7 @@
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
@@ -26,7 +27,7 @@ using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 static_assert(std::is_base_of_v<std::invalid_argument, ModelError>);
 

@@ -8,6 +8,7 @@
 
 #include "featherdrive/model/model_variant.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
@@ -22,10 +23,7 @@ ModelBuilder two_links(double mass, const Vec3& com, const Mat3& inertia, double
   return b;
 }
 
-template <class M>
-bool same_bits(const M& a, const M& b) {
-  return std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 TEST(ModelVariant, EqualsTheModelBuiltWithTheSameParameters) {
   const Mat3 inertia = test::box_inertia(2.0, Vec3(0.1, 0.5, 0.2));

@@ -16,11 +16,12 @@
 #include "featherdrive/io/physx_scene.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 using Trajectory = JointTrajectory;
 

@@ -12,15 +12,12 @@
 #include "featherdrive/sim/batch.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-template <class A, class B>
-bool same_bits(const A& a, const B& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 // Copy i: a random state and random drives from seed i.
 void configure(Simulation& sim, int i) {

@@ -12,16 +12,14 @@
 #include "featherdrive/sim/control_step.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
-bool same_bits(const VecX& a, const VecX& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 bool same_state(const Simulation& a, const Simulation& b) {
   return same_bits(a.q(), b.q()) && same_bits(a.qd(), b.qd()) &&

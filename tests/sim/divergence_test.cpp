@@ -13,17 +13,15 @@
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool same_bits(const VecX& a, const VecX& b) {
-  return a.size() == b.size() &&
-         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
-}
+using test::same_bits;
 
 // Everything a failed step must leave alone.
 struct Snapshot {

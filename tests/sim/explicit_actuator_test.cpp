@@ -11,11 +11,12 @@
 
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 constexpr double kMass = 2.5;
 constexpr double kG = 9.81;
 

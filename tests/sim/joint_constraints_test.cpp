@@ -6,11 +6,12 @@
 
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 class BothSolvers : public ::testing::TestWithParam<SolverType> {
  protected:

@@ -9,11 +9,12 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 struct SliderCase {
   DriveType type;

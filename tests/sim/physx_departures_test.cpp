@@ -6,11 +6,12 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 // A slider on a spinning arm, no gravity: a revolute joint about z at the origin carries an arm
 // (mass centre at (a, 0, 0)); a prismatic joint along x at (d, 0, 0) on the arm carries a block

@@ -7,11 +7,12 @@
 
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 SimulationOptions options(SolverType solver, int position_iterations, int velocity_iterations,
                           double dt = 1.0 / 60.0) {

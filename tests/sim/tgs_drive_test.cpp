@@ -7,11 +7,12 @@
 
 #include "support/drives.hpp"
 #include "support/models.hpp"
+#include "support/compare.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 TEST(TgsDrives, OneDofEqualsImplicitEulerSubsteps) {
   const double m = 1.7, tau = 1.0 / 60.0, kp = 900.0, kd = 12.0;

@@ -12,7 +12,8 @@
 //                 coefficient, per link its LinkParameters, then the last step's drive, limit,
 //                 friction and velocity-limit forces, then per dof its explicit actuator (kind;
 //                 if any: settings, table, feed-forward, pushes and its delay ring of
-//                 delay + 1 commands) and the last step's actuator forces
+//                 delay + 1 commands) and the last step's actuator forces, then per dof the
+//                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets)
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
@@ -28,7 +29,10 @@ namespace featherdrive {
 
 /// 2: compat, the joint friction coefficient and the link parameters (PhysX's) added.
 /// 3: explicit actuators with their delay histories, so a delayed actuator resumes bit for bit.
-inline constexpr std::uint32_t kCheckpointVersion = 3;
+/// 4: the implicit drives' delays with their pending targets. Version 3 is still read (no
+/// drive delays).
+inline constexpr std::uint32_t kCheckpointVersion = 4;
+inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file
 /// and what is wrong (truncated, corrupt, another format version, another model).

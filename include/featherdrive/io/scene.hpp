@@ -36,6 +36,9 @@ struct DriveSpec {
   std::optional<ActuatorEnvelope> envelope;
   /// An explicit actuator (key actuator; the drive's type must be none): the targets are its.
   std::optional<ExplicitActuator> actuator;
+  /// Steps between a target and the implicit drive's use of it (key delay; type force or
+  /// acceleration only; Simulation::set_drive_delay).
+  int delay = 0;
   /// The target position and velocity at time t.
   std::pair<double, double> target_at(double t) const;
 };

@@ -126,6 +126,9 @@ class Batch {
   void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
                      bool scale_inertia = true);
   void set_link_com(std::span<const int> env_ids, int link, const RowMatrix& com);  ///< (k|1, 3)
+  /// Drive delays in steps (whole numbers), as Simulation::set_drive_delay, each checked against
+  /// its environment's drives; the environments' delay histories start over.
+  void set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay);
   // The same read back, (N, nv) / (N,) / (N, 3) copies.
   RowMatrix armature() const;
   RowMatrix lower_limit() const;
@@ -134,6 +137,7 @@ class Batch {
   RowMatrix dynamic_friction() const;
   RowMatrix viscous_friction() const;
   RowMatrix max_joint_velocity() const;
+  RowMatrix drive_delay() const;
   VecX link_mass(int link) const;
   RowMatrix link_com(int link) const;
 

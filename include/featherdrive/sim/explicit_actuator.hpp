@@ -11,6 +11,7 @@
 
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/model/model.hpp"
+#include "featherdrive/sim/delay_line.hpp"
 
 namespace featherdrive {
 
@@ -23,7 +24,7 @@ enum class ActuatorKind {
 const char* to_string(ActuatorKind kind);
 
 /// The most steps an actuator may delay its commands (a ring of delay + 1 commands per dof).
-inline constexpr int kMaxActuatorDelay = 100'000;
+inline constexpr int kMaxActuatorDelay = kMaxDelay;
 
 /// One dof's explicit actuator. Fields a kind does not use must keep their defaults.
 struct ExplicitActuator {
@@ -88,8 +89,8 @@ class ExplicitActuators {
   void undo_push();
 
   /// A dof's history, for checkpoints: pushes since set (or reset) and the ring (delay + 1).
-  long pushes(int dof) const { return slot(dof).pushes; }
-  const std::vector<ActuatorCommand>& ring(int dof) const { return slot(dof).ring; }
+  long pushes(int dof) const { return slot(dof).history.pushes(); }
+  const std::vector<ActuatorCommand>& ring(int dof) const { return slot(dof).history.ring(); }
   /// Throws std::invalid_argument for pushes < 0 or a ring of another size than delay + 1.
   void restore_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
 
@@ -97,8 +98,7 @@ class ExplicitActuators {
   struct Slot {
     ExplicitActuator actuator;
     double feedforward = 0.0;
-    long pushes = 0;
-    std::vector<ActuatorCommand> ring;
+    DelayLine<ActuatorCommand> history;
   };
   const Slot& slot(int dof) const { return slots_[static_cast<size_t>(dof)]; }
   std::vector<Slot> slots_;

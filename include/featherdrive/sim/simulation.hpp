@@ -11,6 +11,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
+#include "featherdrive/sim/drive_delay.hpp"
 #include "featherdrive/sim/explicit_actuator.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/physx_departures.hpp"
@@ -183,6 +184,24 @@ class Simulation {
   /// The effort each actuator applied in the last step (nv; 0 on dofs without one), clipped.
   const VecX& actuator_force() const { return actuator_force_; }
 
+  // Actuator delay of the implicit drive (drive_delay.hpp): the dof's drive row uses the targets
+  // set `delay` steps before the step (eq. 8-9 of docs/math/explicit_actuators.md), as Isaac Lab's
+  // DelayedPDActuator. drive(dof) reports the targets as commanded, not as delayed. Setting a
+  // delay empties the dof's history; set_drive keeps it. 0 (the default) is no delay.
+  /// Throws std::invalid_argument naming the joint and the value for a delay outside
+  /// [0, kMaxDelay], or > 0 on a dof without an implicit drive (type none: it would do nothing;
+  /// an explicit actuator has its own delay).
+  void set_drive_delay(int dof, int delay);
+  void set_drive_delay(const std::string& joint, int delay);
+  int drive_delay(int dof) const { return drive_delays_.delay(check_dof(dof)); }
+  /// The check of set_drive_delay, changing nothing.
+  void check_drive_delay(int dof, int delay) const;
+  /// Empties every drive's delay history (eq. 9), e.g. when an episode starts over.
+  void reset_drive_delay_history() { drive_delays_.reset_history(); }
+  const DriveDelays& drive_delays() const { return drive_delays_; }
+  /// For checkpoints: a dof's pushes and ring (DriveDelays::restore_history).
+  void restore_drive_delay_history(int dof, long pushes, const std::vector<DriveTarget>& ring);
+
   // Link parameters (link_parameters.hpp): inert by default; PhysX 5.6.1's defaults with
   // Compat::physx. Throw std::invalid_argument naming the link, field and value.
   void set_link_parameters(int link, const LinkParameters& parameters);
@@ -270,6 +289,7 @@ class Simulation {
   VecX actuator_force_, joint_force_, actuator_force_start_;
   bool actuated_ = false;  ///< the last step had actuators (actuator_force_ may be nonzero)
   bool actuated_start_ = false;
+  DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
 };
 
 }  // namespace featherdrive
