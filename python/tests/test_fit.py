@@ -17,13 +17,13 @@ DT = 1.0 / 240.0
 ROWS = 301  # 1.25 s
 
 
-def scene_text(solver="pgs", fit="", extra=""):
+def scene_text(solver="pgs", fit="", delay=0):
     return (f"model: {ARM}\nsteps: {ROWS - 1}\ndt: {DT!r}\n"
             f"solver: {{type: {solver}, position_iterations: 4, velocity_iterations: 1}}\n"
-            "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
+            f"drive_defaults: {{type: force, stiffness: 400, damping: 10, delay: {delay}}}\n"
             "drives: {joint2: {stiffness: 600, damping: 12},\n"
             "         joint4: {stiffness: 300, damping: 6}}\n"
-            "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n" + extra + fit)
+            "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n" + fit)
 
 
 def write(path, text):
@@ -38,19 +38,28 @@ def chirp_targets(nv):
     return 0.3 * np.sin(phase[:, None] + np.arange(nv)[None, :])
 
 
-def make_log(path, scene, delay=0, noise=0.0, seed=0):
-    """Runs the scene's drives on chirp targets, the target of row k - delay acting in step
-    k -> k + 1 (row 0's before the log), and writes featherdrive's CSV columns plus targets."""
+def replay(scene, targets, q0=None):
+    """q of the scene's simulation (its drives, delays and joints) under the targets, row k's
+    commanded before step k -> k + 1; from q0 if given."""
     sim = fd.make_simulation(scene)
-    names = scene.model.dof_names
-    targets = chirp_targets(len(names))
+    if q0 is not None:
+        sim.set_q(q0)
     q, qd = [sim.q.copy()], [sim.qd.copy()]
     for k in range(ROWS - 1):
-        sim.set_drive_targets(targets[max(k - delay, 0)])
+        sim.set_drive_targets(targets[k])
         sim.step()
         q.append(sim.q.copy())
         qd.append(sim.qd.copy())
-    q = np.array(q) + noise * np.random.default_rng(seed).standard_normal((ROWS, len(names)))
+    return np.array(q), np.array(qd)
+
+
+def make_log(path, scene, noise=0.0, seed=0):
+    """Runs the scene (its delay included) on chirp targets and writes featherdrive's CSV
+    columns plus the targets, Gaussian noise of `noise` rad on q."""
+    names = scene.model.dof_names
+    targets = chirp_targets(len(names))
+    q, qd = replay(scene, targets)
+    q = q + noise * np.random.default_rng(seed).standard_normal((ROWS, len(names)))
     write_log(path, names, q, qd, targets)
     return q
 
@@ -87,13 +96,17 @@ def worst_error(result, truth):
 
 @pytest.mark.parametrize("solver", ["pgs", "tgs"])
 def test_recovers_gains_armature_and_delay(tmp_path, solver):
-    truth_scene = fd.parse_scene(scene_text(solver), str(tmp_path / "truth.yaml"))
-    make_log(tmp_path / "log.csv", truth_scene, delay=1)
+    truth_scene = fd.parse_scene(scene_text(solver, delay=1), str(tmp_path / "truth.yaml"))
+    logged = make_log(tmp_path / "log.csv", truth_scene)
     scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS))
-    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1, out=str(tmp_path / "out"))
     assert result.delay == 1
     assert worst_error(result, TRUTH) < 0.01, result.table()
     assert result.rms < 1e-9
+    # The fitted scene (drives.J.delay: 1 written in) replays the log.
+    fitted = fd.load_scene(result.scene_file)
+    q, _ = replay(fitted, chirp_targets(fitted.model.nv))
+    assert np.abs(q - logged).max() < 1e-9
 
 
 def test_recovers_friction(tmp_path):
@@ -133,15 +146,7 @@ def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
     # within the noise level and the noisy one at the noise level.
     fitted = fd.load_scene(result.scene_file)
     assert fitted.fit is not None and os.path.exists(result.plot_file)
-    sim = fd.make_simulation(fitted)
-    sim.set_q(noisy[0])  # as the fit's first segment starts
-    targets = chirp_targets(fitted.model.nv)
-    q = [sim.q.copy()]
-    for k in range(ROWS - 1):
-        sim.set_drive_targets(targets[k])
-        sim.step()
-        q.append(sim.q.copy())
-    q = np.array(q)
+    q, _ = replay(fitted, chirp_targets(fitted.model.nv), q0=noisy[0])  # as the fit starts
     assert np.sqrt(np.mean((q - clean) ** 2)) < noise
     assert 0.9 * noise < np.sqrt(np.mean((q - noisy) ** 2)) < 1.2 * noise
     assert open(tmp_path / "fit.yaml").read() == scene_text("pgs", fit)  # input untouched

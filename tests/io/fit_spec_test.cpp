@@ -5,14 +5,15 @@
 #include <gtest/gtest.h>
 
 #include "featherdrive/io/scene.hpp"
+#include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
-const std::string kExamples = std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/";
+using test::kExamples;
 
 // The arm with drives on every joint and armature on joint2; `fit` is the fit: section.
-Scene arm_with(const std::string& fit) {
+Scene arm_fitting(const std::string& fit) {
   return parse_scene("model: arm7.urdf\nsteps: 10\n"
                      "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
                      "drives: {joint4: {stiffness: 250}, joint7: {type: none}}\n"
@@ -21,9 +22,9 @@ Scene arm_with(const std::string& fit) {
                      kExamples + "inline_fit.yaml");
 }
 
-std::string error_of(const std::string& fit) {
+std::string fit_error_of(const std::string& fit) {
   try {
-    arm_with(fit);
+    arm_fitting(fit);
   } catch (const InputError& e) {
     const std::string what = e.what();  // the file's folder left out
     return what.rfind(kExamples, 0) == 0 ? what.substr(kExamples.size()) : what;
@@ -32,14 +33,16 @@ std::string error_of(const std::string& fit) {
 }
 
 // A fit: section of one parameter.
-std::string one(const std::string& entry) { return "  parameters:\n    - " + entry + "\n"; }
+std::string one_parameter(const std::string& entry) {
+  return "  parameters:\n    - " + entry + "\n";
+}
 
 TEST(FitSpec, SceneWithoutFitHasNone) {
   EXPECT_FALSE(load_scene(kExamples + "arm7_pgs.yaml").fit.has_value());
 }
 
 TEST(FitSpec, StartingValuesAreTheScenesUnlessGiven) {
-  const Scene s = arm_with(
+  const Scene s = arm_fitting(
       "  parameters:\n"
       "    - {quantity: stiffness, joints: [joint2, joint4], bounds: [10, 1000]}\n"
       "    - {quantity: damping, joints: all, bounds: [1, 100], shared: true, initial: 20}\n"
@@ -75,36 +78,37 @@ TEST(FitSpec, StartingValuesAreTheScenesUnlessGiven) {
 }
 
 TEST(FitSpec, BadEntriesNameTheKeyAndValue) {
+  const auto bad = [](const std::string& entry) { return fit_error_of(one_parameter(entry)); };
   const std::string f = "inline_fit.yaml: fit.parameters[0]";
-  EXPECT_EQ(error_of(one("{quantity: stiffness, joints: [elbow], bounds: [1, 2]}")),
+  EXPECT_EQ(bad("{quantity: stiffness, joints: [elbow], bounds: [1, 2]}"),
             f + ".joints[0]: no joint named 'elbow' in arm7.urdf (moving joints: joint1, joint2, "
                 "joint3, joint4, joint5, joint6, joint7)");
-  EXPECT_EQ(error_of(one("{quantity: damping, joints: [joint2], bounds: [50, 5]}")),
+  EXPECT_EQ(bad("{quantity: damping, joints: [joint2], bounds: [50, 5]}"),
             f + ".bounds = [50, 5]: lower must be below upper");
-  EXPECT_EQ(error_of(one("{quantity: stiffness, joints: [joint2], bounds: [1, 100]}")),
+  EXPECT_EQ(bad("{quantity: stiffness, joints: [joint2], bounds: [1, 100]}"),
             f + ": the starting value (the scene's stiffness of joint2; give initial:) = 400 is "
                 "outside bounds [1, 100]");
-  EXPECT_EQ(error_of(one("{quantity: damping, joints: [joint2], bounds: [1, 5], initial: 7}")),
+  EXPECT_EQ(bad("{quantity: damping, joints: [joint2], bounds: [1, 5], initial: 7}"),
             f + ": the starting value initial = 7 is outside bounds [1, 5]");
-  EXPECT_EQ(error_of(one("{quantity: stifness, joints: [joint2], bounds: [1, 5]}")),
+  EXPECT_EQ(bad("{quantity: stifness, joints: [joint2], bounds: [1, 5]}"),
             f + ".quantity = stifness: unknown (expected one of: stiffness, damping, max_force, "
                 "armature, friction.static, friction.dynamic, friction.viscous, "
                 "friction_coefficient, delay, mass_scale)");
-  EXPECT_EQ(error_of(one("{quantity: stiffness, joints: [joint7], bounds: [1, 5]}")),
+  EXPECT_EQ(bad("{quantity: stiffness, joints: [joint7], bounds: [1, 5]}"),
             f + ".joints[0] = joint7: the joint has no drive (drives: type none) to fit stiffness");
-  EXPECT_EQ(error_of(one("{quantity: delay, joints: all, bounds: [0, 2.5]}")),
+  EXPECT_EQ(bad("{quantity: delay, joints: all, bounds: [0, 2.5]}"),
             f + ".bounds[1] = 2.5: must be an integer");
-  EXPECT_EQ(error_of(one("{quantity: max_force, joints: [joint1], bounds: [1, 50]}")),
+  EXPECT_EQ(bad("{quantity: max_force, joints: [joint1], bounds: [1, 50]}"),
             f + ": the starting value (the scene's max_force of joint1; give initial:) = inf is "
                 "outside bounds [1, 50]");
-  EXPECT_EQ(error_of("  parameters:\n"
+  EXPECT_EQ(fit_error_of("  parameters:\n"
                      "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"
                      "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"),
             "inline_fit.yaml: fit.parameters[1]: armature of joint1 is fitted twice");
-  EXPECT_EQ(error_of("  parameters: []\n"),
+  EXPECT_EQ(fit_error_of("  parameters: []\n"),
             "inline_fit.yaml: fit.parameters = []: must be a non-empty list of "
             "{quantity, joints, bounds}");
-  EXPECT_EQ(error_of("  parameters:\n    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"
+  EXPECT_EQ(fit_error_of(one_parameter("{quantity: armature, joints: [joint1], bounds: [0, 1]}") +
                      "  data: {resample: cubic}\n"),
             "inline_fit.yaml: fit.data.resample = cubic: must be exact or linear");
 }
