@@ -129,6 +129,35 @@ def test_recovers_friction(tmp_path):
     assert worst_error(result, truth) < 0.05, result.table()
 
 
+def test_recovers_mass_scale_and_max_force(tmp_path):
+    """link3 1.3 times heavier (its inertia too, Batch.set_link_mass) and joint4's drive limited
+    to 20 Nm, which the chirp reaches; fitted from 2 and 40."""
+    text = scene_text().replace("joint4: {stiffness: 300, damping: 6}",
+                                "joint4: {stiffness: 300, damping: 6, max_force: 20}")
+    truth = fd.parse_scene(text, str(tmp_path / "truth.yaml"))
+    batch = fd.Batch(fd.make_simulation(truth), 1)
+    link = truth.model.link_index("link3")
+    batch.set_link_mass(link, 1.3 * truth.model.links[link].mass)
+    targets = chirp_targets(truth.model.nv)
+    q, qd = [np.array(batch.q[0])], [np.array(batch.qd[0])]
+    for k in range(ROWS - 1):
+        batch.set_drive_targets(targets[k])
+        batch.step()
+        q.append(np.array(batch.q[0]))
+        qd.append(np.array(batch.qd[0]))
+        assert abs(batch.drive_force[0, 3]) <= 20.0 + 1e-9
+    write_log(tmp_path / "log.csv", truth.model.dof_names, q, qd, targets)
+    fit = """fit:
+  parameters:
+    - {quantity: mass_scale, links: [link3], bounds: [0.5, 3], initial: 2}
+    - {quantity: max_force, joints: [joint4], bounds: [1, 100], initial: 40}
+"""
+    scene = write(tmp_path / "fit.yaml", text.replace("max_force: 20", "max_force: 40") + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    truth = {("mass_scale", "link3"): 1.3, ("max_force", "joint4"): 20.0}
+    assert worst_error(result, truth) < 0.01, result.table()
+
+
 def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
     noise = 1e-4
     truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
