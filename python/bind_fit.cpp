@@ -1,19 +1,14 @@
-// Python: a scene's fit: section (Scene.fit, read-only) and fd.fit, which forwards to the
-// pure-Python featherdrive_fit module beside this one (docs/fitting.md).
-#include <pybind11/eigen.h>
-#include <pybind11/pybind11.h>
-#include <pybind11/stl.h>
-#include <pybind11/stl/filesystem.h>
-
+// Python: a scene's fit: section (Scene.fit, read-only), fd.fit, which forwards to the
+// pure-Python featherdrive_fit module beside this one (docs/fitting.md), and fd.run_physx.
+#include "bindings.hpp"
 #include "featherdrive/io/fit_spec.hpp"
 #include "featherdrive/io/physx_runner.hpp"
-#include "featherdrive/io/scene.hpp"
-#include "featherdrive/sim/batch.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
+using namespace featherdrive::python;
 
-void bind_fit(py::module_& m) {
+void featherdrive::python::bind_fit(py::module_& m) {
   py::class_<FitParameter>(m, "FitParameter", "One entry of a scene's fit.parameters.")
       .def_property_readonly(
           "quantity", [](const FitParameter& p) { return std::string(to_string(p.quantity)); },
@@ -67,13 +62,15 @@ void bind_fit(py::module_& m) {
                                       std::to_string(target_position.cols()) + "), expected (" +
                                       std::to_string(steps) + ", " + std::to_string(model.nv) +
                                       ")");
-        std::vector<TargetsByJoint> targets(static_cast<size_t>(steps));
-        for (int k = 0; k < steps; ++k)
-          for (int d = 0; d < model.nv; ++d)
-            if (sim.drive(d).type != DriveType::none)
-              targets[static_cast<size_t>(k)][model.dof_names[d]] = {target_position(k, d), 0.0};
-        // With the GIL held: nothing else may step sim while the harness reads it.
-        const JointTrajectory px = run_physx(find_physx(harness_dirs), sim, steps, targets);
+        // Under sim's lock: nothing else may change it while the harness reads it.
+        const JointTrajectory px = locked(sim, [&] {
+          std::vector<TargetsByJoint> targets(static_cast<size_t>(steps));
+          for (int k = 0; k < steps; ++k)
+            for (int d = 0; d < model.nv; ++d)
+              if (sim.drive(d).type != DriveType::none)
+                targets[static_cast<size_t>(k)][model.dof_names[d]] = {target_position(k, d), 0.0};
+          return run_physx(find_physx(harness_dirs), sim, steps, targets);
+        });
         RowMatrix q(static_cast<Eigen::Index>(px.rows()), model.nv), qd = q;
         for (size_t j = 0; j < px.joints.size(); ++j) {
           const int d = model.dof_index(px.joints[j]);

@@ -1,5 +1,6 @@
-"""Typed stubs of the featherdrive module (python/featherdrive_py.cpp): articulated robots in
-reduced coordinates with implicit PD joint drives solved as NVIDIA PhysX 5 does (PGS or TGS).
+"""Typed stubs of the featherdrive module (python/module.cpp, python/bind_*.cpp): articulated
+robots in reduced coordinates with implicit PD joint drives solved as NVIDIA PhysX 5 does (PGS
+or TGS).
 
 Vectors read from a Simulation are read-only numpy views onto its state that follow later steps
 and stay valid for its life (no call moves them; load_checkpoint restores in place); copy them

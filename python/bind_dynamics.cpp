@@ -1,0 +1,261 @@
+// Kinematics and dynamics queries: Simulation methods and module functions of (model, q, qd).
+#include "bindings.hpp"
+
+namespace py = pybind11;
+using namespace featherdrive;
+using namespace featherdrive::python;
+
+namespace {
+
+// ---- kinematics and dynamics ------------------------------------------------------------------
+// Queries at a state: a Simulation's current q and qd (copied under its lock, then computed on a
+// private workspace) or a model at a given q (and qd), checked as Simulation.set_q and set_qd
+// check them. Every result is a new numpy array (a copy). Conventions: docs/conventions.md,
+// "Kinematics and dynamics".
+
+struct KinematicState {
+  std::shared_ptr<const Model> model;
+  VecX q, qd;
+};
+
+KinematicState state_of(const Simulation& s) {
+  return locked(s, [&] { return KinematicState{s.model_ptr(), s.q(), s.qd()}; });
+}
+
+/// q (and qd unless None; zero then) checked and normalised by a scratch simulation's setters.
+KinematicState state_at(const ModelPtr& model, py::handle q, py::handle qd) {
+  if (!model) throw py::type_error("model must be a Model, not None");
+  Simulation check(model, SimulationOptions{});
+  check.set_q(to_vector(q, model->nq, "q"));
+  if (!qd.is_none()) check.set_qd(to_vector(qd, model->nv, "qd"));
+  return {model, check.q(), check.qd()};
+}
+
+ReferenceFrame to_reference(py::handle obj) {
+  return to_enum<ReferenceFrame>(
+      obj, "frame",
+      {{"local", ReferenceFrame::local}, {"world_aligned", ReferenceFrame::world_aligned}},
+      "'local' or 'world_aligned'");
+}
+
+Vec3 to_point(py::handle obj) {
+  return obj.is_none() ? Vec3::Zero() : to_vec3(obj, "point");
+}
+
+/// A link's query: the state's kinematics (with velocities) and the link's index.
+struct LinkQuery {
+  KinematicState state;
+  Data data;
+  int link;
+  LinkQuery(KinematicState s, py::handle link_obj)
+      : state(std::move(s)), data(*state.model), link(link_of(*state.model, link_arg(link_obj))) {
+    forward_kinematics(*state.model, data, state.q, state.qd);
+  }
+  const Model& model() const { return *state.model; }
+};
+
+py::tuple link_pose_of(const LinkQuery& k) {
+  return py::make_tuple(Mat3(k.data.world_rotation[k.link]), Vec3(k.data.world_position[k.link]));
+}
+
+Vec6 frame_velocity_of(const LinkQuery& k, py::handle point, py::handle frame) {
+  return frame_velocity(k.model(), k.data, k.link, to_point(point), to_reference(frame));
+}
+
+MatX jacobian_of(const LinkQuery& k, py::handle point, py::handle frame) {
+  MatX J;
+  frame_jacobian(k.model(), k.data, k.link, to_point(point), to_reference(frame), J);
+  return J;
+}
+
+Vec6 jacobian_dot_of(const LinkQuery& k, py::handle point, py::handle frame) {
+  return jacobian_dot_times_v(k.model(), k.data, k.link, to_point(point), to_reference(frame));
+}
+
+/// The whole robot's queries (no link).
+struct RobotQuery {
+  KinematicState state;
+  Data data;
+  explicit RobotQuery(KinematicState s) : state(std::move(s)), data(*state.model) {
+    forward_kinematics(*state.model, data, state.q, state.qd);
+  }
+  const Model& model() const { return *state.model; }
+  MatX mass_matrix() { return crba(model(), data, state.q); }
+  VecX bias_forces() { return nonlinear_effects(model(), data, state.q, state.qd); }
+  VecX gravity_forces() { return generalized_gravity(model(), data, state.q); }
+  VecX inverse_dynamics(py::handle qdd) {
+    return rnea(model(), data, state.q, state.qd, to_vector(qdd, model().nv, "qdd"));
+  }
+  Vec3 com() { return center_of_mass(model(), data); }
+  Vec3 com_velocity() { return center_of_mass_velocity(model(), data); }
+  MatX com_jacobian() {
+    MatX J;
+    center_of_mass_jacobian(model(), data, J);
+    return J;
+  }
+};
+
+/// A whole-robot query as a Simulation method and as a module function of (model, q) or, with
+/// with_qd, (model, q, qd).
+template <class R>
+void def_robot_query(py::class_<Simulation, SimulationHolder>& sim, py::module_& m,
+                     const char* name, R (RobotQuery::*query)(), bool with_qd,
+                     const std::string& doc) {
+  sim.def(
+      name, [query](const Simulation& s) { return (RobotQuery(state_of(s)).*query)(); },
+      (doc + " At the simulation's current q and qd; a new array (a copy).").c_str());
+  if (with_qd)
+    m.def(
+        name,
+        [query](const ModelPtr& mo, py::handle q, py::handle qd) {
+          return (RobotQuery(state_at(mo, q, qd)).*query)();
+        },
+        py::arg("model"), py::arg("q"), py::arg("qd"),
+        (doc + " At q (nq,) and qd (nv,), checked "
+               "as Simulation.set_q and set_qd check them; a new array.")
+            .c_str());
+  else
+    m.def(
+        name,
+        [query](const ModelPtr& mo, py::handle q) {
+          return (RobotQuery(state_at(mo, q, py::none())).*query)();
+        },
+        py::arg("model"), py::arg("q"),
+        (doc + " At q (nq,), checked as Simulation.set_q checks it; a new array.").c_str());
+}
+
+constexpr const char* kFrameDoc =
+    " frame: 'world_aligned' (world axes, origin at the point; the default) or 'local' (the "
+    "link's axes). Spatial vectors are [angular; linear].";
+
+}  // namespace
+
+void featherdrive::python::bind_dynamics(py::module_& m) {
+  py::enum_<ReferenceFrame>(m, "ReferenceFrame",
+                            "Axes of a spatial velocity or Jacobian: local (the link's) or "
+                            "world_aligned (the world's), origin at the point either way.")
+      .value("local", ReferenceFrame::local)
+      .value("world_aligned", ReferenceFrame::world_aligned);
+
+  auto sim = py::reinterpret_borrow<py::class_<Simulation, SimulationHolder>>(m.attr("Simulation"));
+  const auto link = py::arg("link");
+  const auto point = py::arg("point") = py::none();
+  const auto frame = py::arg("frame") = "world_aligned";
+  const auto model = py::arg("model"), q = py::arg("q"), qd = py::arg("qd");
+  const std::string at_sim = " At the simulation's current q and qd; a new array (a copy).";
+  const std::string at_q = " At q (nq,), checked as Simulation.set_q checks it; a new array.";
+  const std::string at_qd =
+      " At q (nq,) and qd (nv,), checked as Simulation.set_q and set_qd check them; a new array.";
+  const std::string pose_doc =
+      "(R, p) of a link (name or index): its axes R (3, 3) and origin p (3,) in the world.";
+  const std::string point_doc =
+      "World position (3,) of a point (3,) fixed on a link (name or index), given in the link "
+      "frame.";
+  const std::string velocity_doc =
+      std::string(
+          "Spatial velocity (6,) [omega; velocity of the point] of a point on a link "
+          "(point in the link frame; None: the link origin).") +
+      kFrameDoc;
+  const std::string jacobian_doc =
+      std::string(
+          "J (6, nv) with J qd = frame_velocity(link, point, frame); columns for qd "
+          "(a floating root's body-frame twist).") +
+      kFrameDoc;
+  const std::string jdot_doc =
+      std::string(
+          "dJ/dt qd (6,) for jacobian(link, point, frame): the acceleration at qdd = 0, "
+          "gravity excluded; classical (d/dt [omega; point velocity]) when "
+          "world_aligned, spatial in the link's axes when local.") +
+      kFrameDoc;
+  const std::string mass_doc = "Joint-space inertia M(q) (nv, nv), armature included (CRBA).";
+  const std::string bias_doc =
+      "Bias forces b = C(q, qd) qd + g(q) (nv,): M qdd + b = tau (MuJoCo's qfrc_bias).";
+  const std::string gravity_doc = "g(q) (nv,): the joint forces that hold q still against gravity.";
+  const std::string id_doc =
+      "Inverse dynamics tau = M qdd + b (nv,) for joint accelerations qdd (nv,) (RNEA).";
+  const std::string com_doc = "Centre of mass (3,) of the whole robot, world coordinates.";
+  const std::string comv_doc = "Velocity (3,) of the centre of mass, world coordinates.";
+  const std::string comj_doc = "J_com (3, nv): J_com qd is the centre of mass's velocity.";
+
+  // On a Simulation.
+  sim.def(
+         "link_pose",
+         [](const Simulation& s, py::handle l) { return link_pose_of(LinkQuery(state_of(s), l)); },
+         link, (pose_doc + at_sim).c_str())
+      .def(
+          "frame_position",
+          [](const Simulation& s, py::handle l, py::handle p) {
+            const Vec3 pt = to_vec3(p, "point");
+            LinkQuery k(state_of(s), l);
+            return frame_position(k.model(), k.data, k.link, pt);
+          },
+          link, py::arg("point"), (point_doc + at_sim).c_str())
+      .def(
+          "frame_velocity",
+          [](const Simulation& s, py::handle l, py::handle p, py::handle f) {
+            return frame_velocity_of(LinkQuery(state_of(s), l), p, f);
+          },
+          link, point, frame, (velocity_doc + at_sim).c_str())
+      .def(
+          "jacobian",
+          [](const Simulation& s, py::handle l, py::handle p, py::handle f) {
+            return jacobian_of(LinkQuery(state_of(s), l), p, f);
+          },
+          link, point, frame, (jacobian_doc + at_sim).c_str())
+      .def(
+          "jacobian_dot_times_qd",
+          [](const Simulation& s, py::handle l, py::handle p, py::handle f) {
+            return jacobian_dot_of(LinkQuery(state_of(s), l), p, f);
+          },
+          link, point, frame, (jdot_doc + at_sim).c_str())
+      .def(
+          "inverse_dynamics",
+          [](const Simulation& s, py::handle qdd) {
+            return RobotQuery(state_of(s)).inverse_dynamics(qdd);
+          },
+          py::arg("qdd"), (id_doc + at_sim).c_str());
+  def_robot_query(sim, m, "mass_matrix", &RobotQuery::mass_matrix, false, mass_doc);
+  def_robot_query(sim, m, "bias_forces", &RobotQuery::bias_forces, true, bias_doc);
+  def_robot_query(sim, m, "gravity_forces", &RobotQuery::gravity_forces, false, gravity_doc);
+  def_robot_query(sim, m, "center_of_mass", &RobotQuery::com, false, com_doc);
+  def_robot_query(sim, m, "center_of_mass_velocity", &RobotQuery::com_velocity, true, comv_doc);
+  def_robot_query(sim, m, "center_of_mass_jacobian", &RobotQuery::com_jacobian, false, comj_doc);
+
+  // The same as module functions of (model, q[, qd]).
+  m.def(
+      "link_pose",
+      [](const ModelPtr& mo, py::handle q_, py::handle l) {
+        return link_pose_of(LinkQuery(state_at(mo, q_, py::none()), l));
+      },
+      model, q, link, (pose_doc + at_q).c_str());
+  m.def(
+      "frame_position",
+      [](const ModelPtr& mo, py::handle q_, py::handle l, py::handle p) {
+        const Vec3 pt = to_vec3(p, "point");
+        LinkQuery k(state_at(mo, q_, py::none()), l);
+        return frame_position(k.model(), k.data, k.link, pt);
+      },
+      model, q, link, py::arg("point"), (point_doc + at_q).c_str());
+  m.def(
+      "frame_velocity",
+      [](const ModelPtr& mo, py::handle q_, py::handle qd_, py::handle l, py::handle p,
+         py::handle f) { return frame_velocity_of(LinkQuery(state_at(mo, q_, qd_), l), p, f); },
+      model, q, qd, link, point, frame, (velocity_doc + at_qd).c_str());
+  m.def(
+      "jacobian",
+      [](const ModelPtr& mo, py::handle q_, py::handle l, py::handle p, py::handle f) {
+        return jacobian_of(LinkQuery(state_at(mo, q_, py::none()), l), p, f);
+      },
+      model, q, link, point, frame, (jacobian_doc + at_q).c_str());
+  m.def(
+      "jacobian_dot_times_qd",
+      [](const ModelPtr& mo, py::handle q_, py::handle qd_, py::handle l, py::handle p,
+         py::handle f) { return jacobian_dot_of(LinkQuery(state_at(mo, q_, qd_), l), p, f); },
+      model, q, qd, link, point, frame, (jdot_doc + at_qd).c_str());
+  m.def(
+      "inverse_dynamics",
+      [](const ModelPtr& mo, py::handle q_, py::handle qd_, py::handle qdd) {
+        return RobotQuery(state_at(mo, q_, qd_)).inverse_dynamics(qdd);
+      },
+      model, q, qd, py::arg("qdd"), (id_doc + at_qd).c_str());
+}
