@@ -229,11 +229,13 @@ _SCENES = {}
 def _scene_from_text(scene_text, urdf_text, urdf_name):
     key = (scene_text, urdf_text)
     if key not in _SCENES:
-        folder = tempfile.mkdtemp(prefix="featherdrive_fit_")
-        with open(os.path.join(folder, urdf_name), "w") as f:
-            f.write(urdf_text)
+        # The scene holds the parsed robot: the files are not needed once it is read.
+        with tempfile.TemporaryDirectory(prefix="featherdrive_fit_") as folder:
+            with open(os.path.join(folder, urdf_name), "w") as f:
+                f.write(urdf_text)
+            scene = fd.parse_scene(scene_text, os.path.join(folder, "scene.yaml"))
         _SCENES.clear()
-        _SCENES[key] = fd.parse_scene(scene_text, os.path.join(folder, "scene.yaml"))
+        _SCENES[key] = scene
     return _SCENES[key]
 
 

@@ -255,6 +255,15 @@ def test_bad_logs(tmp_path):
     bad(lambda r: [row.__setitem__(1, repr(float(row[1]) * 2)) for row in r[1:]],
         r"bad\.csv: rows 2-3: time step 0\.008333333333333333 s is not the scene's dt "
         r"0\.004166666666666667 s \(set fit\.data\.resample: linear\)")
+    qd4 = rows[0].index("qd:joint4")
+    bad(lambda r: [row.pop(qd4) for row in r],
+        r"bad\.csv: missing column qd:joint4 \(give qd for every joint or none\)$")
+    # Segments restart from the logged qd: a log without qd cannot have them.
+    write(scene, scene_text("pgs", FIT_GAINS + "  data: {segment_steps: 50}\n"))
+    qd_columns = [i for i, name in enumerate(rows[0]) if name.startswith("qd:")]
+    bad(lambda r: [row.pop(i) for row in r for i in reversed(qd_columns)],
+        r"fit\.yaml: fit\.data\.segment_steps = 50: segments start from the logged qd, and "
+        r"the log has no qd columns$")
 
 
 @pytest.mark.parametrize("entry,match", [
