@@ -41,6 +41,9 @@ void featherdrive::python::bind_fit(py::module_& m) {
 
   py::reinterpret_borrow<py::class_<Scene>>(m.attr("Scene"))
       .def_readonly("fit", &Scene::fit, "FitSpec, or None without a fit: section");
+  // The fit applies the scene's drive delays to the logged targets itself.
+  py::reinterpret_borrow<py::class_<DriveSpec>>(m.attr("DriveSpec"))
+      .def_readonly("delay", &DriveSpec::delay, "the drive's delay in steps (0: none)");
 
   m.def(
       "fit",
@@ -57,11 +60,10 @@ void featherdrive::python::bind_fit(py::module_& m) {
          const std::vector<std::filesystem::path>& harness_dirs) {
         const Model& model = sim.model();
         if (target_position.rows() != steps || target_position.cols() != model.nv)
-          throw std::invalid_argument("run_physx: target_position is (" +
-                                      std::to_string(target_position.rows()) + ", " +
-                                      std::to_string(target_position.cols()) + "), expected (" +
-                                      std::to_string(steps) + ", " + std::to_string(model.nv) +
-                                      ")");
+          throw std::invalid_argument(
+              "run_physx: target_position is (" + std::to_string(target_position.rows()) + ", " +
+              std::to_string(target_position.cols()) + "), expected (" + std::to_string(steps) +
+              ", " + std::to_string(model.nv) + ")");
         // Under sim's lock: nothing else may change it while the harness reads it.
         const JointTrajectory px = locked(sim, [&] {
           std::vector<TargetsByJoint> targets(static_cast<size_t>(steps));

@@ -213,10 +213,11 @@ def _unknowns(spec):
 
 
 def _delay_candidates(spec):
+    """The delays to try and the dofs they act on; (None, []) without a delay to fit."""
     for p in spec.parameters:
         if p.quantity == "delay":
-            return list(range(int(p.lower), int(p.upper) + 1))
-    return None
+            return list(range(int(p.lower), int(p.upper) + 1)), list(p.indices)
+    return None, []
 
 
 # ---------------------------------------------------------------------------------------------
@@ -241,7 +242,7 @@ def _scene_from_text(scene_text, urdf_text, urdf_name):
 
 def simulate_batch(job):
     """job: dict(scene_text, urdf_text, urdf_name, unknowns [(quantity, indices)], values (P, n),
-    delay, starts (S,), length, q0 (S, nv), qd0 (S, nv), target_position (T, nv),
+    delays (nv,), starts (S,), length, q0 (S, nv), qd0 (S, nv), target_position (T, nv),
     target_velocity (T, nv), threads). Returns q (P, S, length, nv) and qd likewise."""
     scene = _scene_from_text(job["scene_text"], job["urdf_text"], job["urdf_name"])
     values = np.asarray(job["values"], dtype=float)
@@ -284,12 +285,15 @@ def simulate_batch(job):
     batch.set_q(np.tile(job["q0"], (P, 1)))
     batch.set_qd(np.tile(job["qd0"], (P, 1)))
     tp, tv = job["target_position"], job["target_velocity"]
+    delays = np.asarray(job["delays"])
+    dofs = np.arange(tp.shape[1])[None, :]
     q = np.empty((N, L, tp.shape[1]))
     qd = np.empty_like(q)
     for k in range(L):
-        # The target commanded `delay` steps earlier; before the log's first row, its first.
-        rows = np.maximum(np.tile(starts + k - job["delay"], P), 0)
-        batch.set_drive_targets(tp[rows], tv[rows])
+        # Per dof the target commanded `delay` steps earlier; before the log's first row, its
+        # first (as the simulation's delay line does, eq. 9 of docs/math/explicit_actuators.md).
+        rows = np.maximum(np.tile(starts + k, P)[:, None] - delays[None, :], 0)
+        batch.set_drive_targets(tp[rows, dofs], tv[rows, dofs])
         batch.step()
         q[:, k] = batch.q
         qd[:, k] = batch.qd
@@ -313,6 +317,14 @@ class _Problem:
         doc = yaml.safe_load(text)
         urdf_name = os.path.basename(os.fspath(scene.model_path))
         doc["model"] = urdf_name
+        # The drives' delays are applied to the logged targets (simulate_batch), so that a
+        # segment starts with the targets the robot had in the pipe: none in the simulation.
+        for entry in [doc.get("drive_defaults")] + list((doc.get("drives") or {}).values()):
+            if isinstance(entry, dict) and "delay" in entry:
+                entry["delay"] = 0
+        self.scene_delays = np.zeros(scene.model.nv, dtype=int)
+        for d in scene.drives:
+            self.scene_delays[d.dof] = d.delay
         self.base = dict(scene_text=yaml.safe_dump(doc), urdf_text=urdf_text,
                          urdf_name=urdf_name,
                          unknowns=[(u.quantity, u.indices) for u in unknowns],
@@ -336,14 +348,14 @@ class _Problem:
         self.q_ref = log.q[rows]  # (S, L, nv)
         self.qd_ref = None if log.qd is None else log.qd[rows]
         self.qd_weight = scene.fit.data.qd_weight if log.qd is not None else 0.0
-        self.delay = 0
+        self.delays = self.scene_delays.copy()
         self.nfev = 0
 
     def run(self, values):
         """q, qd (P, S, L, nv) for parameter rows `values` (physical units)."""
         values = np.atleast_2d(values)
         parts = np.array_split(np.arange(values.shape[0]), min(self.chunks, values.shape[0]))
-        jobs = [dict(self.base, values=values[p], delay=self.delay) for p in parts]
+        jobs = [dict(self.base, values=values[p], delays=self.delays) for p in parts]
         results = featherdrive_distributed.map_ordered(simulate_batch, jobs, client=self.client)
         self.nfev += values.shape[0]
         return (np.concatenate([r[0] for r in results]), np.concatenate([r[1] for r in results]))
@@ -405,11 +417,12 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     lower = np.array([u.lower for u in unknowns]) / problem.scale
     upper = np.array([u.upper for u in unknowns]) / problem.scale
     x0 = np.array([u.initial for u in unknowns]) / problem.scale
-    candidates = _delay_candidates(scene.fit)
+    candidates, delayed = _delay_candidates(scene.fit)
     best = None
     costs = {}
     for K in candidates if candidates is not None else [0]:
-        problem.delay = K
+        problem.delays = problem.scene_delays.copy()
+        problem.delays[delayed] = K
         if unknowns:
             sol = least_squares(problem.fun, x0, jac=problem.jac, bounds=(lower, upper),
                                 method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12,
@@ -424,7 +437,9 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
             print(f"delay {K}: cost {cost:.6g}", file=sys.stderr)
         if best is None or cost < best[1]:
             best = (K, cost, x)
-    problem.delay, _, x = best
+    K, _, x = best
+    problem.delays = problem.scene_delays.copy()
+    problem.delays[delayed] = K
     q, qd = problem.run(x * problem.scale)
     r = problem.residuals(q, qd)[0]
     ci = np.zeros(0)
@@ -439,7 +454,7 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     err = q_fit - log.q[:used]
     rms_by_joint = {n: float(np.sqrt(np.mean(err[:, d] ** 2)))
                     for d, n in enumerate(scene.model.dof_names)}
-    result = FitResult(estimates, problem.delay if candidates is not None else None, costs,
+    result = FitResult(estimates, K if candidates is not None else None, costs,
                        rms_by_joint, float(np.sqrt(np.mean(err ** 2))), problem.nfev, q_fit, log)
     if out is not None:
         _write_outputs(result, scene, data, out)
@@ -493,7 +508,7 @@ def fitted_scene_text(result, scene):
             elif e.quantity in _FRICTION:
                 joint = doc.setdefault("joints", {}).setdefault(name, {})
                 joint.setdefault("friction", {})[e.quantity.split(".")[1]] = e.value
-    if result.delay:
+    if result.delay is not None:
         for p in scene.fit.parameters:
             if p.quantity == "delay":
                 for name in p.names:

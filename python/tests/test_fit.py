@@ -181,6 +181,19 @@ def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
     assert open(tmp_path / "fit.yaml").read() == scene_text("pgs", fit)  # input untouched
 
 
+def test_a_known_delay_with_segments(tmp_path):
+    """The scene's own delay (2 steps, not fitted): each segment starts with the targets that
+    were in the pipe, as the uninterrupted run had them."""
+    truth_scene = fd.parse_scene(scene_text(delay=2), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {segment_steps: 100}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit, delay=2))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert worst_error(result, TRUTH) < 1e-6, result.table()
+    assert result.rms < 1e-9
+
+
 def test_resampled_log(tmp_path):
     """A log at twice the scene's rate, resampled (linear), recovers what the log at dt does."""
     truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))

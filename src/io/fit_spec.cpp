@@ -29,23 +29,33 @@ constexpr std::pair<FitQuantity, const char*> kNames[] = {
 constexpr long kMaxFitDelay = 64;
 
 bool on_drive(FitQuantity q) {
-  return q == FitQuantity::stiffness || q == FitQuantity::damping ||
-         q == FitQuantity::max_force || q == FitQuantity::delay;
+  return q == FitQuantity::stiffness || q == FitQuantity::damping || q == FitQuantity::max_force ||
+         q == FitQuantity::delay;
 }
 
 // The scene's own value of `quantity` on dof or link `index`.
 double scene_value(FitQuantity quantity, const Simulation& sim, int index) {
   switch (quantity) {
-    case FitQuantity::stiffness: return sim.drive(index).stiffness;
-    case FitQuantity::damping: return sim.drive(index).damping;
-    case FitQuantity::max_force: return sim.drive(index).max_force;
-    case FitQuantity::armature: return sim.model().armature[index];
-    case FitQuantity::friction_static: return sim.joint_friction(index).static_effort;
-    case FitQuantity::friction_dynamic: return sim.joint_friction(index).dynamic_effort;
-    case FitQuantity::friction_viscous: return sim.joint_friction(index).viscous;
-    case FitQuantity::friction_coefficient: return sim.friction_coefficient(index);
-    case FitQuantity::delay: break;
-    case FitQuantity::mass_scale: return 1.0;
+    case FitQuantity::stiffness:
+      return sim.drive(index).stiffness;
+    case FitQuantity::damping:
+      return sim.drive(index).damping;
+    case FitQuantity::max_force:
+      return sim.drive(index).max_force;
+    case FitQuantity::armature:
+      return sim.model().armature[index];
+    case FitQuantity::friction_static:
+      return sim.joint_friction(index).static_effort;
+    case FitQuantity::friction_dynamic:
+      return sim.joint_friction(index).dynamic_effort;
+    case FitQuantity::friction_viscous:
+      return sim.joint_friction(index).viscous;
+    case FitQuantity::friction_coefficient:
+      return sim.friction_coefficient(index);
+    case FitQuantity::delay:
+      break;
+    case FitQuantity::mass_scale:
+      return 1.0;
   }
   return 0.0;
 }
@@ -116,8 +126,8 @@ FitParameter read_parameter(const Reader& r, const YAML::Node& node, const std::
   } else {
     p.lower = r.finite(b[0], at("bounds") + "[0]");
     p.upper = r.finite(b[1], at("bounds") + "[1]");
-    const bool positive = p.quantity == FitQuantity::mass_scale ||
-                          p.quantity == FitQuantity::max_force;
+    const bool positive =
+        p.quantity == FitQuantity::mass_scale || p.quantity == FitQuantity::max_force;
     if (positive ? p.lower <= 0.0 : p.lower < 0.0)
       r.fail(at("bounds") + "[0]", b[0], positive ? "must be > 0" : "must be >= 0");
   }
@@ -137,10 +147,10 @@ FitParameter read_parameter(const Reader& r, const YAML::Node& node, const std::
                       format_double(p.lower) + ", " + format_double(p.upper) + "]");
   };
   if (node["initial"]) {
-    const double v = p.quantity == FitQuantity::delay
-                         ? static_cast<double>(r.integer(node["initial"], at("initial"), 0,
-                                                         kMaxFitDelay))
-                         : r.finite(node["initial"], at("initial"));
+    const double v =
+        p.quantity == FitQuantity::delay
+            ? static_cast<double>(r.integer(node["initial"], at("initial"), 0, kMaxFitDelay))
+            : r.finite(node["initial"], at("initial"));
     check(v, "initial");
     p.initial.assign(unknowns, v);
   } else if (p.quantity == FitQuantity::delay) {
@@ -204,8 +214,7 @@ FitSpec read_fit_spec(const Reader& r, const YAML::Node& node, const Scene& scen
       r.fail(key, "delay is fitted once (one value for every joint it names)");
     for (size_t j = 0; j < p.names.size(); ++j)
       if (!seen.insert({p.quantity, p.indices[j]}).second)
-        r.fail(key, std::string(to_string(p.quantity)) + " of " + p.names[j] +
-                        " is fitted twice");
+        r.fail(key, std::string(to_string(p.quantity)) + " of " + p.names[j] + " is fitted twice");
     spec.parameters.push_back(std::move(p));
   }
   if (node["data"]) spec.data = read_data(r, node["data"]);

@@ -14,12 +14,14 @@ using test::kExamples;
 
 // The arm with drives on every joint and armature on joint2; `fit` is the fit: section.
 Scene arm_fitting(const std::string& fit) {
-  return parse_scene("model: arm7.urdf\nsteps: 10\n"
-                     "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
-                     "drives: {joint4: {stiffness: 250}, joint7: {type: none}}\n"
-                     "joints: {joint2: {armature: 0.1}, joint3: {friction: {static: 0.3}}}\n"
-                     "fit:\n" + fit,
-                     kExamples + "inline_fit.yaml");
+  return parse_scene(
+      "model: arm7.urdf\nsteps: 10\n"
+      "drive_defaults: {type: force, stiffness: 400, damping: 10}\n"
+      "drives: {joint4: {stiffness: 250}, joint7: {type: none}}\n"
+      "joints: {joint2: {armature: 0.1}, joint3: {friction: {static: 0.3}}}\n"
+      "fit:\n" +
+          fit,
+      kExamples + "inline_fit.yaml");
 }
 
 std::string fit_error_of(const std::string& fit) {
@@ -102,14 +104,14 @@ TEST(FitSpec, BadEntriesNameTheKeyAndValue) {
             f + ": the starting value (the scene's max_force of joint1; give initial:) = inf is "
                 "outside bounds [1, 50]");
   EXPECT_EQ(fit_error_of("  parameters:\n"
-                     "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"
-                     "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"),
+                         "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"
+                         "    - {quantity: armature, joints: [joint1], bounds: [0, 1]}\n"),
             "inline_fit.yaml: fit.parameters[1]: armature of joint1 is fitted twice");
   EXPECT_EQ(fit_error_of("  parameters: []\n"),
             "inline_fit.yaml: fit.parameters = []: must be a non-empty list of "
             "{quantity, joints, bounds}");
   EXPECT_EQ(fit_error_of(one_parameter("{quantity: armature, joints: [joint1], bounds: [0, 1]}") +
-                     "  data: {resample: cubic}\n"),
+                         "  data: {resample: cubic}\n"),
             "inline_fit.yaml: fit.data.resample = cubic: must be exact or linear");
 }
 
