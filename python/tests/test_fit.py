@@ -299,3 +299,26 @@ def test_bad_fit_sections(tmp_path, entry, match):
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and "fit.yaml: fit.parameters[0]" in run.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_the_command(tmp_path, module_dir):
+    """featherdrive fit: the table and the outputs, exit 0; a bad log: one line, exit 2."""
+    command = module_dir.parent / "tools" / "featherdrive"
+    assert command.exists(), command
+    make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
+    fit = "fit:\n  parameters:\n    - {quantity: stiffness, joints: [joint2], bounds: [50, 5000]}\n"
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit).replace(
+        "joint2: {stiffness: 600", "joint2: {stiffness: 300"))
+    run = subprocess.run([str(command), "fit", str(scene), "--data", str(tmp_path / "log.csv"),
+                          "--out", str(tmp_path / "out"), "--threads", "1"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "stiffness              joint2                            300          600" in run.stdout
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {
+        "fit_fitted.yaml", "fit_fit.png", "fit_fit.txt"}
+    (tmp_path / "bad.csv").write_text("t,q:joint1\n0,0\n0.1,0\n")
+    run = subprocess.run([str(command), "fit", str(scene), "--data", str(tmp_path / "bad.csv")],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 2
+    assert run.stderr == f"featherdrive fit: {tmp_path / 'bad.csv'}: missing column q:joint2\n"
+    assert not (tmp_path / "fit_out").exists()
