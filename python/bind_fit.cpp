@@ -41,9 +41,6 @@ void featherdrive::python::bind_fit(py::module_& m) {
 
   py::reinterpret_borrow<py::class_<Scene>>(m.attr("Scene"))
       .def_readonly("fit", &Scene::fit, "FitSpec, or None without a fit: section");
-  // The fit applies the scene's drive delays to the logged targets itself.
-  py::reinterpret_borrow<py::class_<DriveSpec>>(m.attr("DriveSpec"))
-      .def_readonly("delay", &DriveSpec::delay, "the drive's delay in steps (0: none)");
 
   m.def(
       "fit",

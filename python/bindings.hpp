@@ -52,6 +52,8 @@ void bind_batch(py::module_& m);
 void bind_io(py::module_& m);
 void bind_dynamics(py::module_& m);
 void bind_names(py::module_& m);
+void bind_delay(py::module_& m);
+void bind_sweep(py::module_& m);
 void bind_fit(py::module_& m);  // after bind_io: it extends Scene
 
 using ModelPtr = std::shared_ptr<Model>;

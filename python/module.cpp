@@ -51,5 +51,7 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_io(m);
   bind_dynamics(m);
   bind_names(m);
+  bind_delay(m);
+  bind_sweep(m);
   bind_fit(m);
 }

@@ -48,3 +48,19 @@ def test_cluster_failure_names_the_first_failing_item(client):
     with pytest.raises(TypeError, match="distributed.Client or None"):
         map_ordered(abs, [1], client="tcp://nowhere:1")
 
+
+def test_sweep_is_the_same_on_1_and_2_threads_and_on_the_cluster(client):
+    import featherdrive as fd
+    from conftest import ROOT, hexes
+    scene = str(ROOT / "examples" / "slider.yaml")
+    grid = "stiffness=50:800:3:log,damping=2:60:3"
+    one = fd.sweep(scene, grid, num_threads=1)
+    two = fd.sweep(scene, grid, num_threads=2)
+    # 9 points in chunks of 4: three tasks over two workers, gathered in grid order.
+    cluster = fd.sweep(scene, grid, client=client, chunk_size=4)
+    assert one.rms.shape == (9, 1) and np.all(np.isfinite(one.rms))
+    assert len(set(hexes(one.rms))) == 9  # nine different errors: the order is checked
+    for other in (two, cluster):
+        assert hexes(other.rms) == hexes(one.rms)
+        assert hexes(other.total) == hexes(one.total)
+        assert hexes(other.points) == hexes(one.points)

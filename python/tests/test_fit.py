@@ -99,12 +99,13 @@ def test_recovers_gains_armature_and_delay(tmp_path, solver):
     truth_scene = fd.parse_scene(scene_text(solver, delay=1), str(tmp_path / "truth.yaml"))
     logged = make_log(tmp_path / "log.csv", truth_scene)
     scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS))
-    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1, out=str(tmp_path / "out"))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
     assert result.delay == 1
     assert worst_error(result, TRUTH) < 0.01, result.table()
     assert result.rms < 1e-9
     # The fitted scene (drives.J.delay: 1 written in) replays the log.
-    fitted = fd.load_scene(result.scene_file)
+    text = featherdrive_fit.fitted_scene_text(result, fd.load_scene(str(scene)))
+    fitted = fd.parse_scene(text, str(tmp_path / "fitted.yaml"))
     q, _ = replay(fitted, chirp_targets(fitted.model.nv))
     assert np.abs(q - logged).max() < 1e-9
 
@@ -292,17 +293,11 @@ def test_bad_fit_sections(tmp_path, entry, match):
     scene = write(tmp_path / "fit.yaml", scene_text("pgs", f"fit:\n  parameters:\n    - {entry}\n"))
     with pytest.raises(ValueError, match=match):
         fd.load_scene(str(scene))
-    make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
-    run = subprocess.run([sys.executable, "-m", "featherdrive_fit", str(scene), "--data",
-                          str(tmp_path / "log.csv"), "--out", str(tmp_path / "out")],
-                         capture_output=True, text=True)
-    assert run.returncode == 2
-    assert run.stderr.count("\n") == 1 and "fit.yaml: fit.parameters[0]" in run.stderr
-    assert not (tmp_path / "out").exists()
 
 
 def test_the_command(tmp_path, module_dir):
-    """featherdrive fit: the table and the outputs, exit 0; a bad log: one line, exit 2."""
+    """featherdrive fit: the table and the outputs, exit 0; a bad log or fit: section: one line,
+    exit 2, nothing written."""
     command = module_dir.parent / "tools" / "featherdrive"
     assert command.exists(), command
     make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
@@ -321,4 +316,13 @@ def test_the_command(tmp_path, module_dir):
                          capture_output=True, text=True, cwd=tmp_path)
     assert run.returncode == 2
     assert run.stderr == f"featherdrive fit: {tmp_path / 'bad.csv'}: missing column q:joint2\n"
+    assert not (tmp_path / "fit_out").exists()
+    # python -m featherdrive_fit, which the command runs: a bad fit: section, one line, exit 2.
+    write(scene, scene_text("pgs", fit.replace("[50, 5000]", "[5000, 50]")))
+    run = subprocess.run([sys.executable, "-m", "featherdrive_fit", str(scene), "--data",
+                          str(tmp_path / "log.csv")], capture_output=True, text=True, cwd=tmp_path,
+                         env=dict(os.environ, PYTHONPATH=str(module_dir)))
+    assert run.returncode == 2
+    assert run.stderr == (f"featherdrive fit: {scene}: fit.parameters[0].bounds = [5000, 50]: "
+                          "lower must be below upper\n")
     assert not (tmp_path / "fit_out").exists()

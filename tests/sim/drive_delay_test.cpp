@@ -8,20 +8,20 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <string>
 #include <vector>
 
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "support/compare.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
-bool same_bits(double a, double b) {
+bool same_double_bits(double a, double b) {
   return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
 }
 
@@ -78,8 +78,8 @@ TEST_P(DriveDelayShift, DelayedResponseIsTheUndelayedOneKStepsLater) {
     for (int n = 0; n < K; ++n) EXPECT_EQ(q[n], VecX::Zero(3)) << "K " << K << " step " << n;
     for (int n = 0; n < kSteps; ++n)
       for (int d = 0; d < 3; ++d) {
-        ASSERT_TRUE(same_bits(q[n + K][d], q0[n][d])) << "K " << K << " step " << n << " dof " << d;
-        ASSERT_TRUE(same_bits(f[n + K][d], f0[n][d])) << "K " << K << " step " << n << " dof " << d;
+        ASSERT_TRUE(same_double_bits(q[n + K][d], q0[n][d])) << "K " << K << " step " << n << " dof " << d;
+        ASSERT_TRUE(same_double_bits(f[n + K][d], f0[n][d])) << "K " << K << " step " << n << " dof " << d;
       }
     // drive() reports the targets as commanded, not as the row used them.
     EXPECT_EQ(delayed.drive(1).target_position, target(kSteps + K - 1, 1, kOnset));
@@ -102,7 +102,7 @@ TEST(DriveDelay, ConstantTargetFromTheStartIsNotDelayed) {
   for (int k = 0; k < 20; ++k) {
     plain.step();
     delayed.step();
-    for (int d = 0; d < 3; ++d) ASSERT_TRUE(same_bits(plain.q()[d], delayed.q()[d])) << k;
+    for (int d = 0; d < 3; ++d) ASSERT_TRUE(same_double_bits(plain.q()[d], delayed.q()[d])) << k;
   }
   EXPECT_EQ(delayed.drive_delay(2), 4);
   EXPECT_EQ(delayed.drive_delays().pushes(2), 20);
@@ -130,7 +130,7 @@ TEST(DriveDelay, ADivergedStepLeavesTheHistoryAsItWas) {
       for (int d = 0; d < 3; ++d) s->set_drive_target(d, target(k, d, 0), 0.0);
       s->step();
     }
-  for (int d = 0; d < 3; ++d) EXPECT_TRUE(same_bits(sim.q()[d], reference.q()[d])) << d;
+  for (int d = 0; d < 3; ++d) EXPECT_TRUE(same_double_bits(sim.q()[d], reference.q()[d])) << d;
 }
 
 // Each environment with its own delays steps as a lone Simulation with them, on 2 threads; a
@@ -158,7 +158,7 @@ TEST(DriveDelay, BatchEnvironmentsEqualSimulationsAndResetClearsTheHistory) {
   auto expect_equal = [&](const char* when) {
     for (int i = 0; i < 4; ++i)
       for (int d = 0; d < 3; ++d)
-        ASSERT_TRUE(same_bits(batch.q()(i, d), alone[static_cast<size_t>(i)].q()[d]))
+        ASSERT_TRUE(same_double_bits(batch.q()(i, d), alone[static_cast<size_t>(i)].q()[d]))
             << when << ": env " << i << " dof " << d;
   };
   for (int k = 0; k < 15; ++k) {
@@ -184,7 +184,7 @@ TEST(DriveDelay, BatchEnvironmentsEqualSimulationsAndResetClearsTheHistory) {
   EXPECT_EQ(batch.sim(2).drive_delays().pushes(2), 30);
 }
 
-std::string error_of(const std::function<void()>& f) {
+std::string delay_error(const std::function<void()>& f) {
   try {
     f();
   } catch (const std::invalid_argument& e) {
@@ -195,19 +195,19 @@ std::string error_of(const std::function<void()>& f) {
 
 TEST(DriveDelay, BadDelaysGetOneLineAndChangeNothing) {
   Simulation sim = driven_chain(SolverType::pgs, DriveType::force, 0);
-  EXPECT_EQ(error_of([&] { sim.set_drive_delay(0, -1); }),
+  EXPECT_EQ(delay_error([&] { sim.set_drive_delay(0, -1); }),
             "drive of joint 'joint1': delay = -1 must be in [0, 100000] steps");
-  EXPECT_EQ(error_of([&] { sim.set_drive_delay("joint2", 100001); }),
+  EXPECT_EQ(delay_error([&] { sim.set_drive_delay("joint2", 100001); }),
             "drive of joint 'joint2': delay = 100001 must be in [0, 100000] steps");
   sim.set_drive(2, Drive{});
-  EXPECT_NE(error_of([&] { sim.set_drive_delay(2, 3); })
+  EXPECT_NE(delay_error([&] { sim.set_drive_delay(2, 3); })
                 .find("joint 'joint3' (dof 2) has no drive (type none)"),
             std::string::npos);
   sim.set_drive_delay(2, 0);  // no delay is always fine
   ExplicitActuator pd;
   pd.kind = ActuatorKind::ideal_pd;
   sim.set_actuator(2, pd);
-  EXPECT_EQ(error_of([&] { sim.set_drive_delay(2, 1); }),
+  EXPECT_EQ(delay_error([&] { sim.set_drive_delay(2, 1); }),
             "joint 'joint3' has an explicit actuator: a drive delay of 1 steps would do nothing "
             "(give the actuator its own delay)");
   EXPECT_EQ(sim.drive_delay(0), 0);
@@ -216,11 +216,11 @@ TEST(DriveDelay, BadDelaysGetOneLineAndChangeNothing) {
   RowMatrix delays(2, 3);
   delays << 1, 1, 0, 2.5, 0, 0;
   const std::vector<int> all = {0, 1};
-  EXPECT_EQ(error_of([&] { batch.set_drive_delay(all, delays); }),
+  EXPECT_EQ(delay_error([&] { batch.set_drive_delay(all, delays); }),
             "Batch: environment 1: drive delay of joint 'joint1' = 2.5 must be a whole number of "
             "steps in [0, 100000]");
   delays << 1, 1, 0, 1, 0, 3;
-  EXPECT_NE(error_of([&] { batch.set_drive_delay(all, delays); }).find("Batch: environment 1: "),
+  EXPECT_NE(delay_error([&] { batch.set_drive_delay(all, delays); }).find("Batch: environment 1: "),
             std::string::npos);
   EXPECT_EQ(batch.drive_delay(), RowMatrix::Zero(2, 3));  // nothing changed
 }

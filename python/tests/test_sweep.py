@@ -1,0 +1,156 @@
+"""featherdrive_sweep (fd.sweep, `featherdrive sweep`): a grid point against a lone Simulation
+and against `featherdrive simulate`; a damping sweep against the closed form of a second-order
+system's squared error; bad grids. The cluster cases are in test_distributed.py."""
+import csv
+import math
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+import featherdrive as fd
+import featherdrive_sweep
+from conftest import ROOT
+
+SLIDER = ROOT / "examples" / "slider.yaml"
+
+
+def cli(module_dir):
+    return str(module_dir.parent / "tools" / "featherdrive")
+
+
+def lone_run(scene_path, gains, joint=None):
+    """Per drive, the RMS of target - q of a lone Simulation with `gains` on the drives (or on
+    `joint`'s): the same quantity by other code."""
+    scene = fd.load_scene(str(scene_path))
+    sim = fd.make_simulation(scene)
+    drives = [d for d in scene.drives if d.drive.type != fd.DriveType.none]
+    for d in drives:
+        if joint is None or d.joint == joint:
+            drive = sim.drive(d.dof)
+            for name, value in gains.items():
+                setattr(drive, name, value)
+            sim.set_drive(d.dof, drive)
+    model = scene.model
+    errors = []
+    for k in range(scene.steps):
+        fd.apply_targets(scene, sim, k)
+        sim.step()
+        t = (k + 1) * scene.options.dt
+        errors.append([d.target_at(t)[0] - sim.q[model.links[model.dof_link[d.dof]].q_index]
+                       for d in drives])
+    return np.sqrt(np.mean(np.square(errors), axis=0))
+
+
+def test_a_grid_point_is_a_lone_simulation_run():
+    result = fd.sweep(str(SLIDER), "stiffness=100:400:2,damping=5:40:3:log")
+    assert result.names == ["stiffness", "damping"] and result.joints == ["slide"]
+    assert result.points.shape == (6, 2)
+    np.testing.assert_allclose(result.axes[1], [5.0, math.sqrt(5 * 40), 40.0], rtol=1e-15)
+    for i in (0, 4):
+        stiffness, damping = result.points[i]
+        expected = lone_run(SLIDER, {"stiffness": stiffness, "damping": damping})
+        np.testing.assert_allclose(result.rms[i], expected, rtol=1e-12)
+        assert result.total[i] == pytest.approx(expected[0], rel=1e-15)  # one drive
+    assert not result.diverged.any()
+
+
+def test_joint_changes_one_drive_and_total_is_the_rms_of_the_drives():
+    arm = ROOT / "examples" / "arm7_tgs.yaml"
+    result = fd.sweep(str(arm), {"damping": [10.0, 60.0]}, joint="joint7")
+    assert len(result.joints) == 7
+    expected = lone_run(arm, {"damping": 60.0}, joint="joint7")
+    np.testing.assert_allclose(result.rms[1], expected, rtol=1e-12)
+    assert result.total[1] == pytest.approx(math.sqrt(np.mean(expected ** 2)), rel=1e-12)
+    np.testing.assert_array_equal(result.objective, result.rms[:, 6])
+
+
+def test_damping_sweep_follows_the_closed_form(tmp_path):
+    # A 2.5 kg slider without gravity, at rest at 0, target A from the first step. For
+    # m x'' + c x' + k x = k A the squared error integrates to A^2 (1 + 4 z^2) / (4 z w),
+    # w = sqrt(k / m), z = c / (2 sqrt(k m)): least at z = 1/2.
+    k, m, A, dt, T = 100.0, 2.5, 0.1, 1e-3, 5.0
+    w, critical = math.sqrt(k / m), 2.0 * math.sqrt(k * m)
+    scene = tmp_path / "step.yaml"
+    scene.write_text(
+        f"model: {ROOT / 'examples' / 'slider.urdf'}\nfixed_base: true\ngravity: [0, 0, 0]\n"
+        f"dt: {dt}\nsteps: {round(T / dt)}\nsolver: {{type: pgs}}\n"
+        f"drives:\n  slide: {{type: force, stiffness: {k}, target_position: {A}}}\n")
+    zetas = np.linspace(0.2, 1.2, 21)
+    result = fd.sweep(str(scene), {"damping": zetas * critical})
+    closed = np.sqrt(A * A * (1 + 4 * zetas ** 2) / (4 * zetas * w) / T)
+    np.testing.assert_allclose(result.total, closed, rtol=0.015)  # measured: 0.73 %
+    assert zetas[result.best()] == pytest.approx(0.5)
+
+
+def test_cli_writes_the_grid_and_its_plot_and_agrees_with_simulate(tmp_path, module_dir):
+    out = tmp_path / "out"
+    r = subprocess.run([cli(module_dir), "sweep", str(SLIDER), "--grid",
+                        "stiffness=100:400:2,damping=10:40:2", "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "4 grid points, 1 drives" in r.stdout and "least total rms error" in r.stdout
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0]) == ["stiffness", "damping", "rms:slide", "rms_total", "diverged"]
+    assert [(float(r["stiffness"]), float(r["damping"])) for r in rows] == [
+        (100.0, 10.0), (100.0, 40.0), (400.0, 10.0), (400.0, 40.0)]
+    assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # featherdrive simulate on the scene with the point's gains written in: its rms column.
+    text = SLIDER.read_text().replace("stiffness: 400, damping: 40", "stiffness: 100, damping: 40")
+    text = text.replace("model: slider.urdf", f"model: {ROOT / 'examples' / 'slider.urdf'}")
+    scene = tmp_path / "point.yaml"
+    scene.write_text(text)
+    r = subprocess.run([cli(module_dir), "simulate", str(scene)], capture_output=True, text=True,
+                       timeout=120)
+    line = next(l for l in r.stdout.splitlines() if l.strip().startswith("slide"))
+    rms = float(line.split()[3])
+    assert float(rows[1]["rms:slide"]) == pytest.approx(rms, rel=6e-4)
+
+
+BAD_GRIDS = [
+    ("stiffness=10:1000", "--grid stiffness=10:1000: expected VALUE, LO:HI:N or LO:HI:N:log"),
+    ("stiffness=10:1000:x", "N = 'x' must be a whole number of points"),
+    ("stiffness=0:10:3:log", "log spacing needs LO > 0, not 0"),
+    ("stiffness=10:1:3", "HI = 1 is below LO = 10"),
+    ("stiffness=10:20:3:cubic", "spacing 'cubic' must be lin or log"),
+    ("mass=1:2:3", "--grid mass: unknown parameter (expected one of stiffness, damping)"),
+    ("stiffness=1,stiffness=2", "--grid stiffness: given twice"),
+    ("stiffness", "--grid entry 'stiffness': expected NAME=LO:HI:N[:log]"),
+    ("damping=-1", "must be finite and >= 0"),
+]
+
+
+@pytest.mark.parametrize("grid, message", BAD_GRIDS)
+def test_bad_grids_are_value_errors_naming_the_entry(grid, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        featherdrive_sweep.parse_grid(grid)
+
+
+def test_bad_grids_on_the_command_line_get_one_line_and_exit_2(module_dir, tmp_path):
+    for grid, message in BAD_GRIDS[:3]:  # each a python start: a few suffice
+        r = subprocess.run([cli(module_dir), "sweep", str(SLIDER), "--grid", grid, "--out",
+                            str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert r.stderr.startswith("featherdrive sweep: ") and message in r.stderr
+        assert not (tmp_path / "o").exists()
+
+
+def test_bad_options_get_one_line_and_exit_2(module_dir, tmp_path):
+    for args, message in [
+        ([str(SLIDER)], "the following arguments are required: --grid"),
+        ([str(SLIDER), "--grid", "damping=1", "--joint", "elbow"],
+         "--joint elbow: not an implicit drive of"),
+        ([str(tmp_path / "none.yaml"), "--grid", "damping=1"], "none.yaml"),
+    ]:
+        r = subprocess.run([cli(module_dir), "sweep", *args], capture_output=True, text=True,
+                           timeout=120, cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr
+    with pytest.raises(TypeError, match="grid must be a str or a dict"):
+        fd.sweep(str(SLIDER), 3)
+    # --help reaches the module through the dispatch: exit 0.
+    r = subprocess.run([cli(module_dir), "sweep", "--help"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and "LO:HI:N:log" in r.stdout
