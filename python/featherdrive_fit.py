@@ -64,7 +64,8 @@ class FitResult:
     cost_by_delay: dict[int, float]
     rms_by_joint: dict[str, float]  # RMS q residual per joint at the optimum, rad or m
     rms: float
-    nfev: int
+    nfev: int                    # parameter sets simulated
+    converged: bool              # least_squares met a tolerance (not its evaluation limit)
     q_fitted: np.ndarray         # (T, nv) simulated q at the optimum, segments joined
     log: Log
     scene_file: str | None = None
@@ -86,6 +87,8 @@ class FitResult:
         if self.delay is not None:
             costs = ", ".join(f"{k}: {c:.3g}" for k, c in sorted(self.cost_by_delay.items()))
             lines.append(f"delay {self.delay} steps (cost by delay: {costs})")
+        if not self.converged:
+            lines.append("NOT CONVERGED: least_squares stopped at its evaluation limit")
         lines.append("RMS q residual per joint: " +
                      ", ".join(f"{j} {v:.3g}" for j, v in self.rms_by_joint.items()))
         return "\n".join(lines)
@@ -401,7 +404,8 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
 
     scene: a scene file path or an fd.Scene with a fit: section. client: a dask.distributed
     Client (batches run on its workers, results gathered in order). threads: each batch's
-    threads (None: all cores). out: a folder for the fitted scene, the plot and report.txt.
+    threads (None: all cores). out: a folder for <scene>_fitted.yaml, <scene>_fit.png and
+    <scene>_fit.txt (the table).
     chunks: batches per evaluation (default: the client's worker count, or 1).
     Returns a FitResult; bad input raises ValueError naming the file, key or column and value."""
     from scipy.optimize import least_squares
@@ -427,17 +431,17 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
             sol = least_squares(problem.fun, x0, jac=problem.jac, bounds=(lower, upper),
                                 method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12,
                                 max_nfev=100)
-            x, cost = sol.x, sol.cost
+            x, cost, converged = sol.x, sol.cost, sol.status > 0
         else:
-            x = x0
+            x, converged = x0, True
             r = problem.fun(x)
             cost = 0.5 * float(r @ r)
         costs[K] = cost
         if verbose:
             print(f"delay {K}: cost {cost:.6g}", file=sys.stderr)
         if best is None or cost < best[1]:
-            best = (K, cost, x)
-    K, _, x = best
+            best = (K, cost, x, converged)
+    K, _, x, converged = best
     problem.delays = problem.scene_delays.copy()
     problem.delays[delayed] = K
     q, qd = problem.run(x * problem.scale)
@@ -455,7 +459,8 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     rms_by_joint = {n: float(np.sqrt(np.mean(err[:, d] ** 2)))
                     for d, n in enumerate(scene.model.dof_names)}
     result = FitResult(estimates, K if candidates is not None else None, costs,
-                       rms_by_joint, float(np.sqrt(np.mean(err ** 2))), problem.nfev, q_fit, log)
+                       rms_by_joint, float(np.sqrt(np.mean(err ** 2))), problem.nfev, converged,
+                       q_fit, log)
     if out is not None:
         _write_outputs(result, scene, data, out)
     return result

@@ -100,7 +100,7 @@ def test_recovers_gains_armature_and_delay(tmp_path, solver):
     logged = make_log(tmp_path / "log.csv", truth_scene)
     scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS))
     result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
-    assert result.delay == 1
+    assert result.delay == 1 and result.converged
     assert worst_error(result, TRUTH) < 0.01, result.table()
     assert result.rms < 1e-9
     # The fitted scene (drives.J.delay: 1 written in) replays the log.
@@ -168,7 +168,7 @@ def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
                             "  data: {segment_steps: 100}\n")
     scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
     result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1, out=str(tmp_path / "out"))
-    assert worst_error(result, TRUTH) < 0.03, result.table()
+    assert worst_error(result, TRUTH) < 0.03 and result.converged, result.table()
     # The intervals cover the truth (95 %: allow 3 half-widths for the 6 together).
     for e in result.estimates:
         assert abs(e.value - TRUTH[(e.quantity, e.names[0])]) < 3 * e.ci95, result.table()
