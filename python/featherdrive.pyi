@@ -637,6 +637,7 @@ class Scene:
     q0: Vector
     qd0: Vector
     drives: list[DriveSpec]
+    fit: FitSpec | None
     @property
     def model(self) -> Model: ...
 
@@ -720,3 +721,32 @@ def export_mjcf(sim: Simulation, drives: str | DriveMapping = "translated",
 def translate_mjcf_to_scene(mjcf: PathLike, scene_path: PathLike,
                             options: SimulationOptions = ..., steps: Int = 240) -> dict[str, object]:
     """yaml (the scene's text; nothing is written), dt, integrator, notes, joints."""
+
+# A scene's fit: section and the fit (docs/fitting.md; python/bind_fit.cpp, featherdrive_fit.py).
+class FitParameter:
+    quantity: str
+    names: list[str]
+    indices: list[int]
+    lower: float
+    upper: float
+    shared: bool
+    initial: list[float]
+    key: str
+
+class FitData:
+    resample: str
+    segment_steps: int
+    qd_weight: float
+
+class FitSpec:
+    parameters: list[FitParameter]
+    data: FitData
+    def num_unknowns(self) -> int: ...
+
+def fit(scene: Union[PathLike, Scene], data: PathLike, client: object = None,
+        threads: Int | None = None, out: PathLike | None = None,
+        chunks: Int | None = None, verbose: bool = False) -> object:
+    """featherdrive_fit.fit: the scene's fit: parameters fitted to the log; a FitResult."""
+def run_physx(sim: Simulation, steps: int, target_position: ArrayLike,
+              harness_dirs: Sequence[PathLike]) -> tuple[Vector, Vector]:
+    """(q, qd), (steps + 1, nv), from PhysX 5.6.1 itself (tests/physx's harness)."""

@@ -55,4 +55,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_mujoco_bridge(m);
   bind_delay(m);
   bind_sweep(m);
+  bind_fit(m);
 }

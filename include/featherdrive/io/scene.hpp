@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "featherdrive/io/error.hpp"
+#include "featherdrive/io/fit_spec.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
@@ -77,6 +78,8 @@ struct Scene {
   /// control: {substeps: k, targets: hold | linear}: the targets change every k steps
   /// (apply_targets); the default 1 / hold is one target per step.
   ControlStep control;
+  /// fit: what `featherdrive fit` identifies (fit_spec.hpp); absent without the key.
+  std::optional<FitSpec> fit;
 
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };

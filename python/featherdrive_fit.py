@@ -1,0 +1,602 @@
+"""Identify drive and joint parameters from a logged trajectory (docs/fitting.md).
+
+    fit(scene, data, client=None, threads=None, out=None) -> FitResult
+    python -m featherdrive_fit SCENE --data LOG.csv [--out DIR] [--scheduler ADDRESS]
+
+The scene's ``fit:`` section names the unknowns and their bounds; the log's targets are replayed
+in a Batch with candidate parameters and SciPy's ``least_squares`` matches the simulated q to the
+logged q. Every simulation of a residual or a Jacobian is one Batch (one environment per
+parameter set and segment), shipped as scene text + parameters, so it runs the same in-process or
+on Dask workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import math
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+import featherdrive as fd
+import featherdrive_distributed
+
+# Forward differences: the step relative to a parameter's scale (its starting value, or its
+# bounds' width when that is 0). The simulation is deterministic, so the error is truncation.
+_FD_STEP = 1e-6
+# The log's time steps must equal the scene's dt within this (relative), unless resampled.
+_DT_TOLERANCE = 1e-6
+
+_DRIVE = ("stiffness", "damping", "max_force")
+_FRICTION = {"friction.static": 0, "friction.dynamic": 1, "friction.viscous": 2}
+
+
+@dataclasses.dataclass
+class Log:
+    """A log on the scene's time grid: row k is t0 + k dt. targets[k] drives step k -> k + 1."""
+    t: np.ndarray               # (T,)
+    q: np.ndarray               # (T, nv), dof order
+    qd: np.ndarray | None       # (T, nv) or None when the log has no qd columns
+    target_position: np.ndarray  # (T, nv), 0 on dofs without a drive
+    target_velocity: np.ndarray  # (T, nv)
+
+
+@dataclasses.dataclass
+class Estimate:
+    """One fitted unknown: a quantity on one joint (or link), or shared by several."""
+    quantity: str
+    names: list[str]
+    value: float
+    initial: float
+    lower: float
+    upper: float
+    ci95: float  # half-width of the 95 % interval; nan where the Jacobian does not determine it
+
+
+@dataclasses.dataclass
+class FitResult:
+    estimates: list[Estimate]
+    delay: int | None            # the fitted delay (steps), None when it is not fitted
+    cost_by_delay: dict[int, float]
+    rms_by_joint: dict[str, float]  # RMS q residual per joint at the optimum, rad or m
+    rms: float
+    nfev: int                    # parameter sets simulated
+    converged: bool              # least_squares met a tolerance (not its evaluation limit)
+    q_fitted: np.ndarray         # (T, nv) simulated q at the optimum, segments joined
+    log: Log
+    scene_file: str | None = None
+    plot_file: str | None = None
+
+    def value(self, quantity: str, name: str) -> float:
+        """The fitted value of quantity on a joint (or link)."""
+        for e in self.estimates:
+            if e.quantity == quantity and name in e.names:
+                return e.value
+        raise ValueError(f"fit: {quantity} of {name!r} was not fitted")
+
+    def table(self) -> str:
+        lines = [f"{'quantity':22} {'joints':24} {'initial':>12} {'fitted':>12} {'± 95 %':>10}"]
+        for e in self.estimates:
+            names = ",".join(e.names) if len(e.names) <= 2 else f"{e.names[0]},... ({len(e.names)})"
+            lines.append(f"{e.quantity:22} {names:24} {e.initial:12.6g} {e.value:12.6g} "
+                         f"{e.ci95:10.3g}")
+        if self.delay is not None:
+            costs = ", ".join(f"{k}: {c:.3g}" for k, c in sorted(self.cost_by_delay.items()))
+            lines.append(f"delay {self.delay} steps (cost by delay: {costs})")
+        if not self.converged:
+            lines.append("NOT CONVERGED: least_squares stopped at its evaluation limit")
+        lines.append("RMS q residual per joint: " +
+                     ", ".join(f"{j} {v:.3g}" for j, v in self.rms_by_joint.items()))
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# The log
+
+
+def _log_error(path, message):
+    return ValueError(f"{path}: {message}")
+
+
+def read_log(path, scene) -> Log:
+    """Reads a featherdrive CSV (t, q:<joint>, optional qd:<joint>, target:<joint> for each
+    driven joint, optional target_velocity:<joint>; other columns ignored) onto the scene's time
+    grid (fit.data.resample). ValueError names the file, the column or row and the value."""
+    path = os.fspath(path)
+    model = scene.model
+    if model.nq != model.nv:
+        raise _log_error(scene.path, "fit: only robots of one-dof joints (a fixed base) are fitted")
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as e:
+        raise _log_error(path, f"cannot read the log: {e.strerror}") from None
+    if len(rows) < 3:
+        raise _log_error(path, f"{max(len(rows) - 1, 0)} data rows: the log needs at least 2")
+    header = rows[0]
+    index = {}
+    for i, name in enumerate(header):
+        if name in index:
+            raise _log_error(path, f"column {name!r} appears twice")
+        index[name] = i
+    time_name = "t" if "t" in index else "time" if "time" in index else None
+    if time_name is None:
+        raise _log_error(path, "missing column t (or time)")
+    dofs = model.dof_names
+    driven = [d.dof for d in scene.drives if str(d.drive.type) != "DriveType.none"]
+
+    def column(name, required):
+        if name not in index:
+            if required:
+                raise _log_error(path, f"missing column {name}")
+            return None
+        i = index[name]
+        values = np.empty(len(rows) - 1)
+        for r, row in enumerate(rows[1:], start=2):
+            if len(row) != len(header):
+                raise _log_error(path, f"row {r}: {len(row)} fields, the header has {len(header)}")
+            try:
+                values[r - 2] = float(row[i])
+            except ValueError:
+                raise _log_error(path, f"row {r}: {name} = {row[i]!r}: not a number") from None
+            if not math.isfinite(values[r - 2]):
+                raise _log_error(path, f"row {r}: {name} = {row[i]}: must be finite")
+        return values
+
+    t = column(time_name, True)
+    for r in range(1, len(t)):
+        if not t[r] > t[r - 1]:
+            raise _log_error(path, f"row {r + 2}: {time_name} = {t[r]!r} is not after the "
+                                   f"previous row's {t[r - 1]!r} (time must increase)")
+    q = np.stack([column(f"q:{n}", True) for n in dofs], axis=1)
+    qd_cols = [column(f"qd:{n}", False) for n in dofs]
+    have_qd = [c is not None for c in qd_cols]
+    if any(have_qd) and not all(have_qd):
+        raise _log_error(path, f"missing column qd:{dofs[have_qd.index(False)]} "
+                               "(give qd for every joint or none)")
+    qd = np.stack(qd_cols, axis=1) if all(have_qd) else None
+    tp = np.zeros_like(q)
+    tv = np.zeros_like(q)
+    for d in driven:
+        tp[:, d] = column(f"target:{dofs[d]}", True)
+        v = column(f"target_velocity:{dofs[d]}", False)
+        if v is not None:
+            tv[:, d] = v
+
+    dt = scene.options.dt
+    if scene.fit.data.resample == "exact":
+        steps = np.diff(t)
+        bad = np.flatnonzero(np.abs(steps - dt) > _DT_TOLERANCE * dt)
+        if bad.size:
+            r = int(bad[0])
+            raise _log_error(path, f"rows {r + 2}-{r + 3}: time step {steps[r]!r} s is not the "
+                                   f"scene's dt {dt!r} s (set fit.data.resample: linear)")
+        return Log(t, q, qd, tp, tv)
+    # linear: q and qd interpolated at t0 + k dt; a target holds from its row until the next.
+    grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt * (1 + 1e-12))) + 1)
+    if grid.size < 2:
+        raise _log_error(path, f"the log spans {t[-1] - t[0]!r} s, less than one dt = {dt!r} s")
+    interp = lambda x: np.stack([np.interp(grid, t, x[:, j]) for j in range(x.shape[1])], 1)
+    held = np.searchsorted(t, grid * (1 + 1e-12), side="right") - 1
+    return Log(grid, interp(q), None if qd is None else interp(qd), tp[held], tv[held])
+
+
+# ---------------------------------------------------------------------------------------------
+# The unknowns
+
+
+@dataclasses.dataclass
+class _Unknown:
+    quantity: str
+    names: list[str]
+    indices: list[int]
+    initial: float
+    lower: float
+    upper: float
+    scale: float
+
+
+def _unknowns(spec):
+    out = []
+    for p in spec.parameters:
+        if p.quantity == "delay":
+            continue
+        groups = [list(range(len(p.names)))] if p.shared else [[i] for i in range(len(p.names))]
+        for g, members in enumerate(groups):
+            initial = p.initial[g]
+            scale = abs(initial) if initial != 0 else p.upper - p.lower
+            out.append(_Unknown(p.quantity, [p.names[i] for i in members],
+                                [p.indices[i] for i in members], initial, p.lower, p.upper,
+                                scale))
+    return out
+
+
+def _delay_candidates(spec):
+    """The delays to try and the dofs they act on; (None, []) without a delay to fit."""
+    for p in spec.parameters:
+        if p.quantity == "delay":
+            return list(range(int(p.lower), int(p.upper) + 1)), list(p.indices)
+    return None, []
+
+
+# ---------------------------------------------------------------------------------------------
+# One batch: P parameter sets x S segments, each an environment. Module-level and picklable so
+# that Dask workers run it; its inputs are plain data (scene text, numbers, arrays).
+
+_SCENES = {}
+
+
+def _scene_from_text(scene_text, urdf_text, urdf_name):
+    key = (scene_text, urdf_text)
+    if key not in _SCENES:
+        # The scene holds the parsed robot: the files are not needed once it is read.
+        with tempfile.TemporaryDirectory(prefix="featherdrive_fit_") as folder:
+            with open(os.path.join(folder, urdf_name), "w") as f:
+                f.write(urdf_text)
+            scene = fd.parse_scene(scene_text, os.path.join(folder, "scene.yaml"))
+        _SCENES.clear()
+        _SCENES[key] = scene
+    return _SCENES[key]
+
+
+def simulate_batch(job):
+    """job: dict(scene_text, urdf_text, urdf_name, unknowns [(quantity, indices)], values (P, n),
+    delays (nv,), starts (S,), length, q0 (S, nv), qd0 (S, nv), target_position (T, nv),
+    target_velocity (T, nv), threads). Returns q (P, S, length, nv) and qd likewise."""
+    scene = _scene_from_text(job["scene_text"], job["urdf_text"], job["urdf_name"])
+    values = np.asarray(job["values"], dtype=float)
+    starts = np.asarray(job["starts"])
+    P, S, L = values.shape[0], starts.size, job["length"]
+    N = P * S
+    batch = fd.Batch(fd.make_simulation(scene), N)
+    if job["threads"] is not None:
+        batch.set_num_threads(job["threads"])
+    per_env = np.repeat(values, S, axis=0)  # env e = p S + s
+    armature = friction = None
+    for u, (quantity, indices) in enumerate(job["unknowns"]):
+        v = per_env[:, u]
+        if quantity in _DRIVE or quantity == "friction_coefficient":
+            for e in range(N):
+                sim = batch.sim(e)
+                for dof in indices:
+                    if quantity == "friction_coefficient":
+                        sim.set_friction_coefficient(dof, v[e])
+                        continue
+                    drive = sim.drive(dof)
+                    setattr(drive, quantity, v[e])
+                    if quantity == "max_force":
+                        drive.max_impulse = math.inf
+                    sim.set_drive(dof, drive)
+        elif quantity == "armature":
+            armature = np.array(batch.armature()) if armature is None else armature
+            armature[:, indices] = v[:, None]
+        elif quantity in _FRICTION:
+            if friction is None:
+                friction = [np.array(a) for a in batch.joint_friction()]
+            friction[_FRICTION[quantity]][:, indices] = v[:, None]
+        elif quantity == "mass_scale":
+            for link in indices:
+                batch.set_link_mass(link, v * scene.model.links[link].mass)
+    if armature is not None:
+        batch.set_armature(armature)
+    if friction is not None:
+        batch.set_joint_friction(*friction)
+    batch.set_q(np.tile(job["q0"], (P, 1)))
+    batch.set_qd(np.tile(job["qd0"], (P, 1)))
+    tp, tv = job["target_position"], job["target_velocity"]
+    delays = np.asarray(job["delays"])
+    dofs = np.arange(tp.shape[1])[None, :]
+    q = np.empty((N, L, tp.shape[1]))
+    qd = np.empty_like(q)
+    for k in range(L):
+        # Per dof the target commanded `delay` steps earlier; before the log's first row, its
+        # first (as the simulation's delay line does, eq. 9 of docs/math/explicit_actuators.md).
+        rows = np.maximum(np.tile(starts + k, P)[:, None] - delays[None, :], 0)
+        batch.set_drive_targets(tp[rows, dofs], tv[rows, dofs])
+        batch.step()
+        q[:, k] = batch.q
+        qd[:, k] = batch.qd
+    shape = (P, S, L, tp.shape[1])
+    return q.reshape(shape), qd.reshape(shape)
+
+
+
+
+# ---------------------------------------------------------------------------------------------
+# The fit
+
+
+class _Problem:
+    def __init__(self, scene, log, unknowns, client, threads, chunks):
+        with open(scene.path) as f:
+            text = f.read()
+        with open(scene.model_path) as f:
+            urdf_text = f.read()
+        import yaml
+        doc = yaml.safe_load(text)
+        urdf_name = os.path.basename(os.fspath(scene.model_path))
+        doc["model"] = urdf_name
+        # The drives' delays are applied to the logged targets (simulate_batch), so that a
+        # segment starts with the targets the robot had in the pipe: none in the simulation.
+        for entry in [doc.get("drive_defaults")] + list((doc.get("drives") or {}).values()):
+            if isinstance(entry, dict) and "delay" in entry:
+                entry["delay"] = 0
+        self.scene_delays = np.zeros(scene.model.nv, dtype=int)
+        for d in scene.drives:
+            self.scene_delays[d.dof] = d.delay
+        self.base = dict(scene_text=yaml.safe_dump(doc), urdf_text=urdf_text,
+                         urdf_name=urdf_name,
+                         unknowns=[(u.quantity, u.indices) for u in unknowns],
+                         target_position=log.target_position,
+                         target_velocity=log.target_velocity, threads=threads)
+        self.unknowns = unknowns
+        self.scale = np.array([u.scale for u in unknowns])
+        self.client, self.chunks = client, chunks
+        self.log = log
+        T = log.t.size
+        L = scene.fit.data.segment_steps or (T - 1)
+        if scene.fit.data.segment_steps and log.qd is None:
+            raise ValueError(f"{scene.path}: fit.data.segment_steps = {L}: segments start from "
+                             "the logged qd, and the log has no qd columns")
+        L = min(L, T - 1)
+        self.starts = np.arange(0, T - L, L)  # whole segments; a tail shorter than L is left out
+        self.length = L
+        qd0 = log.qd[self.starts] if log.qd is not None else np.tile(scene.qd0, (1, 1))
+        self.base.update(starts=self.starts, length=L, q0=log.q[self.starts], qd0=qd0)
+        rows = self.starts[:, None] + 1 + np.arange(L)[None, :]
+        self.q_ref = log.q[rows]  # (S, L, nv)
+        self.qd_ref = None if log.qd is None else log.qd[rows]
+        self.qd_weight = scene.fit.data.qd_weight if log.qd is not None else 0.0
+        self.delays = self.scene_delays.copy()
+        self.nfev = 0
+
+    def run(self, values):
+        """q, qd (P, S, L, nv) for parameter rows `values` (physical units)."""
+        values = np.atleast_2d(values)
+        parts = np.array_split(np.arange(values.shape[0]), min(self.chunks, values.shape[0]))
+        jobs = [dict(self.base, values=values[p], delays=self.delays) for p in parts]
+        results = featherdrive_distributed.map_ordered(simulate_batch, jobs, client=self.client)
+        self.nfev += values.shape[0]
+        return (np.concatenate([r[0] for r in results]), np.concatenate([r[1] for r in results]))
+
+    def residuals(self, q, qd):
+        r = (q - self.q_ref).reshape(q.shape[0], -1)
+        if self.qd_weight:
+            r = np.concatenate([r, self.qd_weight * (qd - self.qd_ref).reshape(q.shape[0], -1)], 1)
+        return r
+
+    # least_squares works in x = value / scale.
+    def fun(self, x):
+        return self.residuals(*self.run(x * self.scale))[0]
+
+    def jac(self, x):
+        # One batch: the point and each forward (backward at an upper bound) step.
+        n = x.size
+        h = np.full(n, _FD_STEP)
+        upper = np.array([u.upper for u in self.unknowns]) / self.scale
+        h[x + h > upper] *= -1
+        rows = np.vstack([x, x + np.diag(h)])
+        r = self.residuals(*self.run(rows * self.scale))
+        return ((r[1:] - r[0]) / h[:, None]).T
+
+
+def _confidence(J, r, m, n):
+    """95 % half-widths from cov = s^2 (J^T J)^-1, s^2 = |r|^2 / (m - n) (docs/fitting.md)."""
+    from scipy import stats
+    if m <= n:
+        return np.full(n, np.nan)
+    s2 = float(r @ r) / (m - n)
+    JtJ = J.T @ J
+    try:
+        cov = s2 * np.linalg.inv(JtJ)
+    except np.linalg.LinAlgError:
+        return np.full(n, np.nan)
+    var = np.diag(cov)
+    return np.where(var >= 0, stats.t.ppf(0.975, m - n) * np.sqrt(np.abs(var)), np.nan)
+
+
+def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=False):
+    """Fits the scene's fit: unknowns to the log `data` (a CSV path).
+
+    scene: a scene file path or an fd.Scene with a fit: section. client: a dask.distributed
+    Client (batches run on its workers, results gathered in order). threads: each batch's
+    threads (None: all cores). out: a folder for <scene>_fitted.yaml, <scene>_fit.png and
+    <scene>_fit.txt (the table).
+    chunks: batches per evaluation (default: the client's worker count, or 1).
+    Returns a FitResult; bad input raises ValueError naming the file, key or column and value."""
+    from scipy.optimize import least_squares
+    if not isinstance(scene, fd.Scene):
+        scene = fd.load_scene(scene)
+    if scene.fit is None:
+        raise ValueError(f"{scene.path}: no fit: section (the parameters to identify)")
+    log = read_log(data, scene)
+    unknowns = _unknowns(scene.fit)
+    if chunks is None:
+        chunks = len(client.scheduler_info()["workers"]) if client is not None else 1
+    problem = _Problem(scene, log, unknowns, client, threads, max(int(chunks), 1))
+    lower = np.array([u.lower for u in unknowns]) / problem.scale
+    upper = np.array([u.upper for u in unknowns]) / problem.scale
+    x0 = np.array([u.initial for u in unknowns]) / problem.scale
+    candidates, delayed = _delay_candidates(scene.fit)
+    best = None
+    costs = {}
+    for K in candidates if candidates is not None else [0]:
+        problem.delays = problem.scene_delays.copy()
+        problem.delays[delayed] = K
+        if unknowns:
+            sol = least_squares(problem.fun, x0, jac=problem.jac, bounds=(lower, upper),
+                                method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                                max_nfev=100)
+            x, cost, converged = sol.x, sol.cost, sol.status > 0
+        else:
+            x, converged = x0, True
+            r = problem.fun(x)
+            cost = 0.5 * float(r @ r)
+        costs[K] = cost
+        if verbose:
+            print(f"delay {K}: cost {cost:.6g}", file=sys.stderr)
+        if best is None or cost < best[1]:
+            best = (K, cost, x, converged)
+    K, _, x, converged = best
+    problem.delays = problem.scene_delays.copy()
+    problem.delays[delayed] = K
+    q, qd = problem.run(x * problem.scale)
+    r = problem.residuals(q, qd)[0]
+    ci = np.zeros(0)
+    if unknowns:
+        J = problem.jac(x) / problem.scale[None, :]
+        ci = _confidence(J, r, r.size, x.size)
+    values = x * problem.scale
+    estimates = [Estimate(u.quantity, u.names, float(v), u.initial, u.lower, u.upper, float(c))
+                 for u, v, c in zip(unknowns, values, ci)]
+    q_fit = np.vstack([log.q[problem.starts[:1]], q[0].reshape(-1, q.shape[-1])])
+    used = q_fit.shape[0]
+    err = q_fit - log.q[:used]
+    rms_by_joint = {n: float(np.sqrt(np.mean(err[:, d] ** 2)))
+                    for d, n in enumerate(scene.model.dof_names)}
+    result = FitResult(estimates, K if candidates is not None else None, costs,
+                       rms_by_joint, float(np.sqrt(np.mean(err ** 2))), problem.nfev, converged,
+                       q_fit, log)
+    if out is not None:
+        _write_outputs(result, scene, data, out)
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# Outputs
+
+
+def _atomic_write(path, write):
+    folder = os.path.dirname(os.path.abspath(path))
+    fd_, tmp = tempfile.mkstemp(dir=folder, prefix=".fit_", suffix=os.path.splitext(path)[1])
+    os.close(fd_)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _output_path(folder, name, inputs):
+    path = os.path.join(folder, name)
+    if os.path.lexists(path) and not os.path.isfile(path):
+        raise ValueError(f"{path}: exists and is not a regular file; not overwritten")
+    for i in inputs:
+        if os.path.exists(path) and os.path.samefile(path, i):
+            raise ValueError(f"{path}: is an input of the fit; not overwritten")
+    return path
+
+
+def fitted_scene_text(result, scene):
+    """The scene file with the fitted values written in (model path made absolute)."""
+    import yaml
+    with open(scene.path) as f:
+        doc = yaml.safe_load(f)
+    doc["model"] = os.path.abspath(os.fspath(scene.model_path))
+    for e in result.estimates:
+        for name in e.names:
+            if e.quantity in _DRIVE:
+                drive = doc.setdefault("drives", {}).setdefault(name, {})
+                if "type" not in drive and "drive_defaults" not in doc:
+                    drive["type"] = "force"
+                drive[e.quantity] = e.value
+                if e.quantity == "max_force":
+                    drive.pop("max_impulse", None)
+            elif e.quantity in ("armature", "friction_coefficient"):
+                doc.setdefault("joints", {}).setdefault(name, {})[e.quantity] = e.value
+            elif e.quantity in _FRICTION:
+                joint = doc.setdefault("joints", {}).setdefault(name, {})
+                joint.setdefault("friction", {})[e.quantity.split(".")[1]] = e.value
+    if result.delay is not None:
+        for p in scene.fit.parameters:
+            if p.quantity == "delay":
+                for name in p.names:
+                    doc.setdefault("drives", {}).setdefault(name, {})["delay"] = result.delay
+    for p in doc.get("fit", {}).get("parameters", []):
+        p.pop("initial", None)  # the scene's values are now the fitted ones
+    return yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=100)
+
+
+def _write_outputs(result, scene, data, out):
+    os.makedirs(out, exist_ok=True)
+    inputs = [os.fspath(scene.path), os.fspath(data), os.fspath(scene.model_path)]
+    stem = os.path.splitext(os.path.basename(os.fspath(scene.path)))[0]
+    scene_path = _output_path(out, f"{stem}_fitted.yaml", inputs)
+    plot_path = _output_path(out, f"{stem}_fit.png", inputs)
+    report_path = _output_path(out, f"{stem}_fit.txt", inputs)
+    text = fitted_scene_text(result, scene)
+    _atomic_write(scene_path, lambda p: open(p, "w").write(text))
+    notes = [f"mass_scale of {', '.join(e.names)} = {e.value:.6g}: not a scene key; scale the "
+             "URDF's <inertial>" for e in result.estimates if e.quantity == "mass_scale"]
+    _atomic_write(report_path, lambda p: open(p, "w").write(
+        result.table() + "\n" + "".join(n + "\n" for n in notes)))
+    _atomic_write(plot_path, lambda p: plot(result, scene, p))
+    result.scene_file, result.plot_file = scene_path, plot_path
+
+
+def plot(result, scene, path):
+    """Per joint: logged and fitted q, and below it the residual (fitted - logged), as a PNG."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    names = scene.model.dof_names
+    n = len(names)
+    cols = min(n, 4)
+    rows = (n + cols - 1) // cols
+    fig = plt.figure(figsize=(3.0 * cols, 2.6 * rows), layout="constrained")
+    grid = fig.add_gridspec(2 * rows, cols, height_ratios=[3, 1] * rows)
+    t = result.log.t[:result.q_fitted.shape[0]]
+    for d, name in enumerate(names):
+        top = fig.add_subplot(grid[2 * (d // cols), d % cols])
+        low = fig.add_subplot(grid[2 * (d // cols) + 1, d % cols], sharex=top)
+        top.plot(t, result.log.q[:t.size, d], "k-", lw=1.5, label="logged")
+        top.plot(t, result.q_fitted[:, d], "r--", lw=1, label="fitted")
+        low.plot(t, result.q_fitted[:, d] - result.log.q[:t.size, d], "r-", lw=0.5)
+        top.set_title(f"{name} (rms {result.rms_by_joint[name]:.2g})", fontsize=8)
+        top.tick_params(labelsize=6, labelbottom=False)
+        low.tick_params(labelsize=6)
+        low.yaxis.get_offset_text().set_fontsize(6)
+        if d == 0:
+            top.legend(fontsize=6)
+            low.set_ylabel("residual", fontsize=6)
+    fig.supxlabel("t [s]", fontsize=8)
+    fig.savefig(path, format="png", dpi=70)
+    plt.close(fig)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="featherdrive fit",
+                                     description="Fit a scene's fit: parameters to a log.")
+    parser.add_argument("scene")
+    parser.add_argument("--data", required=True, help="the log, a CSV")
+    parser.add_argument("--out", default="fit_out", help="folder for the outputs (fit_out)")
+    parser.add_argument("--scheduler", help="a Dask scheduler's address")
+    parser.add_argument("--threads", type=int, help="threads per batch (default: all cores)")
+    args = parser.parse_args(argv)
+    client = None
+    try:
+        if args.scheduler:
+            client = featherdrive_distributed.connect(args.scheduler)
+        result = fit(args.scene, args.data, client=client, threads=args.threads, out=args.out)
+    except ValueError as e:
+        print(f"featherdrive fit: {e}", file=sys.stderr)
+        return 2
+    except Exception as e:  # one line, as the CLI's other commands
+        print(f"featherdrive fit: {type(e).__name__}: {e}", file=sys.stderr)
+        return 1
+    finally:
+        if client is not None:
+            client.close()
+    print(result.table())
+    print(f"wrote {result.scene_file}, {result.plot_file}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

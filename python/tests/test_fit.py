@@ -1,0 +1,328 @@
+"""featherdrive_fit (fd.fit, python -m featherdrive_fit): parameters recovered from logs that
+featherdrive made with known parameters (the truth the fit never sees), the fitted scene replaying
+the log, identical fits on 1 and 2 threads and Dask workers, and one-line errors."""
+import csv
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import featherdrive as fd
+import featherdrive_fit
+from conftest import ARM
+
+DT = 1.0 / 240.0
+ROWS = 301  # 1.25 s
+
+
+def scene_text(solver="pgs", fit="", delay=0):
+    return (f"model: {ARM}\nsteps: {ROWS - 1}\ndt: {DT!r}\n"
+            f"solver: {{type: {solver}, position_iterations: 4, velocity_iterations: 1}}\n"
+            f"drive_defaults: {{type: force, stiffness: 400, damping: 10, delay: {delay}}}\n"
+            "drives: {joint2: {stiffness: 600, damping: 12},\n"
+            "         joint4: {stiffness: 300, damping: 6}}\n"
+            "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n" + fit)
+
+
+def write(path, text):
+    path.write_text(text)
+    return path
+
+
+def chirp_targets(nv):
+    """0.3 rad chirps from 0.5 to 4 Hz, a phase apart per joint."""
+    t = DT * np.arange(ROWS)
+    phase = 2 * np.pi * (0.5 * t + 3.5 * t ** 2 / (2 * t[-1]))
+    return 0.3 * np.sin(phase[:, None] + np.arange(nv)[None, :])
+
+
+def replay(scene, targets, q0=None):
+    """q of the scene's simulation (its drives, delays and joints) under the targets, row k's
+    commanded before step k -> k + 1; from q0 if given."""
+    sim = fd.make_simulation(scene)
+    if q0 is not None:
+        sim.set_q(q0)
+    q, qd = [sim.q.copy()], [sim.qd.copy()]
+    for k in range(ROWS - 1):
+        sim.set_drive_targets(targets[k])
+        sim.step()
+        q.append(sim.q.copy())
+        qd.append(sim.qd.copy())
+    return np.array(q), np.array(qd)
+
+
+def make_log(path, scene, noise=0.0, seed=0):
+    """Runs the scene (its delay included) on chirp targets and writes featherdrive's CSV
+    columns plus the targets, Gaussian noise of `noise` rad on q."""
+    names = scene.model.dof_names
+    targets = chirp_targets(len(names))
+    q, qd = replay(scene, targets)
+    q = q + noise * np.random.default_rng(seed).standard_normal((ROWS, len(names)))
+    write_log(path, names, q, qd, targets)
+    return q
+
+
+def write_log(path, names, q, qd, targets):
+    """featherdrive's CSV columns, the targets and a column the fit ignores."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["step", "t"] + [f"q:{n}" for n in names] + [f"qd:{n}" for n in names] +
+                   [f"target:{n}" for n in names] + ["comment"])
+        for k in range(len(q)):
+            w.writerow([k, repr(k * DT)] + [repr(x) for x in q[k]] + [repr(x) for x in qd[k]] +
+                       [repr(x) for x in targets[k]] + ["ignored"])
+
+
+# The starting values are off by 2x (x2 and /2) from the truth of scene_text.
+FIT_GAINS = """fit:
+  parameters:
+    - {quantity: stiffness, joints: [joint2, joint4], bounds: [50, 5000], initial: 1200}
+    - {quantity: damping, joints: [joint2], bounds: [0.5, 100], initial: 6}
+    - {quantity: damping, joints: [joint4], bounds: [0.5, 100], initial: 12}
+    - {quantity: armature, joints: [joint2], bounds: [0.001, 1], initial: 0.04}
+    - {quantity: armature, joints: [joint4], bounds: [0.001, 1], initial: 0.08}
+    - {quantity: delay, joints: all, bounds: [0, 2]}
+"""
+TRUTH = {("stiffness", "joint2"): 600, ("stiffness", "joint4"): 300,
+         ("damping", "joint2"): 12, ("damping", "joint4"): 6,
+         ("armature", "joint2"): 0.08, ("armature", "joint4"): 0.04}
+
+
+def worst_error(result, truth):
+    return max(abs(result.value(q, j) / v - 1) for (q, j), v in truth.items())
+
+
+@pytest.mark.parametrize("solver", ["pgs", "tgs"])
+def test_recovers_gains_armature_and_delay(tmp_path, solver):
+    truth_scene = fd.parse_scene(scene_text(solver, delay=1), str(tmp_path / "truth.yaml"))
+    logged = make_log(tmp_path / "log.csv", truth_scene)
+    scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert result.delay == 1 and result.converged
+    assert worst_error(result, TRUTH) < 0.01, result.table()
+    assert result.rms < 1e-9
+    # The fitted scene (drives.J.delay: 1 written in) replays the log.
+    text = featherdrive_fit.fitted_scene_text(result, fd.load_scene(str(scene)))
+    fitted = fd.parse_scene(text, str(tmp_path / "fitted.yaml"))
+    q, _ = replay(fitted, chirp_targets(fitted.model.nv))
+    assert np.abs(q - logged).max() < 1e-9
+
+
+def test_recovers_friction(tmp_path):
+    friction = ("joints: {joint2: {armature: 0.08, friction: {static: 0.6, dynamic: 0.6, "
+                "viscous: 0.4}},\n"
+                "         joint4: {armature: 0.04, friction: {static: 0.3, dynamic: 0.3, "
+                "viscous: 0.2}}}\n")
+    text = scene_text().replace(
+        "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n", friction)
+    make_log(tmp_path / "log.csv", fd.parse_scene(text, str(tmp_path / "truth.yaml")))
+    fit = """fit:
+  parameters:
+    - {quantity: friction.dynamic, joints: [joint2, joint4], bounds: [0, 5], initial: 1.2}
+    - {quantity: friction.viscous, joints: [joint2, joint4], bounds: [0, 5], initial: 0.2}
+"""
+    scene = write(tmp_path / "fit.yaml", text + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    truth = {("friction.dynamic", "joint2"): 0.6, ("friction.dynamic", "joint4"): 0.3,
+             ("friction.viscous", "joint2"): 0.4, ("friction.viscous", "joint4"): 0.2}
+    assert worst_error(result, truth) < 0.05, result.table()
+
+
+def test_recovers_mass_scale_and_max_force(tmp_path):
+    """link3 1.3 times heavier (its inertia too, Batch.set_link_mass) and joint4's drive limited
+    to 20 Nm, which the chirp reaches; fitted from 2 and 40."""
+    text = scene_text().replace("joint4: {stiffness: 300, damping: 6}",
+                                "joint4: {stiffness: 300, damping: 6, max_force: 20}")
+    truth = fd.parse_scene(text, str(tmp_path / "truth.yaml"))
+    batch = fd.Batch(fd.make_simulation(truth), 1)
+    link = truth.model.link_index("link3")
+    batch.set_link_mass(link, 1.3 * truth.model.links[link].mass)
+    targets = chirp_targets(truth.model.nv)
+    q, qd = [np.array(batch.q[0])], [np.array(batch.qd[0])]
+    for k in range(ROWS - 1):
+        batch.set_drive_targets(targets[k])
+        batch.step()
+        q.append(np.array(batch.q[0]))
+        qd.append(np.array(batch.qd[0]))
+        assert abs(batch.drive_force[0, 3]) <= 20.0 + 1e-9
+    write_log(tmp_path / "log.csv", truth.model.dof_names, q, qd, targets)
+    fit = """fit:
+  parameters:
+    - {quantity: mass_scale, links: [link3], bounds: [0.5, 3], initial: 2}
+    - {quantity: max_force, joints: [joint4], bounds: [1, 100], initial: 40}
+"""
+    scene = write(tmp_path / "fit.yaml", text.replace("max_force: 20", "max_force: 40") + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    truth = {("mass_scale", "link3"): 1.3, ("max_force", "joint4"): 20.0}
+    assert worst_error(result, truth) < 0.01, result.table()
+
+
+def test_noisy_log_with_segments_and_the_fitted_scene(tmp_path):
+    noise = 1e-4
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    clean = make_log(tmp_path / "clean.csv", truth_scene)
+    noisy = make_log(tmp_path / "log.csv", truth_scene, noise=noise)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {segment_steps: 100}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1, out=str(tmp_path / "out"))
+    assert worst_error(result, TRUTH) < 0.03 and result.converged, result.table()
+    # The intervals cover the truth (95 %: allow 3 half-widths for the 6 together).
+    for e in result.estimates:
+        assert abs(e.value - TRUTH[(e.quantity, e.names[0])]) < 3 * e.ci95, result.table()
+    # The fitted scene, replayed from the log's start with its targets, matches the clean log
+    # within the noise level and the noisy one at the noise level.
+    fitted = fd.load_scene(result.scene_file)
+    assert fitted.fit is not None and os.path.exists(result.plot_file)
+    q, _ = replay(fitted, chirp_targets(fitted.model.nv), q0=noisy[0])  # as the fit starts
+    assert np.sqrt(np.mean((q - clean) ** 2)) < noise
+    assert 0.9 * noise < np.sqrt(np.mean((q - noisy) ** 2)) < 1.2 * noise
+    assert open(tmp_path / "fit.yaml").read() == scene_text("pgs", fit)  # input untouched
+
+
+def test_a_known_delay_with_segments(tmp_path):
+    """The scene's own delay (2 steps, not fitted): each segment starts with the targets that
+    were in the pipe, as the uninterrupted run had them."""
+    truth_scene = fd.parse_scene(scene_text(delay=2), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {segment_steps: 100}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit, delay=2))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert worst_error(result, TRUTH) < 1e-6, result.table()
+    assert result.rms < 1e-9
+
+
+def test_resampled_log(tmp_path):
+    """A log at twice the scene's rate, resampled (linear), recovers what the log at dt does."""
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    rows = list(csv.reader(open(tmp_path / "log.csv")))
+    t = rows[0].index("t")
+    fine = [rows[0]] + [r for r in rows[1:]]
+    # Insert a midpoint row between each pair: q linear there, the target held.
+    out = [fine[0]]
+    for a, b in zip(fine[1:-1], fine[2:]):
+        out.append(a)
+        mid = list(a)
+        for i, name in enumerate(rows[0]):
+            if name.startswith(("q:", "qd:")) or name == "t":
+                mid[i] = repr((float(a[i]) + float(b[i])) / 2)
+        out.append(mid)
+    out.append(fine[-1])
+    with open(tmp_path / "fine.csv", "w", newline="") as f:
+        csv.writer(f).writerows(out)
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {resample: linear}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
+    result = fd.fit(str(scene), str(tmp_path / "fine.csv"), threads=1)
+    assert result.log.t.size == ROWS
+    assert float(rows[1][t]) == result.log.t[0]
+    assert worst_error(result, TRUTH) < 1e-6, result.table()
+
+
+def fit_with(tmp_path, **kw):
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene, noise=1e-4)
+    # Segments of 50 steps: a sixth of the steps per batch (the threads meet at every step).
+    fit = FIT_GAINS.replace("    - {quantity: delay, joints: all, bounds: [0, 2]}\n",
+                            "  data: {segment_steps: 50}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), **kw)
+    return [e.value.hex() for e in result.estimates] + [result.rms.hex()]
+
+
+def test_identical_on_1_and_2_threads_and_a_local_cluster(tmp_path):
+    one = fit_with(tmp_path, threads=1)
+    assert fit_with(tmp_path, threads=2, chunks=3) == one
+    import distributed
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        assert fit_with(tmp_path, client=client, threads=1) == one
+
+
+# Bad input: one line naming the file, the key or column and the value.
+
+def test_bad_logs(tmp_path):
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", FIT_GAINS))
+    rows = list(csv.reader(open(tmp_path / "log.csv")))
+
+    def bad(edit, match):
+        edited = [list(r) for r in rows]
+        edit(edited)
+        with open(tmp_path / "bad.csv", "w", newline="") as f:
+            csv.writer(f).writerows(edited)
+        with pytest.raises(ValueError, match=match) as e:
+            fd.fit(str(scene), str(tmp_path / "bad.csv"))
+        assert "\n" not in str(e.value)
+
+    col = rows[0].index("target:joint4")
+    bad(lambda r: [row.pop(col) for row in r], r"bad\.csv: missing column target:joint4$")
+    bad(lambda r: r[6].__setitem__(1, "0.001"),  # line 7 of the file
+        r"bad\.csv: row 7: t = 0\.001 is not after the previous row's 0\.016666666666666666 ")
+    bad(lambda r: r[3].__setitem__(3, "nan"), r"bad\.csv: row 4: q:joint2 = nan: must be finite")
+    bad(lambda r: [row.__setitem__(1, repr(float(row[1]) * 2)) for row in r[1:]],
+        r"bad\.csv: rows 2-3: time step 0\.008333333333333333 s is not the scene's dt "
+        r"0\.004166666666666667 s \(set fit\.data\.resample: linear\)")
+    qd4 = rows[0].index("qd:joint4")
+    bad(lambda r: [row.pop(qd4) for row in r],
+        r"bad\.csv: missing column qd:joint4 \(give qd for every joint or none\)$")
+    # Segments restart from the logged qd: a log without qd cannot have them.
+    write(scene, scene_text("pgs", FIT_GAINS + "  data: {segment_steps: 50}\n"))
+    qd_columns = [i for i, name in enumerate(rows[0]) if name.startswith("qd:")]
+    bad(lambda r: [row.pop(i) for row in r for i in reversed(qd_columns)],
+        r"fit\.yaml: fit\.data\.segment_steps = 50: segments start from the logged qd, and "
+        r"the log has no qd columns$")
+
+
+@pytest.mark.parametrize("entry,match", [
+    ("{quantity: stiffness, joints: [elbow], bounds: [1, 2]}",
+     r"fit\.parameters\[0\]\.joints\[0\]: no joint named 'elbow' in arm7\.urdf"),
+    ("{quantity: damping, joints: [joint2], bounds: [50, 5]}",
+     r"fit\.parameters\[0\]\.bounds = \[50, 5\]: lower must be below upper$"),
+    ("{quantity: stiffness, joints: [joint2], bounds: [1, 100]}",
+     r"fit\.parameters\[0\]: the starting value \(the scene's stiffness of joint2; give "
+     r"initial:\) = 600 is outside bounds \[1, 100\]$"),
+])
+def test_bad_fit_sections(tmp_path, entry, match):
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", f"fit:\n  parameters:\n    - {entry}\n"))
+    with pytest.raises(ValueError, match=match):
+        fd.load_scene(str(scene))
+
+
+def test_the_command(tmp_path, module_dir):
+    """featherdrive fit: the table and the outputs, exit 0; a bad log or fit: section: one line,
+    exit 2, nothing written."""
+    command = module_dir.parent / "tools" / "featherdrive"
+    assert command.exists(), command
+    make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
+    fit = "fit:\n  parameters:\n    - {quantity: stiffness, joints: [joint2], bounds: [50, 5000]}\n"
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit).replace(
+        "joint2: {stiffness: 600", "joint2: {stiffness: 300"))
+    run = subprocess.run([str(command), "fit", str(scene), "--data", str(tmp_path / "log.csv"),
+                          "--out", str(tmp_path / "out"), "--threads", "1"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "stiffness              joint2                            300          600" in run.stdout
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {
+        "fit_fitted.yaml", "fit_fit.png", "fit_fit.txt"}
+    (tmp_path / "bad.csv").write_text("t,q:joint1\n0,0\n0.1,0\n")
+    run = subprocess.run([str(command), "fit", str(scene), "--data", str(tmp_path / "bad.csv")],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 2
+    assert run.stderr == f"featherdrive fit: {tmp_path / 'bad.csv'}: missing column q:joint2\n"
+    assert not (tmp_path / "fit_out").exists()
+    # python -m featherdrive_fit, which the command runs: a bad fit: section, one line, exit 2.
+    write(scene, scene_text("pgs", fit.replace("[50, 5000]", "[5000, 50]")))
+    run = subprocess.run([sys.executable, "-m", "featherdrive_fit", str(scene), "--data",
+                          str(tmp_path / "log.csv")], capture_output=True, text=True, cwd=tmp_path,
+                         env=dict(os.environ, PYTHONPATH=str(module_dir)))
+    assert run.returncode == 2
+    assert run.stderr == (f"featherdrive fit: {scene}: fit.parameters[0].bounds = [5000, 50]: "
+                          "lower must be below upper\n")
+    assert not (tmp_path / "fit_out").exists()
