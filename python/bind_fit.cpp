@@ -1,7 +1,11 @@
 // Python: a scene's fit: section (Scene.fit, read-only), fd.fit, which forwards to the
-// pure-Python featherdrive_fit module beside this one (docs/fitting.md), and fd.run_physx.
+// pure-Python featherdrive_fit module beside this one (docs/fitting.md), fd.run_physx and
+// fd.run_mujoco.
+#include <cmath>
+
 #include "bindings.hpp"
 #include "featherdrive/io/fit_spec.hpp"
+#include "featherdrive/io/mjcf_export.hpp"
 #include "featherdrive/io/physx_runner.hpp"
 
 namespace py = pybind11;
@@ -85,4 +89,64 @@ void featherdrive::python::bind_fit(py::module_& m) {
       "$FEATHERDRIVE_PHYSX_DIR or the first of harness_dirs holding it) on sim's robot, state "
       "and settings, target_position[k] (velocity 0) set before step k + 1. RuntimeError when "
       "node or the harness is missing or PhysX refuses the scene.");
+
+  // MuJoCo 2.2.2 on a simulation through the bridge (export_mjcf, MujocoRun), in-process.
+  m.def(
+      "run_mujoco",
+      [](const Simulation& sim, int steps, const RowMatrix& target_position, py::handle drives,
+         py::handle integrator) {
+        MjcfExportOptions o;
+        o.drives = to_enum<DriveMapping>(
+            drives, "drives",
+            {{"translated", DriveMapping::translated}, {"literal", DriveMapping::literal}},
+            "'translated' or 'literal'");
+        o.integrator = to_enum<MujocoIntegrator>(
+            integrator, "integrator",
+            {{"euler", MujocoIntegrator::euler}, {"implicit", MujocoIntegrator::implicit}},
+            "'euler' or 'implicit'");
+        // A copy holds the targets MujocoRun reads; sim itself is left as it was.
+        Simulation copy = locked(sim, [&] { return sim; });
+        const int nv = copy.model().nv;
+        if (target_position.rows() != steps || target_position.cols() != nv)
+          throw std::invalid_argument(
+              "run_mujoco: target_position is (" + std::to_string(target_position.rows()) + ", " +
+              std::to_string(target_position.cols()) + "), expected (" + std::to_string(steps) +
+              ", " + std::to_string(nv) + ")");
+        for (Eigen::Index k = 0; k < target_position.rows(); ++k)
+          for (int d = 0; d < nv; ++d)
+            if (!std::isfinite(target_position(k, d)))
+              throw std::invalid_argument(
+                  "run_mujoco: target_position[" + std::to_string(k) + ", " + std::to_string(d) +
+                  "] = " + std::to_string(target_position(k, d)) + ": must be finite");
+        const MjcfExport mjcf = export_mjcf(copy, o);
+        RowMatrix q(steps + 1, nv), qd(steps + 1, nv);
+        {
+          py::gil_scoped_release nogil;
+          MujocoRun mj(mjcf);
+          mj.set_state(copy.q(), copy.qd());
+          q.row(0) = mj.q().transpose();
+          qd.row(0) = mj.qd().transpose();
+          for (int k = 0; k < steps; ++k) {
+            for (int d = 0; d < nv; ++d)
+              if (copy.drive(d).type != DriveType::none)
+                copy.set_drive_target(d, target_position(k, d), 0.0);
+            mj.step(copy);
+            // MuJoCo resets a diverging run to its reference state: say so rather than log it.
+            if (mj.diverged() || !mj.q().allFinite() || !mj.qd().allFinite())
+              throw DivergenceError("run_mujoco: MuJoCo diverged at step " +
+                                    std::to_string(k + 1) + " (drives " + to_string(o.drives) +
+                                    ", dt " + std::to_string(copy.options().dt) + " s)");
+            q.row(k + 1) = mj.q().transpose();
+            qd.row(k + 1) = mj.qd().transpose();
+          }
+        }
+        return py::make_tuple(q, qd);
+      },
+      py::arg("sim"), py::arg("steps"), py::arg("target_position"),
+      py::arg("drives") = "translated", py::arg("integrator") = "euler",
+      "(q, qd), (steps + 1, nv): MuJoCo 2.2.2 in-process on sim's robot, state and drives "
+      "exported by export_mjcf (drives 'translated' or 'literal', integrator 'euler' or "
+      "'implicit'), target_position[k] (velocity 0) set before step k + 1; sim is not changed. "
+      "ValueError for bad values or what MuJoCo cannot take; DivergenceError (a RuntimeError) "
+      "when MuJoCo diverges.");
 }

@@ -750,3 +750,7 @@ def fit(scene: Union[PathLike, Scene], data: PathLike, client: object = None,
 def run_physx(sim: Simulation, steps: int, target_position: ArrayLike,
               harness_dirs: Sequence[PathLike]) -> tuple[Vector, Vector]:
     """(q, qd), (steps + 1, nv), from PhysX 5.6.1 itself (tests/physx's harness)."""
+def run_mujoco(sim: Simulation, steps: int, target_position: ArrayLike,
+               drives: str | DriveMapping = "translated",
+               integrator: str | MujocoIntegrator = "euler") -> tuple[Vector, Vector]:
+    """(q, qd), (steps + 1, nv), from MuJoCo 2.2.2 in-process (export_mjcf, the bridge)."""
