@@ -657,7 +657,8 @@ class CheckpointError(ValueError): ...
 def save_checkpoint(sim: Simulation, path: str | os.PathLike[str]) -> None:
     """Writes the full simulation state atomically, bit-exact."""
 def load_checkpoint(path: str | os.PathLike[str], sim: Simulation) -> None:
-    """Restores a checkpoint into sim; CheckpointError (a ValueError) if it is not one of sim's model."""
+    """Restores a checkpoint into sim; CheckpointError (a ValueError) if it is not one of sim's
+    model."""
 
 
 # The MuJoCo bridge (docs/mujoco_bridge.md): gain translation and the MJCF export.
@@ -719,7 +720,8 @@ def export_mjcf(sim: Simulation, drives: str | DriveMapping = "translated",
                 keep_timestep: bool = False) -> dict[str, object]:
     """xml, timestep, substeps, notes, drives: [{joint, effective_inertia, mujoco, translation}]."""
 def translate_mjcf_to_scene(mjcf: PathLike, scene_path: PathLike,
-                            options: SimulationOptions = ..., steps: Int = 240) -> dict[str, object]:
+                            options: SimulationOptions = ...,
+                            steps: Int = 240) -> dict[str, object]:
     """yaml (the scene's text; nothing is written), dt, integrator, notes, joints."""
 
 # A scene's fit: section and the fit (docs/fitting.md; python/bind_fit.cpp, featherdrive_fit.py).
