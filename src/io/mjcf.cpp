@@ -9,7 +9,6 @@
 #include <cstring>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -17,6 +16,7 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "mujoco_calls.hpp"
 
 namespace featherdrive {
 namespace {
@@ -27,24 +27,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
   throw InputError(file + ": " + what);
 }
 
-struct ModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-using MjModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
-
-// MuJoCo's messages span lines ("Error: ...\nElement 'body', line 3"); ours are one line.
-std::string one_line(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '\n' || c == '\r') {
-      if (!out.empty() && out.back() != ' ') out += out.back() == ':' ? " " : "; ";
-    } else {
-      out += c;
-    }
-  }
-  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
-  return out;
-}
+using mujoco_calls::one_line;
 
 std::string name_of(const mjModel* m, mjtObj type, int id, const char* fallback) {
   const char* name = mj_id2name(m, type, id);
@@ -55,27 +38,6 @@ Vec3 vec3(const mjtNum* p) { return Vec3(p[0], p[1], p[2]); }
 Mat3 rotation(const mjtNum* quat) {
   return Quat(quat[0], quat[1], quat[2], quat[3]).normalized().toRotationMatrix();
 }
-
-// MuJoCo's compiler reports warnings through mju_user_warning while it loads; keep them for
-// UrdfRobot::warnings instead of MuJoCo's default (stdout and MUJOCO_LOG.TXT).
-std::vector<std::string>* collected_warnings = nullptr;  // set while `loading` is held
-void collect_warning(const char* text) {
-  if (collected_warnings) collected_warnings->push_back("MuJoCo: " + one_line(text));
-}
-
-struct WarningCapture {
-  explicit WarningCapture(std::vector<std::string>& into) : saved(mju_user_warning) {
-    collected_warnings = &into;
-    mju_user_warning = collect_warning;
-  }
-  ~WarningCapture() {
-    mju_user_warning = saved;
-    collected_warnings = nullptr;
-  }
-  WarningCapture(const WarningCapture&) = delete;
-  WarningCapture& operator=(const WarningCapture&) = delete;
-  void (*saved)(const char*);
-};
 
 std::string joined(const std::vector<std::string>& names) {
   std::string out;
@@ -465,17 +427,9 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
 MjcfRobot load(const char* filename, const mjVFS* vfs, const std::string& file,
                const UrdfOptions& options) {
   std::vector<std::string> warnings;
-  char error[1024] = "";
-  MjModelPtr m;
-  {
-    // mju_user_warning is MuJoCo's global: one load at a time swaps it.
-    static std::mutex loading;
-    const std::lock_guard<std::mutex> lock(loading);
-    const WarningCapture capture(warnings);
-    m.reset(mj_loadXML(filename, vfs, error, sizeof error));
-  }
-  if (!m) fail(file, "MuJoCo cannot load it: " + one_line(error[0] ? error : "unknown error"));
-  if (error[0]) warnings.push_back("MuJoCo: " + one_line(error));
+  std::string error;
+  const mujoco_calls::ModelPtr m = mujoco_calls::load_xml(filename, vfs, error, warnings);
+  if (!m) fail(file, "MuJoCo cannot load it: " + error);
   return convert(m.get(), file, options, std::move(warnings));
 }
 

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "featherdrive/core/format.hpp"
+#include "mujoco_calls.hpp"
 
 namespace featherdrive {
 namespace {
@@ -115,15 +116,12 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
   return xml.str();
 }
 
-struct MjModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
 struct MjDataDeleter {
   void operator()(mjData* d) const { mj_deleteData(d); }
 };
 
 // Compiles XML text through MuJoCo's virtual file system (no file on disk).
-std::unique_ptr<mjModel, MjModelDeleter> compile(const std::string& xml, std::string& error) {
+mujoco_calls::ModelPtr compile(const std::string& xml, std::string& error) {
   auto vfs = std::make_unique<mjVFS>();  // ~2 MB: not on the stack
   mj_defaultVFS(vfs.get());
   const char* name = "featherdrive_export.xml";
@@ -133,11 +131,9 @@ std::unique_ptr<mjModel, MjModelDeleter> compile(const std::string& xml, std::st
   }
   const int index = mj_findFileVFS(vfs.get(), name);
   std::memcpy(vfs->filedata[index], xml.data(), xml.size());
-  std::array<char, 1000> message{};
-  std::unique_ptr<mjModel, MjModelDeleter> m(
-      mj_loadXML(name, vfs.get(), message.data(), static_cast<int>(message.size())));
+  std::vector<std::string> warnings;  // the export is ours: what MuJoCo warns of is in its notes
+  mujoco_calls::ModelPtr m = mujoco_calls::load_xml(name, vfs.get(), error, warnings);
   mj_deleteVFS(vfs.get());
-  if (!m) error = message.data();
   return m;
 }
 
@@ -267,16 +263,14 @@ std::string mujoco_compile_error(const std::string& xml) {
 }
 
 struct MujocoRun::Impl {
-  std::unique_ptr<mjModel, MjModelDeleter> m;
+  mujoco_calls::ModelPtr m;
   std::unique_ptr<mjData, MjDataDeleter> d;
 };
 
-// MuJoCo prints its warnings (e.g. a diverging step) on stdout; MujocoRun reads mjData's warning
-// counters instead and says so in its own words.
-void quiet_warning(const char*) {}
-
 MujocoRun::MujocoRun(const MjcfExport& mjcf) : impl_(std::make_unique<Impl>()), mjcf_(mjcf) {
-  mju_user_warning = quiet_warning;
+  // MuJoCo would print a diverging step's warning on stdout; MujocoRun reads mjData's warning
+  // counters instead and says so in its own words.
+  mujoco_calls::route_warnings();
   std::string error;
   impl_->m = compile(mjcf.xml, error);
   if (!impl_->m) throw std::runtime_error("MuJoCo refused the exported model: " + error);

@@ -12,6 +12,7 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/io/mjcf.hpp"
+#include "mujoco_calls.hpp"
 
 namespace featherdrive {
 
@@ -20,11 +21,10 @@ SceneTranslation translate_mjcf_to_scene(const std::filesystem::path& mjcf,
                                          const SimulationOptions& options, int steps) {
   namespace fs = std::filesystem;
   const std::string name = mjcf.string();
-  std::array<char, 1000> error{};
-  std::unique_ptr<mjModel, void (*)(mjModel*)> m(
-      mj_loadXML(name.c_str(), nullptr, error.data(), static_cast<int>(error.size())),
-      mj_deleteModel);
-  if (!m) throw InputError(name + ": MuJoCo refused the file: " + error.data());
+  std::string error;
+  std::vector<std::string> warnings;  // load_mjcf below reports them
+  const mujoco_calls::ModelPtr m = mujoco_calls::load_xml(name.c_str(), nullptr, error, warnings);
+  if (!m) throw InputError(name + ": MuJoCo refused the file: " + error);
   SceneTranslation out;
   out.dt = m->opt.timestep;
   if (m->opt.integrator == mjINT_RK4)

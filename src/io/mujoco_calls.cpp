@@ -1,0 +1,49 @@
+#include "mujoco_calls.hpp"
+
+#include <array>
+#include <mutex>
+
+namespace featherdrive::mujoco_calls {
+namespace {
+
+thread_local std::vector<std::string>* collector = nullptr;
+
+void route(const char* text) {
+  if (collector) collector->push_back("MuJoCo: " + one_line(text));
+}
+
+}  // namespace
+
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n' || c == '\r') {
+      if (!out.empty() && out.back() != ' ') out += out.back() == ':' ? " " : "; ";
+    } else {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  return out;
+}
+
+void route_warnings() {
+  static std::once_flag installed;
+  std::call_once(installed, [] { mju_user_warning = route; });
+}
+
+ModelPtr load_xml(const char* filename, const mjVFS* vfs, std::string& error,
+                  std::vector<std::string>& warnings) {
+  route_warnings();
+  static std::mutex loading;
+  const std::lock_guard<std::mutex> lock(loading);
+  std::array<char, 1024> message{};
+  collector = &warnings;
+  ModelPtr m(mj_loadXML(filename, vfs, message.data(), static_cast<int>(message.size())));
+  collector = nullptr;
+  if (!m) error = one_line(message[0] ? message.data() : "unknown error");
+  else if (message[0]) warnings.push_back("MuJoCo: " + one_line(message.data()));
+  return m;
+}
+
+}  // namespace featherdrive::mujoco_calls
