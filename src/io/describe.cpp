@@ -99,12 +99,12 @@ std::string describe(const UrdfRobot& robot) {
   for (const Link& l : model.links) total += l.mass;
   std::ostringstream out;
   out << "robot '" << robot.name << "' from " << robot.path.string() << "\n";
-  out << "  " << robot.joint_order.size() << " URDF joints, " << model.num_links()
+  out << "  " << robot.joint_order.size() << " joints in the file, " << model.num_links()
       << " links after merging " << robot.merged.size() << " fixed, " << model.nv << " dofs, "
       << (model.floating_base() ? "floating base" : "fixed base") << ", total mass " << num(total)
       << " kg\n\ntree (inertia about the centre of mass, link axes):\n";
   link_lines(out, robot, model);
-  out << "\ndofs in URDF order:";
+  out << "\ndofs in the file's order:";
   for (int d : robot.dof_order) out << " " << model.dof_names[d];
   out << "\n";
   for (const UrdfMimic& m : robot.mimics)

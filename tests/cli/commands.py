@@ -44,7 +44,7 @@ def main():
     check(r.returncode == 0, "info branches", r)
     check("warning: joint 'left': <mimic joint='right1'> is read but not simulated" in r.stderr,
           "the mimic warning is printed", r)
-    check("dofs in URDF order: right1 left right2" in r.stdout, "info lists dofs in URDF order", r)
+    check("dofs in the file's order: right1 left right2" in r.stdout, "info lists dofs in URDF order", r)
 
     # Overrides: steps, solver, iterations.
     out = os.path.join(out_dir, "chain3_override.csv")

@@ -317,7 +317,7 @@ TEST(Urdf, FileJointOrderAndDofOrderMapBothWays) {
     EXPECT_EQ(columns[3], "q:head_tilt");
     EXPECT_EQ(columns[4 + o], "qd:l_knee");
     EXPECT_EQ(columns.back(), "f:head_tilt");
-    EXPECT_NE(describe(robot).find("dofs in URDF order:" +
+    EXPECT_NE(describe(robot).find("dofs in the file's order:" +
                                    std::string(floating ? " " + robot.root_joint + ":wx" : "")),
               std::string::npos);
     EXPECT_NE(describe(robot).find("l_knee l_hip waist head_tilt\n"), std::string::npos);
