@@ -56,8 +56,9 @@ struct JointExtras {
   std::vector<std::string> text;  // per dof
 };
 
-void write_body(const Model& model, int i, int depth, const JointExtras* extras,
-                std::ostringstream& xml) {
+// A body's opening tag, inertial and joint; its children and closing tag are write_bodies'.
+void open_body(const Model& model, int i, int depth, const JointExtras* extras,
+               std::ostringstream& xml) {
   const Link& link = model.links[i];
   const std::string indent(2 * static_cast<size_t>(depth), ' ');
   const Transform& X = link.tree_transform;
@@ -93,8 +94,30 @@ void write_body(const Model& model, int i, int depth, const JointExtras* extras,
       xml << joint << "free\"/>\n";
       break;
   }
-  for (int c : link.children) write_body(model, c, depth + 1, extras, xml);
-  xml << indent << "</body>\n";
+}
+
+// The tree from the root, depth first with children in order, on an explicit stack: a chain may
+// be longer than the call stack is deep.
+void write_bodies(const Model& model, int depth, const JointExtras* extras,
+                  std::ostringstream& xml) {
+  struct Item {
+    int link, depth;
+    bool close;
+  };
+  std::vector<Item> stack{{0, depth, false}};
+  while (!stack.empty()) {
+    const Item item = stack.back();
+    stack.pop_back();
+    if (item.close) {
+      xml << std::string(2 * static_cast<size_t>(item.depth), ' ') << "</body>\n";
+      continue;
+    }
+    open_body(model, item.link, item.depth, extras, xml);
+    stack.push_back({item.link, item.depth, true});
+    const std::vector<int>& children = model.links[static_cast<size_t>(item.link)].children;
+    for (auto c = children.rbegin(); c != children.rend(); ++c)
+      stack.push_back({*c, item.depth + 1, false});
+  }
 }
 
 std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator integrator,
@@ -109,7 +132,7 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
       << "    <flag contact=\"disable\"/>\n"
       << "  </option>\n"
       << "  <worldbody>\n";
-  write_body(model, 0, 2, extras, xml);
+  write_bodies(model, 2, extras, xml);
   xml << "  </worldbody>\n";
   if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
   xml << "</mujoco>\n";
