@@ -41,8 +41,10 @@ ModelPtr load_xml(const char* filename, const mjVFS* vfs, std::string& error,
   collector = &warnings;
   ModelPtr m(mj_loadXML(filename, vfs, message.data(), static_cast<int>(message.size())));
   collector = nullptr;
-  if (!m) error = one_line(message[0] ? message.data() : "unknown error");
-  else if (message[0]) warnings.push_back("MuJoCo: " + one_line(message.data()));
+  if (!m)
+    error = one_line(message[0] ? message.data() : "unknown error");
+  else if (message[0])
+    warnings.push_back("MuJoCo: " + one_line(message.data()));
   return m;
 }
 
