@@ -107,6 +107,15 @@ def test_page_of_a_scene(tmp_path):
 
 
 @needs_bundle
+def test_mjcf_robots_are_drawn_from_their_inertia(tmp_path):
+    scene = ROOT / "examples" / "humanoid_hold.yaml"
+    model = fd.load_scene(str(scene)).model
+    data = page_data(fd.view(str(scene), tmp_path / "h.html", steps=1))
+    assert data["urdf"] is None and data["meshes"] == {}
+    assert sorted(data["boxes"]) == sorted(link.name for link in model.links if link.mass > 0)
+
+
+@needs_bundle
 def test_page_of_a_csv_needs_the_csv_columns(tmp_path):
     good = tmp_path / "run.csv"
     good.write_text("step,t," + ",".join(f"q:joint{k}" for k in range(1, 8)) + "\n"

@@ -6,7 +6,7 @@ the magenta marker at the tcp (a link merged into link7 through two fixed joints
 few pixels of where the page's camera matrices put the tcp's pose computed here (fd.link_pose of
 link7 from the CSV's q of `featherdrive simulate`, then the URDF's fixed joint origins); the two
 screenshots differ around the arm and not in the view's corner; the curves' time cursor moves
-linearly with the timeline; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
+linearly with the timeline; play advances it and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
 where Chromium is not installed.
 
 usage: view_arm.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
@@ -147,6 +147,19 @@ def main():
             x, y = int(x) - left, int(y) - top
             if not changed[max(y - 15, 0):y + 15, max(x - 15, 0):x + 15].any():
                 fail(f"nothing changed near the tcp's place at frame {frame}")
+        # Play from frame 0 until the page has moved on, then pause: the frame stays.
+        browser.evaluate("featherdrive.setFrame(0); document.getElementById('fd-play').click()")
+        played = browser.evaluate("new Promise(r => { const t0 = performance.now(); (function "
+                                  "wait() { if (featherdrive.frame > 0 || performance.now() - t0 "
+                                  "> 20000) r(featherdrive.frame); else requestAnimationFrame("
+                                  "wait); })(); })")
+        label = browser.evaluate("document.getElementById('fd-play').textContent")
+        browser.evaluate("document.getElementById('fd-play').click()")
+        paused = browser.evaluate("[featherdrive.playing, featherdrive.frame]")
+        after = browser.evaluate("new Promise(r => setTimeout(() => r(featherdrive.frame), 300))")
+        print(f"play: frame {played} ({label!r} shown), paused at {paused[1]}, then {after}")
+        if played < 1 or label != "pause" or paused[0] or after != paused[1]:
+            fail("play/pause does not run and stop the timeline")
         if browser.errors:
             fail(f"console errors: {browser.errors}")
         foreign = [u for u in browser.requests if not u.startswith(("file:", "data:", "blob:"))]

@@ -145,7 +145,7 @@ scene.updateMatrixWorld(true);
 for (const o of Object.values(linkObjects)) bounds.expandByObject(o);
 const size = Math.max(bounds.getSize(new THREE.Vector3()).length(), 0.1);
 const center = bounds.getCenter(new THREE.Vector3());
-camera.position.copy(center).add(new THREE.Vector3(1.0, -1.4, 0.8).multiplyScalar(size * 0.6));
+camera.position.copy(center).add(new THREE.Vector3(1.0, -1.4, 0.8).multiplyScalar(size * 0.75));
 camera.near = size / 500;
 camera.far = size * 50;
 orbit.target.copy(center);
@@ -337,7 +337,7 @@ framesBox.addEventListener('change', () => {
 });
 window.addEventListener('resize', () => { resize(); setFrame(state.frame); });
 
-legend.textContent = `${data.title}: ${frames} frames, dt ${data.dt} s. Joint spheres: |drive ` +
+legend.textContent = `${data.title}: ${frames} frames, dt ${Number(data.dt.toPrecision(6))} s. Joint spheres: |drive ` +
   'force| / max_force from green (0) to red (1; the run\'s largest |force| where a drive has no ' +
   'max_force). Drag to orbit, scroll to zoom.';
 state.setFrame = setFrame;
