@@ -268,8 +268,11 @@ def _urdf_geometry(urdf_path, packages):
     """The URDF's text and its visual meshes {filename: base64}, with warnings for the meshes
     that do not resolve (their links are drawn without them); no text for an MJCF file."""
     _check_input(urdf_path, "the URDF")
-    text = pathlib.Path(urdf_path).read_text(encoding="utf-8")
-    root = ElementTree.fromstring(text)
+    try:
+        text = pathlib.Path(urdf_path).read_text(encoding="utf-8")
+        root = ElementTree.fromstring(text)
+    except (UnicodeDecodeError, ElementTree.ParseError) as exc:
+        raise ValueError(f"{urdf_path}: cannot read its visuals: {exc}") from None
     meshes, notes, inputs = {}, [], []
     if root.tag != "robot":  # MJCF: drawn from the inertia boxes
         return None, meshes, notes, inputs
@@ -332,13 +335,16 @@ def _page_data(fd, run, robot, urdf_text, meshes, title, marker):
 
 
 def _html(data, bundle):
-    # JSON in a <script> ends at the first "</": escaped, the text means the same.
-    payload = json.dumps(data, allow_nan=False, separators=(",", ":")).replace("</", "<\\/")
-    script = bundle.replace("</script", "<\\/script")
+    # A <script>'s text ends at "</script" and "<!--" changes how it is read: every "<" of the
+    # JSON (all inside strings) becomes \u003c, and the bundle must hold neither.
+    payload = json.dumps(data, allow_nan=False, separators=(",", ":")).replace("<", "\\u003c")
+    lowered = bundle.lower()
+    if "</script" in lowered or "<!--" in lowered:
+        raise RuntimeError(f"{bundle_path()}: the viewer's script holds '</script' or '<!--'")
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
             f"<title>featherdrive view: {html.escape(data['title'])}</title></head>\n<body>\n"
             f"<script type=\"application/json\" id=\"fd-data\">{payload}</script>\n"
-            f"<script>{script}</script>\n</body></html>\n")
+            f"<script>{bundle}</script>\n</body></html>\n")
 
 
 def _same_file(a, b):
@@ -414,6 +420,9 @@ def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None,
         if isinstance(source, (str, os.PathLike)) and str(source).lower().endswith(".csv"):
             if scene is None:
                 raise ValueError(f"{source}: a CSV needs the scene that ran it (scene=SCENE)")
+            if steps is not None:
+                raise ValueError(f"{source}: steps = {steps} is for a run of the scene; a CSV "
+                                 "shows its own rows")
             csv_path = pathlib.Path(source)
             inputs.append(("the CSV", csv_path))
         else:
@@ -506,13 +515,16 @@ def main(argv=None):
                         help="a magenta dot at LINK's origin, drawn over everything")
     parser.add_argument("--serve", action="store_true",
                         help="then serve the page on 127.0.0.1 until Ctrl-C")
-    parser.add_argument("--port", type=int, default=8000,
+    parser.add_argument("--port", type=int,
                         help="the port of --serve (default 8000; 0: any free port)")
     args = parser.parse_args(argv)
     if args.steps is not None and args.steps < 0:
         parser.error(f"--steps {args.steps}: must be >= 0")
-    if not 0 <= args.port <= 65535:
-        parser.error(f"--port {args.port}: must be in 0..65535")
+    if args.port is not None and not args.serve:
+        parser.error(f"--port {args.port}: only with --serve")
+    port = 8000 if args.port is None else args.port
+    if not 0 <= port <= 65535:
+        parser.error(f"--port {port}: must be in 0..65535")
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -532,7 +544,7 @@ def main(argv=None):
     print(f"  page: {page.path}")
     if args.serve:
         try:
-            serve(page.path, args.port)
+            serve(page.path, port)
         except RuntimeError as exc:
             sys.stderr.write(f"featherdrive view: {_one_line(exc)}\n")
             return 1

@@ -130,6 +130,8 @@ def test_page_of_a_csv_needs_the_csv_columns(tmp_path):
     bad.write_text(good.read_text().replace("0.2,", "x,", 1))
     with pytest.raises(ValueError, match=r"bad.csv: row 2, column q:joint1: 'x' is not a number"):
         fd.view(str(bad), tmp_path / "bad.html", scene=str(SCENE))
+    with pytest.raises(ValueError, match="steps = 3 is for a run of the scene"):
+        fd.view(str(good), tmp_path / "bad.html", scene=str(SCENE), steps=3)
     with pytest.raises(ValueError, match="a CSV needs the scene"):
         fd.view(str(good), tmp_path / "bad.html")
     assert not (tmp_path / "bad.html").exists()
@@ -187,6 +189,11 @@ def test_command_line_errors_exit_2(tmp_path, capsys):
         featherdrive_view.main([str(SCENE), "--package", "nofolder"])
     assert exit_.value.code == 2
     assert "'nofolder' is not NAME=DIR" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        featherdrive_view.main([str(SCENE), "--port", "8001"])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err == ("featherdrive view: --port 8001: only with --serve (see "
+                                       "featherdrive view --help)\n")
     if HAVE_BUNDLE:
         missing = tmp_path / "missing.yaml"
         assert featherdrive_view.main([str(missing), "--out", str(tmp_path / "a.html")]) == 2
