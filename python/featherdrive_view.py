@@ -51,7 +51,8 @@ def _read_bundle():
             "the viewer needs node and npm to bundle its page at build time: "
             "apt-get install -y nodejs npm, then build again")
     raise ViewerUnavailable(f"the viewer's script {path} is missing: build it (cmake --build "
-                            "build --target featherdrive_viewer)")
+                            "build --target featherdrive_viewer; configure again first if node "
+                            "came after the build was configured)")
 
 
 def _check_input(path, what):

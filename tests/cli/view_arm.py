@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """`featherdrive view` on the arm demo (examples/arm7_pgs.yaml, 60 steps) in headless Chromium with
 the network off (tests/cli/view_browser.py): the page loads from a file URL with no console error
-and no request other than file:/data:/blob:; at two times set through the page's timeline slider,
-the magenta marker at the tcp (a link merged into link7 through two fixed joints) lies within a
-few pixels of where the page's camera matrices put the tcp's pose computed here (fd.link_pose of
-link7 from the CSV's q of `featherdrive simulate`, then the URDF's fixed joint origins); the two
-screenshots differ around the arm and not in the view's corner; the curves' time cursor moves
-linearly with the timeline; play advances it and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
+and no request other than file:/data:/blob:; at three times set through the page's timeline
+slider, the magenta marker at the tcp (a link merged into link7 through two fixed joints) lies
+within a few pixels of where the page's camera matrices put the tcp's pose computed here
+(fd.link_pose of link7 at the CSV's q of `featherdrive simulate`, then the URDF's fixed joint
+origins); two screenshots differ around the arm and not in the view's corner; the curves' time
+cursor moves linearly with the timeline; the frames checkbox draws the joint frames; play advances
+the timeline and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
 where Chromium is not installed.
 
 usage: view_arm.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
@@ -147,6 +148,16 @@ def main():
             x, y = int(x) - left, int(y) - top
             if not changed[max(y - 15, 0):y + 15, max(x - 15, 0):x + 15].any():
                 fail(f"nothing changed near the tcp's place at frame {frame}")
+        # Joint frames and axes on demand: drawn at frame STEPS once the box is checked.
+        browser.evaluate("(() => { const b = document.getElementById('fd-frames'); b.checked = "
+                         "true; b.dispatchEvent(new Event('change')); })()")
+        framed = browser.screenshot()[top:top + height, left:left + width].astype(int)
+        plain = shots[STEPS][top:top + height, left:left + width].astype(int)
+        drawn = np.any(np.abs(framed - plain) > 16, axis=2)
+        print(f"joint frames and axes: {drawn.sum()} pixels drawn, {drawn[:40, :40].sum()} in "
+              "the corner")
+        if drawn.sum() < 100 or drawn[:40, :40].any():
+            fail("the joint frames and axes checkbox draws nothing")
         # Play from frame 0 until the page has moved on, then pause: the frame stays.
         browser.evaluate("featherdrive.setFrame(0); document.getElementById('fd-play').click()")
         played = browser.evaluate("new Promise(r => { const t0 = performance.now(); (function "
