@@ -6,8 +6,9 @@ slider, the magenta marker at the tcp (a link merged into link7 through two fixe
 within a few pixels of where the page's camera matrices put the tcp's pose computed here
 (fd.link_pose of link7 at the CSV's q of `featherdrive simulate`, then the URDF's fixed joint
 origins); two screenshots differ around the arm and not in the view's corner; the curves' time
-cursor moves linearly with the timeline; the frames checkbox draws the joint frames; play advances
-the timeline and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
+cursor moves linearly with the timeline; a joint sphere's pixel is the colour of the CSV's
+|force| / the scene's max_force; the frames checkbox draws the joint frames; play advances the
+timeline and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
 where Chromium is not installed.
 
 usage: view_arm.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
@@ -55,6 +56,32 @@ def tcp_in_link7(urdf):
     return p_hand + r_hand @ p_tcp
 
 
+def srgb(c):
+    return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+
+
+def check_joint_colours(image, frame, state, rows, limits, model, fd, tcp_at):
+    """At the joint whose sphere is farthest on screen from the other spheres and the tcp, the
+    pixel at its projected centre has the colour of its |force| / max_force."""
+    q = np.array([float(rows[frame][f"q:joint{j}"]) for j in range(1, 8)])
+    places = [project(fd.link_pose(model, q, f"link{j}")[1], state["view"], state["projection"],
+                      state["viewport"]) for j in range(1, 8)]
+    tcp = project(tcp_at(frame), state["view"], state["projection"], state["viewport"])
+    clearance = [min(np.hypot(p[0] - o[0], p[1] - o[1]) for o in places[:j] + places[j + 1:]
+                     + [tcp]) for j, p in enumerate(places)]
+    j = int(np.argmax(clearance))
+    if clearance[j] < 20:
+        fail(f"frame {frame}: no joint sphere stands clear of the others ({clearance[j]:.0f} px)")
+    ratio = min(1.0, abs(float(rows[frame][f"f:joint{j + 1}"])) / limits[j])
+    expected = 255 * np.array([srgb(ratio), srgb(0.67 * (1 - ratio)), 0.0])
+    x, y = (int(round(v)) for v in places[j])
+    seen = image[y, x].astype(float)
+    print(f"frame {frame}: joint{j + 1} sphere {seen.astype(int).tolist()} at |f| / max_force "
+          f"{ratio:.3f}, expected {expected.round().astype(int).tolist()}")
+    if np.abs(seen - expected).max() > 3:
+        fail(f"frame {frame}: joint{j + 1}'s colour is not its |force| / max_force")
+
+
 def main():
     cli, source, out_dir, python_dir = sys.argv[1:5]
     chromium_or_skip()
@@ -76,7 +103,10 @@ def main():
         fail(f"view's summary: {run.stdout!r}")
 
     # Where the tcp is, from featherdrive's kinematics at the CSV's q.
-    model = fd.load_scene(scene).model
+    loaded = fd.load_scene(scene)
+    model = loaded.model
+    limits = [next(d.drive.max_force for d in loaded.drives if d.joint == f"joint{j}")
+              for j in range(1, 8)]
     with open(run_csv, newline="") as f:
         rows = list(csv.DictReader(f))
     tcp_offset = tcp_in_link7(os.path.join(source, "examples", "arm7.urdf"))
@@ -148,6 +178,10 @@ def main():
             x, y = int(x) - left, int(y) - top
             if not changed[max(y - 15, 0):y + 15, max(x - 15, 0):x + 15].any():
                 fail(f"nothing changed near the tcp's place at frame {frame}")
+        # The joint spheres' colour: |force| / max_force (the CSV's f, the scene's max_force) as
+        # linear RGB (r, 0.67 (1 - r), 0), which three.js writes sRGB-encoded.
+        for frame in (later, STEPS):
+            check_joint_colours(shots[frame], frame, state, rows, limits, model, fd, tcp_at)
         # Joint frames and axes on demand: drawn at frame STEPS once the box is checked.
         browser.evaluate("(() => { const b = document.getElementById('fd-frames'); b.checked = "
                          "true; b.dispatchEvent(new Event('change')); })()")
