@@ -26,7 +26,7 @@ py::tuple link_world_poses(const ModelPtr& model, py::handle q_rows, py::handle 
     throw std::invalid_argument("q has shape " + shape_of(q) + ", expected (T, " +
                                 std::to_string(model->nq) + ")");
   std::vector<std::string> names;
-  std::vector<int> link_of;  // the model link each name's pose follows
+  std::vector<int> link_of;        // the model link each name's pose follows
   std::vector<MergedLink> offset;  // into is unused here
   for (int i = 0; i < model->num_links(); ++i) {
     names.push_back(model->links[i].name);
@@ -34,11 +34,13 @@ py::tuple link_world_poses(const ModelPtr& model, py::handle q_rows, py::handle 
     offset.emplace_back();
   }
   if (!robot_obj.is_none()) {
+    if (!py::isinstance<UrdfRobot>(robot_obj))
+      throw py::type_error("robot must be a UrdfRobot or None, not " + type_name(robot_obj));
     const auto& robot = robot_obj.cast<const UrdfRobot&>();
+    if (!same_links(robot.model.get(), *model))
+      throw std::invalid_argument("robot: " + robot.path.string() +
+                                  ": its links are not the model's");
     for (const auto& [name, merged] : robot.merged) {
-      if (!same_links(robot.model.get(), *model))
-        throw std::invalid_argument("robot: " + robot.path.string() +
-                                    ": its links are not the model's");
       names.push_back(name);
       link_of.push_back(model->link_index(merged.into));
       offset.push_back(merged);

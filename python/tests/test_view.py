@@ -68,6 +68,11 @@ def test_link_world_poses_refuses_bad_rows():
     rows[1, 2] = np.nan
     with pytest.raises(ValueError, match="q row 1"):
         fd.link_world_poses(model, rows)
+    with pytest.raises(TypeError, match="robot must be a UrdfRobot or None, not str"):
+        fd.link_world_poses(model, rows[:1], "arm7.urdf")
+    other = fd.load_urdf(str(ROOT / "examples" / "pendulum.urdf"))
+    with pytest.raises(ValueError, match="pendulum.urdf: its links are not the model's"):
+        fd.link_world_poses(model, rows[:1], other)
 
 
 def test_inertia_box_is_the_box_of_that_inertia():
