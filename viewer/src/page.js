@@ -58,6 +58,7 @@ scene.add(sun);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.001, 1000);
 camera.up.set(0, 0, 1);  // featherdrive's world: z up
 const orbit = new OrbitControls(camera, view);
+orbit.addEventListener('change', () => render());
 
 function decodeBase64(text) {
   const bytes = atob(text);
@@ -149,6 +150,7 @@ camera.position.copy(center).add(new THREE.Vector3(1.0, -1.4, 0.8).multiplyScala
 camera.near = size / 500;
 camera.far = size * 50;
 orbit.target.copy(center);
+orbit.update();
 const grid = new THREE.GridHelper(size * 1.5, 15, 0xbbbbbb, 0xdddddd);
 grid.rotation.x = Math.PI / 2;
 grid.position.set(center.x, center.y, bounds.min.z);
@@ -289,7 +291,6 @@ function resize() {
 }
 
 function render() {
-  orbit.update();
   renderer.render(scene, camera);
   // The matrices the frame was drawn with (column-major, three.js's) and the canvas in CSS pixels.
   state.projection = camera.projectionMatrix.toArray();
@@ -317,8 +318,7 @@ function tick(now) {
     lastTick = now;
     setFrame(frameAt(playClock));
   } else {
-    lastTick = null;
-    render();
+    lastTick = null;  // nothing to draw: frames are drawn when something changes
   }
   requestAnimationFrame(tick);
 }
