@@ -1,6 +1,6 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
 // a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp);
-// `sweep` and `fit` are Python modules (python_tool.cpp).
+// `sweep`, `fit` and `view` are Python modules (python_tool.cpp).
 // Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else, 130 / 143 after
 // SIGINT / SIGTERM (the run stops after a whole step; simulate keeps the rows written at --out).
 #include <CLI/CLI.hpp>
