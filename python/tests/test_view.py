@@ -6,6 +6,7 @@ import json
 import math
 import pathlib
 import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -140,6 +141,27 @@ def test_page_of_a_csv_needs_the_csv_columns(tmp_path):
     with pytest.raises(ValueError, match="a CSV needs the scene"):
         fd.view(str(good), tmp_path / "bad.html")
     assert not (tmp_path / "bad.html").exists()
+
+
+@needs_bundle
+def test_csv_of_a_floating_robot_gives_the_run_s_poses(tmp_path, module_dir):
+    # The arm with a floating root, 5 steps: the page of `featherdrive simulate`'s CSV (its
+    # q:root_joint:x ... qz columns read back) poses every link as the page of the run itself.
+    scene = tmp_path / "floating.yaml"
+    scene.write_text(SCENE.read_text().replace("model: arm7.urdf", f"model: {ARM}")
+                     .replace("fixed_base: true", "fixed_base: false"))
+    run_csv = tmp_path / "run.csv"
+    cli = module_dir.parent / "tools" / "featherdrive"
+    subprocess.run([str(cli), "simulate", str(scene), "--steps", "5", "--out", str(run_csv)],
+                   check=True, capture_output=True)
+    assert "q:root_joint:qz" in run_csv.read_text().splitlines()[0]
+    of_run = page_data(fd.view(str(scene), tmp_path / "a.html", steps=5))
+    of_csv = page_data(fd.view(str(run_csv), tmp_path / "b.html", scene=str(scene)))
+    assert of_csv["links"] == of_run["links"] and len(of_run["times"]) == 6
+    assert of_csv["poses"] == of_run["poses"]
+    assert of_csv["joints"] == of_run["joints"]
+    # The root moved (it falls): the poses are not those of the initial state repeated.
+    assert of_run["poses"][2] != of_run["poses"][-len(of_run["links"]) * 7 + 2]
 
 
 @needs_bundle
