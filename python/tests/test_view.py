@@ -4,7 +4,6 @@ equivalent-inertia box against a box's closed-form inertia, the page's targets a
 and its bad inputs. The page in a browser: tests/cli/view_arm.py, view_kr5.py."""
 import json
 import math
-import pathlib
 import shutil
 import subprocess
 
