@@ -37,13 +37,17 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 # The demo: the 7-dof arm of examples/arm7.urdf tracking sine trajectories with stiff drives,
-# under PGS and then TGS; trajectories and plots go to out/.
+# under PGS and then TGS; trajectories, plots and the 3D viewer page (docs/viewer.md) go to out/.
 run: build
 	@mkdir -p out
 	@echo
 	@./$(BUILD)/tools/featherdrive simulate examples/arm7_pgs.yaml --out out/arm7_pgs.csv --plot out/arm7_pgs.png
 	@echo
 	@./$(BUILD)/tools/featherdrive simulate examples/arm7_tgs.yaml --out out/arm7_tgs.csv --plot out/arm7_tgs.png
+	@echo
+	@if [ -f $(BUILD)/viewer/viewer.js ]; then \
+	  ./$(BUILD)/tools/featherdrive view examples/arm7_pgs.yaml --csv out/arm7_pgs.csv --out out/arm7_view.html; \
+	else echo "make run: no 3D viewer page (node and npm bundle it at build time: apt-get install -y nodejs npm)"; fi
 
 # PhysX 5.6.1 for `featherdrive compare-physx` (the tests install it themselves): the pinned npm
 # package and our harness in $(BUILD)/physx. Needs node and npm (apt-get install -y nodejs npm).

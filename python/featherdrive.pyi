@@ -576,6 +576,9 @@ class UrdfRobot:
     @property
     def model(self) -> Model: ...
     def rebuild(self) -> None: ...
+    @property
+    def merged(self) -> dict[str, tuple[str, Vector, Vector]]:
+        """{link: (into, xyz, rotation)}: links merged through fixed joints (bind_view.cpp)."""
 
 def apply_urdf_effort_limits(robot: UrdfRobot, sim: Simulation) -> None:
     """The URDF effort limits as max_force or effort_limit where none is set (robot.options)."""
@@ -650,6 +653,16 @@ def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
 def sweep(scene: PathLike, grid: str | dict[str, ArrayLike], joint: str | None = None,
           client: object = None, num_threads: int = 0, chunk_size: int | None = None) -> object:
     """featherdrive_sweep.sweep: tracking error over a grid of gains (a SweepResult)."""
+def view(source: PathLike | Scene | Simulation, out: PathLike | None = None, *,
+         scene: PathLike | Scene | None = None, robot: UrdfRobot | PathLike | None = None,
+         steps: int | None = None, packages: dict[str, PathLike] | None = None,
+         marker: str | None = None, title: str | None = None) -> object:
+    """featherdrive_view.view: the 3D viewer page of a scene, a CSV run or a Simulation (a
+    ViewerPage, inline in Jupyter; docs/viewer.md)."""
+def link_world_poses(model: Model, q: ArrayLike,
+                     robot: UrdfRobot | None = None) -> tuple[list[str], Vector]:
+    """(names, (T, L, 7) positions and quaternions (w, x, y, z)) at each row of q (T, nq);
+    with robot, its links merged through fixed joints too."""
 
 
 class CheckpointError(ValueError): ...

@@ -13,6 +13,8 @@ packages=(
   libmujoco-samples dart-doc
   clang libclang-rt-14-dev
   nodejs
+  # the viewer's tests (tests/cli/view_*.py) drive it headless
+  chromium
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,6 +1,6 @@
 // The `featherdrive` command: `simulate` runs a scene file and writes its trajectory, `info` shows
 // a URDF robot, `compare-physx` runs a scene in featherdrive and in PhysX (compare_physx.cpp);
-// `sweep` and `fit` are Python modules (python_tool.cpp).
+// `sweep`, `fit` and `view` are Python modules (python_tool.cpp).
 // Exit codes: 0 success, 2 bad input (one line on stderr), 1 anything else, 130 / 143 after
 // SIGINT / SIGTERM (the run stops after a whole step; simulate keeps the rows written at --out).
 #include <CLI/CLI.hpp>
@@ -297,6 +297,8 @@ int main(int argc, char** argv) {
                   "Map the drives' tracking error over a grid of gains (CSV and heat map)");
   add_python_tool(app, argc, argv, "fit", "featherdrive_fit",
                   "Fit drive parameters to a logged trajectory");
+  add_python_tool(app, argc, argv, "view", "featherdrive_view",  // docs/viewer.md
+                  "Write a self-contained HTML page that plays a run on the robot in 3D");
 
   try {
     app.parse(argc, argv);
@@ -308,9 +310,9 @@ int main(int argc, char** argv) {
     const std::string first = argc > 1 ? argv[1] : "";
     if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
         first != "compare-physx" && first != "compare-mujoco" && first != "translate" &&
-        first != "sweep" && first != "fit")
+        first != "sweep" && first != "fit" && first != "view")
       report("unknown command '" + first + "' (expected simulate, info, compare-physx, "
-             "compare-mujoco, translate, sweep or fit; see featherdrive --help)");
+             "compare-mujoco, translate, sweep, fit or view; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
