@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "support/compare.hpp"
 #include "support/models.hpp"
@@ -138,6 +139,31 @@ TEST(SceneRevolute, JointsAndDefaultsChooseTheWrap) {
             std::string::npos);
   EXPECT_NE(load_error(head + "joints: {left_finger: {revolute: wrapped}}\n").find("left_finger"),
             std::string::npos);
+}
+
+// A checkpoint (version 5) carries the revolute wrap and the mimic joints: restored into a plain
+// simulation of the model, the run resumes bit for bit.
+TEST(SceneMimic, CheckpointKeepsWrapAndMimicJoints) {
+  const Scene s = from_text("model: ../tests/data/mimic_gripper.urdf\nsteps: 1\n"
+                            "joints: {wrist: {revolute: wrapped}}\n"
+                            "mimic: [{follower: wrist, leader: knuckle, gear_ratio: 2, "
+                            "natural_frequency: 30, damping_ratio: 0.7}]\n");
+  Simulation sim = make_simulation(s);
+  VecX qd = VecX::Zero(sim.model().nv);
+  qd[sim.model().dof_index("left_finger")] = 0.1;
+  sim.set_qd(qd);
+  sim.step(10);
+  const std::string bytes = checkpoint_bytes(sim);
+  Simulation resumed(sim.model_ptr());
+  restore_checkpoint(bytes, resumed, "gripper.ckpt");
+  EXPECT_EQ(resumed.revolute_wrap(sim.model().dof_index("wrist")), RevoluteWrap::wrapped);
+  ASSERT_EQ(resumed.mimic_joints().size(), 3u);
+  EXPECT_EQ(resumed.mimic_joints()[2].natural_frequency, 30.0);
+  EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+  sim.step(20);
+  resumed.step(20);
+  EXPECT_TRUE(test::same_bits(sim.q(), resumed.q()));
+  EXPECT_TRUE(test::same_bits(sim.qd(), resumed.qd()));
 }
 
 }  // namespace
