@@ -66,6 +66,16 @@ void featherdrive::python::bind_joints(py::module_& m) {
           [](const Simulation& s) { return locked(s, [&] { return s.mimic_joints(); }); },
           "The mimic joints (a list of MimicJoint, copies).");
   auto scene = py::reinterpret_borrow<py::class_<Scene>>(m.attr("Scene"));
-  scene.def_readonly("mimic", &Scene::mimic,
-                     "the mimic joints: the URDF's <mimic> rows, then the scene's mimic list");
+  scene
+      .def_readonly("mimic", &Scene::mimic,
+                    "the mimic joints: the URDF's <mimic> rows, then the scene's mimic list")
+      .def_property_readonly(
+          "applied_forces",
+          [](const Scene& s) {
+            py::dict forces;
+            for (const AppliedForceSpec& f : s.applied_forces)
+              forces[py::str(f.joint)] = f.sine ? py::cast(*f.sine) : py::cast(f.value);
+            return forces;
+          },
+          "applied_force: {joint: force (N or Nm) or SineTarget}, a new dict");
 }

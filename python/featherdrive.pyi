@@ -656,6 +656,8 @@ class Scene:
     qd0: Vector
     drives: list[DriveSpec]
     mimic: list[MimicJoint]
+    @property
+    def applied_forces(self) -> dict[str, float | SineTarget]: ...
     fit: FitSpec | None
     @property
     def model(self) -> Model: ...

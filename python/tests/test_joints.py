@@ -45,6 +45,17 @@ def test_wrapped_wheel_stays_within_two_pi():
     assert fd.Simulation(two_wheels(), compat="physx").revolute_wrap(0) == "wrapped"
 
 
+def test_scene_applied_forces_are_constants_or_sines():
+    scene = fd.parse_scene("model: slider.urdf\nsteps: 1\n"
+                           "applied_force: {slide: {sine: {amplitude: 2, frequency: 0.5}}}\n",
+                           str(ROOT / "examples" / "inline.yaml"))
+    (sine,) = scene.applied_forces.values()
+    assert (sine.amplitude, sine.frequency) == (2.0, 0.5)
+    sim = fd.make_simulation(scene)
+    fd.apply_targets(scene, sim, 1)  # step 1 starts at t = dt
+    assert sim.applied_force[0] == pytest.approx(2 * math.sin(math.pi * scene.options.dt), abs=1e-15)
+
+
 def test_bad_values_raise_value_error_and_wrong_types_type_error():
     sim = fd.Simulation(two_wheels())
     with pytest.raises(ValueError, match="cannot mimic itself"):
@@ -70,6 +81,7 @@ def test_urdf_gripper_scene_holds_its_mimic_rows():
                            "solver: {type: pgs, position_iterations: 48, velocity_iterations: 4}\n",
                            str(ROOT / "examples" / "inline.yaml"))
     assert [(m.gear_ratio, m.offset) for m in scene.mimic] == [(1.0, 0.0), (-12.5, 0.1)]
+    assert scene.applied_forces == {}
     sim = fd.make_simulation(scene)
     for k in range(scene.steps):
         fd.apply_targets(scene, sim, k)
