@@ -18,7 +18,7 @@ ValueError, wrong types TypeError, a diverging step RuntimeError (DivergenceErro
 
 import enum
 import os
-from typing import Sequence, SupportsIndex, Union, overload
+from typing import Literal, Sequence, SupportsIndex, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -339,6 +339,15 @@ class Simulation:
         empties its history. ValueError without a drive of type force or acceleration."""
     def drive_delay(self, joint: Joint) -> int: ...
     def reset_drive_delay_history(self) -> None: ...
+    def set_revolute_wrap(self, joint: Joint, wrap: Literal['wrapped', 'unwrapped']) -> None:
+        """PhysX's eREVOLUTE (q back into [-2 pi, 2 pi] after each step) or eREVOLUTE_UNWRAPPED."""
+    def revolute_wrap(self, joint: Joint) -> str: ...
+    def add_mimic_joint(self, follower: Joint, leader: Joint, gear_ratio: float,
+                        offset: float = 0.0, natural_frequency: float = 0.0,
+                        damping_ratio: float = 0.0) -> None:
+        """q[follower] + gear_ratio q[leader] + offset = 0; soft when both last two are > 0."""
+    def clear_mimic_joints(self) -> None: ...
+    def mimic_joints(self) -> list[MimicJoint]: ...
     @property
     def actuator_force(self) -> Vector: ...
     @property
@@ -542,6 +551,15 @@ class UrdfOptions:
     def __init__(self, fixed_base: bool = True, gravity: ArrayLike = (0.0, 0.0, -9.81),
                  effort: Union[UrdfEffort, str] = UrdfEffort.none) -> None: ...
 
+class MimicJoint:
+    """q[follower] + gear_ratio q[leader] + offset = 0 (dofs); rigid unless both > 0."""
+    follower: int
+    leader: int
+    gear_ratio: float
+    offset: float
+    natural_frequency: float
+    damping_ratio: float
+
 class UrdfMimic:
     joint: str
     leader: str
@@ -640,6 +658,9 @@ class Scene:
     q0: Vector
     qd0: Vector
     drives: list[DriveSpec]
+    mimic: list[MimicJoint]
+    @property
+    def applied_forces(self) -> dict[str, float | SineTarget]: ...
     fit: FitSpec | None
     @property
     def model(self) -> Model: ...

@@ -57,4 +57,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_sweep(m);
   bind_fit(m);
   bind_view(m);
+  bind_joints(m);
 }

@@ -71,6 +71,13 @@ int compare_physx(const ComparePhysxArgs& args) {
           t[d.joint] = {copy.drive(d.dof).target_position, copy.drive(d.dof).target_velocity};
     }
   }
+  // The joint forces of every step where the scene varies them (applied_force with a sine).
+  std::vector<ForcesByJoint> forces;
+  for (const AppliedForceSpec& f : scene.applied_forces)
+    for (int k = 0; f.sine && k < scene.steps; ++k) {
+      if (forces.size() <= static_cast<size_t>(k)) forces.emplace_back();
+      forces[static_cast<size_t>(k)][f.joint] = f.at(k * scene.options.dt);
+    }
   try {
     (void)physx_scene_json(sim, 0);  // what PhysX cannot represent is the input's fault
   } catch (const std::invalid_argument& e) {
@@ -99,7 +106,7 @@ int compare_physx(const ComparePhysxArgs& args) {
   }
   JointTrajectory px;
   try {
-    px = run_physx(physx, sim, scene.steps, targets);
+    px = run_physx(physx, sim, scene.steps, targets, forces);
   } catch (const PhysxError& e) {
     if (e.harness_exit == 2)  // the harness refused a value of the exported scene
       throw std::invalid_argument(args.scene + ": PhysX refused the scene: " + e.what());

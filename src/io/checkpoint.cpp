@@ -192,6 +192,43 @@ void read_drive_delays(Reader& r, Simulation& next, const std::string& name) {
   }
 }
 
+// Version 5: per dof its revolute wrap (1: wrapped), then the mimic joints.
+void write_joint_coupling(Writer& p, const Simulation& sim) {
+  for (int d = 0; d < sim.model().nv; ++d)
+    p.u8(sim.revolute_wrap(d) == RevoluteWrap::wrapped ? 1 : 0);
+  p.i64(static_cast<std::int64_t>(sim.mimic_joints().size()));
+  for (const MimicJoint& m : sim.mimic_joints()) {
+    p.i64(m.dof_a);
+    p.i64(m.dof_b);
+    for (double v : {m.gear_ratio, m.offset, m.natural_frequency, m.damping_ratio}) p.f64(v);
+  }
+}
+
+void read_joint_coupling(Reader& r, Simulation& next, const std::string& name) {
+  const Model& model = next.model();
+  for (int d = 0; d < model.nv; ++d) {
+    const std::uint8_t wrapped = r.u8();
+    if (wrapped > 1)
+      fail(name, "corrupt checkpoint: revolute wrap " + std::to_string(wrapped) + " of dof " +
+                     std::to_string(d) + " is neither 0 nor 1");
+    if (wrapped || model.links[model.dof_link[d]].joint_type == JointType::revolute)
+      next.set_revolute_wrap(d, wrapped ? RevoluteWrap::wrapped : RevoluteWrap::unwrapped);
+  }
+  const std::int64_t count = r.i64();
+  if (count < 0 || count > model.nv)
+    fail(name, "corrupt checkpoint: " + std::to_string(count) + " mimic joints for " +
+                   std::to_string(model.nv) + " dofs");
+  std::vector<MimicJoint> rows(static_cast<size_t>(count));
+  for (MimicJoint& m : rows) {
+    const std::int64_t a = r.i64(), b = r.i64();
+    if (a < 0 || a >= model.nv || b < 0 || b >= model.nv)
+      fail(name, "corrupt checkpoint: a mimic joint couples dofs " + std::to_string(a) + " and " +
+                     std::to_string(b) + " of " + std::to_string(model.nv));
+    m = {static_cast<int>(a), static_cast<int>(b), r.f64(), r.f64(), r.f64(), r.f64()};
+  }
+  next.set_mimic_joints(rows);
+}
+
 }  // namespace
 
 std::uint64_t model_fingerprint(const Model& model) {
@@ -264,6 +301,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   p.vec(sim.velocity_limit_force());
   write_actuators(p, sim);
   write_drive_delays(p, sim);
+  write_joint_coupling(p, sim);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -454,6 +492,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
     read_actuators(r, next, name);
     if (version >= 4) read_drive_delays(r, next, name);  // version 3 has none
+    if (version >= 5) read_joint_coupling(r, next, name);  // 3 and 4 have none
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

@@ -109,7 +109,7 @@ std::string describe(const UrdfRobot& robot) {
   out << "\n";
   for (const UrdfMimic& m : robot.mimics)
     out << "mimic: " << m.joint << " = " << num(m.multiplier) << " * " << m.leader << " + "
-        << num(m.offset) << " (not simulated)\n";
+        << num(m.offset) << " (a mimic joint in scenes)\n";
   return out.str();
 }
 

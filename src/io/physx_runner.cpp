@@ -321,8 +321,10 @@ int run_on_server(const std::string& socket_path, const fs::path& scene, const f
 }  // namespace
 
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
-                          const std::vector<TargetsByJoint>& targets) {
-  const std::string json = physx_scene_json(sim, steps, targets);  // throws for what PhysX lacks
+                          const std::vector<TargetsByJoint>& targets,
+                          const std::vector<ForcesByJoint>& forces) {
+  // Throws for what PhysX lacks.
+  const std::string json = physx_scene_json(sim, steps, targets, forces);
   std::string tmpl = (fs::temp_directory_path() / "featherdrive-physx-XXXXXX").string();
   if (::mkdtemp(tmpl.data()) == nullptr) throw PhysxError("cannot make a temporary folder " + tmpl);
   const fs::path dir = tmpl;

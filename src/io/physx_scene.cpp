@@ -53,7 +53,8 @@ std::string str(const std::string& s) {
 }  // namespace
 
 std::string physx_scene_json(const Simulation& sim, int steps,
-                             const std::vector<TargetsByJoint>& targets) {
+                             const std::vector<TargetsByJoint>& targets,
+                             const std::vector<ForcesByJoint>& forces) {
   const Model& model = sim.model();
   const SimulationOptions& o = sim.options();
   const JointType root_type = model.links[0].joint_type;
@@ -61,6 +62,9 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     throw std::invalid_argument("physx export: the root joint '" + model.links[0].joint_name +
                                 "' is " + to_string(root_type) +
                                 "; PhysX needs a fixed or floating root");
+  if (!sim.mimic_joints().empty())
+    throw std::invalid_argument("physx export: " + describe(model, sim.mimic_joints()[0]) +
+                                ": the WebAssembly PhysX has no mimic joints");
   Data data(model);
   forward_kinematics(model, data, sim.q(), sim.qd());
 
@@ -133,6 +137,10 @@ std::string physx_scene_json(const Simulation& sim, int steps,
         js << ", \"armature\": " << num(model.armature[d])
            << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
            << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d));
+        if (sim.applied_force()[d] != 0.0)
+          js << ", \"applied_force\": " << num(sim.applied_force()[d]);
+        if (l.joint_type == JointType::revolute && sim.revolute_wrap(d) == RevoluteWrap::wrapped)
+          js << ", \"wrapped\": true";
         if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
           js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
              << ", \"upper\": " << num(sim.upper_limit(d)) << "}";
@@ -174,7 +182,21 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     }
     js << "}";
   }
-  js << "]\n}\n";
+  js << "]";
+  if (!forces.empty()) {
+    js << ",\n  \"forces\": [";
+    for (size_t k = 0; k < forces.size(); ++k) {
+      js << (k ? ",\n    {" : "\n    {");
+      first = true;
+      for (const auto& [joint, force] : forces[k]) {
+        js << (first ? "" : ", ") << str(joint) << ": " << num(force);
+        first = false;
+      }
+      js << "}";
+    }
+    js << "]";
+  }
+  js << "\n}\n";
   return js.str();
 }
 

@@ -184,6 +184,24 @@ ExplicitActuator read_actuator(const Reader& r, const YAML::Node& node, const st
   return a;
 }
 
+// A sine of time (drives.J.target.sine, applied_force.J.sine).
+SineTarget read_sine(const Reader& r, const YAML::Node& s, const std::string& spath) {
+  r.map(s, spath, {"amplitude", "frequency", "phase", "offset"});
+  SineTarget sine;
+  if (s["amplitude"]) sine.amplitude = r.finite(s["amplitude"], spath + ".amplitude");
+  if (s["frequency"]) sine.frequency = r.non_negative(s["frequency"], spath + ".frequency");
+  if (s["phase"]) sine.phase = r.finite(s["phase"], spath + ".phase");
+  if (s["offset"]) sine.offset = r.finite(s["offset"], spath + ".offset");
+  // The target |offset| + |amplitude| and its velocity's amplitude 2 pi f |amplitude| must stay
+  // finite at every time (apply_targets still checks w t + phase for a huge t).
+  if (!std::isfinite(std::abs(sine.offset) + std::abs(sine.amplitude)))
+    r.fail(spath, s, "offset + amplitude overflows");
+  const double w = 2.0 * std::numbers::pi * sine.frequency;
+  if (!std::isfinite(w) || !std::isfinite(w * std::abs(sine.amplitude)))
+    r.fail(spath, s, "the velocity amplitude 2 pi frequency amplitude overflows");
+  return sine;
+}
+
 DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string& path,
                      DriveSpec spec) {
   r.map(node, path, kDriveKeys);
@@ -224,22 +242,7 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
     const std::string tpath = at("target");
     r.map(node["target"], tpath, {"sine"});
     if (!node["target"]["sine"]) r.fail(tpath, node["target"], "must name a trajectory (sine)");
-    const std::string spath = tpath + ".sine";
-    const YAML::Node s = node["target"]["sine"];
-    r.map(s, spath, {"amplitude", "frequency", "phase", "offset"});
-    SineTarget sine;
-    if (s["amplitude"]) sine.amplitude = r.finite(s["amplitude"], spath + ".amplitude");
-    if (s["frequency"]) sine.frequency = r.non_negative(s["frequency"], spath + ".frequency");
-    if (s["phase"]) sine.phase = r.finite(s["phase"], spath + ".phase");
-    if (s["offset"]) sine.offset = r.finite(s["offset"], spath + ".offset");
-    // The target |offset| + |amplitude| and its velocity's amplitude 2 pi f |amplitude| must stay
-    // finite at every time (apply_targets still checks w t + phase for a huge t).
-    if (!std::isfinite(std::abs(sine.offset) + std::abs(sine.amplitude)))
-      r.fail(spath, s, "offset + amplitude overflows");
-    const double w = 2.0 * std::numbers::pi * sine.frequency;
-    if (!std::isfinite(w) || !std::isfinite(w * std::abs(sine.amplitude)))
-      r.fail(spath, s, "the velocity amplitude 2 pi frequency amplitude overflows");
-    spec.sine = sine;
+    spec.sine = read_sine(r, node["target"]["sine"], tpath + ".sine");
   }
   if (node["envelope"]) {
     const std::string epath = at("envelope");
@@ -275,6 +278,77 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
              "actuator takes actuator.delay)");
   }
   return spec;
+}
+
+// joints.J.revolute, joint_defaults.revolute: PhysX's revolute joint type.
+RevoluteWrap read_revolute(const Reader& r, const YAML::Node& node, const std::string& path) {
+  const std::string text = r.text(node, path);
+  try {
+    return parse_revolute_wrap(text);
+  } catch (const std::invalid_argument&) {
+    r.fail(path, node, "must be wrapped (PhysX's eREVOLUTE) or unwrapped (eREVOLUTE_UNWRAPPED)");
+  }
+}
+
+// applied_force: {joint: force or {sine: ...}}.
+std::vector<AppliedForceSpec> read_applied_forces(const Reader& r, const YAML::Node& node,
+                                                  const UrdfRobot& robot) {
+  r.map(node, "applied_force", {});
+  std::map<int, AppliedForceSpec> by_dof;
+  for (const auto& kv : node) {
+    AppliedForceSpec f;
+    f.joint = kv.first.Scalar();
+    const std::string p = "applied_force." + f.joint;
+    f.dof = joint_dof(r, robot, f.joint, p);
+    if (kv.second.IsMap()) {
+      r.map(kv.second, p, {"sine"});
+      if (!kv.second["sine"]) r.fail(p, kv.second, "must be a force or {sine: ...}");
+      f.sine = read_sine(r, kv.second["sine"], p + ".sine");
+    } else {
+      f.value = r.finite(kv.second, p);
+    }
+    by_dof[f.dof] = f;
+  }
+  std::vector<AppliedForceSpec> out;
+  for (const int dof : robot.dof_order)
+    if (const auto it = by_dof.find(dof); it != by_dof.end()) out.push_back(it->second);
+  return out;
+}
+
+// mimic: [{follower, leader, gear_ratio, offset, natural_frequency, damping_ratio}], added to the
+// URDF's rows (an entry replaces the URDF's row of its follower); the cycle check is
+// validate_mimic_joints' (make_simulation).
+std::vector<MimicJoint> read_mimic(const Reader& r, const YAML::Node& node,
+                                   const UrdfRobot& robot) {
+  if (!node.IsSequence()) r.fail("mimic", node, "must be a list of {follower, leader, gear_ratio}");
+  std::vector<MimicJoint> rows = robot.mimic_joints;
+  for (size_t i = 0; i < node.size(); ++i) {
+    const std::string p = "mimic[" + std::to_string(i) + "]";
+    const YAML::Node e = node[i];
+    r.map(e, p, {"follower", "leader", "gear_ratio", "offset", "natural_frequency",
+                 "damping_ratio"});
+    for (const char* key : {"follower", "leader", "gear_ratio"})
+      if (!e[key]) r.fail(p + "." + key, "missing");
+    MimicJoint m;
+    m.dof_a = joint_dof(r, robot, r.text(e["follower"], p + ".follower"), p + ".follower");
+    m.dof_b = joint_dof(r, robot, r.text(e["leader"], p + ".leader"), p + ".leader");
+    if (m.dof_a == m.dof_b)
+      r.fail(p + ".leader", e["leader"], "is the follower: a joint cannot mimic itself");
+    m.gear_ratio = r.finite(e["gear_ratio"], p + ".gear_ratio");
+    if (m.gear_ratio == 0.0) r.fail(p + ".gear_ratio", e["gear_ratio"], "must be nonzero");
+    if (e["offset"]) m.offset = r.finite(e["offset"], p + ".offset");
+    if (e["natural_frequency"])
+      m.natural_frequency = r.non_negative(e["natural_frequency"], p + ".natural_frequency");
+    if (e["damping_ratio"])
+      m.damping_ratio = r.non_negative(e["damping_ratio"], p + ".damping_ratio");
+    const auto same = std::find_if(rows.begin(), rows.end(),
+                                   [&](const MimicJoint& x) { return x.dof_a == m.dof_a; });
+    if (same != rows.end() && same - rows.begin() < static_cast<long>(robot.mimic_joints.size()))
+      *same = m;
+    else
+      rows.push_back(m);
+  }
+  return rows;
 }
 
 }  // namespace
@@ -320,7 +394,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
-         "control", "urdf_effort", "fit"});
+         "control", "urdf_effort", "fit", "applied_force", "mimic"});
 
   Scene scene;
   scene.path = path;
@@ -415,7 +489,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       js.dof = joint_dof(r, scene.robot, name, path_j);
       const YAML::Node j = kv.second;
       r.map(j, path_j,
-            {"lower", "upper", "max_velocity", "friction", "friction_coefficient", "armature"});
+            {"lower", "upper", "max_velocity", "friction", "friction_coefficient", "armature",
+             "revolute"});
+      if (j["revolute"]) js.revolute = read_revolute(r, j["revolute"], path_j + ".revolute");
       if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
       if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
       if (js.lower && (std::isnan(*js.lower) || *js.lower == kInf))
@@ -461,8 +537,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   }
 
   if (const YAML::Node jd = root["joint_defaults"]) {
-    r.map(jd, "joint_defaults", {"friction_coefficient", "max_velocity"});
+    r.map(jd, "joint_defaults", {"friction_coefficient", "max_velocity", "revolute"});
     JointSettings js;
+    if (jd["revolute"]) js.revolute = read_revolute(r, jd["revolute"], "joint_defaults.revolute");
     if (jd["friction_coefficient"])
       js.friction_coefficient =
           r.non_negative(jd["friction_coefficient"], "joint_defaults.friction_coefficient");
@@ -555,6 +632,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       scene.drives.push_back(it->second);
     if (auto it = settings.find(dof); it != settings.end()) scene.joints.push_back(it->second);
   }
+  if (root["applied_force"])
+    scene.applied_forces = read_applied_forces(r, root["applied_force"], scene.robot);
+  scene.mimic = root["mimic"] ? read_mimic(r, root["mimic"], scene.robot)
+                              : scene.robot.mimic_joints;
   // A last check with the simulation's own rules, so a scene that loads also runs.
   (void)make_simulation(scene);
   if (root["fit"]) scene.fit = read_fit_spec(r, root["fit"], scene);
@@ -580,6 +661,8 @@ Simulation make_simulation(const Scene& scene) {
             (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic))
           continue;
         const JointSettings& jd = *scene.joint_defaults;
+        if (jd.revolute && link.joint_type == JointType::revolute)
+          sim.set_revolute_wrap(link.v_index, *jd.revolute);
         if (jd.friction_coefficient) sim.set_friction_coefficient(link.v_index, *jd.friction_coefficient);
         if (jd.max_velocity && !std::isfinite(model.velocity_limit[link.v_index]))
           sim.set_max_joint_velocity(link.v_index, *jd.max_velocity);
@@ -592,7 +675,9 @@ Simulation make_simulation(const Scene& scene) {
       if (js.max_velocity) sim.set_max_joint_velocity(js.dof, *js.max_velocity);
       if (js.friction) sim.set_joint_friction(js.dof, *js.friction);
       if (js.friction_coefficient) sim.set_friction_coefficient(js.dof, *js.friction_coefficient);
+      if (js.revolute) sim.set_revolute_wrap(js.dof, *js.revolute);
     }
+    sim.set_mimic_joints(scene.mimic);
     for (const DriveSpec& d : scene.drives) {
       sim.set_drive(d.dof, d.drive);
       if (d.delay > 0 && d.drive.type != DriveType::none) sim.set_drive_delay(d.dof, d.delay);
@@ -609,7 +694,22 @@ Simulation make_simulation(const Scene& scene) {
   }
 }
 
+VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index) {
+  VecX tau = VecX::Zero(sim.model().nv);
+  const double t = static_cast<double>(step_index) * sim.options().dt;
+  for (const AppliedForceSpec& f : scene.applied_forces) {
+    tau[f.dof] = f.at(t);
+    if (!std::isfinite(tau[f.dof]))
+      throw InputError(scene.path.string() + ": applied_force." + f.joint +
+                       ".sine: the force at t = " + format_double(t) +
+                       " s is not finite (2 pi frequency t overflows)");
+  }
+  return tau;
+}
+
 void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
+  if (!scene.applied_forces.empty())
+    sim.set_applied_force(applied_force_at(scene, sim, step_index));
   // Control step m, sub-step j of k; times in double: (m + 1) k in int overflows for INT_MAX.
   const ControlStep& control = scene.control;
   const int k = control.substeps;

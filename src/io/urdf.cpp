@@ -569,8 +569,6 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
     if (!j || !j->mimic) continue;
     robot.mimics.push_back({name, j->mimic->joint_name, j->mimic->multiplier, j->mimic->offset});
-    robot.warnings.push_back("joint '" + name + "': <mimic joint='" + j->mimic->joint_name +
-                             "'> is read but not simulated; '" + name + "' moves on its own");
   }
 
   robot.rebuild();
@@ -585,6 +583,22 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(dof_of.at(name));
   }
   map_urdf_joints(robot, *urdf_model);
+  // q_joint = multiplier q_leader + offset is PhysX's q_a + gear_ratio q_b + offset' = 0 with
+  // gear_ratio = -multiplier, offset' = -offset.
+  for (const UrdfMimic& m : robot.mimics) {
+    const std::string what = "joint '" + m.joint + "': <mimic joint='" + m.leader + "'>";
+    auto dof = [&](const std::string& joint) {
+      for (const Link& link : model.links)
+        if (link.joint_name == joint && link.nv == 1) return link.v_index;
+      fail(file, what + ": '" + joint + "' is not a revolute or prismatic joint of the robot");
+    };
+    robot.mimic_joints.push_back({dof(m.joint), dof(m.leader), -m.multiplier, -m.offset});
+    try {
+      validate_mimic_joints(model, robot.mimic_joints);
+    } catch (const std::invalid_argument& e) {
+      fail(file, what + ": " + e.what());
+    }
+  }
   return robot;
 }
 

@@ -144,12 +144,14 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   subtree_force_.assign(n, Vec6::Zero());
   transmitted_force_ = VecX::Zero(model_->num_links());
   link_cfm_ = VecX::Zero(model_->num_links());
+  wrapped_.assign(static_cast<size_t>(nv), 0);
   if (options_.compat == Compat::physx) {
     // PhysX 5.6.1's defaults for everything nobody set; a model's velocity limit counts as set.
     link_parameters_.assign(n, physx_default::link());
     for (int d = 0; d < nv; ++d) {
       const JointType type = model_->links[model_->dof_link[d]].joint_type;
       if (type != JointType::revolute && type != JointType::prismatic) continue;
+      wrapped_[static_cast<size_t>(d)] = type == JointType::revolute;  // PhysX's eREVOLUTE
       friction_coefficient_[d] = physx_default::friction_coefficient;
       if (!std::isfinite(max_velocity_[d])) max_velocity_[d] = physx_default::max_joint_velocity;
     }
@@ -350,6 +352,27 @@ void Simulation::set_friction_coefficient(int dof, double coefficient) {
 }
 void Simulation::set_friction_coefficient(const std::string& joint, double coefficient) {
   set_friction_coefficient(driven_dof(joint), coefficient);
+}
+
+void Simulation::set_revolute_wrap(int dof, RevoluteWrap wrap) {
+  check_dof(dof);
+  const Link& link = model_->links[model_->dof_link[dof]];
+  if (link.joint_type != JointType::revolute)
+    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
+                                to_string(link.joint_type) + ": revolute = " + to_string(wrap) +
+                                " acts on revolute joints only");
+  wrapped_[static_cast<size_t>(dof)] = wrap == RevoluteWrap::wrapped;
+}
+void Simulation::set_revolute_wrap(const std::string& joint, RevoluteWrap wrap) {
+  set_revolute_wrap(model_->links[model_->joint_link_index(joint)].v_index, wrap);
+}
+RevoluteWrap Simulation::revolute_wrap(int dof) const {
+  return wrapped_[static_cast<size_t>(check_dof(dof))] ? RevoluteWrap::wrapped
+                                                        : RevoluteWrap::unwrapped;
+}
+
+void Simulation::set_mimic_joints(const std::vector<MimicJoint>& mimic) {
+  mimic_ = MimicSolver(*model_, mimic);
 }
 
 void Simulation::update_link_damping_active() {

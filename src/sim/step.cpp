@@ -59,6 +59,8 @@ void Simulation::step() {
   if (options_.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
   if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
+  // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
+  wrap_revolute_positions(model, wrapped_, q_);
   // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
   const double inv_dt = 1.0 / dt;
   for (int d = 0; d < model.nv; ++d) {
@@ -147,11 +149,16 @@ void Simulation::setup_rows(double h, bool tgs) {
     any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
   }
   delta_x_.setZero();
+  if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
+    mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
 }
 
 // The phase is updated in place with each dof's delta_x (a copy per row solve was a fifth of the
 // row solves' cost).
 void Simulation::sweep(RowPhase& phase) {
+  // PhysX solves the mimic rows first in every iteration (solveInternalConstraints).
+  if (!mimic_.empty())
+    mimic_.solve(*model_, data_, q_, departures_.row_bias.data(), phase.velocity_iteration, qd_);
   if (!any_rows_) return;
   // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
   DofRows* const rows = rows_.data();
@@ -215,7 +222,7 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.
-  if (!any_undriven_rows_) return;
+  if (!any_undriven_rows_ && mimic_.empty()) return;
   for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
 }
 

@@ -141,7 +141,18 @@ void constrain_every_joint(Simulation& sim, std::mt19937& rng) {
     sim.set_max_joint_velocity(d, 3.0);
     if (d % 2 == 0) sim.set_actuator_envelope(d, ActuatorEnvelope{50.0, 10.0, 1.0, 0.1});
     if (d % 3 == 1) sim.set_drive_delay(d, 1 + d % 4);  // rings sized here, not in the step
+    if (l.joint_type == JointType::revolute && d % 2 == 1)
+      sim.set_revolute_wrap(d, RevoluteWrap::wrapped);
   }
+  // Mimic rows between 1-dof joints, a chain of rows (no cycle), in different branches.
+  std::vector<MimicJoint> rows;
+  int previous = -1;
+  for (const Link& l : sim.model().links) {
+    if (l.nv != 1 || l.joint_type == JointType::spherical) continue;
+    if (previous >= 0 && rows.size() < 3) rows.push_back({l.v_index, previous, -0.5, 0.01});
+    previous = l.v_index;
+  }
+  sim.set_mimic_joints(rows);
 }
 
 struct Case {

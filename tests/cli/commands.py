@@ -42,8 +42,8 @@ def main():
     check(r.returncode == 0 and "floating base" in r.stdout and "9 dofs" in r.stdout, "info --floating", r)
     r = run(cli, "info", data("branches.urdf"))
     check(r.returncode == 0, "info branches", r)
-    check("warning: joint 'left': <mimic joint='right1'> is read but not simulated" in r.stderr,
-          "the mimic warning is printed", r)
+    check("mimic: left = -0.5 * right1 + 0.01 (a mimic joint in scenes)" in r.stdout,
+          "info shows the mimic joint", r)
     check("dofs in the file's order: right1 left right2" in r.stdout, "info lists dofs in URDF order", r)
 
     # Overrides: steps, solver, iterations.

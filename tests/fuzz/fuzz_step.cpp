@@ -184,6 +184,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
 
+  // Then revolute wrap and mimic rows (read last, so that older inputs decode as they did).
+  if (in.flag()) {
+    for (int d = 0; d < nv; ++d)
+      if (in.flag()) try_set([&] { sim.set_revolute_wrap(d, RevoluteWrap::wrapped); });
+    std::vector<MimicJoint> rows(static_cast<size_t>(nv > 0 ? in.small(4) : 0));
+    for (MimicJoint& m : rows)
+      m = {in.small(nv), in.small(nv), in.number(), in.number(), in.number(), in.number()};
+    try_set([&] { sim.set_mimic_joints(rows); });
+    fuzz::check_finite(sim);
+    for (int k = in.small(4); k > 0; --k)
+      if (!fuzz::checked_step(sim)) break;
+  }
+
   // The checkpoint of whatever state this reached restores bit for bit into a fresh simulation.
   const std::string bytes = checkpoint_bytes(sim);
   Simulation other(model);

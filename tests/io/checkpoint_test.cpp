@@ -277,7 +277,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 4)");
+            "to 5)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -576,12 +576,15 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   a.step(4);
   std::string bytes = checkpoint_bytes(a);
   const size_t delays = 8 * static_cast<size_t>(a.model().nv);
-  ASSERT_EQ(bytes.substr(bytes.size() - 8 - delays, delays), std::string(delays, '\0'));
-  bytes.erase(bytes.size() - 8 - delays, delays);
+  // Version 5's revolute wrap (a byte per dof) and mimic joints (their count) come last.
+  const size_t coupling = static_cast<size_t>(a.model().nv) + 8;
+  ASSERT_EQ(bytes.substr(bytes.size() - 8 - coupling - delays, coupling + delays),
+            std::string(coupling + delays, '\0'));
+  bytes.erase(bytes.size() - 8 - coupling - delays, coupling + delays);
   std::uint64_t payload = 0;
   for (size_t i = 0; i < 8; ++i)
     payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[28 + i])) << (8 * i);
-  const std::string v3 = forged(forged(bytes, 8, 3, 4), 28, payload - delays);
+  const std::string v3 = forged(forged(bytes, 8, 3, 4), 28, payload - coupling - delays);
   Simulation b(a.model_ptr());
   int driven = -1;
   for (const Link& l : b.model().links)
@@ -594,8 +597,8 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   expect_same_state(a, b);
   EXPECT_EQ(checkpoint_bytes(b), checkpoint_bytes(a));
   // A forged delay is refused naming the dof.
-  const std::string bad = forged(checkpoint_bytes(a), checkpoint_bytes(a).size() - 8 - delays,
-                                 ~0ULL);
+  const std::string bad = forged(checkpoint_bytes(a),
+                                 checkpoint_bytes(a).size() - 8 - coupling - delays, ~0ULL);
   EXPECT_EQ(error_of(bad, b),
             "state.ckpt: corrupt checkpoint: drive delay -1 of dof 0 is outside [0, 100000]");
   // A forged push count that a later push would overflow.
@@ -604,7 +607,7 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   c.step();
   const std::string with_delay = checkpoint_bytes(c);
   // The delays: 8 bytes per dof, and for `driven` its push count and 2 targets after them.
-  const size_t delays_at = with_delay.size() - 8 - (delays + 8 + 32);
+  const size_t delays_at = with_delay.size() - 8 - coupling - (delays + 8 + 32);
   const size_t pushes_at = delays_at + 8 * static_cast<size_t>(driven) + 8;
   EXPECT_EQ(error_of(forged(with_delay, pushes_at, 0x7fffffffffffffffULL), c),
             "state.ckpt: bad value in the checkpoint: drive delay history of dof " +

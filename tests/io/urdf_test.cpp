@@ -242,7 +242,7 @@ TEST(Urdf, FixedJointMergesTwoBoxesAsWorkedOutByHand) {
   EXPECT_EQ(robot.merged.at("b").xyz, Vec3(0.3, 0, 0));
 }
 
-TEST(Urdf, DofOrderFollowsTheDocumentAndMimicTagsAreReportedNotSimulated) {
+TEST(Urdf, DofOrderFollowsTheDocumentAndMimicTagsBecomeMimicJoints) {
   const UrdfRobot robot = load_urdf(data("branches.urdf"));
   const Model& m = *robot.model;
   // Depth-first: right1, right2, left.
@@ -257,11 +257,13 @@ TEST(Urdf, DofOrderFollowsTheDocumentAndMimicTagsAreReportedNotSimulated) {
   EXPECT_EQ(robot.mimics[0].leader, "right1");
   EXPECT_EQ(robot.mimics[0].multiplier, -0.5);
   EXPECT_EQ(robot.mimics[0].offset, 0.01);
-  bool warned = false;
-  for (const std::string& w : robot.warnings)
-    warned = warned || (w.find("'left'") != std::string::npos &&
-                        w.find("not simulated") != std::string::npos);
-  EXPECT_TRUE(warned);
+  // left = -0.5 right1 + 0.01 is the row left + 0.5 right1 - 0.01 = 0.
+  ASSERT_EQ(robot.mimic_joints.size(), 1u);
+  EXPECT_EQ(robot.mimic_joints[0].dof_a, m.dof_index("left"));
+  EXPECT_EQ(robot.mimic_joints[0].dof_b, m.dof_index("right1"));
+  EXPECT_EQ(robot.mimic_joints[0].gear_ratio, 0.5);
+  EXPECT_EQ(robot.mimic_joints[0].offset, -0.01);
+  EXPECT_TRUE(robot.warnings.empty());
   const int r2 = m.dof_index("right2");
   EXPECT_EQ(m.damping[r2], 0.3);
   EXPECT_EQ(m.friction[r2], 0.1);

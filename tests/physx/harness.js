@@ -262,6 +262,12 @@ function parseScene(doc) {
       joint.axis = unitVec(J.axis, `${wj}.axis`);
     }
     joint.armature = optNum(J, 'armature', wj, 0, { min: 0 });
+    joint.applied_force = optNum(J, 'applied_force', wj, 0);
+    // PhysX's eREVOLUTE wraps the position past +-2 pi; eREVOLUTE_UNWRAPPED (the default) does not.
+    joint.wrapped = bool(J.wrapped, `${wj}.wrapped`, false);
+    if (joint.wrapped && joint.type !== 'revolute') {
+      throw new InputError(`${wj}.wrapped: only a revolute joint wraps`);
+    }
     joint.friction_coefficient = optNum(J, 'friction_coefficient', wj, 0, { min: 0 });
     joint.max_velocity = optNum(J, 'max_velocity', wj, HUGE, { min: 0 });
     if (J.limits === undefined || J.limits === null) {
@@ -325,6 +331,22 @@ function parseScene(doc) {
         m.set(name, v);
       }
       s.targets.push(m);
+    });
+  }
+  // forces[k]: joint forces {joint: value} applied through step k + 1 (PhysX's cache jointForce);
+  // a joint it leaves out keeps its applied_force.
+  s.forces = [];
+  if (doc.forces !== undefined && doc.forces !== null) {
+    if (!Array.isArray(doc.forces)) throw new InputError('scene.forces: expected an array');
+    doc.forces.forEach((entry, k) => {
+      const w = `scene.forces[${k}]`;
+      if (!isObj(entry)) throw new InputError(`${w}: expected an object {joint: force}`);
+      const m = new Map();
+      for (const [name, f] of Object.entries(entry)) {
+        movable(name, w);
+        m.set(name, num(f, `${w}.${name}`));
+      }
+      s.forces.push(m);
     });
   }
   return s;
@@ -437,7 +459,8 @@ function build(P, s) {
       pj.setJointType(P.PxArticulationJointTypeEnum.eFIX);
     } else {
       if (J.type === 'revolute') {
-        pj.setJointType(JOINT_TYPE_REVOLUTE_UNWRAPPED);
+        pj.setJointType(J.wrapped ? P.PxArticulationJointTypeEnum.eREVOLUTE
+                                  : JOINT_TYPE_REVOLUTE_UNWRAPPED);
         axis = P.PxArticulationAxisEnum.eTWIST;
       } else {
         pj.setJointType(P.PxArticulationJointTypeEnum.ePRISMATIC);
@@ -501,7 +524,10 @@ function build(P, s) {
   const CF = P.PxArticulationCacheFlagEnum;
   const cacheFlags = new P.PxArticulationCacheFlags(CF.eLINK_INCOMING_JOINT_FORCE | CF.eACCELERATION);
   const movableJoints = joints.filter((j) => j && j.axis !== null);
-  const h = { P, world, s, scene, art, links, joints, movableJoints, cache, cacheFlags, stepCount: 0 };
+  const anyForce = s.forces.length > 0 || movableJoints.some((j) => j.spec.applied_force !== 0);
+  const h = {
+    P, world, s, scene, art, links, joints, movableJoints, cache, cacheFlags, anyForce, stepCount: 0,
+  };
   return h;
 }
 
@@ -519,6 +545,28 @@ function setTargets(h, map) {
   }
 }
 
+// Joint forces of step k (1-based) through the articulation cache's jointForce, every dof written
+// (forces[k - 1] where it names the joint, else the joint's applied_force).
+function setForces(h, k) {
+  const { P, art, cache } = h;
+  if (!h.anyForce) return;
+  const helpers = P.NativeArrayHelpers.prototype;
+  if (!h.jointForceArray) {
+    // cache.jointForce comes back as the address of the member (see readForces) and setRealAt
+    // writes at the address it is given: the array's address is the pointer stored in the
+    // member, read through a scratch word that holds the member's address (getU32At dereferences).
+    const scratch = P.getPointer(new P.PxVec3(0, 0, 0));
+    helpers.setU32At(scratch, 0, P.getPointer(cache.jointForce));
+    h.jointForceArray = helpers.getU32At(scratch, 0);
+  }
+  const m = k - 1 < h.s.forces.length ? h.s.forces[k - 1] : null;
+  for (let d = 0; d < art.getDofs(); ++d) helpers.setRealAt(h.jointForceArray, d, 0);
+  for (const j of h.movableJoints) {
+    const f = m && m.has(j.spec.name) ? m.get(j.spec.name) : j.spec.applied_force;
+    helpers.setRealAt(h.jointForceArray, j.dofIndex, f);
+  }
+  art.applyCache(cache, new P.PxArticulationCacheFlags(P.PxArticulationCacheFlagEnum.eFORCE));
+}
 function linkPose(link) {
   const t = link.getGlobalPose();
   return { p: [t.p.x, t.p.y, t.p.z], q: [t.q.w, t.q.x, t.q.y, t.q.z] };
@@ -635,6 +683,7 @@ function simulate(P, s, onRow) {
   emit(0, h.movableJoints.map(() => 0));
   for (let k = 1; k <= s.steps; ++k) {
     if (k - 1 < s.targets.length) setTargets(h, s.targets[k - 1]);
+    setForces(h, k);
     step(h);
     const errs = severeMessages(h);
     if (errs.length) throw new Error(`PhysX error in step ${k}: ` + errs.join('; '));

@@ -13,7 +13,9 @@
 //                 friction and velocity-limit forces, then per dof its explicit actuator (kind;
 //                 if any: settings, table, feed-forward, pushes and its delay ring of
 //                 delay + 1 commands) and the last step's actuator forces, then per dof the
-//                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets)
+//                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets),
+//                 then per dof its revolute wrap and the mimic joints (count, then each one's
+//                 dofs, gear ratio, offset, natural frequency and damping ratio)
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
@@ -31,7 +33,9 @@ namespace featherdrive {
 /// 3: explicit actuators with their delay histories, so a delayed actuator resumes bit for bit.
 /// 4: the implicit drives' delays with their pending targets. Version 3 is still read (no
 /// drive delays).
-inline constexpr std::uint32_t kCheckpointVersion = 4;
+/// 5: revolute wrap and mimic joints. Versions 3 and 4 are still read (the simulation keeps its
+/// own).
+inline constexpr std::uint32_t kCheckpointVersion = 5;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file

@@ -80,7 +80,8 @@ PhysxInstall find_physx(const std::vector<std::filesystem::path>& default_dirs);
 /// none answers, node is started as usual. The files go to a
 /// fresh temporary folder, removed afterwards unless the run fails (the message names it).
 JointTrajectory run_physx(const PhysxInstall& physx, const Simulation& sim, int steps,
-                          const std::vector<TargetsByJoint>& targets = {});
+                          const std::vector<TargetsByJoint>& targets = {},
+                          const std::vector<ForcesByJoint>& forces = {});
 
 /// Runs a program (argv[0] a path, or a name looked up on PATH) without a shell and waits for
 /// it; its stdout goes to the caller's, its stderr to `stderr_path` unless that is empty. Returns

@@ -49,6 +49,17 @@ struct JointSettings {
   int dof = 0;
   std::optional<double> lower, upper, max_velocity, armature, friction_coefficient;
   std::optional<JointFriction> friction;
+  std::optional<RevoluteWrap> revolute;  ///< key revolute: wrapped | unwrapped
+};
+
+/// applied_force.J: a joint force through every step (Simulation::set_applied_force), constant
+/// or a sine of time (its position(t); t = k dt, the start of step k).
+struct AppliedForceSpec {
+  std::string joint;
+  int dof = 0;
+  double value = 0.0;
+  std::optional<SineTarget> sine;
+  double at(double t) const { return sine ? sine->position(t) : value; }
 };
 
 /// PhysX's link parameters a scene sets (link_parameters.hpp); the rest keep the simulation's
@@ -75,6 +86,10 @@ struct Scene {
   std::optional<LinkSettings> link_defaults;
   std::vector<LinkSettings> links;    ///< in model link order
   std::optional<JointSettings> joint_defaults;
+  std::vector<AppliedForceSpec> applied_forces;  ///< in URDF joint order
+  /// The URDF's <mimic> rows, then the scene's mimic list (an entry replaces the URDF's row of
+  /// its follower).
+  std::vector<MimicJoint> mimic;
   /// control: {substeps: k, targets: hold | linear}: the targets change every k steps
   /// (apply_targets); the default 1 / hold is one target per step.
   ControlStep control;
@@ -98,10 +113,14 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path);
 /// targets are those of the first step.
 Simulation make_simulation(const Scene& scene);
 
+/// The applied force of step k (0-based), every joint the scene names (nv; 0 elsewhere).
+VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index);
+
 /// Sets the time-varying targets for step k (0-based). With scene.control's K substeps, step k
 /// belongs to control step m = k / K as its sub-step j = k % K + 1: hold sets the sine targets
 /// at the control step's end, t = (m + 1) K dt; linear interpolates from those at t = m K dt
 /// (substep_target, docs/math/control_step.md). For K = 1 both are the targets at t = (k + 1) dt.
+/// Also sets the applied force of step k (applied_force_at), if the scene has any.
 void apply_targets(const Scene& scene, Simulation& sim, int step_index);
 
 /// Runs the scene: on_state(sim, 0) for the initial state, then for each step k apply_targets,

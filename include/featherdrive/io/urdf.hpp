@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "featherdrive/constraint/mimic_row.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/model/model_builder.hpp"
 
@@ -34,7 +35,7 @@ struct UrdfOptions {
   UrdfEffort effort = UrdfEffort::none;
 };
 
-/// A <mimic> tag: joint = multiplier * leader + offset. Read and reported, not simulated.
+/// A <mimic> tag: joint = multiplier * leader + offset (simulated as UrdfRobot::mimic_joints).
 struct UrdfMimic {
   std::string joint;
   std::string leader;
@@ -68,6 +69,9 @@ struct UrdfRobot {
   /// child was merged into), and the joint_order index of each dof (-1 for a floating root's).
   std::vector<int> dof_of_urdf_joint, link_of_urdf_joint, urdf_joint_of_dof;
   std::vector<UrdfMimic> mimics;
+  /// The mimic tags as rigid mimic rows: a = the joint, b = the leader, gear_ratio = -multiplier,
+  /// offset = -offset (docs/math/mimic_joints.md); scenes apply them (make_simulation).
+  std::vector<MimicJoint> mimic_joints;
   std::map<std::string, MergedLink> merged;  ///< merged link name -> where it went
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
   /// The URDF effort limit of each moving joint (informative; drives need their own max_force).

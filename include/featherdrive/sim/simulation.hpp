@@ -15,7 +15,9 @@
 #include "featherdrive/sim/explicit_actuator.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/physx_departures.hpp"
+#include "featherdrive/sim/revolute_wrap.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
+#include "featherdrive/solver/mimic_solve.hpp"
 
 namespace featherdrive {
 
@@ -210,6 +212,18 @@ class Simulation {
   const LinkParameters& link_parameters(int link) const;
   const LinkParameters& link_parameters(const std::string& link) const;
 
+  // Revolute wrap and mimic joints (docs/math/revolute_wrap.md, docs/math/mimic_joints.md).
+  /// PhysX's eREVOLUTE (wrapped: the position returns into [-2 pi, 2 pi] after each step) or
+  /// eREVOLUTE_UNWRAPPED. Unwrapped by default, wrapped with Compat::physx (PhysX's revolute
+  /// joint). Throws std::invalid_argument naming the joint for a dof that is not revolute.
+  void set_revolute_wrap(int dof, RevoluteWrap wrap);
+  void set_revolute_wrap(const std::string& joint, RevoluteWrap wrap);
+  RevoluteWrap revolute_wrap(int dof) const;
+  /// Replaces the mimic joints (rows q_a + gear_ratio q_b + offset = 0); {} removes them. Throws
+  /// std::invalid_argument (validate_mimic_joints); nothing changes then.
+  void set_mimic_joints(const std::vector<MimicJoint>& mimic);
+  const std::vector<MimicJoint>& mimic_joints() const { return mimic_.joints(); }
+
   // Outputs of the last step.
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
   VecView drive_force() const { return state_[StateStorage::drive_force]; }
@@ -291,6 +305,8 @@ class Simulation {
   bool actuated_ = false;  ///< the last step had actuators (actuator_force_ may be nonzero)
   bool actuated_start_ = false;
   DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
+  std::vector<char> wrapped_;  ///< per dof: a revolute joint of PhysX's wrapping type
+  MimicSolver mimic_;
 };
 
 }  // namespace featherdrive

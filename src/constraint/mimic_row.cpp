@@ -1,0 +1,78 @@
+#include "featherdrive/constraint/mimic_row.hpp"
+
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "featherdrive/core/format.hpp"
+
+namespace featherdrive {
+
+std::string describe(const Model& model, const MimicJoint& m) {
+  auto name = [&](int dof) {
+    return dof >= 0 && dof < model.nv ? "'" + model.dof_names[dof] + "'"
+                                      : "dof " + std::to_string(dof);
+  };
+  return "mimic joint " + name(m.dof_a) + " (follower) of " + name(m.dof_b) + " (leader)";
+}
+
+void validate_mimic_joints(const Model& model, const std::vector<MimicJoint>& mimic) {
+  // Union-find over the dofs: a row joining two dofs already connected closes a cycle.
+  std::vector<int> root(static_cast<size_t>(model.nv));
+  std::iota(root.begin(), root.end(), 0);
+  auto find = [&root](int d) {
+    while (root[static_cast<size_t>(d)] != d) d = root[static_cast<size_t>(d)];
+    return d;
+  };
+  for (const MimicJoint& m : mimic) {
+    const std::string what = describe(model, m);
+    for (const int dof : {m.dof_a, m.dof_b}) {
+      if (dof < 0 || dof >= model.nv)
+        throw std::invalid_argument(what + ": dof " + std::to_string(dof) +
+                                    " is out of range [0, " + std::to_string(model.nv) + ")");
+      const Link& link = model.links[model.dof_link[dof]];
+      if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+        throw std::invalid_argument(what + ": joint '" + link.joint_name + "' is " +
+                                    to_string(link.joint_type) +
+                                    "; mimic joints couple revolute and prismatic joints only");
+    }
+    if (m.dof_a == m.dof_b) throw std::invalid_argument(what + ": a joint cannot mimic itself");
+    if (!std::isfinite(m.gear_ratio) || m.gear_ratio == 0.0)
+      throw std::invalid_argument(what + ": gear_ratio = " + format_double(m.gear_ratio) +
+                                  " must be finite and nonzero");
+    if (!std::isfinite(m.offset))
+      throw std::invalid_argument(what + ": offset = " + format_double(m.offset) +
+                                  " must be finite");
+    if (!std::isfinite(m.natural_frequency))
+      throw std::invalid_argument(
+          what + ": natural_frequency = " + format_double(m.natural_frequency) + " must be finite");
+    if (!std::isfinite(m.damping_ratio))
+      throw std::invalid_argument(what + ": damping_ratio = " + format_double(m.damping_ratio) +
+                                  " must be finite");
+    const int ra = find(m.dof_a), rb = find(m.dof_b);
+    if (ra == rb)
+      throw std::invalid_argument(what +
+                                  ": closes a cycle of mimic joints (the two joints are "
+                                  "already coupled through other mimic joints)");
+    root[static_cast<size_t>(ra)] = rb;
+  }
+}
+
+// eq. (3)-(4): a soft row is PhysX's implicit spring-damper with k_p = omega^2 / r and
+// k_d = 2 omega zeta / r on the effective mass 1 / r.
+MimicRow setup_mimic_row(const MimicJoint& m, double r, double h, double bias_coefficient) {
+  MimicRow row;
+  row.response = r;
+  double erp = bias_coefficient, cfm = 0.0;
+  if (m.natural_frequency > 0.0 && m.damping_ratio > 0.0) {
+    const double kp = m.natural_frequency * m.natural_frequency / r;
+    const double kd = 2.0 * m.natural_frequency * m.damping_ratio / r;
+    cfm = 1.0 / (h * (h * kp + kd));
+    erp = h * kp / (h * kp + kd);
+  }
+  row.bias_per_error = erp / h;
+  row.effective_mass = 1.0 / (r + cfm);
+  return row;
+}
+
+}  // namespace featherdrive
