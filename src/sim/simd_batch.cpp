@@ -40,7 +40,8 @@ Layout make_layout(const Plan& p) {
   l.inverse_mass = take(L), l.vel = take(6 * L), l.dv = take(6 * L), l.subtree = take(6 * L);
   l.after = take(6 * L), l.later = take(6 * L), l.q = take(p.nq), l.qd = take(n);
   l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
-  l.old_lf = take(n), l.df = take(n), l.lf = take(n), l.row = take(Layout::kRowFields * n);
+  l.old_lf = take(n), l.old_ff = take(n), l.df = take(n), l.lf = take(n), l.ff = take(n),
+  l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
   l.size = at;
@@ -48,7 +49,7 @@ Layout make_layout(const Plan& p) {
 }
 
 std::size_t scratch_doubles(const Plan& p) {
-  return static_cast<std::size_t>(make_layout(p).size) * kGroup;
+  return static_cast<std::size_t>(make_layout(p).size) * kGroup * kInterleave;
 }
 
 }  // namespace simd
@@ -146,10 +147,6 @@ void check_supported(const Simulation& s) {
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    if (s.joint_friction(d).active())
-      unsupported("joint", joint,
-                  "joint friction (static " + format_double(s.joint_friction(d).static_effort) +
-                      ", viscous " + format_double(s.joint_friction(d).viscous) + ")");
     if (s.friction_coefficient(d) != 0.0)
       unsupported("joint", joint,
                   "friction_coefficient " + format_double(s.friction_coefficient(d)));
@@ -243,7 +240,9 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
   p.layout = simd::make_layout(p);
   // Parameters, every environment (and the padding up to a whole group) the prototype's.
-  const int groups = (count + kGroup - 1) / kGroup;
+  // Whole blocks of the widest width: simd::kInterleave groups each.
+  const int groups =
+      (count + kGroup * simd::kInterleave - 1) / (kGroup * simd::kInterleave) * simd::kInterleave;
   im.parameters.assign(static_cast<size_t>(groups) * p.entries * kGroup, 0.0);
   std::vector<double> one(static_cast<size_t>(p.entries));
   for (int d = 0; d < nv; ++d) {
@@ -260,6 +259,10 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
     x[simd::lower] = prototype.lower_limit(d);
     x[simd::upper] = prototype.upper_limit(d);
     x[simd::armature] = m.armature[d];
+    const JointFriction& f = prototype.joint_friction(d);
+    x[simd::static_friction] = f.static_effort;
+    x[simd::dynamic_friction] = f.dynamic_effort;
+    x[simd::viscous_friction] = f.viscous;
   }
   for (int i = 0; i < L; ++i) {
     const Link& link = m.links[static_cast<size_t>(i)];
@@ -285,6 +288,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   applied_force_ = rows(prototype.applied_force());
   drive_force_ = rows(prototype.drive_force());
   limit_force_ = rows(prototype.limit_force());
+  friction_force_ = rows(prototype.friction_force());
   initial_q_ = prototype.q();
   step_count_.assign(static_cast<size_t>(count), prototype.step_count());
   time_.assign(static_cast<size_t>(count), prototype.time());
@@ -484,6 +488,32 @@ void SimdBatch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& 
     }
 }
 
+void SimdBatch::set_joint_friction(std::span<const int> env_ids, const RowMatrix& static_effort,
+                                   const RowMatrix& dynamic_effort, const RowMatrix& viscous) {
+  const std::vector<int> es = envs(env_ids);
+  const int nv = model_->nv;
+  check_shape(static_effort, es.size(), nv, "static friction");
+  check_shape(dynamic_effort, es.size(), nv, "dynamic friction");
+  check_shape(viscous, es.size(), nv, "viscous friction");
+  Simulation check(model_);  // Simulation's own check of each dof's friction
+  for (size_t j = 0; j < es.size(); ++j)
+    for (int d = 0; d < nv; ++d) {
+      try {
+        check.set_joint_friction(
+            d, JointFriction{row_of(static_effort, j)[d], row_of(dynamic_effort, j)[d],
+                             row_of(viscous, j)[d]});
+      } catch (const std::invalid_argument& e) {
+        rethrow_for_env(es[j], e);
+      }
+    }
+  for (size_t j = 0; j < es.size(); ++j)
+    for (int d = 0; d < nv; ++d) {
+      set_parameter(es[j], dof_index(d, simd::static_friction), row_of(static_effort, j)[d]);
+      set_parameter(es[j], dof_index(d, simd::dynamic_friction), row_of(dynamic_effort, j)[d]);
+      set_parameter(es[j], dof_index(d, simd::viscous_friction), row_of(viscous, j)[d]);
+    }
+}
+
 void SimdBatch::set_armature(std::span<const int> env_ids, const RowMatrix& armature) {
   const std::vector<int> es = envs(env_ids);
   check_shape(armature, es.size(), model_->nv, "armature");
@@ -590,6 +620,7 @@ void SimdBatch::reset(std::span<const int> env_ids, const std::optional<RowMatri
     applied_force_.row(e).setZero();
     drive_force_.row(e).setZero();
     limit_force_.row(e).setZero();
+    friction_force_.row(e).setZero();
     step_count_[static_cast<size_t>(e)] = 0;
     time_[static_cast<size_t>(e)] = 0.0;
     diverged_[static_cast<size_t>(e)].reset();
@@ -649,10 +680,13 @@ Simulation SimdBatch::simulation(int i) const {
     sim.set_drive(d, packed_drive(*this, i, d, &SimdBatch::parameter));
     sim.set_joint_limits(d, parameter(i, dof_index(d, simd::lower)),
                          parameter(i, dof_index(d, simd::upper)));
+    sim.set_joint_friction(d, JointFriction{parameter(i, dof_index(d, simd::static_friction)),
+                                            parameter(i, dof_index(d, simd::dynamic_friction)),
+                                            parameter(i, dof_index(d, simd::viscous_friction))});
   }
   const VecX zero = VecX::Zero(m.nv);
   sim.restore_state(q_.row(i).transpose(), drive_force_.row(i).transpose(),
-                    limit_force_.row(i).transpose(), zero, zero);
+                    limit_force_.row(i).transpose(), friction_force_.row(i).transpose(), zero);
   sim.set_qd(qd_.row(i).transpose());
   sim.set_applied_force(applied_force_.row(i).transpose());
   sim.set_clock(time_[static_cast<size_t>(i)], step_count_[static_cast<size_t>(i)]);
@@ -665,7 +699,7 @@ void SimdBatch::step(int count) {
                                 " must be >= 0");
   if (count == 0) return;
   Impl& im = *impl_;
-  const int W = width();
+  const int W = width() * simd::kInterleave;  // lanes of a block
   const int blocks = (count_ + W - 1) / W;
   const int threads = std::min(effective_num_threads(), blocks);
   const std::size_t doubles = simd::scratch_doubles(im.plan) + 8;
@@ -680,6 +714,7 @@ void SimdBatch::step(int count) {
     b.valid = std::min(W, count_ - b.env0);
     b.q = q_.data(), b.qd = qd_.data(), b.applied = applied_force_.data();
     b.drive_force = drive_force_.data(), b.limit_force = limit_force_.data();
+    b.friction_force = friction_force_.data();
     b.parameters = im.parameters.data();
     b.step_count = step_count_.data(), b.time = time_.data();
     b.stop = im.stops.data(), b.stopped_now = im.stopped_now.get();
@@ -711,8 +746,8 @@ void SimdBatch::step(int count) {
   for (int e = 0; e < count_; ++e) {
     if (!im.stopped_now[static_cast<size_t>(e)]) continue;
     const simd::Stop& s = im.stops[static_cast<size_t>(e)];
-    static const char* const kQuantity[] = {"", "velocity qd", "drive force", "limit force",
-                                            "position q"};
+    static const char* const kQuantity[] = {
+        "", "velocity qd", "drive force", "limit force", "friction force", "position q"};
     std::ostringstream m;
     m.precision(6);
     m << "simulation diverged at step " << step_count_[static_cast<size_t>(e)] + 1

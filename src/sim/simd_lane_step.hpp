@@ -28,26 +28,115 @@ constexpr int sym_index(int a, int b) {
   return base + (lo == 0 ? (hi == 1 ? 3 : 4) : 5);
 }
 
+// K vectors of architecture A as one vector of K W lanes: two independent chains of
+// dependencies per operation, so a sweep's link-to-link latency is paid once for 2 W lanes.
+// Every operation acts lane by lane, as on one vector.
+template <class A, int K>
+struct PackMask {
+  xsimd::batch_bool<double, A> m[K];
+};
+
+template <class A, int K>
+struct Pack {
+  using B = xsimd::batch<double, A>;
+  static constexpr std::size_t size = B::size * K;
+  B b[K];
+  Pack() = default;
+  Pack(double x) {  // NOLINT: broadcast, as xsimd's batch
+    for (int k = 0; k < K; ++k) b[k] = B(x);
+  }
+  static Pack load_aligned(const double* p) {
+    Pack out;
+    for (int k = 0; k < K; ++k) out.b[k] = B::load_aligned(p + k * B::size);
+    return out;
+  }
+  void store_aligned(double* p) const {
+    for (int k = 0; k < K; ++k) b[k].store_aligned(p + k * B::size);
+  }
+};
+
+#define FEATHERDRIVE_PACK_BINARY(OP, R, F)                        \
+  template <class A, int K>                                       \
+  R<A, K> operator OP(const Pack<A, K>& x, const Pack<A, K>& y) { \
+    R<A, K> out;                                                  \
+    for (int k = 0; k < K; ++k) out.F[k] = x.b[k] OP y.b[k];      \
+    return out;                                                   \
+  }
+FEATHERDRIVE_PACK_BINARY(+, Pack, b)
+FEATHERDRIVE_PACK_BINARY(-, Pack, b)
+FEATHERDRIVE_PACK_BINARY(*, Pack, b)
+FEATHERDRIVE_PACK_BINARY(/, Pack, b)
+FEATHERDRIVE_PACK_BINARY(==, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(!=, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(<, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(>, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(>=, PackMask, m)
+#undef FEATHERDRIVE_PACK_BINARY
+
+template <class A, int K>
+Pack<A, K> operator-(const Pack<A, K>& x) {
+  Pack<A, K> out;
+  for (int k = 0; k < K; ++k) out.b[k] = -x.b[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator|(const PackMask<A, K>& x, const PackMask<A, K>& y) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = x.m[k] | y.m[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator&(const PackMask<A, K>& x, const PackMask<A, K>& y) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = x.m[k] & y.m[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator!(const PackMask<A, K>& x) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = !x.m[k];
+  return out;
+}
+template <class A, int K>
+Pack<A, K> select(const PackMask<A, K>& c, const Pack<A, K>& x, const Pack<A, K>& y) {
+  Pack<A, K> out;
+  for (int k = 0; k < K; ++k) out.b[k] = xsimd::select(c.m[k], x.b[k], y.b[k]);
+  return out;
+}
+template <class A, int K>
+bool any(const PackMask<A, K>& c) {
+  for (int k = 0; k < K; ++k)
+    if (xsimd::any(c.m[k])) return true;
+  return false;
+}
+
 template <class A>
 class LaneStep {
  public:
-  using V = xsimd::batch<double, A>;
-  using M = xsimd::batch_bool<double, A>;
+  using V = Pack<A, kInterleave>;
+  using M = PackMask<A, kInterleave>;
   static constexpr int kW = static_cast<int>(V::size);
+  static constexpr int kVector = static_cast<int>(xsimd::batch<double, A>::size);
 
   LaneStep(const Plan& p, const Block& b, double* scratch)
-      : p_(p),
-        b_(b),
-        l_(p.layout),
-        s_(reinterpret_cast<V*>(scratch)),
-        parameters_(b.parameters + (b.env0 / kGroup) * p.entries * kGroup + b.env0 % kGroup) {}
+      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
+    for (int k = 0; k < kInterleave; ++k) {
+      const int e = b.env0 + k * kVector;
+      parameters_[k] = b.parameters + (e / kGroup) * p.entries * kGroup + e % kGroup;
+    }
+  }
 
   void run(int steps);
 
  private:
   // Scratch and parameters.
   V* at(int base) { return s_ + base; }
-  V parameter(int k) const { return V::load_unaligned(parameters_ + k * kGroup); }
+  V parameter(int k) const {
+    V out;
+    for (int j = 0; j < kInterleave; ++j)
+      out.b[j] = xsimd::batch<double, A>::load_unaligned(parameters_[j] + k * kGroup);
+    return out;
+  }
   V dof_parameter(int d, int f) const { return parameter(d * kDofParameters + f); }
   V link_parameter(int i, int f) const {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
@@ -82,20 +171,20 @@ class LaneStep {
     out[1] = a[2] * b[0] - a[0] * b[2];
     out[2] = a[0] * b[1] - a[1] * b[0];
   }
-  static V select_zero(const M& m, const V& x) { return xsimd::select(m, x, V(0.0)); }
+  static V select_zero(const M& m, const V& x) { return select(m, x, V(0.0)); }
   static M none() { return V(0.0) != V(0.0); }  // (xsimd 8's batch_bool(bool) reads past a bool)
 
   const Plan& p_;
   const Block& b_;
   const Layout& l_;
   V* const s_;
-  const double* const parameters_;
+  const double* parameters_[kInterleave];  // per vector of the pack
   // Where in the step a sweep runs (RowPhase).
   double h_ = 0.0, time_to_step_end_ = 0.0;
   bool velocity_iteration_ = false;
   M stopped_ = none();
-  M rowless_ = none();    // lanes with no row at all: a sweep leaves their velocities alone
-  M any_limit_ = none();  // lanes with a limit row: the only rows of a TGS velocity iteration
+  M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
+  M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
 };
 
 template <class A>
@@ -139,9 +228,9 @@ void LaneStep<A>::sincos(V x, V& s, V& c) {
   // j mod 4, exactly: floor(j / 4) = round((j - 1.5) / 4) for an integer j.
   const V quadrant = j - V(4.0) * (((j - V(1.5)) * V(0.25) + round) - round);
   const M odd = (quadrant == V(1.0)) | (quadrant == V(3.0));
-  const V sin_r = xsimd::select(odd, cr, sr), cos_r = xsimd::select(odd, sr, cr);
-  s = xsimd::select(quadrant >= V(2.0), -sin_r, sin_r);
-  c = xsimd::select((quadrant == V(1.0)) | (quadrant == V(2.0)), -cos_r, cos_r);
+  const V sin_r = select(odd, cr, sr), cos_r = select(odd, sr, cr);
+  s = select(quadrant >= V(2.0), -sin_r, sin_r);
+  c = select((quadrant == V(1.0)) | (quadrant == V(2.0)), -cos_r, cos_r);
 }
 
 template <class A>
@@ -385,7 +474,7 @@ template <class A>
 void LaneStep<A>::setup_rows(double h_step) {
   const V h(h_step), dt(p_.dt);
   M rows_any = none();
-  any_limit_ = none();
+  undriven_ = none();
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type == 0) continue;
@@ -399,8 +488,8 @@ void LaneStep<A>::setup_rows(double h_step) {
     const M driven = dof_parameter(d, has_drive) != V(0.0);
     const V a = h * (h * kp + kd);
     const V bb = h * kd * tv;
-    const V x = xsimd::select(accel, V(1.0) / (a + V(1.0)), V(1.0) / (a * r + V(1.0)));
-    const V scale = xsimd::select(accel, x / r, x);
+    const V x = select(accel, V(1.0) / (a + V(1.0)), V(1.0) / (a * r + V(1.0)));
+    const V scale = select(accel, x / r, x);
     rw[Layout::tvb] = scale * (bb + h * kp * (dof_parameter(d, target_position) - x0));
     rw[Layout::velm] = -scale * a;
     rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
@@ -408,7 +497,7 @@ void LaneStep<A>::setup_rows(double h_step) {
     rw[Layout::tpb] = p_.tgs ? scale * h * kp * tv : V(0.0);
     const V limit_force = dof_parameter(d, max_force) * dt;
     const V limit_impulse = dof_parameter(d, max_impulse);
-    rw[Layout::maxi] = xsimd::select(limit_impulse < limit_force, limit_impulse, limit_force);
+    rw[Layout::maxi] = select(limit_impulse < limit_force, limit_impulse, limit_force);
     rw[Layout::dimp] = V(0.0);
     rw[Layout::low] = V(0.0);
     rw[Layout::high] = V(0.0);
@@ -418,39 +507,66 @@ void LaneStep<A>::setup_rows(double h_step) {
     const V inf(__builtin_inf());
     const M limited = (lower_limit > -inf) | (upper_limit < inf);
     rw[Layout::has_limit] = select_zero(limited, V(1.0));
+    const V fs = dof_parameter(d, static_friction), fd = dof_parameter(d, dynamic_friction),
+            fv = dof_parameter(d, viscous_friction);
+    // JointFriction::active(): any of the three nonzero.
+    const M rubbing = !((fs == V(0.0)) & (fd == V(0.0)) & (fv == V(0.0)));
+    rw[Layout::has_friction] = select_zero(rubbing, V(1.0));
+    rw[Layout::fstat] = fs * dt;
+    rw[Layout::fdyn] = fd * dt;
+    rw[Layout::fvisc] = fv * dt;
+    rw[Layout::fimp] = V(0.0);
     rw[Layout::driven] = select_zero(driven, V(1.0));
     rw[Layout::recip] = V(1.0) / r;
     rw[Layout::delta_x] = V(0.0);
     rw[Layout::response] = r;
-    any_limit_ = any_limit_ | limited;
-    rows_any = rows_any | limited | driven;
+    undriven_ = undriven_ | limited | rubbing;
+    rows_any = rows_any | limited | rubbing | driven;
   }
   rowless_ = !rows_any;
 }
 
-// All rows of dof d at joint velocity v (dof_rows.cpp): the drive, then the position limit.
+// All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
+// position limit. A lane without a row keeps total and v exactly (a select, not + 0), so its bits
+// do not depend on whether a neighbour has that row.
 template <class A>
 auto LaneStep<A>::solve_row(int d, V v, const V& dx) -> V {
   V* rw = row(d);
   const V zero(0.0);
   V total = zero;
   const V r = rw[Layout::response];
+  auto apply = [&](const M& present, const V& delta) {
+    total = select(present, total + delta, total);
+    v = select(present, v + r * delta, v);
+  };
   if (!(p_.tgs && velocity_iteration_)) {  // TGS freezes the drive in velocity iterations
     const V dimp = rw[Layout::dimp];
     const V rest = rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
                    rw[Layout::tpb] * V(time_to_step_end_);
     V lambda = rest + rw[Layout::velm] * v;
     const V m = rw[Layout::maxi];
-    lambda = xsimd::select(lambda > m, m, lambda);
-    lambda = xsimd::select(lambda < -m, -m, lambda);
+    lambda = select(lambda > m, m, lambda);
+    lambda = select(lambda < -m, -m, lambda);
     const M driven = rw[Layout::driven] != zero;
-    const V delta = select_zero(driven, lambda - dimp);
-    rw[Layout::dimp] = xsimd::select(driven, lambda, dimp);
-    total = total + delta;
-    v = v + r * delta;
+    rw[Layout::dimp] = select(driven, lambda, dimp);
+    apply(driven, lambda - dimp);
+  }
+  const M rubbing = rw[Layout::has_friction] != zero;
+  if (any(rubbing)) {
+    // The impulse that stops the joint, whole within the static threshold, else clamped to
+    // dynamic + viscous |v|.
+    const V fi = rw[Layout::fimp];
+    const V stopping = fi - v * rw[Layout::recip];
+    const V abs_stopping = select(stopping < zero, -stopping, stopping);
+    const V bound = rw[Layout::fdyn] + rw[Layout::fvisc] * select(v < zero, -v, v);
+    V clamped = select(stopping < -bound, -bound, stopping);
+    clamped = select(bound < stopping, bound, clamped);
+    const V next = select(abs_stopping > rw[Layout::fstat], clamped, stopping);
+    rw[Layout::fimp] = select(rubbing, next, fi);
+    apply(rubbing, next - fi);
   }
   const M limited = rw[Layout::has_limit] != zero;
-  if (xsimd::any(limited)) {
+  if (any(limited)) {
     const V h(h_), erp(p_.limit_erp), recip = rw[Layout::recip];
     const V low = rw[Layout::low], high = rw[Layout::high];
     const V future = dx + v * h;
@@ -460,25 +576,25 @@ auto LaneStep<A>::solve_row(int d, V v, const V& dx) -> V {
     const M high_case = (!low_case) & ((high_now < zero) | (high_next < zero));
     // Below the lower limit or about to cross it.
     const V keep_low = velocity_iteration_ ? v : -low_now / h * erp;
-    const V target_low = xsimd::select(low_now < zero, keep_low, -low_now / h);
+    const V target_low = select(low_now < zero, keep_low, -low_now / h);
     const V push_low = low + (target_low - v) * recip;
-    const V delta_low = xsimd::select(push_low < zero, zero, push_low) - low;
+    const V delta_low = select(push_low < zero, zero, push_low) - low;
     const V keep_high = velocity_iteration_ ? v : high_now / h * erp;
-    const V target_high = xsimd::select(high_now < zero, keep_high, high_now / h);
+    const V target_high = select(high_now < zero, keep_high, high_now / h);
     const V push_high = high + (target_high - v) * recip;
-    const V delta_high = xsimd::select(push_high > zero, zero, push_high) - high;
+    const V delta_high = select(push_high > zero, zero, push_high) - high;
     // Inside both: give back what an earlier push overshot.
     const V to_rest = -v * recip;
-    const V back_low = xsimd::select(to_rest < -low, -low, to_rest);
-    const V back_high = xsimd::select(-high < to_rest, -high, to_rest);
+    const V back_low = select(to_rest < -low, -low, to_rest);
+    const V back_high = select(-high < to_rest, -high, to_rest);
     const M positive = v > zero;
     const M on_low = limited & (low_case | ((!low_case) & (!high_case) & positive));
     const M on_high = limited & (!on_low);
-    const V d_low = xsimd::select(low_case, delta_low, back_low);
-    const V d_high = xsimd::select(high_case, delta_high, back_high);
-    rw[Layout::low] = xsimd::select(on_low, low + d_low, low);
-    rw[Layout::high] = xsimd::select(on_high, high + d_high, high);
-    total = total + xsimd::select(on_low, d_low, select_zero(on_high, d_high));
+    const V d_low = select(low_case, delta_low, back_low);
+    const V d_high = select(high_case, delta_high, back_high);
+    rw[Layout::low] = select(on_low, low + d_low, low);
+    rw[Layout::high] = select(on_high, high + d_high, high);
+    apply(limited, select(on_low, d_low, d_high));
   }
   return total;
 }
@@ -558,7 +674,7 @@ void LaneStep<A>::finish_link(int i) {
 template <class A>
 void LaneStep<A>::sweep() {
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
-  const bool keep = xsimd::any(rowless_);
+  const bool keep = any(rowless_);
   if (keep)
     for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
   int previous = -1;
@@ -588,7 +704,7 @@ void LaneStep<A>::sweep() {
   leave_links(previous, -1, false);
   for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
   if (keep)
-    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = xsimd::select(rowless_, saved[d], at(l_.qd)[d]);
+    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
 }
 
 // q += h qd on every 1-dof joint; TGS also accumulates the position change delta_x.
@@ -635,13 +751,13 @@ void LaneStep<A>::step() {
       integrate(rho, true);
     }
     velocity_iteration_ = true;
-    // Only limit rows act in TGS velocity iterations; lanes without one keep their velocities.
-    if (xsimd::any(any_limit_) && p_.velocity_iterations > 0) {
+    // Only friction and limit rows act in TGS velocity iterations; lanes without keep their
+    // velocities.
+    if (any(undriven_) && p_.velocity_iterations > 0) {
       V* saved = at(l_.saved_tgs);
       for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
-      for (int d = 0; d < p_.nv; ++d)
-        at(l_.qd)[d] = xsimd::select(any_limit_, at(l_.qd)[d], saved[d]);
+      for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
     }
   }
   const V inv_dt(1.0 / dt);
@@ -649,6 +765,7 @@ void LaneStep<A>::step() {
     const V* rw = row(d);
     at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
     at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
+    at(l_.ff)[d] = (rw[Layout::fimp] + V(0.0)) * inv_dt;  // + the (absent) transmission friction
   }
 }
 
@@ -659,14 +776,14 @@ void LaneStep<A>::finish_step() {
   const V zero(0.0);
   V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
   for (int d = 0; d < p_.nv; ++d)
-    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero);
+    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero + at(l_.ff)[d] * zero);
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   // Not z != 0: xsimd 8's != is unordered with SSE2 and ordered with AVX (false for a NaN).
   const M bad = !(z == zero);
   const M fresh = bad & (!stopped_);
-  if (xsimd::any(fresh)) {
+  if (any(fresh)) {
     alignas(64) double fresh_lanes[kW];
-    xsimd::select(fresh, V(1.0), zero).store_aligned(fresh_lanes);
+    select(fresh, V(1.0), zero).store_aligned(fresh_lanes);
     for (int l = 0; l < b_.valid; ++l) {
       if (fresh_lanes[l] == 0.0) continue;
       Stop stop;
@@ -682,26 +799,27 @@ void LaneStep<A>::finish_step() {
         check(1, d, lane(at(l_.qd)[d]));
         check(2, d, lane(at(l_.df)[d]));
         check(3, d, lane(at(l_.lf)[d]));
+        check(4, d, lane(at(l_.ff)[d]));
       }
       for (int i = 0; i < p_.num_links; ++i)
         if (p_.links[i].type != 0)
-          check(4, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
+          check(5, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
       b_.stop[b_.env0 + l] = stop;
       b_.stopped_now[b_.env0 + l] = true;
     }
   }
   stopped_ = stopped_ | bad;
-  if (xsimd::any(stopped_)) {
-    for (int k = 0; k < p_.nq; ++k)
-      at(l_.q)[k] = xsimd::select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
+  if (any(stopped_)) {
+    for (int k = 0; k < p_.nq; ++k) at(l_.q)[k] = select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
     for (int d = 0; d < p_.nv; ++d) {
-      at(l_.qd)[d] = xsimd::select(stopped_, at(l_.old_qd)[d], at(l_.qd)[d]);
-      at(l_.df)[d] = xsimd::select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
-      at(l_.lf)[d] = xsimd::select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
+      at(l_.qd)[d] = select(stopped_, at(l_.old_qd)[d], at(l_.qd)[d]);
+      at(l_.df)[d] = select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
+      at(l_.lf)[d] = select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
+      at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
     }
   }
   alignas(64) double stopped_lanes[kW];
-  xsimd::select(stopped_, V(1.0), zero).store_aligned(stopped_lanes);
+  select(stopped_, V(1.0), zero).store_aligned(stopped_lanes);
   for (int l = 0; l < b_.valid; ++l) {
     if (stopped_lanes[l] != 0.0) continue;
     ++b_.step_count[b_.env0 + l];
@@ -719,6 +837,7 @@ void LaneStep<A>::run(int steps) {
     at(l_.tau)[d] = gather(b_.applied, nv, d);
     at(l_.df)[d] = gather(b_.drive_force, nv, d);
     at(l_.lf)[d] = gather(b_.limit_force, nv, d);
+    at(l_.ff)[d] = gather(b_.friction_force, nv, d);
   }
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
@@ -729,6 +848,7 @@ void LaneStep<A>::run(int steps) {
       at(l_.old_qd)[d] = at(l_.qd)[d];
       at(l_.old_df)[d] = at(l_.df)[d];
       at(l_.old_lf)[d] = at(l_.lf)[d];
+      at(l_.old_ff)[d] = at(l_.ff)[d];
     }
     step();
     finish_step();
@@ -738,6 +858,7 @@ void LaneStep<A>::run(int steps) {
     scatter(at(l_.qd)[d], b_.qd, nv, d);
     scatter(at(l_.df)[d], b_.drive_force, nv, d);
     scatter(at(l_.lf)[d], b_.limit_force, nv, d);
+    scatter(at(l_.ff)[d], b_.friction_force, nv, d);
   }
 }
 

@@ -11,6 +11,8 @@ namespace featherdrive::simd {
 /// environment e at ((e / kGroup) * entries + k) * kGroup + e % kGroup. A block of W | kGroup
 /// lanes reads entry k of its environments as one vector, whatever W.
 inline constexpr int kGroup = 8;
+/// A block holds kInterleave vectors of lanes (simd_lane_step.hpp's Pack): 2 W environments.
+inline constexpr int kInterleave = 2;
 
 enum DofParameter : int {
   has_drive,
@@ -24,6 +26,9 @@ enum DofParameter : int {
   lower,
   upper,
   armature,
+  static_friction,
+  dynamic_friction,
+  viscous_friction,
   kDofParameters
 };
 enum LinkParameter : int {
@@ -78,12 +83,17 @@ struct Layout {
     driven,
     delta_x,
     response,
+    has_friction,
+    fstat,
+    fdyn,
+    fvisc,
+    fimp,
     kRowFields
   };
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
-      tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, df = 0, lf = 0, row = 0,
-      jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, size = 0;
+      tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, df = 0, lf = 0,
+      ff = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, size = 0;
 };
 
 struct Plan {
@@ -102,7 +112,8 @@ struct Plan {
 
 /// Why a lane stopped: the first non-finite quantity in Simulation's order.
 struct Stop {
-  int quantity = 0;  ///< 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 position q
+  /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 position q
+  int quantity = 0;
   int dof = -1;
   double value = 0.0;
 };
@@ -116,6 +127,7 @@ struct Block {
   const double* applied = nullptr;
   double* drive_force = nullptr;
   double* limit_force = nullptr;
+  double* friction_force = nullptr;
   const double* parameters = nullptr;  ///< the whole packed array
   long* step_count = nullptr;
   double* time = nullptr;
@@ -124,8 +136,8 @@ struct Block {
   bool any_limit = true;        ///< some lane has a finite joint limit
 };
 
-/// The layout of p's scratch, and the doubles of scratch one block of any width needs (a multiple
-/// of kGroup).
+/// The layout of p's scratch, and the doubles of scratch one block of any width needs (kGroup
+/// kInterleave doubles a vector).
 Layout make_layout(const Plan& p);
 std::size_t scratch_doubles(const Plan& p);
 

@@ -17,7 +17,7 @@ using test::same_bits;
 
 // A random fixed-base tree of revolute, prismatic and fixed joints (general axes and frames,
 // branches), force or acceleration drives with random targets, a force limit on some dofs and
-// joint limits on others, started away from rest.
+// joint limits and joint friction on others, started away from rest.
 Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
   auto model = test::make_random_tree(seed, links, false, false, 0.01);
   SimulationOptions o;
@@ -34,6 +34,7 @@ Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
     if (d % 4 == 2) drive.max_force = 5.0;
     sim.set_drive(d, drive);
     if (d % 3 == 0) sim.set_joint_limits(d, -0.3, 0.4);
+    if (d % 4 == 1) sim.set_joint_friction(d, JointFriction{0.3, 0.2, 0.1});
   }
   sim.set_qd(test::random_vector(model->nv, rng, 0.5));
   return sim;
@@ -49,18 +50,21 @@ double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
   return worst;
 }
 
-// Per-environment gains, targets, limits, armature and link inertias of the randomisation API.
+// Per-environment gains, targets, limits, friction, armature and link inertias of the
+// randomisation API.
 void randomise(SimdBatch& simd, Batch& scalar, unsigned seed) {
   const int n = simd.size(), nv = simd.model().nv;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.5, 1.5);
   RowMatrix kp(n, nv), kd(n, nv), xt(n, nv), vt(n, nv), lo(n, nv), hi(n, nv), arm(n, nv);
+  RowMatrix fs(n, nv), fv(n, nv);
   for (int e = 0; e < n; ++e)
     for (int d = 0; d < nv; ++d) {
       kp(e, d) = 400.0 * u(rng), kd(e, d) = 20.0 * u(rng);
       xt(e, d) = u(rng) - 1.0, vt(e, d) = 0.2 * (u(rng) - 1.0);
       lo(e, d) = d % 2 ? -kInf : -0.5 * u(rng), hi(e, d) = d % 2 ? kInf : 0.5 * u(rng);
       arm(e, d) = 0.02 * u(rng);
+      fs(e, d) = d % 3 == 2 ? 0.2 * u(rng) : 0.0, fv(e, d) = d % 3 == 2 ? 0.1 * u(rng) : 0.0;
     }
   std::vector<int> all(static_cast<size_t>(n));
   for (int e = 0; e < n; ++e) all[static_cast<size_t>(e)] = e;
@@ -73,6 +77,8 @@ void randomise(SimdBatch& simd, Batch& scalar, unsigned seed) {
   scalar.set_joint_limits(all, lo, hi);
   simd.set_armature(all, arm);
   scalar.set_armature(all, arm);
+  simd.set_joint_friction(all, fs, 0.5 * fs, fv);
+  scalar.set_joint_friction(all, fs, 0.5 * fs, fv);
   VecX mass(n);
   RowMatrix com(n, 3);
   for (int e = 0; e < n; ++e) {
@@ -100,6 +106,7 @@ TEST(SimdBatch, RandomisedLanesEqualScalarBatchWithTheSameParameters) {
                                {&simd.limit_force(), &scalar.limit_force()}})
       EXPECT_LE(simd_relative_difference(*a, *b), 1e-12) << to_string(solver);
     EXPECT_GT(scalar.limit_force().cwiseAbs().maxCoeff(), 0.0);  // the limits acted
+    EXPECT_GT(scalar.friction_force().cwiseAbs().maxCoeff(), 0.0);
     EXPECT_EQ(simd.step_count()[10], 300);
     EXPECT_EQ(simd.link_mass(2), scalar.link_mass(2));
   }
@@ -216,8 +223,8 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   Simulation s = simd_prototype(9, SolverType::pgs, 5);
   const std::string joint = s.model().links[s.model().dof_link[1]].joint_name;
   Simulation f = s;
-  f.set_joint_friction(1, JointFriction{0.5, 0.4, 0.0});
-  expect_refused(f, "joint '" + joint + "' has joint friction (static 0.5");
+  f.set_friction_coefficient(1, 0.05);
+  expect_refused(f, "joint '" + joint + "' has friction_coefficient 0.05");
   Simulation v = s;
   v.set_max_joint_velocity(1, 3.0);
   expect_refused(v, "joint '" + joint + "' has max_velocity 3");

@@ -3,7 +3,7 @@
 // run time from the CPU), blocks of lanes on TBB's threads. Every lane does the same operations,
 // so an environment's bits depend neither on its lane, the batch size, the width nor the thread
 // count. Settings come from a Simulation prototype; each environment may have its own drive gains,
-// targets, joint limits, armature and link inertias. docs/simd_batch.md.
+// targets, joint limits, joint friction, armature and link inertias. docs/simd_batch.md.
 #pragma once
 
 #include <memory>
@@ -40,8 +40,8 @@ class SimdBatch {
   /// `count` (>= 1) copies of `prototype`: state, drives, limits, options, model. Throws
   /// std::invalid_argument with one line naming the setting and the joint (or link) for what the
   /// SIMD step does not simulate: joints other than fixed, revolute and prismatic, compat physx,
-  /// joint friction, friction coefficients, velocity limits, actuator envelopes, explicit
-  /// actuators, drive delays and link parameters (damping, cfm, velocity limits).
+  /// friction coefficients, velocity limits, actuator envelopes, explicit actuators, drive delays
+  /// and link parameters (damping, cfm, velocity limits).
   SimdBatch(const Simulation& prototype, int count, std::optional<SimdIsa> isa = std::nullopt);
   ~SimdBatch();
   SimdBatch(const SimdBatch&) = delete;
@@ -68,6 +68,7 @@ class SimdBatch {
   const RowMatrix& applied_force() const { return applied_force_; }
   const RowMatrix& drive_force() const { return drive_force_; }
   const RowMatrix& limit_force() const { return limit_force_; }
+  const RowMatrix& friction_force() const { return friction_force_; }
   const std::vector<long>& step_count() const { return step_count_; }
   const std::vector<double>& time() const { return time_; }
 
@@ -85,6 +86,9 @@ class SimdBatch {
   /// Lower <= upper, not NaN; +-inf for none.
   void set_joint_limits(std::span<const int> env_ids, const RowMatrix& lower,
                         const RowMatrix& upper);
+  /// As Simulation::set_joint_friction, per dof (static, dynamic, viscous).
+  void set_joint_friction(std::span<const int> env_ids, const RowMatrix& static_effort,
+                          const RowMatrix& dynamic_effort, const RowMatrix& viscous);
   void set_armature(std::span<const int> env_ids, const RowMatrix& armature);
   /// As Batch::set_link_mass / set_link_com.
   void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
@@ -104,6 +108,9 @@ class SimdBatch {
   RowMatrix lower_limit() const;
   RowMatrix upper_limit() const;
   RowMatrix armature() const;
+  RowMatrix static_friction() const;
+  RowMatrix dynamic_friction() const;
+  RowMatrix viscous_friction() const;
   VecX link_mass(int link) const;
   RowMatrix link_com(int link) const;
 
@@ -136,7 +143,7 @@ class SimdBatch {
   int count_ = 0;
   SimdIsa isa_ = SimdIsa::sse2;
   int threads_ = 0;
-  RowMatrix q_, qd_, applied_force_, drive_force_, limit_force_;
+  RowMatrix q_, qd_, applied_force_, drive_force_, limit_force_, friction_force_;
   std::vector<long> step_count_;
   std::vector<double> time_;
   std::vector<std::optional<SimdDivergence>> diverged_;
