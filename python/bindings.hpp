@@ -57,6 +57,7 @@ void bind_mujoco_bridge(py::module_& m);  // bind_mujoco_bridge.cpp
 void bind_delay(py::module_& m);
 void bind_sweep(py::module_& m);
 void bind_fit(py::module_& m);  // after bind_io: it extends Scene
+void bind_simd(py::module_& m);  // bind_simd.cpp: SimdBatch
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

@@ -56,4 +56,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_delay(m);
   bind_sweep(m);
   bind_fit(m);
+  bind_simd(m);
 }
