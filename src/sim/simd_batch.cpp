@@ -190,6 +190,12 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
     throw std::invalid_argument("SimdBatch: count = " + std::to_string(count) + " must be >= 1");
   check_supported(prototype);
   isa_ = isa ? *isa : default_simd_isa();
+  // Without a choice (argument or FEATHERDRIVE_SIMD), a batch smaller than a block of the widest
+  // width takes a narrower one: fewer padding lanes, the same bits.
+  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
+  if (!isa && !(forced && *forced))
+    while (isa_ != SimdIsa::sse2 && simd_width(isa_) * simd::kInterleave > count)
+      isa_ = isa_ == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
   check_isa(isa_, "SimdBatch: isa");
   const Model& m = *model_;
   const int L = m.num_links(), nv = m.nv, nq = m.nq;

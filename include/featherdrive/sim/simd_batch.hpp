@@ -42,6 +42,8 @@ class SimdBatch {
   /// SIMD step does not simulate: joints other than fixed, revolute and prismatic, compat physx,
   /// friction coefficients, velocity limits, actuator envelopes, explicit actuators, drive delays
   /// and link parameters (damping, cfm, velocity limits).
+  /// Without isa, default_simd_isa(), narrowed (when FEATHERDRIVE_SIMD is not set) while a block
+  /// of 2 W lanes would exceed count.
   SimdBatch(const Simulation& prototype, int count, std::optional<SimdIsa> isa = std::nullopt);
   ~SimdBatch();
   SimdBatch(const SimdBatch&) = delete;
