@@ -323,11 +323,6 @@ int SimdBatch::effective_num_threads() const {
 }
 
 std::vector<int> SimdBatch::envs(std::span<const int> env_ids) const {
-  if (env_ids.empty()) {  // all of them
-    std::vector<int> all(static_cast<size_t>(count_));
-    for (int e = 0; e < count_; ++e) all[static_cast<size_t>(e)] = e;
-    return all;
-  }
   std::vector<int> seen(static_cast<size_t>(count_), -1);
   for (size_t j = 0; j < env_ids.size(); ++j) {
     const int e = env_ids[j];

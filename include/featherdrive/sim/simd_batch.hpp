@@ -74,8 +74,9 @@ class SimdBatch {
   const std::vector<long>& step_count() const { return step_count_; }
   const std::vector<double>& time() const { return time_; }
 
-  // Setters as Batch's: every environment, or env_ids (distinct, in [0, size())); one row per
-  // environment named or one row for all. Each row is checked before anything changes.
+  // Setters as Batch's, for the environments env_ids (distinct, in [0, size()); none when empty):
+  // one row per environment named or one row for all. Each row is checked before anything
+  // changes.
   void set_q(std::span<const int> env_ids, const RowMatrix& q);
   void set_qd(std::span<const int> env_ids, const RowMatrix& qd);
   void set_applied_force(std::span<const int> env_ids, const RowMatrix& tau);
