@@ -168,6 +168,7 @@ void register_all() {
     benchmark::RegisterBenchmark(("batch/arm7/threads:" + std::to_string(threads)).c_str(),
                                  [arm, threads](benchmark::State& s) { featherdrive_batch(s, *arm, threads); })
         ->UseRealTime();
+  register_simd_batch();
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 // joint with ctrl = the target, contacts disabled, no limits. With Euler, MuJoCo integrates the
 // damping implicitly and the actuator's stiffness explicitly; with the implicit integrator, both.
 #include <mujoco/mujoco.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -17,6 +19,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -173,6 +176,37 @@ void mujoco_step(benchmark::State& state, const BenchRobot& robot, MujocoIntegra
   state.counters["dofs"] = model.nv;
   state.counters["links"] = model.num_links();
   state.counters["diverged"] = static_cast<double>(diverged);
+}
+
+void mujoco_batch(benchmark::State& state, const BenchRobot& robot, const std::string& xml,
+                  int count, int threads) {
+  const Model& model = *robot.model;
+  std::unique_ptr<mjModel, MjModelDeleter> m;
+  try {
+    m = load_mjcf(xml.empty() ? to_mjcf(model, MujocoIntegrator::euler) : xml);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  m->opt.disableflags |= mjDSBL_CONTACT;  // as to_mjcf's (the humanoid's feet are off the floor)
+  std::vector<std::unique_ptr<mjData, MjDataDeleter>> data;
+  for (int i = 0; i < count; ++i) {
+    data.emplace_back(mj_makeData(m.get()));
+    mjData* d = data.back().get();
+    if (!xml.empty()) continue;  // its own initial state and actuators, ctrl 0
+    int u = 0;
+    for (int dof = 0; dof < model.nv; ++dof)
+      if (is_driven(model, dof)) d->ctrl[u++] = robot.target[dof];
+    for (int k = 0; k < model.nq; ++k) d->qpos[k] = robot.q0[k];
+  }
+  tbb::task_arena arena(threads);
+  for (auto _ : state)
+    arena.execute([&] {
+      tbb::parallel_for(0, count,
+                        [&](int i) { mj_step(m.get(), data[static_cast<size_t>(i)].get()); });
+    });
+  state.counters["env_steps_per_second"] = benchmark::Counter(
+      static_cast<double>(count), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 }  // namespace featherdrive::bench

@@ -5,6 +5,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <string>
+
 #include "bench_models.hpp"
 
 namespace featherdrive::bench {
@@ -13,6 +15,15 @@ enum class MujocoIntegrator { euler, implicit };
 
 /// One mj_step per iteration.
 void mujoco_step(benchmark::State& state, const BenchRobot& robot, MujocoIntegrator integrator);
+
+/// `count` copies of the robot (MJCF as mujoco_step's, Euler), each one mj_step per iteration, on
+/// `threads` threads (TBB); xml, when not empty, is the MJCF to load instead (its own actuators,
+/// ctrl 0). The counter env_steps_per_second.
+void mujoco_batch(benchmark::State& state, const BenchRobot& robot, const std::string& xml,
+                  int count, int threads);
+
+/// simd_batch.cpp: registers simd_batch/<robot>/<engine>/envs:<N>/threads:<T>.
+void register_simd_batch();
 
 /// One btMultiBodyDynamicsWorld::stepSimulation per iteration, PD torques added before it.
 void bullet_step(benchmark::State& state, const BenchRobot& robot);

@@ -59,6 +59,7 @@ void bind_sweep(py::module_& m);
 void bind_fit(py::module_& m);  // after bind_io: it extends Scene
 void bind_view(py::module_& m);  // bind_view.cpp: fd.view, fd.link_world_poses
 void bind_joints(py::module_& m);  // after bind_io: it extends Scene
+void bind_simd(py::module_& m);  // bind_simd.cpp: SimdBatch
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

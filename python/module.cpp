@@ -58,4 +58,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_fit(m);
   bind_view(m);
   bind_joints(m);
+  bind_simd(m);
 }

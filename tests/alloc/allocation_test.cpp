@@ -21,6 +21,7 @@
 #include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/control_step.hpp"
+#include "featherdrive/sim/simd_batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
@@ -206,6 +207,29 @@ TEST(BatchAllocations, PerCallNotPerStep) {
     else EXPECT_LE(many, one + 8) << threads << " threads";  // TBB's scheduler may vary a little
     EXPECT_EQ(batch.sim(0).step_count(), 42);
   }
+}
+
+// The SIMD Batch's step allocates nothing on one thread (its scratch is made by the first call),
+// and per call, not per step, on two (TBB's arena), at every width, with drives and limits.
+TEST(SimdBatchAllocations, NoneOnOneThreadPerCallOnTwo) {
+  auto model = test::make_random_tree(7, 10, false, false, 0.01);
+  Simulation prototype(model, SimulationOptions{});
+  for (const Link& l : model->links) {
+    if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic) continue;
+    prototype.set_drive(l.v_index, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
+    prototype.set_joint_limits(l.v_index, -0.3, 0.4);
+  }
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2}) {
+      SimdBatch batch(prototype, 19, isa);
+      batch.set_num_threads(threads);
+      batch.step();
+      const long one = allocations_in([&] { batch.step(1); });
+      const long many = allocations_in([&] { batch.step(40); });
+      if (threads == 1) EXPECT_EQ(many, 0) << to_string(isa);
+      else EXPECT_LE(many, one + 8) << to_string(isa);
+      EXPECT_EQ(batch.step_count()[18], 42);
+    }
 }
 
 // The kinematics and dynamics queries on a reused Data and reused outputs: none after the first

@@ -1,0 +1,866 @@
+// The SIMD Batch's step on one block of W lanes, one environment per lane, written once for any
+// xsimd architecture A and instantiated by simd_lane_step_<isa>.cpp (each compiled for its
+// instruction set, with -ffp-contract=off). It is Simulation's step (step.cpp, aba.cpp,
+// inverse_mass_diagonal.cpp, gauss_seidel.hpp, dof_rows.cpp) for links of 0 or 1 dof on a fixed
+// base, with every branch on lane data turned into a select, so every lane runs the same
+// operations: only + - * / and exact selects and comparisons, never the library's math functions
+// or fma, whose results differ between instruction sets. docs/simd_batch.md.
+// Everything here has internal linkage: the units compiled with -mavx2 and -mavx512f must not lend
+// an inline function to the rest of the library.
+#pragma once
+
+#include <xsimd/xsimd.hpp>
+
+#include "simd_plan.hpp"
+
+namespace featherdrive::simd {
+namespace {
+
+// The index of entry (a, b) of a symmetric 6 x 6 matrix [A, B; B^T, C] stored as A's six
+// distinct entries (00, 11, 22, 01, 02, 12), B's nine (row-major), C's six.
+constexpr int sym_index(int a, int b) {
+  if (a >= 3 && b < 3) return sym_index(b, a);
+  if (a < 3 && b >= 3) return 6 + 3 * a + (b - 3);
+  const int base = a < 3 ? 0 : 15;
+  const int r = a < 3 ? a : a - 3, c = b < 3 ? b : b - 3;
+  if (r == c) return base + r;
+  const int lo = r < c ? r : c, hi = r < c ? c : r;
+  return base + (lo == 0 ? (hi == 1 ? 3 : 4) : 5);
+}
+
+// K vectors of architecture A as one vector of K W lanes: two independent chains of
+// dependencies per operation, so a sweep's link-to-link latency is paid once for 2 W lanes.
+// Every operation acts lane by lane, as on one vector.
+template <class A, int K>
+struct PackMask {
+  xsimd::batch_bool<double, A> m[K];
+};
+
+template <class A, int K>
+struct Pack {
+  using B = xsimd::batch<double, A>;
+  static constexpr std::size_t size = B::size * K;
+  B b[K];
+  Pack() = default;
+  Pack(double x) {  // NOLINT: broadcast, as xsimd's batch
+    for (int k = 0; k < K; ++k) b[k] = B(x);
+  }
+  static Pack load_aligned(const double* p) {
+    Pack out;
+    for (int k = 0; k < K; ++k) out.b[k] = B::load_aligned(p + k * B::size);
+    return out;
+  }
+  void store_aligned(double* p) const {
+    for (int k = 0; k < K; ++k) b[k].store_aligned(p + k * B::size);
+  }
+};
+
+#define FEATHERDRIVE_PACK_BINARY(OP, R, F)                        \
+  template <class A, int K>                                       \
+  R<A, K> operator OP(const Pack<A, K>& x, const Pack<A, K>& y) { \
+    R<A, K> out;                                                  \
+    for (int k = 0; k < K; ++k) out.F[k] = x.b[k] OP y.b[k];      \
+    return out;                                                   \
+  }
+FEATHERDRIVE_PACK_BINARY(+, Pack, b)
+FEATHERDRIVE_PACK_BINARY(-, Pack, b)
+FEATHERDRIVE_PACK_BINARY(*, Pack, b)
+FEATHERDRIVE_PACK_BINARY(/, Pack, b)
+FEATHERDRIVE_PACK_BINARY(==, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(!=, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(<, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(>, PackMask, m)
+FEATHERDRIVE_PACK_BINARY(>=, PackMask, m)
+#undef FEATHERDRIVE_PACK_BINARY
+
+template <class A, int K>
+Pack<A, K> operator-(const Pack<A, K>& x) {
+  Pack<A, K> out;
+  for (int k = 0; k < K; ++k) out.b[k] = -x.b[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator|(const PackMask<A, K>& x, const PackMask<A, K>& y) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = x.m[k] | y.m[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator&(const PackMask<A, K>& x, const PackMask<A, K>& y) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = x.m[k] & y.m[k];
+  return out;
+}
+template <class A, int K>
+PackMask<A, K> operator!(const PackMask<A, K>& x) {
+  PackMask<A, K> out;
+  for (int k = 0; k < K; ++k) out.m[k] = !x.m[k];
+  return out;
+}
+template <class A, int K>
+Pack<A, K> select(const PackMask<A, K>& c, const Pack<A, K>& x, const Pack<A, K>& y) {
+  Pack<A, K> out;
+  for (int k = 0; k < K; ++k) out.b[k] = xsimd::select(c.m[k], x.b[k], y.b[k]);
+  return out;
+}
+template <class A, int K>
+bool any(const PackMask<A, K>& c) {
+  for (int k = 0; k < K; ++k)
+    if (xsimd::any(c.m[k])) return true;
+  return false;
+}
+
+template <class A>
+class LaneStep {
+ public:
+  using V = Pack<A, kInterleave>;
+  using M = PackMask<A, kInterleave>;
+  static constexpr int kW = static_cast<int>(V::size);
+  static constexpr int kVector = static_cast<int>(xsimd::batch<double, A>::size);
+
+  LaneStep(const Plan& p, const Block& b, double* scratch)
+      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
+    for (int k = 0; k < kInterleave; ++k) {
+      const int e = b.env0 + k * kVector;
+      parameters_[k] = b.parameters + (e / kGroup) * p.entries * kGroup + e % kGroup;
+    }
+  }
+
+  void run(int steps);
+
+ private:
+  // Scratch and parameters.
+  V* at(int base) { return s_ + base; }
+  V parameter(int k) const {
+    V out;
+    for (int j = 0; j < kInterleave; ++j)
+      out.b[j] = xsimd::batch<double, A>::load_unaligned(parameters_[j] + k * kGroup);
+    return out;
+  }
+  V dof_parameter(int d, int f) const { return parameter(d * kDofParameters + f); }
+  V link_parameter(int i, int f) const {
+    return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
+  }
+  V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
+  int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
+  V gather(const double* rows, int stride, int k) const;
+  void scatter(V x, double* rows, int stride, int k) const;
+
+  // The stages of a step.
+  void step();
+  void kinematics();
+  void velocities_and_bias();
+  void articulated_pass();
+  void acceleration_pass();
+  void response();
+  void setup_rows(double h);
+  V solve_row(int d, V v, const V& dx);
+  void sweep();
+  void leave_links(int k, int stop, bool correct);
+  void finish_link(int i);
+  void integrate(double h, bool track);
+  void finish_step();
+
+  static void sincos(V x, V& s, V& c);
+  static V dot6(const V* a, const V* b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
+  }
+  static void sym_times(const V* m, const V* x, V* y);  // y = M x, M symmetric 6 x 6
+  static void cross(const V* a, const V* b, V* out) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+  }
+  static V select_zero(const M& m, const V& x) { return select(m, x, V(0.0)); }
+  static M none() { return V(0.0) != V(0.0); }  // (xsimd 8's batch_bool(bool) reads past a bool)
+
+  const Plan& p_;
+  const Block& b_;
+  const Layout& l_;
+  V* const s_;
+  const double* parameters_[kInterleave];  // per vector of the pack
+  // Where in the step a sweep runs (RowPhase).
+  double h_ = 0.0, time_to_step_end_ = 0.0;
+  bool velocity_iteration_ = false;
+  M stopped_ = none();
+  M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
+  M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
+};
+
+template <class A>
+auto LaneStep<A>::gather(const double* rows, int stride, int k) const -> V {
+  alignas(64) double t[kW];
+  for (int l = 0; l < kW; ++l) t[l] = rows[static_cast<long>(env_of_lane(l)) * stride + k];
+  return V::load_aligned(t);
+}
+
+template <class A>
+void LaneStep<A>::scatter(V x, double* rows, int stride, int k) const {
+  alignas(64) double t[kW];
+  x.store_aligned(t);
+  for (int l = 0; l < b_.valid; ++l) rows[static_cast<long>(b_.env0 + l) * stride + k] = t[l];
+}
+
+// sin and cos from + - * / only: the quadrant j = round(2 x / pi) (by adding and subtracting
+// 1.5 * 2^52), x - j pi / 2 in three parts (Cody and Waite; j times the first part is exact), then
+// Cephes's minimax polynomials on [-pi/4, pi/4] (sin.c). Within 2 ulp of glibc's.
+template <class A>
+void LaneStep<A>::sincos(V x, V& s, V& c) {
+  const V round(6755399441055744.0);
+  const V j = (x * V(0.63661977236758134308) + round) - round;
+  const V r = ((x - j * V(1.57079625129699707031)) - j * V(7.54978941586159635336e-8)) -
+              j * V(5.39030285815811905290e-15);
+  const V z = r * r;
+  V ps = V(1.58962301576546568060e-10);
+  ps = ps * z + V(-2.50507477628578072866e-8);
+  ps = ps * z + V(2.75573136213857245213e-6);
+  ps = ps * z + V(-1.98412698295895385996e-4);
+  ps = ps * z + V(8.33333333332211858878e-3);
+  ps = ps * z + V(-1.66666666666666307295e-1);
+  V pc = V(-1.13585365213876817300e-11);
+  pc = pc * z + V(2.08757008419747316778e-9);
+  pc = pc * z + V(-2.75573141792967388112e-7);
+  pc = pc * z + V(2.48015872888517045348e-5);
+  pc = pc * z + V(-1.38888888888730564116e-3);
+  pc = pc * z + V(4.16666666666665929218e-2);
+  const V sr = r + r * z * ps;
+  const V cr = (V(1.0) - V(0.5) * z) + z * z * pc;
+  // j mod 4, exactly: floor(j / 4) = round((j - 1.5) / 4) for an integer j.
+  const V quadrant = j - V(4.0) * (((j - V(1.5)) * V(0.25) + round) - round);
+  const M odd = (quadrant == V(1.0)) | (quadrant == V(3.0));
+  const V sin_r = select(odd, cr, sr), cos_r = select(odd, sr, cr);
+  s = select(quadrant >= V(2.0), -sin_r, sin_r);
+  c = select((quadrant == V(1.0)) | (quadrant == V(2.0)), -cos_r, cos_r);
+}
+
+template <class A>
+void LaneStep<A>::sym_times(const V* m, const V* x, V* y) {
+  for (int r = 0; r < 6; ++r) {
+    V sum = m[sym_index(r, 0)] * x[0];
+    for (int k = 1; k < 6; ++k) sum = sum + m[sym_index(r, k)] * x[k];
+    y[r] = sum;
+  }
+}
+
+// Poses (world axes; positions relative to the root link's origin, frame 0's origin) and S_i.
+template <class A>
+void LaneStep<A>::kinematics() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    V* R = at(l_.R + 9 * i);
+    V* pos = at(l_.pos + 3 * i);
+    V P[9];  // the joint frame's axes: R_parent E^T
+    if (k.parent < 0) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) P[3 * r + c] = V(k.E[3 * c + r]);
+      for (int r = 0; r < 3; ++r) pos[r] = V(0.0);
+    } else {
+      const V* Rp = at(l_.R + 9 * k.parent);
+      const V* pp = at(l_.pos + 3 * k.parent);
+      for (int r = 0; r < 3; ++r) {
+        pos[r] =
+            pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
+        for (int c = 0; c < 3; ++c)
+          P[3 * r + c] = k.tree_rotation_identity
+                             ? Rp[3 * r + c]
+                             : Rp[3 * r] * V(k.E[3 * c]) + Rp[3 * r + 1] * V(k.E[3 * c + 1]) +
+                                   Rp[3 * r + 2] * V(k.E[3 * c + 2]);
+      }
+    }
+    V aw[3];  // the joint axis in world axes
+    for (int r = 0; r < 3; ++r)
+      aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
+                               : P[3 * r] * V(k.axis[0]) + P[3 * r + 1] * V(k.axis[1]) +
+                                     P[3 * r + 2] * V(k.axis[2]);
+    const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
+    if (k.type == 1) {
+      V s, c;
+      sincos(V(k.axis_sign) * x, s, c);
+      if (k.unit_axis >= 0) {
+        // R = P R(e_a, angle): columns a1 and a2 of P mix.
+        const int a = k.unit_axis, a1 = a == 2 ? 0 : a + 1, a2 = a == 0 ? 2 : a - 1;
+        for (int r = 0; r < 3; ++r) {
+          R[3 * r + a] = P[3 * r + a];
+          R[3 * r + a1] = c * P[3 * r + a1] + s * P[3 * r + a2];
+          R[3 * r + a2] = c * P[3 * r + a2] - s * P[3 * r + a1];
+        }
+      } else {
+        // Rodrigues: R(a, x) = c 1 + s [a]x + (1 - c) a a^T.
+        const V t = V(1.0) - c;
+        const V ax(k.axis[0]), ay(k.axis[1]), az(k.axis[2]);
+        const V J[9] = {t * ax * ax + c,      t * ax * ay - s * az, t * ax * az + s * ay,
+                        t * ax * ay + s * az, t * ay * ay + c,      t * ay * az - s * ax,
+                        t * ax * az - s * ay, t * ay * az + s * ax, t * az * az + c};
+        for (int r = 0; r < 3; ++r)
+          for (int col = 0; col < 3; ++col)
+            R[3 * r + col] =
+                P[3 * r] * J[col] + P[3 * r + 1] * J[3 + col] + P[3 * r + 2] * J[6 + col];
+      }
+    } else {
+      for (int e = 0; e < 9; ++e) R[e] = P[e];
+      if (k.type == 2 && k.parent >= 0)
+        for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
+    }
+    if (k.type == 0) continue;
+    V* S = at(l_.S + 6 * i);
+    if (k.type == 1) {
+      for (int r = 0; r < 3; ++r) S[r] = aw[r];
+      cross(pos, aw, S + 3);
+    } else {
+      for (int r = 0; r < 3; ++r) {
+        S[r] = V(0.0);
+        S[3 + r] = aw[r];
+      }
+    }
+  }
+}
+
+// Rigid-body inertias in frame 0 (aba.cpp's body_inertia), link velocities, velocity-product
+// accelerations c_i and bias forces v x* I v, root to leaves.
+template <class A>
+void LaneStep<A>::velocities_and_bias() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    const V* R = at(l_.R + 9 * i);
+    const V* pos = at(l_.pos + 3 * i);
+    const V m = link_parameter(i, mass);
+    const V com[3] = {link_parameter(i, com_x), link_parameter(i, com_y), link_parameter(i, com_z)};
+    const V xx = link_parameter(i, inertia_xx), yy = link_parameter(i, inertia_yy),
+            zz = link_parameter(i, inertia_zz), xy = link_parameter(i, inertia_xy),
+            xz = link_parameter(i, inertia_xz), yz = link_parameter(i, inertia_yz);
+    const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+    V cg[3], mc[3];
+    for (int r = 0; r < 3; ++r) {
+      cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+      mc[r] = m * cg[r];
+    }
+    V RI[9];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+    const V mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
+    V* I = at(l_.IA + 21 * i);
+    for (int r = 0; r < 3; ++r)
+      for (int c = r; c < 3; ++c) {
+        V a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
+              mc[r] * cg[c];
+        if (r == c) a = a + mcc;
+        I[sym_index(r, c)] = a;
+      }
+    // B = [mc]x, C = m 1.
+    I[6] = V(0.0), I[7] = -mc[2], I[8] = mc[1];
+    I[9] = mc[2], I[10] = V(0.0), I[11] = -mc[0];
+    I[12] = -mc[1], I[13] = mc[0], I[14] = V(0.0);
+    I[15] = m, I[16] = m, I[17] = m, I[18] = V(0.0), I[19] = V(0.0), I[20] = V(0.0);
+
+    V* v = at(l_.vel + 6 * i);
+    V* c = at(l_.c + 6 * i);
+    V J[6] = {V(0.0), V(0.0), V(0.0), V(0.0), V(0.0), V(0.0)};  // S qd
+    if (k.type != 0) {
+      const V qd = at(l_.qd)[k.v_index];
+      const V* S = at(l_.S + 6 * i);
+      for (int r = 0; r < 6; ++r) J[r] = qd * S[r];
+    }
+    for (int r = 0; r < 6; ++r) v[r] = k.parent >= 0 ? at(l_.vel + 6 * k.parent)[r] + J[r] : J[r];
+    V t1[3], t2[3];
+    cross(v, J, c);
+    cross(v, J + 3, t1);
+    cross(v + 3, J, t2);
+    for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
+    V h[6];
+    sym_times(I, v, h);
+    V* pA = at(l_.pA + 6 * i);
+    cross(v, h, t1);
+    cross(v + 3, h + 3, t2);
+    for (int r = 0; r < 3; ++r) pA[r] = t1[r] + t2[r];
+    cross(v, h + 3, pA + 3);
+  }
+}
+
+// ABA pass 2: articulated inertias and bias forces, leaves to root.
+template <class A>
+void LaneStep<A>::articulated_pass() {
+  for (int i = p_.num_links - 1; i >= 0; --i) {
+    const LinkConstants& k = p_.links[i];
+    const V* IA = at(l_.IA + 21 * i);
+    const V* pA = at(l_.pA + 6 * i);
+    if (k.type == 0) {
+      if (k.parent < 0) continue;
+      V* IAp = at(l_.IA + 21 * k.parent);
+      V* pAp = at(l_.pA + 6 * k.parent);
+      for (int e = 0; e < 21; ++e) IAp[e] = IAp[e] + IA[e];
+      for (int r = 0; r < 6; ++r) pAp[r] = pAp[r] + pA[r];
+      continue;
+    }
+    const V* S = at(l_.S + 6 * i);
+    V* U = at(l_.U + 6 * i);
+    sym_times(IA, S, U);
+    const V D_inv = V(1.0) / (dot6(S, U) + dof_parameter(k.v_index, armature));
+    at(l_.D_inv)[i] = D_inv;
+    const V u = at(l_.tau)[k.v_index] - dot6(S, pA);
+    at(l_.u)[k.v_index] = u;
+    if (k.parent < 0) continue;
+    const V* c = at(l_.c + 6 * i);
+    V IAc[6];
+    sym_times(IA, c, IAc);
+    const V beta = D_inv * (u - dot6(U, c));
+    V* pAp = at(l_.pA + 6 * k.parent);
+    for (int r = 0; r < 6; ++r) pAp[r] = pAp[r] + ((pA[r] + IAc[r]) + beta * U[r]);
+    V* IAp = at(l_.IA + 21 * k.parent);
+    for (int a = 0; a < 6; ++a)
+      for (int b = a; b < 6; ++b) {
+        const int e = sym_index(a, b);
+        if (a >= 3 && b < 3) continue;
+        IAp[e] = IAp[e] + (IA[e] - (D_inv * U[b]) * U[a]);
+      }
+  }
+}
+
+// ABA pass 3: accelerations root to leaves (gravity as an upward acceleration of the world); the
+// free velocity qd += dt qdd.
+template <class A>
+void LaneStep<A>::acceleration_pass() {
+  const V* zero = at(l_.zero);
+  const V g[6] = {V(0.0), V(0.0), V(0.0), V(-p_.gravity[0]), V(-p_.gravity[1]), V(-p_.gravity[2])};
+  const V dt(p_.dt);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
+    const V* c = at(l_.c + 6 * i);
+    V* a = at(l_.acc + 6 * i);
+    for (int r = 0; r < 6; ++r) a[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
+    if (k.type == 0) continue;
+    const V* U = at(l_.U + 6 * i);
+    const V* S = at(l_.S + 6 * i);
+    const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, a));
+    for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
+    V& qd = at(l_.qd)[k.v_index];
+    qd = qd + dt * qdd;
+  }
+}
+
+// The whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
+// (inverse_mass_diagonal.cpp), root to leaves.
+template <class A>
+void LaneStep<A>::response() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
+    V* L = at(l_.Lambda + 21 * i);
+    if (k.type == 0) {
+      for (int e = 0; e < 21; ++e) L[e] = T[e];
+      continue;
+    }
+    const V* U = at(l_.U + 6 * i);
+    const V* S = at(l_.S + 6 * i);
+    V* W = at(l_.W + 6 * i);
+    V* G = at(l_.G + 6 * i);
+    sym_times(T, U, W);
+    const V D_inv = at(l_.D_inv)[i];
+    const V r = D_inv + D_inv * D_inv * dot6(U, W);
+    for (int e = 0; e < 6; ++e) G[e] = r * S[e] - D_inv * W[e];
+    for (int a = 0; a < 6; ++a)
+      for (int b = a; b < 6; ++b) {
+        const int e = sym_index(a, b);
+        if (a >= 3 && b < 3) continue;
+        L[e] = (T[e] + G[b] * S[a]) - (S[b] * D_inv) * W[a];
+      }
+    at(l_.inverse_mass)[i] = r;
+  }
+}
+
+// Every dof's rows for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row).
+template <class A>
+void LaneStep<A>::setup_rows(double h_step) {
+  const V h(h_step), dt(p_.dt);
+  M rows_any = none();
+  undriven_ = none();
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type == 0) continue;
+    const int d = k.v_index;
+    V* rw = row(d);
+    const V r = at(l_.inverse_mass)[i];
+    const V x0 = at(l_.q)[k.q_index];
+    const V kp = dof_parameter(d, stiffness), kd = dof_parameter(d, damping);
+    const V tv = dof_parameter(d, target_velocity);
+    const M accel = dof_parameter(d, acceleration) != V(0.0);
+    const M driven = dof_parameter(d, has_drive) != V(0.0);
+    const V a = h * (h * kp + kd);
+    const V bb = h * kd * tv;
+    const V x = select(accel, V(1.0) / (a + V(1.0)), V(1.0) / (a * r + V(1.0)));
+    const V scale = select(accel, x / r, x);
+    rw[Layout::tvb] = scale * (bb + h * kp * (dof_parameter(d, target_position) - x0));
+    rw[Layout::velm] = -scale * a;
+    rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
+    rw[Layout::biasc] = scale * h * kp;
+    rw[Layout::tpb] = p_.tgs ? scale * h * kp * tv : V(0.0);
+    const V limit_force = dof_parameter(d, max_force) * dt;
+    const V limit_impulse = dof_parameter(d, max_impulse);
+    rw[Layout::maxi] = select(limit_impulse < limit_force, limit_impulse, limit_force);
+    rw[Layout::dimp] = V(0.0);
+    rw[Layout::low] = V(0.0);
+    rw[Layout::high] = V(0.0);
+    const V lower_limit = dof_parameter(d, lower), upper_limit = dof_parameter(d, upper);
+    rw[Layout::err_low] = x0 - lower_limit;
+    rw[Layout::err_high] = upper_limit - x0;
+    const V inf(__builtin_inf());
+    const M limited = (lower_limit > -inf) | (upper_limit < inf);
+    rw[Layout::has_limit] = select_zero(limited, V(1.0));
+    const V fs = dof_parameter(d, static_friction), fd = dof_parameter(d, dynamic_friction),
+            fv = dof_parameter(d, viscous_friction);
+    // JointFriction::active(): any of the three nonzero.
+    const M rubbing = !((fs == V(0.0)) & (fd == V(0.0)) & (fv == V(0.0)));
+    rw[Layout::has_friction] = select_zero(rubbing, V(1.0));
+    rw[Layout::fstat] = fs * dt;
+    rw[Layout::fdyn] = fd * dt;
+    rw[Layout::fvisc] = fv * dt;
+    rw[Layout::fimp] = V(0.0);
+    rw[Layout::driven] = select_zero(driven, V(1.0));
+    rw[Layout::recip] = V(1.0) / r;
+    rw[Layout::delta_x] = V(0.0);
+    rw[Layout::response] = r;
+    undriven_ = undriven_ | limited | rubbing;
+    rows_any = rows_any | limited | rubbing | driven;
+  }
+  rowless_ = !rows_any;
+}
+
+// All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
+// position limit. A lane without a row keeps total and v exactly (a select, not + 0), so its bits
+// do not depend on whether a neighbour has that row.
+template <class A>
+auto LaneStep<A>::solve_row(int d, V v, const V& dx) -> V {
+  V* rw = row(d);
+  const V zero(0.0);
+  V total = zero;
+  const V r = rw[Layout::response];
+  auto apply = [&](const M& present, const V& delta) {
+    total = select(present, total + delta, total);
+    v = select(present, v + r * delta, v);
+  };
+  if (!(p_.tgs && velocity_iteration_)) {  // TGS freezes the drive in velocity iterations
+    const V dimp = rw[Layout::dimp];
+    const V rest = rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
+                   rw[Layout::tpb] * V(time_to_step_end_);
+    V lambda = rest + rw[Layout::velm] * v;
+    const V m = rw[Layout::maxi];
+    lambda = select(lambda > m, m, lambda);
+    lambda = select(lambda < -m, -m, lambda);
+    const M driven = rw[Layout::driven] != zero;
+    rw[Layout::dimp] = select(driven, lambda, dimp);
+    apply(driven, lambda - dimp);
+  }
+  const M rubbing = rw[Layout::has_friction] != zero;
+  if (any(rubbing)) {
+    // The impulse that stops the joint, whole within the static threshold, else clamped to
+    // dynamic + viscous |v|.
+    const V fi = rw[Layout::fimp];
+    const V stopping = fi - v * rw[Layout::recip];
+    const V abs_stopping = select(stopping < zero, -stopping, stopping);
+    const V bound = rw[Layout::fdyn] + rw[Layout::fvisc] * select(v < zero, -v, v);
+    V clamped = select(stopping < -bound, -bound, stopping);
+    clamped = select(bound < stopping, bound, clamped);
+    const V next = select(abs_stopping > rw[Layout::fstat], clamped, stopping);
+    rw[Layout::fimp] = select(rubbing, next, fi);
+    apply(rubbing, next - fi);
+  }
+  const M limited = rw[Layout::has_limit] != zero;
+  if (any(limited)) {
+    const V h(h_), erp(p_.limit_erp), recip = rw[Layout::recip];
+    const V low = rw[Layout::low], high = rw[Layout::high];
+    const V future = dx + v * h;
+    const V low_now = rw[Layout::err_low] + dx, low_next = rw[Layout::err_low] + future;
+    const V high_now = rw[Layout::err_high] - dx, high_next = rw[Layout::err_high] - future;
+    const M low_case = (low_now < zero) | (low_next < zero);
+    const M high_case = (!low_case) & ((high_now < zero) | (high_next < zero));
+    // Below the lower limit or about to cross it.
+    const V keep_low = velocity_iteration_ ? v : -low_now / h * erp;
+    const V target_low = select(low_now < zero, keep_low, -low_now / h);
+    const V push_low = low + (target_low - v) * recip;
+    const V delta_low = select(push_low < zero, zero, push_low) - low;
+    const V keep_high = velocity_iteration_ ? v : high_now / h * erp;
+    const V target_high = select(high_now < zero, keep_high, high_now / h);
+    const V push_high = high + (target_high - v) * recip;
+    const V delta_high = select(push_high > zero, zero, push_high) - high;
+    // Inside both: give back what an earlier push overshot.
+    const V to_rest = -v * recip;
+    const V back_low = select(to_rest < -low, -low, to_rest);
+    const V back_high = select(-high < to_rest, -high, to_rest);
+    const M positive = v > zero;
+    const M on_low = limited & (low_case | ((!low_case) & (!high_case) & positive));
+    const M on_high = limited & (!on_low);
+    const V d_low = select(low_case, delta_low, back_low);
+    const V d_high = select(high_case, delta_high, back_high);
+    rw[Layout::low] = select(on_low, low + d_low, low);
+    rw[Layout::high] = select(on_high, high + d_high, high);
+    apply(limited, select(on_low, d_low, d_high));
+  }
+  return total;
+}
+
+// Leaves the finished links from k up to stop (gauss_seidel.hpp's leave_links).
+template <class A>
+void LaneStep<A>::leave_links(int k, int stop, bool correct) {
+  while (k != stop) {
+    const LinkConstants& lk = p_.links[k];
+    const int p = lk.parent;
+    const V* pAk = at(l_.subtree + 6 * k);
+    V pa[6];
+    if (lk.type == 0) {
+      for (int r = 0; r < 6; ++r) pa[r] = pAk[r];
+    } else {
+      const int d = lk.v_index;
+      const V* S = at(l_.S + 6 * k);
+      const V* U = at(l_.U + 6 * k);
+      const V beta = at(l_.D_inv)[k] * (at(l_.jimp)[d] - dot6(S, pAk));
+      if (lk.finish_on_leave) {
+        V& qd = at(l_.qd)[d];
+        qd = qd + (at(l_.entry)[d] - dot6(at(l_.G + 6 * k), pAk));
+      }
+      for (int r = 0; r < 6; ++r) pa[r] = pAk[r] + beta * U[r];
+    }
+    if (p < 0) return;
+    V* pAp = at(l_.subtree + 6 * p);
+    for (int r = 0; r < 6; ++r) pAp[r] = lk.first_child ? pa[r] : pAp[r] + pa[r];
+    if (!lk.last_child)
+      for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
+    if (p == stop && correct) {
+      V t[6];
+      sym_times(at(l_.Lambda + 21 * p), pa, t);
+      V* dv = at(l_.dv + 6 * p);
+      for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
+    }
+    k = p;
+  }
+}
+
+// A joint not finished when left: its velocity change from its subtree and from later subtrees
+// (gauss_seidel.hpp's finish_link).
+template <class A>
+void LaneStep<A>::finish_link(int i) {
+  const LinkConstants& lk = p_.links[i];
+  V E[6];
+  if (lk.later) {
+    const V* Ep = p_.links[lk.parent].later ? at(l_.later + 6 * lk.parent) : at(l_.zero);
+    for (int r = 0; r < 6; ++r) E[r] = Ep[r];
+    if (!lk.last_child) {
+      V diff[6], t[6];
+      const V* pAp = at(l_.subtree + 6 * lk.parent);
+      const V* after = at(l_.after + 6 * i);
+      for (int r = 0; r < 6; ++r) diff[r] = pAp[r] - after[r];
+      sym_times(at(l_.Lambda + 21 * lk.parent), diff, t);
+      for (int r = 0; r < 6; ++r) E[r] = E[r] - t[r];
+    }
+  }
+  if (lk.type == 0) {
+    if (lk.later)
+      for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r];
+    return;
+  }
+  const int d = lk.v_index;
+  V dqd = at(l_.entry)[d] - dot6(at(l_.G + 6 * i), at(l_.subtree + 6 * i));
+  if (lk.later) {
+    const V* S = at(l_.S + 6 * i);
+    const V later = -at(l_.D_inv)[i] * dot6(at(l_.U + 6 * i), E);
+    dqd = dqd + later;
+    for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r] + later * S[r];
+  }
+  V& qd = at(l_.qd)[d];
+  qd = qd + dqd;
+}
+
+// One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n).
+template <class A>
+void LaneStep<A>::sweep() {
+  V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
+  const bool keep = any(rowless_);
+  if (keep)
+    for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
+  int previous = -1;
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (previous != k.parent) leave_links(previous, k.parent, true);
+    previous = i;
+    const V* dvp = k.parent >= 0 ? at(l_.dv + 6 * k.parent) : at(l_.zero);
+    V* dv = at(l_.dv + 6 * i);
+    if (k.type == 0) {
+      for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
+      continue;
+    }
+    const int d = k.v_index;
+    const V* U = at(l_.U + 6 * i);
+    const V* S = at(l_.S + 6 * i);
+    const V* W = at(l_.W + 6 * i);
+    const V D_inv = at(l_.D_inv)[i];
+    const V base = -D_inv * dot6(U, dvp);
+    const V impulse = solve_row(d, at(l_.qd)[d] + base, row(d)[Layout::delta_x]);
+    at(l_.jimp)[d] = impulse;
+    const V dqd = base + at(l_.inverse_mass)[i] * impulse;
+    at(l_.entry)[d] = dqd;
+    const V h = D_inv * impulse;
+    for (int r = 0; r < 6; ++r) dv[r] = (dvp[r] - h * W[r]) + dqd * S[r];
+  }
+  leave_links(previous, -1, false);
+  for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
+  if (keep)
+    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
+}
+
+// q += h qd on every 1-dof joint; TGS also accumulates the position change delta_x.
+template <class A>
+void LaneStep<A>::integrate(double h_step, bool track) {
+  const V h(h_step);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type == 0) continue;
+    const V qd = at(l_.qd)[k.v_index];
+    V& q = at(l_.q)[k.q_index];
+    q = q + h * qd;
+    if (track) {
+      V& dx = row(k.v_index)[Layout::delta_x];
+      dx = dx + h * qd;
+    }
+  }
+}
+
+template <class A>
+void LaneStep<A>::step() {
+  kinematics();
+  velocities_and_bias();
+  articulated_pass();
+  acceleration_pass();
+  response();
+  const double dt = p_.dt;
+  velocity_iteration_ = false;
+  if (!p_.tgs) {
+    setup_rows(dt);
+    h_ = dt;
+    for (int it = 0; it < p_.position_iterations; ++it) sweep();
+    integrate(dt, false);
+    velocity_iteration_ = true;
+    for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
+  } else {
+    const int n = p_.position_iterations;
+    const double rho = dt / n;
+    setup_rows(rho);
+    h_ = rho;
+    for (int i = 1; i <= n; ++i) {
+      time_to_step_end_ = dt - i * rho;
+      sweep();
+      integrate(rho, true);
+    }
+    velocity_iteration_ = true;
+    // Only friction and limit rows act in TGS velocity iterations; lanes without keep their
+    // velocities.
+    if (any(undriven_) && p_.velocity_iterations > 0) {
+      V* saved = at(l_.saved_tgs);
+      for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
+      for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
+      for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
+    }
+  }
+  const V inv_dt(1.0 / dt);
+  for (int d = 0; d < p_.nv; ++d) {
+    const V* rw = row(d);
+    at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
+    at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
+    at(l_.ff)[d] = (rw[Layout::fimp] + V(0.0)) * inv_dt;  // + the (absent) transmission friction
+  }
+}
+
+// After a step: lanes with a non-finite value stop with the state before it (the first culprit
+// recorded in Simulation's order); the others count the step.
+template <class A>
+void LaneStep<A>::finish_step() {
+  const V zero(0.0);
+  V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
+  for (int d = 0; d < p_.nv; ++d)
+    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero + at(l_.ff)[d] * zero);
+  for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
+  // Not z != 0: xsimd 8's != is unordered with SSE2 and ordered with AVX (false for a NaN).
+  const M bad = !(z == zero);
+  const M fresh = bad & (!stopped_);
+  if (any(fresh)) {
+    alignas(64) double fresh_lanes[kW];
+    select(fresh, V(1.0), zero).store_aligned(fresh_lanes);
+    for (int l = 0; l < b_.valid; ++l) {
+      if (fresh_lanes[l] == 0.0) continue;
+      Stop stop;
+      auto lane = [&](V x) {
+        alignas(64) double t[kW];
+        x.store_aligned(t);
+        return t[l];
+      };
+      auto check = [&](int quantity, int dof, double value) {
+        if (stop.quantity == 0 && !(value * 0.0 == 0.0)) stop = Stop{quantity, dof, value};
+      };
+      for (int d = 0; d < p_.nv; ++d) {
+        check(1, d, lane(at(l_.qd)[d]));
+        check(2, d, lane(at(l_.df)[d]));
+        check(3, d, lane(at(l_.lf)[d]));
+        check(4, d, lane(at(l_.ff)[d]));
+      }
+      for (int i = 0; i < p_.num_links; ++i)
+        if (p_.links[i].type != 0)
+          check(5, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
+      b_.stop[b_.env0 + l] = stop;
+      b_.stopped_now[b_.env0 + l] = true;
+    }
+  }
+  stopped_ = stopped_ | bad;
+  if (any(stopped_)) {
+    for (int k = 0; k < p_.nq; ++k) at(l_.q)[k] = select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
+    for (int d = 0; d < p_.nv; ++d) {
+      at(l_.qd)[d] = select(stopped_, at(l_.old_qd)[d], at(l_.qd)[d]);
+      at(l_.df)[d] = select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
+      at(l_.lf)[d] = select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
+      at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
+    }
+  }
+  alignas(64) double stopped_lanes[kW];
+  select(stopped_, V(1.0), zero).store_aligned(stopped_lanes);
+  for (int l = 0; l < b_.valid; ++l) {
+    if (stopped_lanes[l] != 0.0) continue;
+    ++b_.step_count[b_.env0 + l];
+    b_.time[b_.env0 + l] += p_.dt;
+  }
+}
+
+template <class A>
+void LaneStep<A>::run(int steps) {
+  const int nq = p_.nq, nv = p_.nv;
+  for (int e = 0; e < l_.size; ++e) s_[e] = V(0.0);  // leaves' subtree impulses stay 0
+  for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);
+  for (int d = 0; d < nv; ++d) {
+    at(l_.qd)[d] = gather(b_.qd, nv, d);
+    at(l_.tau)[d] = gather(b_.applied, nv, d);
+    at(l_.df)[d] = gather(b_.drive_force, nv, d);
+    at(l_.lf)[d] = gather(b_.limit_force, nv, d);
+    at(l_.ff)[d] = gather(b_.friction_force, nv, d);
+  }
+  alignas(64) double stopped[kW];
+  for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
+  stopped_ = V::load_aligned(stopped) != V(0.0);
+  for (int s = 0; s < steps; ++s) {
+    for (int k = 0; k < nq; ++k) at(l_.old_q)[k] = at(l_.q)[k];
+    for (int d = 0; d < nv; ++d) {
+      at(l_.old_qd)[d] = at(l_.qd)[d];
+      at(l_.old_df)[d] = at(l_.df)[d];
+      at(l_.old_lf)[d] = at(l_.lf)[d];
+      at(l_.old_ff)[d] = at(l_.ff)[d];
+    }
+    step();
+    finish_step();
+  }
+  for (int k = 0; k < nq; ++k) scatter(at(l_.q)[k], b_.q, nq, k);
+  for (int d = 0; d < nv; ++d) {
+    scatter(at(l_.qd)[d], b_.qd, nv, d);
+    scatter(at(l_.df)[d], b_.drive_force, nv, d);
+    scatter(at(l_.lf)[d], b_.limit_force, nv, d);
+    scatter(at(l_.ff)[d], b_.friction_force, nv, d);
+  }
+}
+
+}  // namespace
+}  // namespace featherdrive::simd

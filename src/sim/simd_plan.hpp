@@ -1,0 +1,150 @@
+// What the SIMD Batch's lane kernels (simd_lane_step.hpp, one translation unit per instruction
+// set) read and write: plain structs and pointers, so that those units, compiled with -mavx2 or
+// -mavx512f, share no inline function with the rest of the library. docs/simd_batch.md.
+#pragma once
+
+#include <cstddef>
+
+namespace featherdrive::simd {
+
+/// Per-environment parameters are stored in groups of kGroup environments, interleaved: entry k of
+/// environment e at ((e / kGroup) * entries + k) * kGroup + e % kGroup. A block of W | kGroup
+/// lanes reads entry k of its environments as one vector, whatever W.
+inline constexpr int kGroup = 8;
+/// A block holds kInterleave vectors of lanes (simd_lane_step.hpp's Pack): 2 W environments.
+inline constexpr int kInterleave = 2;
+
+enum DofParameter : int {
+  has_drive,
+  acceleration,
+  stiffness,
+  damping,
+  max_force,
+  max_impulse,
+  target_position,
+  target_velocity,
+  lower,
+  upper,
+  armature,
+  static_friction,
+  dynamic_friction,
+  viscous_friction,
+  kDofParameters
+};
+enum LinkParameter : int {
+  mass,
+  com_x,
+  com_y,
+  com_z,
+  inertia_xx,
+  inertia_yy,
+  inertia_zz,
+  inertia_xy,
+  inertia_xz,
+  inertia_yz,
+  kLinkParameters
+};
+
+/// A link's topology and joint constants, the same in every lane.
+struct LinkConstants {
+  int parent = -1;
+  int type = 0;  ///< 0 fixed, 1 revolute, 2 prismatic
+  int v_index = 0;
+  int q_index = 0;
+  int unit_axis = -1;  ///< k for an axis +-e_k, else -1
+  double axis_sign = 1.0;
+  bool tree_rotation_identity = false;
+  bool first_child = true;  ///< its parent's first child
+  bool last_child = true;   ///< no sibling after it
+  bool later = false;       ///< it or an ancestor has a sibling after it
+  bool finish_on_leave = false;
+  double E[9] = {};     ///< tree transform rotation, row-major
+  double r[3] = {};     ///< tree transform translation (parent frame)
+  double axis[3] = {};  ///< unit joint axis (joint frame)
+};
+
+/// Where a block's scratch keeps each quantity, counted in vectors (simd_batch.cpp fills it).
+struct Layout {
+  // Per dof, kRowFields vectors: the drive row, accumulators, limit errors, masks.
+  enum RowField : int {
+    tvb,
+    velm,
+    impm,
+    biasc,
+    tpb,
+    maxi,
+    dimp,
+    low,
+    high,
+    err_low,
+    err_high,
+    recip,
+    has_limit,
+    driven,
+    delta_x,
+    response,
+    has_friction,
+    fstat,
+    fdyn,
+    fvisc,
+    fimp,
+    kRowFields
+  };
+  int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
+      G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
+      tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, df = 0, lf = 0,
+      ff = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, size = 0;
+};
+
+struct Plan {
+  int num_links = 0, nq = 0, nv = 0;
+  const LinkConstants* links = nullptr;
+  const int* finish_after = nullptr;  ///< links finished after a sweep, in order
+  int num_finish_after = 0;
+  int entries = 0;  ///< parameters per environment
+  double gravity[3] = {};
+  double dt = 0.0;
+  bool tgs = false;
+  int position_iterations = 1, velocity_iterations = 0;
+  double limit_erp = 0.8;
+  Layout layout;
+};
+
+/// Why a lane stopped: the first non-finite quantity in Simulation's order.
+struct Stop {
+  /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 position q
+  int quantity = 0;
+  int dof = -1;
+  double value = 0.0;
+};
+
+/// One block of lanes: environments env0 ... env0 + W - 1, of which the first `valid` exist (the
+/// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major.
+struct Block {
+  int env0 = 0, valid = 0;
+  double* q = nullptr;
+  double* qd = nullptr;
+  const double* applied = nullptr;
+  double* drive_force = nullptr;
+  double* limit_force = nullptr;
+  double* friction_force = nullptr;
+  const double* parameters = nullptr;  ///< the whole packed array
+  long* step_count = nullptr;
+  double* time = nullptr;
+  Stop* stop = nullptr;         ///< per environment; quantity != 0: stopped
+  bool* stopped_now = nullptr;  ///< per environment: stopped in this call
+  bool any_limit = true;        ///< some lane has a finite joint limit
+};
+
+/// The layout of p's scratch, and the doubles of scratch one block of any width needs (kGroup
+/// kInterleave doubles a vector).
+Layout make_layout(const Plan& p);
+std::size_t scratch_doubles(const Plan& p);
+
+/// `steps` steps of one block of lanes (simd_lane_step_<isa>.cpp); scratch: scratch_doubles(p),
+/// 64-byte aligned.
+void run_block_sse2(const Plan& p, const Block& b, double* scratch, int steps);
+void run_block_avx2(const Plan& p, const Block& b, double* scratch, int steps);
+void run_block_avx512(const Plan& p, const Block& b, double* scratch, int steps);
+
+}  // namespace featherdrive::simd

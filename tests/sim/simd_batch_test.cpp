@@ -1,0 +1,250 @@
+// The SIMD Batch against the scalar step (Simulation, Batch: another operation order), and its
+// bits against themselves across lanes, batch sizes, widths and thread counts.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "featherdrive/sim/simd_batch.hpp"
+#include "support/compare.hpp"
+#include "support/drives.hpp"
+#include "support/models.hpp"
+
+namespace featherdrive {
+namespace {
+
+using test::kInf;
+using test::same_bits;
+
+// A random fixed-base tree of revolute, prismatic and fixed joints (general axes and frames,
+// branches), force or acceleration drives with random targets, a force limit on some dofs and
+// joint limits and joint friction on others, started away from rest.
+Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
+  auto model = test::make_random_tree(seed, links, false, false, 0.01);
+  SimulationOptions o;
+  o.dt = 0.005;
+  o.solver = solver;
+  o.position_iterations = 4;
+  o.velocity_iterations = 1;
+  Simulation sim(model, o);
+  std::mt19937 rng(seed);
+  test::drive_every_joint(sim, rng, 300.0, 20.0);
+  for (int d = 0; d < model->nv; ++d) {
+    Drive drive = sim.drive(d);
+    if (d % 3 == 1) drive.type = DriveType::acceleration;
+    if (d % 4 == 2) drive.max_force = 5.0;
+    sim.set_drive(d, drive);
+    if (d % 3 == 0) sim.set_joint_limits(d, -0.3, 0.4);
+    if (d % 4 == 1) sim.set_joint_friction(d, JointFriction{0.3, 0.2, 0.1});
+  }
+  sim.set_qd(test::random_vector(model->nv, rng, 0.5));
+  return sim;
+}
+
+// |a - b| <= tol max(1, |b|) everywhere; returns the largest relative difference.
+double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
+                                const Eigen::Ref<const RowMatrix>& b) {
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < a.size(); ++i)
+    worst =
+        std::max(worst, std::abs(a.data()[i] - b.data()[i]) / std::max(1.0, std::abs(b.data()[i])));
+  return worst;
+}
+
+// Per-environment gains, targets, limits, friction, armature and link inertias of the
+// randomisation API.
+void randomise(SimdBatch& simd, Batch& scalar, unsigned seed) {
+  const int n = simd.size(), nv = simd.model().nv;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.5, 1.5);
+  RowMatrix kp(n, nv), kd(n, nv), xt(n, nv), vt(n, nv), lo(n, nv), hi(n, nv), arm(n, nv);
+  RowMatrix fs(n, nv), fv(n, nv);
+  for (int e = 0; e < n; ++e)
+    for (int d = 0; d < nv; ++d) {
+      kp(e, d) = 400.0 * u(rng), kd(e, d) = 20.0 * u(rng);
+      xt(e, d) = u(rng) - 1.0, vt(e, d) = 0.2 * (u(rng) - 1.0);
+      lo(e, d) = d % 2 ? -kInf : -0.5 * u(rng), hi(e, d) = d % 2 ? kInf : 0.5 * u(rng);
+      arm(e, d) = 0.02 * u(rng);
+      fs(e, d) = d % 3 == 2 ? 0.2 * u(rng) : 0.0, fv(e, d) = d % 3 == 2 ? 0.1 * u(rng) : 0.0;
+    }
+  std::vector<int> all(static_cast<size_t>(n));
+  for (int e = 0; e < n; ++e) all[static_cast<size_t>(e)] = e;
+  const DriveType type = seed % 2 ? DriveType::acceleration : DriveType::force;
+  simd.set_drive_gains(all, kp, kd, type);
+  scalar.set_drive_gains(all, kp, kd, type);
+  simd.set_drive_targets(all, xt, vt);
+  scalar.set_drive_targets(all, xt, vt);
+  simd.set_joint_limits(all, lo, hi);
+  scalar.set_joint_limits(all, lo, hi);
+  simd.set_armature(all, arm);
+  scalar.set_armature(all, arm);
+  simd.set_joint_friction(all, fs, 0.5 * fs, fv);
+  scalar.set_joint_friction(all, fs, 0.5 * fs, fv);
+  VecX mass(n);
+  RowMatrix com(n, 3);
+  for (int e = 0; e < n; ++e) {
+    mass[e] = simd.model().links[2].mass * u(rng);
+    com.row(e) = Vec3(u(rng) - 1.0, u(rng) - 1.0, u(rng) - 1.0).transpose() * 0.2;
+  }
+  simd.set_link_mass(all, 2, mass);
+  scalar.set_link_mass(all, 2, mass);
+  simd.set_link_com(all, 3, com);
+  scalar.set_link_com(all, 3, com);
+}
+
+TEST(SimdBatch, RandomisedLanesEqualScalarBatchWithTheSameParameters) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    const Simulation proto = simd_prototype(11, solver);
+    SimdBatch simd(proto, 11);
+    Batch scalar(proto, 11);
+    scalar.set_num_threads(1);
+    randomise(simd, scalar, solver == SolverType::pgs ? 3 : 4);
+    simd.step(300);
+    scalar.step(300);
+    for (const auto& [a, b] : {std::pair{&simd.q(), &scalar.q()},
+                               {&simd.qd(), &scalar.qd()},
+                               {&simd.drive_force(), &scalar.drive_force()},
+                               {&simd.limit_force(), &scalar.limit_force()}})
+      EXPECT_LE(simd_relative_difference(*a, *b), 1e-12) << to_string(solver);
+    EXPECT_GT(scalar.limit_force().cwiseAbs().maxCoeff(), 0.0);  // the limits acted
+    EXPECT_GT(scalar.friction_force().cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(simd.step_count()[10], 300);
+    EXPECT_EQ(simd.link_mass(2), scalar.link_mass(2));
+  }
+}
+
+// A long run of one environment per lane against Simulation::step, 1000 steps.
+TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    Simulation sim = simd_prototype(21, solver, 12);
+    SimdBatch simd(sim, 3);
+    simd.step(1000);
+    sim.step(1000);
+    for (int e = 0; e < 3; ++e) {
+      EXPECT_LE(simd_relative_difference(simd.q().row(e), sim.q().transpose()), 1e-12);
+      EXPECT_LE(simd_relative_difference(simd.qd().row(e), sim.qd().transpose()), 1e-12);
+      EXPECT_LE(simd_relative_difference(simd.drive_force().row(e), sim.drive_force().transpose()),
+                1e-12);
+    }
+  }
+}
+
+// The same environments, given the same parameters, give the same bits at any lane, in a batch
+// of any size, at every width this CPU has and on any number of threads.
+TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
+  const Simulation proto = simd_prototype(5, SolverType::tgs);
+  const int n = 13;
+  auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+    SimdBatch simd(proto, size, isa);
+    Batch unused(proto, 1);
+    simd.set_num_threads(threads);
+    // Environment e of the reference gets gains of its own; here it sits at (e + shift) % size.
+    RowMatrix kp(size, proto.model().nv);
+    for (int e = 0; e < size; ++e) kp.row((e + shift) % size).setConstant(200.0 + 37.0 * e);
+    std::vector<int> all;
+    for (int e = 0; e < size; ++e) all.push_back(e);
+    simd.set_drive_gains(all, kp, RowMatrix::Constant(1, proto.model().nv, 15.0));
+    simd.step(40);
+    RowMatrix out(size, proto.model().nv + proto.model().nq);
+    for (int e = 0; e < size; ++e)
+      out.row(e) << simd.qd().row((e + shift) % size), simd.q().row((e + shift) % size);
+    return out;
+  };
+  const RowMatrix reference = run(n, SimdIsa::sse2, 1, 0);
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2, 3})
+      for (int shift : {0, 5}) {
+        const RowMatrix x = run(n, isa, threads, shift);
+        EXPECT_TRUE(same_bits(x, reference))
+            << to_string(isa) << ", " << threads << " threads, shift " << shift;
+      }
+  // Alone in a batch of one: environment 7.
+  for (SimdIsa isa : available_simd_isas()) {
+    SimdBatch one(proto, 1, isa);
+    RowMatrix kp = RowMatrix::Constant(1, proto.model().nv, 200.0 + 37.0 * 7);
+    const int e0[] = {0};
+    one.set_drive_gains(e0, kp, RowMatrix::Constant(1, proto.model().nv, 15.0));
+    one.step(40);
+    EXPECT_TRUE(same_bits(RowMatrix(one.qd()), RowMatrix(reference.row(7).head(proto.model().nv))))
+        << to_string(isa);
+  }
+}
+
+// An environment that diverges stops with the state before that step and the scalar guard's
+// message; the others make all their steps, bit for bit as without it.
+TEST(SimdBatch, DivergenceStopsOnlyThatEnvironment) {
+  const Simulation proto = simd_prototype(8, SolverType::pgs);
+  SimdBatch calm(proto, 6), simd(proto, 6);
+  const int bad[] = {4};
+  simd.step(3);
+  calm.step(3);
+  const VecX q_before = simd.q().row(4).transpose();
+  simd.set_qd(bad, RowMatrix::Constant(1, proto.model().nv, 1e200));
+  Simulation alone = simd.simulation(4);
+  std::string scalar_message;
+  try {
+    alone.step();
+  } catch (const DivergenceError& e) {
+    scalar_message = e.what();
+  }
+  ASSERT_FALSE(scalar_message.empty());
+  try {
+    simd.step(5);
+    ADD_FAILURE() << "no DivergenceError";
+  } catch (const DivergenceError& e) {
+    EXPECT_NE(std::string(e.what()).find("environment 4 (1 of 6"), std::string::npos) << e.what();
+  }
+  calm.step(5);
+  ASSERT_TRUE(simd.divergences()[4].has_value());
+  EXPECT_EQ(simd.divergences()[4]->message, scalar_message);
+  EXPECT_EQ(simd.divergences()[4]->step, 4);
+  EXPECT_EQ(simd.step_count()[4], 3);
+  EXPECT_TRUE(same_bits(VecX(simd.q().row(4).transpose()), q_before));
+  for (int e : {0, 1, 2, 3, 5}) {
+    EXPECT_FALSE(simd.divergences()[e].has_value());
+    EXPECT_EQ(simd.step_count()[e], 8);
+    EXPECT_TRUE(same_bits(RowMatrix(simd.q().row(e)), RowMatrix(calm.q().row(e))));
+  }
+  simd.reset(bad);  // steps again
+  simd.step(1);
+  EXPECT_EQ(simd.step_count()[4], 1);
+  EXPECT_FALSE(simd.divergences()[4].has_value());
+}
+
+TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
+  auto expect_refused = [](const Simulation& s, const std::string& words) {
+    try {
+      SimdBatch b(s, 2);
+      ADD_FAILURE() << "accepted: " << words;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  expect_refused(Simulation(test::make_random_tree(2, 4, true, false)), "a floating base");
+  Simulation s = simd_prototype(9, SolverType::pgs, 5);
+  const std::string joint = s.model().links[s.model().dof_link[1]].joint_name;
+  Simulation f = s;
+  f.set_friction_coefficient(1, 0.05);
+  expect_refused(f, "joint '" + joint + "' has friction_coefficient 0.05");
+  Simulation v = s;
+  v.set_max_joint_velocity(1, 3.0);
+  expect_refused(v, "joint '" + joint + "' has max_velocity 3");
+  SimulationOptions physx = s.options();
+  physx.compat = Compat::physx;
+  expect_refused(Simulation(s.model_ptr(), physx), "compat: physx");
+  SimdBatch ok(s, 2);
+  const int ids[] = {1, 1};
+  EXPECT_THROW(ok.set_q(ids, RowMatrix::Zero(1, s.model().nq)), std::invalid_argument);
+  const int one[] = {1};
+  try {
+    ok.set_drive_gains(one, RowMatrix::Constant(1, s.model().nv, -5.0),
+                       RowMatrix::Zero(1, s.model().nv));
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("environment 1: drive on joint"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("stiffness = -5"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ok.stiffness()(1, 0), s.drive(0).stiffness);  // nothing changed
+}
+
+}  // namespace
+}  // namespace featherdrive
