@@ -17,8 +17,10 @@ using TargetsByJoint = std::map<std::string, std::pair<double, double>>;
 
 /// The JSON scene for the harness: the model, the current state, drives, limits, velocity
 /// limits and armature of `sim`, its solver options, `steps` steps and `targets[k]` applied
-/// before step k + 1. Throws std::invalid_argument for what the harness cannot represent (a root
-/// joint other than fixed or floating, spherical joints, joint friction, actuator envelopes).
+/// before step k + 1 (a spherical joint's axes by their dof names, `ball:twist`). Throws
+/// std::invalid_argument for what the harness cannot represent (a root joint other than fixed or
+/// floating, joint friction, actuator envelopes, a spherical joint whose axes differ in max
+/// velocity or friction coefficient: PhysX has one of each per joint).
 std::string physx_scene_json(const Simulation& sim, int steps,
                              const std::vector<TargetsByJoint>& targets = {});
 
