@@ -204,6 +204,25 @@ std::vector<Case> cases() {
   wrist.solver = SolverType::tgs;
   wrist.position_iterations = 8;
   out.push_back(wrist);
+  if (std::getenv("SPH_EXPERIMENT")) {
+    out.clear();
+    for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Case e{std::string("wrist_free_") + to_string(solver), wrist_chain, [](Simulation& s) {
+               VecX qd = s.qd();
+               qd[0] = 1.5;
+               qd[1] = -2.0;
+               s.set_qd(qd);
+               start_at(s, Vec3(0.2, -0.1, 0.3), Vec3(1.0, 0.5, -0.8));
+               if (std::getenv("SPH_DRIVE"))
+                 drive_axes(s, "wrist", DriveType::force, 20, 1, Vec3(0.4, 0.3, -0.5));
+             }};
+      e.solver = solver;
+      e.position_iterations = std::getenv("SPH_N") ? std::atoi(std::getenv("SPH_N")) : 1;
+      e.velocity_iterations = 0;
+      out.push_back(e);
+    }
+    return out;
+  }
   // Limits on the twist and one swing, reached from a push; a drive on the other swing.
   for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Case limits{std::string("pendulum_limits_") + to_string(solver), [g] { return pendulum(g); },
