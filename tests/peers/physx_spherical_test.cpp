@@ -71,7 +71,7 @@ std::pair<Errors, Errors> run_case(const Case& c, Compat compat, int steps) {
   Simulation initial(model, o);
   c.setup(initial);
   const auto targets = c.targets(steps);
-  const JointTrajectory px = run_physx(PhysxInstall{std::getenv("SPH_NODE") ? std::getenv("SPH_NODE") : FEATHERDRIVE_NODE, FEATHERDRIVE_PHYSX_DIR},
+  const JointTrajectory px = run_physx(PhysxInstall{FEATHERDRIVE_NODE, FEATHERDRIVE_PHYSX_DIR},
                                        initial, steps, targets);
   EXPECT_EQ(static_cast<int>(px.joints.size()), model->nv);
   EXPECT_EQ(static_cast<int>(px.q.size()), steps + 1);
@@ -127,13 +127,16 @@ std::pair<Errors, Errors> run_case(const Case& c, Compat compat, int steps) {
 }
 
 // A bob below a spherical joint whose frame is turned off the world axes (origin rpy), the
-// centre of mass off every axis and a full inertia tensor, so that no axis decouples.
-std::shared_ptr<const Model> pendulum(const Vec3& gravity) {
+// centre of mass off every axis, so that no axis decouples. PhysX rotates a spherical drive's
+// targets by the child's principal axes (docs/math/spherical_joints.md, "A PhysX quirk"), which
+// featherdrive does not model: a full inertia tensor only with zero targets.
+std::shared_ptr<const Model> pendulum(const Vec3& gravity, bool full_inertia = false) {
   ModelBuilder b;
   b.set_gravity(gravity);
   b.add_link(make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity(), fixed_joint("fix")));
   Mat3 I;
-  I << 0.02, 0, 0, 0, 0.03, 0, 0, 0, 0.025;
+  if (full_inertia) I << 0.02, 0.002, -0.001, 0.002, 0.03, 0.0015, -0.001, 0.0015, 0.025;
+  else I << 0.02, 0, 0, 0, 0.03, 0, 0, 0, 0.025;
   b.add_link(make_link("bob", "base", 1.5, Vec3(0.08, -0.05, -0.6), I,
                        spherical_joint("ball", Vec3(0, 0, 1), Vec3(0.4, -0.3, 0.7))));
   return std::make_shared<const Model>(b.build());
@@ -192,8 +195,13 @@ std::vector<Case> cases() {
               }};
   zero_g.solver = SolverType::tgs;
   out.push_back(zero_g);
-  out.push_back({"pendulum_free_pgs", [g] { return pendulum(g); }, [](Simulation& s) {
+  out.push_back({"pendulum_free_pgs", [g] { return pendulum(g, true); }, [](Simulation& s) {
                    start_at(s, Vec3(0.5, 0.4, -0.2), Vec3(0.3, 0.6, -0.5));
+                 }});
+  // A full inertia tensor with drives holding the joint's rest position (zero targets).
+  out.push_back({"pendulum_full_inertia_pgs", [g] { return pendulum(g, true); }, [](Simulation& s) {
+                   drive_axes(s, "ball", DriveType::force, 40, 3, Vec3::Zero());
+                   start_at(s, Vec3(0.4, -0.3, 0.2), Vec3(1.0, 0.5, -0.5));
                  }});
   Case wrist{"wrist_chain_tgs_8_1", wrist_chain, [](Simulation& s) {
                s.set_drive("shoulder", Drive{DriveType::force, 300, 20, kInf, 0.4, 0.0});
@@ -204,33 +212,16 @@ std::vector<Case> cases() {
   wrist.solver = SolverType::tgs;
   wrist.position_iterations = 8;
   out.push_back(wrist);
-  if (std::getenv("SPH_EXPERIMENT")) {
-    out.clear();
-    for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-      Case e{std::string("wrist_free_") + to_string(solver), wrist_chain, [](Simulation& s) {
-               VecX qd = s.qd();
-               qd[0] = 1.5;
-               qd[1] = -2.0;
-               s.set_qd(qd);
-               start_at(s, Vec3(0.2, -0.1, 0.3), Vec3(1.0, 0.5, -0.8));
-               if (std::getenv("SPH_DRIVE"))
-                 drive_axes(s, "wrist", DriveType::force, 20, 1, Vec3(0.4, 0.3, -0.5));
-             }};
-      e.solver = solver;
-      e.position_iterations = std::getenv("SPH_N") ? std::atoi(std::getenv("SPH_N")) : 1;
-      e.velocity_iterations = 0;
-      out.push_back(e);
-    }
-    return out;
-  }
-  // Limits on the twist and one swing, reached from a push; a drive on the other swing.
+  // Limits on the twist and one swing, reached with a push and then held by drives whose
+  // targets lie beyond them (a joint grazing a limit at rest would make the speculative limit's
+  // on/off decision, and so a free run, hang on float32 rounding).
   for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Case limits{std::string("pendulum_limits_") + to_string(solver), [g] { return pendulum(g); },
                 [](Simulation& s) {
                   s.set_joint_limits("ball:twist", -0.25, 0.375);
                   s.set_joint_limits("ball:swing1", -0.5, 0.25);
-                  s.set_drive("ball:swing2", Drive{DriveType::force, 30, 2, kInf, 0.5, 0.0});
-                  start_at(s, Vec3(0.1, -0.2, 0.0), Vec3(2.5, 2.0, 0.0));
+                  drive_axes(s, "ball", DriveType::force, 30, 2, Vec3(0.6, -0.8, 0.5));
+                  start_at(s, Vec3(0.1, -0.2, 0.0), Vec3(2.5, -2.0, 0.0));
                 }};
     limits.solver = solver;
     out.push_back(limits);
@@ -238,17 +229,20 @@ std::vector<Case> cases() {
   return out;
 }
 
-TEST(PhysxSpherical, MatchesPhysxRestartedAndFreeRunning) {
-  for (const Case& c : cases())
-    for (const Compat compat : {Compat::none, Compat::physx}) {
-      SCOPED_TRACE(c.name + " " + to_string(compat));
-      const auto [restart, free] = run_case(c, compat, 240);
-      EXPECT_LT(restart.q, 1e-5);
-      EXPECT_LT(restart.qd, 1e-5);
-      EXPECT_LT(free.q, 1e-4);
-      EXPECT_LT(free.qd, 1e-4);
-    }
+void expect_parity(Compat compat) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name + " " + to_string(compat));
+    const auto [restart, free] = run_case(c, compat, 240);
+    EXPECT_LT(restart.q, 1e-5);
+    EXPECT_LT(restart.qd, 1e-5);
+    EXPECT_LT(free.q, 1e-4);
+    EXPECT_LT(free.qd, 1e-4);
+  }
 }
+
+TEST(PhysxSpherical, MatchesPhysxRestartedAndFreeRunning) { expect_parity(Compat::none); }
+
+TEST(PhysxSpherical, MatchesPhysxInCompatPhysx) { expect_parity(Compat::physx); }
 
 }  // namespace
 }  // namespace featherdrive::spherical_parity
