@@ -12,15 +12,15 @@
 namespace featherdrive {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+constexpr double kSphericalPi = std::numbers::pi;
 
-Quat about(const Vec3& axis, double angle) { return Quat(Eigen::AngleAxisd(angle, axis)); }
+Quat turned_about(const Vec3& axis, double angle) { return Quat(Eigen::AngleAxisd(angle, axis)); }
 
 TEST(SphericalAxes, RotationAboutOneAxisIsThatAxisPosition) {
   for (int k = 0; k < 3; ++k)
-    for (const double angle : {-3.0, -1.2, -1e-9, 0.0, 1e-7, 0.4, 2.9, kPi - 1e-6}) {
+    for (const double angle : {-3.0, -1.2, -1e-9, 0.0, 1e-7, 0.4, 2.9, kSphericalPi - 1e-6}) {
       const Vec3 e = Vec3::Unit(k);
-      const Vec3 theta = spherical_joint_positions(about(e, angle));
+      const Vec3 theta = spherical_joint_positions(turned_about(e, angle));
       EXPECT_NEAR(theta[k], angle, 1e-14) << "axis " << k;
       EXPECT_NEAR(theta[(k + 1) % 3], 0.0, 1e-15);
       EXPECT_NEAR(theta[(k + 2) % 3], 0.0, 1e-15);
@@ -29,9 +29,9 @@ TEST(SphericalAxes, RotationAboutOneAxisIsThatAxisPosition) {
 
 TEST(SphericalAxes, BeyondPiTheShorterWayAndEitherSignOfTheQuaternion) {
   // A turn by 1.1 pi about x is one by -0.9 pi; -Q is the same rotation as Q.
-  const Quat Q = about(Vec3::UnitX(), 1.1 * kPi);
-  EXPECT_NEAR(spherical_joint_positions(Q)[0], -0.9 * kPi, 1e-14);
-  const Quat R = about(Vec3(1, -2, 0.5).normalized(), 2.2);
+  const Quat Q = turned_about(Vec3::UnitX(), 1.1 * kSphericalPi);
+  EXPECT_NEAR(spherical_joint_positions(Q)[0], -0.9 * kSphericalPi, 1e-14);
+  const Quat R = turned_about(Vec3(1, -2, 0.5).normalized(), 2.2);
   Quat minus = R;
   minus.coeffs() = -R.coeffs();
   EXPECT_LT((spherical_joint_positions(minus) - spherical_joint_positions(R)).norm(), 1e-15);
@@ -48,7 +48,7 @@ TEST(SphericalAxes, PositionsOfCompositionsRebuildTheRotation) {
                     Eigen::AngleAxisd(u(rng), Vec3::UnitX()))
                        .toRotationMatrix();
     const Vec3 theta = spherical_joint_positions(Quat(R));
-    ASSERT_LE(theta.norm(), kPi);
+    ASSERT_LE(theta.norm(), kSphericalPi);
     const double a = theta.norm();
     const Vec3 n3 = theta / a;
     Mat3 K;
@@ -56,9 +56,10 @@ TEST(SphericalAxes, PositionsOfCompositionsRebuildTheRotation) {
     const Mat3 rodrigues = Mat3::Identity() + std::sin(a) * K + (1 - std::cos(a)) * K * K;
     EXPECT_LT((rodrigues - R).cwiseAbs().maxCoeff(), 1e-13);
   }
-  // Twist then swing about two axes at right angles, small: the positions add to first order.
-  const Quat small = about(Vec3::UnitX(), 1e-4) * about(Vec3::UnitY(), 2e-4);
-  EXPECT_LT((spherical_joint_positions(small) - Vec3(1e-4, 2e-4, 0)).norm(), 1e-11);
+  // Small turns a then b compose to a + b + (a x b) / 2 to second order (Baker-Campbell-Hausdorff).
+  const Vec3 a(1e-4, 0, 0), b(0, 2e-4, 0);
+  const Quat small = turned_about(a.normalized(), a.norm()) * turned_about(b.normalized(), b.norm());
+  EXPECT_LT((spherical_joint_positions(small) - (a + b + 0.5 * a.cross(b))).norm(), 1e-12);
 }
 
 TEST(SphericalAxes, DriveErrorOfOneAxisIsTwiceTheSineOfHalfTheMiss) {
@@ -68,9 +69,9 @@ TEST(SphericalAxes, DriveErrorOfOneAxisIsTwiceTheSineOfHalfTheMiss) {
       driven[static_cast<size_t>(k)] = true;
       Vec3 targets = Vec3::Constant(7.0);  // undriven axes' targets count for nothing
       targets[k] = target;
-      const Vec3 e = spherical_drive_error(about(Vec3::Unit(k), angle), targets, driven);
+      const Vec3 e = spherical_drive_error(turned_about(Vec3::Unit(k), angle), targets, driven);
       // T* Q is a turn by angle - target about e_k, taken the short way round.
-      const double miss = std::remainder(target - angle, 2 * kPi);
+      const double miss = std::remainder(target - angle, 2 * kSphericalPi);
       EXPECT_NEAR(e[k], 2.0 * std::sin(miss / 2.0), 1e-14) << "axis " << k;
       EXPECT_NEAR(e.norm(), std::abs(e[k]), 1e-14);
     }
@@ -83,7 +84,7 @@ TEST(SphericalAxes, DriveErrorIsTheTurnFromTheTargetInItsFrame) {
   const Quat T(Eigen::AngleAxisd(t.norm(), t.normalized()));
   for (int k = 0; k < 3; ++k)
     for (const double d : {-0.7, 1e-5, 0.4}) {
-      const Vec3 e = spherical_drive_error(T * about(Vec3::Unit(k), d), t, {true, true, true});
+      const Vec3 e = spherical_drive_error(T * turned_about(Vec3::Unit(k), d), t, {true, true, true});
       EXPECT_LT((e + 2.0 * std::sin(d / 2.0) * Vec3::Unit(k)).norm(), 1e-15) << k << " " << d;
     }
   EXPECT_LT(spherical_drive_error(T, t, {true, true, true}).norm(), 1e-16);
