@@ -53,10 +53,6 @@ double spherical_axis_drive_error(const Model& model, const VecX& q, int dof,
 /// spherical_rows.cpp. Whether the model has a spherical joint.
 bool has_spherical_joints(const Model& model);
 
-/// spherical_rows.cpp. Default mode: of compute_link_bias's row biases, only the spherical rows'
-/// are kept (the prismatic rows' bias is a compat physx departure).
-void keep_spherical_row_bias(const Model& model, PhysxDepartures& dep);
-
 /// spherical_rows.cpp. After a (sub-)step h moved q: every spherical joint moved again as PhysX
 /// moves it (eq. S-7): its link turns by exp(h w) in the world from its rotation before the
 /// sub-step (dep.now.R, world_pose of the q before it), w the link's world angular velocity with

@@ -39,11 +39,6 @@ bool has_spherical_joints(const Model& model) {
   return false;
 }
 
-void keep_spherical_row_bias(const Model& model, PhysxDepartures& dep) {
-  for (int d = 0; d < model.nv; ++d)
-    if (model.links[model.dof_link[d]].joint_type != JointType::spherical) dep.row_bias[d] = 0.0;
-}
-
 void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& start,
                                 const VecX& qd, const std::vector<Vec3>* link_bias, double h,
                                 PhysxDepartures& dep, VecX& q) {

@@ -33,9 +33,8 @@ void Simulation::step() {
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
   // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
-  // bias (compat physx, spherical joints) and link damping read the link-frame ones.
-  const bool spherical = has_spherical_joints(model);
-  if (physx() || link_damping_active_ || spherical) forward_kinematics(model, data_, q_, qd_);
+  // bias of compat physx and link damping read the link-frame ones.
+  if (physx() || link_damping_active_) forward_kinematics(model, data_, q_, qd_);
   else forward_kinematics(model, data_, q_);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
   any_link_force_ =
@@ -48,10 +47,8 @@ void Simulation::step() {
     transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
   qd_ += dt * data_.qdd;
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
-  // Spherical joints see their links' bias in both modes, as PhysX's move (spherical_rows.cpp).
-  if (physx() || spherical) compute_link_bias(model, data_, qd_, dt, departures_);
-  if (!physx() && spherical) keep_spherical_row_bias(model, departures_);
   if (physx()) {
+    compute_link_bias(model, data_, qd_, dt, departures_);
     if (model.floating_base())
       correct_free_velocity_momentum(model, data_, tau, link_force, dt, departures_, qd_);
   }
@@ -226,10 +223,10 @@ void Simulation::solve_tgs() {
     // the position change from the clamped pose (prismatic_limits.cpp).
     if (physx()) clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
     delta_x_ += rho * qd_;
-    // A row's position change carries its link bias (spherical rows; prismatic ones are measured
-    // again below), as PhysX's link motion does (spherical_joints.md, eq. S-8).
-    delta_x_ += rho * departures_.row_bias;
     if (physx()) {
+      // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
+      // a prismatic row's is measured again below.
+      delta_x_ += rho * departures_.row_bias;
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1).
       track_prismatic_position_change(*model_, q_, qd_, rho, departures_, delta_x_);
       departures_.qd_position += (1.0 / n) * qd_;
@@ -244,8 +241,9 @@ void Simulation::solve_tgs() {
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of
 // the step's start frame, as PhysX keeps it (updateRootBody, recordDeltaMotion).
 void Simulation::integrate_positions(double h) {
-  // PhysX turns a spherical joint's link in the world (spherical_rows.cpp): the rotations before.
-  const bool spherical = has_spherical_joints(*model_);
+  // compat physx turns a spherical joint's link in the world as PhysX does (spherical_rows.cpp):
+  // the rotations before the sub-step.
+  const bool spherical = physx() && has_spherical_joints(*model_);
   if (spherical) world_pose(*model_, q_, departures_.now);
   if (!physx() || !model_->floating_base()) {
     integrate_configuration(*model_, q_, qd_, h, q_);
