@@ -31,3 +31,5 @@ def test_bad_axis_and_limit_are_value_errors(wrist):
         sim.set_joint_limits("wrist:twist", -4.0, 1.0)
     with pytest.raises(ValueError, match="no joint named 'wrist:tilt'"):
         sim.set_drive("wrist:tilt", fd.Drive(fd.DriveType.force, 1.0, 1.0))
+    with pytest.raises(ValueError, match="joint 'wrist' is spherical: name one of its axes"):
+        sim.set_drive("wrist", fd.Drive(fd.DriveType.force, 1.0, 1.0))

@@ -93,7 +93,8 @@ std::string spherical_fields(const Simulation& sim, const Link& l) {
                                     "; PhysX has one per spherical joint");
   std::ostringstream js;
   js << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
-     << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d)) << ",\n       \"axes\": [";
+     << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d))
+     << ",\n       \"axes\": [";
   for (int k = 0; k < 3; ++k)
     js << (k ? ",\n                {" : "{") << dof_fields(sim, d + k, sim.model().dof_names[d + k])
        << "}";

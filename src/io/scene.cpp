@@ -516,14 +516,16 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         if (std::string(which) == "qd")
           scene.qd0[dof] = v;
         else if (link.joint_type == JointType::spherical)
-          rotation.try_emplace(m->dof_link[dof], Vec3::Zero()).first->second[dof - link.v_index] = v;
+          rotation.try_emplace(m->dof_link[dof], Vec3::Zero())
+              .first->second[dof - link.v_index] = v;
         else
           scene.q0[link.q_index] = v;
       }
       // A spherical joint stands at exp(theta), theta its three positions (as PhysX poses it).
       for (const auto& [link, theta] : rotation) {
         const double angle = theta.norm();
-        const Quat Q = angle > 0.0 ? Quat(Eigen::AngleAxisd(angle, theta / angle)) : Quat::Identity();
+        const Quat Q =
+            angle > 0.0 ? Quat(Eigen::AngleAxisd(angle, theta / angle)) : Quat::Identity();
         scene.q0.segment<4>(m->links[link].q_index) << Q.w(), Q.x(), Q.y(), Q.z();
       }
     }
