@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "featherdrive/constraint/spherical_axes.hpp"
+#include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/compare.hpp"
 
