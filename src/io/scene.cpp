@@ -451,11 +451,20 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     }
     bool rebuild = false;
     for (LinkSpec& link : scene.robot.links)
-      for (const auto& [dof, js] : settings)
+      for (const auto& [dof, js] : settings) {
         if (js.armature && link.joint.name == js.joint) {
           link.joint.armature = {*js.armature};
           rebuild = true;
         }
+        // A spherical joint's axes each have their own (one JointSpec armature per dof).
+        if (js.armature && link.joint.type == JointType::spherical &&
+            m->links[m->dof_link[dof]].joint_name == link.joint.name) {
+          std::vector<double>& armature = link.joint.armature;
+          if (armature.size() != 3) armature.assign(3, armature.empty() ? 0.0 : armature[0]);
+          armature[dof - m->links[m->dof_link[dof]].v_index] = *js.armature;
+          rebuild = true;
+        }
+      }
     if (rebuild) scene.robot.rebuild();
     m = scene.robot.model.get();
   }

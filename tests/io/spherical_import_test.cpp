@@ -86,6 +86,16 @@ TEST(SphericalImport, SceneSetsEachAxisAndStartsAtPhysxsPositions) {
   EXPECT_LT((theta - Vec3(0.2, -0.1, 0.0)).norm(), 1e-15);
 }
 
+TEST(SphericalImport, ArmatureIsPerAxis) {
+  const Scene scene = parse_scene(
+      "model: spherical_wrist.urdf\nsteps: 1\njoints: {wrist:swing1: {armature: 0.05}}\n",
+      kExamples + "inline.yaml");
+  const Model& m = *scene.model();
+  EXPECT_EQ(m.armature[1], 0.0);
+  EXPECT_EQ(m.armature[2], 0.05);
+  EXPECT_EQ(m.armature[3], 0.0);
+}
+
 TEST(SphericalImport, BadAxisNamesAndLimitsAreOneLineErrors) {
   const std::string head = "model: spherical_wrist.urdf\nsteps: 1\n";
   EXPECT_EQ(scene_error(head + "joints: {wrist:twist: {lower: -4, upper: 1}}"),
