@@ -43,7 +43,8 @@ void featherdrive::python::bind_model(py::module_& m) {
       .def_readonly("friction", &Model::friction, "Coulomb joint friction per dof (nv,)")
       .def_readonly("dof_link", &Model::dof_link, "the link owning each dof")
       .def_readonly("dof_names", &Model::dof_names,
-                    "joint name of each dof ('joint:wx' etc. for multi-dof joints)")
+                    "joint name of each dof ('joint:twist', ':swing1', ':swing2' for spherical, "
+                    "'joint:wx' ... ':vz' for floating)")
       .def("floating_base", &Model::floating_base, "Whether the root has a floating joint.")
       .def("num_links", &Model::num_links, "Number of links.")
       .def("link_index", &Model::link_index, py::arg("name"),

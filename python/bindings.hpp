@@ -494,9 +494,17 @@ inline int index_in(long long index, int size, const char* what) {
   return static_cast<int>(index);
 }
 
-/// The dof of a joint given by name (its first dof) or by dof index.
+/// The dof of a joint given by name (its first dof; a spherical joint's axes by their own names)
+/// or by dof index.
 inline int dof_of(const Model& model, const NameOrIndex& joint) {
-  return joint.named ? model.dof_index(joint.name) : index_in(joint.index, model.nv, "dof index");
+  if (!joint.named) return index_in(joint.index, model.nv, "dof index");
+  const int dof = model.dof_index(joint.name);
+  const Link& link = model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(dof)])];
+  if (link.joint_type == JointType::spherical && link.joint_name == joint.name)
+    throw std::invalid_argument("joint '" + joint.name + "' is spherical: name one of its axes, '" +
+                                joint.name + ":twist', '" + joint.name + ":swing1' or '" +
+                                joint.name + ":swing2'");
+  return dof;
 }
 
 inline int link_of(const Model& model, const NameOrIndex& link) {

@@ -29,7 +29,8 @@ PathLike = Union[str, os.PathLike[str]]
 Int = SupportsIndex
 """An integer: int, a numpy integer or anything with __index__ (bool is refused)."""
 Joint = Union[str, Int]
-"""A joint name, or a dof index."""
+"""A joint name (a spherical joint's axes: 'ball:twist', 'ball:swing1', 'ball:swing2'), or a
+dof index."""
 
 class DivergenceError(RuntimeError):
     """A step would produce a non-finite value; the state is that before the step."""

@@ -50,10 +50,10 @@ int compare_physx(const ComparePhysxArgs& args) {
   // The harness cannot set PhysX's static/dynamic/viscous friction (URDF <dynamics> gives the
   // arm some): both sides run without it, and the output says so.
   std::string friction_off;
-  for (const Link& l : model.links)
-    if (l.nv == 1 && sim.joint_friction(l.v_index).active()) {
-      sim.set_joint_friction(l.v_index, JointFriction{});
-      friction_off += " " + l.joint_name;
+  for (int d = 0; d < model.nv; ++d)  // a spherical joint's axes by their dof names
+    if (sim.joint_friction(d).active()) {
+      sim.set_joint_friction(d, JointFriction{});
+      friction_off += " " + model.dof_names[d];
     }
 
   // The targets of every step as the harness takes them (entry k before step k + 1), from the

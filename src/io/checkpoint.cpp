@@ -430,14 +430,15 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       e.velocity_dependent_resistance = r.f64();
       const double friction_coefficient = r.f64();
       next.set_drive(d, drive);
-      // The per-joint settings exist for revolute and prismatic joints only; elsewhere the
-      // model's values stand (the fingerprint matched), and a setter is called only to change a
-      // value, so what the model itself allows (e.g. a velocity limit of 0) is kept as it is.
+      // The per-joint settings exist for revolute, prismatic and spherical joints only; elsewhere
+      // the model's values stand (the fingerprint matched), and a setter is called only to change
+      // a value, so what the model itself allows (e.g. a velocity limit of 0) is kept as it is.
       const auto same = [](double a, double b) {
         return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
       };
       const JointType jt = model.links[model.dof_link[d]].joint_type;
-      if (jt != JointType::revolute && jt != JointType::prismatic) {
+      if (jt != JointType::revolute && jt != JointType::prismatic &&
+          jt != JointType::spherical) {
         // No setter can change these here, so a run saves the simulation's own values.
         const JointFriction& f0 = next.joint_friction(d);
         const ActuatorEnvelope& e0 = next.actuator_envelope(d);
@@ -468,7 +469,8 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
             fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
                            " joint '" + model.links[model.dof_link[d]].joint_name +
                            "' has joint setting #" + std::to_string(k) + " = " +
-                           format_double(saved[k]) + ", which only a 1-dof joint can change");
+                           format_double(saved[k]) +
+                           ", which only a revolute, prismatic or spherical joint can change");
         continue;
       }
       if (!same(lower, next.lower_limit(d)) || !same(upper, next.upper_limit(d)))

@@ -16,6 +16,8 @@
 #include <limits>
 #include <sstream>
 
+#include "featherdrive/constraint/spherical_axes.hpp"
+
 extern char** environ;
 
 namespace featherdrive {
@@ -171,8 +173,11 @@ double physx_joint_force(const Simulation& sim, int dof) {
 
 JointTrajectory empty_trajectory(const Model& model) {
   JointTrajectory t;
-  for (const Link& l : model.links)
+  for (const Link& l : model.links) {
     if (l.nv == 1) t.joints.push_back(l.joint_name);
+    if (l.joint_type == JointType::spherical)  // per axis, as PhysX reports them
+      for (int k = 0; k < 3; ++k) t.joints.push_back(model.dof_names[l.v_index + k]);
+  }
   return t;
 }
 
@@ -183,10 +188,14 @@ void append_state(JointTrajectory& out, const Simulation& sim) {
   for (size_t j = 0; j < n; ++j) {
     const int dof = model.dof_index(out.joints[j]);
     const Link& link = model.links[model.dof_link[dof]];
-    if (link.nv != 1)
+    const bool spherical = link.joint_type == JointType::spherical;
+    if (link.nv != 1 && !spherical)
       throw std::invalid_argument("joint '" + out.joints[j] + "' has " + std::to_string(link.nv) +
-                                  " dofs; PhysX's columns are 1-dof joints");
-    q[j] = sim.q()[link.q_index];
+                                  " dofs; PhysX's columns are 1-dof joints and spherical axes");
+    // A spherical axis: PhysX's position, from the quaternion (constraint/spherical_axes.hpp).
+    const double* x = sim.q().data() + link.q_index;
+    q[j] = spherical ? spherical_joint_positions(Quat(x[0], x[1], x[2], x[3]))[dof - link.v_index]
+                     : x[0];
     qd[j] = sim.qd()[dof];
     f[j] = physx_joint_force(sim, dof);
   }

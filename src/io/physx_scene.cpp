@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/constraint/spherical_axes.hpp"
 
 namespace featherdrive {
 namespace {
@@ -48,6 +49,58 @@ std::string str(const std::string& s) {
     }
   }
   return out + "\"";
+}
+
+// One dof's armature, limits and drive (a revolute or prismatic joint, or a spherical axis),
+// each field as `, "key": value`; `name` names it in errors.
+std::string dof_fields(const Simulation& sim, int d, const std::string& name) {
+  if (sim.joint_friction(d).active())
+    throw std::invalid_argument("physx export: joint '" + name +
+                                "' has static/dynamic/viscous friction, which the harness "
+                                "cannot set");
+  if (sim.actuator_envelope(d).active())
+    throw std::invalid_argument("physx export: joint '" + name +
+                                "' has an actuator envelope, which the harness cannot set");
+  std::ostringstream js;
+  js << "\"armature\": " << num(sim.model().armature[d]);
+  if (sim.applied_force()[d] != 0.0) js << ", \"applied_force\": " << num(sim.applied_force()[d]);
+  if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
+    js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
+       << ", \"upper\": " << num(sim.upper_limit(d)) << "}";
+  const Drive& drive = sim.drive(d);
+  if (drive.type != DriveType::none)
+    js << ", \"drive\": {\"type\": " << str(to_string(drive.type))
+       << ", \"stiffness\": " << num(drive.stiffness) << ", \"damping\": " << num(drive.damping)
+       << ", \"max_force\": "
+       << num(std::isfinite(drive.max_impulse) ? drive.max_impulse : drive.max_force)
+       << ", \"target_position\": " << num(drive.target_position)
+       << ", \"target_velocity\": " << num(drive.target_velocity) << "}";
+  return js.str();
+}
+
+// A spherical joint (eSPHERICAL): PhysX has one max velocity and one friction coefficient per
+// joint and armature, limits and a drive per axis.
+std::string spherical_fields(const Simulation& sim, const Link& l) {
+  const int d = l.v_index;
+  for (int k = 1; k < 3; ++k)
+    for (const auto& [what, value] :
+         {std::pair{"max_velocity", &Simulation::max_joint_velocity},
+          std::pair{"friction_coefficient", &Simulation::friction_coefficient}})
+      if ((sim.*value)(d + k) != (sim.*value)(d))
+        throw std::invalid_argument("physx export: joint '" + l.joint_name + "' has " + what +
+                                    " " + num((sim.*value)(d + k)) + " on axis " +
+                                    sim.model().dof_names[d + k] + " but " +
+                                    num((sim.*value)(d)) + " on " + sim.model().dof_names[d] +
+                                    "; PhysX has one per spherical joint");
+  std::ostringstream js;
+  js << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
+     << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d))
+     << ",\n       \"axes\": [";
+  for (int k = 0; k < 3; ++k)
+    js << (k ? ",\n                {" : "{") << dof_fields(sim, d + k, sim.model().dof_names[d + k])
+       << "}";
+  js << "]";
+  return js.str();
 }
 
 }  // namespace
@@ -115,11 +168,9 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     if (i == 0) {
       js << "null}";
     } else {
-      if (l.joint_type == JointType::spherical)
-        throw std::invalid_argument("physx export: joint '" + l.joint_name +
-                                    "' is spherical, which the harness does not build");
       const char* type = l.joint_type == JointType::revolute    ? "revolute"
                          : l.joint_type == JointType::prismatic ? "prismatic"
+                         : l.joint_type == JointType::spherical ? "spherical"
                                                                 : "fixed";
       js << "{\"name\": " << str(l.joint_name) << ", \"type\": " << str(type)
          << ", \"origin\": {\"xyz\": " << vec(l.tree_transform.r)
@@ -127,49 +178,41 @@ std::string physx_scene_json(const Simulation& sim, int steps,
          << "}, \"axis\": " << vec(l.axis);
       if (l.nv == 1) {
         const int d = l.v_index;
-        if (sim.joint_friction(d).active())
-          throw std::invalid_argument("physx export: joint '" + l.joint_name +
-                                      "' has static/dynamic/viscous friction, which the harness "
-                                      "cannot set");
-        if (sim.actuator_envelope(d).active())
-          throw std::invalid_argument("physx export: joint '" + l.joint_name +
-                                      "' has an actuator envelope, which the harness cannot set");
-        js << ", \"armature\": " << num(model.armature[d])
+        js << ", " << dof_fields(sim, d, l.joint_name)
            << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
            << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d));
-        if (sim.applied_force()[d] != 0.0)
-          js << ", \"applied_force\": " << num(sim.applied_force()[d]);
         if (l.joint_type == JointType::revolute && sim.revolute_wrap(d) == RevoluteWrap::wrapped)
           js << ", \"wrapped\": true";
-        if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
-          js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
-             << ", \"upper\": " << num(sim.upper_limit(d)) << "}";
-        const Drive& drive = sim.drive(d);
-        if (drive.type != DriveType::none)
-          js << ", \"drive\": {\"type\": " << str(to_string(drive.type))
-             << ", \"stiffness\": " << num(drive.stiffness)
-             << ", \"damping\": " << num(drive.damping) << ", \"max_force\": "
-             << num(std::isfinite(drive.max_impulse) ? drive.max_impulse : drive.max_force)
-             << ", \"target_position\": " << num(drive.target_position)
-             << ", \"target_velocity\": " << num(drive.target_velocity) << "}";
       }
+      if (l.joint_type == JointType::spherical) js << spherical_fields(sim, l);
       js << "}}";
     }
     js << (i + 1 < model.num_links() ? ",\n" : "\n");
   }
   js << "  ],\n  \"initial\": {\"q\": {";
+  // A spherical joint's axes by their dof names, at PhysX's positions from the quaternion.
   bool first = true;
   for (const Link& l : model.links) {
-    if (l.nv != 1) continue;
-    js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.q()[l.q_index]);
-    first = false;
+    if (l.nv == 1) {
+      js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.q()[l.q_index]);
+      first = false;
+    }
+    if (l.joint_type != JointType::spherical) continue;
+    const double* x = sim.q().data() + l.q_index;
+    const Vec3 position = spherical_joint_positions(Quat(x[0], x[1], x[2], x[3]));
+    for (int k = 0; k < 3; ++k) {
+      js << (first ? "" : ", ") << str(model.dof_names[l.v_index + k]) << ": " << num(position[k]);
+      first = false;
+    }
   }
   js << "}, \"qd\": {";
   first = true;
   for (const Link& l : model.links) {
-    if (l.nv != 1) continue;
-    js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.qd()[l.v_index]);
-    first = false;
+    if (l.nv != 1 && l.joint_type != JointType::spherical) continue;
+    for (int d = l.v_index; d < l.v_index + l.nv; ++d) {
+      js << (first ? "" : ", ") << str(model.dof_names[d]) << ": " << num(sim.qd()[d]);
+      first = false;
+    }
   }
   js << "}},\n  \"targets\": [";
   for (size_t k = 0; k < targets.size(); ++k) {

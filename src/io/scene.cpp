@@ -527,11 +527,20 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     }
     bool rebuild = false;
     for (LinkSpec& link : scene.robot.links)
-      for (const auto& [dof, js] : settings)
+      for (const auto& [dof, js] : settings) {
         if (js.armature && link.joint.name == js.joint) {
           link.joint.armature = {*js.armature};
           rebuild = true;
         }
+        // A spherical joint's axes each have their own (one JointSpec armature per dof).
+        if (js.armature && link.joint.type == JointType::spherical &&
+            m->links[m->dof_link[dof]].joint_name == link.joint.name) {
+          std::vector<double>& armature = link.joint.armature;
+          if (armature.size() != 3) armature.assign(3, armature.empty() ? 0.0 : armature[0]);
+          armature[dof - m->links[m->dof_link[dof]].v_index] = *js.armature;
+          rebuild = true;
+        }
+      }
     if (rebuild) scene.robot.rebuild();
     m = scene.robot.model.get();
   }
@@ -584,14 +593,26 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       if (!values) continue;
       const std::string p = std::string("initial.") + which;
       r.map(values, p, {});
+      std::map<int, Vec3> rotation;  // spherical joints' PhysX positions, by link
       for (const auto& kv : values) {
         const std::string name = kv.first.Scalar();
         const int dof = joint_dof(r, scene.robot, name, p + "." + name);
         const double v = r.finite(kv.second, p + "." + name);
-        if (std::string(which) == "q")
-          scene.q0[m->links[m->dof_link[dof]].q_index] = v;
-        else
+        const Link& link = m->links[m->dof_link[dof]];
+        if (std::string(which) == "qd")
           scene.qd0[dof] = v;
+        else if (link.joint_type == JointType::spherical)
+          rotation.try_emplace(m->dof_link[dof], Vec3::Zero())
+              .first->second[dof - link.v_index] = v;
+        else
+          scene.q0[link.q_index] = v;
+      }
+      // A spherical joint stands at exp(theta), theta its three positions (as PhysX poses it).
+      for (const auto& [link, theta] : rotation) {
+        const double angle = theta.norm();
+        const Quat Q =
+            angle > 0.0 ? Quat(Eigen::AngleAxisd(angle, theta / angle)) : Quat::Identity();
+        scene.q0.segment<4>(m->links[link].q_index) << Q.w(), Q.x(), Q.y(), Q.z();
       }
     }
   }
@@ -605,7 +626,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   std::map<int, DriveSpec> drives;
   if (defaults)
     for (int dof : scene.robot.dof_order)
-      if (m->links[m->dof_link[dof]].nv == 1) {
+      if (m->links[m->dof_link[dof]].nv == 1 ||
+          m->links[m->dof_link[dof]].joint_type == JointType::spherical) {
         DriveSpec spec = *defaults;
         spec.joint = m->dof_names[dof];
         spec.dof = dof;
@@ -656,16 +678,16 @@ Simulation make_simulation(const Scene& scene) {
     }
     if (scene.joint_defaults) {
       const Model& model = sim.model();
-      for (const Link& link : model.links) {
-        if (link.nv != 1 ||
-            (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic))
+      for (int d = 0; d < model.nv; ++d) {  // every revolute, prismatic and spherical dof
+        const JointType type = model.links[model.dof_link[d]].joint_type;
+        if (type != JointType::revolute && type != JointType::prismatic &&
+            type != JointType::spherical)
           continue;
         const JointSettings& jd = *scene.joint_defaults;
-        if (jd.revolute && link.joint_type == JointType::revolute)
-          sim.set_revolute_wrap(link.v_index, *jd.revolute);
-        if (jd.friction_coefficient) sim.set_friction_coefficient(link.v_index, *jd.friction_coefficient);
-        if (jd.max_velocity && !std::isfinite(model.velocity_limit[link.v_index]))
-          sim.set_max_joint_velocity(link.v_index, *jd.max_velocity);
+        if (jd.revolute && type == JointType::revolute) sim.set_revolute_wrap(d, *jd.revolute);
+        if (jd.friction_coefficient) sim.set_friction_coefficient(d, *jd.friction_coefficient);
+        if (jd.max_velocity && !std::isfinite(model.velocity_limit[d]))
+          sim.set_max_joint_velocity(d, *jd.max_velocity);
       }
     }
     for (const JointSettings& js : scene.joints) {

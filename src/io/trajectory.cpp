@@ -1,11 +1,13 @@
 #include "featherdrive/io/trajectory.hpp"
 
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/constraint/spherical_axes.hpp"
 
 namespace featherdrive {
 namespace {
 
-// q entries of each dof column in URDF order; a floating root's q (7) comes first.
+// q entries of each dof column in URDF order; a floating root's q (7) comes first. A spherical
+// axis's column is PhysX's position of dof d, from the quaternion: entry -1 - d.
 std::vector<int> q_order(const UrdfRobot& robot) {
   const Model& model = *robot.model;
   std::vector<int> order;
@@ -14,6 +16,7 @@ std::vector<int> q_order(const UrdfRobot& robot) {
   for (int d : robot.dof_order) {
     const Link& link = model.links[model.dof_link[d]];
     if (link.nv == 1) order.push_back(link.q_index);
+    if (link.joint_type == JointType::spherical) order.push_back(-1 - d);
   }
   return order;
 }
@@ -34,7 +37,9 @@ std::vector<std::string> trajectory_columns(const UrdfRobot& robot) {
     for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz"})
       columns.push_back("q:" + model.links[0].joint_name + ":" + c);
   for (int d : robot.dof_order)
-    if (model.links[model.dof_link[d]].nv == 1) columns.push_back("q:" + model.dof_names[d]);
+    if (model.links[model.dof_link[d]].nv == 1 ||
+        model.links[model.dof_link[d]].joint_type == JointType::spherical)
+      columns.push_back("q:" + model.dof_names[d]);
   for (const char* prefix : {"qd:", "f:"})
     for (int d : robot.dof_order) columns.push_back(prefix + model.dof_names[d]);
   return columns;
@@ -49,7 +54,16 @@ TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot)
 
 void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
   out_ << step << ',' << format_double(sim.time());
-  for (int i : q_order_) out_ << ',' << format_double(sim.q()[i]);
+  for (int i : q_order_) {
+    if (i >= 0) {
+      out_ << ',' << format_double(sim.q()[i]);
+      continue;
+    }
+    const Link& link = sim.model().links[sim.model().dof_link[-1 - i]];
+    const double* x = sim.q().data() + link.q_index;
+    const Vec3 theta = spherical_joint_positions(Quat(x[0], x[1], x[2], x[3]));
+    out_ << ',' << format_double(theta[-1 - i - link.v_index]);
+  }
   for (int d : v_order_) out_ << ',' << format_double(sim.qd()[d]);
   // The dof's driver: its implicit drive or its explicit actuator (a dof has at most one).
   for (int d : v_order_)

@@ -265,7 +265,8 @@ void map_urdf_joints(UrdfRobot& robot, const urdf::ModelInterface& urdf_model) {
     if (joint->type == urdf::Joint::FIXED) continue;
     const int dof = model.links[link->second].v_index;
     robot.dof_of_urdf_joint[j] = dof;
-    robot.urdf_joint_of_dof[static_cast<size_t>(dof)] = static_cast<int>(j);
+    for (int d = dof; d < dof + model.links[link->second].nv; ++d)  // a spherical joint's three
+      robot.urdf_joint_of_dof[static_cast<size_t>(d)] = static_cast<int>(j);
   }
 }
 
@@ -360,7 +361,26 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       fail(file, "the joints form a cycle through link '" + link + "'");
   }
 
-  const urdf::ModelInterfaceSharedPtr urdf_model = parse_with_urdfdom(xml, file, robot.warnings);
+  // <joint type="spherical"> and its synonym "ball", an extension urdfdom refuses: urdfdom reads
+  // them as continuous joints, built as spherical below (docs/conventions.md, "URDF").
+  std::set<std::string> spherical;
+  for (TiXmlElement* e = doc.RootElement()->FirstChildElement("joint"); e;
+       e = e->NextSiblingElement("joint")) {
+    const char* type = e->Attribute("type");
+    const char* name = e->Attribute("name");
+    if (!type || !name || (std::string(type) != "spherical" && std::string(type) != "ball"))
+      continue;
+    spherical.insert(name);
+    e->SetAttribute("type", "continuous");
+  }
+  std::string rewritten;
+  if (!spherical.empty()) {
+    TiXmlPrinter printer;
+    doc.Accept(&printer);
+    rewritten = printer.CStr();
+  }
+  const urdf::ModelInterfaceSharedPtr urdf_model =
+      parse_with_urdfdom(spherical.empty() ? xml : rewritten, file, robot.warnings);
   // urdfdom's links own their children, so freeing a long chain recursed once per link: cut the
   // links apart first (the map still owns every one).
   struct Unlink {
@@ -380,8 +400,9 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     const std::string type = joint_type_name(j->type);
     if (j->type == urdf::Joint::FLOATING || j->type == urdf::Joint::PLANAR)
       fail(file, "joint '" + name + "' type = " + type +
-                     ": not supported (featherdrive imports fixed, revolute, continuous and "
-                     "prismatic joints; a floating root comes from fixed_base: false)");
+                     ": not supported (featherdrive imports fixed, revolute, continuous, "
+                     "prismatic and spherical joints; a floating root comes from fixed_base: "
+                     "false)");
     if (j->type == urdf::Joint::UNKNOWN) fail(file, "joint '" + name + "' has an unknown type");
   }
 
@@ -528,7 +549,13 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
           }
           break;
         case urdf::Joint::CONTINUOUS:
-          spec.joint.type = JointType::revolute;
+          spec.joint.type = spherical.count(j->name) ? JointType::spherical : JointType::revolute;
+          // A spherical joint's position limits are per axis, in the scene (PhysX's [-pi, pi]).
+          if (spherical.count(j->name) && j->limits &&
+              (j->limits->lower != 0.0 || j->limits->upper != 0.0))
+            robot.warnings.push_back("joint '" + j->name + "' is spherical: <limit lower upper> "
+                                     "is not read (limits are set per axis in the scene: joints: "
+                                     "{" + j->name + ":twist: {lower: .., upper: ..}})");
           break;
         default:
           fail(file,
@@ -577,10 +604,14 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
     for (int d = 0; d < model.links[0].nv; ++d) robot.dof_order.push_back(d);
   std::map<std::string, int> dof_of;  // one lookup per joint: Model::dof_index searches
   for (const Link& link : model.links)
-    if (link.nv == 1) dof_of.emplace(link.joint_name, link.v_index);
+    if (link.nv == 1 || link.joint_type == JointType::spherical)
+      dof_of.emplace(link.joint_name, link.v_index);
   for (const std::string& name : robot.joint_order) {
     const urdf::JointConstSharedPtr j = urdf_model->getJoint(name);
-    if (j && j->type != urdf::Joint::FIXED) robot.dof_order.push_back(dof_of.at(name));
+    if (!j || j->type == urdf::Joint::FIXED) continue;
+    const int first = dof_of.at(name);
+    for (int d = first; d < first + model.links[model.dof_link[first]].nv; ++d)
+      robot.dof_order.push_back(d);
   }
   map_urdf_joints(robot, *urdf_model);
   // q_joint = multiplier q_leader + offset is PhysX's q_a + gear_ratio q_b + offset' = 0 with

@@ -137,11 +137,20 @@ class Reader {
 inline int joint_dof(const Reader& r, const UrdfRobot& robot, const std::string& joint,
                      const std::string& path) {
   const Model& model = *robot.model;
+  auto spherical = [&](int dof) {
+    return model.links[model.dof_link[dof]].joint_type == JointType::spherical;
+  };
+  // A spherical joint's axes by their dof names (docs/math/spherical_joints.md).
+  for (int d = 0; d < model.nv; ++d)
+    if (model.dof_names[d] == joint && spherical(d)) return d;
   for (const Link& link : model.links) {
     if (link.joint_name != joint) continue;
     if (link.nv == 1) return link.v_index;
+    if (link.joint_type == JointType::spherical)
+      r.fail(path, "joint '" + joint + "' is spherical: name one of its axes, '" + joint +
+                       ":twist', '" + joint + ":swing1' or '" + joint + ":swing2'");
     r.fail(path, "joint '" + joint + "' is " + to_string(link.joint_type) +
-                     ": this setting acts on revolute and prismatic joints only");
+                     ": this setting acts on revolute, prismatic and spherical joints only");
   }
   for (const std::string& name : robot.joint_order)
     if (name == joint)
@@ -149,7 +158,7 @@ inline int joint_dof(const Reader& r, const UrdfRobot& robot, const std::string&
                        "' is fixed (merged into its parent): it has no degree of freedom");
   std::string list;
   for (int d : robot.dof_order)
-    if (model.links[model.dof_link[d]].nv == 1)
+    if (model.links[model.dof_link[d]].nv == 1 || spherical(d))
       list += (list.empty() ? "" : ", ") + model.dof_names[d];
   r.fail(path, "no joint named '" + joint + "' in " + robot.path.filename().string() +
                    " (moving joints: " + list + ")");

@@ -1,5 +1,7 @@
 #include "featherdrive/model/model.hpp"
 
+#include <algorithm>
+
 #include <stdexcept>
 
 namespace featherdrive {
@@ -28,6 +30,12 @@ int Model::joint_link_index(const std::string& joint_name) const {
 }
 
 int Model::dof_index(const std::string& joint_name) const {
+  // One axis of a multi-dof joint by its dof name ("ball:swing1"); joint names come first.
+  const bool is_joint = std::any_of(links.begin(), links.end(),
+                                    [&](const Link& l) { return l.joint_name == joint_name; });
+  if (!is_joint)
+    for (size_t d = 0; d < dof_names.size(); ++d)
+      if (dof_names[d] == joint_name) return static_cast<int>(d);
   const Link& link = links[joint_link_index(joint_name)];
   if (link.nv == 0)
     throw std::invalid_argument("joint '" + joint_name + "' is fixed and has no degree of freedom");

@@ -335,7 +335,8 @@ Model ModelBuilder::build() const {
       friction.push_back(j.friction);
       model.dof_link.push_back(k);
     }
-    static const char* const kSpherical[] = {"wx", "wy", "wz"};
+    // PhysX's axes of a spherical joint: eTWIST, eSWING1, eSWING2 about the joint frame's x, y, z.
+    static const char* const kSpherical[] = {"twist", "swing1", "swing2"};
     static const char* const kFloating[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
     for (int d = 0; d < link.nv; ++d) {
       if (link.nv == 1) model.dof_names.push_back(j.name);

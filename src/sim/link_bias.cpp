@@ -142,6 +142,12 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
   dep.row_bias.setZero();
   for (int i = 1; i < n; ++i) {
     const Link& link = model.links[i];
+    // A spherical joint's rows are angular about its child's axes, which its angular bias does
+    // not leave alone (docs/math/spherical_joints.md, eq. S-8).
+    if (link.joint_type == JointType::spherical)
+      for (int k = 0; k < 3; ++k)
+        dep.row_bias[link.v_index + k] =
+            s.R[i].col(k).dot(dep.bias_w[i] - dep.bias_w[link.parent]);
     if (link.joint_type != JointType::prismatic) continue;
     const int p = link.parent;
     const Vec3 u = s.R[i] * link.axis;

@@ -5,8 +5,12 @@
 
 #include <vector>
 
+#include <array>
+
 #include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
+#include "featherdrive/sim/physx_departures.hpp"
 
 namespace featherdrive {
 
@@ -36,5 +40,26 @@ void link_cfm(const Model& model, const Data& data, const std::vector<LinkParame
 /// finite limit is put back within it (PhysX does this when it writes the step's positions, after
 /// the velocity iterations; the rows of the step never see it).
 void clamp_prismatic_positions(const Model& model, const VecX& lower, const VecX& upper, VecX& q);
+
+/// spherical_rows.cpp. PhysX's position (twist, swing1 or swing2) of spherical dof `dof` at q.
+double spherical_axis_position(const Model& model, const VecX& q, int dof);
+
+/// spherical_rows.cpp. PhysX's drive error (target - position) of spherical dof `dof` at q, given
+/// the drives of the joint's three axes (twist first): the driven axes' targets make one target
+/// rotation.
+double spherical_axis_drive_error(const Model& model, const VecX& q, int dof,
+                                  const std::array<const Drive*, 3>& axes);
+
+/// spherical_rows.cpp. Whether the model has a spherical joint.
+bool has_spherical_joints(const Model& model);
+
+/// spherical_rows.cpp. After a (sub-)step h moved q: every spherical joint moved again as PhysX
+/// moves it (eq. S-7): its link turns by exp(h w) in the world from its rotation before the
+/// sub-step (dep.now.R, world_pose of the q before it), w the link's world angular velocity with
+/// the step's start rotations (start) plus link_bias (if not null); its parent stands where q
+/// puts it. Writes the joint's quaternion into q; dep.now.R ends as the rotations after.
+void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& start,
+                                const VecX& qd, const std::vector<Vec3>* link_bias, double h,
+                                PhysxDepartures& dep, VecX& q);
 
 }  // namespace featherdrive

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "featherdrive/algorithm/joint_motion.hpp"
@@ -13,6 +14,13 @@ namespace featherdrive {
 namespace {
 
 std::string fmt(double v) { return format_double(v); }
+
+// The joints whose dofs carry rows (drives, limits, friction, velocity limits): revolute,
+// prismatic, and spherical per axis (twist, swing1, swing2; docs/math/spherical_joints.md).
+bool has_axis_rows(JointType type) {
+  return type == JointType::revolute || type == JointType::prismatic ||
+         type == JointType::spherical;
+}
 
 void check_vector(const VecX& x, Eigen::Index expected, const char* what) {
   if (x.size() != expected)
@@ -127,7 +135,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   envelopes_.assign(static_cast<size_t>(nv), ActuatorEnvelope{});
   for (int d = 0; d < nv; ++d) {
     const JointType type = model_->links[model_->dof_link[d]].joint_type;
-    if (type != JointType::revolute && type != JointType::prismatic) continue;
+    if (!has_axis_rows(type)) continue;
     friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
   }
   actuators_ = ExplicitActuators(nv);
@@ -150,7 +158,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     link_parameters_.assign(n, physx_default::link());
     for (int d = 0; d < nv; ++d) {
       const JointType type = model_->links[model_->dof_link[d]].joint_type;
-      if (type != JointType::revolute && type != JointType::prismatic) continue;
+      if (!has_axis_rows(type)) continue;
       wrapped_[static_cast<size_t>(d)] = type == JointType::revolute;  // PhysX's eREVOLUTE
       friction_coefficient_[d] = physx_default::friction_coefficient;
       if (!std::isfinite(max_velocity_[d])) max_velocity_[d] = physx_default::max_joint_velocity;
@@ -237,21 +245,30 @@ int Simulation::check_dof(int dof) const {
 }
 
 int Simulation::driven_dof(const std::string& joint) const {
+  // A spherical joint's axes go by their dof names ("ball:twist", "ball:swing1", "ball:swing2").
+  for (int d = 0; d < model_->nv; ++d)
+    if (model_->dof_names[d] == joint &&
+        model_->links[model_->dof_link[d]].joint_type == JointType::spherical)
+      return d;
   const Link& link = model_->links[model_->joint_link_index(joint)];
-  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+  if (link.joint_type == JointType::spherical)
+    throw std::invalid_argument("joint '" + joint + "' is spherical: name one of its axes, '" +
+                                joint + ":twist', '" + joint + ":swing1' or '" + joint +
+                                ":swing2'");
+  if (!has_axis_rows(link.joint_type))
     throw std::invalid_argument("joint '" + joint + "' is " + to_string(link.joint_type) +
-                                ": this setting acts on revolute and prismatic joints only");
+                                ": this setting acts on revolute, prismatic and spherical "
+                                "joints only");
   return link.v_index;
 }
 
 void Simulation::set_drive(int dof, const Drive& drive) {
   check_dof(dof);
   const Link& link = model_->links[model_->dof_link[dof]];
-  if (drive.type != DriveType::none && link.joint_type != JointType::revolute &&
-      link.joint_type != JointType::prismatic)
+  if (drive.type != DriveType::none && !has_axis_rows(link.joint_type))
     throw std::invalid_argument("joint '" + link.joint_name + "' is " +
                                 to_string(link.joint_type) +
-                                ": drives act on revolute and prismatic joints only");
+                                ": drives act on revolute, prismatic and spherical joints only");
   validate_drive(drive, link.joint_name);
   if (drive.type != DriveType::none && actuators_.active(dof))
     throw std::invalid_argument("joint '" + link.joint_name + "' has an explicit actuator (" +
@@ -275,7 +292,7 @@ bool Simulation::accepts_targets(int dof) const {
 std::string Simulation::no_drive_message(int dof) const {
   const Link& link = model_->links[model_->dof_link[dof]];
   const std::string joint = "joint '" + model_->dof_names[dof] + "' (dof " + std::to_string(dof);
-  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+  if (!has_axis_rows(link.joint_type))
     return joint + ") is " + to_string(link.joint_type) + ": it takes no drive, so no target";
   return joint + ") has no drive (type none), so a target would do nothing: give it one first "
                  "(set_drive, set_drive_gains for every joint, or set_actuator)";
@@ -304,10 +321,10 @@ void Simulation::set_drive_target(const std::string& joint, double position, dou
 int Simulation::one_dof_joint(int dof) const {
   check_dof(dof);
   const Link& link = model_->links[model_->dof_link[dof]];
-  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
+  if (!has_axis_rows(link.joint_type))
     throw std::invalid_argument("joint '" + link.joint_name + "' is " + to_string(link.joint_type) +
-                                ": limits, friction and velocity limits act on revolute and "
-                                "prismatic joints only");
+                                ": limits, friction and velocity limits act on revolute, "
+                                "prismatic and spherical joints only");
   return dof;
 }
 
@@ -320,6 +337,14 @@ void Simulation::set_joint_limits(int dof, double lower, double upper) {
   if (upper == -std::numeric_limits<double>::infinity())
     throw std::invalid_argument("limits on joint '" + joint + "': upper = -inf leaves no position");
   validate_limits(lower, upper, model_->links[model_->dof_link[dof]].joint_name);
+  // PhysX's spherical positions lie in [-pi, pi] (setLimitParams refuses wider limits).
+  if (model_->links[model_->dof_link[dof]].joint_type == JointType::spherical)
+    for (const double limit : {lower, upper})
+      if (std::isfinite(limit) && std::abs(limit) > std::numbers::pi)
+        throw std::invalid_argument("limits on joint '" + model_->dof_names[dof] + "': " +
+                                    (limit == lower ? "lower = " : "upper = ") + fmt(limit) +
+                                    " is outside [-pi, pi], where a spherical axis's position "
+                                    "lies");
   lower_limit_[dof] = lower;
   upper_limit_[dof] = upper;
 }

@@ -92,11 +92,22 @@ void Simulation::setup_rows(double h, bool tgs) {
   const double dt = options_.dt;
   any_rows_ = false;
   any_undriven_rows_ = false;
+  auto drive_seen = [this](int dof) -> const Drive& {
+    return drive_delays_.delayed(dof) ? drive_delays_.drive_seen(dof)
+                                      : drives_[static_cast<size_t>(dof)];
+  };
+  // A spherical joint's three drives, twist first: their targets make one rotation.
+  auto axis_drives = [&](int dof) {
+    const int first = model.links[model.dof_link[dof]].v_index;
+    return std::array<const Drive*, 3>{&drive_seen(first), &drive_seen(first + 1),
+                                       &drive_seen(first + 2)};
+  };
   for (int d = 0; d < model.nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
     // Data's compact copy of the link: a Link spreads over a kilobyte.
     const Data::LinkInfo& link = data_.info[model.dof_link[d]];
-    if (link.type != JointType::revolute && link.type != JointType::prismatic) {
+    const bool spherical = link.type == JointType::spherical;
+    if (link.type != JointType::revolute && link.type != JointType::prismatic && !spherical) {
       rows = DofRows{};
       sweep_.has_rows[d] = 0;
       continue;
@@ -110,17 +121,22 @@ void Simulation::setup_rows(double h, bool tgs) {
     rows.high_impulse = 0.0;
     rows.velocity_limit_impulse = 0.0;
     const double r = data_.inverse_mass_diagonal[d];
-    const double x0 = q_[link.q_index];
+    // A spherical axis's position is PhysX's, from the quaternion (spherical_rows.cpp).
+    const double x0 = spherical ? spherical_axis_position(model, q_, d) : q_[link.q_index];
     // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
     const double cfm = std::max(link_cfm_[model.dof_link[d]],
                                 link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
     rows.response = r;
-    const Drive& drive =
-        drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : drives_[static_cast<size_t>(d)];
+    const Drive& drive = drive_seen(d);
     rows.has_drive = drive.type != DriveType::none;
     // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
+    // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
+    const double x0_drive =
+        spherical && rows.has_drive
+            ? drive.target_position - spherical_axis_drive_error(model, q_, d, axis_drives(d))
+            : x0;
     rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
-                                                             ? r + cfm : r, x0, h, dt, tgs)
+                                                             ? r + cfm : r, x0_drive, h, dt, tgs)
                                 : DriveRow{};
     const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
     rows.has_envelope = rows.has_drive && envelope.active();
@@ -215,6 +231,9 @@ void Simulation::solve_tgs() {
     if (physx()) clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
     delta_x_ += rho * qd_;
     if (physx()) {
+      // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
+      // a prismatic row's is measured again below.
+      delta_x_ += rho * departures_.row_bias;
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1).
       track_prismatic_position_change(*model_, q_, qd_, rho, departures_, delta_x_);
       departures_.qd_position += (1.0 / n) * qd_;
@@ -229,15 +248,22 @@ void Simulation::solve_tgs() {
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of
 // the step's start frame, as PhysX keeps it (updateRootBody, recordDeltaMotion).
 void Simulation::integrate_positions(double h) {
+  // compat physx turns a spherical joint's link in the world as PhysX does (spherical_rows.cpp):
+  // the rotations before the sub-step.
+  const bool spherical = physx() && has_spherical_joints(*model_);
+  if (spherical) world_pose(*model_, q_, departures_.now);
   if (!physx() || !model_->floating_base()) {
     integrate_configuration(*model_, q_, qd_, h, q_);
-    return;
+  } else {
+    const int iq = model_->links[0].q_index;
+    const Eigen::Matrix<double, 7, 1> root = q_.segment<7>(iq);
+    integrate_configuration(*model_, q_, qd_, h, q_);
+    q_.segment<7>(iq) = root;
+    integrate_root_about_com(*model_, qd_, h, departures_, q_);
   }
-  const int iq = model_->links[0].q_index;
-  const Eigen::Matrix<double, 7, 1> root = q_.segment<7>(iq);
-  integrate_configuration(*model_, q_, qd_, h, q_);
-  q_.segment<7>(iq) = root;
-  integrate_root_about_com(*model_, qd_, h, departures_, q_);
+  if (spherical)
+    integrate_spherical_joints(*model_, data_.world_rotation, qd_,
+                               &departures_.bias_w, h, departures_, q_);
 }
 
 }  // namespace featherdrive

@@ -134,16 +134,20 @@ TEST(AllocationCounter, CountsEveryAllocator) {
 void constrain_every_joint(Simulation& sim, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (const Link& l : sim.model().links) {
-    if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic) continue;
-    const int d = l.v_index;
-    sim.set_drive(d, Drive{DriveType::force, 200.0, 20.0, kInf, 0.5 * u(rng), 0.0});
-    sim.set_joint_limits(d, -0.3, 0.4);
-    sim.set_joint_friction(d, JointFriction{0.5, 0.3, 0.1});
-    sim.set_max_joint_velocity(d, 3.0);
-    if (d % 2 == 0) sim.set_actuator_envelope(d, ActuatorEnvelope{50.0, 10.0, 1.0, 0.1});
-    if (d % 3 == 1) sim.set_drive_delay(d, 1 + d % 4);  // rings sized here, not in the step
-    if (l.joint_type == JointType::revolute && d % 2 == 1)
-      sim.set_revolute_wrap(d, RevoluteWrap::wrapped);
+    // Every axis of a spherical joint too (its rows: spherical_rows.cpp).
+    if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic &&
+        l.joint_type != JointType::spherical)
+      continue;
+    for (int d = l.v_index; d < l.v_index + l.nv; ++d) {
+      sim.set_drive(d, Drive{DriveType::force, 200.0, 20.0, kInf, 0.5 * u(rng), 0.0});
+      sim.set_joint_limits(d, -0.3, 0.4);
+      sim.set_joint_friction(d, JointFriction{0.5, 0.3, 0.1});
+      sim.set_max_joint_velocity(d, 3.0);
+      if (d % 2 == 0) sim.set_actuator_envelope(d, ActuatorEnvelope{50.0, 10.0, 1.0, 0.1});
+      if (d % 3 == 1) sim.set_drive_delay(d, 1 + d % 4);  // rings sized here, not in the step
+      if (l.joint_type == JointType::revolute && d % 2 == 1)
+        sim.set_revolute_wrap(d, RevoluteWrap::wrapped);
+    }
   }
   // Mimic rows between 1-dof joints, a chain of rows (no cycle), in different branches.
   std::vector<MimicJoint> rows;

@@ -142,6 +142,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (int i = 0; i < nv; ++i) tau[i] = in.number();
     try_set([&] { sim.set_applied_force(tau); });
   }
+  // Every dof, a spherical joint's three axes included (their rows: spherical_rows.cpp).
   for (int d = 0; d < nv; ++d) {
     if (in.flag()) {
       Drive drive;

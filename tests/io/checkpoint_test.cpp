@@ -439,7 +439,8 @@ TEST(Checkpoint, ForgedJointAndLinkSettingsAreRefused) {
   EXPECT_EQ(error_of(forged(bytes, field(multi, 6), bits(0.0)), a),
             "state.ckpt: corrupt checkpoint: dof " + std::to_string(multi) +
                 " of floating joint '" + m.links[m.dof_link[multi]].joint_name +
-                "' has joint setting #0 = 0, which only a 1-dof joint can change");
+                "' has joint setting #0 = 0, which only a revolute, prismatic or spherical "
+                "joint can change");
   // Link parameters follow the per-dof block: the first link's cfm_scale of 2 is out of [0, 1].
   const size_t links = dofs + 137 * static_cast<size_t>(m.nv);
   EXPECT_NE(error_of(forged(bytes, links, bits(2.0)), a).find("cfm_scale"), std::string::npos);

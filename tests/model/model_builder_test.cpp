@@ -581,7 +581,7 @@ TEST(ModelBuilderLayout, SizesAndIndicesOfEveryJointType) {
   EXPECT_EQ(model.nv, 11);
   EXPECT_THAT(model.dof_names,
               ElementsAre("free:wx", "free:wy", "free:wz", "free:vx", "free:vy", "free:vz",
-                          "ball:wx", "ball:wy", "ball:wz", "hinge", "slide"));
+                          "ball:twist", "ball:swing1", "ball:swing2", "hinge", "slide"));
   EXPECT_THAT(model.dof_link, ElementsAre(0, 0, 0, 0, 0, 0, 1, 1, 1, 2, 3));
   EXPECT_EQ(model.dof_index("free"), 0);
   EXPECT_EQ(model.dof_index("ball"), 6);

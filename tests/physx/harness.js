@@ -24,6 +24,9 @@ const HUGE = 1e30;
 // PxArticulationJointType::eREVOLUTE_UNWRAPPED = 3 exists in PhysX 5.6.1 but the
 // WebIDL binding's enum leaves it out; the wrapper passes enum values through as ints.
 const JOINT_TYPE_REVOLUTE_UNWRAPPED = 3;
+// A spherical joint's axes (eTWIST, eSWING1, eSWING2 about its joint frame's x, y, z): their
+// columns and their names in initial / targets are `<joint>:<axis>`.
+const SPHERICAL_AXES = ['twist', 'swing1', 'swing2'];
 
 class InputError extends Error {}
 
@@ -171,6 +174,39 @@ function bool(x, where, def) {
   return x;
 }
 
+// One dof's armature, limits and drive (a revolute or prismatic joint, or a spherical axis).
+function parseAxis(A, w) {
+  const axis = {};
+  axis.armature = optNum(A, 'armature', w, 0, { min: 0 });
+  axis.applied_force = optNum(A, 'applied_force', w, 0);
+  if (A.limits === undefined || A.limits === null) {
+    axis.limits = null;
+  } else {
+    if (!isObj(A.limits)) throw new InputError(`${w}.limits: expected null or {"lower": .., "upper": ..}`);
+    axis.limits = { lower: num(A.limits.lower, `${w}.limits.lower`), upper: num(A.limits.upper, `${w}.limits.upper`) };
+    if (!(axis.limits.lower <= axis.limits.upper)) throw new InputError(`${w}.limits: lower must be <= upper`);
+  }
+  if (A.drive === undefined || A.drive === null) {
+    axis.drive = null;
+  } else {
+    const D = A.drive;
+    const wd = `${w}.drive`;
+    if (!isObj(D)) throw new InputError(`${wd}: expected null or an object`);
+    if (D.type !== 'force' && D.type !== 'acceleration') {
+      throw new InputError(`${wd}.type: expected "force" or "acceleration", got ${JSON.stringify(D.type)}`);
+    }
+    axis.drive = {
+      type: D.type,
+      stiffness: num(D.stiffness, `${wd}.stiffness`, { min: 0 }),
+      damping: num(D.damping, `${wd}.damping`, { min: 0 }),
+      max_force: optNum(D, 'max_force', wd, HUGE, { min: 0 }),
+      target_position: optNum(D, 'target_position', wd, 0),
+      target_velocity: optNum(D, 'target_velocity', wd, 0),
+    };
+  }
+  return axis;
+}
+
 function parseScene(doc) {
   if (!isObj(doc)) throw new InputError('scene: top level must be a JSON object');
   if (doc.format !== FORMAT) throw new InputError(`scene.format: expected "${FORMAT}", got ${JSON.stringify(doc.format)}`);
@@ -245,8 +281,8 @@ function parseScene(doc) {
     if (jointNames.has(joint.name)) throw new InputError(`${wj}.name: duplicate joint name "${joint.name}"`);
     if (!/^[^,\s"]+$/.test(joint.name)) throw new InputError(`${wj}.name: joint names must not contain commas, quotes or white space ("${joint.name}")`);
     jointNames.set(joint.name, i);
-    if (!['revolute', 'prismatic', 'fixed'].includes(J.type)) {
-      throw new InputError(`${wj}.type: expected "revolute", "prismatic" or "fixed", got ${JSON.stringify(J.type)}`);
+    if (!['revolute', 'prismatic', 'fixed', 'spherical'].includes(J.type)) {
+      throw new InputError(`${wj}.type: expected "revolute", "prismatic", "spherical" or "fixed", got ${JSON.stringify(J.type)}`);
     }
     joint.type = J.type;
     if (!isObj(J.origin)) throw new InputError(`${wj}.origin: expected {"xyz": [...], "quat": [w,x,y,z]}`);
@@ -254,15 +290,30 @@ function parseScene(doc) {
       p: J.origin.xyz === undefined ? [0, 0, 0] : vec(J.origin.xyz, 3, `${wj}.origin.xyz`),
       q: J.origin.quat === undefined ? [1, 0, 0, 0] : unitQuat(J.origin.quat, `${wj}.origin.quat`),
     };
-    if (joint.type === 'fixed') {
-      joint.axis = J.axis === undefined || J.axis === null ? [1, 0, 0] : unitVec(J.axis, `${wj}.axis`);
+    if (joint.type === 'spherical') {
+      // Its axes are the joint frame's; per axis: armature, limits, drive (parseAxis).
+      joint.axis = [1, 0, 0];
+      if (!Array.isArray(J.axes) || J.axes.length !== 3) {
+        throw new InputError(`${wj}.axes: expected 3 objects (twist, swing1, swing2)`);
+      }
+      joint.axes = J.axes.map((A, k) => {
+        const wa = `${wj}.axes[${k}]`;
+        if (!isObj(A)) throw new InputError(`${wa}: expected an object`);
+        const axis = parseAxis(A, wa);
+        for (const side of ['lower', 'upper']) {
+          if (axis.limits && !(Math.abs(axis.limits[side]) <= Math.PI)) {
+            throw new InputError(`${wa}.limits.${side}: a spherical axis's limit must lie in [-pi, pi], got ${axis.limits[side]}`);
+          }
+        }
+        return { name: `${joint.name}:${SPHERICAL_AXES[k]}`, type: 'spherical', index: k, ...axis };
+      });
+      for (const a of joint.axes) jointNames.set(a.name, i);
+    } else if (joint.type === 'fixed') {
       if (J.drive !== undefined && J.drive !== null) throw new InputError(`${wj}.drive: a fixed joint cannot have a drive`);
       if (J.limits !== undefined && J.limits !== null) throw new InputError(`${wj}.limits: a fixed joint cannot have limits`);
     } else {
       joint.axis = unitVec(J.axis, `${wj}.axis`);
     }
-    joint.armature = optNum(J, 'armature', wj, 0, { min: 0 });
-    joint.applied_force = optNum(J, 'applied_force', wj, 0);
     // PhysX's eREVOLUTE wraps the position past +-2 pi; eREVOLUTE_UNWRAPPED (the default) does not.
     joint.wrapped = bool(J.wrapped, `${wj}.wrapped`, false);
     if (joint.wrapped && joint.type !== 'revolute') {
@@ -270,31 +321,7 @@ function parseScene(doc) {
     }
     joint.friction_coefficient = optNum(J, 'friction_coefficient', wj, 0, { min: 0 });
     joint.max_velocity = optNum(J, 'max_velocity', wj, HUGE, { min: 0 });
-    if (J.limits === undefined || J.limits === null) {
-      joint.limits = null;
-    } else {
-      if (!isObj(J.limits)) throw new InputError(`${wj}.limits: expected null or {"lower": .., "upper": ..}`);
-      joint.limits = { lower: num(J.limits.lower, `${wj}.limits.lower`), upper: num(J.limits.upper, `${wj}.limits.upper`) };
-      if (!(joint.limits.lower <= joint.limits.upper)) throw new InputError(`${wj}.limits: lower must be <= upper`);
-    }
-    if (J.drive === undefined || J.drive === null) {
-      joint.drive = null;
-    } else {
-      const D = J.drive;
-      const wd = `${wj}.drive`;
-      if (!isObj(D)) throw new InputError(`${wd}: expected null or an object`);
-      if (D.type !== 'force' && D.type !== 'acceleration') {
-        throw new InputError(`${wd}.type: expected "force" or "acceleration", got ${JSON.stringify(D.type)}`);
-      }
-      joint.drive = {
-        type: D.type,
-        stiffness: num(D.stiffness, `${wd}.stiffness`, { min: 0 }),
-        damping: num(D.damping, `${wd}.damping`, { min: 0 }),
-        max_force: optNum(D, 'max_force', wd, HUGE, { min: 0 }),
-        target_position: optNum(D, 'target_position', wd, 0),
-        target_velocity: optNum(D, 'target_velocity', wd, 0),
-      };
-    }
+    if (joint.type !== 'spherical') Object.assign(joint, parseAxis(J, wj));
     link.joint = joint;
     return link;
   });
@@ -303,6 +330,9 @@ function parseScene(doc) {
     if (!jointNames.has(name)) throw new InputError(`${where}: unknown joint "${name}"`);
     const li = jointNames.get(name);
     if (s.links[li].joint.type === 'fixed') throw new InputError(`${where}: joint "${name}" is fixed and has no coordinate`);
+    if (s.links[li].joint.type === 'spherical' && s.links[li].joint.name === name) {
+      throw new InputError(`${where}: joint "${name}" is spherical: name its axes (${SPHERICAL_AXES.map((a) => `"${name}:${a}"`).join(', ')})`);
+    }
     return li;
   };
   s.initial = { q: new Map(), qd: new Map() };
@@ -451,10 +481,38 @@ function build(P, s) {
     if (i === 0) { joints.push(null); return; }
     const J = L.joint;
     const pj = link.getInboundJoint();
-    const R = rotationXTo(J.axis);
+    // A spherical joint's axes are its joint frame's: the child joint frame is the link frame.
+    const R = J.type === 'spherical' ? [1, 0, 0, 0] : rotationXTo(J.axis);
     pj.setParentPose(pxTransform(P, { p: J.origin.p, q: qnormalize(qmul(J.origin.q, R)) }));
     pj.setChildPose(pxTransform(P, { p: [0, 0, 0], q: R }));
     let axis = null;
+    const setAxis = (ax, spec) => {
+      if (spec.limits) {
+        pj.setMotion(ax, P.PxArticulationMotionEnum.eLIMITED);
+        pj.setLimitParams(ax, new P.PxArticulationLimit(spec.limits.lower, spec.limits.upper));
+      } else {
+        pj.setMotion(ax, P.PxArticulationMotionEnum.eFREE);
+      }
+      pj.setArmature(ax, spec.armature);
+      if (spec.drive) {
+        const type = spec.drive.type === 'acceleration' ? P.PxArticulationDriveTypeEnum.eACCELERATION
+                                                        : P.PxArticulationDriveTypeEnum.eFORCE;
+        pj.setDriveParams(ax, new P.PxArticulationDrive(spec.drive.stiffness, spec.drive.damping, spec.drive.max_force, type));
+        pj.setDriveTarget(ax, spec.drive.target_position);
+        pj.setDriveVelocity(ax, spec.drive.target_velocity);
+      }
+    };
+    if (J.type === 'spherical') {
+      pj.setJointType(P.PxArticulationJointTypeEnum.eSPHERICAL);
+      const A = P.PxArticulationAxisEnum;
+      const enums = [A.eTWIST, A.eSWING1, A.eSWING2];
+      J.axes.forEach((spec, k) => setAxis(enums[k], spec));
+      pj.setFrictionCoefficient(J.friction_coefficient);
+      pj.setMaxJointVelocity(J.max_velocity);
+      joints.push({ px: pj, axis: null, spec: J, linkIndex: i, childRot: R,
+                    axes: J.axes.map((spec, k) => ({ px: pj, axis: enums[k], spec, linkIndex: i, childRot: R })) });
+      return;
+    }
     if (J.type === 'fixed') {
       pj.setJointType(P.PxArticulationJointTypeEnum.eFIX);
     } else {
@@ -466,20 +524,7 @@ function build(P, s) {
         pj.setJointType(P.PxArticulationJointTypeEnum.ePRISMATIC);
         axis = P.PxArticulationAxisEnum.eX;
       }
-      if (J.limits) {
-        pj.setMotion(axis, P.PxArticulationMotionEnum.eLIMITED);
-        pj.setLimitParams(axis, new P.PxArticulationLimit(J.limits.lower, J.limits.upper));
-      } else {
-        pj.setMotion(axis, P.PxArticulationMotionEnum.eFREE);
-      }
-      pj.setArmature(axis, J.armature);
-      if (J.drive) {
-        const type = J.drive.type === 'acceleration' ? P.PxArticulationDriveTypeEnum.eACCELERATION
-                                                     : P.PxArticulationDriveTypeEnum.eFORCE;
-        pj.setDriveParams(axis, new P.PxArticulationDrive(J.drive.stiffness, J.drive.damping, J.drive.max_force, type));
-        pj.setDriveTarget(axis, J.drive.target_position);
-        pj.setDriveVelocity(axis, J.drive.target_velocity);
-      }
+      setAxis(axis, J);
     }
     pj.setFrictionCoefficient(J.friction_coefficient);
     pj.setMaxJointVelocity(J.max_velocity);
@@ -489,9 +534,13 @@ function build(P, s) {
   if (!scene.addArticulation(art)) throw new Error('PhysX refused to add the articulation to the scene');
   art.setWakeCounter(1e9);
 
-  // Initial state.
+  // Initial state: one entry per coordinate (a spherical joint's three axes apart).
+  const movableJoints = [];
   for (const j of joints) {
-    if (!j || j.axis === null) continue;
+    if (j && j.axes) movableJoints.push(...j.axes);
+    else if (j && j.axis !== null) movableJoints.push(j);
+  }
+  for (const j of movableJoints) {
     j.px.setJointPosition(j.axis, s.initial.q.get(j.spec.name) || 0);
     j.px.setJointVelocity(j.axis, s.initial.qd.get(j.spec.name) || 0);
   }
@@ -515,6 +564,7 @@ function build(P, s) {
   for (const { j } of byIndex) {
     const n = links[j.linkIndex].getInboundJointDof();
     j.dofIndex = j.axis === null ? -1 : dof;
+    if (j.axes) j.axes.forEach((a, k) => { a.dofIndex = dof + k; a.physxLinkIndex = links[j.linkIndex].getLinkIndex(); });
     j.physxLinkIndex = links[j.linkIndex].getLinkIndex();
     dof += n;
   }
@@ -523,7 +573,6 @@ function build(P, s) {
   const cache = art.createCache();
   const CF = P.PxArticulationCacheFlagEnum;
   const cacheFlags = new P.PxArticulationCacheFlags(CF.eLINK_INCOMING_JOINT_FORCE | CF.eACCELERATION);
-  const movableJoints = joints.filter((j) => j && j.axis !== null);
   const anyForce = s.forces.length > 0 || movableJoints.some((j) => j.spec.applied_force !== 0);
   const h = {
     P, world, s, scene, art, links, joints, movableJoints, cache, cacheFlags, anyForce, stepCount: 0,
@@ -613,9 +662,9 @@ function readForces(h) {
     const Qnew = qmul(post.q, R);
     const Qold = qmul(pre.q, R);
     const F = qrot(Qnew, Frep); // world
-    const axisOld = qrot(Qold, [1, 0, 0]);
+    const axisOld = qrot(Qold, j.spec.type === 'spherical' ? [0, 0, 0].map((_, k) => (k === j.spec.index ? 1 : 0)) : [1, 0, 0]);
     let transmitted;
-    if (j.spec.type === 'revolute') {
+    if (j.spec.type === 'revolute' || j.spec.type === 'spherical') {
       // torque about the COM, then about the joint point of the start-of-step pose;
       // the joint point is the link origin, so COM -> joint = -Q com
       const dNew = qrot(post.q, com).map((x) => -x);

@@ -253,7 +253,8 @@ TEST(BadArguments, JointsDofsAndSettings) {
   EXPECT_EQ(invalid_of([&] { s.set_drive(1, Drive{}); }), "dof index 1 is out of range [0, 1)");
   EXPECT_EQ(invalid_of([&] { s.set_drive(-1, Drive{}); }), "dof index -1 is out of range [0, 1)");
   EXPECT_EQ(invalid_of([&] { s.set_drive("world_joint", Drive{DriveType::force, 1, 1}); }),
-            "joint 'world_joint' is fixed: this setting acts on revolute and prismatic joints only");
+            "joint 'world_joint' is fixed: this setting acts on revolute, prismatic and "
+            "spherical joints only");
   EXPECT_EQ(invalid_of([&] { s.set_drive("slide", Drive{DriveType::force, -5.0, 1.0}); }),
             "drive on joint 'slide': stiffness = -5 must be finite and >= 0");
   EXPECT_EQ(invalid_of([&] { s.set_drive("slide", Drive{DriveType::force, 1.0, kNaN}); }),

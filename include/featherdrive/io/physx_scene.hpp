@@ -19,11 +19,13 @@ using ForcesByJoint = std::map<std::string, double>;
 
 /// The JSON scene for the harness: the model, the current state, drives, limits, velocity
 /// limits and armature of `sim`, its solver options, `steps` steps and `targets[k]` applied
-/// before step k + 1; `forces[k]` are the joint forces of step k + 1 (a joint it does not name,
-/// or a step past its end, has sim's applied force). Revolute joints are PhysX's eREVOLUTE
-/// where sim wraps them, else eREVOLUTE_UNWRAPPED. Throws std::invalid_argument for what the
-/// harness cannot represent (a root joint other than fixed or floating, spherical joints, mimic
-/// joints, joint friction, actuator envelopes).
+/// before step k + 1 (a spherical joint's axes by their dof names, `ball:twist`); `forces[k]` are
+/// the joint forces of step k + 1 (a joint it does not name, or a step past its end, has sim's
+/// applied force). Revolute joints are PhysX's eREVOLUTE where sim wraps them, else
+/// eREVOLUTE_UNWRAPPED. Throws std::invalid_argument for what the harness cannot represent (a root
+/// joint other than fixed or floating, mimic joints, joint friction, actuator envelopes, a
+/// spherical joint whose axes differ in max velocity or friction coefficient: PhysX has one of
+/// each per joint).
 std::string physx_scene_json(const Simulation& sim, int steps,
                              const std::vector<TargetsByJoint>& targets = {},
                              const std::vector<ForcesByJoint>& forces = {});
