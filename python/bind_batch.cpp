@@ -204,7 +204,7 @@ void featherdrive::python::bind_batch(py::module_& m) {
           },
           py::arg("lower"), py::arg("upper"), py::arg("env_ids") = py::none(),
           "Joint limits of env_ids (None: all), each a scalar, (nv,) or (k, nv); dofs of "
-          "spherical and floating joints must be given the -inf / inf they have.")
+          "a floating root must be given the -inf / inf they have.")
       .def(
           "set_joint_friction",
           [](Batch& b, py::handle static_effort, py::handle dynamic_effort, py::handle viscous,

@@ -317,9 +317,9 @@ void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions&
     warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on joints " +
                        joined(c.springs));
   if (!c.passive.empty())
-    warnings.push_back("joint damping and frictionloss are recorded (Model::damping, friction), "
-                       "not simulated (a scene's joints.<name>.friction {static, dynamic} can "
-                       "give frictionloss) on joints " + joined(c.passive));
+    warnings.push_back("joint damping and frictionloss become joint friction (viscous = damping, "
+                       "static = dynamic = frictionloss), solved as rows, not MuJoCo's passive "
+                       "forces, on joints " + joined(c.passive));
   if (!c.ball_ranges.empty())
     warnings.push_back("ball joint ranges (cones) are not simulated on joints " +
                        joined(c.ball_ranges));

@@ -26,9 +26,11 @@ void check_size(const VecX& x, int expected, const char* function, const char* w
                                 std::to_string(expected));
 }
 
+// Dofs with drives and per-dof joint settings: revolute, prismatic and a spherical joint's axes.
 bool drivable(const Model& model, int dof) {
   const JointType type = model.links[model.dof_link[dof]].joint_type;
-  return type == JointType::revolute || type == JointType::prismatic;
+  return type == JointType::revolute || type == JointType::prismatic ||
+         type == JointType::spherical;
 }
 
 /// The drives set_drive_targets would set; throws before anything changes.
@@ -78,8 +80,8 @@ std::vector<Drive> drives_with_gains(const Simulation& sim, const VecX& stiffnes
     } else if (stiffness[d] != 0.0 || damping[d] != 0.0) {
       throw std::invalid_argument("set_drive_gains: dof " + std::to_string(d) + " of joint '" +
                                   link.joint_name + "' is " + to_string(link.joint_type) +
-                                  ": drives act on revolute and prismatic joints only, so its "
-                                  "stiffness and damping must be 0");
+                                  ": drives act on revolute, prismatic and spherical joints "
+                                  "only, so its stiffness and damping must be 0");
     }
     try {
       validate_drive(drive, link.joint_name);

@@ -108,6 +108,41 @@ TEST(Batch, DriveSettersCheckEverythingFirst) {
   EXPECT_NO_THROW(batch.set_num_threads(Batch::kMaxThreads));
 }
 
+// A spherical joint's axes take gains and limits like any other dof (PhysX's per-axis drives):
+// the Batch's rows equal the Simulation setters called axis by axis.
+TEST(Batch, SphericalAxesTakeGainsAndLimitsAsSimulationDoes) {
+  const auto model = test::make_random_tree(11, 5, /*floating=*/false, /*spherical=*/true);
+  std::vector<int> axes;
+  for (const Link& l : model->links)
+    if (l.joint_type == JointType::spherical)
+      for (int d = l.v_index; d < l.v_index + 3; ++d) axes.push_back(d);
+  ASSERT_FALSE(axes.empty());
+  const int nv = model->nv;
+  RowMatrix kp = RowMatrix::Constant(1, nv, 40.0), kd = RowMatrix::Constant(1, nv, 3.0);
+  RowMatrix lower = RowMatrix::Constant(1, nv, -0.2), upper = RowMatrix::Constant(1, nv, 0.3);
+  Simulation by_axis(model);
+  for (int d = 0; d < nv; ++d) {
+    by_axis.set_drive(d, Drive{DriveType::force, 40.0, 3.0});
+    by_axis.set_joint_limits(d, -0.2, 0.3);
+  }
+  Batch batch(model, 1);
+  const int all[] = {0};
+  batch.set_drive_gains(kp, kd);
+  batch.set_joint_limits(all, lower, upper);
+  for (int d : axes) {
+    EXPECT_EQ(batch.sim(0).drive(d).type, DriveType::force) << model->dof_names[d];
+    EXPECT_EQ(batch.sim(0).drive(d).stiffness, 40.0);
+    EXPECT_EQ(batch.sim(0).upper_limit(d), 0.3);
+  }
+  VecX qd = VecX::LinSpaced(nv, -1.0, 1.0);
+  by_axis.set_qd(qd);
+  batch.set_qd(RowMatrix(qd.transpose()));
+  by_axis.step(5);
+  batch.step(5);
+  EXPECT_TRUE(same_bits(batch.sim(0).q(), by_axis.q()));
+  EXPECT_TRUE(same_bits(batch.sim(0).qd(), by_axis.qd()));
+}
+
 // The (N, n) arrays are the environments' storage: row i of q() is sim(i).q(), written by every
 // step and setter; a copy of a batch has rows of its own; an environment assigned a Simulation
 // keeps its row, and refuses one of other sizes.

@@ -57,10 +57,12 @@ struct Model {
   VecX upper_limit;            ///< +inf where unbounded
   VecX effort_limit;           ///< +inf where not set (informative; URDF <limit effort>)
   VecX velocity_limit;         ///< +inf where not set (URDF <limit velocity>)
-  VecX damping;                ///< viscous joint damping from URDF <dynamics> (informative)
-  VecX friction;               ///< Coulomb joint friction from URDF <dynamics> (informative)
+  /// Joint damping and friction (URDF <dynamics>, MJCF damping and frictionloss): a Simulation's
+  /// initial viscous and static/dynamic joint friction.
+  VecX damping;                ///< viscous joint damping
+  VecX friction;               ///< Coulomb joint friction
   std::vector<int> dof_link;   ///< link owning each dof
-  std::vector<std::string> dof_names;  ///< joint name, or joint name + ":wx" etc. for multi-dof
+  std::vector<std::string> dof_names;  ///< joint name, or joint name + ":twist" etc. for multi-dof
 
   bool floating_base() const { return !links.empty() && links[0].joint_type == JointType::floating; }
   int num_links() const { return static_cast<int>(links.size()); }

@@ -27,8 +27,8 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 void set_drive_targets(Simulation& sim, const VecX& positions, const VecX& velocities);
 
 /// Sets the stiffness and damping of every dof (nv each), keeping max_force, max_impulse and the
-/// targets. Dofs of revolute and prismatic joints get `type`; dofs of other joints (spherical,
-/// floating) take no drive and must be given 0 gains. Throws std::invalid_argument naming the
+/// targets. Dofs of revolute and prismatic joints and a spherical joint's axes get `type`; a
+/// floating root's dofs take no drive and must be given 0 gains. Throws std::invalid_argument naming the
 /// vector, the joint and the value; on a throw nothing changed.
 void set_drive_gains(Simulation& sim, const VecX& stiffness, const VecX& damping,
                      DriveType type = DriveType::force);
