@@ -142,14 +142,7 @@ void featherdrive::python::bind_simd(py::module_& m) {
           py::arg("values"), py::arg("env_ids") = py::none())
       .def(
           "set_link_mass",
-          [](SimdBatch& b, py::handle link, py::handle mass, py::handle env_ids, bool scale) {
-            const NameOrIndex l = link_arg(link);
-            const std::vector<int> ids = to_env_ids(env_ids, b.size());
-            const bool scalar = as_float_array(mass, "mass").ndim() == 0;
-            const VecX m =
-                to_vector(mass, scalar ? 1 : static_cast<Eigen::Index>(ids.size()), "mass", true);
-            locked(b, [&] { b.set_link_mass(ids, link_of(b.model(), l), m, scale); });
-          },
+          &set_link_mass_of<SimdBatch>,
           py::arg("link"), py::arg("mass"), py::arg("env_ids") = py::none(),
           py::arg("scale_inertia") = true, "As Batch.set_link_mass.")
       .def(

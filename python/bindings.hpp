@@ -512,6 +512,16 @@ inline int link_of(const Model& model, const NameOrIndex& link) {
                     : index_in(link.index, model.num_links(), "link index");
 }
 
+/// set_link_mass of Batch and SimdBatch: a link by name or index, one mass or one per env_ids.
+template <class B>
+void set_link_mass_of(B& b, py::handle link, py::handle mass, py::handle env_ids, bool scale) {
+  const NameOrIndex l = link_arg(link);
+  const std::vector<int> ids = to_env_ids(env_ids, b.size());
+  const bool scalar = as_float_array(mass, "mass").ndim() == 0;
+  const VecX m = to_vector(mass, scalar ? 1 : static_cast<Eigen::Index>(ids.size()), "mass", true);
+  locked(b, [&] { b.set_link_mass(ids, link_of(b.model(), l), m, scale); });
+}
+
 /// The model of a simulation or batch, read under its lock.
 template <class T>
 std::shared_ptr<const Model> model_of(const T& object) {
