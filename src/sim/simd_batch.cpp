@@ -49,7 +49,7 @@ Layout make_layout(const Plan& p) {
 }
 
 std::size_t scratch_doubles(const Plan& p) {
-  return static_cast<std::size_t>(make_layout(p).size) * kGroup * kInterleave;
+  return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
 }
 
 }  // namespace simd
@@ -110,6 +110,10 @@ struct SimdBatch::Impl {
   std::unique_ptr<bool[]> stopped_now;
   std::vector<std::vector<double>> scratch;  // one per thread, 64 bytes of slack for alignment
   std::unique_ptr<Simulation> prototype;     // settings shared by all (for simulation(i))
+  // Kept between calls: a fresh arena makes its workers join again each call, and with a few
+  // blocks a call is over before they do.
+  std::unique_ptr<tbb::task_arena> arena;
+  int arena_threads = 0;
   double* scratch_of(int thread) {
     auto address = reinterpret_cast<std::uintptr_t>(scratch[static_cast<size_t>(thread)].data());
     return reinterpret_cast<double*>((address + 63) & ~std::uintptr_t{63});
@@ -194,7 +198,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   // width takes a narrower one: fewer padding lanes, the same bits.
   const char* forced = std::getenv("FEATHERDRIVE_SIMD");
   if (!isa && !(forced && *forced))
-    while (isa_ != SimdIsa::sse2 && simd_width(isa_) * simd::kInterleave > count)
+    while (isa_ != SimdIsa::sse2 && simd_width(isa_) * 2 > count)
       isa_ = isa_ == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
   check_isa(isa_, "SimdBatch: isa");
   const Model& m = *model_;
@@ -246,9 +250,9 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
   p.layout = simd::make_layout(p);
   // Parameters, every environment (and the padding up to a whole group) the prototype's.
-  // Whole blocks of the widest width: simd::kInterleave groups each.
-  const int groups =
-      (count + kGroup * simd::kInterleave - 1) / (kGroup * simd::kInterleave) * simd::kInterleave;
+  // Whole blocks of the widest width and interleave: simd::kMaxInterleave groups each.
+  constexpr int kBlockGroups = simd::kMaxInterleave;
+  const int groups = (count + kGroup * kBlockGroups - 1) / (kGroup * kBlockGroups) * kBlockGroups;
   im.parameters.assign(static_cast<size_t>(groups) * p.entries * kGroup, 0.0);
   std::vector<double> one(static_cast<size_t>(p.entries));
   for (int d = 0; d < nv; ++d) {
@@ -700,7 +704,8 @@ void SimdBatch::step(int count) {
                                 " must be >= 0");
   if (count == 0) return;
   Impl& im = *impl_;
-  const int W = width() * simd::kInterleave;  // lanes of a block
+  const int K = simd::interleave(width(), count_);
+  const int W = width() * K;  // lanes of a block
   const int blocks = (count_ + W - 1) / W;
   const int threads = std::min(effective_num_threads(), blocks);
   const std::size_t doubles = simd::scratch_doubles(im.plan) + 8;
@@ -712,6 +717,7 @@ void SimdBatch::step(int count) {
   auto run = [&](int block, double* scratch) {
     simd::Block b;
     b.env0 = block * W;
+    b.interleave = K;
     b.valid = std::min(W, count_ - b.env0);
     b.q = q_.data(), b.qd = qd_.data(), b.applied = applied_force_.data();
     b.drive_force = drive_force_.data(), b.limit_force = limit_force_.data();
@@ -734,8 +740,11 @@ void SimdBatch::step(int count) {
   if (threads <= 1) {
     for (int block = 0; block < blocks; ++block) run(block, im.scratch_of(0));
   } else {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
+    if (!im.arena || im.arena_threads != threads) {
+      im.arena = std::make_unique<tbb::task_arena>(threads);
+      im.arena_threads = threads;
+    }
+    im.arena->execute([&] {
       tbb::parallel_for(tbb::blocked_range<int>(0, blocks), [&](const tbb::blocked_range<int>& r) {
         double* scratch = im.scratch_of(tbb::this_task_arena::current_thread_index());
         for (int block = r.begin(); block < r.end(); ++block) run(block, scratch);

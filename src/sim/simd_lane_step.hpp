@@ -110,17 +110,17 @@ bool any(const PackMask<A, K>& c) {
   return false;
 }
 
-template <class A>
+template <class A, int K>
 class LaneStep {
  public:
-  using V = Pack<A, kInterleave>;
-  using M = PackMask<A, kInterleave>;
+  using V = Pack<A, K>;
+  using M = PackMask<A, K>;
   static constexpr int kW = static_cast<int>(V::size);
   static constexpr int kVector = static_cast<int>(xsimd::batch<double, A>::size);
 
   LaneStep(const Plan& p, const Block& b, double* scratch)
       : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
-    for (int k = 0; k < kInterleave; ++k) {
+    for (int k = 0; k < K; ++k) {
       const int e = b.env0 + k * kVector;
       parameters_[k] = b.parameters + (e / kGroup) * p.entries * kGroup + e % kGroup;
     }
@@ -133,7 +133,7 @@ class LaneStep {
   V* at(int base) { return s_ + base; }
   V parameter(int k) const {
     V out;
-    for (int j = 0; j < kInterleave; ++j)
+    for (int j = 0; j < K; ++j)
       out.b[j] = xsimd::batch<double, A>::load_unaligned(parameters_[j] + k * kGroup);
     return out;
   }
@@ -178,7 +178,7 @@ class LaneStep {
   const Block& b_;
   const Layout& l_;
   V* const s_;
-  const double* parameters_[kInterleave];  // per vector of the pack
+  const double* parameters_[K];  // per vector of the pack
   // Where in the step a sweep runs (RowPhase).
   double h_ = 0.0, time_to_step_end_ = 0.0;
   bool velocity_iteration_ = false;
@@ -187,15 +187,15 @@ class LaneStep {
   M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
 };
 
-template <class A>
-auto LaneStep<A>::gather(const double* rows, int stride, int k) const -> V {
+template <class A, int K>
+auto LaneStep<A, K>::gather(const double* rows, int stride, int k) const -> V {
   alignas(64) double t[kW];
   for (int l = 0; l < kW; ++l) t[l] = rows[static_cast<long>(env_of_lane(l)) * stride + k];
   return V::load_aligned(t);
 }
 
-template <class A>
-void LaneStep<A>::scatter(V x, double* rows, int stride, int k) const {
+template <class A, int K>
+void LaneStep<A, K>::scatter(V x, double* rows, int stride, int k) const {
   alignas(64) double t[kW];
   x.store_aligned(t);
   for (int l = 0; l < b_.valid; ++l) rows[static_cast<long>(b_.env0 + l) * stride + k] = t[l];
@@ -204,8 +204,8 @@ void LaneStep<A>::scatter(V x, double* rows, int stride, int k) const {
 // sin and cos from + - * / only: the quadrant j = round(2 x / pi) (by adding and subtracting
 // 1.5 * 2^52), x - j pi / 2 in three parts (Cody and Waite; j times the first part is exact), then
 // Cephes's minimax polynomials on [-pi/4, pi/4] (sin.c). Within 2 ulp of glibc's.
-template <class A>
-void LaneStep<A>::sincos(V x, V& s, V& c) {
+template <class A, int K>
+void LaneStep<A, K>::sincos(V x, V& s, V& c) {
   const V round(6755399441055744.0);
   const V j = (x * V(0.63661977236758134308) + round) - round;
   const V r = ((x - j * V(1.57079625129699707031)) - j * V(7.54978941586159635336e-8)) -
@@ -233,8 +233,8 @@ void LaneStep<A>::sincos(V x, V& s, V& c) {
   c = select((quadrant == V(1.0)) | (quadrant == V(2.0)), -cos_r, cos_r);
 }
 
-template <class A>
-void LaneStep<A>::sym_times(const V* m, const V* x, V* y) {
+template <class A, int K>
+void LaneStep<A, K>::sym_times(const V* m, const V* x, V* y) {
   for (int r = 0; r < 6; ++r) {
     V sum = m[sym_index(r, 0)] * x[0];
     for (int k = 1; k < 6; ++k) sum = sum + m[sym_index(r, k)] * x[k];
@@ -243,8 +243,8 @@ void LaneStep<A>::sym_times(const V* m, const V* x, V* y) {
 }
 
 // Poses (world axes; positions relative to the root link's origin, frame 0's origin) and S_i.
-template <class A>
-void LaneStep<A>::kinematics() {
+template <class A, int K>
+void LaneStep<A, K>::kinematics() {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     V* R = at(l_.R + 9 * i);
@@ -317,8 +317,8 @@ void LaneStep<A>::kinematics() {
 
 // Rigid-body inertias in frame 0 (aba.cpp's body_inertia), link velocities, velocity-product
 // accelerations c_i and bias forces v x* I v, root to leaves.
-template <class A>
-void LaneStep<A>::velocities_and_bias() {
+template <class A, int K>
+void LaneStep<A, K>::velocities_and_bias() {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     const V* R = at(l_.R + 9 * i);
@@ -378,8 +378,8 @@ void LaneStep<A>::velocities_and_bias() {
 }
 
 // ABA pass 2: articulated inertias and bias forces, leaves to root.
-template <class A>
-void LaneStep<A>::articulated_pass() {
+template <class A, int K>
+void LaneStep<A, K>::articulated_pass() {
   for (int i = p_.num_links - 1; i >= 0; --i) {
     const LinkConstants& k = p_.links[i];
     const V* IA = at(l_.IA + 21 * i);
@@ -418,8 +418,8 @@ void LaneStep<A>::articulated_pass() {
 
 // ABA pass 3: accelerations root to leaves (gravity as an upward acceleration of the world); the
 // free velocity qd += dt qdd.
-template <class A>
-void LaneStep<A>::acceleration_pass() {
+template <class A, int K>
+void LaneStep<A, K>::acceleration_pass() {
   const V* zero = at(l_.zero);
   const V g[6] = {V(0.0), V(0.0), V(0.0), V(-p_.gravity[0]), V(-p_.gravity[1]), V(-p_.gravity[2])};
   const V dt(p_.dt);
@@ -441,8 +441,8 @@ void LaneStep<A>::acceleration_pass() {
 
 // The whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
 // (inverse_mass_diagonal.cpp), root to leaves.
-template <class A>
-void LaneStep<A>::response() {
+template <class A, int K>
+void LaneStep<A, K>::response() {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
@@ -470,8 +470,8 @@ void LaneStep<A>::response() {
 }
 
 // Every dof's rows for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row).
-template <class A>
-void LaneStep<A>::setup_rows(double h_step) {
+template <class A, int K>
+void LaneStep<A, K>::setup_rows(double h_step) {
   const V h(h_step), dt(p_.dt);
   M rows_any = none();
   undriven_ = none();
@@ -529,8 +529,8 @@ void LaneStep<A>::setup_rows(double h_step) {
 // All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
 // position limit. A lane without a row keeps total and v exactly (a select, not + 0), so its bits
 // do not depend on whether a neighbour has that row.
-template <class A>
-auto LaneStep<A>::solve_row(int d, V v, const V& dx) -> V {
+template <class A, int K>
+auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
   V* rw = row(d);
   const V zero(0.0);
   V total = zero;
@@ -600,8 +600,8 @@ auto LaneStep<A>::solve_row(int d, V v, const V& dx) -> V {
 }
 
 // Leaves the finished links from k up to stop (gauss_seidel.hpp's leave_links).
-template <class A>
-void LaneStep<A>::leave_links(int k, int stop, bool correct) {
+template <class A, int K>
+void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
   while (k != stop) {
     const LinkConstants& lk = p_.links[k];
     const int p = lk.parent;
@@ -637,8 +637,8 @@ void LaneStep<A>::leave_links(int k, int stop, bool correct) {
 
 // A joint not finished when left: its velocity change from its subtree and from later subtrees
 // (gauss_seidel.hpp's finish_link).
-template <class A>
-void LaneStep<A>::finish_link(int i) {
+template <class A, int K>
+void LaneStep<A, K>::finish_link(int i) {
   const LinkConstants& lk = p_.links[i];
   V E[6];
   if (lk.later) {
@@ -671,8 +671,8 @@ void LaneStep<A>::finish_link(int i) {
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n).
-template <class A>
-void LaneStep<A>::sweep() {
+template <class A, int K>
+void LaneStep<A, K>::sweep() {
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
   if (keep)
@@ -708,8 +708,8 @@ void LaneStep<A>::sweep() {
 }
 
 // q += h qd on every 1-dof joint; TGS also accumulates the position change delta_x.
-template <class A>
-void LaneStep<A>::integrate(double h_step, bool track) {
+template <class A, int K>
+void LaneStep<A, K>::integrate(double h_step, bool track) {
   const V h(h_step);
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
@@ -724,8 +724,8 @@ void LaneStep<A>::integrate(double h_step, bool track) {
   }
 }
 
-template <class A>
-void LaneStep<A>::step() {
+template <class A, int K>
+void LaneStep<A, K>::step() {
   kinematics();
   velocities_and_bias();
   articulated_pass();
@@ -771,8 +771,8 @@ void LaneStep<A>::step() {
 
 // After a step: lanes with a non-finite value stop with the state before it (the first culprit
 // recorded in Simulation's order); the others count the step.
-template <class A>
-void LaneStep<A>::finish_step() {
+template <class A, int K>
+void LaneStep<A, K>::finish_step() {
   const V zero(0.0);
   V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
   for (int d = 0; d < p_.nv; ++d)
@@ -827,8 +827,8 @@ void LaneStep<A>::finish_step() {
   }
 }
 
-template <class A>
-void LaneStep<A>::run(int steps) {
+template <class A, int K>
+void LaneStep<A, K>::run(int steps) {
   const int nq = p_.nq, nv = p_.nv;
   for (int e = 0; e < l_.size; ++e) s_[e] = V(0.0);  // leaves' subtree impulses stay 0
   for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);

@@ -5,7 +5,10 @@
 namespace featherdrive::simd {
 
 void run_block_avx2(const Plan& p, const Block& b, double* scratch, int steps) {
-  LaneStep<xsimd::avx2>(p, b, scratch).run(steps);
+  if (b.interleave == 4)
+    LaneStep<xsimd::avx2, 4>(p, b, scratch).run(steps);
+  else
+    LaneStep<xsimd::avx2, 2>(p, b, scratch).run(steps);
 }
 
 }  // namespace featherdrive::simd

@@ -11,8 +11,12 @@ namespace featherdrive::simd {
 /// environment e at ((e / kGroup) * entries + k) * kGroup + e % kGroup. A block of W | kGroup
 /// lanes reads entry k of its environments as one vector, whatever W.
 inline constexpr int kGroup = 8;
-/// A block holds kInterleave vectors of lanes (simd_lane_step.hpp's Pack): 2 W environments.
-inline constexpr int kInterleave = 2;
+/// A block holds K vectors of W lanes (simd_lane_step.hpp's Pack): K independent chains of
+/// dependencies per operation. K = 4 where the batch fills such blocks, else 2 (interleave()).
+inline constexpr int kMaxInterleave = 4;
+constexpr int interleave(int width, int count) {
+  return count >= 4 * width ? 4 : 2;
+}
 
 enum DofParameter : int {
   has_drive,
@@ -122,6 +126,7 @@ struct Stop {
 /// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major.
 struct Block {
   int env0 = 0, valid = 0;
+  int interleave = 2;  ///< K: vectors of the block (2 or 4)
   double* q = nullptr;
   double* qd = nullptr;
   const double* applied = nullptr;
@@ -137,7 +142,7 @@ struct Block {
 };
 
 /// The layout of p's scratch, and the doubles of scratch one block of any width needs (kGroup
-/// kInterleave doubles a vector).
+/// kMaxInterleave doubles a vector).
 Layout make_layout(const Plan& p);
 std::size_t scratch_doubles(const Plan& p);
 

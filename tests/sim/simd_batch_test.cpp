@@ -157,6 +157,14 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
         EXPECT_TRUE(same_bits(x, reference))
             << to_string(isa) << ", " << threads << " threads, shift " << shift;
       }
+  // A batch of 40 fills blocks of four vectors (simd::interleave) at every width, where 13 had
+  // two vectors with AVX2 and AVX-512: its first 13 environments are the same ones.
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2}) {
+      const RowMatrix x = run(40, isa, threads, 0);
+      EXPECT_TRUE(same_bits(RowMatrix(x.topRows(n)), reference))
+          << to_string(isa) << ", 40 environments, " << threads << " threads";
+    }
   // Alone in a batch of one: environment 7.
   for (SimdIsa isa : available_simd_isas()) {
     SimdBatch one(proto, 1, isa);
