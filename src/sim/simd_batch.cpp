@@ -44,6 +44,7 @@ Layout make_layout(const Plan& p) {
   l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
+  l.flags = take(n);  // two doubles a dof
   l.size = at;
   return l;
 }

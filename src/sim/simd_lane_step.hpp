@@ -28,8 +28,21 @@ constexpr int sym_index(int a, int b) {
   return base + (lo == 0 ? (hi == 1 ? 3 : 4) : 5);
 }
 
-// K vectors of architecture A as one vector of K W lanes: two independent chains of
-// dependencies per operation, so a sweep's link-to-link latency is paid once for 2 W lanes.
+// sym_index as a table: loops index it with their counters, where a recursive constexpr function
+// is not always folded (it showed as 5 % of the step's time on arm7).
+struct SymmetricIndex {
+  int at[6][6];
+};
+constexpr SymmetricIndex make_symmetric_index() {
+  SymmetricIndex t{};
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) t.at[a][b] = sym_index(a, b);
+  return t;
+}
+inline constexpr SymmetricIndex kSym = make_symmetric_index();
+
+// K vectors of architecture A as one vector of K W lanes: K independent chains of
+// dependencies per operation, so a sweep's link-to-link latency is paid once for K W lanes.
 // Every operation acts lane by lane, as on one vector.
 template <class A, int K>
 struct PackMask {
@@ -142,6 +155,7 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
+  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 2 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
@@ -153,7 +167,8 @@ class LaneStep {
   void articulated_pass();
   void acceleration_pass();
   void response();
-  void setup_rows(double h);
+  void setup_row_constants(double h);
+  void setup_rows();
   V solve_row(int d, V v, const V& dx);
   void sweep();
   void leave_links(int k, int stop, bool correct);
@@ -236,8 +251,8 @@ void LaneStep<A, K>::sincos(V x, V& s, V& c) {
 template <class A, int K>
 void LaneStep<A, K>::sym_times(const V* m, const V* x, V* y) {
   for (int r = 0; r < 6; ++r) {
-    V sum = m[sym_index(r, 0)] * x[0];
-    for (int k = 1; k < 6; ++k) sum = sum + m[sym_index(r, k)] * x[k];
+    V sum = m[kSym.at[r][0]] * x[0];
+    for (int k = 1; k < 6; ++k) sum = sum + m[kSym.at[r][k]] * x[k];
     y[r] = sum;
   }
 }
@@ -345,7 +360,7 @@ void LaneStep<A, K>::velocities_and_bias() {
         V a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
               mc[r] * cg[c];
         if (r == c) a = a + mcc;
-        I[sym_index(r, c)] = a;
+        I[kSym.at[r][c]] = a;
       }
     // B = [mc]x, C = m 1.
     I[6] = V(0.0), I[7] = -mc[2], I[8] = mc[1];
@@ -367,8 +382,14 @@ void LaneStep<A, K>::velocities_and_bias() {
     cross(v, J + 3, t1);
     cross(v + 3, J, t2);
     for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
-    V h[6];
-    sym_times(I, v, h);
+    // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
+    V h[6], mw[3], mv[3];
+    cross(mc, v + 3, mv);
+    cross(mc, v, mw);
+    for (int r = 0; r < 3; ++r) {
+      h[r] = (I[kSym.at[r][0]] * v[0] + I[kSym.at[r][1]] * v[1] + I[kSym.at[r][2]] * v[2]) + mv[r];
+      h[3 + r] = m * v[3 + r] - mw[r];
+    }
     V* pA = at(l_.pA + 6 * i);
     cross(v, h, t1);
     cross(v + 3, h + 3, t2);
@@ -409,7 +430,7 @@ void LaneStep<A, K>::articulated_pass() {
     V* IAp = at(l_.IA + 21 * k.parent);
     for (int a = 0; a < 6; ++a)
       for (int b = a; b < 6; ++b) {
-        const int e = sym_index(a, b);
+        const int e = kSym.at[a][b];
         if (a >= 3 && b < 3) continue;
         IAp[e] = IAp[e] + (IA[e] - (D_inv * U[b]) * U[a]);
       }
@@ -461,7 +482,7 @@ void LaneStep<A, K>::response() {
     for (int e = 0; e < 6; ++e) G[e] = r * S[e] - D_inv * W[e];
     for (int a = 0; a < 6; ++a)
       for (int b = a; b < 6; ++b) {
-        const int e = sym_index(a, b);
+        const int e = kSym.at[a][b];
         if (a >= 3 && b < 3) continue;
         L[e] = (T[e] + G[b] * S[a]) - (S[b] * D_inv) * W[a];
       }
@@ -469,9 +490,10 @@ void LaneStep<A, K>::response() {
   }
 }
 
-// Every dof's rows for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row).
+// What of every dof's rows depends only on the lanes' parameters and the (sub)step h: set once a
+// call, since parameters change only between calls.
 template <class A, int K>
-void LaneStep<A, K>::setup_rows(double h_step) {
+void LaneStep<A, K>::setup_row_constants(double h_step) {
   const V h(h_step), dt(p_.dt);
   M rows_any = none();
   undriven_ = none();
@@ -480,30 +502,20 @@ void LaneStep<A, K>::setup_rows(double h_step) {
     if (k.type == 0) continue;
     const int d = k.v_index;
     V* rw = row(d);
-    const V r = at(l_.inverse_mass)[i];
-    const V x0 = at(l_.q)[k.q_index];
     const V kp = dof_parameter(d, stiffness), kd = dof_parameter(d, damping);
     const V tv = dof_parameter(d, target_velocity);
     const M accel = dof_parameter(d, acceleration) != V(0.0);
     const M driven = dof_parameter(d, has_drive) != V(0.0);
     const V a = h * (h * kp + kd);
-    const V bb = h * kd * tv;
-    const V x = select(accel, V(1.0) / (a + V(1.0)), V(1.0) / (a * r + V(1.0)));
-    const V scale = select(accel, x / r, x);
-    rw[Layout::tvb] = scale * (bb + h * kp * (dof_parameter(d, target_position) - x0));
-    rw[Layout::velm] = -scale * a;
-    rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
-    rw[Layout::biasc] = scale * h * kp;
-    rw[Layout::tpb] = p_.tgs ? scale * h * kp * tv : V(0.0);
+    rw[Layout::gain] = a;
+    rw[Layout::gain_velocity] = h * kd * tv;
+    rw[Layout::gain_position] = h * kp;
+    rw[Layout::accel] = select_zero(accel, V(1.0));
+    rw[Layout::accel_x] = V(1.0) / (a + V(1.0));
     const V limit_force = dof_parameter(d, max_force) * dt;
     const V limit_impulse = dof_parameter(d, max_impulse);
     rw[Layout::maxi] = select(limit_impulse < limit_force, limit_impulse, limit_force);
-    rw[Layout::dimp] = V(0.0);
-    rw[Layout::low] = V(0.0);
-    rw[Layout::high] = V(0.0);
     const V lower_limit = dof_parameter(d, lower), upper_limit = dof_parameter(d, upper);
-    rw[Layout::err_low] = x0 - lower_limit;
-    rw[Layout::err_high] = upper_limit - x0;
     const V inf(__builtin_inf());
     const M limited = (lower_limit > -inf) | (upper_limit < inf);
     rw[Layout::has_limit] = select_zero(limited, V(1.0));
@@ -515,15 +527,49 @@ void LaneStep<A, K>::setup_rows(double h_step) {
     rw[Layout::fstat] = fs * dt;
     rw[Layout::fdyn] = fd * dt;
     rw[Layout::fvisc] = fv * dt;
-    rw[Layout::fimp] = V(0.0);
     rw[Layout::driven] = select_zero(driven, V(1.0));
-    rw[Layout::recip] = V(1.0) / r;
-    rw[Layout::delta_x] = V(0.0);
-    rw[Layout::response] = r;
+    // Whether any lane has the row: a sweep skips what no lane has.
+    double* has = any_row(d);
+    has[0] = any(rubbing) ? 1.0 : 0.0;
+    has[1] = any(limited) ? 1.0 : 0.0;
     undriven_ = undriven_ | limited | rubbing;
     rows_any = rows_any | limited | rubbing | driven;
   }
   rowless_ = !rows_any;
+}
+
+// Every dof's rows for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row): what
+// depends on the configuration, and the accumulators.
+template <class A, int K>
+void LaneStep<A, K>::setup_rows() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type == 0) continue;
+    const int d = k.v_index;
+    V* rw = row(d);
+    const V r = at(l_.inverse_mass)[i];
+    const V x0 = at(l_.q)[k.q_index];
+    const M accel = rw[Layout::accel] != V(0.0);
+    const V a = rw[Layout::gain], hkp = rw[Layout::gain_position];
+    const V recip = V(1.0) / r;
+    const V x = select(accel, rw[Layout::accel_x], V(1.0) / (a * r + V(1.0)));
+    const V scale = select(accel, x * recip, x);
+    rw[Layout::tvb] =
+        scale * (rw[Layout::gain_velocity] + hkp * (dof_parameter(d, target_position) - x0));
+    rw[Layout::velm] = -scale * a;
+    rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
+    rw[Layout::biasc] = scale * hkp;
+    rw[Layout::tpb] = p_.tgs ? scale * hkp * dof_parameter(d, target_velocity) : V(0.0);
+    rw[Layout::dimp] = V(0.0);
+    rw[Layout::low] = V(0.0);
+    rw[Layout::high] = V(0.0);
+    rw[Layout::err_low] = x0 - dof_parameter(d, lower);
+    rw[Layout::err_high] = dof_parameter(d, upper) - x0;
+    rw[Layout::fimp] = V(0.0);
+    rw[Layout::recip] = recip;
+    rw[Layout::delta_x] = V(0.0);
+    rw[Layout::response] = r;
+  }
 }
 
 // All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
@@ -551,8 +597,8 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     rw[Layout::dimp] = select(driven, lambda, dimp);
     apply(driven, lambda - dimp);
   }
-  const M rubbing = rw[Layout::has_friction] != zero;
-  if (any(rubbing)) {
+  if (any_row(d)[0] != 0.0) {
+    const M rubbing = rw[Layout::has_friction] != zero;
     // The impulse that stops the joint, whole within the static threshold, else clamped to
     // dynamic + viscous |v|.
     const V fi = rw[Layout::fimp];
@@ -565,8 +611,8 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     rw[Layout::fimp] = select(rubbing, next, fi);
     apply(rubbing, next - fi);
   }
-  const M limited = rw[Layout::has_limit] != zero;
-  if (any(limited)) {
+  if (any_row(d)[1] != 0.0) {
+    const M limited = rw[Layout::has_limit] != zero;
     const V h(h_), erp(p_.limit_erp), recip = rw[Layout::recip];
     const V low = rw[Layout::low], high = rw[Layout::high];
     const V future = dx + v * h;
@@ -605,32 +651,40 @@ void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
   while (k != stop) {
     const LinkConstants& lk = p_.links[k];
     const int p = lk.parent;
+    const bool first_child = lk.first_child, last_child = lk.last_child;
     const V* pAk = at(l_.subtree + 6 * k);
-    V pa[6];
-    if (lk.type == 0) {
-      for (int r = 0; r < 6; ++r) pa[r] = pAk[r];
-    } else {
+    const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
+    V beta(0.0);
+    if (lk.type != 0) {
       const int d = lk.v_index;
-      const V* S = at(l_.S + 6 * k);
-      const V* U = at(l_.U + 6 * k);
-      const V beta = at(l_.D_inv)[k] * (at(l_.jimp)[d] - dot6(S, pAk));
+      U = at(l_.U + 6 * k);
+      beta = at(l_.D_inv)[k] * (at(l_.jimp)[d] - dot6(at(l_.S + 6 * k), pAk));
       if (lk.finish_on_leave) {
         V& qd = at(l_.qd)[d];
         qd = qd + (at(l_.entry)[d] - dot6(at(l_.G + 6 * k), pAk));
       }
-      for (int r = 0; r < 6; ++r) pa[r] = pAk[r] + beta * U[r];
     }
     if (p < 0) return;
     V* pAp = at(l_.subtree + 6 * p);
-    for (int r = 0; r < 6; ++r) pAp[r] = lk.first_child ? pa[r] : pAp[r] + pa[r];
-    if (!lk.last_child)
-      for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
-    if (p == stop && correct) {
-      V t[6];
-      sym_times(at(l_.Lambda + 21 * p), pa, t);
-      V* dv = at(l_.dv + 6 * p);
-      for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
+    const bool fix = p == stop && correct;
+    if (first_child && !fix) {  // a chain's link: straight into the parent's subtree impulse
+      if (U)
+        for (int r = 0; r < 6; ++r) pAp[r] = pAk[r] + beta * U[r];
+      else
+        for (int r = 0; r < 6; ++r) pAp[r] = pAk[r];
+    } else {
+      V pa[6];
+      for (int r = 0; r < 6; ++r) pa[r] = U ? pAk[r] + beta * U[r] : pAk[r];
+      for (int r = 0; r < 6; ++r) pAp[r] = first_child ? pa[r] : pAp[r] + pa[r];
+      if (fix) {
+        V t[6];
+        sym_times(at(l_.Lambda + 21 * p), pa, t);
+        V* dv = at(l_.dv + 6 * p);
+        for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
+      }
     }
+    if (!last_child)
+      for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
     k = p;
   }
 }
@@ -734,7 +788,7 @@ void LaneStep<A, K>::step() {
   const double dt = p_.dt;
   velocity_iteration_ = false;
   if (!p_.tgs) {
-    setup_rows(dt);
+    setup_rows();
     h_ = dt;
     for (int it = 0; it < p_.position_iterations; ++it) sweep();
     integrate(dt, false);
@@ -743,7 +797,7 @@ void LaneStep<A, K>::step() {
   } else {
     const int n = p_.position_iterations;
     const double rho = dt / n;
-    setup_rows(rho);
+    setup_rows();
     h_ = rho;
     for (int i = 1; i <= n; ++i) {
       time_to_step_end_ = dt - i * rho;
@@ -842,6 +896,7 @@ void LaneStep<A, K>::run(int steps) {
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
+  setup_row_constants(p_.tgs ? p_.dt / p_.position_iterations : p_.dt);
   for (int s = 0; s < steps; ++s) {
     for (int k = 0; k < nq; ++k) at(l_.old_q)[k] = at(l_.q)[k];
     for (int d = 0; d < nv; ++d) {

@@ -92,12 +92,19 @@ struct Layout {
     fdyn,
     fvisc,
     fimp,
+    // Set once a call (setup_row_constants): h (h kp + kd), h kd target velocity, h kp, the
+    // acceleration drive's mask and its 1 / (h (h kp + kd) + 1).
+    gain,
+    gain_velocity,
+    gain_position,
+    accel,
+    accel_x,
     kRowFields
   };
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, df = 0, lf = 0,
-      ff = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, size = 0;
+      ff = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
 };
 
 struct Plan {
