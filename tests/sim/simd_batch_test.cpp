@@ -2,6 +2,7 @@
 // bits against themselves across lanes, batch sizes, widths and thread counts.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "featherdrive/sim/simd_batch.hpp"
@@ -125,6 +126,9 @@ TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
       EXPECT_LE(simd_relative_difference(simd.drive_force().row(e), sim.drive_force().transpose()),
                 1e-12);
     }
+    std::printf("random tree, %s: q, qd %.1e (docs/simd_batch.md)\n", to_string(solver),
+                std::max(simd_relative_difference(simd.q().row(0), sim.q().transpose()),
+                         simd_relative_difference(simd.qd().row(0), sim.qd().transpose())));
   }
 }
 
