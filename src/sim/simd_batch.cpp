@@ -44,7 +44,7 @@ Layout make_layout(const Plan& p) {
   l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
-  l.flags = take(n);  // two doubles a dof
+  l.flags = take(n);  // three doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
 }
@@ -227,6 +227,8 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
       }
     }
     k.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
+    const Mat3& Ic = link.inertia_com;
+    k.diagonal_inertia = Ic(0, 1) == 0.0 && Ic(0, 2) == 0.0 && Ic(1, 2) == 0.0;
     if (link.parent >= 0) {
       const Link& parent = m.links[static_cast<size_t>(link.parent)];
       k.first_child = parent.children.front() == i;

@@ -122,6 +122,12 @@ bool any(const PackMask<A, K>& c) {
     if (xsimd::any(c.m[k])) return true;
   return false;
 }
+template <class A, int K>
+bool all(const PackMask<A, K>& c) {
+  for (int k = 0; k < K; ++k)
+    if (!xsimd::all(c.m[k])) return false;
+  return true;
+}
 
 template <class A, int K>
 class LaneStep {
@@ -155,7 +161,7 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
-  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 2 * d; }
+  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 3 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
@@ -340,19 +346,28 @@ void LaneStep<A, K>::velocities_and_bias() {
     const V* pos = at(l_.pos + 3 * i);
     const V m = link_parameter(i, mass);
     const V com[3] = {link_parameter(i, com_x), link_parameter(i, com_y), link_parameter(i, com_z)};
-    const V xx = link_parameter(i, inertia_xx), yy = link_parameter(i, inertia_yy),
-            zz = link_parameter(i, inertia_zz), xy = link_parameter(i, inertia_xy),
-            xz = link_parameter(i, inertia_xz), yz = link_parameter(i, inertia_yz);
-    const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
     V cg[3], mc[3];
     for (int r = 0; r < 3; ++r) {
       cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
       mc[r] = m * cg[r];
     }
-    V RI[9];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+    V RI[9];  // R Ic
+    const V xx = link_parameter(i, inertia_xx), yy = link_parameter(i, inertia_yy),
+            zz = link_parameter(i, inertia_zz);
+    if (k.diagonal_inertia) {
+      for (int r = 0; r < 3; ++r) {
+        RI[3 * r] = R[3 * r] * xx;
+        RI[3 * r + 1] = R[3 * r + 1] * yy;
+        RI[3 * r + 2] = R[3 * r + 2] * zz;
+      }
+    } else {
+      const V xy = link_parameter(i, inertia_xy), xz = link_parameter(i, inertia_xz),
+              yz = link_parameter(i, inertia_yz);
+      const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+    }
     const V mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
     V* I = at(l_.IA + 21 * i);
     for (int r = 0; r < 3; ++r)
@@ -528,10 +543,12 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     rw[Layout::fdyn] = fd * dt;
     rw[Layout::fvisc] = fv * dt;
     rw[Layout::driven] = select_zero(driven, V(1.0));
-    // Whether any lane has the row: a sweep skips what no lane has.
+    // Whether some lane has a friction or limit row, whether every lane has a drive: a sweep skips
+    // what no lane has and selects nothing where every lane has it.
     double* has = any_row(d);
     has[0] = any(rubbing) ? 1.0 : 0.0;
     has[1] = any(limited) ? 1.0 : 0.0;
+    has[2] = all(driven) ? 1.0 : 0.0;
     undriven_ = undriven_ | limited | rubbing;
     rows_any = rows_any | limited | rubbing | driven;
   }
@@ -593,9 +610,16 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     const V m = rw[Layout::maxi];
     lambda = select(lambda > m, m, lambda);
     lambda = select(lambda < -m, -m, lambda);
-    const M driven = rw[Layout::driven] != zero;
-    rw[Layout::dimp] = select(driven, lambda, dimp);
-    apply(driven, lambda - dimp);
+    if (any_row(d)[2] != 0.0) {  // every lane driven: the selects below would keep each result
+      rw[Layout::dimp] = lambda;
+      const V delta = lambda - dimp;
+      total = total + delta;
+      v = v + r * delta;
+    } else {
+      const M driven = rw[Layout::driven] != zero;
+      rw[Layout::dimp] = select(driven, lambda, dimp);
+      apply(driven, lambda - dimp);
+    }
   }
   if (any_row(d)[0] != 0.0) {
     const M rubbing = rw[Layout::has_friction] != zero;

@@ -58,6 +58,9 @@ struct LinkConstants {
   int unit_axis = -1;  ///< k for an axis +-e_k, else -1
   double axis_sign = 1.0;
   bool tree_rotation_identity = false;
+  /// The inertia about the centre of mass is diagonal in the link frame (in every lane: the
+  /// setters scale it, never rotate it).
+  bool diagonal_inertia = false;
   bool first_child = true;  ///< its parent's first child
   bool last_child = true;   ///< no sibling after it
   bool later = false;       ///< it or an ancestor has a sibling after it
