@@ -707,7 +707,7 @@ void SimdBatch::step(int count) {
                                 " must be >= 0");
   if (count == 0) return;
   Impl& im = *impl_;
-  const int K = simd::interleave(width(), count_);
+  const int K = simd::interleave(width(), count_, effective_num_threads());
   const int W = width() * K;  // lanes of a block
   const int blocks = (count_ + W - 1) / W;
   const int threads = std::min(effective_num_threads(), blocks);
