@@ -34,6 +34,10 @@ const VecX& articulated_response(const Model& model, Data& data) {
         const Data::OneDof& P = data.one_dof[link.parent];
         J.parent_W = J.U.dot(P.W);
         J.parent_S = J.U.dot(P.S);
+        // Folded once here, not in each sweep.
+        J.base_per_parent_base = -D_inv * J.parent_S;
+        J.base_per_parent_impulse =
+            P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
       }
       data.inverse_mass_block[i](0, 0) = r;
       data.inverse_mass_diagonal[link.v_index] = r;

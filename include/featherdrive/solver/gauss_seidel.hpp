@@ -209,9 +209,8 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
         double ahead = 0.0, per_impulse = 0.0;
         if (next) {
           const Data::OneDof& C = one_dof[i + 1];
-          const double c_S = -C.D_inv * C.parent_S;
-          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * c_S;
-          per_impulse = J.D_inv * (C.D_inv * C.parent_W) + J.inverse_mass * c_S;
+          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * C.base_per_parent_base;
+          per_impulse = C.base_per_parent_impulse;
         }
         double impulse = 0.0;
         if (has_rows[d]) impulse = solve_row(d, v[d] + base);
