@@ -159,11 +159,20 @@ void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& 
   D_inv = D.llt().solve(MatNN::Identity(S.cols(), S.cols()));
 }
 
-// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia, whole
-// columns (Eigen knows they are aligned and SSE2 folds the loads into the arithmetic; split
-// into rows 0-3 and 4-5 they were loaded unaligned, 30 instructions a dof more in the response).
+// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia. With
+// AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else whole columns, which Eigen
+// knows are aligned, so SSE2 folds their loads into the arithmetic (split, they were loaded
+// unaligned). Each is the fewer instructions on its own instruction set (docs/benchmarks.md).
 inline void add_to_parent(const Mat6& IA, double D_inv, const Vec6& U, Mat6& IA_parent) {
-  for (int j = 0; j < 6; ++j) IA_parent.col(j) += IA.col(j) - (D_inv * U[j]) * U;
+  for (int j = 0; j < 6; ++j) {
+#ifdef __AVX__
+    const double k = D_inv * U[j];
+    IA_parent.col(j).head<4>() += IA.col(j).head<4>() - k * U.head<4>();
+    IA_parent.col(j).tail<2>() += IA.col(j).tail<2>() - k * U.tail<2>();
+#else
+    IA_parent.col(j) += IA.col(j) - (D_inv * U[j]) * U;
+#endif
+  }
 }
 
 }  // namespace
