@@ -159,13 +159,19 @@ void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& 
   D_inv = D.llt().solve(MatNN::Identity(S.cols(), S.cols()));
 }
 
-// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia, rows
-// 0-3 and 4-5 apart (a 4-wide and a 2-wide operation with AVX).
+// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia. With
+// AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else whole columns, which Eigen
+// knows are aligned, so SSE2 folds their loads into the arithmetic (split, they were loaded
+// unaligned). Each is the fewer instructions on its own instruction set (docs/benchmarks.md).
 inline void add_to_parent(const Mat6& IA, double D_inv, const Vec6& U, Mat6& IA_parent) {
   for (int j = 0; j < 6; ++j) {
+#ifdef __AVX__
     const double k = D_inv * U[j];
     IA_parent.col(j).head<4>() += IA.col(j).head<4>() - k * U.head<4>();
     IA_parent.col(j).tail<2>() += IA.col(j).tail<2>() - k * U.tail<2>();
+#else
+    IA_parent.col(j) += IA.col(j) - (D_inv * U[j]) * U;
+#endif
   }
 }
 
@@ -239,9 +245,14 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
     data.velocity0[i] = vi;
     const Vec3 w = vi.head<3>(), vo = vi.tail<3>();
     set_halves(w.cross(wJ), w.cross(vJ) + vo.cross(wJ), data.bias_acceleration0[i]);
-    const Vec6 h = data.articulated_inertia[i] * vi;
+    // h = I_i v_i = [A w + m c x vo; m vo - m c x w] from the parts write_inertia laid out (I_i
+    // is still the body's inertia here): a third of the multiplies of the 6 x 6 product.
+    const Mat6& I = data.articulated_inertia[i];
+    const Vec3 mc(I(2, 4), -I(2, 3), I(1, 3));
+    const Vec3 h_top = I.topLeftCorner<3, 3>() * w + mc.cross(vo);
+    const Vec3 h_bottom = I(3, 3) * vo - mc.cross(w);
     Vec6& pA = data.articulated_bias[i];
-    set_halves(w.cross(h.head<3>()) + vo.cross(h.tail<3>()), w.cross(h.tail<3>()), pA);
+    set_halves(w.cross(h_top) + vo.cross(h_bottom), w.cross(h_bottom), pA);
     if (external_force) pA -= (*external_force)[static_cast<size_t>(i)];
   }
   // Pass 2: articulated inertias and bias forces, leaves to root.
@@ -260,7 +271,10 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
       if (link.parent < 0) continue;
       // Ia = IA - U D^-1 U^T; pa = pA + Ia c + U D^-1 u = pA + IA c + U D^-1 (u - U.c)
       const Vec6& c = data.bias_acceleration0[i];
-      const Vec6 IAc = IA * c;  // (+= IA * c would broadcast c's entries once per row pair)
+      // Column by column: Eigen's product went out of line (+= IA * c would broadcast c's entries
+      // once per row pair).
+      Vec6 IAc = c[0] * IA.col(0);
+      for (int j = 1; j < 6; ++j) IAc += c[j] * IA.col(j);
       data.articulated_bias[link.parent] += pA + IAc + (D_inv * (u - J.U.dot(c))) * J.U;
       add_to_parent(IA, D_inv, J.U, data.articulated_inertia[link.parent]);
       continue;

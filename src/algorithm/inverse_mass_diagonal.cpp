@@ -23,17 +23,27 @@ const VecX& articulated_response(const Model& model, Data& data) {
       const double D_inv = J.D_inv;
       const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
       J.G = r * J.S - D_inv * J.W;
-      // Column by column, rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation with AVX).
+      // Column by column: with AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else
+      // whole columns, aligned, so SSE2 folds their loads into the arithmetic (as in aba.cpp's
+      // add_to_parent).
       for (int j = 0; j < 6; ++j) {
         const double g = J.G[j], sh = J.S[j] * D_inv;
+#ifdef __AVX__
         L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
         L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
+#else
+        L.col(j) = T.col(j) + g * J.S - sh * J.W;
+#endif
       }
       J.inverse_mass = r;
       if (link.parent >= 0 && data.info[link.parent].nv == 1) {
         const Data::OneDof& P = data.one_dof[link.parent];
         J.parent_W = J.U.dot(P.W);
         J.parent_S = J.U.dot(P.S);
+        // Folded once here, not in each sweep.
+        J.base_per_parent_base = -D_inv * J.parent_S;
+        J.base_per_parent_impulse =
+            P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
       }
       data.inverse_mass_block[i](0, 0) = r;
       data.inverse_mass_diagonal[link.v_index] = r;

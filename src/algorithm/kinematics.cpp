@@ -1,15 +1,17 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 
-#include <cmath>
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/spatial/sincos.hpp"
 
 namespace featherdrive {
 namespace {
 
 // R(a, q)^T: the transpose of the rotation by q about the unit axis a (Rodrigues).
 Mat3 rotation_transpose(const Vec3& a, double q) {
-  const double s = std::sin(q), c = std::cos(q), t = 1.0 - c;
+  double s, c;
+  sincos_inline(q, s, c);
+  const double t = 1.0 - c;
   const double xy = t * a.x() * a.y(), xz = t * a.x() * a.z(), yz = t * a.y() * a.z();
   const double sx = s * a.x(), sy = s * a.y(), sz = s * a.z();
   Mat3 E;
@@ -38,8 +40,7 @@ void parent_transform_of(const Model& model, const Data& data, int i, const doub
       if (info.unit_axis >= 0) {
         // R(+-e_k, q)^T X_T: rows k1 and k2 of E_T mix, row k stays.
         const double angle = info.axis_sign * q[0];
-        c = std::cos(angle);
-        s = std::sin(angle);
+        sincos_inline(angle, s, c);
         const int a = info.unit_axis, a1 = next_axis(a), a2 = previous_axis(a);
         if (info.tree_rotation_identity) {
           X.E.setZero();
@@ -112,7 +113,8 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
   // First, so that nothing computed before it has to survive the call.
   const double angle = link.axis_sign * q[link.q_index];
-  const double c = std::cos(angle), s = std::sin(angle);
+  double c, s;
+  sincos_inline(angle, s, c);
   const Vec3 r = data.constants[i].tree_transform.r;
   const Mat3& Rp = data.world_rotation[link.parent];
   const Vec3 p = data.world_position[link.parent] + Rp * r;

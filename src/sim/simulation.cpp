@@ -144,6 +144,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   load_state();  // sizes the working copies, so that a step allocates nothing
   drive_force_ = limit_force_ = friction_force_ = velocity_limit_force_ = VecX::Zero(nv);
   rows_.assign(static_cast<size_t>(nv), DofRows{});
+  dof_order_.assign(static_cast<size_t>(nv), 0);
   delta_x_ = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model_->num_links());
   friction_coefficient_ = VecX::Zero(nv);
@@ -183,6 +184,7 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
     throw std::invalid_argument("set_model: the model has another topology: " + difference);
   // The workspaces hold copies of inertial parameters (Data::constants, the total mass).
   data_ = Data(*model);
+  row_kinds_changed_ = true;
   sweep_ = SweepWorkspace(*model);
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
@@ -275,6 +277,8 @@ void Simulation::set_drive(int dof, const Drive& drive) {
                                 to_string(actuators_.actuator(dof).kind) + "): a " +
                                 to_string(drive.type) + " drive cannot act beside it (clear the "
                                 "actuator first; a drive of type none sets its targets)");
+  // New targets or gains leave a lone drive one.
+  if (drive.type != drives_[static_cast<size_t>(dof)].type) row_kinds_changed_ = true;
   drives_[static_cast<size_t>(dof)] = drive;
   // No drive, no delay: what set_drive_delay refuses is not kept either (checkpoints restore it).
   if (drive.type == DriveType::none && drive_delays_.delayed(dof)) drive_delays_.set(dof, 0);
@@ -347,6 +351,7 @@ void Simulation::set_joint_limits(int dof, double lower, double upper) {
                                     "lies");
   lower_limit_[dof] = lower;
   upper_limit_[dof] = upper;
+  row_kinds_changed_ = true;
 }
 void Simulation::set_joint_limits(const std::string& joint, double lower, double upper) {
   set_joint_limits(driven_dof(joint), lower, upper);
@@ -356,6 +361,7 @@ void Simulation::set_joint_friction(int dof, const JointFriction& friction) {
   one_dof_joint(dof);
   validate_friction(friction, model_->links[model_->dof_link[dof]].joint_name);
   friction_[static_cast<size_t>(dof)] = friction;
+  row_kinds_changed_ = true;
 }
 void Simulation::set_joint_friction(const std::string& joint, const JointFriction& friction) {
   set_joint_friction(driven_dof(joint), friction);
@@ -365,6 +371,7 @@ void Simulation::set_max_joint_velocity(int dof, double max_velocity) {
   one_dof_joint(dof);
   validate_max_velocity(max_velocity, model_->links[model_->dof_link[dof]].joint_name);
   max_velocity_[dof] = max_velocity;
+  row_kinds_changed_ = true;
 }
 void Simulation::set_max_joint_velocity(const std::string& joint, double max_velocity) {
   set_max_joint_velocity(driven_dof(joint), max_velocity);
@@ -374,6 +381,7 @@ void Simulation::set_friction_coefficient(int dof, double coefficient) {
   one_dof_joint(dof);
   validate_friction_coefficient(coefficient, model_->links[model_->dof_link[dof]].joint_name);
   friction_coefficient_[dof] = coefficient;
+  row_kinds_changed_ = true;
 }
 void Simulation::set_friction_coefficient(const std::string& joint, double coefficient) {
   set_friction_coefficient(driven_dof(joint), coefficient);
@@ -402,10 +410,14 @@ void Simulation::set_mimic_joints(const std::vector<MimicJoint>& mimic) {
 
 void Simulation::update_link_damping_active() {
   link_damping_active_ = false;
-  for (const LinkParameters& p : link_parameters_)
+  link_cfm_active_ = false;
+  for (const LinkParameters& p : link_parameters_) {
     link_damping_active_ = link_damping_active_ || p.linear_damping > 0.0 ||
                            p.angular_damping > 0.0 || std::isfinite(p.max_linear_velocity) ||
                            std::isfinite(p.max_angular_velocity);
+    link_cfm_active_ = link_cfm_active_ || p.cfm_scale != 0.0;
+  }
+  if (!link_cfm_active_) link_cfm_.setZero();  // what link_cfm would write every step
 }
 
 void Simulation::set_link_parameters(int link, const LinkParameters& parameters) {
@@ -433,6 +445,7 @@ void Simulation::set_actuator_envelope(int dof, const ActuatorEnvelope& envelope
   one_dof_joint(dof);
   validate_envelope(envelope, model_->links[model_->dof_link[dof]].joint_name);
   envelopes_[static_cast<size_t>(dof)] = envelope;
+  row_kinds_changed_ = true;
 }
 void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope) {
   set_actuator_envelope(driven_dof(joint), envelope);
@@ -501,6 +514,7 @@ void Simulation::check_drive_delay(int dof, int delay) const {
 void Simulation::set_drive_delay(int dof, int delay) {
   check_drive_delay(dof, delay);
   drive_delays_.set(dof, delay);
+  row_kinds_changed_ = true;
 }
 void Simulation::set_drive_delay(const std::string& joint, int delay) {
   set_drive_delay(driven_dof(joint), delay);

@@ -54,7 +54,7 @@ void Simulation::step() {
   }
   // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
   articulated_response(model, data_);
-  link_cfm(model, data_, link_parameters_, link_cfm_);  // link_cfm.cpp
+  if (link_cfm_active_) link_cfm(model, data_, link_parameters_, link_cfm_);  // link_cfm.cpp
   // Rows, position iterations, position update, velocity iterations.
   if (options_.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
@@ -87,11 +87,72 @@ void Simulation::scale_to_velocity_limits() {
 }
 
 // Every dof's rows, set up once per step from the start-of-step configuration (eq. 20-24, 35-39).
+// A dof whose only row is an undelayed drive needs its drive row alone: the other fields stay as
+// the last full setup left them (the drive row writes no other accumulator).
 void Simulation::setup_rows(double h, bool tgs) {
   const Model& model = *model_;
-  const double dt = options_.dt;
-  any_rows_ = false;
+  const int nv = model.nv;
+  int* const order = dof_order_.data();
+  if (row_kinds_changed_) {
+    int front = 0, back = nv;
+    for (int d = 0; d < nv; ++d) {
+      setup_dof_rows(d, h, tgs);
+      const bool lone = rows_[static_cast<size_t>(d)].drive_only && !drive_delays_.delayed(d) &&
+                        model.links[model.dof_link[d]].joint_type != JointType::spherical;
+      order[lone ? front++ : --back] = d;
+    }
+    num_lone_drives_ = front;
+    row_kinds_changed_ = false;
+  } else {
+    setup_lone_drives(h, tgs);
+    for (int k = nv - 1; k >= num_lone_drives_; --k) setup_dof_rows(order[k], h, tgs);
+  }
+  any_rows_ = num_lone_drives_ > 0;
   any_undriven_rows_ = false;
+  for (int k = num_lone_drives_; k < nv; ++k) {
+    const DofRows& rows = rows_[static_cast<size_t>(order[k])];
+    any_rows_ = any_rows_ || rows.active();
+    any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
+  }
+  delta_x_.setZero();
+  if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
+    mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
+}
+
+// The lone drives' rows (setup_dof_rows's fields that change from step to step), in one loop
+// over raw pointers: Eigen's stores may alias anything, so the compiler would reload every
+// vector's data pointer after each of them.
+void Simulation::setup_lone_drives(double h, bool tgs) {
+  const int* const dof_link = model_->dof_link.data();
+  const Data::LinkInfo* const info = data_.info.data();
+  const double* const r_of = data_.inverse_mass_diagonal.data();
+  const double* const q = q_.data();
+  const double* const cfm = link_cfm_.data();
+  const double* const applied = applied_force_.data();
+  const Drive* const drives = drives_.data();
+  DofRows* const rows = rows_.data();
+  const int* const order = dof_order_.data();
+  const double dt = options_.dt;
+  for (int k = 0; k < num_lone_drives_; ++k) {
+    const int d = order[k];
+    const int i = dof_link[d];
+    const Data::LinkInfo& link = info[i];
+    const Drive& drive = drives[d];
+    double r = r_of[d];
+    DofRows& row = rows[d];
+    row.drive_impulse = 0.0;
+    row.response = r;
+    row.external_impulse = applied[d] * dt;
+    if (drive.type == DriveType::acceleration)
+      r += std::max(cfm[i], link.parent >= 0 ? cfm[link.parent] : 0.0);
+    row.drive = setup_drive_row(drive, r, q[link.q_index], h, dt, tgs);
+  }
+}
+
+// Dof d's rows, every field.
+void Simulation::setup_dof_rows(int d, double h, bool tgs) {
+  const Model& model = *model_;
+  const double dt = options_.dt;
   auto drive_seen = [this](int dof) -> const Drive& {
     return drive_delays_.delayed(dof) ? drive_delays_.drive_seen(dof)
                                       : drives_[static_cast<size_t>(dof)];
@@ -102,71 +163,64 @@ void Simulation::setup_rows(double h, bool tgs) {
     return std::array<const Drive*, 3>{&drive_seen(first), &drive_seen(first + 1),
                                        &drive_seen(first + 2)};
   };
-  for (int d = 0; d < model.nv; ++d) {
-    DofRows& rows = rows_[static_cast<size_t>(d)];
-    // Data's compact copy of the link: a Link spreads over a kilobyte.
-    const Data::LinkInfo& link = data_.info[model.dof_link[d]];
-    const bool spherical = link.type == JointType::spherical;
-    if (link.type != JointType::revolute && link.type != JointType::prismatic && !spherical) {
-      rows = DofRows{};
-      sweep_.has_rows[d] = 0;
-      continue;
-    }
-    // Every field is set below; the accumulators start from zero.
-    rows.drive_impulse = 0.0;
-    rows.transmission_friction_impulse = 0.0;
-    rows.transmission_friction_applied = 0.0;
-    rows.friction_impulse = 0.0;
-    rows.low_impulse = 0.0;
-    rows.high_impulse = 0.0;
-    rows.velocity_limit_impulse = 0.0;
-    const double r = data_.inverse_mass_diagonal[d];
-    // A spherical axis's position is PhysX's, from the quaternion (spherical_rows.cpp).
-    const double x0 = spherical ? spherical_axis_position(model, q_, d) : q_[link.q_index];
-    // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
-    const double cfm = std::max(link_cfm_[model.dof_link[d]],
-                                link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
-    rows.response = r;
-    const Drive& drive = drive_seen(d);
-    rows.has_drive = drive.type != DriveType::none;
-    // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
-    // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
-    const double x0_drive =
-        spherical && rows.has_drive
-            ? drive.target_position - spherical_axis_drive_error(model, q_, d, axis_drives(d))
-            : x0;
-    rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
-                                                             ? r + cfm : r, x0_drive, h, dt, tgs)
-                                : DriveRow{};
-    const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
-    rows.has_envelope = rows.has_drive && envelope.active();
-    rows.envelope = envelope;
-    rows.external_impulse = applied_force_[d] * dt;
-    const JointFriction& friction = friction_[static_cast<size_t>(d)];
-    rows.has_transmission_friction = friction_coefficient_[d] > 0.0 &&
-                                     friction.static_effort == 0.0 && friction.viscous == 0.0;
-    rows.transmission_friction_bound =
-        friction_coefficient_[d] * h * transmitted_force_[model.dof_link[d]];
-    rows.has_friction = friction.active();
-    rows.static_friction_impulse = friction.static_effort * dt;
-    rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
-    rows.viscous_friction = friction.viscous * dt;
-    rows.has_limit = std::isfinite(lower_limit_[d]) || std::isfinite(upper_limit_[d]);
-    rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
-    rows.error_high = upper_limit_[d] - x0;
-    rows.max_velocity = max_velocity_[d];
-    rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.has_transmission_friction &&
-                      !rows.has_friction && !rows.has_limit &&
-                      !(rows.max_velocity < DofRows::kNoVelocityLimit);
-    // 1 / (r + cfm) is read by every row but a lone drive.
-    rows.recip_response = rows.drive_only ? 0.0 : 1.0 / (r + cfm);
-    sweep_.has_rows[d] = rows.active() ? 1 : 0;
-    any_rows_ = any_rows_ || rows.active();
-    any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
+  DofRows& rows = rows_[static_cast<size_t>(d)];
+  // Data's compact copy of the link: a Link spreads over a kilobyte.
+  const Data::LinkInfo& link = data_.info[model.dof_link[d]];
+  const bool spherical = link.type == JointType::spherical;
+  if (link.type != JointType::revolute && link.type != JointType::prismatic && !spherical) {
+    rows = DofRows{};
+    sweep_.has_rows[d] = 0;
+    return;
   }
-  delta_x_.setZero();
-  if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
-    mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
+  // Every field is set below; the accumulators start from zero.
+  rows.drive_impulse = 0.0;
+  rows.transmission_friction_impulse = 0.0;
+  rows.transmission_friction_applied = 0.0;
+  rows.friction_impulse = 0.0;
+  rows.low_impulse = 0.0;
+  rows.high_impulse = 0.0;
+  rows.velocity_limit_impulse = 0.0;
+  const double r = data_.inverse_mass_diagonal[d];
+  // A spherical axis's position is PhysX's, from the quaternion (spherical_rows.cpp).
+  const double x0 = spherical ? spherical_axis_position(model, q_, d) : q_[link.q_index];
+  // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
+  const double cfm = std::max(link_cfm_[model.dof_link[d]],
+                              link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
+  rows.response = r;
+  const Drive& drive = drive_seen(d);
+  rows.has_drive = drive.type != DriveType::none;
+  // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
+  // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
+  const double x0_drive =
+      spherical && rows.has_drive
+          ? drive.target_position - spherical_axis_drive_error(model, q_, d, axis_drives(d))
+          : x0;
+  rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
+                                                           ? r + cfm : r, x0_drive, h, dt, tgs)
+                              : DriveRow{};
+  const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
+  rows.has_envelope = rows.has_drive && envelope.active();
+  rows.envelope = envelope;
+  rows.external_impulse = applied_force_[d] * dt;
+  const JointFriction& friction = friction_[static_cast<size_t>(d)];
+  rows.has_transmission_friction = friction_coefficient_[d] > 0.0 &&
+                                   friction.static_effort == 0.0 && friction.viscous == 0.0;
+  rows.transmission_friction_bound =
+      friction_coefficient_[d] * h * transmitted_force_[model.dof_link[d]];
+  rows.has_friction = friction.active();
+  rows.static_friction_impulse = friction.static_effort * dt;
+  rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
+  rows.viscous_friction = friction.viscous * dt;
+  rows.has_limit = std::isfinite(lower_limit_[d]) || std::isfinite(upper_limit_[d]);
+  rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
+  rows.error_high = upper_limit_[d] - x0;
+  rows.max_velocity = max_velocity_[d];
+  rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.has_transmission_friction &&
+                    !rows.has_friction && !rows.has_limit &&
+                    !(rows.max_velocity < DofRows::kNoVelocityLimit);
+  // 1 / (r + cfm) is read by every row but a lone drive.
+  rows.recip_response = rows.drive_only ? 0.0 : 1.0 / (r + cfm);
+  sweep_.has_rows[d] = rows.active() ? 1 : 0;
 }
 
 // The phase is updated in place with each dof's delta_x (a copy per row solve was a fifth of the

@@ -10,24 +10,27 @@ SweepWorkspace::SweepWorkspace(const Model& model)
       joint_impulse(VecX::Zero(model.nv)),
       entry_velocity_change(VecX::Zero(model.nv)),
       has_rows(model.nv, 0),
-      first_child(model.links.size(), 0),
-      chain_next(model.links.size(), 0),
-      parent_one_dof(model.links.size(), 0),
-      finish_on_leave(model.links.size(), 0) {
+      links(model.links.size()) {
   const int n = model.num_links();
   std::vector<char> later(model.links.size(), 0);  // it or an ancestor has a later sibling
   for (int i = 0; i < n; ++i) {
-    const Link& link = model.links[i];
+    const featherdrive::Link& link = model.links[i];
+    Link& l = links[static_cast<size_t>(i)];
+    l.parent = link.parent;
+    l.v_index = link.v_index;
+    l.nv = static_cast<short>(link.nv);
     if (link.parent >= 0) {
-      first_child[i] = model.links[link.parent].children.front() == i;
-      parent_one_dof[i] = model.links[link.parent].nv == 1;
+      const featherdrive::Link& parent = model.links[link.parent];
+      l.last_child = parent.children.back() == i;
+      l.first_child = parent.children.front() == i;
+      l.parent_one_dof = parent.nv == 1;
     }
-    chain_next[i] = link.nv == 1 && i + 1 < n && model.links[i + 1].parent == i &&
-                    model.links[i + 1].nv == 1;
+    l.chain_next = link.nv == 1 && i + 1 < n && model.links[i + 1].parent == i &&
+                   model.links[i + 1].nv == 1;
     if (link.parent >= 0)
       later[i] = model.links[link.parent].children.back() != i || later[link.parent];
-    finish_on_leave[i] = link.nv == 1 && !later[i];
-    if (!finish_on_leave[i] && (link.nv > 0 || later[i])) finish_after.push_back(i);
+    l.finish_on_leave = link.nv == 1 && !later[i];
+    if (!l.finish_on_leave && (link.nv > 0 || later[i])) finish_after.push_back(i);
   }
 }
 

@@ -92,6 +92,11 @@ struct Data {
     /// With a 1-dof parent p: U_i^T W_p and U_i^T S_p (the sweep's scalar shortcuts); else 0.
     double parent_W = 0.0;
     double parent_S = 0.0;
+    /// With a 1-dof parent p, the sweep's base_i (gauss_seidel_sweep) as base_p times the first
+    /// plus p's impulse times the second, plus a term in p's parent's velocity change:
+    /// -D_i^-1 U_i^T S_p and D_p^-1 D_i^-1 U_i^T W_p + (M^-1)_pp times the first; else 0.
+    double base_per_parent_base = 0.0;
+    double base_per_parent_impulse = 0.0;
   };
   std::vector<OneDof> one_dof;
 

@@ -253,6 +253,8 @@ class Simulation {
   std::string no_drive_message(int dof) const;
   void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
+  void setup_dof_rows(int dof, double h, bool tgs);
+  void setup_lone_drives(double h, bool tgs);
   void sweep(RowPhase& phase);
   void solve_pgs();
   void solve_tgs();
@@ -290,12 +292,20 @@ class Simulation {
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
   bool any_undriven_rows_ = false;  ///< a row other than a lone drive (acts in TGS velocity iterations)
+  /// Every dof once: first the num_lone_drives_ whose only row is an undelayed drive on a revolute
+  /// or prismatic joint, then the others from the back. setup_rows sets up only the drive row of
+  /// the first, and sorts the dofs again after a setter changed what the sorting reads
+  /// (row_kinds_changed_). Sized nv at construction: a copy of the simulation keeps the size.
+  std::vector<int> dof_order_;
+  int num_lone_drives_ = 0;
+  bool row_kinds_changed_ = true;
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
   PhysxDepartures departures_; ///< compat physx: the link bias and momentum corrections
   // PhysX's parameters (physx_stages.hpp), per link.
   std::vector<Vec6> link_force_;     ///< link damping / velocity-limit forces, frame 0
   bool any_link_force_ = false;
   bool link_damping_active_ = false;  ///< some link has damping or a velocity limit
+  bool link_cfm_active_ = false;      ///< some link has a cfm_scale (else link_cfm_ stays 0)
   std::vector<Vec6> subtree_force_;  ///< scratch of transmitted_force_magnitudes
   VecX transmitted_force_;           ///< |F| through each link's inbound joint
   VecX link_cfm_;

@@ -24,14 +24,23 @@ struct SweepWorkspace {
   VecX joint_impulse;                      ///< impulse applied at each dof in this sweep (nv)
   VecX entry_velocity_change;              ///< each dof's velocity change when it was entered (nv)
   std::vector<char> has_rows;              ///< per dof: does the sweep solve a row here
-  /// Per link: it is its parent's first child (it hands the parent's pA its first value).
-  std::vector<char> first_child;
-  /// Per link: it has one dof and link i + 1 is its child with one dof (a run of a chain).
-  std::vector<char> chain_next;
-  std::vector<char> parent_one_dof;        ///< per link: its parent has one dof
-  /// Per link: one dof and no later subtree, so its joint's velocity is final when it is left
-  /// (detail::leave_links); the others, in model order, are finished after the sweep.
-  std::vector<char> finish_on_leave;
+  /// What the sweep's loops read of a link besides its spatial quantities, in one record (with
+  /// them in separate arrays, each address was formed and each array's pointer reloaded).
+  struct Link {
+    int parent = -1;
+    int v_index = 0;
+    short nv = 0;
+    bool last_child = true;  ///< no sibling after it
+    /// It is its parent's first child (it hands the parent's pA its first value).
+    bool first_child = false;
+    /// It has one dof and link i + 1 is its child with one dof (a run of a chain).
+    bool chain_next = false;
+    bool parent_one_dof = false;  ///< its parent has one dof
+    /// One dof and no later subtree, so its joint's velocity is final when it is left
+    /// (detail::leave_links); the others, in model order, are finished after the sweep.
+    bool finish_on_leave = false;
+  };
+  std::vector<Link> links;
   std::vector<int> finish_after;
   Vec6 zero = Vec6::Zero();                ///< the world's velocity change
 };
@@ -58,7 +67,7 @@ namespace detail {
   }
   if (p < 0) return;
   Vec6& pA_parent = ws.subtree_impulse[p];
-  if (ws.first_child[k]) pA_parent = pa;
+  if (ws.links[k].first_child) pA_parent = pa;
   else pA_parent += pa;
   if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
   if (p == stop && correct_stop) correct_velocity_change(data, ws, p, pa);
@@ -74,18 +83,15 @@ namespace detail {
 // data pointer after each of them.
 inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k, int stop,
                         bool correct_stop) {
-  const Data::LinkInfo* const info = data.info.data();
+  const SweepWorkspace::Link* const links = ws.links.data();
   const Data::OneDof* const one_dof = data.one_dof.data();
   Vec6* const subtree_impulse = ws.subtree_impulse.data();
   const double* const joint_impulse = ws.joint_impulse.data();
-  const char* const first_child = ws.first_child.data();
-  const char* const parent_one_dof = ws.parent_one_dof.data();
-  const char* const finish_on_leave = ws.finish_on_leave.data();
   const double* const entry_velocity_change = ws.entry_velocity_change.data();
   bool have_x = false;
   double x = 0.0;  // S_k^T pA_k when have_x
   while (k != stop) {
-    const Data::LinkInfo& link = info[k];
+    const SweepWorkspace::Link& link = links[k];
     const int p = link.parent;
     if (link.nv != 1) {
       leave_multi_dof_link(data, ws, k, stop, correct_stop);
@@ -100,11 +106,11 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
     const int d = link.v_index;
     const double beta = J.D_inv * (joint_impulse[d] - x);
     // Its velocity change: what it had when entered, plus what its subtree's impulses do to it.
-    if (finish_on_leave[k]) qd[d] += entry_velocity_change[d] - J.G.dot(pA);
+    if (link.finish_on_leave) qd[d] += entry_velocity_change[d] - J.G.dot(pA);
     if (p < 0) return;
     // S_p^T of the parent's pA after this hand-over (pA_p so far + pA + beta U).
-    have_x = parent_one_dof[k] && p != stop;
-    const bool first = first_child[k];
+    have_x = link.parent_one_dof && p != stop;
+    const bool first = link.first_child;
     Vec6& pA_parent = subtree_impulse[p];
     if (have_x) {
       const Vec6& S_p = one_dof[p].S;
@@ -172,17 +178,16 @@ template <class RowSolver>
 void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
                         RowSolver&& solve_row) {
   const int n = model.num_links();
-  const Data::LinkInfo* const info = data.info.data();
+  const SweepWorkspace::Link* const links = ws.links.data();
   const Data::OneDof* const one_dof = data.one_dof.data();
   Vec6* const velocity_change = ws.link_velocity_change.data();
   double* const joint_impulse = ws.joint_impulse.data();
   double* const entry_velocity_change = ws.entry_velocity_change.data();
   const char* const has_rows = ws.has_rows.data();
-  const char* const chain_next = ws.chain_next.data();
   double* const v = qd.data();
   int previous = -1;
   for (int i = 0; i < n; ++i) {
-    const Data::LinkInfo& link = info[i];
+    const SweepWorkspace::Link& link = links[i];
     if (previous != link.parent) detail::leave_links(data, ws, v, previous, link.parent, true);
     previous = i;
     // Delta v of the parent, exact now.
@@ -197,16 +202,15 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
       double base = -one_dof[i].D_inv * one_dof[i].U.dot(from_parent);
       for (;;) {
         const Data::OneDof& J = one_dof[i];
-        const int d = info[i].v_index;
-        const bool next = chain_next[i];
+        const int d = links[i].v_index;
+        const bool next = links[i].chain_next;
         // next base = ahead + impulse * per_impulse, both formed before the impulse is known:
         // the chain of dependencies from one row to the next is one multiply-add.
         double ahead = 0.0, per_impulse = 0.0;
         if (next) {
           const Data::OneDof& C = one_dof[i + 1];
-          const double c_S = -C.D_inv * C.parent_S;
-          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * c_S;
-          per_impulse = J.D_inv * (C.D_inv * C.parent_W) + J.inverse_mass * c_S;
+          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * C.base_per_parent_base;
+          per_impulse = C.base_per_parent_impulse;
         }
         double impulse = 0.0;
         if (has_rows[d]) impulse = solve_row(d, v[d] + base);
