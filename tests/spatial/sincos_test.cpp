@@ -58,6 +58,22 @@ TEST(SincosInline, AbsolutelyCloseNearZerosOfSinAndCos) {
   }
 }
 
+// Beyond 1e5 rad, and for inf and NaN, glibc's values (the fuzzer once gave it 1e300, whose
+// quadrant overflowed a long long).
+TEST(SincosInline, GlibcBeyondItsRange) {
+  for (double x : {1e5 + 1.0, -3e7, 1e300, -1e300}) {
+    double s = 0.0, c = 0.0;
+    sincos_inline(x, s, c);
+    EXPECT_EQ(s, std::sin(x)) << x;
+    EXPECT_EQ(c, std::cos(x)) << x;
+  }
+  for (double x : {std::numeric_limits<double>::infinity(), std::nan("")}) {
+    double s = 0.0, c = 0.0;
+    sincos_inline(x, s, c);
+    EXPECT_TRUE(std::isnan(s) && std::isnan(c)) << x;
+  }
+}
+
 TEST(SincosInline, ExactAtZero) {
   double s = 1.0, c = 0.0;
   sincos_inline(0.0, s, c);

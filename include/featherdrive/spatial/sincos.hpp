@@ -4,11 +4,19 @@
 // instructions, a third of the kinematics. The same method as the SIMD Batch's LaneStep::sincos
 // (docs/math/sincos.md), so the two agree to the last bits or nearly.
 
+#include <cmath>
+
 namespace featherdrive {
 
-/// s = sin x, c = cos x, within 2 ulp of glibc's for |x| <= 1e5 (tests/spatial/sincos_test.cpp).
-/// Needs round-to-nearest and no -ffast-math (the rounding trick below).
+/// s = sin x, c = cos x, within 2 ulp of glibc's for |x| <= 1e5 (tests/spatial/sincos_test.cpp);
+/// beyond, and for inf or NaN, glibc's own (the reduction below loses digits there, and the
+/// quadrant would not fit a long long). Needs round-to-nearest and no -ffast-math.
 inline void sincos_inline(double x, double& s, double& c) {
+  if (!(std::abs(x) <= 1e5)) {
+    s = std::sin(x);
+    c = std::cos(x);
+    return;
+  }
   // j = round(2 x / pi) by adding and subtracting 1.5 * 2^52 (eq. SC-1).
   constexpr double kRound = 6755399441055744.0;
   const double j = (x * 0.63661977236758134308 + kRound) - kRound;
