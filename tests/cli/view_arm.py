@@ -205,11 +205,9 @@ def main():
         print(f"play: frame {played} ({label!r} shown), paused at {paused[1]}, then {after}")
         if played < 1 or label != "pause" or paused[0] or after != paused[1]:
             fail("play/pause does not run and stop the timeline")
-        if browser.errors:
-            fail(f"console errors: {browser.errors}")
-        foreign = [u for u in browser.requests if not u.startswith(("file:", "data:", "blob:"))]
-        if foreign:
-            fail(f"the page asked the network for {foreign}")
+        problem = browser.offline_problem()
+        if problem:
+            fail(problem)
         print(f"no console error; {len(browser.requests)} requests, all file:/data:/blob:")
     finally:
         browser.close()

@@ -93,6 +93,16 @@ class Browser:
             self.requests.append(params["request"]["url"])
         self.events.append(method)
 
+    def offline_problem(self):
+        """Why the page is not a self-contained offline page (a console error, a request beyond
+        file:, data: and blob:), or None."""
+        if self.errors:
+            return f"console errors: {self.errors}"
+        foreign = [u for u in self.requests if not u.startswith(("file:", "data:", "blob:"))]
+        if foreign:
+            return f"the page asked the network for {foreign}"
+        return None
+
     def call(self, method, session=False, timeout=30, **params):
         self.next_id += 1
         message = {"id": self.next_id, "method": method, "params": params}

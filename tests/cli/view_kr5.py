@@ -61,11 +61,9 @@ def main():
         print(f"{100 * ink:.1f}% of the view is robot (darker than the background and grid)")
         if ink < 0.02:
             fail("the robot is not drawn")
-        if browser.errors:
-            fail(f"console errors: {browser.errors}")
-        foreign = [u for u in browser.requests if not u.startswith(("file:", "data:", "blob:"))]
-        if foreign:
-            fail(f"the page asked the network for {foreign}")
+        problem = browser.offline_problem()
+        if problem:
+            fail(problem)
     finally:
         browser.close()
 
