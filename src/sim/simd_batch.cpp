@@ -34,11 +34,16 @@ Layout make_layout(const Plan& p) {
     at += count;
     return o;
   };
-  l.R = take(9 * L), l.pos = take(3 * L), l.S = take(6 * L), l.IA = take(21 * L);
-  l.pA = take(6 * L), l.c = take(6 * L), l.U = take(6 * L), l.D_inv = take(L);
-  l.acc = take(6 * L), l.Lambda = take(21 * L), l.W = take(6 * L), l.G = take(6 * L);
-  l.inverse_mass = take(L), l.vel = take(6 * L), l.dv = take(6 * L), l.subtree = take(6 * L);
-  l.after = take(6 * L), l.later = take(6 * L), l.q = take(p.nq), l.qd = take(n);
+  // Arrays whose lives do not overlap share room, so that a block's scratch stays in the core's
+  // L2 cache (docs/simd_batch.md, "Scratch"): the response's W and G take the poses' place, the
+  // whole-articulation response Lambda the articulated inertias', the sweeps' arrays those of
+  // the velocities, bias forces and accelerations.
+  l.R = take(9 * L), l.pos = take(3 * L), l.W = l.R, l.G = l.R + 6 * L;
+  l.IA = take(21 * L), l.Lambda = l.IA;
+  l.vel = take(6 * L), l.pA = take(6 * L), l.c = take(6 * L), l.acc = take(6 * L);
+  l.dv = l.vel, l.subtree = l.pA, l.after = l.c, l.later = l.acc;
+  l.S = take(6 * L), l.U = take(6 * L), l.D_inv = take(L), l.inverse_mass = take(L);
+  l.q = take(p.nq), l.qd = take(n);
   l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
   l.old_lf = take(n), l.old_ff = take(n), l.df = take(n), l.lf = take(n), l.ff = take(n),
   l.row = take(Layout::kRowFields * n);
@@ -236,6 +241,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
       later[static_cast<size_t>(i)] = !k.last_child || later[static_cast<size_t>(link.parent)];
     }
     k.later = later[static_cast<size_t>(i)];
+    k.leaf = link.children.empty();
     k.finish_on_leave = k.type != 0 && !k.later;
     if (!k.finish_on_leave && (k.type != 0 || k.later)) im.finish_after.push_back(i);
   }

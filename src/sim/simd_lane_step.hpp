@@ -809,6 +809,11 @@ void LaneStep<A, K>::step() {
   articulated_pass();
   acceleration_pass();
   response();
+  // A leaf's subtree impulse is never written by a sweep (no child hands it one) and must read 0;
+  // its room held the bias forces until now.
+  for (int i = 0; i < p_.num_links; ++i)
+    if (p_.links[i].leaf)
+      for (int r = 0; r < 6; ++r) at(l_.subtree + 6 * i)[r] = V(0.0);
   const double dt = p_.dt;
   velocity_iteration_ = false;
   if (!p_.tgs) {
@@ -908,7 +913,7 @@ void LaneStep<A, K>::finish_step() {
 template <class A, int K>
 void LaneStep<A, K>::run(int steps) {
   const int nq = p_.nq, nv = p_.nv;
-  for (int e = 0; e < l_.size; ++e) s_[e] = V(0.0);  // leaves' subtree impulses stay 0
+  for (int e = 0; e < l_.size; ++e) s_[e] = V(0.0);
   for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);
   for (int d = 0; d < nv; ++d) {
     at(l_.qd)[d] = gather(b_.qd, nv, d);

@@ -65,6 +65,7 @@ struct LinkConstants {
   bool first_child = true;  ///< its parent's first child
   bool last_child = true;   ///< no sibling after it
   bool later = false;       ///< it or an ancestor has a sibling after it
+  bool leaf = true;         ///< it has no children
   bool finish_on_leave = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
