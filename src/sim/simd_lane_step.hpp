@@ -344,79 +344,107 @@ void LaneStep<A, K>::kinematics() {
 }
 
 // Rigid-body inertias in frame 0 (aba.cpp's body_inertia), link velocities, velocity-product
-// accelerations c_i and bias forces v x* I v, root to leaves.
+// accelerations c_i and bias forces v x* I v, root to leaves; each link one vector of the pack at
+// a time, so that its rotation, centre of mass and velocity stay in registers (sym_times).
 template <class A, int K>
 void LaneStep<A, K>::velocities_and_bias() {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
-    const V* R = at(l_.R + 9 * i);
-    const V* pos = at(l_.pos + 3 * i);
-    const V m = link_parameter(i, mass);
-    const V com[3] = {link_parameter(i, com_x), link_parameter(i, com_y), link_parameter(i, com_z)};
-    V cg[3], mc[3];
-    for (int r = 0; r < 3; ++r) {
-      cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
-      mc[r] = m * cg[r];
-    }
-    V RI[9];  // R Ic
-    const V xx = link_parameter(i, inertia_xx), yy = link_parameter(i, inertia_yy),
-            zz = link_parameter(i, inertia_zz);
-    if (k.diagonal_inertia) {
+    const V* Rv = at(l_.R + 9 * i);
+    const V* posv = at(l_.pos + 3 * i);
+    const V mv = link_parameter(i, mass);
+    const V comv[3] = {link_parameter(i, com_x), link_parameter(i, com_y),
+                       link_parameter(i, com_z)};
+    V Icv[6] = {link_parameter(i, inertia_xx), link_parameter(i, inertia_yy),
+                link_parameter(i, inertia_zz), V(0.0), V(0.0), V(0.0)};
+    if (!k.diagonal_inertia)
+      Icv[3] = link_parameter(i, inertia_xy), Icv[4] = link_parameter(i, inertia_xz),
+      Icv[5] = link_parameter(i, inertia_yz);
+    V* Iv = at(l_.IA + 21 * i);
+    V* vv = at(l_.vel + 6 * i);
+    V* cv = at(l_.c + 6 * i);
+    V* pAv = at(l_.pA + 6 * i);
+    const V* vp = k.parent >= 0 ? at(l_.vel + 6 * k.parent) : nullptr;
+    const V* Sv = k.type != 0 ? at(l_.S + 6 * i) : nullptr;
+    const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
+    for (int j = 0; j < K; ++j) {
+      auto cross3 = [](const B* x, const B* y, B* out) {
+        out[0] = x[1] * y[2] - x[2] * y[1];
+        out[1] = x[2] * y[0] - x[0] * y[2];
+        out[2] = x[0] * y[1] - x[1] * y[0];
+      };
+      B R[9], pos[3], com[3];
+      for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
+      for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = comv[r].b[j];
+      const B m = mv.b[j];
+      B cg[3], mc[3];
       for (int r = 0; r < 3; ++r) {
-        RI[3 * r] = R[3 * r] * xx;
-        RI[3 * r + 1] = R[3 * r + 1] * yy;
-        RI[3 * r + 2] = R[3 * r + 2] * zz;
+        cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+        mc[r] = m * cg[r];
       }
-    } else {
-      const V xy = link_parameter(i, inertia_xy), xz = link_parameter(i, inertia_xz),
-              yz = link_parameter(i, inertia_yz);
-      const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+      B RI[9];  // R Ic
+      const B xx = Icv[0].b[j], yy = Icv[1].b[j], zz = Icv[2].b[j];
+      if (k.diagonal_inertia) {
+        for (int r = 0; r < 3; ++r) {
+          RI[3 * r] = R[3 * r] * xx;
+          RI[3 * r + 1] = R[3 * r + 1] * yy;
+          RI[3 * r + 2] = R[3 * r + 2] * zz;
+        }
+      } else {
+        const B xy = Icv[3].b[j], xz = Icv[4].b[j], yz = Icv[5].b[j];
+        const B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c)
+            RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+      }
+      const B mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
+      B Ia[6];  // A's entries, stored at kSym
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
-    }
-    const V mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
-    V* I = at(l_.IA + 21 * i);
-    for (int r = 0; r < 3; ++r)
-      for (int c = r; c < 3; ++c) {
-        V a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
-              mc[r] * cg[c];
-        if (r == c) a = a + mcc;
-        I[kSym.at[r][c]] = a;
-      }
-    // B = [mc]x, C = m 1.
-    I[6] = V(0.0), I[7] = -mc[2], I[8] = mc[1];
-    I[9] = mc[2], I[10] = V(0.0), I[11] = -mc[0];
-    I[12] = -mc[1], I[13] = mc[0], I[14] = V(0.0);
-    I[15] = m, I[16] = m, I[17] = m, I[18] = V(0.0), I[19] = V(0.0), I[20] = V(0.0);
+        for (int c = r; c < 3; ++c) {
+          B a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
+                mc[r] * cg[c];
+          if (r == c) a = a + mcc;
+          Ia[kSym.at[r][c]] = a;
+          Iv[kSym.at[r][c]].b[j] = a;
+        }
+      // B = [mc]x, C = m 1.
+      const B zero(0.0);
+      Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
+      Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
+      Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
+      Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
+      Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
 
-    V* v = at(l_.vel + 6 * i);
-    V* c = at(l_.c + 6 * i);
-    V J[6] = {V(0.0), V(0.0), V(0.0), V(0.0), V(0.0), V(0.0)};  // S qd
-    if (k.type != 0) {
-      const V qd = at(l_.qd)[k.v_index];
-      const V* S = at(l_.S + 6 * i);
-      for (int r = 0; r < 6; ++r) J[r] = qd * S[r];
+      B J[6] = {zero, zero, zero, zero, zero, zero};  // S qd
+      if (Sv) {
+        const B qd = qdv->b[j];
+        for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
+      }
+      B v[6];
+      for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
+      for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
+      B c[6], t1[3], t2[3];
+      cross3(v, J, c);
+      cross3(v, J + 3, t1);
+      cross3(v + 3, J, t2);
+      for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
+      for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
+      // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
+      B h[6], mw[3], mvv[3];
+      cross3(mc, v + 3, mvv);
+      cross3(mc, v, mw);
+      for (int r = 0; r < 3; ++r) {
+        h[r] = (Ia[kSym.at[r][0]] * v[0] + Ia[kSym.at[r][1]] * v[1] + Ia[kSym.at[r][2]] * v[2]) +
+               mvv[r];
+        h[3 + r] = m * v[3 + r] - mw[r];
+      }
+      cross3(v, h, t1);
+      cross3(v + 3, h + 3, t2);
+      for (int r = 0; r < 3; ++r) pAv[r].b[j] = t1[r] + t2[r];
+      B pl[3];
+      cross3(v, h + 3, pl);
+      for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
     }
-    for (int r = 0; r < 6; ++r) v[r] = k.parent >= 0 ? at(l_.vel + 6 * k.parent)[r] + J[r] : J[r];
-    V t1[3], t2[3];
-    cross(v, J, c);
-    cross(v, J + 3, t1);
-    cross(v + 3, J, t2);
-    for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
-    // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
-    V h[6], mw[3], mv[3];
-    cross(mc, v + 3, mv);
-    cross(mc, v, mw);
-    for (int r = 0; r < 3; ++r) {
-      h[r] = (I[kSym.at[r][0]] * v[0] + I[kSym.at[r][1]] * v[1] + I[kSym.at[r][2]] * v[2]) + mv[r];
-      h[3 + r] = m * v[3 + r] - mw[r];
-    }
-    V* pA = at(l_.pA + 6 * i);
-    cross(v, h, t1);
-    cross(v + 3, h + 3, t2);
-    for (int r = 0; r < 3; ++r) pA[r] = t1[r] + t2[r];
-    cross(v, h + 3, pA + 3);
   }
 }
 
