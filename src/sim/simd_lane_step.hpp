@@ -465,25 +465,45 @@ void LaneStep<A, K>::articulated_pass() {
     }
     const V* S = at(l_.S + 6 * i);
     V* U = at(l_.U + 6 * i);
-    sym_times(IA, S, U);
-    const V D_inv = V(1.0) / (dot6(S, U) + dof_parameter(k.v_index, armature));
-    at(l_.D_inv)[i] = D_inv;
-    const V u = at(l_.tau)[k.v_index] - dot6(S, pA);
-    at(l_.u)[k.v_index] = u;
-    if (k.parent < 0) continue;
     const V* c = at(l_.c + 6 * i);
-    V IAc[6];
-    sym_times(IA, c, IAc);
-    const V beta = D_inv * (u - dot6(U, c));
-    V* pAp = at(l_.pA + 6 * k.parent);
-    for (int r = 0; r < 6; ++r) pAp[r] = pAp[r] + ((pA[r] + IAc[r]) + beta * U[r]);
-    V* IAp = at(l_.IA + 21 * k.parent);
-    for (int a = 0; a < 6; ++a)
-      for (int b = a; b < 6; ++b) {
-        const int e = kSym.at[a][b];
-        if (a >= 3 && b < 3) continue;
-        IAp[e] = IAp[e] + (IA[e] - (D_inv * U[b]) * U[a]);
+    const V armature = dof_parameter(k.v_index, simd::armature);
+    V* pAp = k.parent >= 0 ? at(l_.pA + 6 * k.parent) : nullptr;
+    V* IAp = k.parent >= 0 ? at(l_.IA + 21 * k.parent) : nullptr;
+    // One vector of the pack at a time, so that U, D^-1 and the like stay in registers.
+    for (int j = 0; j < K; ++j) {
+      B Sj[6], Uj[6];
+      for (int r = 0; r < 6; ++r) Sj[r] = S[r].b[j];
+      for (int r = 0; r < 6; ++r) {
+        B sum = IA[kSym.at[r][0]].b[j] * Sj[0];
+        for (int q = 1; q < 6; ++q) sum = sum + IA[kSym.at[r][q]].b[j] * Sj[q];
+        Uj[r] = sum;
+        U[r].b[j] = sum;
       }
+      B SU = Sj[0] * Uj[0];
+      for (int r = 1; r < 6; ++r) SU = SU + Sj[r] * Uj[r];
+      const B D_inv = B(1.0) / (SU + armature.b[j]);
+      at(l_.D_inv)[i].b[j] = D_inv;
+      B SpA = Sj[0] * pA[0].b[j];
+      for (int r = 1; r < 6; ++r) SpA = SpA + Sj[r] * pA[r].b[j];
+      const B u = at(l_.tau)[k.v_index].b[j] - SpA;
+      at(l_.u)[k.v_index].b[j] = u;
+      if (!pAp) continue;
+      B cj[6];
+      for (int r = 0; r < 6; ++r) cj[r] = c[r].b[j];
+      B Uc = Uj[0] * cj[0];
+      for (int r = 1; r < 6; ++r) Uc = Uc + Uj[r] * cj[r];
+      const B beta = D_inv * (u - Uc);
+      for (int r = 0; r < 6; ++r) {
+        B IAc = IA[kSym.at[r][0]].b[j] * cj[0];
+        for (int q = 1; q < 6; ++q) IAc = IAc + IA[kSym.at[r][q]].b[j] * cj[q];
+        pAp[r].b[j] = pAp[r].b[j] + ((pA[r].b[j] + IAc) + beta * Uj[r]);
+      }
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) {
+          const int e = kSym.at[a][b];
+          IAp[e].b[j] = IAp[e].b[j] + (IA[e].b[j] - (D_inv * Uj[b]) * Uj[a]);
+        }
+    }
   }
 }
 
@@ -526,17 +546,30 @@ void LaneStep<A, K>::response() {
     const V* S = at(l_.S + 6 * i);
     V* W = at(l_.W + 6 * i);
     V* G = at(l_.G + 6 * i);
-    sym_times(T, U, W);
-    const V D_inv = at(l_.D_inv)[i];
-    const V r = D_inv + D_inv * D_inv * dot6(U, W);
-    for (int e = 0; e < 6; ++e) G[e] = r * S[e] - D_inv * W[e];
-    for (int a = 0; a < 6; ++a)
-      for (int b = a; b < 6; ++b) {
-        const int e = kSym.at[a][b];
-        if (a >= 3 && b < 3) continue;
-        L[e] = (T[e] + G[b] * S[a]) - (S[b] * D_inv) * W[a];
+    for (int j = 0; j < K; ++j) {  // one vector of the pack at a time (articulated_pass)
+      B Uj[6], Sj[6], Wj[6], Gj[6];
+      for (int r = 0; r < 6; ++r) Uj[r] = U[r].b[j], Sj[r] = S[r].b[j];
+      for (int r = 0; r < 6; ++r) {
+        B sum = T[kSym.at[r][0]].b[j] * Uj[0];
+        for (int q = 1; q < 6; ++q) sum = sum + T[kSym.at[r][q]].b[j] * Uj[q];
+        Wj[r] = sum;
+        W[r].b[j] = sum;
       }
-    at(l_.inverse_mass)[i] = r;
+      const B D_inv = at(l_.D_inv)[i].b[j];
+      B UW = Uj[0] * Wj[0];
+      for (int r = 1; r < 6; ++r) UW = UW + Uj[r] * Wj[r];
+      const B r_ii = D_inv + D_inv * D_inv * UW;
+      for (int e = 0; e < 6; ++e) {
+        Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
+        G[e].b[j] = Gj[e];
+      }
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) {
+          const int e = kSym.at[a][b];
+          L[e].b[j] = (T[e].b[j] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
+        }
+      at(l_.inverse_mass)[i].b[j] = r_ii;
+    }
   }
 }
 
