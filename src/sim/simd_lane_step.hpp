@@ -9,6 +9,8 @@
 // an inline function to the rest of the library.
 #pragma once
 
+#include <type_traits>
+
 #include <xsimd/xsimd.hpp>
 
 #include "simd_plan.hpp"
@@ -177,6 +179,12 @@ class LaneStep {
   void setup_row_constants(double h);
   void setup_rows();
   V solve_row(int d, V v, const V& dx);
+  template <class T, class Fields>
+  void drive_row(const Fields& rw, bool all_driven, const T& r, const T& dx, T& total, T& v);
+  template <class L>
+  void enter_link(const L& lane, int i, const V* dvp, V* dv);
+  template <class L>
+  void leave_chain_link(const L& lane, int k, bool to_parent, V& beta);
   void sweep();
   void leave_links(int k, int stop, bool correct);
   void finish_link(int i);
@@ -188,6 +196,31 @@ class LaneStep {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
   }
   static void sym_times(const V* m, const V* x, V* y);  // y = M x, M symmetric 6 x 6
+  // Which lanes a piece of a sweep acts on at a time: the whole pack, or one of its K vectors.
+  // With 16 vector registers (SSE2, AVX2) a pack of four spills; one vector at a time, link by
+  // link, stays in registers while the K vectors' chains still overlap. With AVX-512's 32 the
+  // whole pack measured faster (docs/simd_batch.md).
+  struct WholePack {
+    V& operator()(V& x) const { return x; }
+    const V& operator()(const V& x) const { return x; }
+  };
+  struct OneVector {
+    int j;
+    B& operator()(V& x) const { return x.b[j]; }
+    const B& operator()(const V& x) const { return x.b[j]; }
+  };
+  static constexpr bool kVectorByVector = kVector < 8;
+  template <class L>
+  struct RowOf {  // a dof's row fields, as the lanes lane picks
+    V* rw;
+    L lane;
+    auto& operator[](int f) const { return lane(rw[f]); }
+  };
+  template <class L>
+  static auto dot6(const L& lane, const V* a, const V* b) {
+    return lane(a[0]) * lane(b[0]) + lane(a[1]) * lane(b[1]) + lane(a[2]) * lane(b[2]) +
+           lane(a[3]) * lane(b[3]) + lane(a[4]) * lane(b[4]) + lane(a[5]) * lane(b[5]);
+  }
   static void cross(const V* a, const V* b, V* out) {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];
@@ -355,8 +388,12 @@ void LaneStep<A, K>::velocities_and_bias() {
     const V mv = link_parameter(i, mass);
     const V comv[3] = {link_parameter(i, com_x), link_parameter(i, com_y),
                        link_parameter(i, com_z)};
-    V Icv[6] = {link_parameter(i, inertia_xx), link_parameter(i, inertia_yy),
-                link_parameter(i, inertia_zz), V(0.0), V(0.0), V(0.0)};
+    V Icv[6] = {link_parameter(i, inertia_xx),
+                link_parameter(i, inertia_yy),
+                link_parameter(i, inertia_zz),
+                V(0.0),
+                V(0.0),
+                V(0.0)};
     if (!k.diagonal_inertia)
       Icv[3] = link_parameter(i, inertia_xy), Icv[4] = link_parameter(i, inertia_xz),
       Icv[5] = link_parameter(i, inertia_yz);
@@ -657,6 +694,34 @@ void LaneStep<A, K>::setup_rows() {
   }
 }
 
+// The drive row of a dof (drive.hpp) at joint velocity v, on the lanes its fields give: adds its
+// impulse's change to total and its effect to v.
+template <class A, int K>
+template <class T, class Fields>
+void LaneStep<A, K>::drive_row(const Fields& rw, bool all_driven, const T& r, const T& dx, T& total,
+                               T& v) {
+  if (p_.tgs && velocity_iteration_) return;  // TGS freezes the drive in velocity iterations
+  const T dimp = rw[Layout::dimp];
+  const T rest = rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
+                 rw[Layout::tpb] * T(time_to_step_end_);
+  T lambda = rest + rw[Layout::velm] * v;
+  const T m = rw[Layout::maxi];
+  lambda = select(lambda > m, m, lambda);
+  lambda = select(lambda < -m, -m, lambda);
+  if (all_driven) {  // every lane driven: the selects below would keep each result
+    rw[Layout::dimp] = lambda;
+    const T delta = lambda - dimp;
+    total = total + delta;
+    v = v + r * delta;
+  } else {
+    const auto driven = rw[Layout::driven] != T(0.0);
+    rw[Layout::dimp] = select(driven, lambda, dimp);
+    const T delta = lambda - dimp;
+    total = select(driven, total + delta, total);
+    v = select(driven, v + r * delta, v);
+  }
+}
+
 // All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
 // position limit. A lane without a row keeps total and v exactly (a select, not + 0), so its bits
 // do not depend on whether a neighbour has that row.
@@ -670,25 +735,7 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     total = select(present, total + delta, total);
     v = select(present, v + r * delta, v);
   };
-  if (!(p_.tgs && velocity_iteration_)) {  // TGS freezes the drive in velocity iterations
-    const V dimp = rw[Layout::dimp];
-    const V rest = rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
-                   rw[Layout::tpb] * V(time_to_step_end_);
-    V lambda = rest + rw[Layout::velm] * v;
-    const V m = rw[Layout::maxi];
-    lambda = select(lambda > m, m, lambda);
-    lambda = select(lambda < -m, -m, lambda);
-    if (any_row(d)[2] != 0.0) {  // every lane driven: the selects below would keep each result
-      rw[Layout::dimp] = lambda;
-      const V delta = lambda - dimp;
-      total = total + delta;
-      v = v + r * delta;
-    } else {
-      const M driven = rw[Layout::driven] != zero;
-      rw[Layout::dimp] = select(driven, lambda, dimp);
-      apply(driven, lambda - dimp);
-    }
-  }
+  drive_row(rw, any_row(d)[2] != 0.0, r, dx, total, v);
   if (any_row(d)[0] != 0.0) {
     const M rubbing = rw[Layout::has_friction] != zero;
     // The impulse that stops the joint, whole within the static threshold, else clamped to
@@ -737,6 +784,26 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
   return total;
 }
 
+// Link k's part of leaving (the lanes lane picks): beta = D^-1 (impulse - S^T pA), its joint's
+// velocity finished where it is its last change, and when to_parent, pA_parent = pA + beta U.
+template <class A, int K>
+template <class L>
+void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& beta) {
+  const LinkConstants& lk = p_.links[k];
+  const int d = lk.v_index;
+  const V* pAk = at(l_.subtree + 6 * k);
+  const V* U = at(l_.U + 6 * k);
+  auto& b = lane(beta);
+  b = lane(at(l_.D_inv)[k]) * (lane(at(l_.jimp)[d]) - dot6(lane, at(l_.S + 6 * k), pAk));
+  if (lk.finish_on_leave) {
+    auto& qd = lane(at(l_.qd)[d]);
+    qd = qd + (lane(at(l_.entry)[d]) - dot6(lane, at(l_.G + 6 * k), pAk));
+  }
+  if (!to_parent) return;
+  V* pAp = at(l_.subtree + 6 * lk.parent);
+  for (int r = 0; r < 6; ++r) lane(pAp[r]) = lane(pAk[r]) + b * lane(U[r]);
+}
+
 // Leaves the finished links from k up to stop (gauss_seidel.hpp's leave_links).
 template <class A, int K>
 void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
@@ -744,25 +811,23 @@ void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
     const LinkConstants& lk = p_.links[k];
     const int p = lk.parent;
     const bool first_child = lk.first_child, last_child = lk.last_child;
+    const bool fix = p == stop && correct;
+    // A chain's link hands its impulse straight into the parent's subtree impulse.
+    const bool chain = p >= 0 && first_child && !fix;
     const V* pAk = at(l_.subtree + 6 * k);
     const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
-    V beta(0.0);
+    V beta;
     if (lk.type != 0) {
-      const int d = lk.v_index;
       U = at(l_.U + 6 * k);
-      beta = at(l_.D_inv)[k] * (at(l_.jimp)[d] - dot6(at(l_.S + 6 * k), pAk));
-      if (lk.finish_on_leave) {
-        V& qd = at(l_.qd)[d];
-        qd = qd + (at(l_.entry)[d] - dot6(at(l_.G + 6 * k), pAk));
-      }
+      if constexpr (kVectorByVector)
+        for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, k, chain, beta);
+      else
+        leave_chain_link(WholePack{}, k, chain, beta);
     }
     if (p < 0) return;
     V* pAp = at(l_.subtree + 6 * p);
-    const bool fix = p == stop && correct;
-    if (first_child && !fix) {  // a chain's link: straight into the parent's subtree impulse
-      if (U)
-        for (int r = 0; r < 6; ++r) pAp[r] = pAk[r] + beta * U[r];
-      else
+    if (chain) {
+      if (!U)
         for (int r = 0; r < 6; ++r) pAp[r] = pAk[r];
     } else {
       V pa[6];
@@ -816,6 +881,36 @@ void LaneStep<A, K>::finish_link(int i) {
   qd = qd + dqd;
 }
 
+// Link i entered (the lanes lane picks): its joint's velocity from outside its subtree, its
+// rows (a lone drive's alone when lane is one vector), its velocity change dv for its children.
+template <class A, int K>
+template <class L>
+[[gnu::always_inline]] inline void LaneStep<A, K>::enter_link(const L& lane, int i, const V* dvp,
+                                                              V* dv) {
+  const int d = p_.links[i].v_index;
+  const V* U = at(l_.U + 6 * i);
+  const V* S = at(l_.S + 6 * i);
+  const V* W = at(l_.W + 6 * i);
+  V* rw = row(d);
+  const auto D_inv = lane(at(l_.D_inv)[i]);
+  using T = std::remove_cv_t<decltype(D_inv)>;
+  const T base = -D_inv * dot6(lane, U, dvp);
+  T impulse;
+  if constexpr (std::is_same_v<T, V>) {
+    impulse = solve_row(d, at(l_.qd)[d] + base, rw[Layout::delta_x]);
+  } else {
+    T total(0.0), v = lane(at(l_.qd)[d]) + base;
+    drive_row(RowOf<L>{rw, lane}, any_row(d)[2] != 0.0, lane(rw[Layout::response]),
+              lane(rw[Layout::delta_x]), total, v);
+    impulse = total;
+  }
+  lane(at(l_.jimp)[d]) = impulse;
+  const T dqd = base + lane(at(l_.inverse_mass)[i]) * impulse;
+  lane(at(l_.entry)[d]) = dqd;
+  const T h = D_inv * impulse;
+  for (int r = 0; r < 6; ++r) lane(dv[r]) = (lane(dvp[r]) - h * lane(W[r])) + dqd * lane(S[r]);
+}
+
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n).
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
@@ -834,18 +929,13 @@ void LaneStep<A, K>::sweep() {
       for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
       continue;
     }
-    const int d = k.v_index;
-    const V* U = at(l_.U + 6 * i);
-    const V* S = at(l_.S + 6 * i);
-    const V* W = at(l_.W + 6 * i);
-    const V D_inv = at(l_.D_inv)[i];
-    const V base = -D_inv * dot6(U, dvp);
-    const V impulse = solve_row(d, at(l_.qd)[d] + base, row(d)[Layout::delta_x]);
-    at(l_.jimp)[d] = impulse;
-    const V dqd = base + at(l_.inverse_mass)[i] * impulse;
-    at(l_.entry)[d] = dqd;
-    const V h = D_inv * impulse;
-    for (int r = 0; r < 6; ++r) dv[r] = (dvp[r] - h * W[r]) + dqd * S[r];
+    const double* has = any_row(k.v_index);
+    // A lone drive: one vector at a time. With friction or a limit row in the block the whole
+    // pack measured faster (the welded humanoid).
+    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0)
+      for (int j = 0; j < K; ++j) enter_link(OneVector{j}, i, dvp, dv);
+    else
+      enter_link(WholePack{}, i, dvp, dv);
   }
   leave_links(previous, -1, false);
   for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
