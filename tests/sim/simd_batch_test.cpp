@@ -149,7 +149,7 @@ TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
 TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
   const Simulation proto = simd_prototype(5, SolverType::tgs);
   const int n = 13;
-  auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+  auto run = [&](int size, SimdIsa isa, int threads, int shift, int first_call = 40) {
     SimdBatch simd(proto, size, isa);
     Batch unused(proto, 1);
     simd.set_num_threads(threads);
@@ -159,7 +159,10 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
     std::vector<int> all;
     for (int e = 0; e < size; ++e) all.push_back(e);
     simd.set_drive_gains(all, kp, RowMatrix::Constant(1, proto.model().nv, 15.0));
-    simd.step(40);
+    // 40 steps in calls of first_call, then one at a time: a block's scratch is reused by the
+    // thread's other blocks and calls, so nothing may be read from it before it is written.
+    simd.step(first_call);
+    for (int s = first_call; s < 40; ++s) simd.step(1);
     RowMatrix out(size, proto.model().nv + proto.model().nq);
     for (int e = 0; e < size; ++e)
       out.row(e) << simd.qd().row((e + shift) % size), simd.q().row((e + shift) % size);
@@ -180,6 +183,13 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
       const RowMatrix x = run(40, isa, threads, 0);
       EXPECT_TRUE(same_bits(RowMatrix(x.topRows(n)), reference))
           << to_string(isa) << ", 40 environments, " << threads << " threads";
+    }
+  // The same 40 steps in calls of 1 or 37 + 1 + 1 + 1.
+  for (SimdIsa isa : available_simd_isas())
+    for (int first_call : {0, 37}) {
+      const RowMatrix x = run(40, isa, 2, 0, first_call);
+      EXPECT_TRUE(same_bits(RowMatrix(x.topRows(n)), reference))
+          << to_string(isa) << ", calls after " << first_call << " steps";
     }
   // Alone in a batch of one: environment 7.
   for (SimdIsa isa : available_simd_isas()) {
