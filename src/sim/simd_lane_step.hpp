@@ -192,10 +192,25 @@ class LaneStep {
   void finish_step();
 
   static void sincos(V x, V& s, V& c);
-  static V dot6(const V* a, const V* b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
-  }
+  static V dot6(const V* a, const V* b) { return dot6(WholePack{}, a, b); }
   static void sym_times(const V* m, const V* x, V* y);  // y = M x, M symmetric 6 x 6
+  // y = M x for vector j of the packs of M (x, y: that vector's entries, kept in registers).
+  [[gnu::always_inline]] static void sym_times(const V* m, int j, const B* x, B* y) {
+    for (int r = 0; r < 6; ++r) {
+      B sum = m[kSym.at[r][0]].b[j] * x[0];
+      for (int k = 1; k < 6; ++k) sum = sum + m[kSym.at[r][k]].b[j] * x[k];
+      y[r] = sum;
+    }
+  }
+  [[gnu::always_inline]] static B dot6(const B* a, const B* b) {
+    B sum = a[0] * b[0];
+    for (int r = 1; r < 6; ++r) sum = sum + a[r] * b[r];
+    return sum;
+  }
+  // Entries 0-5 of vector j of the packs at p.
+  [[gnu::always_inline]] static void take6(const V* p, int j, B* out) {
+    for (int r = 0; r < 6; ++r) out[r] = p[r].b[j];
+  }
   // Which lanes a piece of a sweep acts on at a time: the whole pack, or one of its K vectors.
   // With 16 vector registers (SSE2, AVX2) a pack of four spills; one vector at a time, link by
   // link, stays in registers while the K vectors' chains still overlap. With AVX-512's 32 the
@@ -221,7 +236,8 @@ class LaneStep {
     return lane(a[0]) * lane(b[0]) + lane(a[1]) * lane(b[1]) + lane(a[2]) * lane(b[2]) +
            lane(a[3]) * lane(b[3]) + lane(a[4]) * lane(b[4]) + lane(a[5]) * lane(b[5]);
   }
-  static void cross(const V* a, const V* b, V* out) {
+  template <class T>  // V or B
+  static void cross(const T* a, const T* b, T* out) {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];
     out[2] = a[0] * b[1] - a[1] * b[0];
@@ -293,13 +309,10 @@ void LaneStep<A, K>::sym_times(const V* m, const V* x, V* y) {
   // One vector of the pack at a time: its six entries of x stay in registers for all six rows,
   // where a whole pack of four would be reloaded for each (6 % fewer instructions a step).
   for (int j = 0; j < K; ++j) {
-    B xj[6];
-    for (int k = 0; k < 6; ++k) xj[k] = x[k].b[j];
-    for (int r = 0; r < 6; ++r) {
-      B sum = m[kSym.at[r][0]].b[j] * xj[0];
-      for (int k = 1; k < 6; ++k) sum = sum + m[kSym.at[r][k]].b[j] * xj[k];
-      y[r].b[j] = sum;
-    }
+    B xj[6], yj[6];
+    take6(x, j, xj);
+    sym_times(m, j, xj, yj);
+    for (int r = 0; r < 6; ++r) y[r].b[j] = yj[r];
   }
 }
 
@@ -405,11 +418,6 @@ void LaneStep<A, K>::velocities_and_bias() {
     const V* Sv = k.type != 0 ? at(l_.S + 6 * i) : nullptr;
     const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
     for (int j = 0; j < K; ++j) {
-      auto cross3 = [](const B* x, const B* y, B* out) {
-        out[0] = x[1] * y[2] - x[2] * y[1];
-        out[1] = x[2] * y[0] - x[0] * y[2];
-        out[2] = x[0] * y[1] - x[1] * y[0];
-      };
       B R[9], pos[3], com[3];
       for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
       for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = comv[r].b[j];
@@ -461,25 +469,25 @@ void LaneStep<A, K>::velocities_and_bias() {
       for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
       for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
       B c[6], t1[3], t2[3];
-      cross3(v, J, c);
-      cross3(v, J + 3, t1);
-      cross3(v + 3, J, t2);
+      cross(v, J, c);
+      cross(v, J + 3, t1);
+      cross(v + 3, J, t2);
       for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
       for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
       // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
       B h[6], mw[3], mvv[3];
-      cross3(mc, v + 3, mvv);
-      cross3(mc, v, mw);
+      cross(mc, v + 3, mvv);
+      cross(mc, v, mw);
       for (int r = 0; r < 3; ++r) {
         h[r] = (Ia[kSym.at[r][0]] * v[0] + Ia[kSym.at[r][1]] * v[1] + Ia[kSym.at[r][2]] * v[2]) +
                mvv[r];
         h[3 + r] = m * v[3 + r] - mw[r];
       }
-      cross3(v, h, t1);
-      cross3(v + 3, h + 3, t2);
+      cross(v, h, t1);
+      cross(v + 3, h + 3, t2);
       for (int r = 0; r < 3; ++r) pAv[r].b[j] = t1[r] + t2[r];
       B pl[3];
-      cross3(v, h + 3, pl);
+      cross(v, h + 3, pl);
       for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
     }
   }
@@ -508,33 +516,21 @@ void LaneStep<A, K>::articulated_pass() {
     V* IAp = k.parent >= 0 ? at(l_.IA + 21 * k.parent) : nullptr;
     // One vector of the pack at a time, so that U, D^-1 and the like stay in registers.
     for (int j = 0; j < K; ++j) {
-      B Sj[6], Uj[6];
-      for (int r = 0; r < 6; ++r) Sj[r] = S[r].b[j];
-      for (int r = 0; r < 6; ++r) {
-        B sum = IA[kSym.at[r][0]].b[j] * Sj[0];
-        for (int q = 1; q < 6; ++q) sum = sum + IA[kSym.at[r][q]].b[j] * Sj[q];
-        Uj[r] = sum;
-        U[r].b[j] = sum;
-      }
-      B SU = Sj[0] * Uj[0];
-      for (int r = 1; r < 6; ++r) SU = SU + Sj[r] * Uj[r];
-      const B D_inv = B(1.0) / (SU + armature.b[j]);
+      B Sj[6], Uj[6], pAj[6];
+      take6(S, j, Sj);
+      sym_times(IA, j, Sj, Uj);
+      for (int r = 0; r < 6; ++r) U[r].b[j] = Uj[r];
+      const B D_inv = B(1.0) / (dot6(Sj, Uj) + armature.b[j]);
       at(l_.D_inv)[i].b[j] = D_inv;
-      B SpA = Sj[0] * pA[0].b[j];
-      for (int r = 1; r < 6; ++r) SpA = SpA + Sj[r] * pA[r].b[j];
-      const B u = at(l_.tau)[k.v_index].b[j] - SpA;
+      take6(pA, j, pAj);
+      const B u = at(l_.tau)[k.v_index].b[j] - dot6(Sj, pAj);
       at(l_.u)[k.v_index].b[j] = u;
       if (!pAp) continue;
-      B cj[6];
-      for (int r = 0; r < 6; ++r) cj[r] = c[r].b[j];
-      B Uc = Uj[0] * cj[0];
-      for (int r = 1; r < 6; ++r) Uc = Uc + Uj[r] * cj[r];
-      const B beta = D_inv * (u - Uc);
-      for (int r = 0; r < 6; ++r) {
-        B IAc = IA[kSym.at[r][0]].b[j] * cj[0];
-        for (int q = 1; q < 6; ++q) IAc = IAc + IA[kSym.at[r][q]].b[j] * cj[q];
-        pAp[r].b[j] = pAp[r].b[j] + ((pA[r].b[j] + IAc) + beta * Uj[r]);
-      }
+      B cj[6], IAc[6];
+      take6(c, j, cj);
+      const B beta = D_inv * (u - dot6(Uj, cj));
+      sym_times(IA, j, cj, IAc);
+      for (int r = 0; r < 6; ++r) pAp[r].b[j] = pAp[r].b[j] + ((pAj[r] + IAc[r]) + beta * Uj[r]);
       for (int a = 0; a < 6; ++a)
         for (int b = a; b < 6; ++b) {
           const int e = kSym.at[a][b];
@@ -585,17 +581,12 @@ void LaneStep<A, K>::response() {
     V* G = at(l_.G + 6 * i);
     for (int j = 0; j < K; ++j) {  // one vector of the pack at a time (articulated_pass)
       B Uj[6], Sj[6], Wj[6], Gj[6];
-      for (int r = 0; r < 6; ++r) Uj[r] = U[r].b[j], Sj[r] = S[r].b[j];
-      for (int r = 0; r < 6; ++r) {
-        B sum = T[kSym.at[r][0]].b[j] * Uj[0];
-        for (int q = 1; q < 6; ++q) sum = sum + T[kSym.at[r][q]].b[j] * Uj[q];
-        Wj[r] = sum;
-        W[r].b[j] = sum;
-      }
+      take6(U, j, Uj);
+      take6(S, j, Sj);
+      sym_times(T, j, Uj, Wj);
+      for (int r = 0; r < 6; ++r) W[r].b[j] = Wj[r];
       const B D_inv = at(l_.D_inv)[i].b[j];
-      B UW = Uj[0] * Wj[0];
-      for (int r = 1; r < 6; ++r) UW = UW + Uj[r] * Wj[r];
-      const B r_ii = D_inv + D_inv * D_inv * UW;
+      const B r_ii = D_inv + D_inv * D_inv * dot6(Uj, Wj);
       for (int e = 0; e < 6; ++e) {
         Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
         G[e].b[j] = Gj[e];
@@ -1072,8 +1063,8 @@ template <class A, int K>
 void LaneStep<A, K>::run(int steps) {
   const int nq = p_.nq, nv = p_.nv;
   // Every quantity is written before it is read in a step (a leaf's subtree impulse included),
-  // so only the world's zeros need setting: clearing the whole scratch cost about as much as a
-  // step with calls of one step.
+  // so only the world's zeros need setting (clearing the whole scratch cost calls of one step
+  // about a tenth of their time).
   for (int e = 0; e < 21; ++e) at(l_.zero)[e] = V(0.0);
   for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);
   for (int d = 0; d < nv; ++d) {
