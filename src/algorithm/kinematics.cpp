@@ -107,7 +107,8 @@ void position_link(const Model& model, Data& data, int i, const VecX& q) {
 // The common case (LinkInfo::coordinate_revolute) about e_A, inline: X_i = [R(e_A, q)^T, r_T],
 // R_i = R_p R(e_A, q), p_i = p_p + R_p r_T. A is a template argument so that every index is a
 // constant.
-template <int A>
+// Without kTransform, X_i is not written (world_poses).
+template <int A, bool kTransform = true>
 void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   constexpr int A1 = A == 2 ? 0 : A + 1, A2 = A == 0 ? 2 : A - 1;
   const Data::LinkInfo& link = data.info[i];
@@ -124,6 +125,7 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   R.col(A1) = c * x + s * y;
   R.col(A2) = c * y - s * x;
   data.world_position[i] = p;
+  if (!kTransform) return;
   Transform& X = data.parent_transform[i];
   X.E(A, A) = 1.0;
   X.E(A, A1) = 0.0;
@@ -165,15 +167,21 @@ Vec6 velocity_from_parent(const Data& data, int i) {
 }
 
 // Either of the above.
+template <bool kTransform = true>
 inline void position_any(const Model& model, Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
   if (!link.coordinate_revolute) position_link(model, data, i, q);
-  else if (link.unit_axis == 0) position_coordinate_revolute<0>(data, i, q);
-  else if (link.unit_axis == 1) position_coordinate_revolute<1>(data, i, q);
-  else position_coordinate_revolute<2>(data, i, q);
+  else if (link.unit_axis == 0) position_coordinate_revolute<0, kTransform>(data, i, q);
+  else if (link.unit_axis == 1) position_coordinate_revolute<1, kTransform>(data, i, q);
+  else position_coordinate_revolute<2, kTransform>(data, i, q);
 }
 
 }  // namespace
+
+void world_poses(const Model& model, Data& data, const VecX& q) {
+  const int n = model.num_links();
+  for (int i = 0; i < n; ++i) position_any<false>(model, data, i, q);
+}
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q) {
   const int n = model.num_links();

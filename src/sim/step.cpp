@@ -35,7 +35,7 @@ void Simulation::step() {
   // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
   // bias of compat physx and link damping read the link-frame ones.
   if (physx() || link_damping_active_) forward_kinematics(model, data_, q_, qd_);
-  else forward_kinematics(model, data_, q_);
+  else world_poses(model, data_, q_);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
   any_link_force_ =
       link_damping_active_ && link_damping_forces(model, data_, link_parameters_, dt, link_force_);
@@ -107,13 +107,15 @@ void Simulation::setup_rows(double h, bool tgs) {
     setup_lone_drives(h, tgs);
     for (int k = nv - 1; k >= num_lone_drives_; --k) setup_dof_rows(order[k], h, tgs);
   }
-  any_rows_ = num_lone_drives_ > 0;
+  bool other_rows = false;  // rows on a dof that is not a lone drive
   any_undriven_rows_ = false;
   for (int k = num_lone_drives_; k < nv; ++k) {
     const DofRows& rows = rows_[static_cast<size_t>(order[k])];
-    any_rows_ = any_rows_ || rows.active();
+    other_rows = other_rows || rows.active();
     any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
   }
+  any_rows_ = num_lone_drives_ > 0 || other_rows;
+  only_lone_drives_pgs_ = !other_rows && !tgs && !physx() && mimic_.empty();
   delta_x_.setZero();
   if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
     mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
@@ -232,6 +234,11 @@ void Simulation::sweep(RowPhase& phase) {
   if (!any_rows_) return;
   // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
   DofRows* const rows = rows_.data();
+  if (only_lone_drives_pgs_) {  // the common case of drives alone, without the general row law
+    gauss_seidel_sweep(*model_, data_, sweep_, qd_,
+                       [rows](int dof, double v) { return solve_lone_drive_pgs(rows[dof], v); });
+    return;
+  }
   const double* const row_bias = departures_.row_bias.data();
   const double* const delta_x = delta_x_.data();
   gauss_seidel_sweep(*model_, data_, sweep_, qd_,

@@ -18,7 +18,7 @@ SweepWorkspace::SweepWorkspace(const Model& model)
     Link& l = links[static_cast<size_t>(i)];
     l.parent = link.parent;
     l.v_index = link.v_index;
-    l.nv = static_cast<short>(link.nv);
+    l.nv = static_cast<signed char>(link.nv);
     if (link.parent >= 0) {
       const featherdrive::Link& parent = model.links[link.parent];
       l.last_child = parent.children.back() == i;
@@ -31,6 +31,7 @@ SweepWorkspace::SweepWorkspace(const Model& model)
       later[i] = model.links[link.parent].children.back() != i || later[link.parent];
     l.finish_on_leave = link.nv == 1 && !later[i];
     if (!l.finish_on_leave && (link.nv > 0 || later[i])) finish_after.push_back(i);
+    l.chain_up = l.finish_on_leave && l.parent_one_dof && l.first_child && l.last_child;
   }
 }
 

@@ -292,6 +292,8 @@ class Simulation {
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
   bool any_rows_ = false;
   bool any_undriven_rows_ = false;  ///< a row other than a lone drive (acts in TGS velocity iterations)
+  /// PGS, compat none, no mimic rows, and every row a lone drive's (step.cpp, sweep).
+  bool only_lone_drives_pgs_ = false;
   /// Every dof once: first the num_lone_drives_ whose only row is an undelayed drive on a revolute
   /// or prismatic joint, then the others from the back. setup_rows sets up only the drive row of
   /// the first, and sorts the dofs again after a setter changed what the sorting reads

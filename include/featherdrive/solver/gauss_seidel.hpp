@@ -29,7 +29,7 @@ struct SweepWorkspace {
   struct Link {
     int parent = -1;
     int v_index = 0;
-    short nv = 0;
+    signed char nv = 0;
     bool last_child = true;  ///< no sibling after it
     /// It is its parent's first child (it hands the parent's pA its first value).
     bool first_child = false;
@@ -39,6 +39,9 @@ struct SweepWorkspace {
     /// One dof and no later subtree, so its joint's velocity is final when it is left
     /// (detail::leave_links); the others, in model order, are finished after the sweep.
     bool finish_on_leave = false;
+    /// One dof, finished on leave, and its one-dof parent's only child: leaving it is the
+    /// tight loop of detail::leave_links.
+    bool chain_up = false;
   };
   std::vector<Link> links;
   std::vector<int> finish_after;
@@ -93,6 +96,27 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
   while (k != stop) {
     const SweepWorkspace::Link& link = links[k];
     const int p = link.parent;
+    if (link.chain_up && p != stop) {
+      // A run of only children, as below with first = last = true and every flag known: pA
+      // stays in registers and is stored once, for the link where the run ends (no link of the
+      // run reads its own again).
+      Vec6 pA = subtree_impulse[k];
+      if (!have_x) x = one_dof[k].S.dot(pA);
+      for (;;) {
+        const Data::OneDof& J = one_dof[k];
+        const int d = links[k].v_index;
+        const int up = links[k].parent;
+        const double beta = J.D_inv * (joint_impulse[d] - x);
+        qd[d] += entry_velocity_change[d] - J.G.dot(pA);
+        x = one_dof[up].S.dot(pA) + beta * J.parent_S;
+        pA = pA + beta * J.U;
+        k = up;
+        if (!links[k].chain_up || links[k].parent == stop) break;
+      }
+      subtree_impulse[k] = pA;
+      have_x = true;
+      continue;
+    }
     if (link.nv != 1) {
       leave_multi_dof_link(data, ws, k, stop, correct_stop);
       if (p < 0) return;
