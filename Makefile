@@ -115,11 +115,13 @@ BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
 	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON \
 	  -DFEATHERDRIVE_ARCH=$(BENCH_ARCH) $(CMAKE_FLAGS)
-	cmake --build build-bench -j $(JOBS) --target featherdrive_bench featherdrive_profile
+	cmake --build build-bench -j $(JOBS) --target featherdrive_bench featherdrive_profile \
+	  featherdrive_prototype_ratio
 	./build-bench/bench/featherdrive_bench $(BENCH_FLAGS) \
 	  --benchmark_out=build-bench/bench.json --benchmark_out_format=json
 	/usr/bin/python3 bench/plot_benchmarks.py build-bench/bench.json \
 	  --plot build-bench/benchmarks_per_dof.png
+	./build-bench/bench/featherdrive_prototype_ratio
 
 format:
 	find include src tests tools bench -name '*.hpp' -o -name '*.cpp' | xargs clang-format -i

@@ -136,4 +136,16 @@ void add_drives(Simulation& sim, const BenchRobot& robot) {
       sim.set_drive(d, Drive{DriveType::force, kStiffness, kDamping, kInf, robot.target[d], 0.0});
 }
 
+Simulation bench_simulation(const BenchRobot& robot, SolverType solver) {
+  SimulationOptions o;
+  o.dt = kDt;
+  o.solver = solver;
+  o.position_iterations = 4;
+  o.velocity_iterations = 1;
+  Simulation sim(robot.model, o);
+  add_drives(sim, robot);
+  sim.set_q(robot.q0);
+  return sim;
+}
+
 }  // namespace featherdrive::bench

@@ -42,6 +42,10 @@ BenchRobot make_humanoid();
 /// Drives of kStiffness / kDamping towards robot.target on every revolute joint.
 void add_drives(Simulation& sim, const BenchRobot& robot);
 
+/// The benchmarks' Simulation of robot: the solver with 4 position and 1 velocity iterations at
+/// kDt, add_drives, at q0.
+Simulation bench_simulation(const BenchRobot& robot, SolverType solver = SolverType::pgs);
+
 /// Is the dof a driven revolute joint?
 bool is_driven(const Model& model, int dof);
 

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <cstdio>
 #include <map>
 #include <memory>
 #include <set>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "bench_models.hpp"
+#include "chain_prototype.hpp"
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
@@ -41,10 +43,8 @@ void set_counters(benchmark::State& state, const Model& model) {
 
 // One Simulation::step per iteration, drives on every revolute joint.
 void featherdrive_step(benchmark::State& state, const BenchRobot& robot, SolverType solver) {
-  Simulation sim(robot.model, options_for(solver));
-  add_drives(sim, robot);
+  Simulation sim = bench_simulation(robot, solver);
   const VecX zero = VecX::Zero(robot.model->nv);
-  sim.set_q(robot.q0);
   int since_reset = 0;
   for (auto _ : state) {
     sim.step();
@@ -55,6 +55,59 @@ void featherdrive_step(benchmark::State& state, const BenchRobot& robot, SolverT
     }
   }
   benchmark::DoNotOptimize(sim.qd().data());
+  set_counters(state, *robot.model);
+}
+
+// The chain prototype against Simulation::step from the same start: the largest difference of q,
+// qd and the drive force over 10 steps, relative to the largest magnitude of each. It grows with
+// the chain's length as the SIMD Batch's does (chain16 2e-15, chain256 1e-12 after one step: the
+// rounding of a long chain's ill-conditioned dynamics; docs/benchmarks.md).
+double prototype_difference(const BenchRobot& robot) {
+  Simulation sim = bench_simulation(robot);
+  ChainPrototype prototype(sim);
+  double worst = 0.0;
+  auto compare = [&worst](const VecView& a, const std::vector<double>& b) {
+    double scale = 1e-300, diff = 0.0;
+    for (int d = 0; d < a.size(); ++d) {
+      scale = std::max(scale, std::abs(a[d]));
+      diff = std::max(diff, std::abs(a[d] - b[static_cast<size_t>(d)]));
+    }
+    worst = std::max(worst, diff / scale);
+  };
+  for (int k = 0; k < 10; ++k) {
+    sim.step();
+    prototype.step();
+    compare(sim.q(), prototype.q());
+    compare(sim.qd(), prototype.qd());
+    compare(sim.drive_force(), prototype.drive_force());
+  }
+  return worst;
+}
+
+// One ChainPrototype::step per iteration, as featherdrive_step; refused unless it agrees with
+// Simulation::step within 1e-9.
+void prototype_step(benchmark::State& state, const BenchRobot& robot) {
+  const double difference = prototype_difference(robot);
+  if (!(difference <= 1e-9)) {
+    char text[80];
+    std::snprintf(text, sizeof text, "the prototype differs from Simulation by %.3g", difference);
+    state.SkipWithError(text);
+    return;
+  }
+  Simulation sim = bench_simulation(robot);
+  ChainPrototype prototype(sim);
+  const std::vector<double> q0(robot.q0.data(), robot.q0.data() + robot.q0.size());
+  const std::vector<double> zero(q0.size(), 0.0);
+  int since_reset = 0;
+  for (auto _ : state) {
+    prototype.step();
+    if (++since_reset == kResetInterval) {
+      prototype.set_state(q0, zero);
+      since_reset = 0;
+    }
+  }
+  benchmark::DoNotOptimize(prototype.qd().data());
+  state.counters["difference"] = difference;
   set_counters(state, *robot.model);
 }
 
@@ -140,6 +193,9 @@ void register_all() {
     const BenchRobot* r = &robot;
     benchmark::RegisterBenchmark((prefix + "featherdrive_pgs").c_str(),
                                  [r](benchmark::State& s) { featherdrive_step(s, *r, SolverType::pgs); });
+    if (robot.name.rfind("chain", 0) == 0)
+      benchmark::RegisterBenchmark((prefix + "prototype_pgs").c_str(),
+                                   [r](benchmark::State& s) { prototype_step(s, *r); });
     benchmark::RegisterBenchmark((prefix + "featherdrive_tgs").c_str(),
                                  [r](benchmark::State& s) { featherdrive_step(s, *r, SolverType::tgs); });
     benchmark::RegisterBenchmark((prefix + "mujoco_euler").c_str(), [r](benchmark::State& s) {

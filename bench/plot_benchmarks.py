@@ -20,6 +20,7 @@ ENGINES = [
     ("mujoco_euler", "MuJoCo 2.2.2 Euler"),
     ("mujoco_implicit", "MuJoCo 2.2.2 implicit"),
     ("bullet", "Bullet 3.24 btMultiBody"),
+    ("prototype_pgs", "chain prototype PGS 4/1"),  # bench/chain_prototype.hpp, chains only
 ]
 KERNELS = ["kinematics", "aba", "articulated_response", "sweep"]
 
@@ -184,7 +185,7 @@ def plot(medians, path):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    markers = ["o", "s", "^", "v", "D"]
+    markers = ["o", "s", "^", "v", "D", "x"]
     for (key, label), marker in zip(ENGINES, markers):
         xs, ys = [], []
         for name, b in medians.items():

@@ -1,20 +1,23 @@
 // A fixed number of steps of one benchmark robot, for profilers: the same instructions on every
 // run, which Google Benchmark's timed loops cannot give (docs/benchmarks.md, "Where the
 // instructions go").
-//   featherdrive_profile ROBOT [pgs|tgs] [STEPS]     ROBOT: chainN, arm7 or humanoid
+//   featherdrive_profile ROBOT [pgs|tgs|prototype] [STEPS]   ROBOT: chainN, arm7 or humanoid
+// (prototype: bench/chain_prototype.hpp, chains only).
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
 
 #include "bench_models.hpp"
+#include "chain_prototype.hpp"
 
 using namespace featherdrive;
 using namespace featherdrive::bench;
 
 int main(int argc, char** argv) {
   try {
-    if (argc < 2) throw std::invalid_argument("usage: featherdrive_profile ROBOT [pgs|tgs] [STEPS]");
+    if (argc < 2)
+      throw std::invalid_argument("usage: featherdrive_profile ROBOT [pgs|tgs|prototype] [STEPS]");
     const std::string name = argv[1];
     const std::string solver = argc > 2 ? argv[2] : "pgs";
     const int steps = argc > 3 ? std::stoi(argv[3]) : 200;
@@ -23,15 +26,16 @@ int main(int argc, char** argv) {
     else if (name == "humanoid") robot = make_humanoid();
     else if (name.rfind("chain", 0) == 0) robot = make_chain(std::stoi(name.substr(5)));
     else throw std::invalid_argument("unknown robot " + name);
-    if (solver != "pgs" && solver != "tgs") throw std::invalid_argument("solver must be pgs or tgs");
-    SimulationOptions options;
-    options.dt = kDt;
-    options.solver = solver == "pgs" ? SolverType::pgs : SolverType::tgs;
-    options.position_iterations = 4;
-    options.velocity_iterations = 1;
-    Simulation sim(robot.model, options);
-    add_drives(sim, robot);
-    sim.set_q(robot.q0);
+    if (solver != "pgs" && solver != "tgs" && solver != "prototype")
+      throw std::invalid_argument("solver must be pgs, tgs or prototype");
+    Simulation sim = bench_simulation(robot, solver == "tgs" ? SolverType::tgs : SolverType::pgs);
+    if (solver == "prototype") {
+      ChainPrototype prototype(sim);
+      for (int k = 0; k < steps; ++k) prototype.step();
+      std::printf("%s prototype: %d steps, %d dofs, q[0] = %.17g\n", name.c_str(), steps,
+                  robot.model->nv, prototype.q()[0]);
+      return 0;
+    }
     sim.step(steps);
     std::printf("%s %s: %d steps, %d dofs, q[0] = %.17g\n", name.c_str(), solver.c_str(), steps,
                 robot.model->nv, sim.q()[0]);

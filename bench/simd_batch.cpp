@@ -23,18 +23,6 @@ constexpr int kStepsPerIteration = 10;
 const int kSizes[] = {1, 8, 64, 1024};
 const int kThreads[] = {1, 2};
 
-// PGS 4/1 at the benchmarks' dt, drives of kStiffness / kDamping towards the robot's targets.
-Simulation prototype_of(const BenchRobot& robot) {
-  SimulationOptions o;
-  o.dt = kDt;
-  o.position_iterations = 4;
-  o.velocity_iterations = 1;
-  Simulation sim(robot.model, o);
-  add_drives(sim, robot);
-  sim.set_q(robot.q0);
-  return sim;
-}
-
 template <class B>
 void run(benchmark::State& state, B& batch, const VecX& q0, int count) {
   RowMatrix q(1, q0.size());
@@ -56,14 +44,14 @@ void run(benchmark::State& state, B& batch, const VecX& q0, int count) {
 }
 
 void scalar_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads) {
-  Batch batch(prototype_of(robot), count);
+  Batch batch(bench_simulation(robot), count);
   batch.set_num_threads(threads);
   run(state, batch, robot.q0, count);
 }
 
 void simd_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads,
                 SimdIsa isa) {
-  SimdBatch batch(prototype_of(robot), count, isa);
+  SimdBatch batch(bench_simulation(robot), count, isa);
   batch.set_num_threads(threads);
   run(state, batch, robot.q0, count);
 }
