@@ -9,6 +9,7 @@
 #include <Eigen/Cholesky>
 
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "joint_acceleration.hpp"
 
 namespace featherdrive {
 namespace {
@@ -135,19 +136,6 @@ void joint_inertia_fixed(const Model& model, int v_index, const Mat6N& S_dyn, co
   D_inv = spd_inverse<N>(D);
 }
 
-// Pass 3 at a joint with N dofs: qdd = D^-1 (u - U^T a), a += S qdd, on fixed sizes. Out of
-// line: inlined, it costs the 1-dof path of pass 3 registers.
-template <int N>
-[[gnu::noinline]] void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
-  using Mat6K = Eigen::Matrix<double, 6, N>;
-  using VecK = Eigen::Matrix<double, N, 1>;
-  const Mat6K U = data.U[i];
-  const Eigen::Matrix<double, N, N> D_inv = data.D_inv[i];
-  const VecK qdd = D_inv * (data.u.segment<N>(v_index) - U.transpose() * a);
-  data.qdd.segment<N>(v_index) = qdd;
-  a.noalias() += Mat6K(data.motion_subspace[i]) * qdd;
-}
-
 // U, D^-1 of a joint with several dofs.
 void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& IA, Mat6N& U,
                    MatNN& D_inv) {
@@ -206,8 +194,8 @@ void articulated_inertias(const Model& model, Data& data) {
   }
 }
 
-const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
-                                const std::vector<Vec6>* external_force) {
+void articulated_bodies(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                        const std::vector<Vec6>* external_force) {
   const int n = model.num_links();
   const Vec3 origin = data.world_position[0];
   data.frame_origin = origin;
@@ -300,33 +288,19 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
     data.articulated_inertia[link.parent] += Ia;
     data.articulated_bias[link.parent] += pa;
   }
-  // Pass 3: accelerations, root to leaves; gravity as an upward acceleration of the world.
-  Vec6 a_world = Vec6::Zero();
-  a_world.tail<3>() = -model.gravity;
-  for (int i = 0; i < n; ++i) {
-    const Data::LinkInfo& link = data.info[i];
-    Vec6 a = (link.parent >= 0 ? data.acceleration0[link.parent] : a_world) +
-             data.bias_acceleration0[i];
-    if (link.nv == 1) {
-      const Data::OneDof& J = data.one_dof[i];
-      const double qdd = J.D_inv * (data.u[link.v_index] - J.U.dot(a));
-      data.qdd[link.v_index] = qdd;
-      a += qdd * J.S;
-    } else if (link.nv == 6) {
-      joint_acceleration_fixed<6>(data, i, link.v_index, a);
-    } else if (link.nv == 3) {
-      joint_acceleration_fixed<3>(data, i, link.v_index, a);
-    } else if (link.nv > 0) {
-      auto qdd = data.qdd.segment(link.v_index, link.nv);
-      Vec6 r = Vec6::Zero();  // u - U^T a in the first nv entries, on the stack
-      r.head(link.nv) = data.u.segment(link.v_index, link.nv);
-      r.head(link.nv).noalias() -= data.U[i].transpose() * a;
-      qdd.noalias() = data.D_inv[i] * r.head(link.nv);
-      a.noalias() += data.motion_subspace[i] * qdd;
-    }
-    data.acceleration0[i] = a;
-  }
+}
+
+// Pass 3: accelerations, root to leaves; gravity as an upward acceleration of the world.
+const VecX& joint_accelerations(const Model& model, Data& data) {
+  const Vec6 a_world = detail::world_acceleration(model);
+  for (int i = 0; i < model.num_links(); ++i) detail::link_acceleration(data, i, a_world);
   return data.qdd;
+}
+
+const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                                const std::vector<Vec6>* external_force) {
+  articulated_bodies(model, data, v, tau, external_force);
+  return joint_accelerations(model, data);
 }
 
 const VecX& aba(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& tau) {

@@ -2,85 +2,102 @@
 
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "joint_acceleration.hpp"
 
 namespace featherdrive {
+namespace {
 
-// In frame 0, where a link's and its parent's spatial vectors share coordinates:
-// Lambda_i = S D^-1 S^T + P T P^T with T = Lambda_p and P = I - S D^-1 U^T;
-// (M^-1)_ii = D^-1 + D^-1 U^T T U D^-1 (docs/math/unit_response.md).
-const VecX& articulated_response(const Model& model, Data& data) {
-  static const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
-  for (int i = 0; i < model.num_links(); ++i) {
-    const Data::LinkInfo& link = data.info[i];
-    const Mat6& T = link.parent >= 0 ? data.response[link.parent] : kZero;
-    Mat6& L = data.response[i];
-    if (link.nv == 1) {
-      // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
-      //          = T + S g^T - h S^T, g = r S - h (G_i).
-      // No 6-vector temporaries: GCC keeps them on the stack and copies them; J's are read instead.
-      Data::OneDof& J = data.one_dof[i];
-      J.W.noalias() = T * J.U;
-      const double D_inv = J.D_inv;
-      const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
-      J.G = r * J.S - D_inv * J.W;
-      // Column by column: with AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else
-      // whole columns, aligned, so SSE2 folds their loads into the arithmetic (as in aba.cpp's
-      // add_to_parent).
-      for (int j = 0; j < 6; ++j) {
-        const double g = J.G[j], sh = J.S[j] * D_inv;
+const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
+
+// Link i's Lambda_i, W_i and (M^-1)_ii, its parent's being done. In frame 0, where a link's and
+// its parent's spatial vectors share coordinates: Lambda_i = S D^-1 S^T + P T P^T with
+// T = Lambda_p and P = I - S D^-1 U^T; (M^-1)_ii = D^-1 + D^-1 U^T T U D^-1
+// (docs/math/unit_response.md). Forced inline: both loops below take it.
+[[gnu::always_inline]] inline void link_response(Data& data, int i) {
+  const Data::LinkInfo& link = data.info[i];
+  const Mat6& T = link.parent >= 0 ? data.response[link.parent] : kZero;
+  Mat6& L = data.response[i];
+  if (link.nv == 1) {
+    // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
+    //          = T + S g^T - h S^T, g = r S - h (G_i).
+    // No 6-vector temporaries: GCC keeps them on the stack and copies them; J's are read instead.
+    Data::OneDof& J = data.one_dof[i];
+    J.W.noalias() = T * J.U;
+    const double D_inv = J.D_inv;
+    const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
+    J.G = r * J.S - D_inv * J.W;
+    // Column by column: with AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else
+    // whole columns, aligned, so SSE2 folds their loads into the arithmetic (as in aba.cpp's
+    // add_to_parent).
+    for (int j = 0; j < 6; ++j) {
+      const double g = J.G[j], sh = J.S[j] * D_inv;
 #ifdef __AVX__
-        L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
-        L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
+      L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
+      L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
 #else
-        L.col(j) = T.col(j) + g * J.S - sh * J.W;
+      L.col(j) = T.col(j) + g * J.S - sh * J.W;
 #endif
-      }
-      J.inverse_mass = r;
-      if (link.parent >= 0 && data.info[link.parent].nv == 1) {
-        const Data::OneDof& P = data.one_dof[link.parent];
-        J.parent_W = J.U.dot(P.W);
-        J.parent_S = J.U.dot(P.S);
-        // Folded once here, not in each sweep.
-        J.base_per_parent_base = -D_inv * J.parent_S;
-        J.base_per_parent_impulse =
-            P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
-      }
-      data.inverse_mass_block[i](0, 0) = r;
-      data.inverse_mass_diagonal[link.v_index] = r;
-      continue;
     }
-    if (link.nv == 0) {
-      L = T;
-      continue;
+    J.inverse_mass = r;
+    if (link.parent >= 0 && data.info[link.parent].nv == 1) {
+      const Data::OneDof& P = data.one_dof[link.parent];
+      J.parent_W = J.U.dot(P.W);
+      J.parent_S = J.U.dot(P.S);
+      // Folded once here, not in each sweep.
+      J.base_per_parent_base = -D_inv * J.parent_S;
+      J.base_per_parent_impulse =
+          P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
     }
-    const Mat6N& S = data.motion_subspace[i];
-    const Mat6N& U = data.U[i];
-    const MatNN& Dinv = data.D_inv[i];
-    if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
-      if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
-        const Mat6 S6 = S;
-        L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
-      } else {
-        L.noalias() = S * Dinv * S.transpose();
-      }
-      data.parent_coupling[i].setZero();
-      data.inverse_mass_block[i] = Dinv;
-      data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
-      continue;
-    }
-    const Mat6N W = T * U;
-    const MatNN UtW = U.transpose() * W;
-    const Mat6N SDinv = S * Dinv;
-    L = T;
-    L.noalias() -= SDinv * W.transpose();
-    L.noalias() -= W * SDinv.transpose();
-    L.noalias() += SDinv * UtW * SDinv.transpose();
-    L.noalias() += SDinv * S.transpose();
-    data.parent_coupling[i] = W;
-    data.inverse_mass_block[i] = Dinv + Dinv * UtW * Dinv;
-    data.inverse_mass_diagonal.segment(link.v_index, link.nv) = data.inverse_mass_block[i].diagonal();
+    data.inverse_mass_block[i](0, 0) = r;
+    data.inverse_mass_diagonal[link.v_index] = r;
+    return;
   }
+  if (link.nv == 0) {
+    L = T;
+    return;
+  }
+  const Mat6N& S = data.motion_subspace[i];
+  const Mat6N& U = data.U[i];
+  const MatNN& Dinv = data.D_inv[i];
+  if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
+    if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
+      const Mat6 S6 = S;
+      L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
+    } else {
+      L.noalias() = S * Dinv * S.transpose();
+    }
+    data.parent_coupling[i].setZero();
+    data.inverse_mass_block[i] = Dinv;
+    data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
+    return;
+  }
+  const Mat6N W = T * U;
+  const MatNN UtW = U.transpose() * W;
+  const Mat6N SDinv = S * Dinv;
+  L = T;
+  L.noalias() -= SDinv * W.transpose();
+  L.noalias() -= W * SDinv.transpose();
+  L.noalias() += SDinv * UtW * SDinv.transpose();
+  L.noalias() += SDinv * S.transpose();
+  data.parent_coupling[i] = W;
+  data.inverse_mass_block[i] = Dinv + Dinv * UtW * Dinv;
+  data.inverse_mass_diagonal.segment(link.v_index, link.nv) = data.inverse_mass_block[i].diagonal();
+}
+
+}  // namespace
+
+const VecX& articulated_response(const Model& model, Data& data) {
+  for (int i = 0; i < model.num_links(); ++i) link_response(data, i);
   return data.inverse_mass_diagonal;
+}
+
+const VecX& accelerations_and_response(const Model& model, Data& data) {
+  const Vec6 a_world = detail::world_acceleration(model);
+  for (int i = 0; i < model.num_links(); ++i) {
+    detail::link_acceleration(data, i, a_world);
+    link_response(data, i);
+  }
+  return data.qdd;
 }
 
 const VecX& inverse_mass_diagonal(const Model& model, Data& data, const VecX& q) {

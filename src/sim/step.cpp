@@ -40,8 +40,11 @@ void Simulation::step() {
   any_link_force_ =
       link_damping_active_ && link_damping_forces(model, data_, link_parameters_, dt, link_force_);
   const std::vector<Vec6>* link_force = any_link_force_ ? &link_force_ : nullptr;
-  // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1).
-  aba_from_kinematics(model, data_, qd_, tau, link_force);
+  // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1);
+  // with the accelerations, in the same pass, the unit responses r = (M^-1)_jj and the
+  // whole-articulation response, frozen for the step.
+  articulated_bodies(model, data_, qd_, tau, link_force);
+  accelerations_and_response(model, data_);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((friction_coefficient_.array() > 0.0).any())
     transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
@@ -52,8 +55,6 @@ void Simulation::step() {
     if (model.floating_base())
       correct_free_velocity_momentum(model, data_, tau, link_force, dt, departures_, qd_);
   }
-  // Unit responses r = (M^-1)_jj and the whole-articulation response, frozen for the step.
-  articulated_response(model, data_);
   if (link_cfm_active_) link_cfm(model, data_, link_parameters_, link_cfm_);  // link_cfm.cpp
   // Rows, position iterations, position update, velocity iterations.
   if (options_.solver == SolverType::pgs) solve_pgs();

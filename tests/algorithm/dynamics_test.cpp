@@ -51,6 +51,15 @@ TEST_P(RandomTree, AbaEqualsInverseMassTimesForces) {
   const VecX expected = M.lu().solve(tau - bias);
   const VecX qdd = aba(*model, data, q, v, tau);
   EXPECT_LT((qdd - expected).norm(), 1e-10 * (1.0 + expected.norm()));
+  // The step's form (step.cpp) on the kinematics aba left: ABA's first two passes, then its third
+  // with the response in one pass; (M^-1)_jj too.
+  articulated_bodies(*model, data, v, tau);
+  const VecX qdd_step = accelerations_and_response(*model, data);
+  EXPECT_LT((qdd_step - expected).norm(), 1e-10 * (1.0 + expected.norm()));
+  const MatX Minv = M.inverse();
+  for (int j = 0; j < model->nv; ++j)
+    EXPECT_NEAR(data.inverse_mass_diagonal[j], Minv(j, j), 1e-10 * std::abs(Minv(j, j)))
+        << "dof " << j;
   // M is symmetric positive definite.
   EXPECT_LT((M - M.transpose()).norm(), 1e-12 * M.norm());
   EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(M).eigenvalues().minCoeff(), 0.0);

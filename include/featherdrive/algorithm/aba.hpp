@@ -15,6 +15,15 @@ const VecX& aba(const Model& model, Data& data, const VecX& q, const VecX& v, co
 const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, const VecX& tau,
                                 const std::vector<Vec6>* external_force = nullptr);
 
+/// ABA's first two passes on the kinematics in data: IA, pA, U, D^-1 and u, everything
+/// aba_from_kinematics computes but the accelerations (joint_accelerations, or with the response
+/// accelerations_and_response).
+void articulated_bodies(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                        const std::vector<Vec6>* external_force = nullptr);
+
+/// ABA's third pass after articulated_bodies: qdd and each link's acceleration. Returns data.qdd.
+const VecX& joint_accelerations(const Model& model, Data& data);
+
 /// Only the articulated inertias IA, U and D^-1 (no bias forces), on kinematics already in data.
 void articulated_inertias(const Model& model, Data& data);
 
