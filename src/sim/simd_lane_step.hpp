@@ -10,6 +10,7 @@
 #pragma once
 
 #include <type_traits>
+#include <utility>
 
 #include <xsimd/xsimd.hpp>
 
@@ -171,13 +172,15 @@ class LaneStep {
 
   // The stages of a step.
   void step();
-  void kinematics();
-  void velocities_and_bias();
+  void kinematics_and_bias();
+  void link_pose(int i);
+  void link_velocity_and_bias(int i);
   void articulated_pass();
-  void acceleration_pass();
-  void response();
+  void forward_pass();
+  void link_acceleration(int i, const V* g, const V& dt);
+  void link_response(int i);
   void setup_row_constants(double h);
-  void setup_rows();
+  void setup_link_rows(int i);
   V solve_row(int d, V v, const V& dx);
   template <class T, class Fields>
   void drive_row(const Fields& rw, bool all_driven, const T& r, const T& dx, T& total, T& v);
@@ -187,6 +190,8 @@ class LaneStep {
   void leave_chain_link(const L& lane, int k, bool to_parent, V& beta);
   void sweep();
   void leave_links(int k, int stop, bool correct);
+  bool in_chain_run(int i, int stop, bool correct) const;
+  int leave_chain_run(int k, int stop, bool correct);
   void finish_link(int i);
   void integrate(double h, bool track);
   void finish_step();
@@ -316,180 +321,186 @@ void LaneStep<A, K>::sym_times(const V* m, const V* x, V* y) {
   }
 }
 
-// Poses (world axes; positions relative to the root link's origin, frame 0's origin) and S_i.
+// Pass 1 of the step's ABA, root to leaves, link by link: pose, S_i, rigid-body inertia,
+// velocity, c_i and bias force, one link's results read by the next while still in cache.
 template <class A, int K>
-void LaneStep<A, K>::kinematics() {
+void LaneStep<A, K>::kinematics_and_bias() {
   for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    V* R = at(l_.R + 9 * i);
-    V* pos = at(l_.pos + 3 * i);
-    V P[9];  // the joint frame's axes: R_parent E^T
-    if (k.parent < 0) {
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) P[3 * r + c] = V(k.E[3 * c + r]);
-      for (int r = 0; r < 3; ++r) pos[r] = V(0.0);
-    } else {
-      const V* Rp = at(l_.R + 9 * k.parent);
-      const V* pp = at(l_.pos + 3 * k.parent);
-      for (int r = 0; r < 3; ++r) {
-        pos[r] =
-            pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
-        for (int c = 0; c < 3; ++c)
-          P[3 * r + c] = k.tree_rotation_identity
-                             ? Rp[3 * r + c]
-                             : Rp[3 * r] * V(k.E[3 * c]) + Rp[3 * r + 1] * V(k.E[3 * c + 1]) +
-                                   Rp[3 * r + 2] * V(k.E[3 * c + 2]);
-      }
-    }
-    V aw[3];  // the joint axis in world axes
+    link_pose(i);
+    link_velocity_and_bias(i);
+  }
+}
+
+// Link i's pose (world axes; position relative to the root link's origin, frame 0's origin) and
+// S_i, its parent's being done.
+template <class A, int K>
+[[gnu::always_inline]] inline void LaneStep<A, K>::link_pose(int i) {
+  const LinkConstants& k = p_.links[i];
+  V* R = at(l_.R + 9 * i);
+  V* pos = at(l_.pos + 3 * i);
+  V P[9];  // the joint frame's axes: R_parent E^T
+  if (k.parent < 0) {
     for (int r = 0; r < 3; ++r)
-      aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
-                               : P[3 * r] * V(k.axis[0]) + P[3 * r + 1] * V(k.axis[1]) +
-                                     P[3 * r + 2] * V(k.axis[2]);
-    const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
-    if (k.type == 1) {
-      V s, c;
-      sincos(V(k.axis_sign) * x, s, c);
-      if (k.unit_axis >= 0) {
-        // R = P R(e_a, angle): columns a1 and a2 of P mix.
-        const int a = k.unit_axis, a1 = a == 2 ? 0 : a + 1, a2 = a == 0 ? 2 : a - 1;
-        for (int r = 0; r < 3; ++r) {
-          R[3 * r + a] = P[3 * r + a];
-          R[3 * r + a1] = c * P[3 * r + a1] + s * P[3 * r + a2];
-          R[3 * r + a2] = c * P[3 * r + a2] - s * P[3 * r + a1];
-        }
-      } else {
-        // Rodrigues: R(a, x) = c 1 + s [a]x + (1 - c) a a^T.
-        const V t = V(1.0) - c;
-        const V ax(k.axis[0]), ay(k.axis[1]), az(k.axis[2]);
-        const V J[9] = {t * ax * ax + c,      t * ax * ay - s * az, t * ax * az + s * ay,
-                        t * ax * ay + s * az, t * ay * ay + c,      t * ay * az - s * ax,
-                        t * ax * az - s * ay, t * ay * az + s * ax, t * az * az + c};
-        for (int r = 0; r < 3; ++r)
-          for (int col = 0; col < 3; ++col)
-            R[3 * r + col] =
-                P[3 * r] * J[col] + P[3 * r + 1] * J[3 + col] + P[3 * r + 2] * J[6 + col];
-      }
-    } else {
-      for (int e = 0; e < 9; ++e) R[e] = P[e];
-      if (k.type == 2 && k.parent >= 0)
-        for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
+      for (int c = 0; c < 3; ++c) P[3 * r + c] = V(k.E[3 * c + r]);
+    for (int r = 0; r < 3; ++r) pos[r] = V(0.0);
+  } else {
+    const V* Rp = at(l_.R + 9 * k.parent);
+    const V* pp = at(l_.pos + 3 * k.parent);
+    for (int r = 0; r < 3; ++r) {
+      pos[r] =
+          pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
+      for (int c = 0; c < 3; ++c)
+        P[3 * r + c] = k.tree_rotation_identity
+                           ? Rp[3 * r + c]
+                           : Rp[3 * r] * V(k.E[3 * c]) + Rp[3 * r + 1] * V(k.E[3 * c + 1]) +
+                                 Rp[3 * r + 2] * V(k.E[3 * c + 2]);
     }
-    if (k.type == 0) continue;
-    V* S = at(l_.S + 6 * i);
-    if (k.type == 1) {
-      for (int r = 0; r < 3; ++r) S[r] = aw[r];
-      cross(pos, aw, S + 3);
-    } else {
+  }
+  V aw[3];  // the joint axis in world axes
+  for (int r = 0; r < 3; ++r)
+    aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
+                             : P[3 * r] * V(k.axis[0]) + P[3 * r + 1] * V(k.axis[1]) +
+                                   P[3 * r + 2] * V(k.axis[2]);
+  const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
+  if (k.type == 1) {
+    V s, c;
+    sincos(V(k.axis_sign) * x, s, c);
+    if (k.unit_axis >= 0) {
+      // R = P R(e_a, angle): columns a1 and a2 of P mix.
+      const int a = k.unit_axis, a1 = a == 2 ? 0 : a + 1, a2 = a == 0 ? 2 : a - 1;
       for (int r = 0; r < 3; ++r) {
-        S[r] = V(0.0);
-        S[3 + r] = aw[r];
+        R[3 * r + a] = P[3 * r + a];
+        R[3 * r + a1] = c * P[3 * r + a1] + s * P[3 * r + a2];
+        R[3 * r + a2] = c * P[3 * r + a2] - s * P[3 * r + a1];
       }
+    } else {
+      // Rodrigues: R(a, x) = c 1 + s [a]x + (1 - c) a a^T.
+      const V t = V(1.0) - c;
+      const V ax(k.axis[0]), ay(k.axis[1]), az(k.axis[2]);
+      const V J[9] = {t * ax * ax + c,      t * ax * ay - s * az, t * ax * az + s * ay,
+                      t * ax * ay + s * az, t * ay * ay + c,      t * ay * az - s * ax,
+                      t * ax * az - s * ay, t * ay * az + s * ax, t * az * az + c};
+      for (int r = 0; r < 3; ++r)
+        for (int col = 0; col < 3; ++col)
+          R[3 * r + col] =
+              P[3 * r] * J[col] + P[3 * r + 1] * J[3 + col] + P[3 * r + 2] * J[6 + col];
+    }
+  } else {
+    for (int e = 0; e < 9; ++e) R[e] = P[e];
+    if (k.type == 2 && k.parent >= 0)
+      for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
+  }
+  if (k.type == 0) return;
+  V* S = at(l_.S + 6 * i);
+  if (k.type == 1) {
+    for (int r = 0; r < 3; ++r) S[r] = aw[r];
+    cross(pos, aw, S + 3);
+  } else {
+    for (int r = 0; r < 3; ++r) {
+      S[r] = V(0.0);
+      S[3 + r] = aw[r];
     }
   }
 }
 
-// Rigid-body inertias in frame 0 (aba.cpp's body_inertia), link velocities, velocity-product
-// accelerations c_i and bias forces v x* I v, root to leaves; each link one vector of the pack at
-// a time, so that its rotation, centre of mass and velocity stay in registers (sym_times).
+// Link i's rigid-body inertia in frame 0 (aba.cpp's body_inertia), velocity, velocity-product
+// acceleration c_i and bias force v x* I v; one vector of the pack at a time, so that its
+// rotation, centre of mass and velocity stay in registers (sym_times).
 template <class A, int K>
-void LaneStep<A, K>::velocities_and_bias() {
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    const V* Rv = at(l_.R + 9 * i);
-    const V* posv = at(l_.pos + 3 * i);
-    const V mv = link_parameter(i, mass);
-    const V comv[3] = {link_parameter(i, com_x), link_parameter(i, com_y),
-                       link_parameter(i, com_z)};
-    V Icv[6] = {link_parameter(i, inertia_xx),
-                link_parameter(i, inertia_yy),
-                link_parameter(i, inertia_zz),
-                V(0.0),
-                V(0.0),
-                V(0.0)};
-    if (!k.diagonal_inertia)
-      Icv[3] = link_parameter(i, inertia_xy), Icv[4] = link_parameter(i, inertia_xz),
-      Icv[5] = link_parameter(i, inertia_yz);
-    V* Iv = at(l_.IA + 21 * i);
-    V* vv = at(l_.vel + 6 * i);
-    V* cv = at(l_.c + 6 * i);
-    V* pAv = at(l_.pA + 6 * i);
-    const V* vp = k.parent >= 0 ? at(l_.vel + 6 * k.parent) : nullptr;
-    const V* Sv = k.type != 0 ? at(l_.S + 6 * i) : nullptr;
-    const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
-    for (int j = 0; j < K; ++j) {
-      B R[9], pos[3], com[3];
-      for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
-      for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = comv[r].b[j];
-      const B m = mv.b[j];
-      B cg[3], mc[3];
-      for (int r = 0; r < 3; ++r) {
-        cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
-        mc[r] = m * cg[r];
-      }
-      B RI[9];  // R Ic
-      const B xx = Icv[0].b[j], yy = Icv[1].b[j], zz = Icv[2].b[j];
-      if (k.diagonal_inertia) {
-        for (int r = 0; r < 3; ++r) {
-          RI[3 * r] = R[3 * r] * xx;
-          RI[3 * r + 1] = R[3 * r + 1] * yy;
-          RI[3 * r + 2] = R[3 * r + 2] * zz;
-        }
-      } else {
-        const B xy = Icv[3].b[j], xz = Icv[4].b[j], yz = Icv[5].b[j];
-        const B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c)
-            RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
-      }
-      const B mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
-      B Ia[6];  // A's entries, stored at kSym
-      for (int r = 0; r < 3; ++r)
-        for (int c = r; c < 3; ++c) {
-          B a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
-                mc[r] * cg[c];
-          if (r == c) a = a + mcc;
-          Ia[kSym.at[r][c]] = a;
-          Iv[kSym.at[r][c]].b[j] = a;
-        }
-      // B = [mc]x, C = m 1.
-      const B zero(0.0);
-      Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
-      Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
-      Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
-      Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
-      Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
-
-      B J[6] = {zero, zero, zero, zero, zero, zero};  // S qd
-      if (Sv) {
-        const B qd = qdv->b[j];
-        for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
-      }
-      B v[6];
-      for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
-      for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
-      B c[6], t1[3], t2[3];
-      cross(v, J, c);
-      cross(v, J + 3, t1);
-      cross(v + 3, J, t2);
-      for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
-      for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
-      // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
-      B h[6], mw[3], mvv[3];
-      cross(mc, v + 3, mvv);
-      cross(mc, v, mw);
-      for (int r = 0; r < 3; ++r) {
-        h[r] = (Ia[kSym.at[r][0]] * v[0] + Ia[kSym.at[r][1]] * v[1] + Ia[kSym.at[r][2]] * v[2]) +
-               mvv[r];
-        h[3 + r] = m * v[3 + r] - mw[r];
-      }
-      cross(v, h, t1);
-      cross(v + 3, h + 3, t2);
-      for (int r = 0; r < 3; ++r) pAv[r].b[j] = t1[r] + t2[r];
-      B pl[3];
-      cross(v, h + 3, pl);
-      for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
+[[gnu::always_inline]] inline void LaneStep<A, K>::link_velocity_and_bias(int i) {
+  const LinkConstants& k = p_.links[i];
+  const V* Rv = at(l_.R + 9 * i);
+  const V* posv = at(l_.pos + 3 * i);
+  const V mv = link_parameter(i, mass);
+  const V comv[3] = {link_parameter(i, com_x), link_parameter(i, com_y), link_parameter(i, com_z)};
+  V Icv[6] = {link_parameter(i, inertia_xx),
+              link_parameter(i, inertia_yy),
+              link_parameter(i, inertia_zz),
+              V(0.0),
+              V(0.0),
+              V(0.0)};
+  if (!k.diagonal_inertia)
+    Icv[3] = link_parameter(i, inertia_xy), Icv[4] = link_parameter(i, inertia_xz),
+    Icv[5] = link_parameter(i, inertia_yz);
+  V* Iv = at(l_.IA + 21 * i);
+  V* vv = at(l_.vel + 6 * i);
+  V* cv = at(l_.c + 6 * i);
+  V* pAv = at(l_.pA + 6 * i);
+  const V* vp = k.parent >= 0 ? at(l_.vel + 6 * k.parent) : nullptr;
+  const V* Sv = k.type != 0 ? at(l_.S + 6 * i) : nullptr;
+  const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
+  for (int j = 0; j < K; ++j) {
+    B R[9], pos[3], com[3];
+    for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
+    for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = comv[r].b[j];
+    const B m = mv.b[j];
+    B cg[3], mc[3];
+    for (int r = 0; r < 3; ++r) {
+      cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+      mc[r] = m * cg[r];
     }
+    B RI[9];  // R Ic
+    const B xx = Icv[0].b[j], yy = Icv[1].b[j], zz = Icv[2].b[j];
+    if (k.diagonal_inertia) {
+      for (int r = 0; r < 3; ++r) {
+        RI[3 * r] = R[3 * r] * xx;
+        RI[3 * r + 1] = R[3 * r + 1] * yy;
+        RI[3 * r + 2] = R[3 * r + 2] * zz;
+      }
+    } else {
+      const B xy = Icv[3].b[j], xz = Icv[4].b[j], yz = Icv[5].b[j];
+      const B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+    }
+    const B mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
+    B Ia[6];  // A's entries, stored at kSym
+    for (int r = 0; r < 3; ++r)
+      for (int c = r; c < 3; ++c) {
+        B a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
+              mc[r] * cg[c];
+        if (r == c) a = a + mcc;
+        Ia[kSym.at[r][c]] = a;
+        Iv[kSym.at[r][c]].b[j] = a;
+      }
+    // B = [mc]x, C = m 1.
+    const B zero(0.0);
+    Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
+    Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
+    Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
+    Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
+    Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
+
+    B J[6] = {zero, zero, zero, zero, zero, zero};  // S qd
+    if (Sv) {
+      const B qd = qdv->b[j];
+      for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
+    }
+    B v[6];
+    for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
+    for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
+    B c[6], t1[3], t2[3];
+    cross(v, J, c);
+    cross(v, J + 3, t1);
+    cross(v + 3, J, t2);
+    for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
+    for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
+    // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
+    B h[6], mw[3], mvv[3];
+    cross(mc, v + 3, mvv);
+    cross(mc, v, mw);
+    for (int r = 0; r < 3; ++r) {
+      h[r] =
+          (Ia[kSym.at[r][0]] * v[0] + Ia[kSym.at[r][1]] * v[1] + Ia[kSym.at[r][2]] * v[2]) + mvv[r];
+      h[3 + r] = m * v[3 + r] - mw[r];
+    }
+    cross(v, h, t1);
+    cross(v + 3, h + 3, t2);
+    for (int r = 0; r < 3; ++r) pAv[r].b[j] = t1[r] + t2[r];
+    B pl[3];
+    cross(v, h + 3, pl);
+    for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
   }
 }
 
@@ -540,64 +551,72 @@ void LaneStep<A, K>::articulated_pass() {
   }
 }
 
-// ABA pass 3: accelerations root to leaves (gravity as an upward acceleration of the world); the
-// free velocity qd += dt qdd.
+// ABA pass 3, the response and the rows, in one pass root to tip (step.cpp's
+// accelerations_and_response and setup_rows): each reads what the one before wrote for the link.
 template <class A, int K>
-void LaneStep<A, K>::acceleration_pass() {
-  const V* zero = at(l_.zero);
+void LaneStep<A, K>::forward_pass() {
   const V g[6] = {V(0.0), V(0.0), V(0.0), V(-p_.gravity[0]), V(-p_.gravity[1]), V(-p_.gravity[2])};
   const V dt(p_.dt);
   for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
-    const V* c = at(l_.c + 6 * i);
-    V* a = at(l_.acc + 6 * i);
-    for (int r = 0; r < 6; ++r) a[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
-    if (k.type == 0) continue;
-    const V* U = at(l_.U + 6 * i);
-    const V* S = at(l_.S + 6 * i);
-    const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, a));
-    for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
-    V& qd = at(l_.qd)[k.v_index];
-    qd = qd + dt * qdd;
+    link_acceleration(i, g, dt);
+    link_response(i);
+    if (p_.links[i].type != 0) setup_link_rows(i);
   }
 }
 
-// The whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
-// (inverse_mass_diagonal.cpp), root to leaves.
+// ABA pass 3 at link i: its acceleration (gravity as an upward acceleration of the world) and
+// the free velocity qd += dt qdd.
 template <class A, int K>
-void LaneStep<A, K>::response() {
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
-    V* L = at(l_.Lambda + 21 * i);
-    if (k.type == 0) {
-      for (int e = 0; e < 21; ++e) L[e] = T[e];
-      continue;
+[[gnu::always_inline]] inline void LaneStep<A, K>::link_acceleration(int i, const V* g,
+                                                                     const V& dt) {
+  const V* zero = at(l_.zero);
+  const LinkConstants& k = p_.links[i];
+  const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
+  const V* c = at(l_.c + 6 * i);
+  V* a = at(l_.acc + 6 * i);
+  for (int r = 0; r < 6; ++r) a[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
+  if (k.type == 0) return;
+  const V* U = at(l_.U + 6 * i);
+  const V* S = at(l_.S + 6 * i);
+  const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, a));
+  for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
+  V& qd = at(l_.qd)[k.v_index];
+  qd = qd + dt * qdd;
+}
+
+// Link i's whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
+// (inverse_mass_diagonal.cpp), its parent's being done.
+template <class A, int K>
+[[gnu::always_inline]] inline void LaneStep<A, K>::link_response(int i) {
+  const LinkConstants& k = p_.links[i];
+  const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
+  V* L = at(l_.Lambda + 21 * i);
+  if (k.type == 0) {
+    for (int e = 0; e < 21; ++e) L[e] = T[e];
+    return;
+  }
+  const V* U = at(l_.U + 6 * i);
+  const V* S = at(l_.S + 6 * i);
+  V* W = at(l_.W + 6 * i);
+  V* G = at(l_.G + 6 * i);
+  for (int j = 0; j < K; ++j) {  // one vector of the pack at a time (articulated_pass)
+    B Uj[6], Sj[6], Wj[6], Gj[6];
+    take6(U, j, Uj);
+    take6(S, j, Sj);
+    sym_times(T, j, Uj, Wj);
+    for (int r = 0; r < 6; ++r) W[r].b[j] = Wj[r];
+    const B D_inv = at(l_.D_inv)[i].b[j];
+    const B r_ii = D_inv + D_inv * D_inv * dot6(Uj, Wj);
+    for (int e = 0; e < 6; ++e) {
+      Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
+      G[e].b[j] = Gj[e];
     }
-    const V* U = at(l_.U + 6 * i);
-    const V* S = at(l_.S + 6 * i);
-    V* W = at(l_.W + 6 * i);
-    V* G = at(l_.G + 6 * i);
-    for (int j = 0; j < K; ++j) {  // one vector of the pack at a time (articulated_pass)
-      B Uj[6], Sj[6], Wj[6], Gj[6];
-      take6(U, j, Uj);
-      take6(S, j, Sj);
-      sym_times(T, j, Uj, Wj);
-      for (int r = 0; r < 6; ++r) W[r].b[j] = Wj[r];
-      const B D_inv = at(l_.D_inv)[i].b[j];
-      const B r_ii = D_inv + D_inv * D_inv * dot6(Uj, Wj);
-      for (int e = 0; e < 6; ++e) {
-        Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
-        G[e].b[j] = Gj[e];
+    for (int a = 0; a < 6; ++a)
+      for (int b = a; b < 6; ++b) {
+        const int e = kSym.at[a][b];
+        L[e].b[j] = (T[e].b[j] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
       }
-      for (int a = 0; a < 6; ++a)
-        for (int b = a; b < 6; ++b) {
-          const int e = kSym.at[a][b];
-          L[e].b[j] = (T[e].b[j] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
-        }
-      at(l_.inverse_mass)[i].b[j] = r_ii;
-    }
+    at(l_.inverse_mass)[i].b[j] = r_ii;
   }
 }
 
@@ -651,38 +670,35 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
   rowless_ = !rows_any;
 }
 
-// Every dof's rows for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row): what
-// depends on the configuration, and the accumulators.
+// The rows of link i's dof for the step (step.cpp's setup_rows, drive.hpp's setup_drive_row):
+// what depends on the configuration, and the accumulators.
 template <class A, int K>
-void LaneStep<A, K>::setup_rows() {
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    if (k.type == 0) continue;
-    const int d = k.v_index;
-    V* rw = row(d);
-    const V r = at(l_.inverse_mass)[i];
-    const V x0 = at(l_.q)[k.q_index];
-    const M accel = rw[Layout::accel] != V(0.0);
-    const V a = rw[Layout::gain], hkp = rw[Layout::gain_position];
-    const V recip = V(1.0) / r;
-    const V x = select(accel, rw[Layout::accel_x], V(1.0) / (a * r + V(1.0)));
-    const V scale = select(accel, x * recip, x);
-    rw[Layout::tvb] =
-        scale * (rw[Layout::gain_velocity] + hkp * (dof_parameter(d, target_position) - x0));
-    rw[Layout::velm] = -scale * a;
-    rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
-    rw[Layout::biasc] = scale * hkp;
-    rw[Layout::tpb] = p_.tgs ? scale * hkp * dof_parameter(d, target_velocity) : V(0.0);
-    rw[Layout::dimp] = V(0.0);
-    rw[Layout::low] = V(0.0);
-    rw[Layout::high] = V(0.0);
-    rw[Layout::err_low] = x0 - dof_parameter(d, lower);
-    rw[Layout::err_high] = dof_parameter(d, upper) - x0;
-    rw[Layout::fimp] = V(0.0);
-    rw[Layout::recip] = recip;
-    rw[Layout::delta_x] = V(0.0);
-    rw[Layout::response] = r;
-  }
+[[gnu::always_inline]] inline void LaneStep<A, K>::setup_link_rows(int i) {
+  const LinkConstants& k = p_.links[i];
+  const int d = k.v_index;
+  V* rw = row(d);
+  const V r = at(l_.inverse_mass)[i];
+  const V x0 = at(l_.q)[k.q_index];
+  const M accel = rw[Layout::accel] != V(0.0);
+  const V a = rw[Layout::gain], hkp = rw[Layout::gain_position];
+  const V recip = V(1.0) / r;
+  const V x = select(accel, rw[Layout::accel_x], V(1.0) / (a * r + V(1.0)));
+  const V scale = select(accel, x * recip, x);
+  rw[Layout::tvb] =
+      scale * (rw[Layout::gain_velocity] + hkp * (dof_parameter(d, target_position) - x0));
+  rw[Layout::velm] = -scale * a;
+  rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
+  rw[Layout::biasc] = scale * hkp;
+  rw[Layout::tpb] = p_.tgs ? scale * hkp * dof_parameter(d, target_velocity) : V(0.0);
+  rw[Layout::dimp] = V(0.0);
+  rw[Layout::low] = V(0.0);
+  rw[Layout::high] = V(0.0);
+  rw[Layout::err_low] = x0 - dof_parameter(d, lower);
+  rw[Layout::err_high] = dof_parameter(d, upper) - x0;
+  rw[Layout::fimp] = V(0.0);
+  rw[Layout::recip] = recip;
+  rw[Layout::delta_x] = V(0.0);
+  rw[Layout::response] = r;
 }
 
 // The drive row of a dof (drive.hpp) at joint velocity v, on the lanes its fields give: adds its
@@ -693,8 +709,11 @@ void LaneStep<A, K>::drive_row(const Fields& rw, bool all_driven, const T& r, co
                                T& v) {
   if (p_.tgs && velocity_iteration_) return;  // TGS freezes the drive in velocity iterations
   const T dimp = rw[Layout::dimp];
-  const T rest = rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
-                 rw[Layout::tpb] * T(time_to_step_end_);
+  // PGS: dx and tpb are 0 and biasc >= 0, so the last two terms subtract +0, which leaves every
+  // value as it is (step.cpp's solve_lone_drive_pgs).
+  const T rest = p_.tgs ? rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
+                              rw[Layout::tpb] * T(time_to_step_end_)
+                        : rw[Layout::tvb] + rw[Layout::impm] * dimp;
   T lambda = rest + rw[Layout::velm] * v;
   const T m = rw[Layout::maxi];
   lambda = select(lambda > m, m, lambda);
@@ -795,10 +814,61 @@ void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& b
   for (int r = 0; r < 6; ++r) lane(pAp[r]) = lane(pAk[r]) + b * lane(U[r]);
 }
 
+// Is link i on a run of only children that leave_chain_run takes: a moving joint finished on
+// leave, its parent's one child, and not a child of stop whose velocity change is corrected?
+template <class A, int K>
+bool LaneStep<A, K>::in_chain_run(int i, int stop, bool correct) const {
+  const LinkConstants& l = p_.links[i];
+  return i != stop && l.type != 0 && l.parent >= 0 && l.first_child && l.last_child &&
+         l.finish_on_leave && !(correct && l.parent == stop);
+}
+
+// Leaves a run of only children from k (leave_chain_link's operations in its order), the subtree
+// impulse carried up in registers, one vector at a time where kVectorByVector, and stored once
+// where the run ends: in the link returned (k itself when k starts no run).
+template <class A, int K>
+int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
+  int end = k;
+  while (in_chain_run(end, stop, correct)) end = p_.links[end].parent;
+  if (end == k) return k;
+  auto leave = [&](const auto& lane) {
+    using T = std::remove_cvref_t<decltype(lane(std::declval<V&>()))>;
+    const V* pAk = at(l_.subtree + 6 * k);
+    T pA[6];
+    for (int r = 0; r < 6; ++r) pA[r] = lane(pAk[r]);
+    for (int i = k; i != end; i = p_.links[i].parent) {
+      const LinkConstants& l = p_.links[i];
+      const int d = l.v_index;
+      const V* S = at(l_.S + 6 * i);
+      const V* G = at(l_.G + 6 * i);
+      const V* U = at(l_.U + 6 * i);
+      const T Sp = lane(S[0]) * pA[0] + lane(S[1]) * pA[1] + lane(S[2]) * pA[2] +
+                   lane(S[3]) * pA[3] + lane(S[4]) * pA[4] + lane(S[5]) * pA[5];
+      const T Gp = lane(G[0]) * pA[0] + lane(G[1]) * pA[1] + lane(G[2]) * pA[2] +
+                   lane(G[3]) * pA[3] + lane(G[4]) * pA[4] + lane(G[5]) * pA[5];
+      const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp);
+      auto& qd = lane(at(l_.qd)[d]);
+      qd = qd + (lane(at(l_.entry)[d]) - Gp);
+      for (int r = 0; r < 6; ++r) pA[r] = pA[r] + b * lane(U[r]);
+    }
+    V* pA_end = at(l_.subtree + 6 * end);
+    for (int r = 0; r < 6; ++r) lane(pA_end[r]) = pA[r];
+  };
+  if constexpr (kVectorByVector)
+    for (int j = 0; j < K; ++j) leave(OneVector{j});
+  else
+    leave(WholePack{});
+  return end;
+}
+
 // Leaves the finished links from k up to stop (gauss_seidel.hpp's leave_links).
 template <class A, int K>
 void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
   while (k != stop) {
+    if (const int end = leave_chain_run(k, stop, correct); end != k) {
+      k = end;
+      continue;
+    }
     const LinkConstants& lk = p_.links[k];
     const int p = lk.parent;
     const bool first_child = lk.first_child, last_child = lk.last_child;
@@ -953,11 +1023,9 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
 
 template <class A, int K>
 void LaneStep<A, K>::step() {
-  kinematics();
-  velocities_and_bias();
+  kinematics_and_bias();
   articulated_pass();
-  acceleration_pass();
-  response();
+  forward_pass();
   // A leaf's subtree impulse is never written by a sweep (no child hands it one) and must read 0;
   // its room held the bias forces until now.
   for (int i = 0; i < p_.num_links; ++i)
@@ -966,7 +1034,6 @@ void LaneStep<A, K>::step() {
   const double dt = p_.dt;
   velocity_iteration_ = false;
   if (!p_.tgs) {
-    setup_rows();
     h_ = dt;
     for (int it = 0; it < p_.position_iterations; ++it) sweep();
     integrate(dt, false);
@@ -975,7 +1042,6 @@ void LaneStep<A, K>::step() {
   } else {
     const int n = p_.position_iterations;
     const double rho = dt / n;
-    setup_rows();
     h_ = rho;
     for (int i = 1; i <= n; ++i) {
       time_to_step_end_ = dt - i * rho;
