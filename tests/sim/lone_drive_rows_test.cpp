@@ -27,6 +27,19 @@ Simulation driven_chain(SolverType solver) {
   return sim;
 }
 
+// Steps both `steps` times: the same bits in the state and every output force, step by step.
+void expect_same_steps(Simulation& a, Simulation& b, int steps) {
+  for (int k = 0; k < steps; ++k) {
+    a.step();
+    b.step();
+    ASSERT_EQ(a.q(), b.q()) << "step " << k;
+    ASSERT_EQ(a.qd(), b.qd()) << "step " << k;
+    ASSERT_EQ(a.drive_force(), b.drive_force()) << "step " << k;
+    ASSERT_EQ(a.limit_force(), b.limit_force()) << "step " << k;
+    ASSERT_EQ(a.friction_force(), b.friction_force()) << "step " << k;
+  }
+}
+
 // Steps with the change made after 5 steps, against a simulation that has it from the start and
 // begins from the same state: the same bits.
 void expect_as_if_set_first(SolverType solver, const Change& change) {
@@ -37,15 +50,7 @@ void expect_as_if_set_first(SolverType solver, const Change& change) {
   change(early);
   early.set_q(late.q());
   early.set_qd(late.qd());
-  for (int k = 0; k < 5; ++k) {
-    late.step();
-    early.step();
-    ASSERT_EQ(late.q(), early.q()) << "step " << k;
-    ASSERT_EQ(late.qd(), early.qd()) << "step " << k;
-    ASSERT_EQ(late.drive_force(), early.drive_force()) << "step " << k;
-    ASSERT_EQ(late.limit_force(), early.limit_force()) << "step " << k;
-    ASSERT_EQ(late.friction_force(), early.friction_force()) << "step " << k;
-  }
+  expect_same_steps(late, early, 5);
 }
 
 class LoneDriveRows : public ::testing::TestWithParam<SolverType> {};
@@ -120,13 +125,7 @@ TEST(LoneDriveSweep, EqualsTheGeneralRowLawBitForBit) {
   lone.set_qd(test::random_vector(model->nv, rng));
   Simulation general = lone;
   for (int d = 0; d < model->nv; ++d) general.set_max_joint_velocity(d, 1e30);
-  for (int k = 0; k < 50; ++k) {
-    lone.step();
-    general.step();
-    ASSERT_EQ(lone.q(), general.q()) << "step " << k;
-    ASSERT_EQ(lone.qd(), general.qd()) << "step " << k;
-    ASSERT_EQ(lone.drive_force(), general.drive_force()) << "step " << k;
-  }
+  expect_same_steps(lone, general, 50);
   EXPECT_EQ(general.velocity_limit_force(), VecX::Zero(model->nv));  // it never bound
 }
 
