@@ -9,6 +9,8 @@
 // an inline function to the rest of the library.
 #pragma once
 
+#include <array>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 
@@ -835,33 +837,45 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
   int end = k;
   while (in_chain_run(end, stop, correct)) end = p_.links[end].parent;
   if (end == k) return k;
-  auto leave = [&](const auto& lane) {
-    using T = std::remove_cvref_t<decltype(lane(std::declval<V&>()))>;
+  // Two vectors at a time where kVectorByVector: each run is a chain of dependences from link to
+  // link, and two of them interleaved keep the core busy while one waits.
+  auto leave = [&](const auto& lanes) {
+    using Lanes = std::remove_cvref_t<decltype(lanes)>;
+    constexpr int N = static_cast<int>(std::tuple_size_v<Lanes>);
+    using T = std::remove_cvref_t<decltype(lanes[0](std::declval<V&>()))>;
     const V* pAk = at(l_.subtree + 6 * k);
-    T pA[6];
-    for (int r = 0; r < 6; ++r) pA[r] = lane(pAk[r]);
+    T pA[N][6];
+    for (int n = 0; n < N; ++n)
+      for (int r = 0; r < 6; ++r) pA[n][r] = lanes[n](pAk[r]);
     for (int i = k; i != end; i = p_.links[i].parent) {
       const LinkConstants& l = p_.links[i];
       const int d = l.v_index;
       const V* S = at(l_.S + 6 * i);
       const V* G = at(l_.G + 6 * i);
       const V* U = at(l_.U + 6 * i);
-      const T Sp = lane(S[0]) * pA[0] + lane(S[1]) * pA[1] + lane(S[2]) * pA[2] +
-                   lane(S[3]) * pA[3] + lane(S[4]) * pA[4] + lane(S[5]) * pA[5];
-      const T Gp = lane(G[0]) * pA[0] + lane(G[1]) * pA[1] + lane(G[2]) * pA[2] +
-                   lane(G[3]) * pA[3] + lane(G[4]) * pA[4] + lane(G[5]) * pA[5];
-      const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp);
-      auto& qd = lane(at(l_.qd)[d]);
-      qd = qd + (lane(at(l_.entry)[d]) - Gp);
-      for (int r = 0; r < 6; ++r) pA[r] = pA[r] + b * lane(U[r]);
+      for (int n = 0; n < N; ++n) {
+        const auto& lane = lanes[n];
+        T* x = pA[n];
+        const T Sp = lane(S[0]) * x[0] + lane(S[1]) * x[1] + lane(S[2]) * x[2] + lane(S[3]) * x[3] +
+                     lane(S[4]) * x[4] + lane(S[5]) * x[5];
+        const T Gp = lane(G[0]) * x[0] + lane(G[1]) * x[1] + lane(G[2]) * x[2] + lane(G[3]) * x[3] +
+                     lane(G[4]) * x[4] + lane(G[5]) * x[5];
+        const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp);
+        auto& qd = lane(at(l_.qd)[d]);
+        qd = qd + (lane(at(l_.entry)[d]) - Gp);
+        for (int r = 0; r < 6; ++r) x[r] = x[r] + b * lane(U[r]);
+      }
     }
     V* pA_end = at(l_.subtree + 6 * end);
-    for (int r = 0; r < 6; ++r) lane(pA_end[r]) = pA[r];
+    for (int n = 0; n < N; ++n)
+      for (int r = 0; r < 6; ++r) lanes[n](pA_end[r]) = pA[n][r];
   };
-  if constexpr (kVectorByVector)
-    for (int j = 0; j < K; ++j) leave(OneVector{j});
-  else
-    leave(WholePack{});
+  if constexpr (kVectorByVector) {
+    static_assert(K % 2 == 0);
+    for (int j = 0; j < K; j += 2) leave(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
+  } else {
+    leave(std::array<WholePack, 1>{});
+  }
   return end;
 }
 
