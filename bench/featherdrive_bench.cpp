@@ -27,15 +27,6 @@ namespace {
 
 const int kChainSizes[] = {1, 4, 16, 64, 256, 1024};
 
-SimulationOptions options_for(SolverType solver) {
-  SimulationOptions o;
-  o.dt = kDt;
-  o.solver = solver;
-  o.position_iterations = 4;
-  o.velocity_iterations = 1;
-  return o;
-}
-
 void set_counters(benchmark::State& state, const Model& model) {
   state.counters["dofs"] = model.nv;
   state.counters["links"] = model.num_links();
@@ -158,11 +149,8 @@ void featherdrive_batch(benchmark::State& state, const BenchRobot& robot, int th
   constexpr int kRobots = 64;
   constexpr int kStepsPerTask = 10;
   std::vector<std::unique_ptr<Simulation>> sims;
-  for (int i = 0; i < kRobots; ++i) {
-    sims.push_back(std::make_unique<Simulation>(robot.model, options_for(SolverType::pgs)));
-    add_drives(*sims.back(), robot);
-    sims.back()->set_q(robot.q0);
-  }
+  for (int i = 0; i < kRobots; ++i)
+    sims.push_back(std::make_unique<Simulation>(bench_simulation(robot)));
   const VecX zero = VecX::Zero(robot.model->nv);
   tbb::task_arena arena(threads);
   for (auto _ : state) {

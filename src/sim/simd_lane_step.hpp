@@ -156,20 +156,18 @@ class LaneStep {
  private:
   // Scratch and parameters.
   V* at(int base) { return s_ + base; }
+  // Entry k of the lanes' parameters: vector j of the pack, or the whole pack.
+  B parameter(int k, int j) const { return B::load_unaligned(parameters_[j] + k * kGroup); }
   V parameter(int k) const {
     V out;
-    for (int j = 0; j < K; ++j)
-      out.b[j] = xsimd::batch<double, A>::load_unaligned(parameters_[j] + k * kGroup);
+    for (int j = 0; j < K; ++j) out.b[j] = parameter(k, j);
     return out;
   }
   V dof_parameter(int d, int f) const { return parameter(d * kDofParameters + f); }
-  V link_parameter(int i, int f) const {
-    return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
-  }
-  // Vector j of link_parameter(i, f).
+  // Vector j only: the link's parameters are read one vector at a time (gathered into packs
+  // first, they went through the stack).
   B link_parameter(int i, int f, int j) const {
-    return B::load_unaligned(parameters_[j] +
-                             (p_.nv * kDofParameters + i * kLinkParameters + f) * kGroup);
+    return parameter(p_.nv * kDofParameters + i * kLinkParameters + f, j);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
   double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 3 * d; }
@@ -423,9 +421,6 @@ template <class A, int K>
   const LinkConstants& k = p_.links[i];
   const V* Rv = at(l_.R + 9 * i);
   const V* posv = at(l_.pos + 3 * i);
-  // The link's parameters are read vector by vector below: gathered into packs first, they went
-  // through the stack.
-  auto parameter_of = [this, i](int j, int f) { return link_parameter(i, f, j); };
   V* Iv = at(l_.IA + 21 * i);
   V* vv = at(l_.vel + 6 * i);
   V* cv = at(l_.c + 6 * i);
@@ -436,16 +431,16 @@ template <class A, int K>
   for (int j = 0; j < K; ++j) {
     B R[9], pos[3], com[3];
     for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
-    for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = parameter_of(j, com_x + r);
-    const B m = parameter_of(j, mass);
+    for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = link_parameter(i, com_x + r, j);
+    const B m = link_parameter(i, mass, j);
     B cg[3], mc[3];
     for (int r = 0; r < 3; ++r) {
       cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
       mc[r] = m * cg[r];
     }
     B RI[9];  // R Ic
-    const B xx = parameter_of(j, inertia_xx), yy = parameter_of(j, inertia_yy),
-            zz = parameter_of(j, inertia_zz);
+    const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
+            zz = link_parameter(i, inertia_zz, j);
     if (k.diagonal_inertia) {
       for (int r = 0; r < 3; ++r) {
         RI[3 * r] = R[3 * r] * xx;
@@ -453,8 +448,8 @@ template <class A, int K>
         RI[3 * r + 2] = R[3 * r + 2] * zz;
       }
     } else {
-      const B xy = parameter_of(j, inertia_xy), xz = parameter_of(j, inertia_xz),
-              yz = parameter_of(j, inertia_yz);
+      const B xy = link_parameter(i, inertia_xy, j), xz = link_parameter(i, inertia_xz, j),
+              yz = link_parameter(i, inertia_yz, j);
       const B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
