@@ -212,6 +212,37 @@ def main():
     finally:
         browser.close()
 
+    # A browser without WebGL (--disable-3d-apis, as some headless and remote ones): the page
+    # says so in one line and keeps the timeline and the curves, with no console error.
+    browser = Browser(1000, 1400, extra_args=["--disable-3d-apis"])
+    try:
+        browser.open(page)
+        note = browser.evaluate("(() => { const n = document.getElementById('fd-no-webgl'); "
+                                "return n ? n.textContent : null; })()")
+        if browser.evaluate("featherdrive.webgl") is not False or not note or "3D view" not in note:
+            fail(f"without WebGL: no line saying the 3D view is unavailable ({note!r})")
+        browser.evaluate(f"(() => {{ const s = document.getElementById('fd-time'); "
+                         f"s.value = '{later}'; s.dispatchEvent(new Event('input')); }})()")
+        image = browser.screenshot()
+        curves_top = int(browser.evaluate(
+            "document.getElementById('fd-curves').getBoundingClientRect().top"))
+        xs, _ = pixels_of(image[curves_top:, : image.shape[1] // 2], CURSOR, tolerance=2)
+        expected = cursors[0] + span * later / STEPS  # where the page with WebGL drew it
+        if browser.evaluate("featherdrive.frame") != later or len(xs) < 50 or \
+                abs(xs.mean() - expected) > 2.0:
+            fail(f"without WebGL: the timeline or the curves' cursor do not work "
+                 f"({len(xs)} cursor pixels)")
+        drawn = np.any(image[curves_top:] < 200, axis=2).sum()
+        if drawn < 1000:
+            fail(f"without WebGL: the curves are not drawn ({drawn} dark pixels)")
+        problem = browser.offline_problem()
+        if problem:
+            fail(f"without WebGL: {problem}")
+        print(f"without WebGL: {note!r}; curves drawn ({drawn} dark pixels), cursor at "
+              f"{xs.mean():.1f} px")
+    finally:
+        browser.close()
+
     # --serve: the page over HTTP on 127.0.0.1 until SIGINT, then exit 0.
     server = subprocess.Popen([cli, "view", scene, "--csv", run_csv, "--out", page, "--serve",
                                "--port", "0"], stdout=subprocess.PIPE, text=True)

@@ -32,7 +32,7 @@ class Browser:
     """One headless Chromium with one page, the network off; every console error, uncaught
     exception and request that is not file:, data: or blob: is recorded."""
 
-    def __init__(self, width, height):
+    def __init__(self, width, height, extra_args=()):
         self.profile = tempfile.mkdtemp(prefix="fd-chromium-")
         to_chrome_r, self.to_chrome = os.pipe()
         self.from_chrome, from_chrome_w = os.pipe()
@@ -47,7 +47,7 @@ class Browser:
                 "--disable-extensions", "--disable-background-networking", "--disable-sync",
                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                 "--host-resolver-rules=MAP * ~NOTFOUND", "--proxy-server=127.0.0.1:9",
-                "--hide-scrollbars", "about:blank"]
+                "--hide-scrollbars", *extra_args, "about:blank"]
         if os.geteuid() == 0:
             args.insert(2, "--no-sandbox")  # Chromium's sandbox refuses to run as root
         self.process = subprocess.Popen(args, preexec_fn=pipes, close_fds=False,

@@ -46,9 +46,30 @@ const speed = document.getElementById('fd-speed');
 const framesBox = document.getElementById('fd-frames');
 
 // ---- the 3D scene -----------------------------------------------------------------------------
-const renderer = new THREE.WebGLRenderer({ canvas: view, antialias: true,
-                                           preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio || 1);
+// Some headless and remote browsers have no WebGL: the page then keeps the timeline and the
+// curves, and one line says that the 3D view is unavailable. WebGL 2 is probed on a scratch
+// canvas first, since three.js logs a console error before it throws.
+function makeRenderer() {
+  if (!document.createElement('canvas').getContext('webgl2')) return null;
+  try {
+    return new THREE.WebGLRenderer({ canvas: view, antialias: true, preserveDrawingBuffer: true });
+  } catch (e) {
+    return null;
+  }
+}
+const renderer = makeRenderer();
+state.webgl = renderer !== null;
+if (renderer) {
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+} else {
+  view.style.display = 'none';
+  const note = document.createElement('div');
+  note.id = 'fd-no-webgl';
+  note.style.padding = '8px';
+  note.textContent = 'The 3D view is unavailable: this browser has no WebGL 2. The timeline and ' +
+    'the curves below work without it.';
+  document.body.insertBefore(note, view);
+}
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0xffffff);
 scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 2.0));
@@ -283,14 +304,17 @@ function setFrame(frame) {
 }
 
 function resize() {
-  const width = view.clientWidth, height = view.clientHeight;
-  renderer.setSize(width, height, false);
-  camera.aspect = width / height;
-  camera.updateProjectionMatrix();
+  if (renderer) {
+    const width = view.clientWidth, height = view.clientHeight;
+    renderer.setSize(width, height, false);
+    camera.aspect = width / height;
+    camera.updateProjectionMatrix();
+  }
   drawCurves();
 }
 
 function render() {
+  if (!renderer) return;
   renderer.render(scene, camera);
   // The matrices the frame was drawn with (column-major, three.js's) and the canvas in CSS pixels.
   state.projection = camera.projectionMatrix.toArray();
