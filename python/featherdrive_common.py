@@ -21,7 +21,7 @@ import tempfile
 
 import featherdrive as fd
 
-__all__ = ["read_bytes", "read_text", "read_csv", "decimal", "is_decimal", "scene_inputs",
+__all__ = ["read_bytes", "read_text", "read_csv", "load_scene", "decimal", "is_decimal", "scene_inputs",
            "check_outputs", "write_atomically", "integer", "client", "path", "optional_text"]
 
 _BOM = b"\xef\xbb\xbf"
@@ -69,6 +69,11 @@ def read_csv(path, what="the CSV"):
                 exc = f"a field of {len(fields[k])} characters (at most {limit})"
         raise ValueError(f"{os.fspath(path)}: {where}: {exc}") from None
     return rows
+
+
+def load_scene(path):
+    """fd.Scene of a scene file read by read_text ("FILE: cannot open the scene: ...")."""
+    return fd.parse_scene(read_text(path, "the scene"), os.fspath(path))
 
 
 def scene_inputs(scene):

@@ -458,7 +458,7 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     if not isinstance(verbose, bool):
         raise TypeError(f"verbose = {verbose!r}: must be a bool, not {type(verbose).__name__}")
     if not isinstance(scene, fd.Scene):
-        scene = fd.load_scene(scene)
+        scene = common.load_scene(scene)
     if scene.fit is None:
         raise ValueError(f"{scene.path}: no fit: section (the parameters to identify)")
     outputs = _check_outputs(scene, data, out)  # before the fit: a refused output costs nothing

@@ -347,8 +347,7 @@ def main(argv=None):
             raise ValueError(f"--grid: {len(axes)} parameters; a sweep plots one or two")
         common.integer(args.threads, "--threads", 0, common.MAX_THREADS)
         # The outputs are checked before the run: none may replace a file the run reads.
-        import featherdrive as fd
-        scene = fd.load_scene(args.scene)
+        scene = common.load_scene(args.scene)
         common.check_outputs([("--out", out / "sweep.csv"), ("--out", out / "sweep.png")],
                              common.scene_inputs(scene))
         if args.scheduler:

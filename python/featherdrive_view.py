@@ -398,7 +398,7 @@ def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None,
         else:
             scene = source
         if isinstance(scene, (str, os.PathLike)):
-            scene = fd.load_scene(scene)  # the C++ reader: regular files, at most 64 MiB
+            scene = common.load_scene(scene)
         if not isinstance(scene, fd.Scene):
             raise TypeError(f"source must be a scene path, a CSV path, a Scene or a Simulation, "
                             f"not {type(scene).__name__}")
