@@ -528,3 +528,31 @@ def test_an_mjcf_model_with_includes_is_fitted_where_it_is(tmp_path):
     text = f"model: {tmp_path / 'elsewhere' / 'main.xml'}\n" + base.split("\n", 1)[1]
     s = featherdrive_fit._scene_from_files(text, str(tmp_path / "elsewhere" / "s.yaml"), moved)
     assert s.model.dof_names == ["j"] and not (tmp_path / "elsewhere").exists()
+
+
+def test_the_command_refuses_before_work(tmp_path, module_dir):
+    """featherdrive fit: a log or scene that is not a regular file, --out onto a file, bad
+    --threads: one line, exit 2, no hang, nothing written."""
+    command = str(module_dir.parent / "tools" / "featherdrive")
+    scene, log = small_fit(tmp_path)
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    (tmp_path / "file").write_text("x")
+    for args, message in [
+        ([str(scene), "--data", "/dev/zero"], "/dev/zero: is not a regular file (a character "
+                                              "device)"),
+        ([str(scene), "--data", str(fifo)], f"{fifo}: is not a regular file (a FIFO)"),
+        ([str(fifo), "--data", str(log)], f"{fifo}: is not a regular file (a FIFO)"),
+        ([str(scene), "--data", str(log), "--out", str(tmp_path / "file")],
+         f"out {tmp_path / 'file'}: exists and is not a folder"),
+        ([str(scene), "--data", str(log), "--out", str(tmp_path), "--threads", "-1"],
+         "threads = -1: must be in [0, 4096]"),
+        ([str(scene), "--data", str(log), "--threads", "1e9"],
+         "argument --threads: invalid int value: '1e9'"),
+    ]:
+        r = subprocess.run([command, "fit", *args], capture_output=True, text=True, timeout=60,
+                           cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "fit.yaml", "log.csv",
+                                                          "pipe.csv"]

@@ -297,3 +297,18 @@ def test_the_page_never_replaces_the_csv_or_the_model(tmp_path):
     finally:
         os.umask(old)
     assert oct(page.path.stat().st_mode & 0o777) == oct(0o640)
+
+
+@needs_bundle
+def test_the_command_refuses_non_regular_inputs(tmp_path, module_dir):
+    command = str(module_dir.parent / "tools" / "featherdrive")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    for args, message in [(["/dev/zero"], "/dev/zero: is not a regular file (a character device)"),
+                          ([str(SCENE), "--csv", str(fifo)], f"{fifo}: is not a regular file "
+                                                             "(a FIFO)")]:
+        r = subprocess.run([command, "view", *args, "--out", str(tmp_path / "a.html")],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr
+    assert not (tmp_path / "a.html").exists()
