@@ -21,8 +21,9 @@ import tempfile
 
 import featherdrive as fd
 
-__all__ = ["read_bytes", "read_text", "read_csv", "load_scene", "decimal", "is_decimal", "scene_inputs",
-           "check_outputs", "write_atomically", "integer", "client", "path", "optional_text"]
+__all__ = ["read_bytes", "read_text", "read_csv", "load_scene", "decimal", "is_decimal",
+           "scene_inputs", "check_outputs", "write_atomically", "integer", "client", "path",
+           "optional_text"]
 
 _BOM = b"\xef\xbb\xbf"
 

@@ -351,7 +351,8 @@ def test_logs_that_are_not_regular_files_are_refused_unread(tmp_path):
     big = tmp_path / "big.csv"
     with open(big, "wb") as f:
         f.truncate(fd.MAX_INPUT_BYTES + 1)  # sparse
-    with pytest.raises(ValueError, match=rf"big\.csv: is larger than 64 MiB \({fd.MAX_INPUT_BYTES + 1} "):
+    with pytest.raises(ValueError,
+                       match=rf"big\.csv: is larger than 64 MiB \({fd.MAX_INPUT_BYTES + 1} "):
         fd.fit(str(scene), str(big))
 
 
@@ -398,7 +399,8 @@ def test_resampled_length_is_bounded_before_it_is_made(tmp_path):
     (tmp_path / "bad.csv").write_text("\n".join(rows[:-1] + [",".join(fields)]) + "\n")
     steps = 1.7e9 / DT
     with pytest.raises(ValueError, match=rf"bad\.csv: row {len(rows)}: t = 1700000000\.0 is "
-                                         rf"1\.7e\+09 s after the first row: {re.escape(f'{steps:.4g}')} steps of "
+                                         r"1\.7e\+09 s after the first row: "
+                                         rf"{re.escape(f'{steps:.4g}')} steps of "
                                          rf"dt = .* more than {featherdrive_fit.MAX_LOG_STEPS}"):
         fd.fit(str(scene), str(tmp_path / "bad.csv"))
 
