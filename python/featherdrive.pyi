@@ -675,6 +675,9 @@ def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
 def sweep(scene: PathLike, grid: str | dict[str, ArrayLike], joint: str | None = None,
           client: object = None, num_threads: int = 0, chunk_size: int | None = None) -> object:
     """featherdrive_sweep.sweep: tracking error over a grid of gains (a SweepResult)."""
+MAX_INPUT_BYTES: int
+def read_input_file(path: PathLike, what: str = "the file") -> bytes:
+    """An input file's bytes as the commands read them (regular files of at most 64 MiB)."""
 def view(source: PathLike | Scene | Simulation, out: PathLike | None = None, *,
          scene: PathLike | Scene | None = None, robot: UrdfRobot | PathLike | None = None,
          steps: int | None = None, packages: dict[str, PathLike] | None = None,

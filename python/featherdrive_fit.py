@@ -13,16 +13,17 @@ on Dask workers.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import os
 import sys
 import tempfile
+import time
 
 import numpy as np
 
 import featherdrive as fd
+import featherdrive_common as common
 import featherdrive_distributed
 
 # Forward differences: the step relative to a parameter's scale (its starting value, or its
@@ -30,6 +31,20 @@ import featherdrive_distributed
 _FD_STEP = 1e-6
 # The log's time steps must equal the scene's dt within this (relative), unless resampled.
 _DT_TOLERANCE = 1e-6
+# The most steps of a log on the scene's grid (resample: linear makes them from the time span):
+# checked before the grid is made.
+MAX_LOG_STEPS = 1_000_000
+# An unknown starting at 0 has no magnitude of its own: it is scaled by its bounds' range, which
+# is bounded so that the steps of the fit (fractions of it) stay steps.
+MAX_ZERO_START_RANGE = 1e6
+# With threads=None a batch of fewer environments than this runs on 1 thread: a small batch's
+# step is shorter than the threads' meeting at every step (the arm example, 7 environments:
+# 3.7 s on 1 thread, 9.4 s on 2 cores).
+SMALL_BATCH = 64
+# A fit running longer than this (s) prints a line per evaluation with verbose.
+PROGRESS_AFTER = 2.0
+# The most batches one evaluation is cut into (fit's chunks=).
+MAX_CHUNKS = 4096
 
 _DRIVE = ("stiffness", "damping", "max_force")
 _FRICTION = {"friction.static": 0, "friction.dynamic": 1, "friction.viscous": 2}
@@ -110,11 +125,7 @@ def read_log(path, scene) -> Log:
     model = scene.model
     if model.nq != model.nv:
         raise _log_error(scene.path, "fit: only robots of one-dof joints (a fixed base) are fitted")
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
-    except OSError as e:
-        raise _log_error(path, f"cannot read the log: {e.strerror}") from None
+    rows = common.read_csv(path, "the log")
     if len(rows) < 3:
         raise _log_error(path, f"{max(len(rows) - 1, 0)} data rows: the log needs at least 2")
     header = rows[0]
@@ -139,12 +150,7 @@ def read_log(path, scene) -> Log:
         for r, row in enumerate(rows[1:], start=2):
             if len(row) != len(header):
                 raise _log_error(path, f"row {r}: {len(row)} fields, the header has {len(header)}")
-            try:
-                values[r - 2] = float(row[i])
-            except ValueError:
-                raise _log_error(path, f"row {r}: {name} = {row[i]!r}: not a number") from None
-            if not math.isfinite(values[r - 2]):
-                raise _log_error(path, f"row {r}: {name} = {row[i]}: must be finite")
+            values[r - 2] = common.decimal(row[i], f"{path}: row {r}: {name}")
         return values
 
     t = column(time_name, True)
@@ -169,6 +175,9 @@ def read_log(path, scene) -> Log:
 
     dt = scene.options.dt
     if scene.fit.data.resample == "exact":
+        if t.size - 1 > MAX_LOG_STEPS:
+            raise _log_error(path, f"row {MAX_LOG_STEPS + 2}: the log has {t.size - 1} steps, "
+                                   f"more than {MAX_LOG_STEPS}")
         steps = np.diff(t)
         bad = np.flatnonzero(np.abs(steps - dt) > _DT_TOLERANCE * dt)
         if bad.size:
@@ -177,7 +186,13 @@ def read_log(path, scene) -> Log:
                                    f"scene's dt {dt!r} s (set fit.data.resample: linear)")
         return Log(t, q, qd, tp, tv)
     # linear: q and qd interpolated at t0 + k dt; a target holds from its row until the next.
-    grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt * (1 + 1e-12))) + 1)
+    spans = (t - t[0]) / dt * (1 + 1e-12)
+    if spans[-1] > MAX_LOG_STEPS:
+        r = int(np.argmax(spans > MAX_LOG_STEPS))
+        raise _log_error(path, f"row {r + 2}: {time_name} = {t[r]!r} is {t[r] - t[0]:.6g} s after "
+                               f"the first row: {spans[r]:.4g} steps of dt = {dt!r} s, more than "
+                               f"{MAX_LOG_STEPS} (fit.data.resample: linear)")
+    grid = t[0] + dt * np.arange(int(math.floor(spans[-1])) + 1)
     if grid.size < 2:
         raise _log_error(path, f"the log spans {t[-1] - t[0]!r} s, less than one dt = {dt!r} s")
     interp = lambda x: np.stack([np.interp(grid, t, x[:, j]) for j in range(x.shape[1])], 1)
@@ -200,7 +215,7 @@ class _Unknown:
     scale: float
 
 
-def _unknowns(spec):
+def _unknowns(spec, path):
     out = []
     for p in spec.parameters:
         if p.quantity == "delay":
@@ -209,6 +224,14 @@ def _unknowns(spec):
         for g, members in enumerate(groups):
             initial = p.initial[g]
             scale = abs(initial) if initial != 0 else p.upper - p.lower
+            if initial == 0 and scale > MAX_ZERO_START_RANGE:
+                # least_squares starts strictly inside the bounds (1e-10 of the scale) and the
+                # Jacobian steps 1e-6 of it: of [0, 1e308] that is 1e298 away from the start.
+                raise ValueError(f"{path}: {p.key}: starts at 0 with bounds "
+                                 f"[{p.lower:g}, {p.upper:g}]: "
+                                 "an unknown starting at 0 is scaled by its bounds' range, which "
+                                 f"must be at most {MAX_ZERO_START_RANGE:g}; give initial: (not "
+                                 "0) or narrower bounds")
             out.append(_Unknown(p.quantity, [p.names[i] for i in members],
                                 [p.indices[i] for i in members], initial, p.lower, p.upper,
                                 scale))
@@ -230,31 +253,53 @@ def _delay_candidates(spec):
 _SCENES = {}
 
 
-def _scene_from_text(scene_text, urdf_text, urdf_name):
-    key = (scene_text, urdf_text)
+def _same_bytes(path, data):
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(data) + 1) == data
+    except OSError:
+        return False
+
+
+def _scene_from_files(scene_text, scene_path, files):
+    """The scene of scene_text (its model an absolute path) and files {absolute path: bytes}, the
+    robot's files. Where the files are (this machine, or a worker that shares its folders) the
+    robot is read in place, so that what the model reads besides them (an MJCF's <include>s and
+    meshes) is found; elsewhere the files are written under a temporary folder that mirrors their
+    absolute paths, so that relative references between them still hold."""
+    key = (scene_text, scene_path, tuple(sorted(files.items())))
     if key not in _SCENES:
-        # The scene holds the parsed robot: the files are not needed once it is read.
-        with tempfile.TemporaryDirectory(prefix="featherdrive_fit_") as folder:
-            with open(os.path.join(folder, urdf_name), "w") as f:
-                f.write(urdf_text)
-            scene = fd.parse_scene(scene_text, os.path.join(folder, "scene.yaml"))
+        if all(_same_bytes(p, data) for p, data in files.items()):
+            scene = fd.parse_scene(scene_text, scene_path)
+        else:
+            # The scene holds the parsed robot: the files are not needed once it is read.
+            with tempfile.TemporaryDirectory(prefix="featherdrive_fit_") as folder:
+                mirror = lambda p: os.path.join(folder, os.path.relpath(p, os.sep))
+                for p, data in files.items():
+                    os.makedirs(os.path.dirname(mirror(p)), exist_ok=True)
+                    with open(mirror(p), "wb") as f:
+                        f.write(data)
+                import yaml
+                doc = yaml.safe_load(scene_text)
+                doc["model"] = mirror(doc["model"])
+                scene = fd.parse_scene(yaml.safe_dump(doc), mirror(scene_path))
         _SCENES.clear()
         _SCENES[key] = scene
     return _SCENES[key]
 
 
 def simulate_batch(job):
-    """job: dict(scene_text, urdf_text, urdf_name, unknowns [(quantity, indices)], values (P, n),
+    """job: dict(scene_text, scene_path, files, unknowns [(quantity, indices)], values (P, n),
     delays (nv,), starts (S,), length, q0 (S, nv), qd0 (S, nv), target_position (T, nv),
     target_velocity (T, nv), threads). Returns q (P, S, length, nv) and qd likewise."""
-    scene = _scene_from_text(job["scene_text"], job["urdf_text"], job["urdf_name"])
+    scene = _scene_from_files(job["scene_text"], job["scene_path"], job["files"])
     values = np.asarray(job["values"], dtype=float)
     starts = np.asarray(job["starts"])
     P, S, L = values.shape[0], starts.size, job["length"]
     N = P * S
     batch = fd.Batch(fd.make_simulation(scene), N)
-    if job["threads"] is not None:
-        batch.set_num_threads(job["threads"])
+    threads = job["threads"]
+    batch.set_num_threads(threads if threads is not None else 1 if N < SMALL_BATCH else 0)
     per_env = np.repeat(values, S, axis=0)  # env e = p S + s
     armature = friction = None
     for u, (quantity, indices) in enumerate(job["unknowns"]):
@@ -312,14 +357,16 @@ def simulate_batch(job):
 
 class _Problem:
     def __init__(self, scene, log, unknowns, client, threads, chunks):
-        with open(scene.path) as f:
-            text = f.read()
-        with open(scene.model_path) as f:
-            urdf_text = f.read()
+        text = common.read_text(scene.path, "the scene")
         import yaml
         doc = yaml.safe_load(text)
-        urdf_name = os.path.basename(os.fspath(scene.model_path))
-        doc["model"] = urdf_name
+        scene_path = os.path.abspath(os.fspath(scene.path))
+        model_path = os.path.abspath(os.fspath(scene.model_path))
+        doc["model"] = model_path
+        # The robot's files, shipped to workers that may not have them (_scene_from_files).
+        files = {p: common.read_bytes(p, "the scene's model")
+                 for what, p in common.scene_inputs(scene) if what != "the scene"}
+        files = {os.path.abspath(p): data for p, data in files.items()}
         # The drives' delays are applied to the logged targets (simulate_batch), so that a
         # segment starts with the targets the robot had in the pipe: none in the simulation.
         for entry in [doc.get("drive_defaults")] + list((doc.get("drives") or {}).values()):
@@ -328,8 +375,7 @@ class _Problem:
         self.scene_delays = np.zeros(scene.model.nv, dtype=int)
         for d in scene.drives:
             self.scene_delays[d.dof] = d.delay
-        self.base = dict(scene_text=yaml.safe_dump(doc), urdf_text=urdf_text,
-                         urdf_name=urdf_name,
+        self.base = dict(scene_text=yaml.safe_dump(doc), scene_path=scene_path, files=files,
                          unknowns=[(u.quantity, u.indices) for u in unknowns],
                          target_position=log.target_position,
                          target_velocity=log.target_velocity, threads=threads)
@@ -353,6 +399,9 @@ class _Problem:
         self.qd_weight = scene.fit.data.qd_weight if log.qd is not None else 0.0
         self.delays = self.scene_delays.copy()
         self.nfev = 0
+        self.evaluations = 0
+        self.verbose = False
+        self.started = time.monotonic()
 
     def run(self, values):
         """q, qd (P, S, L, nv) for parameter rows `values` (physical units)."""
@@ -361,6 +410,10 @@ class _Problem:
         jobs = [dict(self.base, values=values[p], delays=self.delays) for p in parts]
         results = featherdrive_distributed.map_ordered(simulate_batch, jobs, client=self.client)
         self.nfev += values.shape[0]
+        self.evaluations += 1
+        if self.verbose and time.monotonic() - self.started > PROGRESS_AFTER:
+            print(f"fit: evaluation {self.evaluations}, {self.nfev} parameter sets simulated, "
+                  f"{time.monotonic() - self.started:.1f} s", file=sys.stderr, flush=True)
         return (np.concatenate([r[0] for r in results]), np.concatenate([r[1] for r in results]))
 
     def residuals(self, q, qd):
@@ -404,20 +457,34 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
 
     scene: a scene file path or an fd.Scene with a fit: section. client: a dask.distributed
     Client (batches run on its workers, results gathered in order). threads: each batch's
-    threads (None: all cores). out: a folder for <scene>_fitted.yaml, <scene>_fit.png and
-    <scene>_fit.txt (the table).
+    threads (None: 1 for batches under SMALL_BATCH environments, else all cores). out: a folder
+    for <scene>_fitted.yaml, <scene>_fit.png and <scene>_fit.txt (the table), checked before
+    the fit. verbose: the cost per delay, and a line per evaluation once the fit has run
+    PROGRESS_AFTER seconds (the command sets it).
     chunks: batches per evaluation (default: the client's worker count, or 1).
     Returns a FitResult; bad input raises ValueError naming the file, key or column and value."""
     from scipy.optimize import least_squares
+    # Every argument is checked before a file is read.
     if not isinstance(scene, fd.Scene):
-        scene = fd.load_scene(scene)
+        common.path(scene, "scene")
+    common.path(data, "data")
+    common.client(client)
+    common.integer(threads, "threads", 0, common.MAX_THREADS, none=True)
+    common.path(out, "out", none=True)
+    common.integer(chunks, "chunks", 1, MAX_CHUNKS, none=True)
+    if not isinstance(verbose, bool):
+        raise TypeError(f"verbose = {verbose!r}: must be a bool, not {type(verbose).__name__}")
+    if not isinstance(scene, fd.Scene):
+        scene = common.load_scene(scene)
     if scene.fit is None:
         raise ValueError(f"{scene.path}: no fit: section (the parameters to identify)")
+    outputs = _check_outputs(scene, data, out)  # before the fit: a refused output costs nothing
     log = read_log(data, scene)
-    unknowns = _unknowns(scene.fit)
+    unknowns = _unknowns(scene.fit, scene.path)
     if chunks is None:
         chunks = len(client.scheduler_info()["workers"]) if client is not None else 1
-    problem = _Problem(scene, log, unknowns, client, threads, max(int(chunks), 1))
+    problem = _Problem(scene, log, unknowns, client, threads, max(chunks, 1))
+    problem.verbose = verbose
     lower = np.array([u.lower for u in unknowns]) / problem.scale
     upper = np.array([u.upper for u in unknowns]) / problem.scale
     x0 = np.array([u.initial for u in unknowns]) / problem.scale
@@ -462,7 +529,7 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
                        rms_by_joint, float(np.sqrt(np.mean(err ** 2))), problem.nfev, converged,
                        q_fit, log)
     if out is not None:
-        _write_outputs(result, scene, data, out)
+        _write_outputs(result, scene, outputs)
     return result
 
 
@@ -470,34 +537,26 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
 # Outputs
 
 
-def _atomic_write(path, write):
-    folder = os.path.dirname(os.path.abspath(path))
-    fd_, tmp = tempfile.mkstemp(dir=folder, prefix=".fit_", suffix=os.path.splitext(path)[1])
-    os.close(fd_)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def _output_path(folder, name, inputs):
-    path = os.path.join(folder, name)
-    if os.path.lexists(path) and not os.path.isfile(path):
-        raise ValueError(f"{path}: exists and is not a regular file; not overwritten")
-    for i in inputs:
-        if os.path.exists(path) and os.path.samefile(path, i):
-            raise ValueError(f"{path}: is an input of the fit; not overwritten")
-    return path
+def _check_outputs(scene, data, out):
+    """The output files (scene, plot, report) in the folder out, checked as the commands check
+    them (featherdrive_common.check_outputs); None without out."""
+    if out is None:
+        return None
+    out = os.fspath(out)
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise ValueError(f"out {out}: exists and is not a folder")
+    stem = os.path.splitext(os.path.basename(os.fspath(scene.path)))[0]
+    paths = [os.path.join(out, f"{stem}{suffix}")
+             for suffix in ("_fitted.yaml", "_fit.png", "_fit.txt")]
+    common.check_outputs([("out", p) for p in paths],
+                         common.scene_inputs(scene) + [("the log", os.fspath(data))])
+    return paths
 
 
 def fitted_scene_text(result, scene):
     """The scene file with the fitted values written in (model path made absolute)."""
     import yaml
-    with open(scene.path) as f:
-        doc = yaml.safe_load(f)
+    doc = yaml.safe_load(common.read_text(scene.path, "the scene"))
     doc["model"] = os.path.abspath(os.fspath(scene.model_path))
     for e in result.estimates:
         for name in e.names:
@@ -523,20 +582,21 @@ def fitted_scene_text(result, scene):
     return yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=100)
 
 
-def _write_outputs(result, scene, data, out):
-    os.makedirs(out, exist_ok=True)
-    inputs = [os.fspath(scene.path), os.fspath(data), os.fspath(scene.model_path)]
-    stem = os.path.splitext(os.path.basename(os.fspath(scene.path)))[0]
-    scene_path = _output_path(out, f"{stem}_fitted.yaml", inputs)
-    plot_path = _output_path(out, f"{stem}_fit.png", inputs)
-    report_path = _output_path(out, f"{stem}_fit.txt", inputs)
+def _write_text(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def _write_outputs(result, scene, outputs):
+    scene_path, plot_path, report_path = outputs
+    os.makedirs(os.path.dirname(scene_path) or ".", exist_ok=True)
     text = fitted_scene_text(result, scene)
-    _atomic_write(scene_path, lambda p: open(p, "w").write(text))
+    common.write_atomically(scene_path, lambda p: _write_text(p, text))
     notes = [f"mass_scale of {', '.join(e.names)} = {e.value:.6g}: not a scene key; scale the "
              "URDF's <inertial>" for e in result.estimates if e.quantity == "mass_scale"]
-    _atomic_write(report_path, lambda p: open(p, "w").write(
-        result.table() + "\n" + "".join(n + "\n" for n in notes)))
-    _atomic_write(plot_path, lambda p: plot(result, scene, p))
+    common.write_atomically(report_path, lambda p: _write_text(
+        p, result.table() + "\n" + "".join(n + "\n" for n in notes)))
+    common.write_atomically(plot_path, lambda p: plot(result, scene, p))
     result.scene_file, result.plot_file = scene_path, plot_path
 
 
@@ -570,22 +630,30 @@ def plot(result, scene, path):
     plt.close(fig)
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2
+        sys.stderr.write(f"featherdrive fit: {message} (see featherdrive fit --help)\n")
+        sys.exit(2)
+
+
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="featherdrive fit",
+    parser = _Parser(prog="featherdrive fit",
                                      description="Fit a scene's fit: parameters to a log.")
     parser.add_argument("scene")
     parser.add_argument("--data", required=True, help="the log, a CSV")
     parser.add_argument("--out", default="fit_out", help="folder for the outputs (fit_out)")
     parser.add_argument("--scheduler", help="a Dask scheduler's address")
-    parser.add_argument("--threads", type=int, help="threads per batch (default: all cores)")
+    parser.add_argument("--threads", type=int,
+                        help="threads per batch (default: 1 for small batches, else all cores)")
     args = parser.parse_args(argv)
     client = None
     try:
         if args.scheduler:
             client = featherdrive_distributed.connect(args.scheduler)
-        result = fit(args.scene, args.data, client=client, threads=args.threads, out=args.out)
+        result = fit(args.scene, args.data, client=client, threads=args.threads, out=args.out,
+                     verbose=True)
     except ValueError as e:
-        print(f"featherdrive fit: {e}", file=sys.stderr)
+        print(f"featherdrive fit: {' '.join(str(e).splitlines())}", file=sys.stderr)
         return 2
     except Exception as e:  # one line, as the CLI's other commands
         print(f"featherdrive fit: {type(e).__name__}: {e}", file=sys.stderr)

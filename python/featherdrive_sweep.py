@@ -10,7 +10,8 @@ depend on threads, chunks or workers. docs/fitting.md, "Sweeps and Dask".
 
 Grid syntax: ``NAME=SPEC[,NAME=SPEC...]`` with NAME ``stiffness`` or ``damping`` and SPEC
 ``VALUE`` (one point), ``LO:HI:N`` (N points spaced linearly) or ``LO:HI:N:log`` (N points
-spaced geometrically, LO > 0). The first name varies slowest.
+spaced geometrically, LO > 0). The first name varies slowest. A grid has at most MAX_POINTS
+points, refused before any is made.
 """
 
 import argparse
@@ -18,13 +19,18 @@ import math
 import os
 import pathlib
 import sys
-import tempfile
 
 import numpy as np
+
+import featherdrive_common as common
 
 __all__ = ["sweep", "parse_grid", "SweepResult", "main"]
 
 PARAMETERS = ("stiffness", "damping")
+# The most points of a grid (each is a simulation); the axes' product is checked before the grid
+# is made. Run locally, the grid is run LOCAL_CHUNK environments at a time.
+MAX_POINTS = 1_000_000
+LOCAL_CHUNK = 4096
 
 
 def _number(text, where):
@@ -77,6 +83,9 @@ def parse_grid(grid):
             entries.append((name, spec))
     elif isinstance(grid, dict):
         entries = list(grid.items())
+        for name, _ in entries:
+            if not isinstance(name, str):
+                raise TypeError(f"grid: a name {name!r} must be a str, not {type(name).__name__}")
     else:
         raise TypeError(f"grid must be a str or a dict, not {type(grid).__name__}")
     if not entries:
@@ -92,11 +101,20 @@ def parse_grid(grid):
         if isinstance(spec, str):
             values, log = _axis(name, spec)
         else:
-            values = np.asarray(spec, dtype=float).ravel()
+            try:
+                values = np.asarray(spec, dtype=float).ravel()
+            except (TypeError, ValueError):
+                raise ValueError(f"grid {name}: values must be numbers, not "
+                                 f"{type(spec).__name__}") from None
             if values.size == 0 or not np.all(np.isfinite(values)) or np.any(values < 0):
                 raise ValueError(f"grid {name}: values must be finite, >= 0 and not empty")
             log = False
         axes.append((name, values, log))
+    count = math.prod(len(a[1]) for a in axes)
+    if count > MAX_POINTS:
+        sizes = " x ".join(f"{a[0]} {len(a[1])}" for a in axes)
+        raise ValueError(f"--grid: {sizes} = {count} points, more than {MAX_POINTS}: "
+                         "sweep fewer points")
     return axes
 
 
@@ -135,7 +153,8 @@ class SweepResult:
             values = list(self.points[i]) + list(self.rms[i]) + [self.total[i]]
             lines.append(",".join(repr(float(v)) for v in values)
                          + f",{int(self.diverged[i])}")
-        _write_atomically(path, ("\n".join(lines) + "\n").encode())
+        text = "\n".join(lines) + "\n"
+        common.write_atomically(path, lambda tmp: pathlib.Path(tmp).write_text(text))
 
     def plot(self, path, title):
         import matplotlib
@@ -172,16 +191,10 @@ class SweepResult:
             raise ValueError(f"a plot shows one or two parameters, not {len(varying)}")
         ax.set_title(title)
         fig.tight_layout()
-        with tempfile.NamedTemporaryFile(dir=os.path.dirname(os.path.abspath(path)),
-                                         suffix=".png", delete=False) as tmp:
-            pass
         try:
-            fig.savefig(tmp.name, dpi=100)
-            os.replace(tmp.name, path)
+            common.write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
         finally:
             plt.close(fig)
-            if os.path.exists(tmp.name):
-                os.unlink(tmp.name)
 
 
 def _edges(values, log):
@@ -195,19 +208,6 @@ def _edges(values, log):
 def _points(axes):
     mesh = np.meshgrid(*[a[1] for a in axes], indexing="ij")
     return np.stack([m.ravel() for m in mesh], axis=1)
-
-
-def _write_atomically(path, data):
-    folder = os.path.dirname(os.path.abspath(path))
-    fd_, tmp = tempfile.mkstemp(dir=folder, prefix=".sweep-")
-    try:
-        with os.fdopen(fd_, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _drives(scene, joint):
@@ -288,29 +288,24 @@ def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None):
     task on the cluster (default: the grid shared evenly among the workers)."""
     import featherdrive as fd
     from featherdrive_distributed import map_ordered
-    if not isinstance(scene, (str, os.PathLike)):
-        raise TypeError(f"scene must be a path, not {type(scene).__name__}")
-    path = str(scene)
-    try:
-        text = pathlib.Path(path).read_text()
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read the scene: {exc.strerror}") from None
+    # Every argument is checked before the scene is read or a point made.
+    path = os.fspath(common.path(scene, "scene"))
+    common.optional_text(joint, "joint")
+    common.client(client)
+    common.integer(num_threads, "num_threads", 0, common.MAX_THREADS)
+    common.integer(chunk_size, "chunk_size", 1, MAX_POINTS, none=True)
     axes = parse_grid(grid)
+    text = common.read_text(path, "the scene")
     parsed = fd.parse_scene(text, path)  # InputError (a ValueError) for a bad scene
     drives, _ = _drives(parsed, joint)
-    if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 0:
-        raise ValueError(f"num_threads = {num_threads!r} must be an integer >= 0")
     points = _points(axes)
     names = [a[0] for a in axes]
     if client is None:
-        chunks = [points]
-    else:
-        if chunk_size is None:
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
-            chunk_size = -(-len(points) // workers)
-        if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
-            raise ValueError(f"chunk_size = {chunk_size!r} must be an integer >= 1")
-        chunks = [points[i:i + chunk_size] for i in range(0, len(points), chunk_size)]
+        chunk_size = LOCAL_CHUNK  # the environments of one Batch; the numbers do not depend on it
+    elif chunk_size is None:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        chunk_size = -(-len(points) // workers)
+    chunks = [points[i:i + chunk_size] for i in range(0, len(points), chunk_size)]
     items = [(path, text, names, rows, joint, num_threads) for rows in chunks]
     results = map_ordered(evaluate, items, client)
     rms = np.concatenate([r[0] for r in results])
@@ -350,6 +345,11 @@ def main(argv=None):
         axes = parse_grid(args.grid)
         if len(axes) > 2:
             raise ValueError(f"--grid: {len(axes)} parameters; a sweep plots one or two")
+        common.integer(args.threads, "--threads", 0, common.MAX_THREADS)
+        # The outputs are checked before the run: none may replace a file the run reads.
+        scene = common.load_scene(args.scene)
+        common.check_outputs([("--out", out / "sweep.csv"), ("--out", out / "sweep.png")],
+                             common.scene_inputs(scene))
         if args.scheduler:
             from featherdrive_distributed import connect
             client = connect(args.scheduler)

@@ -8,7 +8,6 @@ bundled at build time into build/viewer/viewer.js and inlined here, so the page 
 """
 import argparse
 import base64
-import csv
 import functools
 import html
 import http.server
@@ -16,16 +15,17 @@ import json
 import math
 import os
 import pathlib
-import stat
 import sys
-import tempfile
 import warnings
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-# Inputs larger than this are refused before they are read, as the command's other inputs.
-MAX_INPUT_BYTES = 64 << 20
+import featherdrive_common as common
+
+
+# The most steps of a run the page shows (each a frame of every link's pose).
+MAX_STEPS = 1_000_000
 
 
 class ViewerUnavailable(RuntimeError):
@@ -53,20 +53,6 @@ def _read_bundle():
     raise ViewerUnavailable(f"the viewer's script {path} is missing: build it (cmake --build "
                             "build --target featherdrive_viewer; configure again first if node "
                             "came after the build was configured)")
-
-
-def _check_input(path, what):
-    """A regular file no larger than MAX_INPUT_BYTES (ValueError naming it otherwise)."""
-    try:
-        st = os.stat(path)
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot open {what}: {exc.strerror}") from None
-    if stat.S_ISDIR(st.st_mode):
-        raise ValueError(f"{path}: is a directory")
-    if not stat.S_ISREG(st.st_mode):
-        raise ValueError(f"{path}: is not a regular file")
-    if st.st_size > MAX_INPUT_BYTES:
-        raise ValueError(f"{path}: is larger than 64 MiB ({st.st_size} bytes)")
 
 
 class ViewerPage:
@@ -150,10 +136,9 @@ def _run_scene(fd, scene, steps, notes):
 
 
 def _number(text, where):
-    try:
-        value = float(text)
-    except ValueError:
-        raise ValueError(f"{where}: {text!r} is not a number") from None
+    if not common.is_decimal(text):  # as the C++ readers: not 1_0, " 1" or "infinity"
+        raise ValueError(f"{where}: {text!r} is not a number")
+    value = float(text)
     if not math.isfinite(value):
         raise ValueError(f"{where}: {text} is not finite")
     return value
@@ -162,11 +147,9 @@ def _number(text, where):
 def _read_csv(fd, scene, path):
     """The run of a trajectory CSV (`featherdrive simulate --out`) of the scene's model: q from
     its q columns, forces from its f columns, targets from the scene."""
-    _check_input(path, "the CSV")
+    rows = common.read_csv(path, "the CSV")
     model = scene.model
     robot = scene.robot
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.reader(f))
     if not rows:
         raise ValueError(f"{path}: empty (expected the header step,t,q:<joint>...)")
     header = rows[0]
@@ -268,11 +251,10 @@ def _resolve_mesh(filename, urdf_dir, packages):
 def _urdf_geometry(urdf_path, packages):
     """The URDF's text and its visual meshes {filename: base64}, with warnings for the meshes
     that do not resolve (their links are drawn without them); no text for an MJCF file."""
-    _check_input(urdf_path, "the URDF")
+    text = common.read_text(urdf_path, "the URDF")
     try:
-        text = pathlib.Path(urdf_path).read_text(encoding="utf-8")
         root = ElementTree.fromstring(text)
-    except (UnicodeDecodeError, ElementTree.ParseError) as exc:
+    except ElementTree.ParseError as exc:
         raise ValueError(f"{urdf_path}: cannot read its visuals: {exc}") from None
     meshes, notes, inputs = {}, [], []
     if root.tag != "robot":  # MJCF: drawn from the inertia boxes
@@ -287,16 +269,17 @@ def _urdf_geometry(urdf_path, packages):
                 why = f"{path} not found"
             if why is None and path.suffix.lower() not in (".stl", ".dae"):
                 why = "only STL and DAE meshes are drawn"
+            data = None
             if why is None:
                 try:
-                    _check_input(path, "the mesh")
+                    data = common.read_bytes(path, "the mesh")
                 except ValueError as exc:
                     why = str(exc)
             if why is not None:
                 notes.append(f"{urdf_path}: link '{link.get('name')}' mesh {filename}: {why}; "
                              "drawn without it")
                 continue
-            meshes[filename] = base64.b64encode(path.read_bytes()).decode("ascii")
+            meshes[filename] = base64.b64encode(data).decode("ascii")
             inputs.append(path)
     return text, meshes, notes, inputs
 
@@ -348,21 +331,10 @@ def _html(data, bundle):
             f"<script>{bundle}</script>\n</body></html>\n")
 
 
-def _same_file(a, b):
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return False
-
-
 def _check_out(out, inputs):
-    """Refuses (ValueError) an out that is one of the inputs, exists and is not a regular file,
-    or is not .html."""
-    for what, path in inputs:
-        if out.exists() and _same_file(out, path):
-            raise ValueError(f"--out {out}: is {what} ({path}); refusing to overwrite an input")
-    if out.exists() and not out.is_file():
-        raise ValueError(f"--out {out}: is not a regular file; refusing to replace it")
+    """Refuses (ValueError) an out that is one of the inputs, exists and is not a regular file
+    (featherdrive_common.check_outputs), or is not .html."""
+    common.check_outputs([("--out", out)], inputs)
     if out.suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"--out {out}: the page must be an .html file")
 
@@ -371,20 +343,7 @@ def _write_atomically(out, text, inputs):
     """Writes text to out through a temporary file beside it (_check_out first)."""
     _check_out(out, inputs)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fd_, tmp = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd_, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, stat.S_IMODE(os.stat(out).st_mode) if out.exists() else 0o666 & ~umask)
-        os.replace(tmp, out)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    common.write_atomically(out, lambda tmp: pathlib.Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None, marker=None,
@@ -397,12 +356,22 @@ def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None,
     (default out/<name>_view.html); steps: overrides the scene's; packages: {name: folder} for
     package:// meshes; marker: a link whose origin gets a magenta dot."""
     import featherdrive as fd
+    # Every argument is checked before a file is read or a step run.
+    if packages is not None and not isinstance(packages, dict):
+        raise TypeError(f"packages must be a dict {{name: folder}}, not {type(packages).__name__}")
     packages = dict(packages or {})
     for name, folder in packages.items():
         if not isinstance(name, str) or not isinstance(folder, (str, os.PathLike)):
-            raise TypeError("packages must map package names (str) to folders")
+            raise TypeError(f"packages: {name!r}: {folder!r}: packages must map package names "
+                            "(str) to folders")
     if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 0):
         raise ValueError(f"steps = {steps!r} must be an integer >= 0")
+    common.integer(steps, "steps", 0, MAX_STEPS, none=True)
+    common.path(out, "out", none=True)
+    common.optional_text(title, "title")
+    common.optional_text(marker, "marker")
+    if scene is not None and not isinstance(scene, (str, os.PathLike, fd.Scene)):
+        raise TypeError(f"scene must be a scene path or a Scene, not {type(scene).__name__}")
     bundle = _read_bundle()
     notes = []
     inputs = [("the viewer's script", bundle_path())]
@@ -429,14 +398,12 @@ def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None,
         else:
             scene = source
         if isinstance(scene, (str, os.PathLike)):
-            _check_input(scene, "the scene")
-            inputs.append(("the scene", pathlib.Path(scene)))
-            scene = fd.load_scene(scene)
+            scene = common.load_scene(scene)
         if not isinstance(scene, fd.Scene):
             raise TypeError(f"source must be a scene path, a CSV path, a Scene or a Simulation, "
                             f"not {type(scene).__name__}")
         robot = scene.robot
-        inputs.append(("the scene's model", pathlib.Path(str(scene.model_path))))
+        inputs += common.scene_inputs(scene)
         stem = (csv_path or pathlib.Path(str(scene.path))).stem
     urdf_text, meshes = None, {}
     if robot is not None and str(robot.path):

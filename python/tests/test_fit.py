@@ -3,6 +3,8 @@ featherdrive made with known parameters (the truth the fit never sees), the fitt
 the log, identical fits on 1 and 2 threads and Dask workers, and one-line errors."""
 import csv
 import os
+import re
+import shutil
 import subprocess
 import sys
 
@@ -326,3 +328,233 @@ def test_the_command(tmp_path, module_dir):
     assert run.stderr == (f"featherdrive fit: {scene}: fit.parameters[0].bounds = [5000, 50]: "
                           "lower must be below upper\n")
     assert not (tmp_path / "fit_out").exists()
+
+
+# Hardening (issue 36): the C++ commands' input and output rules, numbers as the C++ readers
+# take them, bounds on what a log makes, arguments checked before work, MJCF includes.
+
+def small_fit(tmp_path, fit="fit:\n  parameters:\n    - {quantity: stiffness, joints: [joint2], "
+                            "bounds: [50, 5000]}\n"):
+    make_log(tmp_path / "log.csv", fd.parse_scene(scene_text(), str(tmp_path / "t.yaml")))
+    return write(tmp_path / "fit.yaml", scene_text("pgs", fit)), tmp_path / "log.csv"
+
+
+def test_logs_that_are_not_regular_files_are_refused_unread(tmp_path):
+    scene, _ = small_fit(tmp_path)
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    for data, why in (("/dev/zero", "is not a regular file (a character device)"),
+                      (str(fifo), "is not a regular file (a FIFO)"),
+                      (str(tmp_path), "is a directory")):
+        with pytest.raises(ValueError, match="^" + re.escape(f"{data}: {why}")):
+            fd.fit(str(scene), data)
+    big = tmp_path / "big.csv"
+    with open(big, "wb") as f:
+        f.truncate(fd.MAX_INPUT_BYTES + 1)  # sparse
+    with pytest.raises(ValueError,
+                       match=rf"big\.csv: is larger than 64 MiB \({fd.MAX_INPUT_BYTES + 1} "):
+        fd.fit(str(scene), str(big))
+
+
+def test_log_numbers_are_decimal_and_text_is_utf8(tmp_path):
+    scene, log = small_fit(tmp_path)
+    rows = log.read_text().splitlines()
+    header = rows[0].split(",")
+    col = header.index("q:joint3")
+
+    def edited(row, value):
+        fields = rows[row].split(",")
+        fields[col] = value
+        return "\n".join(rows[:row] + [",".join(fields)] + rows[row + 1:]) + "\n"
+
+    # Python's float() takes each of these; the C++ readers take none.
+    for text in ("1_0", " 1", "0x10", "infinity", "1e5_0"):
+        (tmp_path / "bad.csv").write_text(edited(3, text))
+        with pytest.raises(ValueError, match=r"bad\.csv: row 4: q:joint3 = "):
+            fd.fit(str(scene), str(tmp_path / "bad.csv"))
+    # A byte order mark is no part of the first column's name: the fit reads the log as without.
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + log.read_bytes())
+    assert fd.fit(str(scene), str(tmp_path / "bom.csv")).rms == fd.fit(str(scene), str(log)).rms
+    # Not UTF-8: the line and the byte offset of the first bad byte.
+    data = log.read_bytes()
+    offset = data.index(b"\n", data.index(b"\n") + 1) + 3  # in the third line
+    (tmp_path / "latin.csv").write_bytes(data[:offset] + b"\xe9" + data[offset + 1:])
+    with pytest.raises(ValueError, match=rf"latin\.csv: line 3, byte offset {offset}: byte 0xe9 "
+                                         "is not UTF-8"):
+        fd.fit(str(scene), str(tmp_path / "latin.csv"))
+    # A field longer than csv's limit: one line naming the line and the column.
+    (tmp_path / "long.csv").write_text(edited(2, '"' + "1" * 200_000 + '"'))
+    with pytest.raises(ValueError, match=rf"long\.csv: line 3, column {col + 1} \(q:joint3\): "
+                                         "a field of 200002 characters"):
+        fd.fit(str(scene), str(tmp_path / "long.csv"))
+
+
+def test_resampled_length_is_bounded_before_it_is_made(tmp_path):
+    fit = ("fit:\n  data: {resample: linear}\n  parameters:\n"
+           "    - {quantity: stiffness, joints: [joint2], bounds: [50, 5000]}\n")
+    scene, log = small_fit(tmp_path, fit)
+    rows = log.read_text().splitlines()
+    fields = rows[-1].split(",")
+    fields[1] = "1.7e9"  # one time stamp in seconds since 1970: 4e11 steps of dt
+    (tmp_path / "bad.csv").write_text("\n".join(rows[:-1] + [",".join(fields)]) + "\n")
+    steps = 1.7e9 / DT
+    with pytest.raises(ValueError, match=rf"bad\.csv: row {len(rows)}: t = 1700000000\.0 is "
+                                         r"1\.7e\+09 s after the first row: "
+                                         rf"{re.escape(f'{steps:.4g}')} steps of "
+                                         rf"dt = .* more than {featherdrive_fit.MAX_LOG_STEPS}"):
+        fd.fit(str(scene), str(tmp_path / "bad.csv"))
+
+
+def test_starting_at_the_truth_stays_there_and_unscalable_ranges_are_refused(tmp_path):
+    # From the truth (600 N m/rad, 12 N m s/rad), bounds up to 1e308 are no reason to move.
+    fit = ("fit:\n  parameters:\n"
+           "    - {quantity: stiffness, joints: [joint2], bounds: [0, 1e308]}\n"
+           "    - {quantity: damping, joints: [joint2], bounds: [0, 1e308]}\n")
+    scene, log = small_fit(tmp_path, fit)
+    result = fd.fit(str(scene), str(log), threads=1)
+    assert result.value("stiffness", "joint2") == pytest.approx(600, rel=1e-9)
+    assert result.value("damping", "joint2") == pytest.approx(12, rel=1e-9)
+    # An unknown starting at 0 has only its range for a scale: the fit would start 1e-10 of it
+    # inside the bounds, 1e298 for [0, 1e308].
+    zero = "fit:\n  parameters:\n    - {quantity: friction_coefficient, joints: [joint2], bounds: "
+    write(scene, scene_text("pgs", zero + "[0, 1e308]}\n"))
+    with pytest.raises(ValueError, match=r"fit\.yaml: fit\.parameters\[0\]: starts at 0 with "
+                                         r"bounds \[0, 1e\+308\]: .* at most 1e\+06; give "
+                                         r"initial: \(not 0\) or narrower bounds$"):
+        fd.fit(str(scene), str(log), threads=1)
+    write(scene, scene_text("pgs", zero + "[0, 10]}\n"))
+    assert abs(fd.fit(str(scene), str(log), threads=1).estimates[0].value) <= 1e-9 * 10
+
+
+class NotAClient:
+    pass
+
+
+@pytest.mark.parametrize("kw,error,match", [
+    ({"threads": -1}, ValueError, r"threads = -1: must be in \[0, 4096\]"),
+    ({"threads": 10**9}, ValueError, r"threads = 1000000000: must be in \[0, 4096\]"),
+    ({"threads": 1.5}, TypeError, r"threads = 1\.5: must be an integer or None, not float"),
+    ({"threads": True}, TypeError, r"threads = True: must be an integer or None, not bool"),
+    ({"chunks": 0}, ValueError, r"chunks = 0: must be in \[1, 4096\]"),
+    ({"chunks": -5}, ValueError, r"chunks = -5: must be in \[1, 4096\]"),
+    ({"chunks": 2.5}, TypeError, r"chunks = 2\.5: must be an integer or None, not float"),
+    ({"client": NotAClient()}, TypeError, r"client = <.*: must be a "
+                                          r"distributed\.Client or None, not NotAClient"),
+    ({"out": 3}, TypeError, r"out = 3: must be a path \(str or os\.PathLike\) or None, not int"),
+    ({"data": 3}, TypeError, r"data = 3: must be a path"),
+    ({"scene": None}, TypeError, r"scene = None: must be a path"),
+    ({"verbose": "yes"}, TypeError, r"verbose = 'yes': must be a bool"),
+])
+def test_bad_arguments_name_the_argument_before_any_work(tmp_path, kw, error, match):
+    scene, log = small_fit(tmp_path)
+    args = dict(scene=str(scene), data=str(log), out=str(tmp_path / "out")) | kw
+    with pytest.raises(error, match=match):
+        fd.fit(**args)
+    assert not (tmp_path / "out").exists()
+
+
+def test_outputs_are_checked_before_the_fit(tmp_path, monkeypatch):
+    scene, log = small_fit(tmp_path)
+    ran = []
+    monkeypatch.setattr(featherdrive_fit, "read_log", lambda *a: ran.append(a))
+    out = tmp_path / "out"
+    out.mkdir()
+    cases = [  # (out, a file placed there, message)
+        (tmp_path / "file", None, r"out .*file: exists and is not a folder"),
+        (out, "fit_fit.txt/", r"out .*fit_fit\.txt: is not a regular file; refusing to replace"),
+        (tmp_path, None, None),  # out holding the scene: its outputs are other names
+    ]
+    (tmp_path / "file").write_text("x")
+    (out / "fit_fit.txt").mkdir()
+    for folder, _, match in cases[:2]:
+        with pytest.raises(ValueError, match=match):
+            fd.fit(str(scene), str(log), out=str(folder))
+    # The fitted scene's name is an input (the scene itself, or the log): never replaced.
+    (out / "fit_fit.txt").rmdir()
+    shutil.copy(scene, out / "fit.yaml")
+    os.link(log, out / "fit_fit.png")
+    before = (out / "fit.yaml").read_text()
+    with pytest.raises(ValueError, match=r"out .*fit_fit\.png: is the log \(.*log\.csv, an input "
+                                         r"of this run\); refusing to overwrite it"):
+        fd.fit(str(out / "fit.yaml"), str(log), out=str(out))
+    os.unlink(out / "fit_fit.png")
+    os.symlink(out / "fit.yaml", out / "fit_fitted.yaml")
+    with pytest.raises(ValueError, match=r"fit_fitted\.yaml: is the scene"):
+        fd.fit(str(out / "fit.yaml"), str(log), out=str(out))
+    assert ran == [] and (out / "fit.yaml").read_text() == before
+
+
+def test_outputs_respect_the_umask(tmp_path):
+    scene, log = small_fit(tmp_path)
+    old = os.umask(0o027)
+    try:
+        result = fd.fit(str(scene), str(log), out=str(tmp_path / "out"), threads=1)
+    finally:
+        os.umask(old)
+    for path in (result.scene_file, result.plot_file, tmp_path / "out" / "fit_fit.txt"):
+        assert oct(os.stat(path).st_mode & 0o777) == oct(0o666 & ~0o027), path
+
+
+MJCF_MAIN = '<mujoco model="pendulum"><include file="parts/body.xml"/></mujoco>\n'
+MJCF_BODY = ('<mujoco><worldbody><body name="b"><joint name="j" type="hinge" axis="0 1 0"/>'
+             '<geom type="capsule" size="0.05" fromto="0 0 0 0 0 -0.5" mass="1"/></body>'
+             '</worldbody></mujoco>\n')
+
+
+def test_an_mjcf_model_with_includes_is_fitted_where_it_is(tmp_path):
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "main.xml").write_text(MJCF_MAIN)
+    (tmp_path / "parts" / "body.xml").write_text(MJCF_BODY)
+    base = (f"model: main.xml\ndt: {DT!r}\nsteps: 100\n"
+            "drives: {j: {type: force, stiffness: 50, damping: 2}}\n")
+    truth = fd.parse_scene(base, str(tmp_path / "truth.yaml"))
+    sim = fd.make_simulation(truth)
+    q, qd = [sim.q.copy()], [sim.qd.copy()]
+    targets = 0.5 * np.sin(np.arange(101) * DT * 8 * np.pi)
+    for k in range(100):
+        sim.set_drive_targets(targets[k:k + 1])
+        sim.step()
+        q.append(sim.q.copy())
+        qd.append(sim.qd.copy())
+    write_log(tmp_path / "log.csv", ["j"], np.array(q), np.array(qd), targets[:, None])
+    fit = ("fit:\n  parameters:\n"
+           "    - {quantity: stiffness, joints: [j], bounds: [1, 500], initial: 20}\n")
+    scene = write(tmp_path / "fit.yaml", base + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert result.value("stiffness", "j") == pytest.approx(50, rel=1e-6)
+    # Where the files are not (a worker without them), the robot's files are written under a
+    # temporary folder that mirrors their paths: the include is found there too once listed.
+    job_files = {str(tmp_path / "main.xml"): MJCF_MAIN.encode(),
+                 str(tmp_path / "parts" / "body.xml"): MJCF_BODY.encode()}
+    moved = {p.replace(str(tmp_path), str(tmp_path / "elsewhere")): d for p, d in job_files.items()}
+    text = f"model: {tmp_path / 'elsewhere' / 'main.xml'}\n" + base.split("\n", 1)[1]
+    s = featherdrive_fit._scene_from_files(text, str(tmp_path / "elsewhere" / "s.yaml"), moved)
+    assert s.model.dof_names == ["j"] and not (tmp_path / "elsewhere").exists()
+
+
+def test_the_command_refuses_before_work(tmp_path, module_dir):
+    """featherdrive fit: a log or scene that is not a regular file, --out onto a file, bad
+    --threads: one line, exit 2, no hang, nothing written."""
+    command = str(module_dir.parent / "tools" / "featherdrive")
+    scene, log = small_fit(tmp_path)
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    (tmp_path / "file").write_text("x")
+    for args, message in [
+        ([str(scene), "--data", "/dev/zero"], "/dev/zero: is not a regular file (a character "
+                                              "device)"),
+        ([str(scene), "--data", str(fifo)], f"{fifo}: is not a regular file (a FIFO)"),
+        ([str(fifo), "--data", str(log)], f"{fifo}: is not a regular file (a FIFO)"),
+        ([str(scene), "--data", str(log), "--out", str(tmp_path / "file")],
+         f"out {tmp_path / 'file'}: exists and is not a folder"),
+        ([str(scene), "--data", str(log), "--out", str(tmp_path), "--threads", "-1"],
+         "threads = -1: must be in [0, 4096]"),
+        ([str(scene), "--data", str(log), "--threads", "1e9"],
+         "argument --threads: invalid int value: '1e9'"),
+    ]:
+        r = subprocess.run([command, "fit", *args], capture_output=True, text=True, timeout=60,
+                           cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "fit.yaml", "log.csv",
+                                                          "pipe.csv"]

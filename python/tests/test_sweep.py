@@ -3,6 +3,7 @@ and against `featherdrive simulate`; a damping sweep against the closed form of 
 system's squared error; bad grids. The cluster cases are in test_distributed.py."""
 import csv
 import math
+import os
 import re
 import subprocess
 
@@ -154,3 +155,103 @@ def test_bad_options_get_one_line_and_exit_2(module_dir, tmp_path):
     r = subprocess.run([cli(module_dir), "sweep", "--help"], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0 and "LO:HI:N:log" in r.stdout
+
+
+# Hardening (issue 36): the C++ commands' file rules, the grid's size, arguments, outputs.
+
+def slider_copy(folder):
+    """The slider scene (20 steps) and its URDF in folder."""
+    (folder / "slider.urdf").write_text((ROOT / "examples" / "slider.urdf").read_text())
+    scene = folder / "s.yaml"
+    scene.write_text(SLIDER.read_text().replace("steps: 240", "steps: 20"))
+    return scene
+
+
+def test_scenes_that_are_not_regular_files_are_refused_unread(tmp_path):
+    fifo = tmp_path / "pipe.yaml"
+    os.mkfifo(fifo)
+    for scene, why in (("/dev/zero", "is not a regular file (a character device)"),
+                       (str(fifo), "is not a regular file (a FIFO)"),
+                       (str(tmp_path), "is a directory")):
+        with pytest.raises(ValueError, match="^" + re.escape(f"{scene}: {why}")):
+            fd.sweep(scene, "damping=1")
+
+
+def test_the_grid_s_size_is_bounded_before_it_is_made():
+    n = 31_623  # each axis within its bound, the product 1e9 points
+    with pytest.raises(ValueError, match=rf"--grid: stiffness {n} x damping {n} = {n * n} points, "
+                                         rf"more than {featherdrive_sweep.MAX_POINTS}"):
+        featherdrive_sweep.parse_grid(f"stiffness=1:10:{n},damping=1:10:{n}")
+    with pytest.raises(ValueError, match="= 1000001 points"):
+        featherdrive_sweep.parse_grid({"stiffness": np.ones(1_000_001)})
+    assert len(featherdrive_sweep._points(featherdrive_sweep.parse_grid(
+        "stiffness=1:10:1000,damping=1:10:1000"))) == featherdrive_sweep.MAX_POINTS
+
+
+class NotAClient:
+    pass
+
+
+@pytest.mark.parametrize("kw,error,match", [
+    ({"num_threads": -1}, ValueError, r"num_threads = -1: must be in \[0, 4096\]"),
+    ({"num_threads": 10**9}, ValueError, r"num_threads = 1000000000: must be in \[0, 4096\]"),
+    ({"num_threads": 1.5}, TypeError, r"num_threads = 1\.5: must be an integer, not float"),
+    ({"chunk_size": 0}, ValueError, r"chunk_size = 0: must be in \[1, 1000000\]"),
+    ({"chunk_size": 2.5}, TypeError, r"chunk_size = 2\.5: must be an integer or None"),
+    ({"client": NotAClient()}, TypeError, r"client = <.*: must be a distributed\.Client or None"),
+    ({"joint": 3}, TypeError, r"joint = 3: must be a str or None, not int"),
+    ({"scene": 3}, TypeError, r"scene = 3: must be a path"),
+    ({"grid": {3: [1]}}, TypeError, r"grid: a name 3 must be a str"),
+    ({"grid": {"damping": ["x"]}}, ValueError, r"grid damping: values must be numbers"),
+])
+def test_bad_arguments_name_the_argument(kw, error, match):
+    args = dict(scene=str(SLIDER), grid="damping=1:2:2") | kw
+    with pytest.raises(error, match=match):
+        fd.sweep(**args)
+
+
+def test_outputs_never_replace_an_input_and_respect_the_umask(tmp_path, module_dir):
+    out = tmp_path / "out"
+    out.mkdir()
+    scene = slider_copy(out)
+    (out / "sweep.csv").symlink_to(scene)  # the scene reached through the output's name
+    before = scene.read_text()
+    r = subprocess.run([cli(module_dir), "sweep", str(scene), "--grid", "damping=1:2:2",
+                        "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert f"--out {out / 'sweep.csv'}: is the scene ({scene}, an input of this run)" in r.stderr
+    (out / "sweep.csv").unlink()
+    os.link(out / "slider.urdf", out / "sweep.png")
+    r = subprocess.run([cli(module_dir), "sweep", str(scene), "--grid", "damping=1:2:2",
+                        "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "sweep.png: is the scene's model" in r.stderr, r.stderr
+    assert scene.read_text() == before and not (out / "sweep.csv").exists()
+    (out / "sweep.png").unlink()
+    (out / "sweep.csv").mkdir()
+    r = subprocess.run([cli(module_dir), "sweep", str(scene), "--grid", "damping=1:2:2",
+                        "--out", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "sweep.csv: is not a regular file; refusing" in r.stderr
+    (out / "sweep.csv").rmdir()
+    r = subprocess.run(["sh", "-c", 'umask 027 && exec "$@"', "sh", cli(module_dir), "sweep",
+                        str(scene), "--grid", "damping=1:2:2", "--out", str(out)],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    for name in ("sweep.csv", "sweep.png"):
+        assert oct((out / name).stat().st_mode & 0o777) == oct(0o640)
+
+
+def test_non_regular_scenes_and_threads_on_the_command_line(tmp_path, module_dir):
+    fifo = tmp_path / "pipe.yaml"
+    os.mkfifo(fifo)
+    for args, message in [
+        (["/dev/zero"], "/dev/zero: is not a regular file (a character device)"),
+        ([str(fifo)], f"{fifo}: is not a regular file (a FIFO)"),
+        ([str(SLIDER), "--threads", "-1"], "--threads = -1: must be in [0, 4096]"),
+        ([str(SLIDER), "--threads", "1000000000"], "--threads = 1000000000: must be in"),
+        ([str(SLIDER), "--threads", "1e9"], "argument --threads: invalid int value: '1e9'"),
+    ]:
+        r = subprocess.run([cli(module_dir), "sweep", *args, "--grid", "damping=1"],
+                           capture_output=True, text=True, timeout=60, cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.yaml"]

@@ -4,6 +4,8 @@ equivalent-inertia box against a box's closed-form inertia, the page's targets a
 and its bad inputs. The page in a browser: tests/cli/view_arm.py, view_kr5.py."""
 import json
 import math
+import os
+import re
 import shutil
 import subprocess
 
@@ -226,3 +228,87 @@ def test_command_line_errors_exit_2(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err == f"featherdrive view: {missing}: cannot open the scene: " \
                       "No such file or directory\n"
+
+
+# Hardening (issue 36): inputs as the C++ commands read them, arguments, outputs.
+
+def good_csv(path):
+    path.write_text("step,t," + ",".join(f"q:joint{k}" for k in range(1, 8)) + "\n"
+                    + "0,0," + ",".join(["0.1"] * 7) + "\n" + "1,0.1," + ",".join(["0.2"] * 7)
+                    + "\n")
+    return path
+
+
+@needs_bundle
+def test_csv_inputs_are_regular_decimal_utf8(tmp_path):
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    for source, why in (("/dev/zero.csv", "cannot open the CSV"),
+                        (str(fifo), "is not a regular file (a FIFO)")):
+        with pytest.raises(ValueError, match="^" + re.escape(f"{source}: {why}")):
+            fd.view(source, tmp_path / "a.html", scene=str(SCENE))
+    good = good_csv(tmp_path / "run.csv")
+    data = good.read_bytes()
+    offset = data.index(b"0.2")
+    (tmp_path / "latin.csv").write_bytes(data[:offset] + b"\xff" + data[offset + 1:])
+    with pytest.raises(ValueError, match=rf"latin\.csv: line 3, byte offset {offset}: byte 0xff "
+                                         "is not UTF-8"):
+        fd.view(str(tmp_path / "latin.csv"), tmp_path / "a.html", scene=str(SCENE))
+    (tmp_path / "under.csv").write_text(good.read_text().replace("0.2,", "0_2,", 1))
+    with pytest.raises(ValueError, match=r"under\.csv: row 2, column q:joint1: '0_2' is not a "
+                                         "number"):
+        fd.view(str(tmp_path / "under.csv"), tmp_path / "a.html", scene=str(SCENE))
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + data)
+    assert page_data(fd.view(str(tmp_path / "bom.csv"), tmp_path / "b.html",
+                             scene=str(SCENE)))["joints"][2]["q"] == [0.1, 0.2]
+    assert not (tmp_path / "a.html").exists()
+
+
+@needs_bundle
+@pytest.mark.parametrize("kw,error,match", [
+    ({"title": 3}, TypeError, r"title = 3: must be a str or None, not int"),
+    ({"marker": 3}, TypeError, r"marker = 3: must be a str or None, not int"),
+    ({"out": 3}, TypeError, r"out = 3: must be a path"),
+    ({"steps": 10**9}, ValueError, r"steps = 1000000000: must be in \[0, 1000000\]"),
+    ({"packages": ["kit"]}, TypeError, r"packages must be a dict"),
+    ({"scene": 3}, TypeError, r"scene must be a scene path or a Scene, not int"),
+])
+def test_bad_arguments_name_the_argument(tmp_path, kw, error, match):
+    args = dict(out=tmp_path / "a.html") | kw
+    with pytest.raises(error, match=match):
+        fd.view(str(SCENE), **args)
+    assert not (tmp_path / "a.html").exists()
+
+
+@needs_bundle
+def test_the_page_never_replaces_the_csv_or_the_model(tmp_path):
+    scene = tmp_path / "arm.yaml"
+    scene.write_text(SCENE.read_text().replace("model: arm7.urdf", f"model: {ARM}"))
+    run = good_csv(tmp_path / "run.csv")
+    (tmp_path / "run.html").symlink_to(run)
+    with pytest.raises(ValueError, match=r"--out .*run\.html: is the CSV"):
+        fd.view(str(run), tmp_path / "run.html", scene=str(scene))
+    (tmp_path / "model.html").symlink_to(ARM)
+    with pytest.raises(ValueError, match=r"--out .*model\.html: is the scene's model"):
+        fd.view(str(scene), tmp_path / "model.html", steps=1)
+    old = os.umask(0o027)
+    try:
+        page = fd.view(str(scene), tmp_path / "p.html", steps=1)
+    finally:
+        os.umask(old)
+    assert oct(page.path.stat().st_mode & 0o777) == oct(0o640)
+
+
+@needs_bundle
+def test_the_command_refuses_non_regular_inputs(tmp_path, module_dir):
+    command = str(module_dir.parent / "tools" / "featherdrive")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    for args, message in [(["/dev/zero"], "/dev/zero: is not a regular file (a character device)"),
+                          ([str(SCENE), "--csv", str(fifo)], f"{fifo}: is not a regular file "
+                                                             "(a FIFO)")]:
+        r = subprocess.run([command, "view", *args, "--out", str(tmp_path / "a.html")],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert message in r.stderr
+    assert not (tmp_path / "a.html").exists()
