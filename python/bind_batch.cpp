@@ -298,11 +298,14 @@ void featherdrive::python::bind_batch(py::module_& m) {
           [](const Batch& b, py::handle link, py::handle point) {
             const NameOrIndex l = link_arg(link);
             const Vec3 p = point.is_none() ? Vec3::Zero() : to_vec3(point, "point");
-            return locked(b, [&] { return b.frame_positions(link_of(b.model(), l), p); });
+            return locked(b, [&] {
+              const NamedFrame f = frame_of(b.model(), l);
+              return b.frame_positions(f.link, point_on_link(f, p));
+            });
           },
           py::arg("link"), py::arg("point") = py::none(),
-          "World position of a point (link coordinates, default its origin) on a link (name or "
-          "index) in every environment, (N, 3), a new array.")
+          "World position of a point (frame coordinates, default its origin) on a link (name or "
+          "index) or a merged link's frame (name) in every environment, (N, 3), a new array.")
       .def(
           "step",
           [](Batch& b, py::handle count) {

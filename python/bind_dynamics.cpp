@@ -42,34 +42,50 @@ Vec3 to_point(py::handle obj) {
   return obj.is_none() ? Vec3::Zero() : to_vec3(obj, "point");
 }
 
-/// A link's query: the state's kinematics (with velocities) and the link's index.
+/// A link's or named frame's query (a merged link's name gives its frame on the link it merged
+/// into): the state's kinematics (with velocities) and the frame.
 struct LinkQuery {
   KinematicState state;
   Data data;
-  int link;
+  NamedFrame frame;
   LinkQuery(KinematicState s, py::handle link_obj)
-      : state(std::move(s)), data(*state.model), link(link_of(*state.model, link_arg(link_obj))) {
+      : state(std::move(s)), data(*state.model), frame(frame_of(*state.model, link_arg(link_obj))) {
     forward_kinematics(*state.model, data, state.q, state.qd);
   }
   const Model& model() const { return *state.model; }
+  Vec3 point(py::handle p) const { return point_on_link(frame, to_point(p)); }
+  /// Rows [angular; linear] in link axes -> in the frame's axes where `reference` is local.
+  template <class M>
+  void to_frame_axes(M& rows, ReferenceFrame reference) const {
+    if (reference != ReferenceFrame::local) return;
+    rows.template topRows<3>() = frame.rotation.transpose() * rows.template topRows<3>().eval();
+    rows.template bottomRows<3>() =
+        frame.rotation.transpose() * rows.template bottomRows<3>().eval();
+  }
 };
 
 py::tuple link_pose_of(const LinkQuery& k) {
-  return py::make_tuple(Mat3(k.data.world_rotation[k.link]), Vec3(k.data.world_position[k.link]));
+  return py::make_tuple(frame_rotation(k.model(), k.data, k.frame),
+                        frame_position(k.model(), k.data, k.frame));
 }
 
 Vec6 frame_velocity_of(const LinkQuery& k, py::handle point, py::handle frame) {
-  return frame_velocity(k.model(), k.data, k.link, to_point(point), to_reference(frame));
+  return frame_velocity(k.model(), k.data, k.frame, to_point(point), to_reference(frame));
 }
 
 MatX jacobian_of(const LinkQuery& k, py::handle point, py::handle frame) {
   MatX J;
-  frame_jacobian(k.model(), k.data, k.link, to_point(point), to_reference(frame), J);
+  const ReferenceFrame r = to_reference(frame);
+  frame_jacobian(k.model(), k.data, k.frame.link, k.point(point), r, J);
+  k.to_frame_axes(J, r);
   return J;
 }
 
 Vec6 jacobian_dot_of(const LinkQuery& k, py::handle point, py::handle frame) {
-  return jacobian_dot_times_v(k.model(), k.data, k.link, to_point(point), to_reference(frame));
+  const ReferenceFrame r = to_reference(frame);
+  Vec6 a = jacobian_dot_times_v(k.model(), k.data, k.frame.link, k.point(point), r);
+  k.to_frame_axes(a, r);
+  return a;
 }
 
 /// The whole robot's queries (no link).
@@ -147,10 +163,12 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
   const std::string at_qd =
       " At q (nq,) and qd (nv,), checked as Simulation.set_q and set_qd check them; a new array.";
   const std::string pose_doc =
-      "(R, p) of a link (name or index): its axes R (3, 3) and origin p (3,) in the world.";
+      "(R, p) of a link (name or index) or of a link merged into one through fixed joints "
+      "(name; its frame keeps its offset in that link): its axes R (3, 3) and origin p (3,) in "
+      "the world. ValueError naming the nearest names for an unknown one.";
   const std::string point_doc =
-      "World position (3,) of a point (3,) fixed on a link (name or index), given in the link "
-      "frame.";
+      "World position (3,) of a point (3,) fixed on a link (name or index) or a merged link "
+      "(name), given in that frame.";
   const std::string velocity_doc =
       std::string(
           "Spatial velocity (6,) [omega; velocity of the point] of a point on a link "
@@ -187,7 +205,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
           [](const Simulation& s, py::handle l, py::handle p) {
             const Vec3 pt = to_vec3(p, "point");
             LinkQuery k(state_of(s), l);
-            return frame_position(k.model(), k.data, k.link, pt);
+            return frame_position(k.model(), k.data, k.frame, pt);
           },
           link, py::arg("point"), (point_doc + at_sim).c_str())
       .def(
@@ -233,7 +251,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
       [](const ModelPtr& mo, py::handle q_, py::handle l, py::handle p) {
         const Vec3 pt = to_vec3(p, "point");
         LinkQuery k(state_at(mo, q_, py::none()), l);
-        return frame_position(k.model(), k.data, k.link, pt);
+        return frame_position(k.model(), k.data, k.frame, pt);
       },
       model, q, link, py::arg("point"), (point_doc + at_q).c_str());
   m.def(

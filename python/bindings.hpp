@@ -512,6 +512,15 @@ inline int link_of(const Model& model, const NameOrIndex& link) {
                     : index_in(link.index, model.num_links(), "link index");
 }
 
+/// A link (by name or index) or a merged link's frame (by name) for the frame queries.
+inline NamedFrame frame_of(const Model& model, const NameOrIndex& link) {
+  if (link.named) return model.frame(link.name);
+  NamedFrame f;
+  f.link = index_in(link.index, model.num_links(), "link index");
+  f.name = model.links[static_cast<size_t>(f.link)].name;
+  return f;
+}
+
 /// set_link_mass of Batch and SimdBatch: a link by name or index, one mass or one per env_ids.
 template <class B>
 void set_link_mass_of(B& b, py::handle link, py::handle mass, py::handle env_ids, bool scale) {

@@ -38,6 +38,9 @@ int translate_to_physx_scene(const TranslateArgs& args) {
                 p.drive.damping, p.distance.step_response, p.exact ? "exact" : p.note.c_str());
   }
   for (const std::string& note : t.notes) std::printf("  note: %s\n", note.c_str());
+  if (t.restored)
+    std::printf("  scene: the one the MJCF was exported from (its %s text), model the MJCF\n",
+                kMjcfSceneText);
   std::printf("  scene: %s\n", args.out.c_str());
   return 0;
 }
@@ -56,6 +59,8 @@ int translate(const TranslateArgs& args) {
   options.keep_timestep = args.keep_timestep;
   MjcfExport e;
   try {
+    options.model_name = scene.robot.name;
+    options.scene_record = scene_record(read_input_file(args.scene, "the scene"), sim, args.scene);
     e = export_mjcf(sim, options);
   } catch (const InputError& error) {
     throw std::invalid_argument(args.scene + ": " + error.what());

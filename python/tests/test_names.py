@@ -186,3 +186,76 @@ def test_batch_constructor_gains_equal_single_simulations(arm):
         fd.Batch(arm, 2, stiffness=-1.0)
     with pytest.raises(ValueError, match="has no drive"):
         fd.Batch(arm, 2).set_drive_targets(targets)
+
+
+# ---- frames of links merged through fixed joints (issue 33) -------------------------------------
+
+def urdf_origin(path, joint):
+    """(xyz, R) of a <joint>'s <origin>, read with xml.etree (R = Rz(y) Ry(p) Rx(r))."""
+    origin = next(j for j in ET.parse(path).getroot().findall("joint")
+                  if j.get("name") == joint).find("origin")
+    xyz = np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
+    r, p, y = (float(v) for v in origin.get("rpy", "0 0 0").split())
+    rx = np.array([[1, 0, 0], [0, np.cos(r), -np.sin(r)], [0, np.sin(r), np.cos(r)]])
+    ry = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
+    rz = np.array([[np.cos(y), -np.sin(y), 0], [np.sin(y), np.cos(y), 0], [0, 0, 1]])
+    return xyz, rz @ ry @ rx
+
+
+def tcp_pose(rotation, position):
+    """The arm's tcp from link7's pose, composing the URDF's fixed origins by hand:
+    link7 -> hand (hand_joint) -> tcp (tcp_joint)."""
+    p1, r1 = urdf_origin(ARM, "hand_joint")
+    p2, r2 = urdf_origin(ARM, "tcp_joint")
+    return rotation @ r1 @ r2, position + rotation @ (p1 + r1 @ p2)
+
+
+def test_merged_links_keep_their_frames_for_every_query(arm):
+    assert "tcp" not in arm.link_names and "hand" not in arm.link_names  # merged into link7
+    sim = fd.Simulation(arm)
+    sim.set_q(np.linspace(-0.9, 1.1, arm.nv))
+    R7, p7 = sim.link_pose("link7")
+    R, p = tcp_pose(R7, p7)
+    Rt, pt = sim.link_pose("tcp")
+    np.testing.assert_allclose(Rt, R, atol=1e-12)
+    np.testing.assert_allclose(pt, p, atol=1e-12)
+    point = np.array([0.01, -0.02, 0.03])  # in the tcp frame
+    np.testing.assert_allclose(sim.frame_position("tcp", point), p + R @ point, atol=1e-12)
+    np.testing.assert_allclose(fd.frame_position(arm, sim.q, "tcp", point), p + R @ point,
+                               atol=1e-12)
+    # The Jacobian's linear rows against central differences of the frame's position.
+    J = sim.jacobian("tcp", point)
+    h = 1e-6
+    for d in range(arm.nv):
+        dq = np.zeros(arm.nv)
+        dq[d] = h
+        diff = (fd.frame_position(arm, sim.q + dq, "tcp", point) -
+                fd.frame_position(arm, sim.q - dq, "tcp", point)) / (2 * h)
+        np.testing.assert_allclose(J[3:, d], diff, atol=1e-8)
+    # local: the same rows in the tcp's own axes.
+    local = sim.jacobian("tcp", point, "local")
+    np.testing.assert_allclose(local[:3], R.T @ J[:3], atol=1e-12)
+    np.testing.assert_allclose(local[3:], R.T @ J[3:], atol=1e-12)
+    sim.set_qd(np.linspace(0.5, -0.4, arm.nv))
+    np.testing.assert_allclose(sim.frame_velocity("tcp", point), J @ sim.qd, atol=1e-12)
+    np.testing.assert_allclose(sim.frame_velocity("tcp", point, "local"), local @ sim.qd,
+                               atol=1e-12)
+
+
+def test_batch_frame_positions_of_a_merged_link(arm):
+    batch = fd.Batch(arm, 3)
+    q = np.stack([np.linspace(-0.5, 0.5, arm.nv) * k for k in (0.0, 1.0, 2.0)])
+    batch.set_q(q)
+    point = np.array([0.0, 0.05, 0.0])
+    got = batch.frame_positions("tcp", point)
+    for i in range(3):
+        R, p = tcp_pose(*fd.link_pose(arm, q[i], "link7"))
+        np.testing.assert_allclose(got[i], p + R @ point, atol=1e-12)
+
+
+def test_unknown_frame_names_the_nearest(arm):
+    sim = fd.Simulation(arm)
+    for query in (lambda n: sim.frame_position(n, [0, 0, 0]), sim.link_pose, sim.jacobian,
+                  lambda n: fd.Batch(arm, 1).frame_positions(n)):
+        with pytest.raises(ValueError, match=r"^no link or frame named 'tpc'; nearest: 'tcp'"):
+            query("tpc")

@@ -31,4 +31,24 @@ Vec6 frame_velocity(const Model& model, const Data& data, int link, const Vec3& 
   return out;
 }
 
+Mat3 frame_rotation(const Model& model, const Data& data, const NamedFrame& frame) {
+  check_link_index(model, frame.link);
+  return data.world_rotation[frame.link] * frame.rotation;
+}
+
+Vec3 frame_position(const Model& model, const Data& data, const NamedFrame& frame,
+                    const Vec3& point) {
+  return frame_position(model, data, frame.link, point_on_link(frame, point));
+}
+
+Vec6 frame_velocity(const Model& model, const Data& data, const NamedFrame& frame,
+                    const Vec3& point, ReferenceFrame reference) {
+  Vec6 v = frame_velocity(model, data, frame.link, point_on_link(frame, point), reference);
+  if (reference == ReferenceFrame::local) {  // link axes -> the frame's
+    v.head<3>() = frame.rotation.transpose() * v.head<3>().eval();
+    v.tail<3>() = frame.rotation.transpose() * v.tail<3>().eval();
+  }
+  return v;
+}
+
 }  // namespace featherdrive

@@ -2,6 +2,7 @@
 #include "featherdrive/io/mjcf_export.hpp"
 
 #include <mujoco/mujoco.h>
+#include <yaml-cpp/yaml.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -44,6 +45,15 @@ std::string attr(const std::string& s) {
       case '\'':
         out += "&apos;";
         break;
+      case '\n':  // a literal line break in an attribute would read back as a space
+        out += "&#10;";
+        break;
+      case '\r':
+        out += "&#13;";
+        break;
+      case '\t':
+        out += "&#9;";
+        break;
       default:
         out += c;
     }
@@ -56,55 +66,87 @@ struct JointExtras {
   std::vector<std::string> text;  // per dof
 };
 
-// A body's opening tag, inertial and joint; its children and closing tag are write_bodies'.
-void open_body(const Model& model, int i, int depth, const JointExtras* extras,
-               std::ostringstream& xml) {
-  const Link& link = model.links[i];
+// A massless moving link whose only child moves too and hangs at an unrotated frame: the pair is
+// one MJCF body with two joints (MuJoCo's own form, which load_mjcf splits into such links), since
+// MuJoCo refuses a moving body without mass.
+bool joins_child(const Model& model, int i) {
+  const Link& link = model.links[static_cast<size_t>(i)];
+  if (i == 0 || link.nv == 0 || link.joint_type == JointType::floating || link.mass != 0.0 ||
+      link.children.size() != 1)
+    return false;
+  const Link& child = model.links[static_cast<size_t>(link.children[0])];
+  return child.nv > 0 && (child.tree_transform.E - Mat3::Identity()).cwiseAbs().maxCoeff() == 0.0;
+}
+
+// A body's opening tag, inertial and joints for the links `chain` (a link and the children it
+// joins, joins_child); `shift` is the parent link frame's origin in the parent body's frame.
+// Returns the last link frame's origin in this body's frame (each joint sits at its link's origin,
+// with the axis in body coordinates: the chain's frames differ by translations only).
+Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& shift, int depth,
+               const JointExtras* extras, std::ostringstream& xml) {
+  const Link& first = model.links[static_cast<size_t>(chain.front())];
   const std::string indent(2 * static_cast<size_t>(depth), ' ');
-  const Transform& X = link.tree_transform;
+  const Transform& X = first.tree_transform;
+  const Vec3 origin = shift + X.r;
   const Quat rotation(X.E.transpose());  // the joint frame's orientation in the parent frame
-  const std::string name = link.name == "world" ? "world_link" : link.name;
-  xml << indent << "<body name=\"" << attr(name) << "\" pos=\"" << nums({X.r.x(), X.r.y(), X.r.z()})
-      << "\" quat=\"" << nums({rotation.w(), rotation.x(), rotation.y(), rotation.z()}) << "\">\n";
-  Eigen::SelfAdjointEigenSolver<Mat3> eig(link.inertia_com);
+  const Link& last = model.links[static_cast<size_t>(chain.back())];
+  const std::string name = last.name == "world" ? "world_link" : last.name;
+  xml << indent << "<body name=\"" << attr(name) << "\" pos=\""
+      << nums({origin.x(), origin.y(), origin.z()}) << "\" quat=\""
+      << nums({rotation.w(), rotation.x(), rotation.y(), rotation.z()}) << "\">\n";
+  std::vector<Vec3> anchors{Vec3::Zero()};
+  for (size_t k = 1; k < chain.size(); ++k)
+    anchors.push_back(anchors.back() + model.links[static_cast<size_t>(chain[k])].tree_transform.r);
+  const Vec3& offset = anchors.back();
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(last.inertia_com);
   Mat3 axes = eig.eigenvectors();
   if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);
   const Quat principal(axes);
   const Vec3 moments = eig.eigenvalues();
-  xml << indent << "  <inertial pos=\"" << nums({link.com.x(), link.com.y(), link.com.z()})
-      << "\" quat=\"" << nums({principal.w(), principal.x(), principal.y(), principal.z()})
-      << "\" mass=\"" << format_double(link.mass) << "\" diaginertia=\""
+  const Vec3 com = last.com + offset;
+  xml << indent << "  <inertial pos=\"" << nums({com.x(), com.y(), com.z()}) << "\" quat=\""
+      << nums({principal.w(), principal.x(), principal.y(), principal.z()}) << "\" mass=\""
+      << format_double(last.mass) << "\" diaginertia=\""
       << nums({moments.x(), moments.y(), moments.z()}) << "\"/>\n";
-  const Vec3& a = link.axis;
-  const std::string joint = indent + "  <joint name=\"" + attr(link.joint_name) + "\" type=\"";
-  const std::string more =
-      extras && link.nv == 1 ? extras->text[static_cast<size_t>(link.v_index)] : "";
-  switch (link.joint_type) {
-    case JointType::fixed:
-      break;
-    case JointType::revolute:
-    case JointType::prismatic:
-      xml << joint << (link.joint_type == JointType::revolute ? "hinge" : "slide") << "\" axis=\""
-          << nums({a.x(), a.y(), a.z()}) << "\"" << more << "/>\n";
-      break;
-    case JointType::spherical:
-      xml << joint << "ball\"/>\n";
-      break;
-    case JointType::floating:
-      xml << joint << "free\"/>\n";
-      break;
+  for (size_t k = 0; k < chain.size(); ++k) {
+    const Link& link = model.links[static_cast<size_t>(chain[k])];
+    const Vec3& a = link.axis;
+    const Vec3& p = anchors[k];
+    const std::string pos = k == 0 ? "" : "\" pos=\"" + nums({p.x(), p.y(), p.z()});
+    const std::string joint = indent + "  <joint name=\"" + attr(link.joint_name) + "\" type=\"";
+    const std::string more =
+        extras && link.nv == 1 ? extras->text[static_cast<size_t>(link.v_index)] : "";
+    switch (link.joint_type) {
+      case JointType::fixed:
+        break;
+      case JointType::revolute:
+      case JointType::prismatic:
+        xml << joint << (link.joint_type == JointType::revolute ? "hinge" : "slide") << pos
+            << "\" axis=\"" << nums({a.x(), a.y(), a.z()}) << "\"" << more << "/>\n";
+        break;
+      case JointType::spherical:
+        xml << joint << "ball" << pos << "\"/>\n";
+        break;
+      case JointType::floating:
+        xml << joint << "free\"/>\n";
+        break;
+    }
   }
+  return offset;
 }
 
 // The tree from the root, depth first with children in order, on an explicit stack: a chain may
-// be longer than the call stack is deep.
+// be longer than the call stack is deep. Bodies come in link order, so MuJoCo's joint, qpos and
+// qvel order is ours.
 void write_bodies(const Model& model, int depth, const JointExtras* extras,
                   std::ostringstream& xml) {
   struct Item {
     int link, depth;
     bool close;
+    Vec3 shift;
   };
-  std::vector<Item> stack{{0, depth, false}};
+  std::vector<Item> stack{{0, depth, false, Vec3::Zero()}};
+  std::vector<int> chain;
   while (!stack.empty()) {
     const Item item = stack.back();
     stack.pop_back();
@@ -112,19 +154,23 @@ void write_bodies(const Model& model, int depth, const JointExtras* extras,
       xml << std::string(2 * static_cast<size_t>(item.depth), ' ') << "</body>\n";
       continue;
     }
-    open_body(model, item.link, item.depth, extras, xml);
-    stack.push_back({item.link, item.depth, true});
-    const std::vector<int>& children = model.links[static_cast<size_t>(item.link)].children;
+    chain.assign(1, item.link);
+    while (joins_child(model, chain.back()))
+      chain.push_back(model.links[static_cast<size_t>(chain.back())].children[0]);
+    const Vec3 shift = open_body(model, chain, item.shift, item.depth, extras, xml);
+    stack.push_back({item.link, item.depth, true, Vec3::Zero()});
+    const std::vector<int>& children = model.links[static_cast<size_t>(chain.back())].children;
     for (auto c = children.rbegin(); c != children.rend(); ++c)
-      stack.push_back({*c, item.depth + 1, false});
+      stack.push_back({*c, item.depth + 1, false, shift});
   }
 }
 
 std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator integrator,
-                      const JointExtras* extras, const std::string& actuators) {
+                      const JointExtras* extras, const std::string& actuators,
+                      const MjcfExportOptions& options = {}) {
   std::ostringstream xml;
   const Vec3& g = model.gravity;
-  xml << "<mujoco model=\"featherdrive\">\n"
+  xml << "<mujoco model=\"" << attr(options.model_name) << "\">\n"
       << "  <compiler angle=\"radian\"/>\n"
       << "  <option timestep=\"" << format_double(timestep) << "\" gravity=\""
       << nums({g.x(), g.y(), g.z()}) << "\" integrator=\""
@@ -135,6 +181,9 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
   write_bodies(model, 2, extras, xml);
   xml << "  </worldbody>\n";
   if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
+  if (!options.scene_record.empty())
+    xml << "  <custom>\n    <text name=\"" << kMjcfSceneText << "\" data=\""
+        << attr(options.scene_record) << "\"/>\n  </custom>\n";
   xml << "</mujoco>\n";
   return xml.str();
 }
@@ -243,7 +292,7 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   }
   // Every translated drive of a TGS scene has the same sub-steps (the position iterations).
   out.timestep = o.dt / out.substeps;
-  out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str());
+  out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str(), options);
   if (!friction.empty())
     out.notes.push_back("joint friction not exported (MuJoCo's frictionloss is another law):" +
                         friction);
@@ -273,6 +322,46 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
     out.notes.push_back("MuJoCo timestep dt / " + std::to_string(out.substeps) +
                         " (TGS's sub-steps); the ctrl follows TGS's interpolated target");
   return out;
+}
+
+std::string scene_record(const std::string& scene_text, const Simulation& sim,
+                         const std::string& file) {
+  YAML::Node scene;
+  try {
+    scene = YAML::Load(scene_text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file + ": not YAML: " + e.msg);
+  }
+  if (!scene.IsMap()) throw InputError(file + ": the scene is not a YAML map");
+  auto number = [](double v) {
+    return std::isinf(v) ? std::string(v > 0 ? ".inf" : "-.inf") : format_double(v);
+  };
+  const Model& model = sim.model();
+  YAML::Node joints = scene["joints"];
+  if (!joints) joints = YAML::Node(YAML::NodeType::Map);
+  for (int d = 0; d < model.nv; ++d) {
+    const Link& link = model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])];
+    if (link.joint_type == JointType::floating) continue;
+    const std::string& name = model.dof_names[static_cast<size_t>(d)];  // a ball joint's axes
+    YAML::Node j = joints[name];
+    if (!j) j = YAML::Node(YAML::NodeType::Map);
+    j["lower"] = number(sim.lower_limit(d));
+    j["upper"] = number(sim.upper_limit(d));
+    j["armature"] = number(model.armature[d]);
+    const JointFriction f = sim.joint_friction(d);
+    YAML::Node friction(YAML::NodeType::Map);
+    friction["static"] = number(f.static_effort);
+    friction["dynamic"] = number(f.dynamic_effort);
+    friction["viscous"] = number(f.viscous);
+    j["friction"] = friction;
+    if (std::isfinite(sim.max_joint_velocity(d)))
+      j["max_velocity"] = number(sim.max_joint_velocity(d));
+    joints[name] = j;
+  }
+  scene["joints"] = joints;
+  YAML::Emitter out;
+  out << scene;
+  return std::string(out.c_str()) + "\n";
 }
 
 std::string mujoco_version() {

@@ -12,6 +12,7 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/io/mjcf.hpp"
+#include "featherdrive/io/mjcf_export.hpp"
 #include "mujoco_calls.hpp"
 
 namespace featherdrive {
@@ -121,6 +122,29 @@ SceneTranslation translate_mjcf_to_scene(const std::filesystem::path& mjcf,
       << YAML::EndMap << YAML::EndMap;
   }
   y << YAML::EndMap << YAML::EndMap;
+  // An export of a featherdrive scene keeps that scene: it comes back whole, with the MJCF as
+  // its model (the translation above stays in the report).
+  for (int i = 0; i < m->ntext; ++i) {
+    const char* text_name = mj_id2name(m.get(), mjOBJ_TEXT, i);
+    if (!text_name || std::string(text_name) != kMjcfSceneText) continue;
+    YAML::Node scene;
+    try {
+      scene = YAML::Load(std::string(m->text_data + m->text_adr[i]));
+    } catch (const YAML::Exception& e) {
+      throw InputError(name + ": <custom><text name=\"" + kMjcfSceneText + "\">: not YAML: " +
+                       e.msg);
+    }
+    if (!scene.IsMap())
+      throw InputError(name + ": <custom><text name=\"" + kMjcfSceneText + "\">: not a YAML map");
+    scene["model"] = model_path.generic_string();
+    YAML::Emitter restored;
+    restored << scene;
+    out.restored = true;
+    out.yaml = std::string("# The featherdrive scene kept in ") + mjcf.filename().string() +
+               " by `featherdrive translate --to mujoco`, its model the MJCF "
+               "(docs/mujoco_bridge.md)\n" + restored.c_str() + "\n";
+    return out;
+  }
   out.yaml = std::string("# Translated from ") + mjcf.filename().string() +
              " by `featherdrive translate --to physx` (docs/mujoco_bridge.md)\n" + y.c_str() + "\n";
   return out;

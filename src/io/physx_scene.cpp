@@ -103,6 +103,22 @@ std::string spherical_fields(const Simulation& sim, const Link& l) {
   return js.str();
 }
 
+// A massless link below a fixed root (e.g. one of the links of an MJCF body with several joints)
+// gets kHelperMass times the mass and mean principal moment of the first link with mass below it,
+// at its origin: PhysX needs a positive mass on every link (docs/physx_parity.md bounds the error).
+constexpr double kHelperMass = 1e-6;
+
+void helper_inertial(const Model& model, int i, double& mass, Mat3& inertia) {
+  int body = i;
+  while (model.links[static_cast<size_t>(body)].mass == 0.0 &&
+         !model.links[static_cast<size_t>(body)].children.empty())
+    body = model.links[static_cast<size_t>(body)].children.front();
+  const Link& b = model.links[static_cast<size_t>(body)];
+  if (b.mass == 0.0) return;  // nothing moves below it: left to the harness's check
+  mass = kHelperMass * b.mass;
+  inertia = Mat3::Identity() * (kHelperMass * b.inertia_com.trace() / 3.0);
+}
+
 }  // namespace
 
 std::string physx_scene_json(const Simulation& sim, int steps,
@@ -153,9 +169,11 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     // world link) never enters the dynamics, so a unit one stands in for a missing one.
     const bool stand_in = i == 0 && !model.floating_base() &&
                           !(l.mass > 0.0 && l.inertia_com.llt().info() == Eigen::Success);
-    const Mat3 I = stand_in ? Mat3::Identity() : l.inertia_com;
+    Mat3 I = stand_in ? Mat3::Identity() : l.inertia_com;
+    double mass = stand_in ? 1.0 : l.mass;
+    if (i > 0 && l.mass == 0.0) helper_inertial(model, i, mass, I);
     js << "    {\"name\": " << str(l.name) << ", \"parent\": " << l.parent
-       << ", \"mass\": " << num(stand_in ? 1.0 : l.mass) << ", \"com\": " << vec(l.com)
+       << ", \"mass\": " << num(mass) << ", \"com\": " << vec(l.com)
        << ", \"inertia\": ["
        << num(I(0, 0)) << ", " << num(I(1, 1)) << ", " << num(I(2, 2)) << ", " << num(I(0, 1))
        << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     ";

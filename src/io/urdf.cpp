@@ -286,6 +286,7 @@ void UrdfRobot::rebuild() {
   ModelBuilder builder;
   builder.set_gravity(options.gravity);
   for (const LinkSpec& l : links) builder.add_link(l);
+  for (const auto& [name, m] : merged) builder.add_frame(name, m.into, m.xyz, m.rotation);
   try {
     model = std::make_shared<const Model>(builder.build());
   } catch (const ModelError& e) {

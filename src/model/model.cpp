@@ -17,10 +17,53 @@ const char* to_string(JointType type) {
   return "unknown";
 }
 
+namespace {
+
+// Edit distance with adjacent transpositions (optimal string alignment): "tpc" is 1 from "tcp".
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+  for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (size_t i = 1; i <= a.size(); ++i)
+    for (size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1,
+                          d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+// "; nearest: 'a', 'b', 'c'": the three names closest to `name`, nearest first.
+std::string nearest(const std::string& name, std::vector<std::string> names) {
+  std::stable_sort(names.begin(), names.end(), [&](const std::string& a, const std::string& b) {
+    return edit_distance(name, a) < edit_distance(name, b);
+  });
+  std::string out;
+  for (size_t i = 0; i < std::min<size_t>(names.size(), 3); ++i)
+    out += (i ? ", '" : "; nearest: '") + names[i] + "'";
+  return out;
+}
+
+}  // namespace
+
 int Model::link_index(const std::string& name) const {
   for (int i = 0; i < num_links(); ++i)
     if (links[i].name == name) return i;
-  throw std::invalid_argument("no link named '" + name + "' in the model");
+  std::vector<std::string> names;
+  for (const Link& l : links) names.push_back(l.name);
+  throw std::invalid_argument("no link named '" + name + "' in the model" + nearest(name, names));
+}
+
+NamedFrame Model::frame(const std::string& name) const {
+  for (int i = 0; i < num_links(); ++i)
+    if (links[i].name == name) return NamedFrame{name, i, Vec3::Zero(), Mat3::Identity()};
+  for (const NamedFrame& f : frames)
+    if (f.name == name) return f;
+  std::vector<std::string> names;
+  for (const Link& l : links) names.push_back(l.name);
+  for (const NamedFrame& f : frames) names.push_back(f.name);
+  throw std::invalid_argument("no link or frame named '" + name + "'" + nearest(name, names));
 }
 
 int Model::joint_link_index(const std::string& joint_name) const {

@@ -165,6 +165,16 @@ ModelBuilder& ModelBuilder::add_link(LinkSpec link) {
   return *this;
 }
 
+ModelBuilder& ModelBuilder::add_frame(std::string name, std::string link, const Vec3& xyz,
+                                      const Mat3& rotation) {
+  NamedFrame f;
+  f.name = std::move(name);
+  f.position = xyz;
+  f.rotation = rotation;
+  frames_.emplace_back(std::move(f), std::move(link));
+  return *this;
+}
+
 Model ModelBuilder::build() const {
   if (!gravity_.allFinite()) fail("gravity = " + fmt(gravity_) + " is not finite");
   if (links_.empty()) fail("the model has no links");
@@ -358,6 +368,19 @@ Model ModelBuilder::build() const {
   model.velocity_limit = to_vec(velocity);
   model.damping = to_vec(damping);
   model.friction = to_vec(friction);
+  std::map<std::string, int> frame_names;
+  for (auto [frame, link] : frames_) {
+    const std::string who = "frame '" + frame.name + "'";
+    if (const std::string why = name_problem(frame.name); !why.empty()) fail("frame " + why);
+    if (by_name.count(frame.name)) fail(who + ": a link has this name");
+    if (!frame_names.emplace(frame.name, 0).second) fail(who + ": duplicate frame name");
+    const auto it = by_name.find(link);
+    if (it == by_name.end()) fail(who + ": link = '" + link + "' is not a link of the model");
+    check_finite(who, "xyz", frame.position);
+    if (!frame.rotation.allFinite()) fail(who + ": rotation is not finite");
+    frame.link = new_index[it->second];
+    model.frames.push_back(std::move(frame));
+  }
   return model;
 }
 

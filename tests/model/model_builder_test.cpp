@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "featherdrive/algorithm/crba.hpp"
+#include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
@@ -695,6 +697,87 @@ TEST(ModelBuilderLayout, Gravity) {
   ModelBuilder b = base_and_arm([](LinkSpec&) {});
   b.set_gravity(Vec3(1, 2, 3));
   EXPECT_EQ(b.build().gravity, Vec3(1, 2, 3));
+}
+
+}  // namespace
+}  // namespace featherdrive
+
+namespace featherdrive {
+namespace {
+
+// A named frame (a merged link's) against the same link kept as a massless fixed-joint link of
+// an unmerged model: the same world pose for every configuration and point.
+TEST(ModelBuilderFrames, FrameEqualsTheUnmergedFixedLink) {
+  const Mat3 eye = Mat3::Identity();
+  const Vec3 xyz(0.05, -0.02, 0.1), rpy(0.3, -0.2, 0.7);
+  auto chain = [&](ModelBuilder& b) {
+    b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("root")));
+    b.add_link(make_link("a", "base", 1.0, Vec3(0, 0, 0.1), 0.01 * eye,
+                         revolute_joint("j1", Vec3::UnitZ(), Vec3(0, 0, 0.2))));
+    b.add_link(make_link("b", "a", 2.0, Vec3(0.1, 0, 0), 0.02 * eye,
+                         revolute_joint("j2", Vec3(0, 1, 1), Vec3(0.3, 0, 0), Vec3(0.1, 0, 0))));
+  };
+  ModelBuilder unmerged, merged;
+  chain(unmerged);
+  chain(merged);
+  // (a link below a moving one needs mass; the kinematics compared do not depend on it)
+  unmerged.add_link(make_link("tcp", "b", 0.1, Vec3::Zero(), 1e-3 * eye,
+                              fixed_joint("tcp_joint", xyz, rpy)));
+  merged.add_frame("tcp", "b", xyz, rotation_from_rpy(rpy));
+  const Model u = unmerged.build(), m = merged.build();
+  ASSERT_EQ(m.frames.size(), 1u);
+  const NamedFrame f = m.frame("tcp");
+  EXPECT_EQ(f.link, m.link_index("b"));
+  const NamedFrame itself = m.frame("a");  // a link is its own frame
+  EXPECT_EQ(itself.link, m.link_index("a"));
+  EXPECT_EQ(itself.position, Vec3::Zero());
+  Data du(u), dm(m);
+  const Vec3 point(0.01, 0.02, -0.03);
+  const std::vector<std::pair<double, double>> configurations{
+      {0.0, 0.0}, {0.7, -1.2}, {-2.0, 0.4}};
+  for (const auto& [q0, q1] : configurations) {
+    VecX q(2), qd(2);
+    q << q0, q1;
+    qd << 0.5, -0.3;
+    forward_kinematics(u, du, q, qd);
+    forward_kinematics(m, dm, q, qd);
+    const int t = u.link_index("tcp");
+    EXPECT_LT((frame_rotation(m, dm, f) - du.world_rotation[t]).norm(), 1e-14);
+    EXPECT_LT((frame_position(m, dm, f, point) - frame_position(u, du, t, point)).norm(), 1e-14);
+    for (ReferenceFrame r : {ReferenceFrame::local, ReferenceFrame::world_aligned})
+      EXPECT_LT((frame_velocity(m, dm, f, point, r) - frame_velocity(u, du, t, point, r)).norm(),
+                1e-13);
+  }
+}
+
+TEST(ModelBuilderFrames, BadFramesAndUnknownNames) {
+  auto model_with = [](const std::string& name, const std::string& link, const Vec3& xyz) {
+    ModelBuilder b;
+    b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("root")));
+    b.add_link(make_link("tool", "base", 1.0, Vec3::Zero(), 0.01 * Mat3::Identity(),
+                         revolute_joint("j", Vec3::UnitZ())));
+    b.add_frame(name, link, xyz, Mat3::Identity());
+    return b.build();
+  };
+  auto message = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "(no exception)";
+  };
+  EXPECT_EQ(message([&] { model_with("tool", "base", Vec3::Zero()); }),
+            "model: frame 'tool': a link has this name");
+  EXPECT_EQ(message([&] { model_with("tcp", "hand", Vec3::Zero()); }),
+            "model: frame 'tcp': link = 'hand' is not a link of the model");
+  EXPECT_THAT(message([&] { model_with("tcp", "tool", Vec3(kNaN, 0, 0)); }),
+              StartsWith("model: frame 'tcp': xyz = "));
+  const Model m = model_with("tcp", "tool", Vec3(0, 0, 0.1));
+  EXPECT_THAT(message([&] { m.frame("tpc"); }),
+              StartsWith("no link or frame named 'tpc'; nearest: 'tcp', "));
+  EXPECT_THAT(message([&] { m.link_index("tol"); }),
+              StartsWith("no link named 'tol' in the model; nearest: 'tool', "));
 }
 
 }  // namespace

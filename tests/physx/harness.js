@@ -481,8 +481,9 @@ function build(P, s) {
     if (i === 0) { joints.push(null); return; }
     const J = L.joint;
     const pj = link.getInboundJoint();
-    // A spherical joint's axes are its joint frame's: the child joint frame is the link frame.
-    const R = J.type === 'spherical' ? [1, 0, 0, 0] : rotationXTo(J.axis);
+    // A spherical joint's axes are its joint frame's, and a fixed joint (an MJCF body welded to
+    // its parent) has none: the child joint frame is the link frame.
+    const R = J.type === 'spherical' || J.type === 'fixed' ? [1, 0, 0, 0] : rotationXTo(J.axis);
     pj.setParentPose(pxTransform(P, { p: J.origin.p, q: qnormalize(qmul(J.origin.q, R)) }));
     pj.setChildPose(pxTransform(P, { p: [0, 0, 0], q: R }));
     let axis = null;

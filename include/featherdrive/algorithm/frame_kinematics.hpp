@@ -26,6 +26,19 @@ Vec3 frame_position(const Model& model, const Data& data, int link, const Vec3& 
 Vec6 frame_velocity(const Model& model, const Data& data, int link, const Vec3& point,
                     ReferenceFrame reference);
 
+/// A point given in a named frame's coordinates (Model::frame), in its link's coordinates.
+inline Vec3 point_on_link(const NamedFrame& frame, const Vec3& point) {
+  return frame.position + frame.rotation * point;
+}
+
+/// World rotation and position of a named frame (a link's, or a merged link's fixed in it).
+Mat3 frame_rotation(const Model& model, const Data& data, const NamedFrame& frame);
+Vec3 frame_position(const Model& model, const Data& data, const NamedFrame& frame,
+                    const Vec3& point = Vec3::Zero());
+/// frame_velocity of the point (frame coordinates) on a named frame; local: the frame's axes.
+Vec6 frame_velocity(const Model& model, const Data& data, const NamedFrame& frame,
+                    const Vec3& point, ReferenceFrame reference);
+
 /// The link frame's spatial velocity (the point 0). local is data.velocity[link].
 inline Vec6 link_velocity(const Model& model, const Data& data, int link,
                           ReferenceFrame reference) {

@@ -2,7 +2,10 @@
 // (contacts off), and a MuJoCo run of it beside featherdrive's. docs/mujoco_bridge.md.
 //
 // Mapping: one <body> per link, nested as in the tree and written in link order, so MuJoCo's
-// body, joint, qpos and qvel order is ours. A body's pos/quat is the joint frame's pose in the
+// joint, qpos and qvel order is ours; a massless moving link whose only child moves and hangs at an
+// unrotated frame shares that child's body (one body with several joints, each at its link's
+// origin: MuJoCo's form of the links load_mjcf makes for such a body, which MuJoCo would refuse
+// as a massless moving body). A body's pos/quat is the joint frame's pose in the
 // parent link frame (tree_transform: E = R^T, r = origin); the joint sits at the body origin with
 // its axis in body coordinates, so the body frame is our link frame; <inertial> takes the centre
 // of mass and the principal axes and moments of our inertia about it (from Eigen: MuJoCo 2.2.2's
@@ -36,7 +39,23 @@ struct MjcfExportOptions {
   MujocoIntegrator integrator = MujocoIntegrator::euler;
   DriveMapping drives = DriveMapping::translated;
   bool keep_timestep = false;  ///< TranslationOptions::keep_timestep
+  std::string model_name = "featherdrive";  ///< <mujoco model>: the robot's name
+  /// Kept in the file as <custom><text name="featherdrive_scene"> (kMjcfSceneText): the scene the
+  /// export came from (scene_record), which `translate --to physx` restores. Empty: none.
+  std::string scene_record;
 };
+
+/// The name of the custom text that holds an export's scene_record.
+inline constexpr const char* kMjcfSceneText = "featherdrive_scene";
+
+/// The scene text to keep in an MJCF export of `sim` (make_simulation of that scene): the text
+/// with what the MJCF cannot give back as the scene had it (each hinge's, slide's and ball
+/// axis's limits, armature, friction and velocity limit: the MJCF's armature and damping carry
+/// the drives' translation) written into its `joints` entries, so that the scene read with the
+/// MJCF as its model is the scene read with its own. Throws InputError (naming `file`) for text
+/// that is not a YAML map.
+std::string scene_record(const std::string& scene_text, const Simulation& sim,
+                         const std::string& file);
 
 /// One driven dof in the export: its MuJoCo setting, the translation's verdict and its actuators'
 /// indices in the file (velocity: -1 when there is none).

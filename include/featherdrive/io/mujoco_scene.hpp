@@ -24,6 +24,9 @@ struct SceneTranslation {
   MujocoIntegrator integrator = MujocoIntegrator::euler;
   std::vector<TranslatedJoint> joints;
   std::vector<std::string> notes;  ///< one line each: what is not carried
+  /// yaml is the scene an export kept in the MJCF (kMjcfSceneText), its model the MJCF; joints
+  /// still holds the translation of the MJCF's drives.
+  bool restored = false;
 };
 
 /// Reads the MJCF (load_mjcf, and MuJoCo's compiler for its options) and translates every joint

@@ -45,6 +45,16 @@ struct Link {
   int subtree_end = 0;         ///< links [index, subtree_end) form this link's subtree
 };
 
+/// A named frame fixed on a link: a URDF link merged into it through fixed joints keeps its name
+/// and its pose in that link's frame (x_link = position + rotation x_frame). A link is the frame
+/// at its own origin.
+struct NamedFrame {
+  std::string name;
+  int link = 0;
+  Vec3 position = Vec3::Zero();
+  Mat3 rotation = Mat3::Identity();
+};
+
 struct Model {
   std::vector<Link> links;     ///< depth-first preorder from the root, children in insertion order
   int nq = 0;                  ///< size of the configuration vector
@@ -64,11 +74,16 @@ struct Model {
   std::vector<int> dof_link;   ///< link owning each dof
   std::vector<std::string> dof_names;  ///< joint name, or joint name + ":twist" etc. for multi-dof
 
+  std::vector<NamedFrame> frames;      ///< merged links' frames (names unlike any link's)
+
   bool floating_base() const { return !links.empty() && links[0].joint_type == JointType::floating; }
   int num_links() const { return static_cast<int>(links.size()); }
 
   /// Index of the link with this name; throws std::invalid_argument naming it if there is none.
   int link_index(const std::string& name) const;
+  /// A link (itself at the identity) or a frame by name; throws std::invalid_argument naming it
+  /// and the nearest link and frame names if there is none.
+  NamedFrame frame(const std::string& name) const;
   /// Index of the link whose inbound joint has this name; throws if there is none.
   int joint_link_index(const std::string& joint_name) const;
   /// First dof index of the named joint; throws if there is none or it has no dofs.

@@ -74,6 +74,10 @@ class ModelBuilder {
  public:
   ModelBuilder& set_gravity(const Vec3& gravity);
   ModelBuilder& add_link(LinkSpec link);
+  /// A named frame fixed on `link` at (xyz, rotation) in its frame (Model::frames); build()
+  /// checks that the link exists and the name is new.
+  ModelBuilder& add_frame(std::string name, std::string link, const Vec3& xyz,
+                          const Mat3& rotation);
   /// Validates everything and returns the model; throws ModelError naming the offending link or
   /// joint, field and value.
   Model build() const;
@@ -81,6 +85,7 @@ class ModelBuilder {
  private:
   Vec3 gravity_{0.0, 0.0, -9.81};
   std::vector<LinkSpec> links_;
+  std::vector<std::pair<NamedFrame, std::string>> frames_;  // the frame and its link's name
 };
 
 }  // namespace featherdrive
