@@ -94,7 +94,8 @@ def test_cli_writes_the_grid_and_its_plot_and_agrees_with_simulate(tmp_path, mod
     assert "4 grid points, 1 drives" in r.stdout and "least total rms error" in r.stdout
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0]) == ["stiffness", "damping", "rms:slide", "rms_total", "diverged"]
+    assert list(rows[0]) == ["stiffness", "damping", "rms:slide", "rms_total", "diverged",
+                             "overshoot:slide", "settling_time:slide", "max_force:slide"]
     assert [(float(r["stiffness"]), float(r["damping"])) for r in rows] == [
         (100.0, 10.0), (100.0, 40.0), (400.0, 10.0), (400.0, 40.0)]
     assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
