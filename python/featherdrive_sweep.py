@@ -192,7 +192,9 @@ class SweepResult:
         what = words[self.objective_name]
         if self.joint:
             return f"{what} of {self.joint}"
-        return "total rms error" if self.objective_name == "rms" else f"{what} (largest of the drives)"
+        if self.objective_name == "rms":
+            return "total rms error"
+        return f"{what} (largest of the drives)"
 
     def unit(self):
         """The objective's unit: rad or m for errors, 1 (of the step) or rad/m for overshoot,
