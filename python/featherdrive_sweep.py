@@ -1,7 +1,15 @@
 """Tracking error over a grid of drive gains: ``featherdrive sweep`` and ``fd.sweep``.
 
-Every grid point is one environment of a Batch that runs the scene with those gains; the error
-of a drive is the RMS over the run of (target - q), as ``featherdrive simulate`` reports it.
+Every grid point is one environment of a Batch that runs the scene with those gains. Per drive,
+from the error e = target - q at the end of each step (t = dt .. T) and the initial error e0:
+rms, the RMS of e over the run (``featherdrive simulate``'s rms error); overshoot, for a step
+(a target constant over the run and more than STEP_MIN from q(0)) the largest excursion past the
+target, max(0, max -sign(e0) e) / |e0| (a fraction of the step), and for any other target the
+largest |e| [rad or m]; settling_time [s], the first sample time from which |e| stays within the
+band (SETTLING_BAND of |e0| for a step, of the target's range over the run otherwise,
+SETTLING_BAND_ABSOLUTE where both are 0), 0 if e0 is inside, inf if the last step is outside;
+max_force, the largest |drive force| over the steps [N or Nm]. One of them (rms by default) is
+the objective that best() and the plot use.
 Locally the whole grid is one Batch on all cores; with a Dask client the grid is cut into chunks
 of rows, each shipped to a worker as (scene path, scene text, rows) and run there as a Batch, and
 the results are gathered in grid order (featherdrive_distributed.map_ordered). Each environment
