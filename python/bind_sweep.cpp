@@ -12,8 +12,9 @@ void featherdrive::python::bind_sweep(py::module_& m) {
       [](py::args args, py::kwargs kwargs) {
         return py::module_::import("featherdrive_sweep").attr("sweep")(*args, **kwargs);
       },
-      "sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None): the tracking "
-      "error over a grid of gains, a SweepResult (featherdrive_sweep.sweep; docs/fitting.md).");
+      "sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None, "
+      "objective='rms'): the tracking error over a grid of gains, a SweepResult "
+      "(featherdrive_sweep.sweep; docs/fitting.md).");
 
   m.attr("MAX_INPUT_BYTES") = py::int_(static_cast<unsigned long long>(kMaxInputBytes));
   m.def(

@@ -673,8 +673,10 @@ def make_simulation(scene: Scene) -> Simulation: ...
 def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
     """0 <= step_index <= 2**31 - 2."""
 def sweep(scene: PathLike, grid: str | dict[str, ArrayLike], joint: str | None = None,
-          client: object = None, num_threads: int = 0, chunk_size: int | None = None) -> object:
-    """featherdrive_sweep.sweep: tracking error over a grid of gains (a SweepResult)."""
+          client: object = None, num_threads: int = 0, chunk_size: int | None = None,
+          objective: str = "rms") -> object:
+    """featherdrive_sweep.sweep: tracking error over a grid of gains (a SweepResult); objective
+    rms, overshoot, settling_time or max_force."""
 MAX_INPUT_BYTES: int
 def read_input_file(path: PathLike, what: str = "the file") -> bytes:
     """An input file's bytes as the commands read them (regular files of at most 64 MiB)."""

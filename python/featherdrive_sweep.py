@@ -1,7 +1,15 @@
 """Tracking error over a grid of drive gains: ``featherdrive sweep`` and ``fd.sweep``.
 
-Every grid point is one environment of a Batch that runs the scene with those gains; the error
-of a drive is the RMS over the run of (target - q), as ``featherdrive simulate`` reports it.
+Every grid point is one environment of a Batch that runs the scene with those gains. Per drive,
+from the error e = target - q at the end of each step (t = dt .. T) and the initial error e0:
+rms, the RMS of e over the run (``featherdrive simulate``'s rms error); overshoot, for a step
+(a target constant over the run and more than STEP_MIN from q(0)) the largest excursion past the
+target, max(0, max -sign(e0) e) / |e0| (a fraction of the step), and for any other target the
+largest |e| [rad or m]; settling_time [s], the first sample time from which |e| stays within the
+band (SETTLING_BAND of |e0| for a step, of the target's range over the run otherwise,
+SETTLING_BAND_ABSOLUTE where both are 0), 0 if e0 is inside, inf if the last step is outside;
+max_force, the largest |drive force| over the steps [N or Nm]. One of them (rms by default) is
+the objective that best() and the plot use.
 Locally the whole grid is one Batch on all cores; with a Dask client the grid is cut into chunks
 of rows, each shipped to a worker as (scene path, scene text, rows) and run there as a Batch, and
 the results are gathered in grid order (featherdrive_distributed.map_ordered). Each environment
@@ -31,6 +39,14 @@ PARAMETERS = ("stiffness", "damping")
 # is made. Run locally, the grid is run LOCAL_CHUNK environments at a time.
 MAX_POINTS = 1_000_000
 LOCAL_CHUNK = 4096
+# What a sweep can minimise (module docstring); rms is the default.
+OBJECTIVES = ("rms", "overshoot", "settling_time", "max_force")
+# The settling band: this share of the step (or of the target's range over the run); a target
+# that neither steps nor moves gets SETTLING_BAND_ABSOLUTE [rad or m]. A constant target counts
+# as a step when it lies more than STEP_MIN [rad or m] from the initial position.
+SETTLING_BAND = 0.02
+SETTLING_BAND_ABSOLUTE = 1e-3
+STEP_MIN = 1e-9
 
 
 def _number(text, where):
@@ -119,25 +135,43 @@ def parse_grid(grid):
 
 
 class SweepResult:
-    """A sweep's grid and errors, rows in grid order (the first parameter slowest).
+    """A sweep's grid and objectives, rows in grid order (the first parameter slowest).
 
-    names: the parameters; axes: their values; points (M, p): each point's values;
-    joints: the drives' joints; rms (M, len(joints)): RMS of target - q per drive [rad or m];
-    total (M,): sqrt(mean over the drives of rms**2); objective (M,): the --joint's rms, or
-    total; diverged (M,): points whose run diverged (their errors are nan)."""
+    names: the parameters; axes: their values; points (M, p): each point's values; joints: the
+    drives' joints; units: each drive's position unit (rad or m); step: whether each drive's
+    target is a step (module docstring). Per point and drive (M, len(joints)): rms (RMS of
+    target - q), overshoot, settling_time [s], max_force [N or Nm]. total (M,): sqrt(mean over
+    the drives of rms**2). objective_name: rms, overshoot, settling_time or max_force;
+    objective (M,): that objective of the --joint, or over the drives (rms: total; the others:
+    the largest). diverged (M,): points whose run diverged (nan). warning: None, or one line
+    when the best point is on the grid's edge."""
 
-    def __init__(self, axes, joints, joint, rms, diverged):
+    def __init__(self, axes, joints, joint, values, diverged, objective="rms", units=None,
+                 step=None, gain_units=None):
         self.names = [a[0] for a in axes]
         self.axes = [a[1] for a in axes]
         self.log = [a[2] for a in axes]
         self.points = _points(axes)
         self.joints = list(joints)
         self.joint = joint
-        self.rms = rms
+        self.rms = values["rms"]
+        self.overshoot = values["overshoot"]
+        self.settling_time = values["settling_time"]
+        self.max_force = values["max_force"]
         self.diverged = diverged
+        self.units = list(units) if units is not None else ["rad"] * len(self.joints)
+        self.step = np.asarray(step if step is not None else [False] * len(self.joints))
+        self.gain_units = gain_units or {}
         self.total = np.array([math.sqrt(math.fsum(r * r for r in row) / len(row))
-                               for row in rms])
-        self.objective = rms[:, self.joints.index(joint)] if joint else self.total
+                               for row in self.rms])
+        self.objective_name = objective
+        if joint:
+            self.objective = values[objective][:, self.joints.index(joint)]
+        elif objective == "rms":
+            self.objective = self.total
+        else:
+            self.objective = np.max(values[objective], axis=1)  # nan stays nan
+        self.warning = self._edge_warning()
 
     def best(self):
         """Index of the point with the least objective among those that did not diverge."""
@@ -146,21 +180,67 @@ class SweepResult:
             raise RuntimeError("every grid point diverged")
         return int(ok[np.argmin(self.objective[ok])])
 
+    def _edge_warning(self):
+        """One line when the best point is at an end of an axis of several values."""
+        if self.diverged.all():
+            return None
+        best = self.points[self.best()]
+        ends = [f"{n} = {v:.6g} is the {'least' if v == a[0] else 'largest'} value swept"
+                for n, a, v in zip(self.names, self.axes, best)
+                if len(a) > 1 and v in (a[0], a[-1])]
+        if not ends:
+            return None
+        return (f"the least {self.label()} is on the grid's edge ({'; '.join(ends)}): the "
+                "optimum may lie outside the grid; widen it there")
+
+    def label(self):
+        """The objective in words, with its scope."""
+        words = {"rms": "rms error", "overshoot": "overshoot",
+                 "settling_time": "settling time", "max_force": "max |drive force|"}
+        what = words[self.objective_name]
+        if self.joint:
+            return f"{what} of {self.joint}"
+        if self.objective_name == "rms":
+            return "total rms error"
+        return f"{what} (largest of the drives)"
+
+    def unit(self):
+        """The objective's unit: rad or m for errors, 1 (of the step) or rad/m for overshoot,
+        s for settling time, N or Nm for forces; 'a or b' where the drives differ."""
+        chosen = [self.joints.index(self.joint)] if self.joint else range(len(self.joints))
+        if self.objective_name == "settling_time":
+            return "s"
+        units = []
+        for d in chosen:
+            u = self.units[d]
+            if self.objective_name == "max_force":
+                u = "N" if u == "m" else "Nm"
+            elif self.objective_name == "overshoot" and self.step[d]:
+                u = "fraction of the step"
+            if u not in units:
+                units.append(u)
+        return " or ".join(units)
+
     def write_csv(self, path):
-        header = self.names + [f"rms:{j}" for j in self.joints] + ["rms_total", "diverged"]
+        header = (self.names + [f"rms:{j}" for j in self.joints] + ["rms_total", "diverged"]
+                  + [f"{o}:{j}" for o in OBJECTIVES[1:] for j in self.joints])
         lines = [",".join(header)]
         for i in range(len(self.points)):
             values = list(self.points[i]) + list(self.rms[i]) + [self.total[i]]
+            extra = [v for o in OBJECTIVES[1:] for v in getattr(self, o)[i]]
             lines.append(",".join(repr(float(v)) for v in values)
-                         + f",{int(self.diverged[i])}")
+                         + f",{int(self.diverged[i])},"
+                         + ",".join(repr(float(v)) for v in extra))
         text = "\n".join(lines) + "\n"
         common.write_atomically(path, lambda tmp: pathlib.Path(tmp).write_text(text))
 
     def plot(self, path, title):
+        """Writes the PNG; returns the (closed) figure, whose labels can be read."""
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        what = f"RMS error of {self.joint}" if self.joint else "RMS error, all drives"
+        what = f"{self.label()} [{self.unit()}]"
+        axis = [f"{n} [{self.gain_units[n]}]" if n in self.gain_units else n for n in self.names]
         fig, ax = plt.subplots(figsize=(7, 5.5))
         best = self.best()
         varying = [i for i, a in enumerate(self.axes) if len(a) > 1]
@@ -168,21 +248,22 @@ class SweepResult:
             k = varying[0] if varying else 0
             ax.plot(self.points[:, k], self.objective, "o-")
             ax.plot(self.points[best, k], self.objective[best], "r*", markersize=14)
-            ax.set_xlabel(self.names[k])
+            ax.set_xlabel(axis[k])
             ax.set_ylabel(what)
             if self.log[k]:
                 ax.set_xscale("log")
         elif len(varying) == 2:
             z = np.ma.masked_invalid(self.objective.reshape(len(self.axes[0]),
                                                             len(self.axes[1])))
+            finite = self.objective[np.isfinite(self.objective)]
             mesh = ax.pcolormesh(_edges(self.axes[1], self.log[1]),
                                  _edges(self.axes[0], self.log[0]), z, shading="flat",
                                  norm=matplotlib.colors.LogNorm()
-                                 if np.nanmin(self.objective) > 0 else None)
+                                 if finite.size and finite.min() > 0 else None)
             fig.colorbar(mesh, ax=ax, label=what)
             ax.plot(self.points[best, 1], self.points[best, 0], "w*", markersize=14)
-            ax.set_xlabel(self.names[1])
-            ax.set_ylabel(self.names[0])
+            ax.set_xlabel(axis[1])
+            ax.set_ylabel(axis[0])
             if self.log[1]:
                 ax.set_xscale("log")
             if self.log[0]:
@@ -195,6 +276,7 @@ class SweepResult:
             common.write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
         finally:
             plt.close(fig)
+        return fig
 
 
 def _edges(values, log):
@@ -227,10 +309,52 @@ def _drives(scene, joint):
     return drives, changed
 
 
+def _steps_and_bands(specs, initial_error, steps, dt):
+    """Per drive: whether its target is a step (constant over the run, away from the initial
+    position) and the settling band [rad or m] (module docstring)."""
+    step, band = [], []
+    for spec, e0 in zip(specs, initial_error):
+        path = np.array([spec.target_at(k * dt)[0] for k in range(steps + 1)])
+        is_step = bool(np.all(path == path[0])) and abs(e0) > STEP_MIN
+        span = abs(e0) if is_step else float(np.max(path) - np.min(path))
+        step.append(is_step)
+        band.append(SETTLING_BAND * span if span > 0 else SETTLING_BAND_ABSOLUTE)
+    return np.array(step), np.array(band)
+
+
+def _units(model, drives):
+    """Each drive's position unit: m on a prismatic joint, rad otherwise."""
+    import featherdrive as fd
+    return ["m" if model.links[model.dof_link[dof]].joint_type == fd.JointType.prismatic
+            else "rad" for _, dof, _ in drives]
+
+
+def _gain_units(scene, drives, changed):
+    """The gains' units over the changed drives: N/m, Nm/rad (force drives) or 1/s², and Ns/m,
+    Nms/rad or 1/s; 'a or b' where the drives differ."""
+    import featherdrive as fd
+    model = scene.model
+    kinds = {"stiffness": [], "damping": []}
+    for joint, dof, _ in drives:
+        if dof not in changed:
+            continue
+        spec = next(s for s in scene.drives if s.joint == joint)
+        linear = model.links[model.dof_link[dof]].joint_type == fd.JointType.prismatic
+        if spec.drive.type == fd.DriveType.acceleration:
+            pair = ("1/s²", "1/s")
+        else:
+            pair = ("N/m", "Ns/m") if linear else ("Nm/rad", "Nms/rad")
+        for name, unit in zip(kinds, pair):
+            if unit not in kinds[name]:
+                kinds[name].append(unit)
+    return {name: " or ".join(u) for name, u in kinds.items()}
+
+
 def evaluate(item):
-    """RMS errors (k, drives) and diverged flags (k,) of the rows of one chunk: item is
-    (scene path, scene text, parameter names, rows (k, p), joint or None, threads). Module-level
-    and of plain data, so that Dask ships it to workers."""
+    """The objectives of the rows of one chunk ({name: (k, drives)}, OBJECTIVES), diverged
+    flags (k,) and which drives' targets are steps (drives,): item is (scene path, scene text,
+    parameter names, rows (k, p), joint or None, threads). Module-level and of plain data, so
+    that Dask ships it to workers."""
     import featherdrive as fd
     path, text, names, rows, joint, threads = item
     scene = fd.parse_scene(text, path)
@@ -257,6 +381,15 @@ def evaluate(item):
     alive = np.ones(len(rows), dtype=bool)
     position = np.zeros(nv)
     velocity = np.zeros(nv)
+    # Overshoot, settling time and peak force (module docstring): the step heights, bands and
+    # running extremes, from the same errors as the RMS.
+    dofs = np.array([d[1] for d in drives])
+    initial = np.array([s.target_at(0.0)[0] for s in specs]) - batch.q[:, q_index]
+    step, band = _steps_and_bands(specs, initial[0], scene.steps, dt)
+    direction = np.where(step, -np.sign(initial[0]), 0.0)
+    excursion = np.zeros((len(rows), len(drives)))
+    settled_at = np.where(np.abs(initial) > band, dt, 0.0)
+    peak_force = np.zeros((len(rows), len(drives)))
     for k in range(scene.steps):
         fd.apply_targets(scene, reference, k)
         for d in range(nv):
@@ -273,17 +406,28 @@ def evaluate(item):
         target_q = np.array([s.target_at(t)[0] for s in specs])
         error = target_q - batch.q[:, q_index]
         squares += error * error
+        excursion = np.maximum(excursion, np.where(step, direction * error, np.abs(error)))
+        settled_at[np.abs(error) > band] = t + dt
+        peak_force = np.maximum(peak_force, np.abs(batch.drive_force[:, dofs]))
     rms = np.sqrt(squares / max(scene.steps, 1))
-    rms[~alive] = np.nan
-    return rms, ~alive
+    overshoot = np.where(step, excursion / np.where(step, np.abs(initial), 1.0), excursion)
+    end = scene.steps * dt
+    settling = np.where(settled_at > end + dt / 2, np.inf, settled_at)  # outside at the end
+    values = {"rms": rms, "overshoot": overshoot, "settling_time": settling,
+              "max_force": peak_force}
+    for v in values.values():
+        v[~alive] = np.nan
+    return values, ~alive, step
 
 
-def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None):
+def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None,
+          objective="rms"):
     """Runs the scene at every point of the grid; returns a SweepResult.
 
     scene: a scene file path; grid: the grid text (module docstring) or {name: values};
-    joint: only this drive's gains change and its error is the objective (default: every
-    implicit drive's gains, objective the total); client: a distributed.Client (default: one
+    joint: only this drive's gains change and its objective is the result's (default: every
+    implicit drive's gains, the objective over the drives); objective: what best() and the plot
+    minimise, one of OBJECTIVES (every one is computed); client: a distributed.Client (default: one
     Batch here); num_threads: the Batch's threads (0: all cores); chunk_size: grid points per
     task on the cluster (default: the grid shared evenly among the workers)."""
     import featherdrive as fd
@@ -294,10 +438,11 @@ def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None):
     common.client(client)
     common.integer(num_threads, "num_threads", 0, common.MAX_THREADS)
     common.integer(chunk_size, "chunk_size", 1, MAX_POINTS, none=True)
+    _objective(objective, "objective")
     axes = parse_grid(grid)
     text = common.read_text(path, "the scene")
     parsed = fd.parse_scene(text, path)  # InputError (a ValueError) for a bad scene
-    drives, _ = _drives(parsed, joint)
+    drives, changed = _drives(parsed, joint)
     points = _points(axes)
     names = [a[0] for a in axes]
     if client is None:
@@ -308,9 +453,18 @@ def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None):
     chunks = [points[i:i + chunk_size] for i in range(0, len(points), chunk_size)]
     items = [(path, text, names, rows, joint, num_threads) for rows in chunks]
     results = map_ordered(evaluate, items, client)
-    rms = np.concatenate([r[0] for r in results])
+    values = {name: np.concatenate([r[0][name] for r in results]) for name in OBJECTIVES}
     diverged = np.concatenate([r[1] for r in results])
-    return SweepResult(axes, [d[0] for d in drives], joint, rms, diverged)
+    return SweepResult(axes, [d[0] for d in drives], joint, values, diverged, objective,
+                       _units(parsed.model, drives), results[0][2],
+                       _gain_units(parsed, drives, changed))
+
+
+def _objective(value, where):
+    if not isinstance(value, str):
+        raise TypeError(f"{where} = {value!r}: must be a str, not {type(value).__name__}")
+    if value not in OBJECTIVES:
+        raise ValueError(f"{where} = {value!r}: must be one of {', '.join(OBJECTIVES)}")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -329,7 +483,10 @@ def main(argv=None):
                "stiffness=10:1000:8:log,damping=1:100:8:log")
     parser.add_argument("scene", help="scene file (YAML or JSON)")
     parser.add_argument("--grid", required=True, help="the grid (see below)")
-    parser.add_argument("--joint", help="change only this drive's gains; its error is plotted")
+    parser.add_argument("--joint", help="change only this drive's gains; its objective is plotted")
+    parser.add_argument("--objective", default="rms",
+                        help="what the plot and the least point use: rms (the default), "
+                             "overshoot, settling_time or max_force; the CSV has them all")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on the Dask cluster of this scheduler (tcp://host:8786)")
     parser.add_argument("--out", metavar="DIR",
@@ -346,6 +503,7 @@ def main(argv=None):
         if len(axes) > 2:
             raise ValueError(f"--grid: {len(axes)} parameters; a sweep plots one or two")
         common.integer(args.threads, "--threads", 0, common.MAX_THREADS)
+        _objective(args.objective, "--objective")
         # The outputs are checked before the run: none may replace a file the run reads.
         scene = common.load_scene(args.scene)
         common.check_outputs([("--out", out / "sweep.csv"), ("--out", out / "sweep.png")],
@@ -354,7 +512,7 @@ def main(argv=None):
             from featherdrive_distributed import connect
             client = connect(args.scheduler)
         result = sweep(args.scene, args.grid, joint=args.joint, client=client,
-                       num_threads=args.threads)
+                       num_threads=args.threads, objective=args.objective)
         out.mkdir(parents=True, exist_ok=True)
         result.write_csv(out / "sweep.csv")
         best = result.best()
@@ -372,8 +530,9 @@ def main(argv=None):
     where = f" on {args.scheduler}" if args.scheduler else ""
     print(f"{args.scene}: {len(result.points)} grid points{where}, {len(result.joints)} drives")
     point = ", ".join(f"{n} {v:.6g}" for n, v in zip(result.names, result.points[best]))
-    label = f"rms error of {result.joint}" if result.joint else "total rms error"
-    print(f"  least {label}: {result.objective[best]:.4e} at {point}")
+    print(f"  least {result.label()}: {result.objective[best]:.4e} {result.unit()} at {point}")
+    if result.warning:
+        sys.stderr.write(f"featherdrive sweep: warning: {result.warning}\n")
     if result.diverged.any():
         print(f"  {int(result.diverged.sum())} grid points diverged (nan in the CSV, "
               "diverged = 1)")

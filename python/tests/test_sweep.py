@@ -94,7 +94,8 @@ def test_cli_writes_the_grid_and_its_plot_and_agrees_with_simulate(tmp_path, mod
     assert "4 grid points, 1 drives" in r.stdout and "least total rms error" in r.stdout
     with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0]) == ["stiffness", "damping", "rms:slide", "rms_total", "diverged"]
+    assert list(rows[0]) == ["stiffness", "damping", "rms:slide", "rms_total", "diverged",
+                             "overshoot:slide", "settling_time:slide", "max_force:slide"]
     assert [(float(r["stiffness"]), float(r["damping"])) for r in rows] == [
         (100.0, 10.0), (100.0, 40.0), (400.0, 10.0), (400.0, 40.0)]
     assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -255,3 +256,178 @@ def test_non_regular_scenes_and_threads_on_the_command_line(tmp_path, module_dir
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
         assert message in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.yaml"]
+
+
+# Objectives beside RMS (issue 33): overshoot, settling time, max |drive force|; the edge
+# warning; the plot's labels.
+
+def step_scene(folder, k=100.0, A=0.1, dt=1e-3, T=5.0, damping=None):
+    """The 2.5 kg slider without gravity, at rest at 0, target A from the first step."""
+    gains = f"stiffness: {k}" + (f", damping: {damping}" if damping is not None else "")
+    scene = folder / "step.yaml"
+    scene.write_text(
+        f"model: {ROOT / 'examples' / 'slider.urdf'}\nfixed_base: true\ngravity: [0, 0, 0]\n"
+        f"dt: {dt}\nsteps: {round(T / dt)}\nsolver: {{type: pgs}}\n"
+        f"drives:\n  slide: {{type: force, {gains}, target_position: {A}}}\n")
+    return scene
+
+
+def test_step_objectives_follow_the_damped_oscillator(tmp_path):
+    # x(t) = A (1 - e^(-z w t) (cos wd t + z / sqrt(1 - z^2) sin wd t)), wd = w sqrt(1 - z^2):
+    # overshoot exp(-pi z / sqrt(1 - z^2)) of the step; settling time the last time the error
+    # leaves the 2 % band (here from the closed form sampled every 10 us). The implicit step's
+    # own damping lowers the overshoot a little (measured: 1.0 to 1.4 %).
+    k, m, A, dt, T = 100.0, 2.5, 0.1, 1e-3, 5.0
+    w, critical = math.sqrt(k / m), 2.0 * math.sqrt(k * m)
+    zetas = np.array([0.2, 0.4, 0.6, 0.7])
+    result = fd.sweep(str(step_scene(tmp_path)), {"damping": zetas * critical},
+                      objective="overshoot")
+    assert result.step.tolist() == [True] and result.units == ["m"]
+    np.testing.assert_allclose(result.overshoot[:, 0],
+                               np.exp(-math.pi * zetas / np.sqrt(1 - zetas ** 2)), rtol=0.02)
+    t = np.arange(0.0, T, 1e-5)
+    for i, z in enumerate(zetas):
+        wd = w * math.sqrt(1 - z * z)
+        e = A * np.exp(-z * w * t) * (np.cos(wd * t) + z / math.sqrt(1 - z * z) * np.sin(wd * t))
+        settle = t[np.flatnonzero(np.abs(e) > 0.02 * A)[-1]]
+        if z >= 0.4:  # where a slightly damper run leaves the band at the same swing
+            assert result.settling_time[i, 0] == pytest.approx(settle, abs=5 * dt)
+        # The largest force is the first step's: f = k (A - x1) - c v1 with v1 = dt f / m and
+        # x1 = dt v1, so f = k A / (1 + (k dt^2 + c dt) / m).
+        c = z * critical
+        assert result.max_force[i, 0] == pytest.approx(k * A / (1 + (k * dt * dt + c * dt) / m),
+                                                        rel=1e-9)
+    # The objective is the largest drive's (one drive here): the overshoot, least at the
+    # largest damping swept, the grid's edge.
+    np.testing.assert_array_equal(result.objective, result.overshoot[:, 0])
+    assert result.best() == 3 and "damping = " in result.warning
+    assert "is the largest value swept" in result.warning
+
+
+def trajectory_objectives(csv_path, joint, target):
+    """Overshoot, settling time and max |f| from `featherdrive simulate --out`'s CSV, by the
+    documented rules: target(t) a function of time; a constant one away from q(0) is a step."""
+    with open(csv_path) as f:
+        rows = list(csv.DictReader(f))
+    t = np.array([float(r["t"]) for r in rows])
+    q = np.array([float(r[f"q:{joint}"]) for r in rows])
+    force = np.array([float(r[f"f:{joint}"]) for r in rows])
+    goal = np.array([target(x) for x in t])
+    e = goal - q
+    if np.all(goal == goal[0]) and abs(e[0]) > 1e-9:
+        overshoot = max(0.0, np.max(-np.sign(e[0]) * e[1:])) / abs(e[0])
+        band = 0.02 * abs(e[0])
+    else:
+        overshoot = np.max(np.abs(e[1:]))
+        band = 0.02 * (goal.max() - goal.min())
+    outside = np.flatnonzero(np.abs(e) > band)
+    settle = (0.0 if outside.size == 0 else math.inf if outside[-1] == len(t) - 1
+              else t[outside[-1] + 1])
+    return overshoot, settle, np.max(np.abs(force))
+
+
+@pytest.mark.parametrize("case", ["pendulum_step", "slider_sine"])
+def test_objectives_agree_with_simulate_s_trajectory(tmp_path, module_dir, case):
+    if case == "pendulum_step":  # revolute, a step from 0 to 0.5 rad without gravity
+        joint, grid = "hinge", "stiffness=20:80:2,damping=2:6:2"
+        scene_text = (f"model: {ROOT / 'examples' / 'pendulum.urdf'}\ngravity: [0, 0, 0]\n"
+                      "dt: 0.002\nsteps: 1500\nsolver: {type: tgs}\n"
+                      "drives:\n  hinge: {type: force, stiffness: 80, damping: 2, "
+                      "target_position: 0.5}\n")
+
+        def target(t):
+            return 0.5
+    else:  # prismatic under gravity tracking a sine: overshoot is max |error| [m]
+        joint, grid = "slide", "stiffness=100:400:2,damping=10:40:2"
+        scene_text = SLIDER.read_text().replace(
+            "model: slider.urdf", f"model: {ROOT / 'examples' / 'slider.urdf'}")
+
+        def target(t):
+            return 0.1 + 0.2 * math.sin(2 * math.pi * 0.5 * t + 0.3)
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(scene_text)
+    result = fd.sweep(str(scene), grid)
+    point = 2  # stiffness high, damping low: the scene's own gains in both cases
+    assert (result.step[0], result.units[0]) == ((True, "rad") if case == "pendulum_step"
+                                                else (False, "m"))
+    traj = tmp_path / "traj.csv"
+    s, d = result.points[point]
+    text = scene_text.replace("stiffness: 80, damping: 2", f"stiffness: {s}, damping: {d}")
+    text = text.replace("stiffness: 400, damping: 40", f"stiffness: {s}, damping: {d}")
+    (tmp_path / "point.yaml").write_text(text)
+    r = subprocess.run([cli(module_dir), "simulate", str(tmp_path / "point.yaml"), "--out",
+                        str(traj)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    overshoot, settle, force = trajectory_objectives(traj, joint, target)
+    assert result.overshoot[point, 0] == pytest.approx(overshoot, rel=1e-9)
+    assert result.settling_time[point, 0] == pytest.approx(settle, rel=1e-9)
+    assert result.max_force[point, 0] == pytest.approx(force, rel=1e-12)
+    if case == "pendulum_step":
+        assert 0 < overshoot < 1 and 0 < settle < 3.0  # an underdamped step that settles
+
+
+def test_the_edge_warning_appears_only_when_the_best_point_is_on_the_edge(tmp_path, module_dir):
+    # The least RMS error of the step is at z = 1/2 (test_damping_sweep_follows_the_closed_form).
+    critical = 2.0 * math.sqrt(100.0 * 2.5)
+    scene = step_scene(tmp_path, dt=4e-3, T=2.0)
+    inside = fd.sweep(str(scene), {"damping": np.array([0.3, 0.5, 0.8]) * critical})
+    assert inside.best() == 1 and inside.warning is None
+    edge = fd.sweep(str(scene), {"damping": np.array([0.6, 0.8, 1.0]) * critical,
+                                 "stiffness": [100.0]})
+    assert edge.best() == 0
+    assert edge.warning == (f"the least total rms error is on the grid's edge (damping = "
+                            f"{0.6 * critical:.6g} is the least value swept): the optimum may "
+                            "lie outside the grid; widen it there")
+    for grid, warned in (("damping=4.74:25.3:3", False), ("damping=19:32:3", True)):
+        r = subprocess.run([cli(module_dir), "sweep", str(scene), "--grid", grid, "--out",
+                            str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == warned, r.stderr
+        if warned:
+            assert lines[0].startswith("featherdrive sweep: warning: the least total rms error "
+                                       "is on the grid's edge (damping = 19 is the least")
+
+
+def test_the_plot_labels_its_colour_scale_and_axes_with_units(tmp_path, module_dir):
+    pendulum = tmp_path / "p.yaml"
+    pendulum.write_text(f"model: {ROOT / 'examples' / 'pendulum.urdf'}\ndt: 0.01\nsteps: 50\n"
+                        "drives:\n  hinge: {type: force, stiffness: 50, damping: 5, "
+                        "target_position: 0.3}\n")
+    result = fd.sweep(str(pendulum), "stiffness=20:80:2,damping=2:6:2", objective="max_force")
+    fig = result.plot(tmp_path / "p.png", "pendulum")
+    assert (tmp_path / "p.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    plot, bar = fig.axes
+    assert bar.get_ylabel() == "max |drive force| (largest of the drives) [Nm]"
+    assert (plot.get_xlabel(), plot.get_ylabel()) == ("damping [Nms/rad]", "stiffness [Nm/rad]")
+    for objective, label in (("rms", "total rms error [rad]"),
+                             ("overshoot", "overshoot (largest of the drives) "
+                                           "[fraction of the step]"),
+                             ("settling_time", "settling time (largest of the drives) [s]")):
+        other = fd.sweep(str(pendulum), "stiffness=20:80:2,damping=2:6:2", objective=objective)
+        assert other.plot(tmp_path / "p.png", "p").axes[1].get_ylabel() == label
+        np.testing.assert_array_equal(other.max_force, result.max_force)  # all computed
+    # The slider: linear units, and --joint names the drive; one parameter, a curve.
+    one = fd.sweep(str(SLIDER), {"damping": [10.0, 40.0]}, joint="slide", objective="overshoot")
+    ax = one.plot(tmp_path / "s.png", "s").axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("damping [Ns/m]", "overshoot of slide [m]")
+    # The command: the chosen objective in the summary line.
+    r = subprocess.run([cli(module_dir), "sweep", str(SLIDER), "--grid", "damping=10:40:3",
+                        "--objective", "settling_time", "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and "least settling time (largest of the drives): " in r.stdout
+    assert " s at damping " in r.stdout
+
+
+def test_a_bad_objective_is_refused_before_the_run(tmp_path, module_dir):
+    with pytest.raises(ValueError, match=r"^objective = 'peak': must be one of rms, overshoot, "
+                                         r"settling_time, max_force$"):
+        fd.sweep(str(SLIDER), "damping=1", objective="peak")
+    with pytest.raises(TypeError, match="objective = 3: must be a str, not int"):
+        fd.sweep(str(SLIDER), "damping=1", objective=3)
+    r = subprocess.run([cli(module_dir), "sweep", str(SLIDER), "--grid", "damping=1",
+                        "--objective", "peak", "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "--objective = 'peak': must be one of rms, overshoot" in r.stderr
+    assert not (tmp_path / "o").exists()
