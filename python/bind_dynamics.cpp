@@ -1,5 +1,6 @@
 // Kinematics and dynamics queries: Simulation methods and module functions of (model, q, qd).
 #include "bindings.hpp"
+#include "featherdrive/algorithm/aba.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
@@ -88,6 +89,17 @@ Vec6 jacobian_dot_of(const LinkQuery& k, py::handle point, py::handle frame) {
   return a;
 }
 
+/// A (n,) vector of finite values: ValueError naming the entry otherwise.
+VecX finite_vector(py::handle obj, Eigen::Index n, const std::string& what) {
+  VecX v = to_vector(obj, n, what);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      throw std::invalid_argument(what + "[" + std::to_string(i) + "] = " +
+                                  py::repr(py::float_(v[i])).cast<std::string>() +
+                                  " is not finite");
+  return v;
+}
+
 /// The whole robot's queries (no link).
 struct RobotQuery {
   KinematicState state;
@@ -101,6 +113,27 @@ struct RobotQuery {
   VecX gravity_forces() { return generalized_gravity(model(), data, state.q); }
   VecX inverse_dynamics(py::handle qdd) {
     return rnea(model(), data, state.q, state.qd, to_vector(qdd, model().nv, "qdd"));
+  }
+  VecX forward_dynamics(py::handle tau) {
+    return aba(model(), data, state.q, state.qd, finite_vector(tau, model().nv, "tau"));
+  }
+  /// MuJoCo's qfrc_bias: b in MuJoCo's velocities. They differ from ours only at a floating
+  /// root, whose qvel is A v with A = [0 R; 1 0] (world velocity of the origin, then body-frame
+  /// angular velocity; R the root's orientation) and whose d/dt qvel = A qdd + c, c = [R (w x u);
+  /// 0] for v = [w; u]: M_mj = A M A^T and qfrc_bias = A (b - M A^T c), A orthogonal
+  /// (docs/conventions.md, "Kinematics and dynamics").
+  VecX mujoco_qfrc_bias() {
+    const Model& m = model();
+    const Mat3 R = data.world_rotation[0];
+    VecX b = nonlinear_effects(m, data, state.q, state.qd);
+    if (!m.floating_base()) return b;
+    VecX At_c = VecX::Zero(m.nv);  // A^T c = [0; w x u]
+    At_c.segment<3>(3) = state.qd.head<3>().cross(state.qd.segment<3>(3));
+    b -= crba(m, data, state.q) * At_c;
+    const Vec3 angular = b.head<3>();
+    b.head<3>() = R * b.segment<3>(3);
+    b.segment<3>(3) = angular;
+    return b;
   }
   Vec3 com() { return center_of_mass(model(), data); }
   Vec3 com_velocity() { return center_of_mass_velocity(model(), data); }
@@ -138,6 +171,16 @@ void def_robot_query(py::class_<Simulation, SimulationHolder>& sim, py::module_&
         },
         py::arg("model"), py::arg("q"),
         (doc + " At q (nq,), checked as Simulation.set_q checks it; a new array.").c_str());
+}
+
+/// (N, k) rows as a new (N, shape...) array.
+py::array reshaped(const RowMatrix& rows, std::initializer_list<Eigen::Index> shape) {
+  std::vector<py::ssize_t> dims{static_cast<py::ssize_t>(rows.rows())};
+  for (Eigen::Index d : shape) dims.push_back(static_cast<py::ssize_t>(d));
+  py::array_t<double> out(dims);
+  if (rows.size() > 0)
+    std::memcpy(out.mutable_data(), rows.data(), sizeof(double) * static_cast<size_t>(rows.size()));
+  return out;
 }
 
 constexpr const char* kFrameDoc =
@@ -187,7 +230,17 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
       kFrameDoc;
   const std::string mass_doc = "Joint-space inertia M(q) (nv, nv), armature included (CRBA).";
   const std::string bias_doc =
-      "Bias forces b = C(q, qd) qd + g(q) (nv,): M qdd + b = tau (MuJoCo's qfrc_bias).";
+      "Bias forces b = C(q, qd) qd + g(q) (nv,): M qdd + b = tau in featherdrive's velocities "
+      "qd. MuJoCo's qfrc_bias on a fixed base; with a floating root they differ (MuJoCo's qvel "
+      "is A qd, not qd): mujoco_qfrc_bias gives MuJoCo's.";
+  const std::string mujoco_bias_doc =
+      "MuJoCo's qfrc_bias (nv,) at this state: bias_forces in MuJoCo's velocities. With a "
+      "floating root qvel = A qd, A = [0 R; 1 0] (world velocity of the root's origin, then its "
+      "body-frame angular velocity), and qfrc_bias = A (b - M A^T c), c = [R (w x v); 0]; on a "
+      "fixed base it equals bias_forces (docs/conventions.md).";
+  const std::string fd_doc =
+      "Forward dynamics qdd (nv,) = M^-1 (tau - b) for joint forces tau (nv,, finite) (ABA): the "
+      "rigid bodies and armature only, no drives, limits, friction or damping.";
   const std::string gravity_doc = "g(q) (nv,): the joint forces that hold q still against gravity.";
   const std::string id_doc =
       "Inverse dynamics tau = M qdd + b (nv,) for joint accelerations qdd (nv,) (RNEA).";
@@ -231,7 +284,15 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
           [](const Simulation& s, py::handle qdd) {
             return RobotQuery(state_of(s)).inverse_dynamics(qdd);
           },
-          py::arg("qdd"), (id_doc + at_sim).c_str());
+          py::arg("qdd"), (id_doc + at_sim).c_str())
+      .def(
+          "forward_dynamics",
+          [](const Simulation& s, py::handle tau) {
+            return RobotQuery(state_of(s)).forward_dynamics(tau);
+          },
+          py::arg("tau"), (fd_doc + at_sim).c_str());
+  def_robot_query(sim, m, "mujoco_qfrc_bias", &RobotQuery::mujoco_qfrc_bias, true,
+                  mujoco_bias_doc);
   def_robot_query(sim, m, "mass_matrix", &RobotQuery::mass_matrix, false, mass_doc);
   def_robot_query(sim, m, "bias_forces", &RobotQuery::bias_forces, true, bias_doc);
   def_robot_query(sim, m, "gravity_forces", &RobotQuery::gravity_forces, false, gravity_doc);
@@ -276,4 +337,57 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
         return RobotQuery(state_at(mo, q_, qd_)).inverse_dynamics(qdd);
       },
       model, q, qd, py::arg("qdd"), (id_doc + at_qd).c_str());
+  m.def(
+      "forward_dynamics",
+      [](const ModelPtr& mo, py::handle q_, py::handle qd_, py::handle tau) {
+        return RobotQuery(state_at(mo, q_, qd_)).forward_dynamics(tau);
+      },
+      model, q, qd, py::arg("tau"), (fd_doc + at_qd).c_str());
+
+  // Batch: the same queries for every environment at once, (N, ...) new arrays; each row is
+  // what the environment's own Simulation method returns.
+  auto batch = py::reinterpret_borrow<py::class_<Batch, BatchHolder>>(m.attr("Batch"));
+  const std::string per_env = " Every environment at its own state and model, on num_threads "
+                              "threads; a new array.";
+  batch
+      .def(
+          "link_poses",
+          [](const Batch& b, py::handle l) {
+            const NameOrIndex li = link_arg(l);
+            const RowMatrix rows = locked(b, [&] { return b.link_poses(link_of(b.model(), li)); });
+            py::array_t<double> R({rows.rows(), Eigen::Index{3}, Eigen::Index{3}});
+            py::array_t<double> p({rows.rows(), Eigen::Index{3}});
+            for (Eigen::Index i = 0; i < rows.rows(); ++i) {
+              std::memcpy(R.mutable_data(i), rows.row(i).data(), 9 * sizeof(double));
+              std::memcpy(p.mutable_data(i), rows.row(i).data() + 9, 3 * sizeof(double));
+            }
+            return py::make_tuple(R, p);
+          },
+          link, ("(R, p) of a link (name or index) in every environment: R (N, 3, 3), p (N, 3), "
+                 "as Simulation.link_pose." + per_env).c_str())
+      .def(
+          "jacobians",
+          [](const Batch& b, py::handle l, py::handle p, py::handle f) {
+            const NameOrIndex li = link_arg(l);
+            const Vec3 pt = to_point(p);
+            const ReferenceFrame rf = to_reference(f);
+            const int nv = model_of(b)->nv;
+            return reshaped(locked(b, [&] {
+              return b.frame_jacobians(link_of(b.model(), li), pt, rf);
+            }), {6, nv});
+          },
+          link, point, frame,
+          ("J (N, 6, nv), each environment's Simulation.jacobian(link, point, frame)." +
+           std::string(kFrameDoc) + per_env).c_str())
+      .def(
+          "mass_matrices",
+          [](const Batch& b) {
+            const int nv = model_of(b)->nv;
+            return reshaped(locked(b, [&] { return b.mass_matrices(); }), {nv, nv});
+          },
+          ("M (N, nv, nv), each environment's Simulation.mass_matrix()." + per_env).c_str())
+      .def(
+          "bias_forces",
+          [](const Batch& b) { return locked(b, [&] { return b.bias_forces(); }); },
+          ("b (N, nv), each environment's Simulation.bias_forces()." + per_env).c_str());
 }

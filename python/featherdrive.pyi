@@ -383,9 +383,15 @@ class Simulation:
         """(6,): classical acceleration at qdd = 0 (world_aligned) or spatial (local)."""
     def mass_matrix(self) -> Vector: ...
     def bias_forces(self) -> Vector:
-        """b = C qd + g: M qdd + b = tau (MuJoCo's qfrc_bias)."""
+        """b = C qd + g: M qdd + b = tau in featherdrive's qd. MuJoCo's qfrc_bias only on a
+        fixed base: with a floating root MuJoCo's qvel = A qd; see mujoco_qfrc_bias."""
+    def mujoco_qfrc_bias(self) -> Vector:
+        """MuJoCo's qfrc_bias (nv,): A (b - M A^T c) with a floating root, A = [0 R; 1 0],
+        c = [R (w x v); 0]; bias_forces on a fixed base (docs/conventions.md)."""
     def gravity_forces(self) -> Vector: ...
     def inverse_dynamics(self, qdd: ArrayLike) -> Vector: ...
+    def forward_dynamics(self, tau: ArrayLike) -> Vector:
+        """qdd = M^-1 (tau - b) (ABA) at the current state; rigid bodies and armature only."""
     def center_of_mass(self) -> Vector: ...
     def center_of_mass_velocity(self) -> Vector: ...
     def center_of_mass_jacobian(self) -> Vector: ...
@@ -446,6 +452,10 @@ def mass_matrix(model: Model, q: ArrayLike) -> Vector: ...
 def bias_forces(model: Model, q: ArrayLike, qd: ArrayLike) -> Vector: ...
 def gravity_forces(model: Model, q: ArrayLike) -> Vector: ...
 def inverse_dynamics(model: Model, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Vector: ...
+def forward_dynamics(model: Model, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> Vector:
+    """qdd = M^-1 (tau - b) (ABA); tau (nv,) finite; rigid bodies and armature only."""
+def mujoco_qfrc_bias(model: Model, q: ArrayLike, qd: ArrayLike) -> Vector:
+    """MuJoCo's qfrc_bias at (q, qd): bias_forces in MuJoCo's velocities (docs/conventions.md)."""
 def center_of_mass(model: Model, q: ArrayLike) -> Vector: ...
 def center_of_mass_velocity(model: Model, q: ArrayLike, qd: ArrayLike) -> Vector: ...
 def center_of_mass_jacobian(model: Model, q: ArrayLike) -> Vector: ...
@@ -531,6 +541,15 @@ class Batch:
         limit_force, friction_force, velocity_limit_force, target_position, target_velocity)."""
     def frame_positions(self, link: Union[str, Int], point: ArrayLike | None = None) -> Vector:
         """(N, 3) world positions of a point on a link in every environment."""
+    def link_poses(self, link: Union[str, Int]) -> tuple[Vector, Vector]:
+        """(R (N, 3, 3), p (N, 3)): Simulation.link_pose of every environment."""
+    def jacobians(self, link: Union[str, Int], point: ArrayLike | None = None,
+                  frame: Union[str, ReferenceFrame] = "world_aligned") -> Vector:
+        """(N, 6, nv): Simulation.jacobian of every environment."""
+    def mass_matrices(self) -> Vector:
+        """(N, nv, nv): Simulation.mass_matrix of every environment (its own model)."""
+    def bias_forces(self) -> Vector:
+        """(N, nv): Simulation.bias_forces of every environment."""
     def step(self, count: Int = 1) -> None:
         """Steps every copy (0 <= count < 2**31, GIL released); DivergenceError names the lowest
         diverged copy; Ctrl-C: KeyboardInterrupt with every copy at the same whole step."""

@@ -4,8 +4,9 @@
 ReachEnv: N copies of the 7-dof arm (examples/arm7.urdf) whose hand must reach a goal point.
 Autoreset is Gymnasium's next-step mode (its default since 1.0): the step that ends an episode
 returns its last observation with terminated or truncated set; the next step() resets that env,
-ignores its action and returns the first observation of the new episode with reward 0 and
-terminated = truncated = False. docs/examples.md describes the environment and its numbers.
+ignores its action, does not step its physics and returns the new episode's reset observation
+(the one reset() would give: qd = 0) with reward 0 and terminated = truncated = False; the
+episode's steps count from the step after it. docs/examples.md describes the environment and its numbers.
 """
 import os
 
@@ -116,12 +117,15 @@ class ReachEnv:
         a = np.clip(a, -1.0, 1.0)
         resetting = np.flatnonzero(self._needs_reset)
         a[resetting] = 0.0
-        if resetting.size:
-            self._reset_envs(resetting)
         targets = np.clip(self.home + self.action_scale * a, self.lower, self.upper)
         self.batch.set_drive_targets(targets)
+        # The Batch steps every env; one that ended is then reset, so its physics does not move:
+        # it returns its reset observation (the new episode's step 0), as Gymnasium's next-step
+        # autoreset does.
         self.batch.step(self.decimation)
         self.episode_steps += 1
+        if resetting.size:
+            self._reset_envs(resetting)
         obs = self._observe()
         distance = np.linalg.norm(obs[:, -6:-3] - self.goal, axis=1)
         rewards = -distance - self.action_cost * np.sum(a * a, axis=1)

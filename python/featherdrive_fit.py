@@ -81,7 +81,8 @@ class FitResult:
     rms: float
     nfev: int                    # parameter sets simulated
     converged: bool              # least_squares met a tolerance (not its evaluation limit)
-    q_fitted: np.ndarray         # (T, nv) simulated q at the optimum, segments joined
+    q_fitted: np.ndarray         # (T, nv) simulated q at the optimum, segments joined; nan
+    #                              before the replay's start row (the largest delay)
     log: Log
     scene_file: str | None = None
     plot_file: str | None = None
@@ -355,8 +356,22 @@ def simulate_batch(job):
 # The fit
 
 
+def _replay_start(scene, log, candidates):
+    """The log row the replay starts at: the largest delay (the scene's or one tried), so that
+    the targets in the pipe at its first step are logged ones, which a log cut from running
+    motion does not hold before its first row. A log without qd starts at row 0, in the scene's
+    initial state, the first row's targets taken as the earlier ones (docs/fitting.md)."""
+    if log.qd is None:
+        return 0
+    start = max([0] + [d.delay for d in scene.drives] + list(candidates or []))
+    if start > log.t.size - 2:
+        raise ValueError(f"{scene.path}: the replay starts {start} rows into the log (the "
+                         f"largest delay), and the log has {log.t.size} rows")
+    return start
+
+
 class _Problem:
-    def __init__(self, scene, log, unknowns, client, threads, chunks):
+    def __init__(self, scene, log, unknowns, client, threads, chunks, start=0):
         text = common.read_text(scene.path, "the scene")
         import yaml
         doc = yaml.safe_load(text)
@@ -384,12 +399,13 @@ class _Problem:
         self.client, self.chunks = client, chunks
         self.log = log
         T = log.t.size
-        L = scene.fit.data.segment_steps or (T - 1)
+        L = scene.fit.data.segment_steps or (T - 1 - start)
         if scene.fit.data.segment_steps and log.qd is None:
             raise ValueError(f"{scene.path}: fit.data.segment_steps = {L}: segments start from "
                              "the logged qd, and the log has no qd columns")
-        L = min(L, T - 1)
-        self.starts = np.arange(0, T - L, L)  # whole segments; a tail shorter than L is left out
+        L = min(L, T - 1 - start)
+        # Whole segments from row `start`; a tail shorter than L is left out.
+        self.starts = np.arange(start, T - L, L)
         self.length = L
         qd0 = log.qd[self.starts] if log.qd is not None else np.tile(scene.qd0, (1, 1))
         self.base.update(starts=self.starts, length=L, q0=log.q[self.starts], qd0=qd0)
@@ -483,12 +499,13 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     unknowns = _unknowns(scene.fit, scene.path)
     if chunks is None:
         chunks = len(client.scheduler_info()["workers"]) if client is not None else 1
-    problem = _Problem(scene, log, unknowns, client, threads, max(chunks, 1))
+    candidates, delayed = _delay_candidates(scene.fit)
+    start = _replay_start(scene, log, candidates)
+    problem = _Problem(scene, log, unknowns, client, threads, max(chunks, 1), start)
     problem.verbose = verbose
     lower = np.array([u.lower for u in unknowns]) / problem.scale
     upper = np.array([u.upper for u in unknowns]) / problem.scale
     x0 = np.array([u.initial for u in unknowns]) / problem.scale
-    candidates, delayed = _delay_candidates(scene.fit)
     best = None
     costs = {}
     for K in candidates if candidates is not None else [0]:
@@ -521,8 +538,8 @@ def fit(scene, data, client=None, threads=None, out=None, chunks=None, verbose=F
     estimates = [Estimate(u.quantity, u.names, float(v), u.initial, u.lower, u.upper, float(c))
                  for u, v, c in zip(unknowns, values, ci)]
     q_fit = np.vstack([log.q[problem.starts[:1]], q[0].reshape(-1, q.shape[-1])])
-    used = q_fit.shape[0]
-    err = q_fit - log.q[:used]
+    err = q_fit - log.q[start:start + q_fit.shape[0]]
+    q_fit = np.vstack([np.full((start, q_fit.shape[1]), np.nan), q_fit])  # row k is log row k
     rms_by_joint = {n: float(np.sqrt(np.mean(err[:, d] ** 2)))
                     for d, n in enumerate(scene.model.dof_names)}
     result = FitResult(estimates, K if candidates is not None else None, costs,

@@ -29,12 +29,15 @@ def state(model, seed):
 
 
 def integrate(model, q, dq, s):
-    """q (+) s dq on the joints' manifolds (revolute: q + s dq; floating: p + s R v, Q exp)."""
+    """q (+) s dq on the joints' manifolds (revolute: q + s dq; ball: Q exp; floating: p + s R v,
+    Q exp)."""
     out = np.array(q, dtype=float)
     for link in model.links:
         i, k = link.q_index, link.v_index
         if link.joint_type in (fd.JointType.revolute, fd.JointType.prismatic):
             out[i] += s * dq[k]
+        elif link.joint_type == fd.JointType.spherical:  # body-frame angular velocity
+            out[i:i + 4] = quat_mul(q[i:i + 4], quat_exp(s * np.asarray(dq[k:k + 3])))
         elif link.joint_type == fd.JointType.floating:
             w, x, y, z = q[i + 3:i + 7]
             R = quat_matrix(w, x, y, z)
@@ -215,3 +218,198 @@ def test_bad_arguments_are_refused(arm):
         fd.jacobian(arm, q, 0, [0.0, 1.0])
     with pytest.raises(ValueError, match=r"qdd has shape"):
         fd.inverse_dynamics(arm, q, np.zeros(arm.nv), np.zeros(arm.nv + 1))
+
+
+# ---- forward dynamics, MuJoCo's qfrc_bias, Batch's per-environment queries ----------------------
+
+def inertia(rng):
+    """A random symmetric positive definite inertia that meets the triangle inequality."""
+    R = quat_matrix(*(lambda v: v / np.linalg.norm(v))(rng.standard_normal(4)))
+    return R @ np.diag(rng.uniform(0.03, 0.05, 3)) @ R.T
+
+
+def ball_on_floating_base():
+    """A floating base, a ball joint and a hinge after it: every kind of multi-dof joint."""
+    rng = np.random.default_rng(11)
+    b = fd.ModelBuilder()
+    b.add_link(fd.make_link("base", "", 2.0, [0.03, -0.02, 0.05], inertia(rng),
+                            fd.floating_joint("root")))
+    b.add_link(fd.make_link("upper", "base", 1.0, [0.0, 0.02, 0.15], inertia(rng),
+                            fd.spherical_joint("ball", [0.1, 0.0, 0.2], [0.3, 0.0, 0.2])))
+    b.add_link(fd.make_link("lower", "upper", 0.7, [0.01, 0.0, 0.1], inertia(rng),
+                            fd.revolute_joint("hinge", [0.0, 1.0, 0.0], [0.0, 0.0, 0.3])))
+    return b.build()
+
+
+@pytest.fixture(scope="module", params=["arm fixed", "arm floating", "wrist ball", "ball floating"])
+def any_robot(request):
+    if request.param == "ball floating":
+        return ball_on_floating_base()
+    if request.param == "wrist ball":
+        return fd.load_urdf(fd.example_path("spherical_wrist.urdf")).model
+    return fd.load_urdf(str(ARM), fd.UrdfOptions(fixed_base=request.param == "arm fixed")).model
+
+
+def unit_state(model, seed):
+    """A random q with every quaternion (floating and ball) of unit length, and a random qd."""
+    rng = np.random.default_rng(seed)
+    q = np.array(model.neutral_configuration()) + 0.5 * rng.standard_normal(model.nq)
+    for link in model.links:
+        if link.joint_type in (fd.JointType.floating, fd.JointType.spherical):
+            i = link.q_index + (3 if link.joint_type == fd.JointType.floating else 0)
+            q[i:i + 4] /= np.linalg.norm(q[i:i + 4])
+    return q, rng.standard_normal(model.nv)
+
+
+def test_forward_dynamics_solves_the_mass_matrix_and_bias(any_robot):
+    """ABA against CRBA's M and RNEA's b: qdd = M^-1 (tau - b), on the module and a Simulation."""
+    model = any_robot
+    q, qd = unit_state(model, 21)
+    tau = 3.0 * np.random.default_rng(22).standard_normal(model.nv)
+    M, b = fd.mass_matrix(model, q), fd.bias_forces(model, q, qd)
+    expected = np.linalg.solve(M, tau - b)
+    qdd = fd.forward_dynamics(model, q, qd, tau)
+    assert qdd.shape == (model.nv,)
+    assert np.abs(qdd - expected).max() < 1e-10 * (1 + np.abs(expected).max())
+    sim = fd.Simulation(model)
+    sim.set_q(q)
+    sim.set_qd(qd)
+    assert np.array_equal(sim.forward_dynamics(tau), qdd)
+    # At rest with tau = g(q) the robot is held: no acceleration.
+    held = fd.forward_dynamics(model, q, np.zeros(model.nv), fd.gravity_forces(model, q))
+    assert np.abs(held).max() < 1e-10
+
+
+def test_forward_dynamics_refuses_bad_input(arm):
+    q, qd = np.zeros(arm.nq), np.zeros(arm.nv)
+    with pytest.raises(ValueError, match=r"tau has shape \(6,\), expected \(7,\)"):
+        fd.forward_dynamics(arm, q, qd, np.zeros(6))
+    with pytest.raises(ValueError, match=r"tau\[3\] = nan is not finite"):
+        fd.forward_dynamics(arm, q, qd, np.array([0, 0, 0, np.nan, 0, 0, 0]))
+    with pytest.raises(ValueError, match=r"qd has shape \(8,\), expected \(7,\)"):
+        fd.forward_dynamics(arm, q, np.zeros(8), np.zeros(7))
+    with pytest.raises(ValueError, match=r"q\[1\] = inf is not finite"):
+        fd.forward_dynamics(arm, np.array([0, np.inf, 0, 0, 0, 0, 0]), qd, np.zeros(7))
+    with pytest.raises(ValueError, match=r"tau\[0\] = -inf is not finite"):
+        fd.Simulation(arm).forward_dynamics(np.full(7, -np.inf))
+
+
+def mujoco_velocity(R, v):
+    """MuJoCo's qvel of a free root at orientation R: [world velocity of the origin; body-frame
+    angular velocity], from featherdrive's body-frame v = [w; u] (docs/conventions.md)."""
+    return np.concatenate([R @ v[3:6], v[0:3], v[6:]])
+
+
+def test_mujoco_qfrc_bias_of_a_free_body_is_its_closed_form():
+    """One free body, centre of mass at its origin: MuJoCo's qvel has the world velocity of the
+    centre, which gravity alone changes, so qfrc_bias = [-m g; w x I w] (Euler's equations);
+    featherdrive's bias has m (w x u) in its linear rows instead."""
+    rng = np.random.default_rng(5)
+    I = inertia(rng)
+    b = fd.ModelBuilder()
+    b.add_link(fd.make_link("body", "", 1.7, [0, 0, 0], I, fd.floating_joint("root")))
+    model = b.build()
+    q, v = unit_state(model, 6)
+    w = v[:3]
+    expected = np.concatenate([-1.7 * np.array(model.gravity), np.cross(w, I @ w)])
+    got = fd.mujoco_qfrc_bias(model, q, v)
+    assert np.abs(got - expected).max() < 1e-12 * (1 + np.abs(expected).max())
+    assert np.abs(fd.bias_forces(model, q, v) - expected).max() > 0.1  # the conventions differ
+
+
+def test_mujoco_qfrc_bias_balances_motion_in_mujoco_velocities(any_robot):
+    """With no joint force, MuJoCo's M_mj qacc + qfrc_bias = 0, qacc the time derivative of
+    MuJoCo's qvel along the motion (central differences over +-h of forward dynamics and the
+    root's rotation), M_mj = A M A^T the same kinetic energy in qvel. On a fixed base it is
+    bias_forces itself."""
+    model = any_robot
+    q, v = unit_state(model, 31)
+    got = fd.mujoco_qfrc_bias(model, q, v)
+    if not model.floating_base():
+        assert np.array_equal(got, fd.bias_forces(model, q, v))
+        return
+    a = fd.forward_dynamics(model, q, v, np.zeros(model.nv))
+    R, _ = fd.link_pose(model, q, 0)
+    h = 1e-5
+
+    def qvel(s):
+        return mujoco_velocity(R @ quat_matrix(*quat_exp(s * v[:3])), v + s * a)
+
+    qacc = (qvel(h) - qvel(-h)) / (2 * h)
+    A = np.eye(model.nv)
+    A[:6, :6] = np.block([[np.zeros((3, 3)), R], [np.eye(3), np.zeros((3, 3))]])
+    M_mj = A @ fd.mass_matrix(model, q) @ A.T
+    residual = M_mj @ qacc + got
+    assert np.abs(residual).max() < 1e-6 * (1 + np.abs(got).max())
+
+
+def batch_of(model, n=5):
+    """n environments at different states; environment 2 a heavier link and 3 more armature
+    (their own models)."""
+    batch = fd.Batch(model, n)
+    states = [unit_state(model, 40 + i) for i in range(n)]
+    batch.set_q(np.array([s[0] for s in states]))
+    batch.set_qd(np.array([s[1] for s in states]))
+    batch.set_link_mass(model.num_links() - 1, [3.0], env_ids=[2])
+    return batch
+
+
+def test_batch_queries_are_each_environments_own(any_robot):
+    model = any_robot
+    batch = batch_of(model)
+    last = model.links[-1].name
+    point = [0.02, -0.01, 0.05]
+    J = batch.jacobians(last, point)
+    J_local = batch.jacobians(last, point, "local")
+    M = batch.mass_matrices()
+    b = batch.bias_forces()
+    R, p = batch.link_poses(last)
+    n, nv = len(batch), model.nv
+    assert J.shape == (n, 6, nv) and M.shape == (n, nv, nv) and b.shape == (n, nv)
+    assert R.shape == (n, 3, 3) and p.shape == (n, 3)
+    for i in range(n):
+        sim = batch.sim(i)
+        assert np.array_equal(J[i], sim.jacobian(last, point))
+        assert np.array_equal(J_local[i], sim.jacobian(last, point, "local"))
+        assert np.array_equal(M[i], sim.mass_matrix())
+        assert np.array_equal(b[i], sim.bias_forces())
+        Ri, pi = sim.link_pose(last)
+        assert np.array_equal(R[i], Ri) and np.array_equal(p[i], pi)
+    assert not np.array_equal(M[2], M[1])  # the heavier link is in environment 2's M
+    # The same bits on 1 and 2 threads.
+    batch.num_threads = 2
+    assert np.array_equal(batch.mass_matrices(), M) and np.array_equal(batch.jacobians(last, point), J)
+
+
+def test_batch_queries_meet_independent_properties(any_robot):
+    """Each environment's M is symmetric positive definite and gives the kinetic energy summed
+    over its links (mass and inertia of that environment, velocities of the link centres from
+    frame_velocity) plus the armature's; its Jacobian is the central difference of link poses."""
+    model = any_robot
+    batch = batch_of(model)
+    M, (R, _) = batch.mass_matrices(), batch.link_poses(0)
+    last = model.links[-1].name
+    point = np.array([0.02, -0.01, 0.05])
+    J = batch.jacobians(last, point)
+    armature = np.array(batch.armature())
+    eye = np.eye(model.nv)
+    for i in range(len(batch)):
+        assert np.abs(M[i] - M[i].T).max() <= 1e-13 * np.abs(M[i]).max()
+        assert np.linalg.eigvalsh(M[i]).min() > 0
+        sim = batch.sim(i)
+        qd = np.array(sim.qd)
+        energy = 0.5 * np.sum(armature[i] * qd * qd)
+        for l, link in enumerate(model.links):
+            mass = batch.link_mass(l)[i]
+            inertia_world = (mass / link.mass if link.mass > 0 else 1.0) * np.asarray(
+                link.inertia_com)
+            Rl, _ = sim.link_pose(l)
+            w, v = np.split(sim.frame_velocity(l, link.com), 2)
+            energy += 0.5 * mass * v @ v + 0.5 * w @ (Rl @ inertia_world @ Rl.T) @ w
+        assert abs(0.5 * qd @ M[i] @ qd - energy) < 1e-12 * (1 + energy), i
+        q = np.array(sim.q)
+        fd_J = np.column_stack([pose_rate(model, q, eye[k], last, point)
+                                for k in range(model.nv)])
+        assert rel(J[i], fd_J) < 1e-7, i
+    assert np.array_equal(R[:, :, :], np.array([batch.sim(i).link_pose(0)[0]
+                                                for i in range(len(batch))]))

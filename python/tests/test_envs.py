@@ -115,8 +115,60 @@ def test_truncation_and_next_step_autoreset():
     obs, rewards, terminated, truncated, _ = env.step(np.ones((2, 7)))
     assert list(rewards) == [0.0, 0.0] and not terminated.any() and not truncated.any()
     assert not np.array_equal(obs[:, 17:], goals0)
-    assert list(env.episode_steps) == [1, 1]
+    assert np.all(obs[:, 7:14] == 0.0)  # the reset state, not stepped
+    assert list(env.episode_steps) == [0, 0]
     assert [env.batch.sim(0).drive(k).target_position for k in range(7)] == list(env.home)
+    # The new episode has its max_episode_steps = 3 steps after the reset step.
+    for k in range(3):
+        truncated = env.step(np.zeros((2, 7)))[3]
+        assert list(truncated) == [k == 2, k == 2]
+
+
+def test_next_step_autoreset_follows_gymnasium_rules(arm):
+    """Gymnasium 1.x next-step autoreset, its rules as the expectation: the step after an env's
+    step returned terminated (or truncated) resets that env, ignores its action, does not step its
+    physics and returns its reset observation (q drawn about home, qd = 0) with reward 0 and
+    terminated = truncated = False; the next step is the new episode's first; the other envs
+    step as usual in the same call."""
+    probe = make(2)
+    probe.reset()
+    distance = probe.step(np.zeros((2, 7)))[4]["distance"]
+    assert distance[0] != distance[1]
+    done, other = int(np.argmin(distance)), int(np.argmax(distance))
+    radius = distance.mean()  # the same run where only env `done` reaches its goal at step 1
+
+    def run_to_the_reset(action_of_done):
+        env = make(2, success_radius=radius)
+        env.reset()
+        terminated = env.step(np.zeros((2, 7)))[2]
+        assert list(terminated) == [i == done for i in range(2)]
+        q_other = np.array(env.batch.q[other])
+        actions = np.full((2, 7), 0.7)
+        actions[done] = action_of_done
+        return env, q_other, env.step(actions)
+
+    env, q_other, (obs, rewards, terminated, truncated, _) = run_to_the_reset(0.7)
+    assert rewards[done] == 0.0 and not terminated[done] and not truncated[done]
+    q, qd = obs[done, :7], obs[done, 7:14]
+    assert np.all(qd == 0.0) and np.all(np.abs(q - env.home) <= 0.1)
+    R, p = fd.link_pose(arm, q, "link7")
+    np.testing.assert_allclose(obs[done, 14:17], p + R @ [0.0, 0.0, 0.06], atol=1e-12)
+    assert np.all(np.abs(obs[done, 17:] - env.hand_home) <= env.goal_range)
+    # The other env made its step with its action in the same call.
+    assert rewards[other] < 0.0 and not np.array_equal(obs[other, :7], q_other)
+    # The ended env's action is ignored: another one gives the same bits.
+    assert run_to_the_reset(-0.9)[2][0].tobytes() == obs.tobytes()
+    # The reset observation is where the new episode starts: its first step is a lone
+    # simulation's from (q, 0) with the episode's gains.
+    u = env.gain_scale[done]
+    sim = fd.Simulation(arm, dt=1.0 / 120.0, solver="tgs", position_iterations=4,
+                        stiffness=600.0 * u, damping=40.0 * np.sqrt(u))
+    sim.set_q(q)
+    a = np.random.default_rng(4).uniform(-1, 1, (2, 7))
+    sim.set_drive_targets(np.clip(env.home + 0.5 * a[done], arm.lower_limit, arm.upper_limit))
+    sim.step(4)
+    first = env.step(a)[0]
+    assert np.concatenate([sim.q, sim.qd]).tobytes() == first[done, :14].tobytes()
 
 
 def test_reaching_the_goal_terminates():

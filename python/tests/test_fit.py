@@ -197,6 +197,39 @@ def test_a_known_delay_with_segments(tmp_path):
     assert result.rms < 1e-9
 
 
+def test_a_log_cut_from_running_motion_with_a_delay(tmp_path):
+    """The robot runs (delay 2, TGS) for 0.25 s before the log's first row: the targets it
+    commanded then are not in the log. The replay starts 2 rows (the largest delay tried) into
+    the log, where the targets in the pipe are logged ones; the gains come back within 1 %."""
+    truth_scene = fd.parse_scene(scene_text("tgs", delay=2), str(tmp_path / "truth.yaml"))
+    cut = 60
+    sim = fd.make_simulation(truth_scene)
+    t = DT * np.arange(cut + ROWS)
+    targets = 0.3 * np.sin(2 * np.pi * (1.0 + 1.5 * t)[:, None] * t[:, None] +
+                           np.arange(sim.model.nv)[None, :])
+    q, qd = [sim.q.copy()], [sim.qd.copy()]
+    for k in range(cut + ROWS - 1):
+        sim.set_drive_targets(targets[k])
+        sim.step()
+        q.append(sim.q.copy())
+        qd.append(sim.qd.copy())
+    q, qd = np.array(q)[cut:], np.array(qd)[cut:]
+    assert np.abs(qd[0]).max() > 0.5  # mid-motion
+    write_log(tmp_path / "log.csv", truth_scene.model.dof_names, q, qd, targets[cut:])
+    scene = write(tmp_path / "fit.yaml", scene_text("tgs", FIT_GAINS))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    assert result.delay == 2, result.table()
+    assert worst_error(result, TRUTH) < 0.01, result.table()
+    # Rows before the replay's start have no simulated q.
+    assert np.isnan(result.q_fitted[:2]).all() and not np.isnan(result.q_fitted[2:]).any()
+    assert result.q_fitted.shape == q.shape
+    # A log with no row after the replay's start: one line naming the scene and the rows.
+    write_log(tmp_path / "short.csv", truth_scene.model.dof_names, q[:3], qd[:3], targets[:3])
+    with pytest.raises(ValueError, match=r"fit\.yaml: the replay starts 2 rows into the log "
+                                         r"\(the largest delay\), and the log has 3 rows$"):
+        fd.fit(str(scene), str(tmp_path / "short.csv"), threads=1)
+
+
 def test_resampled_log(tmp_path):
     """A log at twice the scene's rate, resampled (linear), recovers what the log at dt does."""
     truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))

@@ -11,8 +11,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/jacobian.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/model/model_variant.hpp"
 
@@ -567,17 +570,69 @@ RowMatrix Batch::frame_positions(int link, const Vec3& point) const {
   if (!point.allFinite())
     throw std::invalid_argument("frame_positions: point = " + format_vec3(point) +
                                 " is not finite");
-  RowMatrix out(size(), 3);
-  // Chunks of environments share a workspace; the topology, all the kinematics reads, is shared.
+  return per_environment(
+      3, [&](const Simulation& s, Data& data, const VecX& q, const VecX&, auto row) {
+        forward_kinematics(s.model(), data, q);
+        row = frame_position(s.model(), data, link, point).transpose();
+      });
+}
+
+RowMatrix Batch::link_poses(int link) const {
+  check_link_index(model(), link);
+  const auto l = static_cast<size_t>(link);
+  return per_environment(12, [&](const Simulation& s, Data& data, const VecX& q, const VecX&,
+                                 auto row) {
+    forward_kinematics(s.model(), data, q);
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(row.data()) = data.world_rotation[l];
+    row.template tail<3>() = data.world_position[l].transpose();
+  });
+}
+
+RowMatrix Batch::frame_jacobians(int link, const Vec3& point, ReferenceFrame frame) const {
+  check_link_index(model(), link);
+  if (!point.allFinite())
+    throw std::invalid_argument("frame_jacobians: point = " + format_vec3(point) +
+                                " is not finite");
+  const int nv = model().nv;
+  return per_environment(6 * nv, [&, J = MatX()](const Simulation& s, Data& data, const VecX& q,
+                                                 const VecX&, auto row) mutable {
+    forward_kinematics(s.model(), data, q);
+    frame_jacobian(s.model(), data, link, point, frame, J);
+    Eigen::Map<RowMatrix>(row.data(), 6, nv) = J;
+  });
+}
+
+RowMatrix Batch::mass_matrices() const {
+  const int nv = model().nv;
+  return per_environment(
+      nv * nv, [&](const Simulation& s, Data& data, const VecX& q, const VecX&, auto row) {
+        Eigen::Map<RowMatrix>(row.data(), nv, nv) = crba(s.model(), data, q);
+      });
+}
+
+RowMatrix Batch::bias_forces() const {
+  return per_environment(
+      model().nv, [&](const Simulation& s, Data& data, const VecX& q, const VecX& qd, auto row) {
+        row = nonlinear_effects(s.model(), data, q, qd).transpose();
+      });
+}
+
+// (N, cols): row i from row_of(environment i, a workspace, its q and qd, the row). Chunks of
+// environments share a workspace (the topology, all the queries read of it, is shared); each row
+// depends only on its environment, so the result is the same on any number of threads.
+template <class F>
+RowMatrix Batch::per_environment(Eigen::Index cols, F row_of) const {
+  RowMatrix out(size(), cols);
   const int grain = std::max(1, size() / (8 * effective_num_threads()));
   parallel(size(), grain, [&](int begin, int end) {
     Data data(model());
-    VecX q(model().nq);
+    VecX q(model().nq), qd(model().nv);
+    F f = row_of;  // a private copy: a query may keep scratch in its closure
     for (int i = begin; i < end; ++i) {
       const Simulation& s = sims_[static_cast<size_t>(i)];
       q = s.q();
-      forward_kinematics(s.model(), data, q);
-      out.row(i) = frame_position(s.model(), data, link, point).transpose();
+      qd = s.qd();
+      f(s, data, q, qd, out.row(i));
     }
   });
   return out;

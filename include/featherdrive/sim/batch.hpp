@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "featherdrive/algorithm/frame_kinematics.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
@@ -146,6 +147,17 @@ class Batch {
   /// World position of `point` (link coordinates) on `link` in every environment, (N, 3), by
   /// forward kinematics of each environment's q, on num_threads() threads.
   RowMatrix frame_positions(int link, const Vec3& point) const;
+  // Dynamics queries of every environment at its own q (and qd) with its own model, on
+  // num_threads() threads, one row per environment; each row is the Simulation's query, bits
+  // unchanged, whatever the threads.
+  /// The pose of `link`: (N, 12), each row R (3 x 3, row-major) then p.
+  RowMatrix link_poses(int link) const;
+  /// frame_jacobian of `point` on `link` in `frame`: (N, 6 nv), each row J (6 x nv, row-major).
+  RowMatrix frame_jacobians(int link, const Vec3& point, ReferenceFrame frame) const;
+  /// crba's M(q), armature included: (N, nv nv), each row M (row-major).
+  RowMatrix mass_matrices() const;
+  /// nonlinear_effects' b(q, qd): (N, nv).
+  RowMatrix bias_forces() const;
 
   /// Steps every environment `count` times (>= 0), in parallel. One that diverges stops at the
   /// step that diverged with the state it had before that step (as Simulation::step does); every
@@ -158,6 +170,8 @@ class Batch {
   std::vector<int> check_env_ids(std::span<const int> env_ids) const;
   template <class F>
   void parallel(int n, int grain, F f) const;
+  template <class F>
+  RowMatrix per_environment(Eigen::Index cols, F row_of) const;
   template <class Set>
   void set_rows(std::span<const int> env_ids, const RowMatrix& values, Eigen::Index cols,
                 const char* what, Set set);
