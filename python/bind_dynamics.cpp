@@ -39,7 +39,7 @@ ReferenceFrame to_reference(py::handle obj) {
 }
 
 Vec3 to_point(py::handle obj) {
-  return obj.is_none() ? Vec3::Zero() : to_vec3(obj, "point");
+  return obj.is_none() ? Vec3::Zero() : Vec3(to_finite_vector(obj, 3, "point"));
 }
 
 /// A link's query: the state's kinematics (with velocities) and the link's index.
@@ -84,7 +84,7 @@ struct RobotQuery {
   VecX bias_forces() { return nonlinear_effects(model(), data, state.q, state.qd); }
   VecX gravity_forces() { return generalized_gravity(model(), data, state.q); }
   VecX inverse_dynamics(py::handle qdd) {
-    return rnea(model(), data, state.q, state.qd, to_vector(qdd, model().nv, "qdd"));
+    return rnea(model(), data, state.q, state.qd, to_finite_vector(qdd, model().nv, "qdd"));
   }
   Vec3 com() { return center_of_mass(model(), data); }
   Vec3 com_velocity() { return center_of_mass_velocity(model(), data); }
@@ -185,7 +185,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
       .def(
           "frame_position",
           [](const Simulation& s, py::handle l, py::handle p) {
-            const Vec3 pt = to_vec3(p, "point");
+            const Vec3 pt = Vec3(to_finite_vector(p, 3, "point"));
             LinkQuery k(state_of(s), l);
             return frame_position(k.model(), k.data, k.link, pt);
           },
@@ -231,7 +231,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
   m.def(
       "frame_position",
       [](const ModelPtr& mo, py::handle q_, py::handle l, py::handle p) {
-        const Vec3 pt = to_vec3(p, "point");
+        const Vec3 pt = Vec3(to_finite_vector(p, 3, "point"));
         LinkQuery k(state_at(mo, q_, py::none()), l);
         return frame_position(k.model(), k.data, k.link, pt);
       },

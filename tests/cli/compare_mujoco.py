@@ -128,6 +128,36 @@ def main():
     check(len(rows) == 7 and all("exact; literal copy unstable in MuJoCo" in x for x in rows),
           "every arm joint: exact, literal copy unstable", r)
 
+    # Numbers that do not fit (issue 36): a gear whose gain gear^2 overflows, refused naming the
+    # file, the actuator and the gear, and no scene written with stiffness inf.
+    gear = os.path.join(out_dir, "mj_gear.xml")
+    with open(gear, "w") as f:
+        f.write('<mujoco><worldbody><body name="cart"><joint name="slide" type="slide"/>'
+                '<inertial pos="0 0 0" mass="2" diaginertia="0.01 0.01 0.01"/></body></worldbody>'
+                '<actuator><position name="push" joint="slide" kp="900" gear="1e200"/>'
+                '</actuator></mujoco>\n')
+    gear_scene = os.path.join(out_dir, "mj_gear.yaml")
+    r = run(cli, "translate", gear, "--to", "physx", "--out", gear_scene)
+    one_line_error(r, ["mj_gear.xml", "actuator push", "gear = 1e+200"], "a gear of 1e200")
+    check(not os.path.exists(gear_scene), "no scene written for a gear of 1e200")
+    # Targets MuJoCo would zero (its ctrl beyond 1e10): the ctrl kp x_T + kd v_T here is
+    # x_T + (kd / kp) v_T = 1e5 * 1e6 = 1e11, refused naming the joint, not compared with ctrl 0.
+    big_ctrl = os.path.join(out_dir, "mj_big_ctrl.yaml")
+    with open(big_ctrl, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                "  slide: {type: force, stiffness: 1e-6, damping: 1e-1, target_velocity: 1e6}\n")
+    r = run(cli, "compare-mujoco", big_ctrl, "--translate")
+    one_line_error(r, ["mj_big_ctrl.yaml", "joint slide", "ctrl", "beyond the 1e+10"],
+                   "a ctrl MuJoCo would zero")
+    # A target beyond the representable range (docs/math/implicit_drives.md, eq. T3).
+    far = os.path.join(out_dir, "mj_far_target.yaml")
+    with open(far, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                "  slide: {type: force, stiffness: 100, damping: 1, target_position: 2e10}\n")
+    r = run(cli, "compare-mujoco", far)
+    one_line_error(r, ["mj_far_target.yaml", "drives.slide.target_position = 2e10",
+                       "beyond +-1e6"], "a target of 2e10")
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)
