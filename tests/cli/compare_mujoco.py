@@ -158,6 +158,30 @@ def main():
     one_line_error(r, ["mj_far_target.yaml", "drives.slide.target_position = 2e10",
                        "beyond +-1e6"], "a target of 2e10")
 
+    # Verdicts come from the measured run (docs/mujoco_bridge.md, "Verdicts"): the slider agrees
+    # and is exact; on arm7_pgs every drive saturates and the run differs, so no joint is exact.
+    r = run(cli, "compare-mujoco", scene, "--translate")
+    check(re.search(r"^\s+slide\s.*exact \(1-dof map and run\)$", r.stdout, re.M) is not None,
+          "the slider's verdict is exact", r)
+    r = run(cli, "compare-mujoco", os.path.join(source, "examples", "arm7_pgs.yaml"), "--translate")
+    verdicts = re.findall(r"^\s+joint\d\s.*\s(differs by (\S+) of the scale: (.*))$", r.stdout, re.M)
+    check(r.returncode == 0 and len(verdicts) == 7 and "exact" not in r.stdout,
+          "arm7_pgs: no joint called exact", r)
+    table = tables(r.stdout)
+    for whole, figure, why in verdicts:
+        check(float(figure) > 0.1 and why.startswith(("max_force saturates", "coupled joints")),
+              f"arm7_pgs verdict: {whole}")
+    check(any(why.startswith("max_force saturates") for _, _, why in verdicts),
+          "arm7_pgs: a saturating drive is named", r)
+    if table:
+        worst = max(v[2] for v in table[0].values())
+        check(abs(max(float(f) for _, f, _ in verdicts) - worst) <= 0.01 * worst + 0.005,
+              f"the verdicts' largest figure is the table's largest relative q difference {worst}")
+    # Spherical joints: one line naming the scene and the joint.
+    wrist = os.path.join(source, "examples", "spherical_wrist.yaml")
+    one_line_error(run(cli, "compare-mujoco", wrist),
+                   ["spherical_wrist.yaml", "joint 'wrist' is spherical"], "a spherical wrist")
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)
