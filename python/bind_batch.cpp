@@ -18,7 +18,7 @@ void featherdrive::python::bind_batch(py::module_& m) {
       .def(py::init([](ModelPtr model, py::handle count, double dt, py::handle solver,
                        py::handle pi, py::handle vi, py::handle compat, py::handle kp,
                        py::handle kd, py::handle type) {
-             const int n = to_int(count, "count", 1);
+             const int n = to_int(count, "count", 1, Batch::kMaxSize);
              Simulation prototype(std::move(model), make_options(dt, solver, pi, vi, compat));
              initial_drives(prototype, kp, kd, type);
              return BatchHolder(new Batch(prototype, n));
@@ -31,7 +31,7 @@ void featherdrive::python::bind_batch(py::module_& m) {
            "count environments, each a new Simulation of model, with the arguments of "
            "Simulation(model, dt, ..., stiffness, damping, drive_type).")
       .def(py::init([](const Simulation& prototype, py::handle count) {
-             const int n = to_int(count, "count", 1);
+             const int n = to_int(count, "count", 1, Batch::kMaxSize);
              return locked(prototype, [&] { return BatchHolder(new Batch(prototype, n)); });
            }),
            py::arg("prototype"), py::arg("count"),

@@ -40,7 +40,7 @@ ReferenceFrame to_reference(py::handle obj) {
 }
 
 Vec3 to_point(py::handle obj) {
-  return obj.is_none() ? Vec3::Zero() : to_vec3(obj, "point");
+  return obj.is_none() ? Vec3::Zero() : Vec3(to_finite_vector(obj, 3, "point"));
 }
 
 /// A link's or named frame's query (a merged link's name gives its frame on the link it merged
@@ -112,7 +112,7 @@ struct RobotQuery {
   VecX bias_forces() { return nonlinear_effects(model(), data, state.q, state.qd); }
   VecX gravity_forces() { return generalized_gravity(model(), data, state.q); }
   VecX inverse_dynamics(py::handle qdd) {
-    return rnea(model(), data, state.q, state.qd, to_vector(qdd, model().nv, "qdd"));
+    return rnea(model(), data, state.q, state.qd, to_finite_vector(qdd, model().nv, "qdd"));
   }
   VecX forward_dynamics(py::handle tau) {
     return aba(model(), data, state.q, state.qd, finite_vector(tau, model().nv, "tau"));
@@ -256,7 +256,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
       .def(
           "frame_position",
           [](const Simulation& s, py::handle l, py::handle p) {
-            const Vec3 pt = to_vec3(p, "point");
+            const Vec3 pt = Vec3(to_finite_vector(p, 3, "point"));
             LinkQuery k(state_of(s), l);
             return frame_position(k.model(), k.data, k.frame, pt);
           },
@@ -310,7 +310,7 @@ void featherdrive::python::bind_dynamics(py::module_& m) {
   m.def(
       "frame_position",
       [](const ModelPtr& mo, py::handle q_, py::handle l, py::handle p) {
-        const Vec3 pt = to_vec3(p, "point");
+        const Vec3 pt = Vec3(to_finite_vector(p, 3, "point"));
         LinkQuery k(state_at(mo, q_, py::none()), l);
         return frame_position(k.model(), k.data, k.frame, pt);
       },

@@ -54,7 +54,7 @@ void featherdrive::python::bind_simd(py::module_& m) {
       "FEATHERDRIVE_SIMD), blocks on num_threads threads; bits independent of lane, batch size, "
       "width and threads. States are read-only (N, nq) / (N, nv) views (docs/simd_batch.md).")
       .def(py::init([](const Simulation& prototype, py::handle count, py::handle isa) {
-             const int n = to_int(count, "count", 1);
+             const int n = to_int(count, "count", 1, Batch::kMaxSize);
              const std::optional<SimdIsa> i = to_isa(isa);
              return locked(prototype,
                            [&] { return SimdBatchHolder(new SimdBatch(prototype, n, i)); });
@@ -178,8 +178,12 @@ void featherdrive::python::bind_simd(py::module_& m) {
           "{environment: message} of the environments that stopped.")
       .def(
           "simulation",
-          [](const SimdBatch& b, int i) {
-            return SimulationHolder(new Simulation(b.simulation(i)));
+          [](const SimdBatch& b, py::handle i) {
+            constexpr auto lo = std::numeric_limits<long long>::min();
+            constexpr auto hi = std::numeric_limits<long long>::max();
+            const int index =
+                index_in(to_int64(i, "environment index", lo, hi), b.size(), "environment index");
+            return locked(b, [&] { return SimulationHolder(new Simulation(b.simulation(index))); });
           },
           py::arg("i"), "Environment i as a Simulation of its own (a copy).")
       .def(

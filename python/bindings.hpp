@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <exception>
 #include <functional>
@@ -132,14 +134,67 @@ inline NameOrIndex to_name_or_index(py::handle obj, const std::string& what, con
 // ---- per-object locks -----------------------------------------------------------------------
 // Python threads may share a Simulation or Batch: every binding that reads or writes one holds
 // its lock, so calls on one object are serialised (whole calls: a step(n) runs its n steps before
-// another call on that object starts). The lock is waited for with the GIL released, so that its
-// holder can re-take the GIL (step() runs without it); the main thread's wait answers Ctrl-C. The
-// table maps an object's address to its lock and is only touched with the GIL held, which guards
-// it. A copy inside a Batch maps to the batch's lock (Batch.sim registers it). The entries of an
-// object go when the Python object owning it is freed (the holders' deleters).
+// another call on that object starts). The lock is first come, first served (a ticket lock): a
+// call that waits gets its turn after the calls that asked before it, so a thread stepping in a
+// loop cannot starve another. The lock is waited for with the GIL released, so that its holder
+// can re-take the GIL (step() runs without it); the main thread's wait answers Ctrl-C (its ticket
+// is then given up). The table maps an object's address to its lock and is only touched with the
+// GIL held, which guards it. A copy inside a Batch maps to the batch's lock (Batch.sim registers
+// it). The entries of an object go when the Python object owning it is freed (the holders'
+// deleters).
 
-struct ObjectLock {
-  std::timed_mutex mutex;
+class ObjectLock {
+ public:
+  using Ticket = unsigned long long;
+  /// Takes the lock if no one holds it or waits for it.
+  bool try_acquire() {
+    std::lock_guard<std::mutex> guard(mutex_);
+    if (serving_ != next_) return false;
+    ++next_;
+    return true;
+  }
+  /// A place in the queue; the lock is the caller's once granted(ticket).
+  Ticket request() {
+    std::lock_guard<std::mutex> guard(mutex_);
+    return next_++;
+  }
+  /// Waits until the ticket's turn (or the timeout): whether it came.
+  bool wait(Ticket ticket, std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> guard(mutex_);
+    return turn_.wait_for(guard, timeout, [&] { return serving_ == ticket; });
+  }
+  void wait(Ticket ticket) {
+    std::unique_lock<std::mutex> guard(mutex_);
+    turn_.wait(guard, [&] { return serving_ == ticket; });
+  }
+  void release() {
+    std::lock_guard<std::mutex> guard(mutex_);
+    advance();
+  }
+  /// Gives a ticket up (its waiter left): passed on if its turn has come, else skipped later.
+  void abandon(Ticket ticket) {
+    std::lock_guard<std::mutex> guard(mutex_);
+    if (serving_ == ticket)
+      advance();
+    else
+      abandoned_.push_back(ticket);
+  }
+
+ private:
+  void advance() {
+    ++serving_;
+    for (auto it = std::find(abandoned_.begin(), abandoned_.end(), serving_);
+         it != abandoned_.end(); it = std::find(abandoned_.begin(), abandoned_.end(), serving_)) {
+      abandoned_.erase(it);
+      ++serving_;
+    }
+    turn_.notify_all();
+  }
+  std::mutex mutex_;
+  std::condition_variable turn_;
+  Ticket next_ = 0;     // the next ticket to hand out
+  Ticket serving_ = 0;  // the ticket that holds the lock (free when serving_ == next_)
+  std::vector<Ticket> abandoned_;
 };
 
 using LockTable = std::unordered_map<const void*, std::shared_ptr<ObjectLock>>;
@@ -171,22 +226,30 @@ inline void check_signals() {
 /// Holds an object's lock for its scope.
 class Hold {
  public:
-  /// With the GIL held: waits without it if another thread holds the lock.
+  /// With the GIL held: waits without it if another thread holds the lock or waits for it.
   explicit Hold(const void* object) : lock_(lock_for(object)) {
-    if (lock_->mutex.try_lock()) return;
+    if (lock_->try_acquire()) return;
+    const ObjectLock::Ticket ticket = lock_->request();
     py::gil_scoped_release nogil;
-    wait();
+    wait(ticket);
   }
   /// Without the GIL (lock from lock_for, taken with the GIL).
-  explicit Hold(std::shared_ptr<ObjectLock> lock) : lock_(std::move(lock)) { wait(); }
-  ~Hold() { lock_->mutex.unlock(); }
+  explicit Hold(std::shared_ptr<ObjectLock> lock) : lock_(std::move(lock)) {
+    wait(lock_->request());
+  }
+  ~Hold() { lock_->release(); }
   Hold(const Hold&) = delete;
   Hold& operator=(const Hold&) = delete;
 
  private:
-  void wait() {
-    if (!on_main_thread()) return lock_->mutex.lock();
-    while (!lock_->mutex.try_lock_for(std::chrono::milliseconds(20))) check_signals();
+  void wait(ObjectLock::Ticket ticket) {
+    if (!on_main_thread()) return lock_->wait(ticket);
+    try {
+      while (!lock_->wait(ticket, std::chrono::milliseconds(20))) check_signals();
+    } catch (...) {
+      lock_->abandon(ticket);
+      throw;
+    }
   }
   std::shared_ptr<ObjectLock> lock_;
 };
@@ -292,6 +355,17 @@ inline VecX to_vector(py::handle obj, Eigen::Index n, const std::string& what,
 
 inline Vec3 to_vec3(py::handle obj, const std::string& what) {
   return to_vector(obj, 3, what);
+}
+
+/// to_vector with every entry finite: ValueError naming the entry and its value.
+inline VecX to_finite_vector(py::handle obj, Eigen::Index n, const std::string& what) {
+  VecX v = to_vector(obj, n, what);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      throw std::invalid_argument(what + "[" + std::to_string(i) + "] = " +
+                                  py::repr(py::float_(v[i])).cast<std::string>() +
+                                  ": must be finite");
+  return v;
 }
 
 inline Mat3 to_mat3(py::handle obj, const std::string& what) {

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -5,6 +6,8 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "compare_table.hpp"
@@ -71,20 +74,86 @@ Compared run_both(const Scene& scene, const Simulation& start, DriveMapping mapp
     append_row(out.mj, model, sim.time(), mj.q(), mj.qd(), mj.drive_force());
     if (mj.diverged() && out.diverged_at < 0) out.diverged_at = k + 1;
   }
+  // After MuJoCo diverges (and resets its state) the differences mean nothing: only the rows
+  // before the diverging step are compared.
+  if (out.diverged_at >= 0) {
+    const auto keep = static_cast<size_t>(out.diverged_at);
+    for (JointTrajectory* t : {&out.fd, &out.mj}) {
+      t->t.resize(keep);
+      t->q.resize(keep);
+      t->qd.resize(keep);
+      t->f.resize(keep);
+    }
+  }
   out.c = compare_trajectories(out.fd, out.mj);
   return out;
 }
 
-void print_drives(const MjcfExport& e, DriveMapping mapping, double dt) {
+// A translated joint agrees with MuJoCo when its largest q difference is within this share of
+// the run's scale (the largest |q| of MuJoCo's run; docs/mujoco_bridge.md, "Verdicts").
+constexpr double kAgreement = 1e-6;
+
+// Per drive, what the translated run shows: "exact" only where the 1-dof map is exact and the
+// measured run agrees; else the difference and the likeliest reason.
+std::vector<std::string> verdicts(const Compared& r, const Simulation& start) {
+  std::vector<std::string> out;
+  const SimulationOptions& o = start.options();
+  for (const MjcfDrive& d : r.mjcf.drives) {
+    if (r.diverged_at >= 0) {
+      out.push_back("diverged at step " + std::to_string(r.diverged_at));
+      continue;
+    }
+    const auto joint = static_cast<size_t>(
+        std::find(r.fd.joints.begin(), r.fd.joints.end(), d.joint) - r.fd.joints.begin());
+    double q_difference = 0.0;
+    for (const JointDifference& j : r.c.joints)
+      if (j.joint == d.joint) q_difference = j.q.value;
+    const double relative = r.c.scale_q > 0.0 ? q_difference / r.c.scale_q
+                            : q_difference > 0.0 ? std::numeric_limits<double>::infinity()
+                                                 : 0.0;
+    char figure[64];
+    std::snprintf(figure, sizeof figure, "differs by %.2g of the scale", relative);
+    if (relative <= kAgreement) {
+      out.push_back(d.translation.exact ? "exact (1-dof map and run)"
+                                        : "agrees in the run; 1-dof map: " + d.translation.note);
+      continue;
+    }
+    // The drive's largest force: max_force, or max_impulse per step.
+    const Drive& drive = start.drive(d.dof);
+    const double limit = std::min(drive.max_force, drive.max_impulse / o.dt);
+    // Saturated: featherdrive's drive reached its limit, or MuJoCo's force passed it (its
+    // forcerange clips the actuator; the damping adds beyond).
+    bool saturated = false;
+    if (joint < r.fd.joints.size() && std::isfinite(limit))
+      for (size_t k = 0; k < r.fd.rows(); ++k)
+        saturated = saturated || std::abs(r.fd.f[k][joint]) >= limit * (1 - 1e-9) ||
+                    std::abs(r.mj.f[k][joint]) > limit;
+    std::string why;
+    if (saturated)
+      why = "max_force saturates (MuJoCo's forcerange clips the actuator, not the joint damping "
+            "that carries the implicit share)";
+    else if (start.model().nv > 1)
+      why = "coupled joints (the 1-dof map sees one joint; " + std::string(to_string(o.solver)) +
+            " " + std::to_string(o.position_iterations) + "/" +
+            std::to_string(o.velocity_iterations) + " iterations)";
+    else
+      why = d.translation.exact ? "the run departs from the 1-dof map" : d.translation.note;
+    out.push_back(std::string(figure) + ": " + why);
+  }
+  return out;
+}
+
+void print_drives(const MjcfExport& e, DriveMapping mapping, double dt,
+                  const std::vector<std::string>& verdict) {
   std::printf("  %s drives: MuJoCo timestep %.6g s (%d per step), integrator %s\n",
               to_string(mapping), e.timestep, e.substeps, to_string(e.integrator));
   std::printf("  %-16s %10s %11s %11s %11s %11s  %s\n", "joint", "m", "kp dt^2/m", "kp", "kv",
-              "damping", "match");
-  for (const MjcfDrive& d : e.drives) {
+              "damping", mapping == DriveMapping::translated ? "verdict (q difference / scale)" : "");
+  for (size_t k = 0; k < e.drives.size(); ++k) {
+    const MjcfDrive& d = e.drives[k];
     const MujocoDrive& mj = d.mujoco;
     std::string match;
-    if (mapping == DriveMapping::translated)
-      match = d.translation.exact ? "exact (1-dof map)" : d.translation.note;
+    if (mapping == DriveMapping::translated && k < verdict.size()) match = verdict[k];
     std::printf("  %-16s %10.4g %11.4g %11.4g %11.4g %11.4g  %s\n", d.joint.c_str(),
                 d.effective_inertia, mj.kp * dt * dt / d.effective_inertia, mj.kp, mj.kv,
                 mj.damping, match.c_str());
@@ -106,6 +175,12 @@ int compare_mujoco(const CompareMujocoArgs& args) {
     throw std::invalid_argument(args.scene +
                                 ": fixed_base = false: compare-mujoco compares "
                                 "fixed-base robots (MuJoCo's free joint has other velocities)");
+  for (const Link& l : model.links)
+    if (l.joint_type == JointType::spherical)
+      throw std::invalid_argument(
+          args.scene + ": joint '" + l.joint_name +
+          "' is spherical: compare-mujoco compares revolute and prismatic joints (MuJoCo's ball "
+          "joint takes no actuator per axis and its qpos is a quaternion)");
   Simulation start = make_simulation(scene);
   // MuJoCo's frictionloss is another law and it has no joint velocity limits: both sides run
   // without them, and the output says so.
@@ -160,12 +235,14 @@ int compare_mujoco(const CompareMujocoArgs& args) {
                                      ? DriveMapping::translated
                                      : DriveMapping::literal;
     std::printf("\n");
-    print_drives(r.mjcf, mapping, o.dt);
+    print_drives(r.mjcf, mapping, o.dt,
+                 mapping == DriveMapping::translated ? verdicts(r, start)
+                                                     : std::vector<std::string>{});
     if (r.diverged_at >= 0)
       std::printf(
           "  MuJoCo diverged at step %d (a huge acceleration; MuJoCo resets its state "
-          "then)\n",
-          r.diverged_at);
+          "then): the differences below are over steps 0 to %d\n",
+          r.diverged_at, r.diverged_at - 1);
     print_difference_table(r.c, std::string("MuJoCo (") + to_string(mapping) + ")");
   }
   if (runs.size() == 2)

@@ -92,3 +92,21 @@ def test_scene_delay_and_bad_values(arm):
                                          r"must be a whole number"):
         batch.set_drive_delay(1.5)
     assert not batch.drive_delay().any()
+
+
+def test_batch_drive_delay_is_all_or_nothing(arm):
+    """Delays whose histories would exceed the batch's bound (2**26 samples) are refused before
+    any environment changes: ValueError, every environment's delays as they were."""
+    sim = fd.Simulation(arm)
+    sim.set_drive_gains(np.full(7, 10.0), np.full(7, 1.0))
+    batch = fd.Batch(sim, 1000)
+    batch.set_drive_delay(4, env_ids=[7])
+    samples = 1000 * 7 * 100001
+    with pytest.raises(ValueError, match=f"need {samples} samples.*nothing changed"):
+        batch.set_drive_delay(100000)
+    expected = np.zeros((1000, 7))
+    expected[7] = 4
+    assert np.array_equal(batch.drive_delay(), expected)
+    # Within the bound: every environment takes it.
+    batch.set_drive_delay(9)
+    assert np.array_equal(batch.drive_delay(), np.full((1000, 7), 9.0))

@@ -243,11 +243,14 @@ def test_iteration_counts_out_of_range(arm, field, value, lo):
 
 
 def test_batch_sizes_indices_and_threads(arm):
-    with pytest.raises(ValueError, match=out_of_range("count", 2**31, 1, INT_MAX)):
+    most = 2**24  # Batch::kMaxSize
+    with pytest.raises(ValueError, match=out_of_range("count", 2**31, 1, most)):
         fd.Batch(arm, 2**31)
-    with pytest.raises(ValueError, match=out_of_range("count", 2**32 + 2, 1, INT_MAX)):
+    with pytest.raises(ValueError, match=out_of_range("count", 2**32 + 2, 1, most)):
         fd.Batch(fd.Simulation(arm), 2**32 + 2)
-    with pytest.raises(ValueError, match=out_of_range("count", -3, 1, INT_MAX)):
+    with pytest.raises(ValueError, match=out_of_range("count", most + 1, 1, most)):
+        fd.Batch(arm, most + 1)
+    with pytest.raises(ValueError, match=out_of_range("count", -3, 1, most)):
         fd.Batch(arm, -3)
     batch = fd.Batch(arm, np.int64(4))
     assert len(batch) == 4 and len(fd.Batch(fd.Simulation(arm), Index(2))) == 2
@@ -396,3 +399,27 @@ def test_bad_strings_are_value_errors(arm):
             fd.Simulation(arm, solver=bad)
         with pytest.raises(ValueError):
             sim.link_parameters(bad)
+
+
+def test_dynamics_numbers_must_be_finite(arm):
+    """A NaN point or acceleration is refused naming the entry, not answered with NaN."""
+    q = np.zeros(arm.nv)
+    with pytest.raises(ValueError, match=r"point\[1\] = nan: must be finite"):
+        fd.frame_position(arm, q, 3, [0.0, float("nan"), 0.0])
+    with pytest.raises(ValueError, match=r"qdd\[6\] = inf: must be finite"):
+        fd.inverse_dynamics(arm, q, q, np.r_[np.zeros(6), np.inf])
+    sim = fd.Simulation(arm)
+    with pytest.raises(ValueError, match=r"point\[0\] = -inf"):
+        sim.frame_position(3, [-np.inf, 0.0, 0.0])
+
+
+def test_drive_targets_beyond_the_representable_range(arm):
+    """docs/math/implicit_drives.md eq. T3: |x_T| <= 1e6 on a drive with stiffness."""
+    sim = fd.Simulation(arm, stiffness=100.0, damping=10.0)
+    sim.set_drive_target("joint2", 1e6, 0.0)
+    with pytest.raises(ValueError, match=r"joint 'joint2'.*target_position = 1e\+20 is beyond"):
+        sim.set_drive_target("joint2", 1e20, 0.0)
+    assert sim.drive("joint2").target_position == 1e6
+    batch = fd.Batch(sim, 2)
+    with pytest.raises(ValueError, match="target_velocity = 2e\\+10 is beyond"):
+        batch.set_drive_targets(np.zeros(7), np.full(7, 2e10))

@@ -80,6 +80,56 @@ def test_bad_input(slider):
         fd.export_mjcf(sim, drives="copied")
 
 
+def test_numbers_out_of_range_are_refused_naming_the_argument(slider):
+    """NaN, inf, negative, zero and overflowing numbers: ValueError naming the argument and the
+    value, never a NaN result, an identity map or timestep="nan"."""
+    options = fd.SimulationOptions()
+    nan = float("nan")
+    mj = fd.MujocoDrive()
+    mj.kp = nan
+    with pytest.raises(ValueError, match="kp = nan"):
+        fd.translate_to_physx(1.0, mj, options)
+    mj.kp = 100.0
+    mj.substeps = -5
+    with pytest.raises(ValueError, match="substeps = -5"):
+        fd.mujoco_step_map(1.0, mj, DT)
+    mj.substeps = 1
+    for dt in (0.0, -1.0, nan, float("inf")):
+        with pytest.raises(ValueError, match="dt = "):
+            fd.mujoco_step_map(1.0, mj, dt)
+    for field in ("kv", "damping", "armature"):
+        bad = fd.MujocoDrive()
+        setattr(bad, field, -1.0)
+        with pytest.raises(ValueError, match=f"{field} = -1"):
+            fd.mujoco_step_map(1.0, bad, DT)
+    with pytest.raises(ValueError, match=r"q\[0\] = nan"):
+        fd.effective_inertia(slider, np.array([nan]))
+    with pytest.raises(ValueError, match="dt = nan"):
+        fd.model_to_mjcf(slider, nan)
+    with pytest.raises(ValueError, match="dt = 0"):
+        fd.model_to_mjcf(slider, 0.0)
+    with pytest.raises(ValueError, match="stiffness = nan"):
+        fd.translate_to_mujoco(1.0, fd.Drive("force", stiffness=nan), options)
+    with pytest.raises(ValueError, match="effective inertia m = inf"):
+        fd.physx_step_map(float("inf"), fd.Drive("force", stiffness=1.0), options)
+    # A drive whose translation overflows a double (damping kd + dt kp = 2e308): refused, not
+    # a damping of inf.
+    with pytest.raises(ValueError, match="the translated damping = inf"):
+        fd.translate_to_mujoco(1.0, fd.Drive("force", stiffness=1e308, damping=1e308),
+                               fd.SimulationOptions(dt=1.0))
+
+
+def test_mjcf_gear_that_overflows_is_refused(tmp_path):
+    """A gear of 1e200 gives gain gear^2 = inf: refused naming the file, actuator and gear."""
+    xml = tmp_path / "gear.xml"
+    xml.write_text(
+        '<mujoco><worldbody><body name="b"><joint name="h" type="hinge"/>'
+        '<geom type="sphere" size="0.1" mass="1"/></body></worldbody>'
+        '<actuator><position name="act" joint="h" kp="10" gear="1e200"/></actuator></mujoco>')
+    with pytest.raises(ValueError, match=r"gear.xml: actuator act: gear = 1e\+200"):
+        fd.translate_mjcf_to_scene(str(xml), str(tmp_path / "s.yaml"))
+
+
 def test_mjcf_drives_to_a_scene(tmp_path):
     """A MuJoCo position actuator with joint damping 40 >= dt kp = 15: PGS's drive is kp and
     40 - dt kp (eq. B11), and the scene text loads."""

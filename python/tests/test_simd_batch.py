@@ -63,6 +63,29 @@ def test_bad_input_and_unsupported_settings():
         fd.SimdBatch(proto, 3)
 
 
+def test_indices_and_sizes_are_checked():
+    """An index is an integer in range (not a bool, not 2**40); a size stays within the bound
+    that keeps the padding to whole blocks inside an int."""
+    proto = arm_prototype()
+    batch = fd.SimdBatch(proto, 3)
+    for index in (2**40, -1, 3, -(2**70)):
+        with pytest.raises(ValueError, match=f"environment index.*{index}"):
+            batch.simulation(index)
+    for index in (True, 1.0, "1"):
+        with pytest.raises(TypeError, match="environment index"):
+            batch.simulation(index)
+    assert batch.simulation(np.int64(2)).model.nv == proto.model.nv
+    for count in (2**31 - 1, 2**24 + 1, 2**40):
+        with pytest.raises(ValueError, match=f"count = {count}"):
+            fd.SimdBatch(proto, count)
+        with pytest.raises(ValueError, match=f"count = {count}"):
+            fd.Batch(proto, count)
+    with pytest.raises(TypeError, match="count"):
+        fd.SimdBatch(proto, True)
+    with pytest.raises(TypeError, match="environment index"):
+        fd.Batch(proto, 2).sim(True)
+
+
 def test_divergence_names_the_environment():
     batch = fd.SimdBatch(arm_prototype(), 4)
     batch.set_qd(1e200, env_ids=[2])

@@ -200,3 +200,47 @@ def test_views_read_from_another_thread_do_not_crash(arm):
 
     run_threads(stepper, reader)
     assert sim.step_count == 400
+
+
+def test_a_waiting_call_gets_its_turn_after_the_current_one(arm, tmp_path):
+    """The lock is first come, first served: while one thread steps in a loop, another thread's
+    call waits for the step call in progress (and at most one that started as it asked), not for
+    a run of them. Counted in calls, not timed; the join is only a hang guard."""
+    sim = driven(arm)
+    path = tmp_path / "start.bin"
+    fd.save_checkpoint(sim, path)
+    done = [0]  # step calls the stepping thread has finished
+    stop = threading.Event()
+    waits, errors = [], []
+
+    def stepper():
+        try:
+            while not stop.is_set():
+                sim.step(200)
+                done[0] += 1
+        except BaseException as e:  # noqa: B036 - reported below
+            errors.append(e)
+
+    def caller():
+        try:
+            while done[0] == 0:  # the stepper is in its loop
+                threading.Event().wait(0.001)
+            for _ in range(30):
+                before = done[0]
+                fd.load_checkpoint(path, sim)
+                waits.append(done[0] - before)
+        except BaseException as e:  # noqa: B036 - reported below
+            errors.append(e)
+        finally:
+            stop.set()
+
+    threads = [threading.Thread(target=stepper), threading.Thread(target=caller)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not any(t.is_alive() for t in threads), "hang"
+    if errors:
+        raise errors[0]
+    assert len(waits) == 30
+    assert max(waits) <= 2, waits

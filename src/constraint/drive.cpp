@@ -1,5 +1,6 @@
 #include "featherdrive/constraint/drive.hpp"
 
+#include "featherdrive/constraint/drive_range.hpp"
 #include "featherdrive/core/format.hpp"
 
 #include <algorithm>
@@ -42,6 +43,17 @@ void validate_drive(const Drive& d, const std::string& joint) {
     reject(joint, "target_position", d.target_position, "must be finite");
   if (!std::isfinite(d.target_velocity))
     reject(joint, "target_velocity", d.target_velocity, "must be finite");
+  // Beyond these the drive impulse's rounding swamps the step's other impulses (eq. T1-T3).
+  // A target whose gain is 0 adds nothing to the impulse (eq. T1): only driven targets count.
+  const bool driven = d.type != DriveType::none;
+  if (driven && d.stiffness > 0.0 && std::abs(d.target_position) > kMaxDriveTargetPosition)
+    reject(joint, "target_position", d.target_position,
+           "is beyond +-1e6 (m or rad): its drive impulse cannot be represented beside the "
+           "step's other impulses");
+  if (driven && d.damping > 0.0 && std::abs(d.target_velocity) > kMaxDriveTargetVelocity)
+    reject(joint, "target_velocity", d.target_velocity,
+           "is beyond +-1e6 (m/s or rad/s): its drive impulse cannot be represented beside the "
+           "step's other impulses");
 }
 
 }  // namespace featherdrive

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "featherdrive/core/format.hpp"
 #include "mujoco_calls.hpp"
@@ -216,6 +217,10 @@ const char* to_string(DriveMapping mapping) {
 }
 
 std::string model_to_mjcf(const Model& model, double dt) {
+  if (!(dt >= kMinDt && dt <= kMaxDt))
+    throw std::invalid_argument("model_to_mjcf: dt = " + format_double(dt) +
+                                ": must be a normal number in [" + format_double(kMinDt) + ", " +
+                                format_double(kMaxDt) + "] s");
   return mjcf_text(model, dt, MujocoIntegrator::euler, nullptr, "");
 }
 
@@ -418,6 +423,14 @@ void MujocoRun::step(const Simulation& targets) {
       const Drive& drive = targets.drive(e.dof);
       const auto [position, velocity] =
           mujoco_ctrl(e.mujoco, drive.target_position, drive.target_velocity, dt, i);
+      // MuJoCo zeroes (with a warning) a ctrl beyond mjMAXVAL: the run would answer target 0.
+      for (const double ctrl : {position, velocity})
+        if (!(std::abs(ctrl) <= mjMAXVAL))
+          throw InputError("joint " + e.joint + ": the drive's targets (position " +
+                           format_double(drive.target_position) + ", velocity " +
+                           format_double(drive.target_velocity) + ") make MuJoCo's ctrl " +
+                           format_double(ctrl) + ", beyond the " + format_double(mjMAXVAL) +
+                           " MuJoCo takes (it would run with ctrl 0)");
       d->ctrl[e.position_actuator] = position;
       if (e.velocity_actuator >= 0) d->ctrl[e.velocity_actuator] = velocity;
     }

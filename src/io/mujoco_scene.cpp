@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <stdexcept>
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/error.hpp"
@@ -48,7 +49,14 @@ SceneTranslation translate_mjcf_to_scene(const std::filesystem::path& mjcf,
   for (const MjcfActuator& a : robot.actuators) {
     if (a.kind == MjcfActuatorKind::motor) continue;
     Gains& g = gains[a.dof];
-    (a.kind == MjcfActuatorKind::position ? g.kp : g.kv) += a.gain * a.gear * a.gear;
+    double& gain = a.kind == MjcfActuatorKind::position ? g.kp : g.kv;
+    gain += a.gain * a.gear * a.gear;
+    // A joint-space gain that overflows (or is NaN) would be written as inf or nan.
+    if (!std::isfinite(gain) || gain < 0.0)
+      throw InputError(name + ": actuator " + a.name + ": gear = " + format_double(a.gear) +
+                       ", gain = " + format_double(a.gain) + " give the joint-space " +
+                       (a.kind == MjcfActuatorKind::position ? "kp" : "kv") + " gain * gear^2 = " +
+                       format_double(gain) + ": must be finite and >= 0");
     const double limit = std::abs(a.gear) * std::max(std::abs(a.force_lower), a.force_upper);
     if (std::isfinite(limit)) {
       g.max_force = std::min(g.max_force, limit);
@@ -100,7 +108,11 @@ SceneTranslation translate_mjcf_to_scene(const std::filesystem::path& mjcf,
     t.mujoco.kv = g.kv;
     t.mujoco.damping = model.damping[dof];
     t.mujoco.integrator = out.integrator;
-    t.physx = translate_to_physx(mass[dof], t.mujoco, o);
+    try {
+      t.physx = translate_to_physx(mass[dof], t.mujoco, o);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(name + ": joint " + t.joint + ": " + e.what());
+    }
     y << YAML::Key << t.joint << YAML::Value << YAML::Flow << YAML::BeginMap;
     y << YAML::Key << "type" << YAML::Value << "force";
     y << YAML::Key << "stiffness" << YAML::Value << format_double(t.physx.drive.stiffness);

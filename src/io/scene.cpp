@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "featherdrive/constraint/drive_range.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/io/mjcf.hpp"
@@ -202,6 +203,23 @@ SineTarget read_sine(const Reader& r, const YAML::Node& s, const std::string& sp
   return sine;
 }
 
+// A drive's targets within the range whose impulses a double resolves (drive_range.hpp,
+// docs/math/implicit_drives.md eq. T1-T3).
+// Only a target with a gain acts on the impulse (validate_drive's rule).
+void check_target_range(const Reader& r, const YAML::Node& node, const std::string& path,
+                        const Drive& drive, double position, double velocity) {
+  const char* why = ": its drive impulse cannot be represented beside the step's other impulses";
+  if (drive.type == DriveType::none) return;
+  if (drive.stiffness > 0.0 && std::abs(position) > kMaxDriveTargetPosition)
+    r.fail(path, node,
+           "the target position reaches " + format_double(position) +
+               ", beyond +-1e6 (m or rad)" + why);
+  if (drive.damping > 0.0 && std::abs(velocity) > kMaxDriveTargetVelocity)
+    r.fail(path, node,
+           "the target velocity reaches " + format_double(velocity) +
+               ", beyond +-1e6 (m/s or rad/s)" + why);
+}
+
 DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string& path,
                      DriveSpec spec) {
   r.map(node, path, kDriveKeys);
@@ -234,15 +252,25 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
     r.fail(path,
            "give either target (a trajectory) or target_position / target_velocity, not both");
   if (constant) spec.sine.reset();
-  if (node["target_position"])
+  if (node["target_position"]) {
     spec.drive.target_position = r.finite(node["target_position"], at("target_position"));
-  if (node["target_velocity"])
+    check_target_range(r, node["target_position"], at("target_position"), spec.drive,
+                       spec.drive.target_position, 0.0);
+  }
+  if (node["target_velocity"]) {
     spec.drive.target_velocity = r.finite(node["target_velocity"], at("target_velocity"));
+    check_target_range(r, node["target_velocity"], at("target_velocity"), spec.drive, 0.0,
+                       spec.drive.target_velocity);
+  }
   if (node["target"]) {
     const std::string tpath = at("target");
     r.map(node["target"], tpath, {"sine"});
     if (!node["target"]["sine"]) r.fail(tpath, node["target"], "must name a trajectory (sine)");
     spec.sine = read_sine(r, node["target"]["sine"], tpath + ".sine");
+    check_target_range(r, node["target"]["sine"], tpath + ".sine", spec.drive,
+                       std::abs(spec.sine->offset) + std::abs(spec.sine->amplitude),
+                       2.0 * std::numbers::pi * spec.sine->frequency *
+                           std::abs(spec.sine->amplitude));
   }
   if (node["envelope"]) {
     const std::string epath = at("envelope");

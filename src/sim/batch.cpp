@@ -167,8 +167,9 @@ Batch::Batch(std::shared_ptr<const Model> model, int count, const SimulationOpti
     : Batch(Simulation(std::move(model), options), count) {}
 
 Batch::Batch(const Simulation& prototype, int count) {
-  if (count < 1)
-    throw std::invalid_argument("Batch: count = " + std::to_string(count) + " must be >= 1");
+  if (count < 1 || count > kMaxSize)
+    throw std::invalid_argument("Batch: count = " + std::to_string(count) + " must be in [1, " +
+                                std::to_string(kMaxSize) + "]");
   sims_.assign(static_cast<size_t>(count), prototype);
   initial_q_ = prototype.q();
   lend_rows();
@@ -411,10 +412,15 @@ void Batch::set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix
 void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay) {
   const std::vector<int> envs = check_env_ids(env_ids);
   check_values(delay, envs.size(), model().nv, "drive delay");
+  const int nv = model().nv;
   // Checked on the environments themselves: a delay needs the dof's drive.
+  std::vector<int> delays(static_cast<size_t>(size()) * static_cast<size_t>(nv));
+  for (int i = 0; i < size(); ++i)
+    for (int d = 0; d < nv; ++d)
+      delays[static_cast<size_t>(i) * nv + d] = sims_[static_cast<size_t>(i)].drive_delay(d);
   for (size_t j = 0; j < envs.size(); ++j) {
     const Simulation& sim = sims_[static_cast<size_t>(envs[j])];
-    for (int d = 0; d < model().nv; ++d) {
+    for (int d = 0; d < nv; ++d) {
       const double k = row_of(delay, j)[d];
       try {
         if (k != std::floor(k) || !(std::abs(k) <= kMaxDelay + 1.0))
@@ -426,11 +432,32 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
       } catch (const std::invalid_argument& e) {
         rethrow_for(envs[j], e);
       }
+      delays[static_cast<size_t>(envs[j]) * nv + d] = static_cast<int>(k);
     }
   }
-  for (size_t j = 0; j < envs.size(); ++j)
-    for (int d = 0; d < model().nv; ++d)
-      sims_[static_cast<size_t>(envs[j])].set_drive_delay(d, static_cast<int>(row_of(delay, j)[d]));
+  // The histories the batch would hold (delay + 1 samples per delayed dof), bounded before any
+  // is allocated.
+  long long samples = 0;
+  for (const int k : delays) samples += k > 0 ? k + 1LL : 0LL;
+  if (samples > kMaxDelaySamples)
+    throw std::invalid_argument(
+        "set_drive_delay: these delays need " + std::to_string(samples) +
+        " samples of delay history over the batch's " + std::to_string(size()) +
+        " environments, more than the " + std::to_string(kMaxDelaySamples) +
+        " a batch may hold (kMaxDelaySamples): nothing changed");
+  // Every new history is allocated before any environment changes (a std::bad_alloc leaves the
+  // batch as it was); the moves that commit them allocate nothing.
+  std::vector<DriveDelays> made;
+  made.reserve(envs.size());
+  for (size_t j = 0; j < envs.size(); ++j) {
+    DriveDelays& lines = made.emplace_back(sims_[static_cast<size_t>(envs[j])].drive_delays_);
+    for (int d = 0; d < nv; ++d) lines.set(d, static_cast<int>(row_of(delay, j)[d]));
+  }
+  for (size_t j = 0; j < envs.size(); ++j) {
+    Simulation& sim = sims_[static_cast<size_t>(envs[j])];
+    sim.drive_delays_ = std::move(made[j]);
+    sim.row_kinds_changed_ = true;
+  }
 }
 
 // Each environment envs[j] gets the model make(its model, j); with broadcast values, one new

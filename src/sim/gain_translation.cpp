@@ -12,6 +12,7 @@
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/sim/control_step.hpp"
 
 namespace featherdrive {
 namespace {
@@ -59,6 +60,27 @@ void check_inertia(double m) {
                                 ": must be finite and > 0");
 }
 
+void check_step(double dt) {
+  if (!(dt >= kMinDt && dt <= kMaxDt))
+    throw std::invalid_argument("dt = " + format_double(dt) + ": must be a normal number in [" +
+                                format_double(kMinDt) + ", " + format_double(kMaxDt) + "] s");
+}
+
+void check_gain(const char* name, double value) {
+  if (!std::isfinite(value) || value < 0.0)
+    throw std::invalid_argument(std::string("MuJoCo setting: ") + name + " = " +
+                                format_double(value) + ": must be finite and >= 0");
+}
+
+// A translated gain that does not fit a double (or is NaN) is refused, not written.
+void check_result(const char* name, double value) {
+  if (!std::isfinite(value))
+    throw std::invalid_argument(std::string("the translated ") + name + " = " +
+                                format_double(value) +
+                                " is not a finite number: the gains or the inertia are out of "
+                                "range");
+}
+
 std::complex<double> pole(const Eigen::Matrix2d& A, int k) {
   const double tr = A.trace(), det = A.determinant();
   const std::complex<double> root = std::sqrt(std::complex<double>(tr * tr / 4.0 - det));
@@ -92,6 +114,7 @@ const char* to_string(MujocoIntegrator integrator) {
 DriveStepMap physx_step_map(double m, const Drive& drive, const SimulationOptions& options) {
   check_inertia(m);
   validate_options(options);
+  validate_drive(drive, "(translated)");
   const ForceGains g = drive.type == DriveType::none ? ForceGains{0.0, 0.0} : force_gains(m, drive);
   const double dt = options.dt;
   const bool tgs = options.solver == SolverType::tgs;
@@ -110,8 +133,27 @@ std::pair<double, double> mujoco_ctrl(const MujocoDrive& drive, double x_target,
   return {position, v_target};
 }
 
+void validate_mujoco_drive(const MujocoDrive& drive) {
+  check_gain("kp", drive.kp);
+  check_gain("kv", drive.kv);
+  check_gain("damping", drive.damping);
+  check_gain("armature", drive.armature);
+  if (!std::isfinite(drive.ctrl_velocity_gain))
+    throw std::invalid_argument("MuJoCo setting: ctrl_velocity_gain = " +
+                                format_double(drive.ctrl_velocity_gain) + ": must be finite");
+  if (drive.substeps < 1 || drive.substeps > kMaxSubsteps)
+    throw std::invalid_argument("MuJoCo setting: substeps = " + std::to_string(drive.substeps) +
+                                ": must be in [1, " + std::to_string(kMaxSubsteps) + "]");
+  if (drive.integrator != MujocoIntegrator::euler && drive.integrator != MujocoIntegrator::implicit)
+    throw std::invalid_argument("MuJoCo setting: integrator = " +
+                                std::to_string(static_cast<int>(drive.integrator)) +
+                                ": must be euler or implicit");
+}
+
 DriveStepMap mujoco_step_map(double m, const MujocoDrive& drive, double dt) {
   check_inertia(m);
+  validate_mujoco_drive(drive);
+  check_step(dt);
   const double h = dt / drive.substeps;
   const double mass = m + drive.armature;
   // Euler: damping implicit, kv explicit; implicit: both implicit (eq. B5-B6).
@@ -171,11 +213,14 @@ MapDistance map_distance(const DriveStepMap& a, const DriveStepMap& b, int steps
 
 MujocoDrive literal_mujoco_drive(double m, const Drive& drive, MujocoIntegrator integrator) {
   check_inertia(m);
+  validate_drive(drive, "(translated)");
   const ForceGains g = force_gains(m, drive);
   MujocoDrive out;
   out.kp = g.kp;
   out.kv = g.kd;
   out.integrator = integrator;
+  check_result("kp", out.kp);
+  check_result("kv", out.kv);
   return out;
 }
 
@@ -183,6 +228,8 @@ MujocoTranslation translate_to_mujoco(double m, const Drive& drive,
                                       const SimulationOptions& options,
                                       const TranslationOptions& translation) {
   check_inertia(m);
+  validate_options(options);
+  validate_drive(drive, "(translated)");
   if (drive.type == DriveType::none)
     throw std::invalid_argument("translate_to_mujoco: the drive has type none");
   const DriveStepMap physx = physx_step_map(m, drive, options);
@@ -229,6 +276,10 @@ MujocoTranslation translate_to_mujoco(double m, const Drive& drive,
                                : "; closest: armature 0, damping kd + dt kp (one implicit step)";
     }
   }
+  check_result("kp", mj.kp);
+  check_result("damping", mj.damping);
+  check_result("armature", mj.armature);
+  check_result("ctrl_velocity_gain", mj.ctrl_velocity_gain);
   out.distance = map_distance(physx, mujoco_step_map(m, mj, dt));
   out.exact = out.reproducible && out.distance.step_response <= 1e-9;
   if (out.reproducible && !out.exact && out.note.empty())
@@ -243,6 +294,7 @@ PhysxTranslation translate_to_physx(double m, const MujocoDrive& mujoco,
                                     const SimulationOptions& options) {
   check_inertia(m);
   validate_options(options);
+  validate_mujoco_drive(mujoco);
   if (mujoco.substeps != 1)
     throw std::invalid_argument(
         "translate_to_physx: substeps = " + std::to_string(mujoco.substeps) + ": must be 1");
@@ -277,6 +329,8 @@ PhysxTranslation translate_to_physx(double m, const MujocoDrive& mujoco,
                "); closest: MuJoCo's stiffness without damping";
     g = {mujoco.kp, 0.0};
   }
+  check_result("stiffness", g.kp);
+  check_result("damping", g.kd);
   out.drive.stiffness = g.kp;
   out.drive.damping = g.kd;
   out.distance = map_distance(target, physx_step_map(mass, out.drive, options));
@@ -293,8 +347,21 @@ PhysxTranslation translate_to_physx(double m, const MujocoDrive& mujoco,
 }
 
 VecX effective_inertia(const Model& model, const VecX& q) {
+  if (q.size() != model.nq)
+    throw std::invalid_argument("effective_inertia: q has " + std::to_string(q.size()) +
+                                " entries, the model " + std::to_string(model.nq));
+  for (Eigen::Index i = 0; i < q.size(); ++i)
+    if (!std::isfinite(q[i]))
+      throw std::invalid_argument("effective_inertia: q[" + std::to_string(i) +
+                                  "] = " + format_double(q[i]) + ": must be finite");
   Data data(model);
-  return inverse_mass_diagonal(model, data, q).cwiseInverse();
+  const VecX m = inverse_mass_diagonal(model, data, q).cwiseInverse();
+  for (Eigen::Index i = 0; i < m.size(); ++i)
+    if (!(m[i] > 0.0) || !std::isfinite(m[i]))
+      throw std::invalid_argument("effective_inertia: dof " + std::to_string(i) +
+                                  " has effective inertia " + format_double(m[i]) +
+                                  ": the mass matrix is singular or out of range at q");
+  return m;
 }
 
 }  // namespace featherdrive

@@ -196,8 +196,9 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
       options_(prototype.options()),
       count_(count),
       impl_(std::make_unique<Impl>()) {
-  if (count < 1)
-    throw std::invalid_argument("SimdBatch: count = " + std::to_string(count) + " must be >= 1");
+  if (count < 1 || count > Batch::kMaxSize)
+    throw std::invalid_argument("SimdBatch: count = " + std::to_string(count) + " must be in [1, " +
+                                std::to_string(Batch::kMaxSize) + "]");
   check_supported(prototype);
   isa_ = isa ? *isa : default_simd_isa();
   // Without a choice (argument or FEATHERDRIVE_SIMD), a batch smaller than a block of the widest

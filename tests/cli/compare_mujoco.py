@@ -212,6 +212,60 @@ def main():
     check(len(rows) == 7 and all("exact; literal copy unstable in MuJoCo" in x for x in rows),
           "every arm joint: exact, literal copy unstable", r)
 
+    # Numbers that do not fit (issue 36): a gear whose gain gear^2 overflows, refused naming the
+    # file, the actuator and the gear, and no scene written with stiffness inf.
+    gear = os.path.join(out_dir, "mj_gear.xml")
+    with open(gear, "w") as f:
+        f.write('<mujoco><worldbody><body name="cart"><joint name="slide" type="slide"/>'
+                '<inertial pos="0 0 0" mass="2" diaginertia="0.01 0.01 0.01"/></body></worldbody>'
+                '<actuator><position name="push" joint="slide" kp="900" gear="1e200"/>'
+                '</actuator></mujoco>\n')
+    gear_scene = os.path.join(out_dir, "mj_gear.yaml")
+    r = run(cli, "translate", gear, "--to", "physx", "--out", gear_scene)
+    one_line_error(r, ["mj_gear.xml", "actuator push", "gear = 1e+200"], "a gear of 1e200")
+    check(not os.path.exists(gear_scene), "no scene written for a gear of 1e200")
+    # Targets MuJoCo would zero (its ctrl beyond 1e10): the ctrl kp x_T + kd v_T here is
+    # x_T + (kd / kp) v_T = 1e5 * 1e6 = 1e11, refused naming the joint, not compared with ctrl 0.
+    big_ctrl = os.path.join(out_dir, "mj_big_ctrl.yaml")
+    with open(big_ctrl, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                "  slide: {type: force, stiffness: 1e-6, damping: 1e-1, target_velocity: 1e6}\n")
+    r = run(cli, "compare-mujoco", big_ctrl, "--translate")
+    one_line_error(r, ["mj_big_ctrl.yaml", "joint slide", "ctrl", "beyond the 1e+10"],
+                   "a ctrl MuJoCo would zero")
+    # A target beyond the representable range (docs/math/implicit_drives.md, eq. T3).
+    far = os.path.join(out_dir, "mj_far_target.yaml")
+    with open(far, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                "  slide: {type: force, stiffness: 100, damping: 1, target_position: 2e10}\n")
+    r = run(cli, "compare-mujoco", far)
+    one_line_error(r, ["mj_far_target.yaml", "drives.slide.target_position = 2e10",
+                       "beyond +-1e6"], "a target of 2e10")
+
+    # Verdicts come from the measured run (docs/mujoco_bridge.md, "Verdicts"): the slider agrees
+    # and is exact; on arm7_pgs every drive saturates and the run differs, so no joint is exact.
+    r = run(cli, "compare-mujoco", scene, "--translate")
+    check(re.search(r"^\s+slide\s.*exact \(1-dof map and run\)$", r.stdout, re.M) is not None,
+          "the slider's verdict is exact", r)
+    r = run(cli, "compare-mujoco", os.path.join(source, "examples", "arm7_pgs.yaml"), "--translate")
+    verdicts = re.findall(r"^\s+joint\d\s.*\s(differs by (\S+) of the scale: (.*))$", r.stdout, re.M)
+    check(r.returncode == 0 and len(verdicts) == 7 and "exact" not in r.stdout,
+          "arm7_pgs: no joint called exact", r)
+    table = tables(r.stdout)
+    for whole, figure, why in verdicts:
+        check(float(figure) > 0.1 and why.startswith(("max_force saturates", "coupled joints")),
+              f"arm7_pgs verdict: {whole}")
+    check(any(why.startswith("max_force saturates") for _, _, why in verdicts),
+          "arm7_pgs: a saturating drive is named", r)
+    if table:
+        worst = max(v[2] for v in table[0].values())
+        check(abs(max(float(f) for _, f, _ in verdicts) - worst) <= 0.01 * worst + 0.005,
+              f"the verdicts' largest figure is the table's largest relative q difference {worst}")
+    # Spherical joints: one line naming the scene and the joint.
+    wrist = os.path.join(source, "examples", "spherical_wrist.yaml")
+    one_line_error(run(cli, "compare-mujoco", wrist),
+                   ["spherical_wrist.yaml", "joint 'wrist' is spherical"], "a spherical wrist")
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)

@@ -88,6 +88,23 @@ def physx(cli, source, out_dir):
         check(r.returncode == 0 and m is not None and max(float(x) for x in m.groups()) < 1e-4,
               f"compare-physx {name} agrees within 1e-4", r)
 
+    # Joint names with a comma, quotes, a backslash and a space reach the real harness (JSON
+    # escaped, CSV header quoted) and the pendulum agrees with PhysX as the plain one does.
+    with open(os.path.join(source, "examples", "pendulum.urdf")) as f:
+        urdf = f.read()
+    odd = 'hi, "nge" \\x'
+    with open(os.path.join(out_dir, "odd_names.urdf"), "w") as f:
+        f.write(urdf.replace('name="hinge"', 'name="hi, &quot;nge&quot; \\x"'))
+    odd_scene = os.path.join(out_dir, "odd_names.yaml")
+    with open(odd_scene, "w") as f:
+        f.write("model: odd_names.urdf\ndt: 0.01\nsteps: 50\n"
+                "initial: {q: {'" + odd.replace("'", "''") + "': 0.5}}\n")
+    r = run(cli, "compare-physx", odd_scene, env=environment())
+    m = re.search(r"largest relative difference: q " + number + ", qd " + number + ", force " + number, r.stdout)
+    check(r.returncode == 0 and m is not None and max(float(x) for x in m.groups()) < 1e-4
+          and re.search(r"^\s+" + re.escape(odd) + r"\s", r.stdout, re.M) is not None,
+          "compare-physx with a joint named with a comma, quotes and a backslash", r)
+
     # Overrides reach both sides: TGS, 2 steps.
     r = run(cli, "compare-physx", scene, "--steps", "2", "--solver", "tgs", "--position-iterations", "8",
             "--velocity-iterations", "2", env=environment())

@@ -122,6 +122,37 @@ TEST(DriveRow, RejectsBadSettings) {
             "not both");
 }
 
+// docs/math/implicit_drives.md eq. T1-T3: the velocity a step's target term gives a dof is at
+// most |x_T - x_0| / tau + |v_T|, whatever the gains; targets beyond +-1e6 are refused.
+TEST(DriveRow, TargetsBeyondTheRepresentableRangeAreRefused) {
+  std::mt19937 rng(3);
+  for (int i = 0; i < 2000; ++i) {
+    const Sample s = random_sample(rng);
+    Drive d{DriveType::force, s.kp, s.kd, std::numeric_limits<double>::infinity(), 1e6 * s.xT,
+            1e6 * s.vT};
+    const DriveRow row = setup_drive_row(d, s.r, s.x0, s.tau, s.tau, false);
+    const double bound = std::abs(d.target_position - s.x0) / s.tau + std::abs(d.target_velocity);
+    EXPECT_LE(s.r * std::abs(row.target_vel_plus_initial_bias), bound * (1 + 1e-12));
+  }
+  auto message = [](double position, double velocity) {
+    try {
+      validate_drive({DriveType::force, 1, 1, std::numeric_limits<double>::infinity(), position,
+                      velocity},
+                     "slider");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message(1e6, -1e6), "no error");
+  EXPECT_EQ(message(-1e20, 0.0),
+            "drive on joint 'slider': target_position = -1e+20 is beyond +-1e6 (m or rad): its "
+            "drive impulse cannot be represented beside the step's other impulses");
+  EXPECT_NE(message(std::nextafter(1e6, 2e6), 0.0), "no error");
+  EXPECT_EQ(message(0.0, 2e10).substr(0, 55),
+            "drive on joint 'slider': target_velocity = 2e+10 is bey");
+}
+
 TEST(DriveRow, MaxImpulseBoundsTheStepImpulseDirectly) {
   Drive d{DriveType::force, 1e6, 10, std::numeric_limits<double>::infinity(), 1.0, 0.0};
   d.max_impulse = 0.3;

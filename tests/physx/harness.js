@@ -279,7 +279,8 @@ function parseScene(doc) {
     const joint = {};
     joint.name = typeof J.name === 'string' && J.name ? J.name : `joint${i}`;
     if (jointNames.has(joint.name)) throw new InputError(`${wj}.name: duplicate joint name "${joint.name}"`);
-    if (!/^[^,\s"]+$/.test(joint.name)) throw new InputError(`${wj}.name: joint names must not contain commas, quotes or white space ("${joint.name}")`);
+    // Any name the CSV header can quote (RFC 4180); a line break would split the header's line.
+    if (/[\r\n]/.test(joint.name)) throw new InputError(`${wj}.name: joint names must not contain line breaks (${JSON.stringify(joint.name)})`);
     jointNames.set(joint.name, i);
     if (!['revolute', 'prismatic', 'fixed', 'spherical'].includes(J.type)) {
       throw new InputError(`${wj}.type: expected "revolute", "prismatic", "spherical" or "fixed", got ${JSON.stringify(J.type)}`);

@@ -5,6 +5,7 @@
 
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -60,10 +61,14 @@ TEST(Batch, EqualsSeparateSimulationsForAnyThreadCount) {
 TEST(Batch, DivergenceNamesTheLowestCopyAndTheOthersStep) {
   const auto model = test::make_planar_chain(3, 1.0, 0.5);
   Batch batch(model, 6);
-  // Stiffness times position error overflows to inf at the first step.
-  const Drive overflow{DriveType::force, 1e300, 0.0, std::numeric_limits<double>::infinity(), 1e300, 0.0};
-  batch.sim(4).set_drive(1, overflow);
-  batch.sim(2).set_drive(0, overflow);
+  // An applied force of 1e308 overflows the velocity at the first step (a target of 1e300 is
+  // refused: docs/math/implicit_drives.md eq. T3).
+  VecX force = VecX::Zero(model->nv);
+  force[1] = 1e308;
+  batch.sim(4).set_applied_force(force);
+  force.setZero();
+  force[0] = 1e308;
+  batch.sim(2).set_applied_force(force);
   try {
     batch.step(3);
     FAIL() << "no DivergenceError";
@@ -423,6 +428,39 @@ TEST(Batch, RandomisationRefusesBadValuesAndChangesNothing) {
         << e.what();
   }
   EXPECT_THROW(sim.set_model(test::make_planar_chain(4, 1.0, 0.5)), std::invalid_argument);
+}
+
+// set_drive_delay is all or nothing: delays whose histories exceed kMaxDelaySamples are refused
+// before any environment changes, and a refused environment leaves the others as they were.
+std::vector<int> every_env(const Batch& batch) {
+  std::vector<int> ids(static_cast<size_t>(batch.size()));
+  std::iota(ids.begin(), ids.end(), 0);
+  return ids;
+}
+
+TEST(Batch, DriveDelayIsAllOrNothing) {
+  const auto model = test::make_planar_chain(2, 1.0, 0.5);
+  Simulation prototype(model);
+  for (int d = 0; d < model->nv; ++d) prototype.set_drive(d, {DriveType::force, 10.0, 1.0});
+  Batch batch(prototype, 1000);
+  batch.set_drive_delay(std::vector<int>{5}, RowMatrix::Constant(1, model->nv, 3.0));
+  // 1000 environments x 2 dofs x (kMaxDelay + 1) samples: over 2^26, refused whole.
+  const long long needed = 1000LL * model->nv * (kMaxDelay + 1);
+  ASSERT_GT(needed, Batch::kMaxDelaySamples);
+  try {
+    batch.set_drive_delay(every_env(batch), RowMatrix::Constant(1, model->nv, kMaxDelay));
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("need " + std::to_string(needed) + " samples"),
+              std::string::npos)
+        << e.what();
+  }
+  for (int i = 0; i < batch.size(); ++i)
+    for (int d = 0; d < model->nv; ++d) ASSERT_EQ(batch.sim(i).drive_delay(d), i == 5 ? 3 : 0);
+  // Within the bound every environment takes it (and the old histories go).
+  batch.set_drive_delay(every_env(batch), RowMatrix::Constant(1, model->nv, 7.0));
+  for (int i = 0; i < batch.size(); ++i) EXPECT_EQ(batch.sim(i).drive_delay(1), 7);
+  EXPECT_THROW(Batch(prototype, Batch::kMaxSize + 1), std::invalid_argument);
 }
 
 // observe() puts the fields side by side; frame_positions() is each environment's tip of a planar

@@ -159,5 +159,48 @@ TEST(GainTranslation, BadInputIsRefused) {
   EXPECT_THROW(translate_to_physx(1.0, sub, o), std::invalid_argument);
 }
 
+// Every number that enters the translation is checked where it enters: one line naming the
+// argument (or field) and the value, never a NaN, an identity map or inf in the result.
+TEST(GainTranslation, NonFiniteNegativeAndOverflowingNumbersAreRefused) {
+  auto message = [](auto f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const SimulationOptions o;
+  const double nan = std::nan("");
+  MujocoDrive mj;
+  mj.kp = nan;
+  EXPECT_EQ(message([&] { translate_to_physx(1.0, mj, o); }),
+            "MuJoCo setting: kp = nan: must be finite and >= 0");
+  mj.kp = 100.0;
+  mj.substeps = -5;
+  EXPECT_EQ(message([&] { mujoco_step_map(1.0, mj, 0.01); }),
+            "MuJoCo setting: substeps = -5: must be in [1, 1000000]");
+  mj.substeps = 1;
+  EXPECT_EQ(message([&] { mujoco_step_map(1.0, mj, 0.0); }).substr(0, 34),
+            "dt = 0: must be a normal number in");
+  mj.armature = -1.0;
+  EXPECT_EQ(message([&] { mujoco_step_map(1.0, mj, 0.01); }),
+            "MuJoCo setting: armature = -1: must be finite and >= 0");
+  mj.armature = 0.0;
+  // Gains that fit a double but whose translation (damping kd + dt kp = 2e308) overflows are
+  // refused, not written as inf.
+  SimulationOptions one_second;
+  one_second.dt = 1.0;
+  const std::string big = message(
+      [&] { translate_to_mujoco(1.0, Drive{DriveType::force, 1e308, 1e308}, one_second); });
+  EXPECT_EQ(big.find("the translated damping = inf"), 0u) << big;
+  const auto pendulum = test::make_pendulum(1.3, 0.7, 0.02);
+  EXPECT_EQ(message([&] { effective_inertia(*pendulum, VecX::Constant(1, nan)); }),
+            "effective_inertia: q[0] = nan: must be finite");
+  Drive d{DriveType::force, nan, 1.0};
+  EXPECT_EQ(message([&] { translate_to_mujoco(1.0, d, o); }),
+            "drive on joint '(translated)': stiffness = nan must be finite and >= 0");
+}
+
 }  // namespace
 }  // namespace featherdrive

@@ -99,6 +99,8 @@ class MujocoRun {
   /// q and qd in featherdrive's order and convention (fixed-base models: the same vectors).
   void set_state(const VecX& q, const VecX& qd);
   /// One featherdrive step (substeps MuJoCo steps) with the drive targets sim.drive(dof) holds.
+  /// Throws InputError naming the joint for targets whose ctrl MuJoCo would zero (beyond
+  /// mjMAXVAL = 1e10).
   void step(const Simulation& targets);
   VecX q() const;
   VecX qd() const;

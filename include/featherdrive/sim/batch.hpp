@@ -42,9 +42,11 @@ enum class Observation {
 
 class Batch {
  public:
-  /// `count` (>= 1) environments, each a new Simulation of `model` with `options`.
+  /// The most environments a Batch or SimdBatch holds (2^24): std::invalid_argument above.
+  static constexpr int kMaxSize = 1 << 24;
+  /// `count` in [1, kMaxSize] environments, each a new Simulation of `model` with `options`.
   Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options = {});
-  /// `count` (>= 1) copies of `prototype`: state, drives, limits and all other settings.
+  /// `count` in [1, kMaxSize] copies of `prototype`: state, drives, limits and all other settings.
   Batch(const Simulation& prototype, int count);
   Batch(const Batch& other);  ///< environments with their own rows
   Batch& operator=(const Batch&) = delete;
@@ -127,8 +129,13 @@ class Batch {
   void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
                      bool scale_inertia = true);
   void set_link_com(std::span<const int> env_ids, int link, const RowMatrix& com);  ///< (k|1, 3)
+  /// The most samples of drive delay history (delay + 1 per delayed dof, 16 bytes each) a batch
+  /// holds over all its environments: 2^26, 1 GiB.
+  static constexpr long long kMaxDelaySamples = 1LL << 26;
   /// Drive delays in steps (whole numbers), as Simulation::set_drive_delay, each checked against
-  /// its environment's drives; the environments' delay histories start over.
+  /// its environment's drives; the environments' delay histories start over. All or nothing:
+  /// std::invalid_argument (nothing changed) for a delay refused or more than kMaxDelaySamples in
+  /// all; every history is allocated before any environment changes.
   void set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay);
   // The same read back, (N, nv) / (N,) / (N, 3) copies.
   RowMatrix armature() const;

@@ -47,6 +47,11 @@ struct MujocoDrive {
   MujocoIntegrator integrator = MujocoIntegrator::euler;
 };
 
+/// Throws std::invalid_argument naming the field and value for a gain, damping or armature that
+/// is negative or not finite, a non-finite ctrl_velocity_gain or substeps outside
+/// [1, kMaxSubsteps].
+void validate_mujoco_drive(const MujocoDrive& drive);
+
 /// MuJoCo's step of the joint over dt (`substeps` MuJoCo steps), eq. B5-B6. Semi-implicit
 /// Euler: explicit in kp and kv, implicit in joint damping (dof_damping > 0); the implicit
 /// integrator is implicit in kv and damping too.
@@ -113,7 +118,8 @@ PhysxTranslation translate_to_physx(double m, const MujocoDrive& mujoco,
                                     const SimulationOptions& options);
 
 /// 1 / (M(q)^-1)_jj for every dof (armature included): the inertia a drive on dof j sees with
-/// the rest of the articulation free (spec ERRATA 6).
+/// the rest of the articulation free (spec ERRATA 6). std::invalid_argument for a q of the
+/// wrong size or with a non-finite entry, or a dof whose inertia is not finite and > 0.
 VecX effective_inertia(const Model& model, const VecX& q);
 
 }  // namespace featherdrive

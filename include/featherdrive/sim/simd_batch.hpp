@@ -37,7 +37,8 @@ struct SimdDivergence {
 
 class SimdBatch {
  public:
-  /// `count` (>= 1) copies of `prototype`: state, drives, limits, options, model. Throws
+  /// `count` in [1, Batch::kMaxSize] copies of `prototype`: state, drives, limits, options,
+  /// model (std::invalid_argument outside; the padding to whole blocks stays within int). Throws
   /// std::invalid_argument with one line naming the setting and the joint (or link) for what the
   /// SIMD step does not simulate: joints other than fixed, revolute and prismatic, compat physx,
   /// friction coefficients, velocity limits, actuator envelopes, explicit actuators, drive delays
