@@ -98,12 +98,14 @@ class Progress {
 struct DriveStats {
   Rms rms;
   double max_error = 0.0, max_force = 0.0;
-  long at_max_force = 0, at_velocity_limit = 0, at_position_limit = 0, unconverged = 0;
-  double worst_change = 0.0;  ///< the largest relative drive impulse change of a last iteration
+  long at_max_force = 0, at_velocity_limit = 0, at_position_limit = 0;
+  /// The largest change of the drive force (impulse / dt) in PGS's last position iteration.
+  double max_change = 0.0;
 
-  // The relative change of the drive impulse in PGS's last position iteration above which the
-  // step counts as not converged.
-  static constexpr double kConvergence = 1e-3;
+  /// A drive whose last-iteration change reached this share of its largest force has not
+  /// converged.
+  static constexpr double kConvergence = 1e-2;
+  bool converged() const { return !(max_change > kConvergence * max_force); }
 
   static double force_bound(const Simulation& sim, int dof) {
     const Drive& drive = sim.drive(dof);
@@ -121,13 +123,8 @@ struct DriveStats {
       ++at_max_force;
     if (sim.velocity_limit_force()[d.dof] != 0.0) ++at_velocity_limit;
     if (sim.limit_force()[d.dof] != 0.0) ++at_position_limit;
-    // Only where the impulse is not held at its bound (a clamped impulse has converged).
-    const double impulse = std::abs(sim.drive_force()[d.dof]) * sim.options().dt;
-    const double change = std::abs(sim.last_drive_impulse_change()[d.dof]);
-    if (impulse > 0.0 && change > kConvergence * impulse) {
-      ++unconverged;
-      worst_change = std::max(worst_change, change / impulse);
-    }
+    max_change = std::max(max_change,
+                          std::abs(sim.last_drive_impulse_change()[d.dof]) / sim.options().dt);
   }
 };
 
@@ -147,8 +144,7 @@ void print_drive_table(const Scene& scene, const Simulation& sim,
   std::printf("  %-16s %-12s %11s %11s %11s %11s %10s %10s %10s\n", "joint", "drive",
               "final error", "rms error", "max |error|", "max |force|", "max_force", "vel. limit",
               "pos. limit");
-  std::vector<std::string> unconverged;
-  double worst = 0.0;
+  std::string unconverged;
   for (size_t i = 0; i < stats.size(); ++i) {
     const DriveSpec& d = scene.drives[i];
     const DriveStats& s = stats[i];
@@ -163,20 +159,19 @@ void print_drive_table(const Scene& scene, const Simulation& sim,
                 share(s.at_velocity_limit, steps, std::isfinite(sim.max_joint_velocity(d.dof)))
                     .c_str(),
                 share(s.at_position_limit, steps, limited).c_str());
-    if (s.unconverged > 0) {
-      unconverged.push_back(d.joint + " (" + share(s.unconverged, steps, true) + " of steps)");
-      worst = std::max(worst, s.worst_change);
+    if (!s.converged()) {
+      char text[96];
+      std::snprintf(text, sizeof text, " (by up to %.3g, %.2g %% of %.4g)", s.max_change,
+                    100.0 * s.max_change / s.max_force, s.max_force);
+      unconverged += (unconverged.empty() ? "" : ", ") + d.joint + text;
     }
   }
   if (unconverged.empty()) return;
-  std::string joints;
-  for (const std::string& j : unconverged) joints += (joints.empty() ? "" : ", ") + j;
-  char worst_text[32];
-  std::snprintf(worst_text, sizeof worst_text, "%.3g", worst);
-  print_warnings({"not converged: PGS's last position iteration still changed the drive impulse "
-                  "by more than " + format_double(DriveStats::kConvergence) + " of it (up to " +
-                  worst_text + ") on " + joints + "; raise position_iterations (now " +
-                  std::to_string(sim.options().position_iterations) + ")"});
+  print_warnings({"not converged: the last of PGS's " +
+                  std::to_string(sim.options().position_iterations) +
+                  " position iterations still changed the drive force by more than " +
+                  format_double(100.0 * DriveStats::kConvergence) + " % of its largest on " +
+                  unconverged + "; raise position_iterations"});
 }
 
 int simulate(const SimulateArgs& args) {
@@ -345,12 +340,14 @@ int main(int argc, char** argv) {
   CLI::App app{
       "featherdrive: articulated robots with implicit PD joint drives (PhysX-style PGS and TGS)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("featherdrive ") + FEATHERDRIVE_VERSION);
 
   SimulateArgs sim_args;
   CLI::App* sim_cmd = app.add_subcommand("simulate", "Run a scene file and write its trajectory");
   sim_cmd->add_option("scene", sim_args.scene, "Scene file (YAML or JSON)")->required();
   sim_cmd->add_option("--out", sim_args.out,
-                      "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...");
+                      "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...,"
+                      "target:<joint>...,target_velocity:<joint>... (a log fit reads)");
   sim_cmd->add_option("--plot", sim_args.plot, "PNG of positions against targets and drive forces");
   sim_args.overrides.add_options(sim_cmd);
   sim_cmd->add_option("--save-state", sim_args.save_state,
@@ -389,6 +386,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";
