@@ -36,6 +36,9 @@ configure: deps $(BUILD)/CMakeCache.txt
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
+# No "Entering/Leaving directory" lines from the makes that cmake --build starts below.
+MAKEFLAGS += --no-print-directory
+
 # The demo: the 7-dof arm of examples/arm7.urdf tracking sine trajectories with stiff drives,
 # under PGS and then TGS; trajectories, plots and the 3D viewer page (docs/viewer.md) go to out/.
 run: build

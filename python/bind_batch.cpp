@@ -15,6 +15,19 @@ void featherdrive::python::bind_batch(py::module_& m) {
                                  "each bit-identical to stepping it alone, for any num_threads. "
                                  "States are read-only (N, nq) / (N, nv) views of the batch's "
                                  "arrays; sim(i) is environment i, live.")
+      .def("__repr__",
+           [](const Batch& b) {
+             return locked(b, [&] {
+               const Simulation& s = b.sim(0);
+               const SimulationOptions& o = s.options();
+               std::ostringstream r;
+               r << "Batch(N=" << b.size() << ", nq=" << b.model().nq << ", nv=" << b.model().nv
+                 << ", " << to_string(o.solver) << " " << o.position_iterations << "/"
+                 << o.velocity_iterations << ", dt=" << o.dt << ", num_threads="
+                 << b.num_threads() << ")";
+               return r.str();
+             });
+           })
       .def(py::init([](ModelPtr model, py::handle count, double dt, py::handle solver,
                        py::handle pi, py::handle vi, py::handle compat, py::handle kp,
                        py::handle kd, py::handle type) {

@@ -1,9 +1,43 @@
 // Model (read-only), its links, and ModelBuilder with its joint and link specs.
 #include "bindings.hpp"
+#include "featherdrive/model/dof_position.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
 using namespace featherdrive::python;
+
+namespace {
+
+// The dofs argument of dof_positions / set_dof_positions: None (every dof with a position, in
+// model order) or a sequence of dof indices, each with a position.
+std::vector<int> position_dofs(const Model& model, py::handle dofs_obj) {
+  std::vector<int> dofs;
+  if (dofs_obj.is_none()) {
+    for (int d = 0; d < model.nv; ++d)
+      if (has_dof_position(model, d)) dofs.push_back(d);
+    return dofs;
+  }
+  for (py::handle d : dofs_obj) {
+    const int dof = to_int(d, "dofs[" + std::to_string(dofs.size()) + "]", 0, model.nv - 1);
+    if (!has_dof_position(model, dof)) dof_position(model, model.neutral_configuration(), dof);
+    dofs.push_back(dof);
+  }
+  return dofs;
+}
+
+// q as rows (T, nq), and whether it was one configuration (nq,).
+std::pair<py::array_t<double, py::array::c_style>, bool> q_rows(const Model& model,
+                                                                py::handle q_obj) {
+  auto q = as_float_array(q_obj, "q");
+  const bool single = q.ndim() == 1;
+  if ((q.ndim() != 1 && q.ndim() != 2) || q.shape(q.ndim() - 1) != model.nq)
+    throw std::invalid_argument("q has shape " + shape_of(q) + ", expected (" +
+                                std::to_string(model.nq) + ",) or (T, " +
+                                std::to_string(model.nq) + ")");
+  return {q, single};
+}
+
+}  // namespace
 
 void featherdrive::python::bind_model(py::module_& m) {
   // ---- model ----------------------------------------------------------------------------------
@@ -157,4 +191,57 @@ void featherdrive::python::bind_model(py::module_& m) {
           "build", [](const ModelBuilder& b) { return std::make_shared<Model>(b.build()); },
           "Validates everything and returns the Model; ModelError (a ValueError) naming the "
           "link or joint, field and value.");
+
+  // ---- dof positions (model/dof_position.hpp) -------------------------------------------------
+  m.def(
+      "has_dof_position",
+      [](const ModelPtr& model, py::handle dof) {
+        return has_dof_position(*model, to_int(dof, "dof", 0, model->nv - 1));
+      },
+      py::arg("model"), py::arg("dof"),
+      "Whether the dof has a position of its own: a 1-dof joint's or a spherical joint's axis "
+      "(not a floating root's).");
+  m.def(
+      "dof_positions",
+      [](const ModelPtr& model, py::handle q_obj, py::handle dofs_obj) -> py::array {
+        const auto [q, single] = q_rows(*model, q_obj);
+        const std::vector<int> dofs = position_dofs(*model, dofs_obj);
+        const py::ssize_t rows = single ? 1 : q.shape(0), n = static_cast<py::ssize_t>(dofs.size());
+        py::array_t<double> out({rows, n});
+        auto o = out.mutable_unchecked<2>();
+        for (py::ssize_t t = 0; t < rows; ++t)
+          for (py::ssize_t j = 0; j < n; ++j)
+            o(t, j) = dof_position(*model, q.data() + t * model->nq, dofs[static_cast<size_t>(j)]);
+        if (single) return out.attr("reshape")(n);
+        return out;
+      },
+      py::arg("model"), py::arg("q"), py::arg("dofs") = py::none(),
+      "Each dof's position in q (nq,) or rows of q (T, nq): q's entry for a 1-dof joint, PhysX's "
+      "position of a spherical joint's axis (the rotation vector of its quaternion), as the "
+      "trajectory CSV's q:<dof> columns. dofs: indices (default: every dof with a position, in "
+      "model order; a floating root's have none). Returns (len(dofs),) or (T, len(dofs)).");
+  m.def(
+      "set_dof_positions",
+      [](const ModelPtr& model, py::handle q_obj, py::handle dofs_obj, py::handle values_obj) {
+        const auto [q, single] = q_rows(*model, q_obj);
+        const std::vector<int> dofs = position_dofs(*model, dofs_obj);
+        const auto values = as_float_array(values_obj, "values");
+        const py::ssize_t rows = single ? 1 : q.shape(0), n = static_cast<py::ssize_t>(dofs.size());
+        if (values.size() != rows * n || values.ndim() != q.ndim())
+          throw std::invalid_argument("values has shape " + shape_of(values) + ", expected " +
+                                      (single ? "(" + std::to_string(n) + ",)"
+                                              : "(" + std::to_string(rows) + ", " +
+                                                    std::to_string(n) + ")"));
+        py::array_t<double> out = py::module_::import("numpy").attr("array")(q);  // a copy
+        double* x = out.mutable_data();
+        for (py::ssize_t t = 0; t < rows; ++t)
+          for (py::ssize_t j = 0; j < n; ++j)
+            set_dof_position(*model, x + t * model->nq, dofs[static_cast<size_t>(j)],
+                             values.data()[t * n + j]);
+        return out;
+      },
+      py::arg("model"), py::arg("q"), py::arg("dofs"), py::arg("values"),
+      "A copy of q (nq,) or (T, nq) with the dofs' positions set, the inverse of dof_positions: "
+      "a spherical joint's quaternion becomes exp(theta), theta its three axis positions with "
+      "the given ones replaced. dofs as in dof_positions; values (len(dofs),) or (T, len(dofs)).");
 }

@@ -13,6 +13,18 @@ void featherdrive::python::bind_simulation(py::module_& m) {
   py::class_<Simulation, SimulationHolder>(m, "Simulation",
                                            "One simulation of a Model: state, drives, joint "
                                            "settings and the forces of the last step.")
+      .def("__repr__",
+           [](const Simulation& s) {
+             return locked(s, [&] {
+               const SimulationOptions& o = s.options();
+               std::ostringstream r;
+               r << "Simulation(nq=" << s.model().nq << ", nv=" << s.model().nv << ", "
+                 << to_string(o.solver) << " " << o.position_iterations << "/"
+                 << o.velocity_iterations << ", dt=" << o.dt << ", step " << s.step_count()
+                 << ", t=" << s.time() << ")";
+               return r.str();
+             });
+           })
       .def(
           py::init([](ModelPtr model, double dt, py::handle solver, py::handle pi, py::handle vi,
                       py::handle compat, py::handle kp, py::handle kd, py::handle type) {

@@ -877,3 +877,15 @@ class SimdBatch:
     def step(self, count: Int = 1) -> None:
         """Steps every environment count times without the GIL; DivergenceError names the
         lowest environment that stopped (the others make all their steps)."""
+
+# ---- dof positions (model/dof_position.hpp) ----------------------------------------------------
+def has_dof_position(model: Model, dof: Int) -> bool:
+    """Whether the dof has a position of its own: a 1-dof joint's or a spherical joint's axis
+    (not a floating root's)."""
+def dof_positions(model: Model, q: ArrayLike, dofs: Sequence[Int] | None = None) -> Vector:
+    """Each dof's position in q (nq,) or rows of q (T, nq), as the trajectory CSV's q:<dof>
+    columns: q's entry for a 1-dof joint, PhysX's position of a spherical axis. dofs: default
+    every dof with a position. Returns (len(dofs),) or (T, len(dofs))."""
+def set_dof_positions(model: Model, q: ArrayLike, dofs: Sequence[Int] | None,
+                      values: ArrayLike) -> Vector:
+    """A copy of q with the dofs' positions set (the inverse of dof_positions)."""

@@ -94,6 +94,13 @@ class FitResult:
                 return e.value
         raise ValueError(f"fit: {quantity} of {name!r} was not fitted")
 
+    def __repr__(self) -> str:
+        values = ", ".join(f"{e.quantity}[{','.join(e.names)}]={e.value:.6g}"
+                           for e in self.estimates)
+        delay = "" if self.delay is None else f", delay={self.delay}"
+        return (f"FitResult({values}{delay}, rms={self.rms:.3g}, nfev={self.nfev}, "
+                f"converged={self.converged})")
+
     def table(self) -> str:
         lines = [f"{'quantity':22} {'joints':24} {'initial':>12} {'fitted':>12} {'± 95 %':>10}"]
         for e in self.estimates:

@@ -293,10 +293,9 @@ def _points(axes):
 
 
 def _drives(scene, joint):
-    """The scene's implicit drives [(joint, dof, q index)] and the dofs the grid changes."""
+    """The scene's implicit drives [(joint, dof)] and the dofs the grid changes."""
     import featherdrive as fd
-    model = scene.model
-    drives = [(d.joint, d.dof, model.links[model.dof_link[d.dof]].q_index)
+    drives = [(d.joint, d.dof)
               for d in scene.drives if d.drive.type != fd.DriveType.none and d.actuator is None]
     if not drives:
         raise ValueError(f"{scene.path}: the scene has no implicit drive (type force or "
@@ -375,7 +374,7 @@ def evaluate(item):
     reference = fd.make_simulation(scene)
     nv = scene.model.nv
     dt = scene.options.dt
-    q_index = np.array([d[2] for d in drives])
+    dofs = [d[1] for d in drives]
     specs = [next(s for s in scene.drives if s.joint == d[0]) for d in drives]
     squares = np.zeros((len(rows), len(drives)))
     alive = np.ones(len(rows), dtype=bool)
@@ -404,7 +403,8 @@ def evaluate(item):
                     alive[i] = False
         t = (k + 1) * dt
         target_q = np.array([s.target_at(t)[0] for s in specs])
-        error = target_q - batch.q[:, q_index]
+        # Each drive's position as the CSV has it (a spherical axis: PhysX's, not a q entry).
+        error = target_q - fd.dof_positions(scene.model, batch.q, dofs)
         squares += error * error
         excursion = np.maximum(excursion, np.where(step, direction * error, np.abs(error)))
         settled_at[np.abs(error) > band] = t + dt

@@ -155,19 +155,15 @@ def _read_csv(fd, scene, path):
     header = rows[0]
     index = {name: i for i, name in enumerate(header)}
     links = model.links
-    q_columns = []  # (column, q index)
+    q_columns = []  # (column, q index) of a floating root's 7 entries
     if model.floating_base():
         root = links[0]
         for k, c in enumerate(("x", "y", "z", "qw", "qx", "qy", "qz")):
             q_columns.append((f"q:{root.joint_name}:{c}", root.q_index + k))
-    for d in robot.dof_order:
-        link = links[model.dof_link[d]]
-        if link.nv == 1:
-            q_columns.append((f"q:{model.dof_names[d]}", link.q_index))
-        elif link.nv == 3:
-            raise ValueError(f"{path}: joint '{link.joint_name}' is spherical: the CSV has no "
-                             "q of it to pose the robot with")
-    for name in ["t"] + [c for c, _ in q_columns]:
+    # Each dof's position (fd.dof_positions: a spherical axis's PhysX position), set into q below.
+    dofs = [d for d in robot.dof_order if fd.has_dof_position(model, d)]
+    dof_columns = [(f"q:{model.dof_names[d]}", d) for d in dofs]
+    for name in ["t"] + [c for c, _ in q_columns + dof_columns]:
         if name not in index:
             raise ValueError(f"{path}: no column '{name}' (the model of {scene.path} needs it)")
     f_columns = {d: index.get(f"f:{model.dof_names[d]}") for d in range(model.nv)}
@@ -176,6 +172,7 @@ def _read_csv(fd, scene, path):
         raise ValueError(f"{path}: no rows after the header")
     times = np.zeros(len(body))
     q = np.tile(np.array(model.neutral_configuration()), (len(body), 1))
+    positions = np.zeros((len(body), len(dofs)))
     forces = np.zeros((len(body), model.nv))
     for r, row in enumerate(body):
         if len(row) != len(header):
@@ -187,9 +184,12 @@ def _read_csv(fd, scene, path):
                              "than the row before")
         for column, qi in q_columns:
             q[r, qi] = _number(row[index[column]], f"{path}: row {r + 1}, column {column}")
+        for j, (column, _) in enumerate(dof_columns):
+            positions[r, j] = _number(row[index[column]], f"{path}: row {r + 1}, column {column}")
         for d, c in f_columns.items():
             if c is not None:
                 forces[r, d] = _number(row[c], f"{path}: row {r + 1}, column {header[c]}")
+    q = fd.set_dof_positions(model, q, dofs, positions)
     targets, limits = _scene_targets(fd, scene, len(body))
     return _Run(model, times, q, forces, targets, limits)
 
@@ -294,13 +294,15 @@ def _page_data(fd, run, robot, urdf_text, meshes, title, marker):
         raise ValueError(f"marker: no link '{marker}' (links: {', '.join(names)})")
     joints = []
     order = robot.dof_order if robot is not None else range(model.nv)
-    for d in order:
+    dofs = [d for d in order if fd.has_dof_position(model, d)]
+    positions = fd.dof_positions(model, np.asarray(run.q, dtype=float).reshape(-1, model.nq), dofs)
+    for j, d in enumerate(dofs):
         link = model.links[model.dof_link[d]]
-        if link.nv != 1:
-            continue
+        # A spherical joint's axis k: the joint frame's x, y or z (twist, swing1, swing2).
+        axis = np.eye(3)[d - link.v_index] if link.nv == 3 else link.axis
         joint = {"name": model.dof_names[d], "link": link.name,
-                 "axis": [float(a) for a in link.axis],
-                 "q": np.round(run.q[:, link.q_index], 9).tolist(),
+                 "axis": [float(a) for a in axis],
+                 "q": np.round(positions[:, j], 9).tolist(),
                  "target": None, "force": None, "max_force": run.max_force.get(d),
                  "largest_force": 0.0}
         if d in run.targets:

@@ -11,9 +11,11 @@
 
 #include "cli_common.hpp"
 #include "compare_table.hpp"
+#include "featherdrive/core/format.hpp"
 #include "featherdrive/io/mjcf_export.hpp"
 #include "featherdrive/io/physx_runner.hpp"
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/model/dof_position.hpp"
 #include "mujoco_commands.hpp"
 
 namespace fs = std::filesystem;
@@ -25,18 +27,18 @@ MujocoIntegrator integrator_of(const std::string& name) {
   return name == "implicit" ? MujocoIntegrator::implicit : MujocoIntegrator::euler;
 }
 
-// One row per state of each engine: q, qd of the 1-dof joints and their drive force.
+// One row per state of each engine: position (dof_position), qd and drive force of each column.
 void append_row(JointTrajectory& out, const Model& model, double t, const VecX& q, const VecX& qd,
                 const VecX& f) {
   out.t.push_back(t);
   auto& rq = out.q.emplace_back();
   auto& rqd = out.qd.emplace_back();
   auto& rf = out.f.emplace_back();
-  for (const std::string& joint : out.joints) {
-    const Link& link = model.links[static_cast<size_t>(model.joint_link_index(joint))];
-    rq.push_back(q[link.q_index]);
-    rqd.push_back(qd[link.v_index]);
-    rf.push_back(f[link.v_index]);
+  for (const std::string& joint : out.joints) {  // 1-dof joints and spherical axes
+    const int dof = model.dof_index(joint);
+    rq.push_back(dof_position(model, q, dof));
+    rqd.push_back(qd[dof]);
+    rf.push_back(f[dof]);
   }
 }
 
@@ -217,10 +219,10 @@ int compare_mujoco(const CompareMujocoArgs& args) {
   }
 
   const SimulationOptions& o = scene.options;
-  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s), solver %s %d/%d\n",
-              args.scene.c_str(), scene.robot.name.c_str(), model.nv, o.dt, scene.steps,
-              scene.steps * o.dt, to_string(o.solver), o.position_iterations,
-              o.velocity_iterations);
+  std::printf("%s: robot %s (%s), dt %.6g s, %s (%.4g s), solver %s %d/%d\n",
+              args.scene.c_str(), scene.robot.name.c_str(), count_of(model.nv, "dof").c_str(),
+              o.dt, count_of(scene.steps, "step").c_str(), scene.steps * o.dt,
+              to_string(o.solver), o.position_iterations, o.velocity_iterations);
   std::printf("  featherdrive against MuJoCo %s (exported MJCF, contacts off, integrator %s)\n",
               mujoco_version().c_str(), to_string(integrator));
   if (!friction_off.empty())

@@ -115,10 +115,10 @@ int compare_physx(const ComparePhysxArgs& args) {
   const TrajectoryComparison c = compare_trajectories(fd, px);
 
   const SimulationOptions& o = sim.options();
-  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s), solver %s %d/%d\n",
-              args.scene.c_str(), scene.robot.name.c_str(), model.nv, o.dt, scene.steps,
-              scene.steps * o.dt, to_string(o.solver), o.position_iterations,
-              o.velocity_iterations);
+  std::printf("%s: robot %s (%s), dt %.6g s, %s (%.4g s), solver %s %d/%d\n",
+              args.scene.c_str(), scene.robot.name.c_str(), count_of(model.nv, "dof").c_str(),
+              o.dt, count_of(scene.steps, "step").c_str(), scene.steps * o.dt,
+              to_string(o.solver), o.position_iterations, o.velocity_iterations);
   std::printf("  featherdrive (float64) against PhysX 5.6.1 (float32, %s)\n",
               physx.dir.string().c_str());
   if (!friction_off.empty())

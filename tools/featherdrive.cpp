@@ -22,12 +22,14 @@
 #include "mujoco_commands.hpp"
 #include "python_tool.hpp"
 #include "scene_overrides.hpp"
+#include "featherdrive/core/format.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/io/describe.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/trajectory.hpp"
+#include "featherdrive/model/dof_position.hpp"
 
 namespace fs = std::filesystem;
 using namespace featherdrive;
@@ -90,6 +92,88 @@ class Progress {
   int last_ = -1;
 };
 
+// Per drive over the run: the error target - position (dof_position: a spherical axis's PhysX
+// position), the largest force, and the steps at each bound. A bound counts where the step's
+// force reached it: the drive's max_force (within 1e-9 of it), or a nonzero limit force.
+struct DriveStats {
+  Rms rms;
+  double max_error = 0.0, max_force = 0.0;
+  long at_max_force = 0, at_velocity_limit = 0, at_position_limit = 0;
+  /// The largest change of the drive force (impulse / dt) in PGS's last position iteration.
+  double max_change = 0.0;
+
+  /// A drive whose last-iteration change reached this share of its largest force has not
+  /// converged.
+  static constexpr double kConvergence = 1e-2;
+  bool converged() const { return !(max_change > kConvergence * max_force); }
+
+  static double force_bound(const Simulation& sim, int dof) {
+    const Drive& drive = sim.drive(dof);
+    return std::min(drive.max_force, drive.max_impulse / sim.options().dt);
+  }
+
+  void add(const DriveSpec& d, const Simulation& sim, double t) {
+    const double error = d.target_at(t).first - dof_position(sim.model(), sim.q(), d.dof);
+    rms.add(error);
+    max_error = std::max(max_error, std::abs(error));
+    const double force = sim.drive_force()[d.dof] + sim.actuator_force()[d.dof];
+    max_force = std::max(max_force, std::abs(force));
+    const double bound = force_bound(sim, d.dof);
+    if (std::isfinite(bound) && std::abs(sim.drive_force()[d.dof]) >= bound * (1.0 - 1e-9))
+      ++at_max_force;
+    if (sim.velocity_limit_force()[d.dof] != 0.0) ++at_velocity_limit;
+    if (sim.limit_force()[d.dof] != 0.0) ++at_position_limit;
+    max_change = std::max(max_change,
+                          std::abs(sim.last_drive_impulse_change()[d.dof]) / sim.options().dt);
+  }
+};
+
+// "12.5 %" of the steps, or "-" where the joint has no such bound.
+std::string share(long count, long steps, bool bounded) {
+  if (!bounded) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f %%", steps > 0 ? 100.0 * count / steps : 0.0);
+  return text;
+}
+
+void print_drive_table(const Scene& scene, const Simulation& sim,
+                       const std::vector<DriveStats>& stats, double t_end, long steps) {
+  const Model& model = sim.model();
+  std::printf("  per drive: errors target - position in rad (m on prismatic joints), forces in "
+              "N m (N); share of steps at the bound ('-': none set)\n");
+  std::printf("  %-16s %-12s %11s %11s %11s %11s %10s %10s %10s\n", "joint", "drive",
+              "final error", "rms error", "max |error|", "max |force|", "max_force", "vel. limit",
+              "pos. limit");
+  std::string unconverged;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    const DriveSpec& d = scene.drives[i];
+    const DriveStats& s = stats[i];
+    const double final_error = d.target_at(t_end).first - dof_position(model, sim.q(), d.dof);
+    const bool limited =
+        std::isfinite(sim.lower_limit(d.dof)) || std::isfinite(sim.upper_limit(d.dof));
+    const char* drive = d.actuator ? "actuator" : to_string(d.drive.type);
+    std::printf("  %-16s %-12s %11.3e %11.3e %11.3e %11.4g %10s %10s %10s\n", d.joint.c_str(),
+                drive, final_error, s.rms.value(steps), s.max_error, s.max_force,
+                share(s.at_max_force, steps, std::isfinite(DriveStats::force_bound(sim, d.dof)))
+                    .c_str(),
+                share(s.at_velocity_limit, steps, std::isfinite(sim.max_joint_velocity(d.dof)))
+                    .c_str(),
+                share(s.at_position_limit, steps, limited).c_str());
+    if (!s.converged()) {
+      char text[96];
+      std::snprintf(text, sizeof text, " (by up to %.3g, %.2g %% of %.4g)", s.max_change,
+                    100.0 * s.max_change / s.max_force, s.max_force);
+      unconverged += (unconverged.empty() ? "" : ", ") + d.joint + text;
+    }
+  }
+  if (unconverged.empty()) return;
+  print_warnings({"not converged: the last of PGS's " +
+                  std::to_string(sim.options().position_iterations) +
+                  " position iterations still changed the drive force by more than " +
+                  format_double(100.0 * DriveStats::kConvergence) + " % of its largest on " +
+                  unconverged + "; raise position_iterations"});
+}
+
 int simulate(const SimulateArgs& args) {
   install_interrupt_handlers();
   if (!args.plot.empty()) check_plot_path("--plot", args.plot);
@@ -139,7 +223,7 @@ int simulate(const SimulateArgs& args) {
   std::ostream* csv_stream = out_file ? &out_file->stream() : plot_csv ? &*plot_csv : nullptr;
   std::optional<TrajectoryWriter> csv;
   std::optional<TargetWriter> targets;
-  if (csv_stream) csv.emplace(*csv_stream, scene.robot);
+  if (csv_stream) csv.emplace(*csv_stream, scene.robot, target_dofs(scene));
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {
@@ -151,15 +235,21 @@ int simulate(const SimulateArgs& args) {
   };
 
   const size_t n = scene.drives.size();
-  std::vector<double> max_force(n, 0.0);
-  std::vector<Rms> rms(n);
+  std::vector<DriveStats> stats(n);
+  // The step's drive impulse change in PGS's last position iteration, for the convergence note.
+  if (options.solver == SolverType::pgs) sim.set_track_convergence(true);
   Progress progress(scene.steps);
   const auto start = std::chrono::steady_clock::now();
-  if (csv) csv->write(first, sim, /*initial=*/args.load_state.empty());
   if (targets) targets->write(first, first * dt);
+  // Row k: the state before step k and the targets of step k (fit reads a log so); the last row
+  // gets the targets the next step would have.
+  auto write_row = [&](int k, const Simulation& s) {
+    if (csv) csv->write(k, s, /*initial=*/k == first && args.load_state.empty());
+  };
   int last = first;  // the last whole step written
   for (int k = first; k < first + scene.steps && !interrupted(); ++k) {
     apply_targets(scene, sim, k);
+    write_row(k, sim);
     try {
       sim.step();
     } catch (const DivergenceError&) {  // --out keeps the steps before it, for a post-mortem
@@ -167,16 +257,15 @@ int simulate(const SimulateArgs& args) {
       throw;
     }
     const double t = (k + 1) * dt;
-    for (size_t i = 0; i < n; ++i) {
-      const DriveSpec& d = scene.drives[i];
-      rms[i].add(d.target_at(t).first - sim.q()[model.links[model.dof_link[d.dof]].q_index]);
-      const double force = sim.drive_force()[d.dof] + sim.actuator_force()[d.dof];
-      max_force[i] = std::max(max_force[i], std::abs(force));
-    }
-    if (csv) csv->write(k + 1, sim);
+    for (size_t i = 0; i < n; ++i) stats[i].add(scene.drives[i], sim, t);
     if (targets) targets->write(k + 1, t);
     last = k + 1;
     progress.update(k + 1 - first);
+  }
+  if (csv) {
+    Simulation next = sim;  // the targets of the step after the last, without changing sim
+    apply_targets(scene, next, last);
+    write_row(last, next);
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -197,8 +286,9 @@ int simulate(const SimulateArgs& args) {
   if (out_file) out_file->commit();
   if (!args.save_state.empty()) save_checkpoint(sim, args.save_state);
 
-  std::printf("%s: robot %s (%d dofs), dt %.6g s, %d steps (%.4g s)\n", args.scene.c_str(),
-              scene.robot.name.c_str(), model.nv, dt, scene.steps, scene.steps * dt);
+  std::printf("%s: robot %s (%s), dt %.6g s, %s (%.4g s)\n", args.scene.c_str(),
+              scene.robot.name.c_str(), count_of(model.nv, "dof").c_str(), dt,
+              count_of(scene.steps, "step").c_str(), scene.steps * dt);
   if (!args.load_state.empty())
     std::printf("  resumed from %s at step %d\n", args.load_state.c_str(), first);
   std::printf("  solver %s: %d position / %d velocity iterations\n", to_string(options.solver),
@@ -206,18 +296,7 @@ int simulate(const SimulateArgs& args) {
   if (scene.control.substeps > 1)
     std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
                 to_string(scene.control.targets));
-  if (n > 0) {
-    std::printf("  %-16s %-12s %14s %14s %14s\n", "joint", "drive", "final error", "rms error",
-                "max |force|");
-    const double t_end = (first + scene.steps) * dt;
-    for (size_t i = 0; i < n; ++i) {
-      const DriveSpec& d = scene.drives[i];
-      const double final_error =
-          d.target_at(t_end).first - sim.q()[model.links[model.dof_link[d.dof]].q_index];
-      std::printf("  %-16s %-12s %14.3e %14.3e %14.4g\n", d.joint.c_str(), to_string(d.drive.type),
-                  final_error, rms[i].value(scene.steps), max_force[i]);
-    }
-  }
+  if (n > 0) print_drive_table(scene, sim, stats, (first + scene.steps) * dt, scene.steps);
   std::printf("  wall time %.3f s, %.0f steps/s\n", wall, wall > 0.0 ? scene.steps / wall : 0.0);
   if (!args.out.empty()) std::printf("  trajectory: %s\n", args.out.c_str());
   if (!args.save_state.empty()) std::printf("  state: %s\n", args.save_state.c_str());
@@ -261,12 +340,14 @@ int main(int argc, char** argv) {
   CLI::App app{
       "featherdrive: articulated robots with implicit PD joint drives (PhysX-style PGS and TGS)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("featherdrive ") + FEATHERDRIVE_VERSION);
 
   SimulateArgs sim_args;
   CLI::App* sim_cmd = app.add_subcommand("simulate", "Run a scene file and write its trajectory");
   sim_cmd->add_option("scene", sim_args.scene, "Scene file (YAML or JSON)")->required();
   sim_cmd->add_option("--out", sim_args.out,
-                      "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...");
+                      "Trajectory CSV: step,t,q:<joint>...,qd:<joint>...,f:<joint>...,"
+                      "target:<joint>...,target_velocity:<joint>... (a log fit reads)");
   sim_cmd->add_option("--plot", sim_args.plot, "PNG of positions against targets and drive forces");
   sim_args.overrides.add_options(sim_cmd);
   sim_cmd->add_option("--save-state", sim_args.save_state,
@@ -305,6 +386,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string first = argc > 1 ? argv[1] : "";

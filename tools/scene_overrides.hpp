@@ -45,18 +45,23 @@ struct SceneOverrides {
   /// The notes are appended to the iteration options' help (e.g. PhysX's range).
   void add_options(CLI::App* cmd, const std::string& position_note = "",
                    const std::string& velocity_note = "") {
+    // Read as text for their range messages (parse), shown as the integers they are.
     cmd->add_option("--steps", steps_text,
-                    "Number of steps, 0 to 2147483647 (overrides the scene)");
+                    "Number of steps, 0 to 2147483647 (overrides the scene)")
+        ->type_name("INT");
     cmd->add_option("--solver", solver, "pgs or tgs (overrides the scene)")
         ->check(CLI::IsMember({"pgs", "tgs"}));
     const std::string most = std::to_string(featherdrive::kMaxIterations);
     cmd->add_option("--position-iterations", position_text,
-                    "1 to " + most + ", overrides the scene" + position_note);
+                    "1 to " + most + ", overrides the scene" + position_note)
+        ->type_name("INT");
     cmd->add_option("--velocity-iterations", velocity_text,
-                    "0 to " + most + ", overrides the scene" + velocity_note);
+                    "0 to " + most + ", overrides the scene" + velocity_note)
+        ->type_name("INT");
     cmd->add_option("--substeps", substeps_text,
                     "Physics steps per control step (the scene's control.substeps), 1 to " +
-                        std::to_string(featherdrive::kMaxSubsteps));
+                        std::to_string(featherdrive::kMaxSubsteps))
+        ->type_name("INT");
   }
 
   /// The integer options from their text; throws std::invalid_argument naming the option and

@@ -21,4 +21,8 @@ std::string format_vec3(const Vec3& v) {
   return s;
 }
 
+std::string count_of(long n, const char* noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 }  // namespace featherdrive

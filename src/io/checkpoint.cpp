@@ -216,8 +216,8 @@ void read_joint_coupling(Reader& r, Simulation& next, const std::string& name) {
   }
   const std::int64_t count = r.i64();
   if (count < 0 || count > model.nv)
-    fail(name, "corrupt checkpoint: " + std::to_string(count) + " mimic joints for " +
-                   std::to_string(model.nv) + " dofs");
+    fail(name, "corrupt checkpoint: " + count_of(count, "mimic joint") + " for " +
+                   count_of(model.nv, "dof"));
   std::vector<MimicJoint> rows(static_cast<size_t>(count));
   for (MimicJoint& m : rows) {
     const std::int64_t a = r.i64(), b = r.i64();

@@ -1,5 +1,7 @@
 #include "featherdrive/io/describe.hpp"
 
+#include "featherdrive/core/format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -99,8 +101,9 @@ std::string describe(const UrdfRobot& robot) {
   for (const Link& l : model.links) total += l.mass;
   std::ostringstream out;
   out << "robot '" << robot.name << "' from " << robot.path.string() << "\n";
-  out << "  " << robot.joint_order.size() << " joints in the file, " << model.num_links()
-      << " links after merging " << robot.merged.size() << " fixed, " << model.nv << " dofs, "
+  out << "  " << count_of(static_cast<long>(robot.joint_order.size()), "joint") << " in the file, "
+      << count_of(model.num_links(), "link") << " after merging " << robot.merged.size()
+      << " fixed, " << count_of(model.nv, "dof") << ", "
       << (model.floating_base() ? "floating base" : "fixed base") << ", total mass " << num(total)
       << " kg\n\ntree (inertia about the centre of mass, link axes):\n";
   link_lines(out, robot, model);

@@ -16,7 +16,7 @@
 #include <limits>
 #include <sstream>
 
-#include "featherdrive/constraint/spherical_axes.hpp"
+#include "featherdrive/model/dof_position.hpp"
 
 extern char** environ;
 
@@ -187,15 +187,11 @@ void append_state(JointTrajectory& out, const Simulation& sim) {
   std::vector<double> q(n), qd(n), f(n);
   for (size_t j = 0; j < n; ++j) {
     const int dof = model.dof_index(out.joints[j]);
-    const Link& link = model.links[model.dof_link[dof]];
-    const bool spherical = link.joint_type == JointType::spherical;
-    if (link.nv != 1 && !spherical)
-      throw std::invalid_argument("joint '" + out.joints[j] + "' has " + std::to_string(link.nv) +
+    if (!has_dof_position(model, dof))
+      throw std::invalid_argument("joint '" + out.joints[j] + "' has " +
+                                  std::to_string(model.links[model.dof_link[dof]].nv) +
                                   " dofs; PhysX's columns are 1-dof joints and spherical axes");
-    // A spherical axis: PhysX's position, from the quaternion (constraint/spherical_axes.hpp).
-    const double* x = sim.q().data() + link.q_index;
-    q[j] = spherical ? spherical_joint_positions(Quat(x[0], x[1], x[2], x[3]))[dof - link.v_index]
-                     : x[0];
+    q[j] = dof_position(model, sim.q(), dof);  // a spherical axis: PhysX's position
     qd[j] = sim.qd()[dof];
     f[j] = physx_joint_force(sim, dof);
   }

@@ -146,6 +146,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   rows_.assign(static_cast<size_t>(nv), DofRows{});
   dof_order_.assign(static_cast<size_t>(nv), 0);
   delta_x_ = VecX::Zero(nv);
+  last_drive_change_ = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model_->num_links());
   friction_coefficient_ = VecX::Zero(nv);
   link_parameters_.assign(n, LinkParameters{});
@@ -166,6 +167,11 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     }
   }
   update_link_damping_active();
+}
+
+void Simulation::set_track_convergence(bool on) {
+  track_convergence_ = on;
+  last_drive_change_.setZero();
 }
 
 void Simulation::set_options(const SimulationOptions& options) {

@@ -259,7 +259,15 @@ void Simulation::solve_pgs() {
   phase.dt = dt;
   phase.h = dt;
   phase.limit_erp = limit_erp(SolverType::pgs, options_.position_iterations);
-  for (int it = 0; it < options_.position_iterations; ++it) sweep(phase);
+  const int last = options_.position_iterations - 1;
+  for (int it = 0; it < last; ++it) sweep(phase);
+  if (track_convergence_)  // the impulses before the last iteration, then its change
+    for (int d = 0; d < model_->nv; ++d)
+      last_drive_change_[d] = rows_[static_cast<size_t>(d)].drive_impulse;
+  sweep(phase);
+  if (track_convergence_)
+    for (int d = 0; d < model_->nv; ++d)
+      last_drive_change_[d] = rows_[static_cast<size_t>(d)].drive_impulse - last_drive_change_[d];
   departures_.qd_position = qd_;
   integrate_positions(dt);
   phase.velocity_iteration = true;
@@ -277,6 +285,7 @@ void Simulation::solve_tgs() {
   const int n = options_.position_iterations;
   const double rho = dt / n;
   setup_rows(rho, /*tgs=*/true);
+  if (track_convergence_) last_drive_change_.setZero();  // no iteration to converge
   RowPhase phase;
   phase.dt = dt;
   phase.h = rho;

@@ -56,7 +56,7 @@ def main():
     with open(out, newline="") as f:
         rows = list(csv.reader(f))
     check(len(rows) == 1 + 8, f"--steps 7 gives 8 rows, got {len(rows) - 1}")
-    check(rows[1][2:] == ["0"] * 9, f"row 0 is the initial state at rest with f = 0: {rows[1]}")
+    check(rows[1][2:11] == ["0"] * 9, f"row 0 is the initial state at rest with f = 0: {rows[1]}")
     r = run(cli, "simulate", ex("chain3.yaml"), "--steps", "0")
     check(r.returncode == 0, "--steps 0 runs", r)
 
@@ -80,8 +80,12 @@ def main():
     opt_rows, key_rows, plain_rows = rows_of(by_option), rows_of(by_key), rows_of(plain)
     check(len(opt_rows) == 1 + 9, f"--substeps keeps one row per physics step: {len(opt_rows) - 1}")
     check(opt_rows == key_rows, "--substeps 4 gives the CSV of control: {substeps: 4}")
-    check(opt_rows[:2] == plain_rows[:2] and opt_rows[2:] != plain_rows[2:],
+    # Row 0's state is the same; its target column (the command of step 0) is that of t = 4 dt.
+    state = lambda rows: [r[:5] for r in rows]  # noqa: E731 (step, t, q, qd, f)
+    check(state(opt_rows[:2]) == state(plain_rows[:2]) and opt_rows[2:] != plain_rows[2:],
           "--substeps 4 holds the target of t = 4 dt from step 0 (1 step per target differs)")
+    check(float(opt_rows[1][5]) == float(plain_rows[4][5]),
+          "--substeps 4: row 0's target is the plain run's target of step 3 (t = 4 dt)")
     one_line_error(run(cli, "simulate", ex("slider.yaml"), "--substeps", "0"), 2,
                    "--substeps = 0: must be between 1 and 1000000")
 

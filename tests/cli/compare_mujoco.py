@@ -136,7 +136,7 @@ def main():
     r = run(cli, "compare-mujoco", scene, "--plot", png)
     check(r.returncode == 0, "compare-mujoco slider succeeds", r)
     out = r.stdout
-    check("1 dofs" in out and "240 steps" in out and "solver pgs 4/1" in out,
+    check("(1 dof)" in out and "240 steps" in out and "solver pgs 4/1" in out,
           "the run is described", r)
     check("MuJoCo 2.2.2" in out and "integrator euler" in out, "MuJoCo's version and integrator", r)
     check("translated drives" in out and "literal drives" in out, "both mappings are run", r)

@@ -33,7 +33,8 @@ def main():
             sys.exit(f"FAIL: {png} is not a plot ({os.path.getsize(png)} bytes)")
         with open(out, newline="") as f:
             rows = list(csv.reader(f))
-        if len(rows) != 1 + 361 or len(rows[0]) != 2 + 3 * 7:
+        # step, t, then q, qd, f, target and target_velocity of each of the 7 driven joints
+        if len(rows) != 1 + 361 or len(rows[0]) != 2 + 5 * 7:
             sys.exit(f"FAIL: {out}: {len(rows)} rows of {len(rows[0])} columns")
         print(run.stdout)
 

@@ -364,7 +364,7 @@ def reports():
     for joint, value in (("joint1", "1.000e+308"), ("joint2", "-1.000e+200"),
                          ("joint3", "1.000e-200")):
         rms = value.lstrip("-")
-        m = re.search(rf"^\s+{joint}\s+force\s+(\S+)\s+(\S+)\s+(\S+)$", r.stdout, re.M)
+        m = re.search(rf"^\s+{joint}\s+force\s+(\S+)\s+(\S+)\s+(\S+)\s+(\S+)\s", r.stdout, re.M)
         check(m is not None and m.group(1) == value and m.group(2) == rms,
               f"{joint}: final error {value} and rms {rms}: {m.group(0) if m else r.stdout}")
     check("inf" not in r.stdout and "nan" not in r.stdout, "no inf or nan in the summary", r)

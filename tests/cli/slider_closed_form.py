@@ -6,8 +6,9 @@ recurrence that a PGS drive step solves exactly for one dof:
   f = s (kp (xT - x0 - dt v1) + kd (vT - v1)),
 
 with s = 1 for a force drive and s = m for an acceleration drive, F = m g along the axis, and
-sine targets taken at each step's end time (k + 1) dt. The scene parameters are copied here
-from the files by hand.
+sine targets taken at each step's end time (k + 1) dt. Row k's target and target_velocity
+columns are the command of the step from row k to row k + 1 (fit reads them so): the targets at
+(k + 1) dt. The scene parameters are copied here from the files by hand.
 
 usage: slider_closed_form.py FEATHERDRIVE SCENE OUT_DIR
 """
@@ -50,7 +51,7 @@ def main():
     with open(out, newline="") as f:
         rows = list(csv.reader(f))
     header = ",".join(rows[0])
-    if header != "step,t,q:slide,qd:slide,f:slide":
+    if header != "step,t,q:slide,qd:slide,f:slide,target:slide,target_velocity:slide":
         sys.exit(f"FAIL: header {header!r}")
     data = rows[1:]
     if len(data) != p["steps"] + 1:
@@ -68,8 +69,11 @@ def main():
             f = s * (kp * (xT - x - dt * v1) + kd * (vT - v1))
             x, v = x + dt * v1, v1
         step, t, q, qd, force = int(row[0]), float(row[1]), float(row[2]), float(row[3]), float(row[4])
+        command = target(p, (k + 1) * dt)
         checks = [("step", step, k, 0), ("t", t, k * dt, 1e-12), ("q", q, x, 1e-12),
-                  ("qd", qd, v, 1e-12), ("f", force, f, 1e-12 * max(1.0, abs(f)))]
+                  ("qd", qd, v, 1e-12), ("f", force, f, 1e-12 * max(1.0, abs(f))),
+                  ("target", float(row[5]), command[0], 1e-12),
+                  ("target_velocity", float(row[6]), command[1], 1e-12)]
         for what, got, want, tol in checks:
             worst = max(worst, abs(got - want) / max(1.0, abs(want)))
             if abs(got - want) > tol:

@@ -178,16 +178,21 @@ grid.position.set(center.x, center.y, bounds.min.z);
 scene.add(grid);
 
 // Joint markers coloured by |force| / max_force (green 0 to red 1), frames and axes on demand.
+// The three axes of a spherical joint share their link's marker, coloured by the largest ratio.
 const jointMarkers = [];
+const linkMarkers = {};
 const frameHelpers = [];
 for (const joint of data.joints) {
   const link = linkObjects[joint.link];
-  // Drawn over the links (joints sit inside them), under the marker below.
-  const marker = new THREE.Mesh(new THREE.SphereGeometry(size * 0.015, 16, 12),
-                                new THREE.MeshBasicMaterial({ color: 0x00aa00, depthTest: false }));
-  marker.renderOrder = 900;
-  link.add(marker);
-  jointMarkers.push(marker);
+  if (!linkMarkers[joint.link]) {
+    // Drawn over the links (joints sit inside them), under the marker below.
+    const marker = new THREE.Mesh(new THREE.SphereGeometry(size * 0.015, 16, 12),
+                                  new THREE.MeshBasicMaterial({ color: 0x00aa00, depthTest: false }));
+    marker.renderOrder = 900;
+    link.add(marker);
+    linkMarkers[joint.link] = marker;
+  }
+  jointMarkers.push(linkMarkers[joint.link]);
   const axes = new THREE.AxesHelper(size * 0.08);
   const axis = new THREE.ArrowHelper(new THREE.Vector3(...joint.axis).normalize(),
                                      new THREE.Vector3(), size * 0.12, 0xaa00aa);
@@ -293,10 +298,12 @@ function setFrame(frame) {
     linkObjects[name].position.set(p[0], p[1], p[2]);
     linkObjects[name].quaternion.set(p[4], p[5], p[6], p[3]);
   }
+  const ratios = new Map();
   data.joints.forEach((joint, j) => {
-    jointMarkers[j].material.color.setRGB(forceRatio(joint, state.frame),
-                                          0.67 * (1 - forceRatio(joint, state.frame)), 0);
+    const marker = jointMarkers[j];
+    ratios.set(marker, Math.max(ratios.get(marker) || 0, forceRatio(joint, state.frame)));
   });
+  ratios.forEach((ratio, marker) => marker.material.color.setRGB(ratio, 0.67 * (1 - ratio), 0));
   slider.value = String(state.frame);
   clock.textContent = `t = ${state.time.toFixed(3)} s (step ${state.frame} of ${frames - 1})`;
   drawCursor();

@@ -1,5 +1,8 @@
 // Trajectory CSV files: one row per state, columns per dof in the URDF's joint order.
-//   step,t,q:<joint>...,qd:<joint>...,f:<joint>...
+//   step,t,q:<joint>...,qd:<joint>...,f:<joint>...[,target:<joint>...,target_velocity:<joint>...]
+// q:<joint> is each dof's position (model/dof_position.hpp): a spherical joint's three axes are
+// PhysX's positions, a floating root's q its 7 entries. The targets of row k are the drive's
+// commanded target during the step from row k to row k + 1, as `featherdrive fit` reads a log.
 // Numbers are written in the shortest form that reads back to the same double. A column name
 // holding a comma, a quote or a line break is quoted as RFC 4180 says (csv_field).
 #pragma once
@@ -16,19 +19,28 @@ namespace featherdrive {
 /// a quote or a line break (RFC 4180).
 std::string csv_field(const std::string& s);
 
-/// Column names after step,t: q (nq of them: a floating root gives x, y, z, qw, qx, qy, qz), then
-/// qd and f (one per dof).
-std::vector<std::string> trajectory_columns(const UrdfRobot& robot);
+/// Column names after step,t: q (a floating root gives x, y, z, qw, qx, qy, qz, then one per dof
+/// with a position), then qd and f (one per dof), then target and target_velocity of each of
+/// `target_dofs` (in URDF order).
+std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
+                                            const std::vector<int>& target_dofs = {});
+
+/// The dofs a scene's log gives targets for: those with an implicit drive (type force or
+/// acceleration), in URDF order.
+std::vector<int> target_dofs(const Scene& scene);
 
 class TrajectoryWriter {
  public:
-  TrajectoryWriter(std::ostream& out, const UrdfRobot& robot);
-  /// One row of the simulation's state; `initial` writes f = 0 (no step has run).
+  /// target_dofs: the dofs whose drive targets each row holds (target_dofs(scene), or none).
+  TrajectoryWriter(std::ostream& out, const UrdfRobot& robot,
+                   const std::vector<int>& target_dofs = {});
+  /// One row of the simulation's state and its drives' current targets; `initial` writes f = 0
+  /// (no step has run).
   void write(long step, const Simulation& sim, bool initial = false);
 
  private:
   std::ostream& out_;
-  std::vector<int> q_order_, v_order_;
+  std::vector<int> q_order_, v_order_, target_order_;
 };
 
 /// The drive targets of a scene at each row's time t = step dt (target position per driven

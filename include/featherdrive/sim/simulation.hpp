@@ -234,6 +234,16 @@ class Simulation {
   /// The force the joint velocity limit applied on each dof (impulse / dt).
   VecView velocity_limit_force() const { return state_[StateStorage::velocity_limit_force]; }
 
+  /// Diagnostics of the PGS solver's convergence, off by default (a step then stores nothing for
+  /// them): with it on, each PGS step keeps how much the last position iteration changed each
+  /// dof's drive impulse. Not kept in checkpoints.
+  void set_track_convergence(bool on);
+  bool track_convergence() const { return track_convergence_; }
+  /// The change of each dof's drive impulse (N s or N m s) in the last position iteration of the
+  /// last PGS step (nv). Zeros when tracking is off, before a step, and for TGS, whose sub-steps
+  /// each solve a fresh drive impulse once.
+  const VecX& last_drive_impulse_change() const { return last_drive_change_; }
+
   /// Advances by one step of options().dt; throws DivergenceError (state unchanged) if it would
   /// produce a non-finite value.
   void step();
@@ -287,6 +297,8 @@ class Simulation {
   VecX friction_coefficient_;
   std::vector<LinkParameters> link_parameters_;
   VecX drive_force_, limit_force_, friction_force_, velocity_limit_force_;
+  bool track_convergence_ = false;
+  VecX last_drive_change_;  ///< see last_drive_impulse_change (nv)
 
   // Per-step scratch.
   std::vector<DofRows> rows_;  ///< every dof's rows for this step
