@@ -1,4 +1,6 @@
 #include <cstdio>
+#include <filesystem>
+#include <map>
 #include <stdexcept>
 
 #include "cli_common.hpp"
@@ -45,6 +47,26 @@ int translate_to_physx_scene(const TranslateArgs& args) {
   return 0;
 }
 
+// The URDF's visuals and collisions for the export (MuJoCo's viewer shows them); what cannot be
+// exported is a warning line each.
+std::vector<std::string> add_geometry(const Scene& scene, const TranslateArgs& args,
+                                      MjcfExportOptions& options) {
+  std::map<std::string, std::string> packages;
+  for (const std::string& p : args.packages) {
+    const size_t eq = p.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == p.size())
+      throw std::invalid_argument("--package '" + p + "': expected NAME=DIR");
+    const std::string folder = p.substr(eq + 1);
+    std::error_code error;
+    if (!std::filesystem::is_directory(folder, error))
+      throw std::invalid_argument("--package '" + p + "': " + folder + " is not a folder");
+    packages[p.substr(0, eq)] = folder;
+  }
+  std::vector<std::string> warnings;
+  options.geometry = mjcf_geometry(scene.robot, packages, warnings);
+  return warnings;
+}
+
 }  // namespace
 
 int translate(const TranslateArgs& args) {
@@ -57,6 +79,7 @@ int translate(const TranslateArgs& args) {
   options.integrator =
       args.integrator == "implicit" ? MujocoIntegrator::implicit : MujocoIntegrator::euler;
   options.keep_timestep = args.keep_timestep;
+  const std::vector<std::string> geometry_warnings = add_geometry(scene, args, options);
   MjcfExport e;
   try {
     options.model_name = scene.robot.name;
@@ -103,6 +126,7 @@ int translate(const TranslateArgs& args) {
                 literal_match, verdict.c_str());
   }
   for (const std::string& note : e.notes) std::printf("  note: %s\n", note.c_str());
+  for (const std::string& w : geometry_warnings) std::printf("  warning: %s\n", w.c_str());
   std::printf("  MJCF: %s\n", args.out.c_str());
   return 0;
 }
