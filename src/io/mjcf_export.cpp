@@ -448,6 +448,7 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
   std::vector<UrdfGeometry> out;
   std::string collada;  // the .dae meshes: one line for all
   int collada_count = 0;
+  std::map<std::string, int> unmapped;  // package -> meshes left out: one line per package
   for (const UrdfGeometry& g : robot.geometry) {
     const std::string where = file + ": link '" + g.link + "' " +
                               (g.collision ? "<collision>" : "<visual>") + " ";
@@ -472,8 +473,7 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
       const std::string package = rest.substr(0, rest.find('/'));
       const auto it = packages.find(package);
       if (it == packages.end()) {
-        skip("mesh " + name + ": package '" + package + "' is not mapped (--package " +
-             package + "=DIR)");
+        ++unmapped[package];
         continue;
       }
       path = fs::path(it->second) /
@@ -510,6 +510,10 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
     resolved.filename = fs::absolute(path).lexically_normal().string();
     out.push_back(std::move(resolved));
   }
+  for (const auto& [package, count] : unmapped)
+    warnings.push_back(file + ": " + std::to_string(count) + " mesh" + (count == 1 ? "" : "es") +
+                       " of package '" + package + "' left out of the MJCF: it is not mapped "
+                       "(--package " + package + "=DIR)");
   if (collada_count > 0)
     warnings.push_back(file + ": " + std::to_string(collada_count) +
                        " COLLADA (.dae) mesh" + (collada_count == 1 ? "" : "es") +

@@ -56,7 +56,7 @@ struct MjcfExportOptions {
 /// path: package://NAME/REST as packages[NAME]/REST, file://PATH as PATH, else relative to the
 /// URDF's folder. Left out, with a line in `warnings` naming the URDF, the link and the value:
 /// meshes MuJoCo 2.2.2 cannot load (not STL: COLLADA .dae ones share one line), missing files,
-/// unmapped packages, sizes and scales that are not finite and > 0.
+/// unmapped packages (one line per package), sizes and scales that are not finite and > 0.
 std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
                                         const std::map<std::string, std::string>& packages,
                                         std::vector<std::string>& warnings);
