@@ -67,6 +67,17 @@ std::vector<std::string> add_geometry(const Scene& scene, const TranslateArgs& a
   return warnings;
 }
 
+// A refused export whose geometry MuJoCo cannot load (a broken mesh file) is the input's fault:
+// throws std::invalid_argument naming the URDF when the export without geometry compiles.
+void check_geometry_loads(const Simulation& sim, MjcfExportOptions options, const Scene& scene,
+                          const std::string& error) {
+  if (options.geometry.empty()) return;
+  options.geometry.clear();
+  if (mujoco_compile_error(export_mjcf(sim, options).xml).empty())
+    throw std::invalid_argument(scene.robot.path.string() +
+                                ": MuJoCo cannot load its geometry: " + error);
+}
+
 }  // namespace
 
 int translate(const TranslateArgs& args) {
@@ -91,8 +102,10 @@ int translate(const TranslateArgs& args) {
   if (e.drives.empty())
     throw std::invalid_argument(args.scene + ": no joint has a drive: nothing to translate");
   // MuJoCo must take what is written (a refusal here is a bug of the export, not the input's).
-  if (const std::string error = mujoco_compile_error(e.xml); !error.empty())
+  if (const std::string error = mujoco_compile_error(e.xml); !error.empty()) {
+    check_geometry_loads(sim, options, scene, error);
     throw std::runtime_error("MuJoCo refused the translated model: " + error);
+  }
   make_parent_folders(args.out);
   AtomicFile out(args.out, "the MJCF");
   out.stream() << e.xml;

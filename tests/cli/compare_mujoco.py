@@ -169,6 +169,20 @@ def urdf_geometry(cli, source, out_dir):
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml + "2", "--package", "herb")
     one_line_error(r, ["--package 'herb'", "NAME=DIR"], "a --package without a folder")
     check(not os.path.exists(xml + "2"), "no MJCF written for a bad --package")
+    # A mesh file MuJoCo cannot read is the input's fault: exit 2 naming the URDF and the file.
+    with open(urdf) as f:
+        text = f.read().replace('<sphere radius="0.06"/>', '<mesh filename="broken.stl"/>')
+    with open(os.path.join(out_dir, "broken.urdf"), "w") as f:
+        f.write(text)
+    with open(os.path.join(out_dir, "broken.stl"), "w") as f:
+        f.write("not an STL")
+    broken = os.path.join(out_dir, "geom_broken.yaml")
+    with open(broken, "w") as f:
+        f.write("model: broken.urdf\nsteps: 10\n"
+                "drives:\n  joint1: {type: force, stiffness: 200, damping: 20}\n")
+    r = run(cli, "translate", broken, "--to", "mujoco", "--out", xml + "3")
+    one_line_error(r, ["broken.urdf", "geometry", "broken.stl"], "a mesh MuJoCo cannot read")
+    check(not os.path.exists(xml + "3"), "no MJCF written for a broken mesh")
 
     wam = "/usr/share/doc/dart/data/urdf/wam/wam.urdf"
     if not os.path.exists(wam):
