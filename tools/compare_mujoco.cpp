@@ -307,6 +307,8 @@ MujocoCommands::MujocoCommands(CLI::App& app) {
                        "Keep MuJoCo's timestep at the scene's dt for TGS (no sub-steps): the "
                        "poles are matched with armature, where MuJoCo can");
   translate_args_.overrides.add_options(translate_);
+  translate_->add_option("--package", translate_args_.packages,
+                         "NAME=DIR: where the URDF's package://NAME/ meshes are (repeatable)");
 }
 
 int MujocoCommands::run() {

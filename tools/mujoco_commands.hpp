@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "scene_overrides.hpp"
 
@@ -25,6 +26,7 @@ struct TranslateArgs {
   std::string integrator = "euler";
   bool keep_timestep = false;
   SceneOverrides overrides;
+  std::vector<std::string> packages;  ///< --package NAME=DIR, for the URDF's package:// meshes
 };
 
 /// Both return the exit code; throw std::invalid_argument for bad input, other exceptions for

@@ -1,4 +1,6 @@
 #include <cstdio>
+#include <filesystem>
+#include <map>
 #include <stdexcept>
 
 #include "cli_common.hpp"
@@ -45,6 +47,37 @@ int translate_to_physx_scene(const TranslateArgs& args) {
   return 0;
 }
 
+// The URDF's visuals and collisions for the export (MuJoCo's viewer shows them); what cannot be
+// exported is a warning line each.
+std::vector<std::string> add_geometry(const Scene& scene, const TranslateArgs& args,
+                                      MjcfExportOptions& options) {
+  std::map<std::string, std::string> packages;
+  for (const std::string& p : args.packages) {
+    const size_t eq = p.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == p.size())
+      throw std::invalid_argument("--package '" + p + "': expected NAME=DIR");
+    const std::string folder = p.substr(eq + 1);
+    std::error_code error;
+    if (!std::filesystem::is_directory(folder, error))
+      throw std::invalid_argument("--package '" + p + "': " + folder + " is not a folder");
+    packages[p.substr(0, eq)] = folder;
+  }
+  std::vector<std::string> warnings;
+  options.geometry = mjcf_geometry(scene.robot, packages, warnings);
+  return warnings;
+}
+
+// A refused export whose geometry MuJoCo cannot load (a broken mesh file) is the input's fault:
+// throws std::invalid_argument naming the URDF when the export without geometry compiles.
+void check_geometry_loads(const Simulation& sim, MjcfExportOptions options, const Scene& scene,
+                          const std::string& error) {
+  if (options.geometry.empty()) return;
+  options.geometry.clear();
+  if (mujoco_compile_error(export_mjcf(sim, options).xml).empty())
+    throw std::invalid_argument(scene.robot.path.string() +
+                                ": MuJoCo cannot load its geometry: " + error);
+}
+
 }  // namespace
 
 int translate(const TranslateArgs& args) {
@@ -57,6 +90,7 @@ int translate(const TranslateArgs& args) {
   options.integrator =
       args.integrator == "implicit" ? MujocoIntegrator::implicit : MujocoIntegrator::euler;
   options.keep_timestep = args.keep_timestep;
+  const std::vector<std::string> geometry_warnings = add_geometry(scene, args, options);
   MjcfExport e;
   try {
     options.model_name = scene.robot.name;
@@ -68,8 +102,10 @@ int translate(const TranslateArgs& args) {
   if (e.drives.empty())
     throw std::invalid_argument(args.scene + ": no joint has a drive: nothing to translate");
   // MuJoCo must take what is written (a refusal here is a bug of the export, not the input's).
-  if (const std::string error = mujoco_compile_error(e.xml); !error.empty())
+  if (const std::string error = mujoco_compile_error(e.xml); !error.empty()) {
+    check_geometry_loads(sim, options, scene, error);
     throw std::runtime_error("MuJoCo refused the translated model: " + error);
+  }
   make_parent_folders(args.out);
   AtomicFile out(args.out, "the MJCF");
   out.stream() << e.xml;
@@ -103,6 +139,7 @@ int translate(const TranslateArgs& args) {
                 literal_match, verdict.c_str());
   }
   for (const std::string& note : e.notes) std::printf("  note: %s\n", note.c_str());
+  for (const std::string& w : geometry_warnings) std::printf("  warning: %s\n", w.c_str());
   std::printf("  MJCF: %s\n", args.out.c_str());
   return 0;
 }

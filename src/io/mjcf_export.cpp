@@ -7,10 +7,12 @@
 #include <Eigen/Eigenvalues>
 
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -67,6 +69,70 @@ struct JointExtras {
   std::vector<std::string> text;  // per dof
 };
 
+// The exported geoms per model link, and the mesh assets they name.
+struct GeomTable {
+  std::vector<std::vector<const UrdfGeometry*>> of_link;
+  std::vector<std::string> mesh_of;  // per options.geometry entry: its asset's name, or ""
+  std::string assets;                // the <mesh> elements
+};
+
+GeomTable geom_table(const Model& model, const std::vector<UrdfGeometry>& geometry) {
+  GeomTable table;
+  table.of_link.resize(static_cast<size_t>(model.num_links()));
+  std::map<std::string, int> link_of;
+  for (int i = 0; i < model.num_links(); ++i) link_of.emplace(model.links[i].name, i);
+  std::map<std::pair<std::string, std::string>, std::string> meshes;  // (file, scale) -> name
+  for (const UrdfGeometry& g : geometry) {
+    const auto link = link_of.find(g.body);
+    if (link == link_of.end())
+      throw InputError("geometry of link '" + g.link + "': the model has no link '" + g.body +
+                       "'");
+    table.of_link[static_cast<size_t>(link->second)].push_back(&g);
+    std::string name;
+    if (g.shape == UrdfGeometry::Shape::mesh) {
+      const std::string scale = nums({g.scale.x(), g.scale.y(), g.scale.z()});
+      auto [it, added] = meshes.emplace(std::make_pair(g.filename, scale), "");
+      if (added) {
+        it->second = "mesh" + std::to_string(meshes.size() - 1) + ":" +
+                     std::filesystem::path(g.filename).stem().string();
+        table.assets += "    <mesh name=\"" + attr(it->second) + "\" file=\"" + attr(g.filename) +
+                        "\"" + (scale == "1 1 1" ? "" : " scale=\"" + scale + "\"") + "/>\n";
+      }
+      name = it->second;
+    }
+    table.mesh_of.push_back(name);
+  }
+  return table;
+}
+
+// A <geom> for g, whose frame is given in a link frame that sits at `offset` in the body frame.
+std::string geom_text(const UrdfGeometry& g, const std::string& mesh, const Vec3& offset,
+                      const std::string& indent) {
+  const Vec3 p = offset + g.xyz;
+  const Quat q(g.rotation);
+  const std::string name =
+      g.link + (g.collision ? ":collision" : ":visual") + std::to_string(g.index);
+  std::string text = indent + "<geom name=\"" + attr(name) + "\" type=\"";
+  switch (g.shape) {
+    case UrdfGeometry::Shape::box:  // MuJoCo's size: half extents
+      text += "box\" size=\"" + nums({g.size.x() / 2, g.size.y() / 2, g.size.z() / 2});
+      break;
+    case UrdfGeometry::Shape::cylinder:  // radius, half length
+      text += "cylinder\" size=\"" + nums({g.size.x(), g.size.y() / 2});
+      break;
+    case UrdfGeometry::Shape::sphere:
+      text += "sphere\" size=\"" + nums({g.size.x()});
+      break;
+    case UrdfGeometry::Shape::mesh:
+      text += "mesh\" mesh=\"" + attr(mesh);
+      break;
+  }
+  text += "\" pos=\"" + nums({p.x(), p.y(), p.z()}) + "\" quat=\"" +
+          nums({q.w(), q.x(), q.y(), q.z()}) + "\"";
+  text += g.collision ? " group=\"0\"" : " contype=\"0\" conaffinity=\"0\" group=\"1\"";
+  return text + "/>\n";
+}
+
 // A massless moving link whose only child moves too and hangs at an unrotated frame: the pair is
 // one MJCF body with two joints (MuJoCo's own form, which load_mjcf splits into such links), since
 // MuJoCo refuses a moving body without mass.
@@ -84,7 +150,8 @@ bool joins_child(const Model& model, int i) {
 // Returns the last link frame's origin in this body's frame (each joint sits at its link's origin,
 // with the axis in body coordinates: the chain's frames differ by translations only).
 Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& shift, int depth,
-               const JointExtras* extras, std::ostringstream& xml) {
+               const JointExtras* extras, const GeomTable* geoms,
+               const std::vector<UrdfGeometry>* geometry, std::ostringstream& xml) {
   const Link& first = model.links[static_cast<size_t>(chain.front())];
   const std::string indent(2 * static_cast<size_t>(depth), ' ');
   const Transform& X = first.tree_transform;
@@ -133,6 +200,10 @@ Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& sh
         break;
     }
   }
+  for (size_t k = 0; geoms && k < chain.size(); ++k)
+    for (const UrdfGeometry* g : geoms->of_link[static_cast<size_t>(chain[k])])
+      xml << geom_text(*g, geoms->mesh_of[static_cast<size_t>(g - geometry->data())], anchors[k],
+                       indent + "  ");
   return offset;
 }
 
@@ -140,6 +211,7 @@ Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& sh
 // be longer than the call stack is deep. Bodies come in link order, so MuJoCo's joint, qpos and
 // qvel order is ours.
 void write_bodies(const Model& model, int depth, const JointExtras* extras,
+                  const GeomTable* geoms, const std::vector<UrdfGeometry>* geometry,
                   std::ostringstream& xml) {
   struct Item {
     int link, depth;
@@ -158,7 +230,7 @@ void write_bodies(const Model& model, int depth, const JointExtras* extras,
     chain.assign(1, item.link);
     while (joins_child(model, chain.back()))
       chain.push_back(model.links[static_cast<size_t>(chain.back())].children[0]);
-    const Vec3 shift = open_body(model, chain, item.shift, item.depth, extras, xml);
+    const Vec3 shift = open_body(model, chain, item.shift, item.depth, extras, geoms, geometry, xml);
     stack.push_back({item.link, item.depth, true, Vec3::Zero()});
     const std::vector<int>& children = model.links[static_cast<size_t>(chain.back())].children;
     for (auto c = children.rbegin(); c != children.rend(); ++c)
@@ -171,15 +243,18 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
                       const MjcfExportOptions& options = {}) {
   std::ostringstream xml;
   const Vec3& g = model.gravity;
+  const GeomTable geoms = geom_table(model, options.geometry);
+  // Every body has its <inertial>: the geoms' volumes must not become mass.
   xml << "<mujoco model=\"" << attr(options.model_name) << "\">\n"
-      << "  <compiler angle=\"radian\"/>\n"
+      << "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
       << "  <option timestep=\"" << format_double(timestep) << "\" gravity=\""
       << nums({g.x(), g.y(), g.z()}) << "\" integrator=\""
       << (integrator == MujocoIntegrator::euler ? "Euler" : "implicit") << "\">\n"
       << "    <flag contact=\"disable\"/>\n"
-      << "  </option>\n"
-      << "  <worldbody>\n";
-  write_bodies(model, 2, extras, xml);
+      << "  </option>\n";
+  if (!geoms.assets.empty()) xml << "  <asset>\n" << geoms.assets << "  </asset>\n";
+  xml << "  <worldbody>\n";
+  write_bodies(model, 2, extras, &geoms, &options.geometry, xml);
   xml << "  </worldbody>\n";
   if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
   if (!options.scene_record.empty())
@@ -367,6 +442,88 @@ std::string scene_record(const std::string& scene_text, const Simulation& sim,
   YAML::Emitter out;
   out << scene;
   return std::string(out.c_str()) + "\n";
+}
+
+std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
+                                        const std::map<std::string, std::string>& packages,
+                                        std::vector<std::string>& warnings) {
+  namespace fs = std::filesystem;
+  const std::string file = robot.path.string();
+  const fs::path folder = fs::absolute(robot.path).parent_path();
+  std::vector<UrdfGeometry> out;
+  std::string collada;  // the .dae meshes: one line for all
+  int collada_count = 0;
+  std::map<std::string, int> unmapped;  // package -> meshes left out: one line per package
+  for (const UrdfGeometry& g : robot.geometry) {
+    const std::string where = file + ": link '" + g.link + "' " +
+                              (g.collision ? "<collision>" : "<visual>") + " ";
+    auto skip = [&](const std::string& why) {
+      warnings.push_back(where + why + ": left out of the MJCF");
+    };
+    if (g.shape != UrdfGeometry::Shape::mesh) {
+      const int n = g.shape == UrdfGeometry::Shape::box        ? 3
+                    : g.shape == UrdfGeometry::Shape::cylinder ? 2
+                                                               : 1;
+      if (!(g.size.head(n).array() > 0.0).all() || !g.size.allFinite()) {
+        skip("size " + format_vec3(g.size) + ": must be finite and > 0");
+        continue;
+      }
+      out.push_back(g);
+      continue;
+    }
+    const std::string& name = g.filename;
+    fs::path path;
+    if (name.rfind("package://", 0) == 0) {
+      const std::string rest = name.substr(10);
+      const std::string package = rest.substr(0, rest.find('/'));
+      const auto it = packages.find(package);
+      if (it == packages.end()) {
+        ++unmapped[package];
+        continue;
+      }
+      path = fs::path(it->second) /
+             (rest.size() > package.size() ? rest.substr(package.size() + 1) : "");
+    } else if (name.rfind("file://", 0) == 0) {
+      path = name.substr(7);
+    } else if (name.find("://") != std::string::npos) {
+      skip("mesh " + name + ": only package:// and file:// addresses are read");
+      continue;
+    } else {
+      path = folder / name;
+    }
+    std::string extension = path.extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".dae") {
+      collada += (collada.empty() ? " link '" : ", '") + g.link + "' " + name;
+      ++collada_count;
+      continue;
+    }
+    if (extension != ".stl") {
+      skip("mesh " + name + ": MuJoCo 2.2.2 loads STL meshes only here");
+      continue;
+    }
+    std::error_code error;
+    if (!fs::is_regular_file(path, error)) {
+      skip("mesh " + name + ": " + path.string() + " not found");
+      continue;
+    }
+    if (!g.scale.allFinite() || (g.scale.array() == 0.0).any()) {
+      skip("mesh " + name + " scale " + format_vec3(g.scale) + ": must be finite and not 0");
+      continue;
+    }
+    UrdfGeometry resolved = g;
+    resolved.filename = fs::absolute(path).lexically_normal().string();
+    out.push_back(std::move(resolved));
+  }
+  for (const auto& [package, count] : unmapped)
+    warnings.push_back(file + ": " + std::to_string(count) + " mesh" + (count == 1 ? "" : "es") +
+                       " of package '" + package + "' left out of the MJCF: it is not mapped "
+                       "(--package " + package + "=DIR)");
+  if (collada_count > 0)
+    warnings.push_back(file + ": " + std::to_string(collada_count) +
+                       " COLLADA (.dae) mesh" + (collada_count == 1 ? "" : "es") +
+                       " left out of the MJCF (MuJoCo 2.2.2 cannot load them):" + collada);
+  return out;
 }
 
 std::string mujoco_version() {

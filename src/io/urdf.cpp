@@ -270,6 +270,66 @@ void map_urdf_joints(UrdfRobot& robot, const urdf::ModelInterface& urdf_model) {
   }
 }
 
+// Each link's visuals and collisions, placed in its anchor's frame (in_anchor: the link frame's
+// pose there). Links not reached from the root have no anchor and are left out.
+void collect_geometry(UrdfRobot& robot, const urdf::ModelInterface& urdf_model,
+                      const std::vector<std::string>& link_order,
+                      const std::map<std::string, std::string>& anchor,
+                      const std::map<std::string, Pose>& in_anchor) {
+  auto add = [&](const std::string& link, bool collision, int index, const urdf::Pose& origin,
+                 const urdf::GeometrySharedPtr& g) {
+    if (!g) return;
+    UrdfGeometry out;
+    out.link = link;
+    out.body = anchor.at(link);
+    out.collision = collision;
+    out.index = index;
+    const Pose pose = compose(in_anchor.at(link), pose_of(origin));
+    out.xyz = pose.p;
+    out.rotation = pose.R;
+    switch (g->type) {
+      case urdf::Geometry::BOX: {
+        const urdf::Vector3& d = static_cast<const urdf::Box&>(*g).dim;
+        out.shape = UrdfGeometry::Shape::box;
+        out.size = Vec3(d.x, d.y, d.z);
+        break;
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto& c = static_cast<const urdf::Cylinder&>(*g);
+        out.shape = UrdfGeometry::Shape::cylinder;
+        out.size = Vec3(c.radius, c.length, 0.0);
+        break;
+      }
+      case urdf::Geometry::SPHERE:
+        out.shape = UrdfGeometry::Shape::sphere;
+        out.size = Vec3(static_cast<const urdf::Sphere&>(*g).radius, 0.0, 0.0);
+        break;
+      case urdf::Geometry::MESH: {
+        const auto& m = static_cast<const urdf::Mesh&>(*g);
+        out.shape = UrdfGeometry::Shape::mesh;
+        out.filename = m.filename;
+        out.scale = Vec3(m.scale.x, m.scale.y, m.scale.z);
+        break;
+      }
+      default:
+        return;
+    }
+    robot.geometry.push_back(std::move(out));
+  };
+  for (const std::string& name : link_order) {
+    const urdf::LinkConstSharedPtr link = urdf_model.getLink(name);
+    if (!link || !anchor.count(name)) continue;
+    for (size_t k = 0; k < link->visual_array.size(); ++k)
+      if (link->visual_array[k])
+        add(name, false, static_cast<int>(k), link->visual_array[k]->origin,
+            link->visual_array[k]->geometry);
+    for (size_t k = 0; k < link->collision_array.size(); ++k)
+      if (link->collision_array[k])
+        add(name, true, static_cast<int>(k), link->collision_array[k]->origin,
+            link->collision_array[k]->geometry);
+  }
+}
+
 }  // namespace
 
 Vec3 rpy_from_rotation(const Mat3& R) {
@@ -489,6 +549,8 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
       stack.push_back(child);
     }
   }
+
+  collect_geometry(robot, *urdf_model, link_order, anchor, in_anchor);
 
   // The root's joint needs a name no URDF joint has.
   robot.root_joint = "root_joint";

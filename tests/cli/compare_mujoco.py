@@ -126,6 +126,86 @@ def round_trips(cli, source, out_dir):
                   f"{name}: the round-tripped scene simulates as the original ({worst} of {scale})")
 
 
+def urdf_geometry(cli, source, out_dir):
+    """translate --to mujoco writes the URDF's visuals and collisions as geoms (mesh files
+    resolved, --package for package://, COLLADA left out with a warning line); the export still
+    round-trips to a scene that simulates as the original."""
+    from xml.etree import ElementTree
+    urdf = os.path.abspath(os.path.join(source, "tests", "data", "geometry.urdf"))
+    scene = os.path.join(out_dir, "geom.yaml")
+    with open(scene, "w") as f:
+        f.write(f"model: {urdf}\nsteps: 60\ninitial: {{q: {{joint1: 0.3}}}}\n"
+                "drives:\n  joint1: {type: force, stiffness: 200, damping: 20,\n"
+                "           target: {sine: {amplitude: 0.4, frequency: 0.5}}}\n")
+    xml = os.path.join(out_dir, "geom.xml")
+    r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml)
+    check(r.returncode == 0 and "warning" not in r.stdout, "geometry.urdf: translated", r)
+    if r.returncode == 0:
+        root = ElementTree.parse(xml).getroot()
+        check(root.find("compiler").get("inertiafromgeom") == "false",
+              "geoms give no inertia")
+        geoms = {g.get("name"): g for g in root.iter("geom")}
+        # tests/data/geometry.urdf: box 0.4 0.3 0.1, cylinders r 0.04 / 0.05, sphere r 0.06.
+        check(sorted(geoms) == ["base:collision0", "base:visual0", "link1:collision0",
+                                "link1:visual0", "tool:visual0"], f"the five geoms: {list(geoms)}")
+        if "base:visual0" in geoms and "tool:visual0" in geoms:
+            check(geoms["base:visual0"].get("size") == "0.2 0.15 0.05", "box half extents")
+            check(geoms["link1:visual0"].get("size") == "0.04 0.25", "cylinder radius, half length")
+            check(geoms["tool:visual0"].get("contype") == "0" and
+                  geoms["tool:visual0"].get("group") == "1", "a visual makes no contact")
+            check(geoms["base:collision0"].get("group") == "0", "collisions in group 0")
+        back = os.path.join(out_dir, "geom_back.yaml")
+        r = run(cli, "translate", xml, "--to", "physx", "--out", back)
+        check(r.returncode == 0, "geometry.urdf's MJCF back to a scene", r)
+        runs = []
+        for s in (scene, back):
+            csv = s + ".csv"
+            r = run(cli, "simulate", s, "--out", csv)
+            check(r.returncode == 0, f"simulate {s}", r)
+            runs.append(read_csv(csv) if r.returncode == 0 else None)
+        if runs[0] and runs[1]:
+            worst = max(abs(a - b) for ra, rb in zip(runs[0][1], runs[1][1]) for a, b in zip(ra, rb))
+            check(worst <= 1e-10, f"geometry.urdf's round trip simulates alike ({worst})")
+    r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml + "2", "--package", "herb")
+    one_line_error(r, ["--package 'herb'", "NAME=DIR"], "a --package without a folder")
+    check(not os.path.exists(xml + "2"), "no MJCF written for a bad --package")
+    # A mesh file MuJoCo cannot read is the input's fault: exit 2 naming the URDF and the file.
+    with open(urdf) as f:
+        text = f.read().replace('<sphere radius="0.06"/>', '<mesh filename="broken.stl"/>')
+    with open(os.path.join(out_dir, "broken.urdf"), "w") as f:
+        f.write(text)
+    with open(os.path.join(out_dir, "broken.stl"), "w") as f:
+        f.write("not an STL")
+    broken = os.path.join(out_dir, "geom_broken.yaml")
+    with open(broken, "w") as f:
+        f.write("model: broken.urdf\nsteps: 10\n"
+                "drives:\n  joint1: {type: force, stiffness: 200, damping: 20}\n")
+    r = run(cli, "translate", broken, "--to", "mujoco", "--out", xml + "3")
+    one_line_error(r, ["broken.urdf", "geometry", "broken.stl"], "a mesh MuJoCo cannot read")
+    check(not os.path.exists(xml + "3"), "no MJCF written for a broken mesh")
+
+    wam = "/usr/share/doc/dart/data/urdf/wam/wam.urdf"
+    if not os.path.exists(wam):
+        return
+    scene = os.path.join(out_dir, "geom_wam.yaml")
+    with open(scene, "w") as f:
+        f.write(f"model: {wam}\nsteps: 10\ndrives:\n  /j1: {{type: force, stiffness: 100, "
+                "damping: 10}\n")
+    xml = os.path.join(out_dir, "geom_wam.xml")
+    r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml)
+    check(r.returncode == 0 and "16 meshes of package 'herb_description' left out" in r.stdout,
+          "WAM without --package: one warning line for the package", r)
+    r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml,
+            "--package", "herb_description=" + os.path.dirname(wam))
+    check(r.returncode == 0 and "8 COLLADA (.dae) meshes left out" in r.stdout,
+          "WAM: the COLLADA visuals are left out on one warning line", r)
+    if r.returncode == 0:
+        root = ElementTree.parse(xml).getroot()
+        files = [m.get("file") for m in root.iter("mesh")]
+        check(len(files) == 8 and all(f.endswith("_collision.STL") and os.path.isfile(f)
+                                      for f in files), f"WAM: its 8 STL collisions: {files}")
+
+
 def main():
     cli, source, out_dir = sys.argv[1:4]
     os.makedirs(out_dir, exist_ok=True)
@@ -275,6 +355,7 @@ def main():
 
     mjcf_robots(cli, source, out_dir)
     round_trips(cli, source, out_dir)
+    urdf_geometry(cli, source, out_dir)
 
     for f in failures:
         print("FAIL:", f)

@@ -9,11 +9,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
 #include <unistd.h>
+#include <urdf_parser/urdf_parser.h>
 
+#include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/io/mjcf_export.hpp"
@@ -385,6 +389,285 @@ TEST(MujocoBridge, BodiesWithSeveralJointsExportAsOneBody) {
   mj_deleteData(d1);
   mj_deleteModel(original);
   mj_deleteModel(exported);
+}
+
+// ---- The URDF's visual and collision geometry in the export ----
+
+// A row-major 3x3 of MuJoCo's.
+Mat3 mj_mat(const double* m) {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m);
+}
+
+// The three corners of a binary STL's triangle k (its header: 80 bytes and a count; each triangle
+// a normal, three corners and 2 bytes).
+std::array<Vec3, 3> stl_triangle(const std::string& path, int k) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(84 + 50 * k + 12);
+  std::array<Vec3, 3> corners;
+  for (Vec3& c : corners) {
+    float v[3];
+    in.read(reinterpret_cast<char*>(v), sizeof v);
+    c = Vec3(v[0], v[1], v[2]);
+  }
+  EXPECT_TRUE(in.good()) << path;
+  return corners;
+}
+
+struct GeomCheck {
+  int geoms = 0, meshes = 0;
+  double worst = 0.0;  ///< the largest position error of a geom or mesh corner
+};
+
+// Each of the URDF's <visual> and <collision> elements (read here with urdfdom, .dae meshes
+// left out) against the exported geom of its name in `m` at featherdrive's configuration q: its
+// type and size, and its pose = the URDF link's frame in featherdrive (merged links: the frame
+// they keep) * the element's <origin>. MuJoCo moves a mesh's frame to its centroid, so a mesh is
+// checked by the world position of corners of its STL's triangles among the compiled vertices.
+GeomCheck check_geoms(const UrdfRobot& robot, const std::string& urdf_text,
+                      const std::map<std::string, std::string>& packages, const mjModel* m,
+                      const VecX& q) {
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(urdf_text);
+  EXPECT_TRUE(urdf_model);
+  const Model& model = *robot.model;
+  Data data(model);
+  forward_kinematics(model, data, q);
+  mjData* d = mj_makeData(m);
+  std::copy(q.data(), q.data() + m->nq, d->qpos);
+  mj_forward(m, d);
+  GeomCheck check;
+  for (const auto& [name, link] : urdf_model->links_) {
+    const NamedFrame frame = model.frame(name);
+    const Mat3 R = frame_rotation(model, data, frame);
+    const Vec3 p = frame_position(model, data, frame);
+    auto check_one = [&](const std::string& geom_name, const urdf::Pose& origin,
+                         const urdf::Geometry& g) {
+      if (g.type == urdf::Geometry::MESH &&
+          static_cast<const urdf::Mesh&>(g).filename.find(".dae") != std::string::npos)
+        return;
+      const int id = mj_name2id(m, mjOBJ_GEOM, geom_name.c_str());
+      ASSERT_GE(id, 0) << geom_name;
+      ++check.geoms;
+      const urdf::Rotation& r = origin.rotation;
+      const Mat3 R_geom = R * Quat(r.w, r.x, r.y, r.z).toRotationMatrix();
+      const Vec3 p_geom = p + R * Vec3(origin.position.x, origin.position.y, origin.position.z);
+      const double* size = m->geom_size + 3 * id;
+      switch (g.type) {
+        case urdf::Geometry::BOX: {
+          const urdf::Vector3& dim = static_cast<const urdf::Box&>(g).dim;
+          EXPECT_EQ(m->geom_type[id], mjGEOM_BOX) << geom_name;
+          EXPECT_EQ(Vec3(size[0], size[1], size[2]), Vec3(dim.x / 2, dim.y / 2, dim.z / 2));
+          break;
+        }
+        case urdf::Geometry::CYLINDER: {
+          const auto& c = static_cast<const urdf::Cylinder&>(g);
+          EXPECT_EQ(m->geom_type[id], mjGEOM_CYLINDER) << geom_name;
+          EXPECT_EQ(size[0], c.radius) << geom_name;
+          EXPECT_EQ(size[1], c.length / 2) << geom_name;
+          break;
+        }
+        case urdf::Geometry::SPHERE:
+          EXPECT_EQ(m->geom_type[id], mjGEOM_SPHERE) << geom_name;
+          EXPECT_EQ(size[0], static_cast<const urdf::Sphere&>(g).radius) << geom_name;
+          break;
+        case urdf::Geometry::MESH: {
+          const auto& mesh = static_cast<const urdf::Mesh&>(g);
+          EXPECT_EQ(m->geom_type[id], mjGEOM_MESH) << geom_name;
+          ++check.meshes;
+          std::string file = mesh.filename;
+          if (file.rfind("package://", 0) == 0) {
+            const std::string rest = file.substr(10);
+            const size_t slash = rest.find('/');
+            file = packages.at(rest.substr(0, slash)) + rest.substr(slash);
+          } else {
+            file = (std::filesystem::path(robot.path).parent_path() / file).string();
+          }
+          const int mesh_id = m->geom_dataid[id];
+          const Mat3 R_mj = mj_mat(d->geom_xmat + 9 * id);
+          const Vec3 p_mj(d->geom_xpos + 3 * id);
+          const Vec3 scale(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+          for (int t : {0, 1}) {
+            for (const Vec3& corner : stl_triangle(file, t)) {
+              const Vec3 expected = p_geom + R_geom * scale.cwiseProduct(corner);
+              double nearest = kInf;
+              for (int v = m->mesh_vertadr[mesh_id];
+                   v < m->mesh_vertadr[mesh_id] + m->mesh_vertnum[mesh_id]; ++v) {
+                const float* x = m->mesh_vert + 3 * v;
+                const Vec3 world = p_mj + R_mj * Vec3(x[0], x[1], x[2]);
+                nearest = std::min(nearest, (world - expected).norm());
+              }
+              check.worst = std::max(check.worst, nearest);
+            }
+          }
+          return;  // the geom's own frame is the mesh's centroid frame
+        }
+      }
+      check.worst = std::max(check.worst, (Vec3(d->geom_xpos + 3 * id) - p_geom).norm());
+      EXPECT_LT((mj_mat(d->geom_xmat + 9 * id) - R_geom).cwiseAbs().maxCoeff(), 1e-12)
+          << geom_name;
+      // Visuals show without contacts, in group 1; collisions in group 0.
+      const bool visual = geom_name.find(":visual") != std::string::npos;
+      EXPECT_EQ(m->geom_group[id], visual ? 1 : 0) << geom_name;
+      EXPECT_EQ(m->geom_contype[id], visual ? 0 : 1) << geom_name;
+    };
+    for (size_t k = 0; k < link->visual_array.size(); ++k)
+      check_one(name + ":visual" + std::to_string(k), link->visual_array[k]->origin,
+                *link->visual_array[k]->geometry);
+    for (size_t k = 0; k < link->collision_array.size(); ++k)
+      check_one(name + ":collision" + std::to_string(k), link->collision_array[k]->origin,
+                *link->collision_array[k]->geometry);
+  }
+  mj_deleteData(d);
+  return check;
+}
+
+// The export of `robot` with its geometry (geometry: true) or without, compiled by MuJoCo.
+struct GeomExport {
+  MjcfExport mjcf;
+  std::vector<std::string> warnings;
+  mjModel* m = nullptr;
+};
+
+// The robot with a drive on every dof towards 0.2.
+Simulation driven(const UrdfRobot& robot) {
+  Simulation sim(robot.model, SimulationOptions{});
+  for (int dof = 0; dof < robot.model->nv; ++dof) {
+    Drive drive;
+    drive.type = DriveType::force;
+    drive.stiffness = 400.0;
+    drive.damping = 40.0;
+    drive.target_position = 0.2;
+    sim.set_drive(dof, drive);
+  }
+  return sim;
+}
+
+GeomExport export_robot(const UrdfRobot& robot, const std::map<std::string, std::string>& packages,
+                        bool geometry) {
+  const Simulation sim = driven(robot);
+  GeomExport out;
+  MjcfExportOptions options;
+  if (geometry) options.geometry = mjcf_geometry(robot, packages, out.warnings);
+  out.mjcf = export_mjcf(sim, options);
+  out.m = load_text(out.mjcf.xml);
+  return out;
+}
+
+// The geoms leave MuJoCo's bodies and their motion as they are without them.
+void expect_same_dynamics(const UrdfRobot& robot, const GeomExport& with, const GeomExport& without) {
+  ASSERT_EQ(with.m->nbody, without.m->nbody);
+  EXPECT_EQ(without.m->ngeom, 0);
+  auto same = [](const double* a, const double* b, int n) { return std::equal(a, a + n, b); };
+  EXPECT_TRUE(same(with.m->body_mass, without.m->body_mass, with.m->nbody));
+  EXPECT_TRUE(same(with.m->body_inertia, without.m->body_inertia, 3 * with.m->nbody));
+  EXPECT_TRUE(same(with.m->body_ipos, without.m->body_ipos, 3 * with.m->nbody));
+  EXPECT_TRUE(same(with.m->body_iquat, without.m->body_iquat, 4 * with.m->nbody));
+  const Simulation sim = driven(robot);
+  MujocoRun a(with.mjcf), b(without.mjcf);
+  a.set_state(sim.q(), sim.qd());
+  b.set_state(sim.q(), sim.qd());
+  for (int k = 0; k < 30; ++k) {
+    a.step(sim);
+    b.step(sim);
+  }
+  EXPECT_GT((a.q() - sim.q()).norm(), 1e-3);  // it moved
+  EXPECT_EQ(a.q(), b.q());
+}
+
+TEST(MujocoBridge, UrdfGeometryExportsAsGeoms) {
+  const std::string path = FEATHERDRIVE_SOURCE_DIR "/tests/data/geometry.urdf";
+  const UrdfRobot robot = load_urdf(path);
+  const GeomExport with = export_robot(robot, {}, true);
+  const GeomExport without = export_robot(robot, {}, false);
+  ASSERT_TRUE(with.m && without.m);
+  EXPECT_TRUE(with.warnings.empty());
+  // base: a box visual and collision; link1: a cylinder of each; tool (merged into link1): a
+  // sphere visual.
+  EXPECT_EQ(with.m->ngeom, 5);
+  const int tool = mj_name2id(with.m, mjOBJ_GEOM, "tool:visual0");
+  ASSERT_GE(tool, 0);
+  EXPECT_EQ(with.m->geom_bodyid[tool], mj_name2id(with.m, mjOBJ_BODY, "link1"));
+  EXPECT_EQ(with.m->geom_size[3 * tool], 0.06);
+  const int box = mj_name2id(with.m, mjOBJ_GEOM, "base:visual0");
+  ASSERT_GE(box, 0);
+  EXPECT_EQ(Vec3(with.m->geom_size + 3 * box), Vec3(0.2, 0.15, 0.05));
+  const std::string text = read_input_file(path);
+  for (const double angle : {0.0, 0.7}) {
+    const GeomCheck check =
+        check_geoms(robot, text, {}, with.m, VecX::Constant(robot.model->nq, angle));
+    EXPECT_EQ(check.geoms, 5);
+    EXPECT_LT(check.worst, 1e-12);
+  }
+  expect_same_dynamics(robot, with, without);
+  mj_deleteModel(with.m);
+  mj_deleteModel(without.m);
+}
+
+// DART's KR5 (STL meshes relative to the URDF) and WAM (package:// meshes: COLLADA visuals left
+// out with a warning, STL collisions kept).
+TEST(MujocoBridge, UrdfMeshesExportAsMeshGeoms) {
+  const std::string dart = "/usr/share/doc/dart/data/urdf/";
+  const std::string kr5 = dart + "KR5/KR5 sixx R650.urdf", wam = dart + "wam/wam.urdf";
+  if (!std::filesystem::exists(kr5) || !std::filesystem::exists(wam))
+    GTEST_SKIP() << "DART's data are not installed";
+  const std::map<std::string, std::string> packages{{"herb_description", dart + "wam"}};
+  for (const std::string& path : {kr5, wam}) {
+    SCOPED_TRACE(path);
+    const UrdfRobot robot = load_urdf(path);
+    const GeomExport with = export_robot(robot, packages, true);
+    const GeomExport without = export_robot(robot, packages, false);
+    ASSERT_TRUE(with.m && without.m);
+    const std::string text = read_input_file(path);
+    const GeomCheck check = check_geoms(robot, text, packages, with.m,
+                                        VecX::LinSpaced(robot.model->nq, -0.4, 0.6));
+    EXPECT_EQ(with.m->ngeom, check.geoms);  // every geom is one of the URDF's
+    EXPECT_GT(check.meshes, 6);
+    EXPECT_LT(check.worst, 1e-5);  // MuJoCo keeps vertices as floats
+    std::printf("[ bridge   ] %s: %d geoms (%d meshes), largest position error %.1e\n",
+                robot.name.c_str(), check.geoms, check.meshes, check.worst);
+    // WAM: its 8 visuals are COLLADA, named on one warning line.
+    if (path == wam) {
+      ASSERT_EQ(with.warnings.size(), 1u);
+      EXPECT_NE(with.warnings[0].find("8 COLLADA (.dae) meshes left out"), std::string::npos)
+          << with.warnings[0];
+    } else {
+      EXPECT_TRUE(with.warnings.empty());
+    }
+    expect_same_dynamics(robot, with, without);
+    mj_deleteModel(with.m);
+    mj_deleteModel(without.m);
+  }
+}
+
+// DART's Atlas: COLLADA visuals, STL collisions and shapes; it exports and MuJoCo loads it.
+TEST(MujocoBridge, AtlasExportsWithItsCollisionMeshes) {
+  const std::string path = "/usr/share/doc/dart/data/sdf/atlas/atlas_v3_no_head.urdf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " is not installed";
+  const UrdfRobot robot = load_urdf(path);
+  const GeomExport with = export_robot(robot, {}, true);
+  ASSERT_TRUE(with.m);
+  const std::string text = read_input_file(path);
+  int collada = 0;  // as urdfdom reads the file (some of its elements are commented out)
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(text);
+  ASSERT_TRUE(urdf_model);
+  auto is_collada = [](const urdf::GeometrySharedPtr& g) {
+    return g->type == urdf::Geometry::MESH &&
+           static_cast<const urdf::Mesh&>(*g).filename.find(".dae") != std::string::npos;
+  };
+  for (const auto& [name, link] : urdf_model->links_) {
+    for (const urdf::VisualSharedPtr& v : link->visual_array) collada += is_collada(v->geometry);
+    for (const urdf::CollisionSharedPtr& c : link->collision_array)
+      collada += is_collada(c->geometry);
+  }
+  EXPECT_GT(collada, 20);
+  ASSERT_EQ(with.warnings.size(), 1u);
+  EXPECT_NE(with.warnings[0].find(std::to_string(collada) + " COLLADA (.dae) meshes left out"),
+            std::string::npos)
+      << with.warnings[0];
+  const GeomCheck check = check_geoms(robot, text, {}, with.m, VecX::Zero(robot.model->nq));
+  EXPECT_EQ(with.m->ngeom, check.geoms);
+  EXPECT_GT(check.meshes, 20);
+  EXPECT_LT(check.worst, 1e-5);
+  mj_deleteModel(with.m);
 }
 
 }  // namespace

@@ -15,11 +15,14 @@
 // "world_link" (MuJoCo reserves the name).
 #pragma once
 
+#include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "featherdrive/io/error.hpp"
+#include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/gain_translation.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
@@ -43,7 +46,20 @@ struct MjcfExportOptions {
   /// Kept in the file as <custom><text name="featherdrive_scene"> (kMjcfSceneText): the scene the
   /// export came from (scene_record), which `translate --to physx` restores. Empty: none.
   std::string scene_record;
+  /// <geom>s in the bodies of their `body` links (mjcf_geometry: meshes' filenames absolute):
+  /// visuals in group 1 without contacts, collisions in group 0. Every body has its <inertial>
+  /// and the compiler takes no inertia from geoms, so they leave the dynamics as they are.
+  std::vector<UrdfGeometry> geometry;
 };
+
+/// robot.geometry for MjcfExportOptions::geometry, each mesh's filename resolved to an absolute
+/// path: package://NAME/REST as packages[NAME]/REST, file://PATH as PATH, else relative to the
+/// URDF's folder. Left out, with a line in `warnings` naming the URDF, the link and the value:
+/// meshes MuJoCo 2.2.2 cannot load (not STL: COLLADA .dae ones share one line), missing files,
+/// unmapped packages (one line per package), sizes and scales that are not finite and > 0.
+std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
+                                        const std::map<std::string, std::string>& packages,
+                                        std::vector<std::string>& warnings);
 
 /// The name of the custom text that holds an export's scene_record.
 inline constexpr const char* kMjcfSceneText = "featherdrive_scene";

@@ -50,6 +50,23 @@ struct MergedLink {
   Mat3 rotation = Mat3::Identity();
 };
 
+/// A <visual> or <collision> geometry as the URDF writes it, placed in the frame of the model link
+/// it moves with (read for exports and viewers; the dynamics never use it).
+struct UrdfGeometry {
+  enum class Shape { box, cylinder, sphere, mesh };
+  std::string link;  ///< the URDF link that has it
+  std::string body;  ///< the model link it moves with: link, or the one link was merged into
+  bool collision = false;  ///< <collision>; else <visual>
+  int index = 0;           ///< its place among link's visuals (or collisions)
+  Shape shape = Shape::box;
+  /// box: the full extents; cylinder: radius, length (along z), 0; sphere: radius, 0, 0.
+  Vec3 size = Vec3::Zero();
+  std::string filename;          ///< mesh: as written (package://, file:// or relative)
+  Vec3 scale = Vec3::Ones();     ///< mesh
+  Vec3 xyz = Vec3::Zero();       ///< the geometry frame's origin in body's frame
+  Mat3 rotation = Mat3::Identity();
+};
+
 struct UrdfRobot {
   std::filesystem::path path;
   std::string name;  ///< <robot name>
@@ -73,6 +90,8 @@ struct UrdfRobot {
   /// offset = -offset (docs/math/mimic_joints.md); scenes apply them (make_simulation).
   std::vector<MimicJoint> mimic_joints;
   std::map<std::string, MergedLink> merged;  ///< merged link name -> where it went
+  /// Every link's visuals, then its collisions, links in document order (merged ones included).
+  std::vector<UrdfGeometry> geometry;
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
   /// The URDF effort limit of each moving joint (informative; drives need their own max_force).
   std::map<std::string, double> effort_limits;
