@@ -325,7 +325,7 @@ def _units(model, drives):
     """Each drive's position unit: m on a prismatic joint, rad otherwise."""
     import featherdrive as fd
     return ["m" if model.links[model.dof_link[dof]].joint_type == fd.JointType.prismatic
-            else "rad" for _, dof, _ in drives]
+            else "rad" for _, dof in drives]
 
 
 def _gain_units(scene, drives, changed):
@@ -334,7 +334,7 @@ def _gain_units(scene, drives, changed):
     import featherdrive as fd
     model = scene.model
     kinds = {"stiffness": [], "damping": []}
-    for joint, dof, _ in drives:
+    for joint, dof in drives:
         if dof not in changed:
             continue
         spec = next(s for s in scene.drives if s.joint == joint)
@@ -383,7 +383,8 @@ def evaluate(item):
     # Overshoot, settling time and peak force (module docstring): the step heights, bands and
     # running extremes, from the same errors as the RMS.
     dofs = np.array([d[1] for d in drives])
-    initial = np.array([s.target_at(0.0)[0] for s in specs]) - batch.q[:, q_index]
+    initial = np.array([s.target_at(0.0)[0] for s in specs]) - \
+        fd.dof_positions(scene.model, batch.q, dofs)
     step, band = _steps_and_bands(specs, initial[0], scene.steps, dt)
     direction = np.where(step, -np.sign(initial[0]), 0.0)
     excursion = np.zeros((len(rows), len(drives)))
