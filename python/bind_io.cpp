@@ -40,6 +40,9 @@ void featherdrive::python::bind_io(py::module_& m) {
 
   py::class_<UrdfRobot>(m, "UrdfRobot", "A robot read from URDF and its Model.")
       .def_readonly("path", &UrdfRobot::path, "the file")
+      .def_readonly("input_files", &UrdfRobot::input_files,
+                    "every file the loader read: the robot file, an MJCF's includes and its "
+                    "mesh, skin, hfield and texture files (outputs must not replace them)")
       .def_readonly("name", &UrdfRobot::name, "<robot name>")
       .def_readonly("root_link", &UrdfRobot::root_link, "root link name")
       .def_readonly("root_joint", &UrdfRobot::root_joint, "name of the root's joint")

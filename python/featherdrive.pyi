@@ -589,6 +589,7 @@ class UrdfMimic:
 class UrdfRobot:
     """A robot read from URDF and its Model."""
     path: os.PathLike[str]
+    input_files: list[os.PathLike[str]]
     name: str
     root_link: str
     root_joint: str

@@ -50,13 +50,16 @@ PrivateTempDir::~PrivateTempDir() {
   fs::remove_all(path_, ec);
 }
 
-void check_outputs(const std::vector<Output>& outputs, const std::vector<Input>& inputs) {
+void check_outputs(const std::vector<Output>& outputs, const std::vector<Input>& inputs,
+                   const std::vector<fs::path>& model_files) {
+  std::vector<Input> all = inputs;
+  for (const fs::path& file : model_files) all.emplace_back("a file the model reads", file);
   for (size_t i = 0; i < outputs.size(); ++i) {
     const auto& [option, path] = outputs[i];
     if (path.empty()) continue;
     check_replaceable(path);
     const FileIdentity id = file_identity(path);
-    for (const auto& [what, input] : inputs)
+    for (const auto& [what, input] : all)
       if (!input.empty() && file_identity(input) == id)
         throw std::invalid_argument(option + " " + path.string() + ": is " + what +
                                     " (an input of this run); refusing to overwrite it");

@@ -40,9 +40,11 @@ using Output = std::pair<std::string, std::filesystem::path>;
 using Input = std::pair<std::string, std::filesystem::path>;
 
 /// Before anything runs: refuses (std::invalid_argument, one line) an output that is one of the
-/// inputs or another output (by file identity, so links and other spellings are caught) or that
-/// exists and is not a regular file. Outputs with an empty path are skipped.
-void check_outputs(const std::vector<Output>& outputs, const std::vector<Input>& inputs);
+/// inputs, one of `model_files` (what the robot's loader read: UrdfRobot::input_files, an MJCF's
+/// includes and meshes) or another output (by file identity, so links and other spellings are
+/// caught) or that exists and is not a regular file. Outputs with an empty path are skipped.
+void check_outputs(const std::vector<Output>& outputs, const std::vector<Input>& inputs,
+                   const std::vector<std::filesystem::path>& model_files = {});
 
 /// "--plot out.jpg: the plot must be a .png file" for any other extension.
 void check_plot_path(const std::string& option, const std::filesystem::path& png);

@@ -172,7 +172,8 @@ int compare_mujoco(const CompareMujocoArgs& args) {
   Scene scene = args.overrides.load(args.scene);
   const Model& model = *scene.model();
   check_outputs({{"--plot", args.plot}},
-                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});
+                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}},
+                scene.robot.input_files);
   if (model.floating_base())
     throw std::invalid_argument(args.scene +
                                 ": fixed_base = false: compare-mujoco compares "

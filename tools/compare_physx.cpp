@@ -44,7 +44,8 @@ int compare_physx(const ComparePhysxArgs& args) {
   check_physx_iterations(args, scene.options);
   const Model& model = *scene.model();
   check_outputs({{"--plot", args.plot}},
-                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});
+                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}},
+                scene.robot.input_files);
 
   Simulation sim = make_simulation(scene);
   // The harness cannot set PhysX's static/dynamic/viscous friction (URDF <dynamics> gives the

@@ -182,7 +182,8 @@ int simulate(const SimulateArgs& args) {
   check_outputs({{"--out", args.out}, {"--plot", args.plot}, {"--save-state", args.save_state}},
                 {{"the scene", args.scene},
                  {"the scene's model", scene.robot.path},
-                 {"the --load-state checkpoint", args.load_state}});
+                 {"the --load-state checkpoint", args.load_state}},
+                scene.robot.input_files);
 
   // The simulation: the scene's, or the scene's model with the state and settings of a
   // checkpoint; the command line's solver settings apply on top of either.

@@ -5,6 +5,7 @@
 
 #include "cli_common.hpp"
 #include "featherdrive/io/files.hpp"
+#include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/io/mjcf_export.hpp"
 #include "featherdrive/io/mujoco_scene.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -16,7 +17,7 @@ namespace {
 
 // --to physx: SCENE is an MJCF; the output a featherdrive scene that reads it.
 int translate_to_physx_scene(const TranslateArgs& args) {
-  check_outputs({{"--out", args.out}}, {{"the MJCF", args.scene}});
+  check_outputs({{"--out", args.out}}, {{"the MJCF", args.scene}}, mjcf_input_files(args.scene));
   SimulationOptions options;
   args.overrides.apply(options);
   const int steps = args.overrides.steps.value_or(240);
@@ -84,7 +85,8 @@ int translate(const TranslateArgs& args) {
   if (args.to == "physx") return translate_to_physx_scene(args);
   Scene scene = args.overrides.load(args.scene);
   check_outputs({{"--out", args.out}},
-                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}});
+                {{"the scene", args.scene}, {"the scene's model", scene.robot.path}},
+                scene.robot.input_files);
   const Simulation sim = make_simulation(scene);
   MjcfExportOptions options;
   options.integrator =

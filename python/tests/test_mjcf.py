@@ -67,3 +67,33 @@ def test_position_actuator_becomes_an_explicit_pd():
     # MuJoCo: joint effort = gear * clip(kp (ctrl - gear q), forcerange).
     assert sim.actuator("j").stiffness == 30 * 2 ** 2
     assert sim.actuator("j").effort_limit == 2 * 5
+
+
+def test_empty_text_raises_instead_of_ending_the_process():
+    # MuJoCo's fatal error on an empty VFS file printed, waited for Enter and exited.
+    with pytest.raises(ValueError, match=r"^x\.xml: empty text"):
+        fd.parse_mjcf("", "x.xml")
+    with pytest.raises(ValueError, match=r"^y\.xml: no root element"):
+        fd.parse_mjcf("<!-- nothing -->", "y.xml")
+
+
+@pytest.mark.parametrize("element, attribute, value", [
+    ("geom", "mass", "nan"), ("body", "pos", "0 nan 0"), ("joint", "damping", "-inf")])
+def test_non_finite_numbers_name_the_element_and_attribute(element, attribute, value):
+    parts = {"body": "", "joint": "", "geom": ' size="0.1"'}
+    parts[element] += f' {attribute}="{value}"'
+    xml = (f'<mujoco><worldbody><body{parts["body"]}><joint{parts["joint"]}/>'
+           f'<geom{parts["geom"]}/></body></worldbody></mujoco>')
+    with pytest.raises(ValueError, match=f'^n.xml: line 1: <{element}> {attribute} = "{value}"'):
+        fd.parse_mjcf(xml, "n.xml")
+
+
+def test_input_files_list_the_file_and_its_includes(tmp_path):
+    (tmp_path / "arm.xml").write_text(
+        '<mujocoinclude><body><joint name="h"/><geom size="0.1"/></body></mujocoinclude>')
+    top = tmp_path / "top.xml"
+    top.write_text('<mujoco><worldbody><include file="arm.xml"/></worldbody></mujoco>')
+    robot = fd.load_mjcf(str(top))
+    assert sorted(map(str, robot.input_files)) == sorted([str(top), str(tmp_path / "arm.xml")])
+    urdf = pathlib.Path(__file__).resolve().parents[2] / "examples" / "slider.urdf"
+    assert [str(p) for p in fd.load_urdf(str(urdf)).input_files] == [str(urdf)]

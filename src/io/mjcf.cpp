@@ -12,10 +12,13 @@
 #include <set>
 #include <sstream>
 
-#include "featherdrive/algorithm/crba.hpp"
+#include "featherdrive/algorithm/aba.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/spatial/spatial.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "mjcf_document.hpp"
 #include "mujoco_calls.hpp"
 
 namespace featherdrive {
@@ -33,6 +36,31 @@ std::string name_of(const mjModel* m, mjtObj type, int id, const char* fallback)
   const char* name = mj_id2name(m, type, id);
   return name && *name ? std::string(name) : std::string(fallback) + std::to_string(id);
 }
+
+// The names of all joints or bodies: an unnamed one gets prefix<id>, with '_' appended while a
+// named one has that name, so that no two share a name.
+std::vector<std::string> unique_names(const mjModel* m, mjtObj type, int count, const char* prefix) {
+  std::vector<std::string> names(static_cast<size_t>(count));
+  std::set<std::string> named;
+  for (int i = 0; i < count; ++i) {
+    const char* name = mj_id2name(m, type, i);
+    if (name && *name) named.insert(names[static_cast<size_t>(i)] = name);
+  }
+  for (int i = 0; i < count; ++i) {
+    std::string& name = names[static_cast<size_t>(i)];
+    if (!name.empty()) continue;
+    name = prefix + std::to_string(i);
+    while (named.count(name)) name += "_";
+  }
+  return names;
+}
+
+struct Names {
+  std::vector<std::string> joint, body;
+  explicit Names(const mjModel* m)
+      : joint(unique_names(m, mjOBJ_JOINT, m->njnt, "joint")),
+        body(unique_names(m, mjOBJ_BODY, m->nbody, "body")) {}
+};
 
 Vec3 vec3(const mjtNum* p) { return Vec3(p[0], p[1], p[2]); }
 Mat3 rotation(const mjtNum* quat) {
@@ -63,7 +91,7 @@ std::string free_name(std::string base, const std::set<std::string>& taken) {
 }
 
 // What MJCF cannot bring over whole: refused with one line, before anything is built.
-void refuse_unsupported(const mjModel* m, const std::string& file) {
+void refuse_unsupported(const mjModel* m, const Names& names, const std::string& file) {
   if (m->ntendon > 0)
     fail(file, "<tendon> '" + name_of(m, mjOBJ_TENDON, 0, "tendon") + "' (" +
                    std::to_string(m->ntendon) +
@@ -78,10 +106,10 @@ void refuse_unsupported(const mjModel* m, const std::string& file) {
     if (m->jnt_type[j] != mjJNT_FREE) continue;
     const int b = m->jnt_bodyid[j];
     if (m->body_jntnum[b] != 1)
-      fail(file, "body '" + name_of(m, mjOBJ_BODY, b, "body") + "': free joint '" +
-                     name_of(m, mjOBJ_JOINT, j, "joint") +
+      fail(file, "body '" + names.body[static_cast<size_t>(b)] + "': free joint '" +
+                     names.joint[static_cast<size_t>(j)] +
                      "' is not the body's only joint (not supported)");
-    free_bodies.push_back(name_of(m, mjOBJ_BODY, b, "body"));
+    free_bodies.push_back(names.body[static_cast<size_t>(b)]);
   }
   if (free_bodies.size() > 1)
     fail(file, "free bodies " + joined(free_bodies) +
@@ -89,7 +117,8 @@ void refuse_unsupported(const mjModel* m, const std::string& file) {
 }
 
 // The featherdrive form of actuator i, or a warning saying why it has none.
-bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator& out,
+bool map_actuator(const mjModel* m, const Names& names, int i, const UrdfRobot& robot,
+                  const std::map<std::string, int>& link_of_joint, MjcfActuator& out,
                   std::string& why_not) {
   out.name = name_of(m, mjOBJ_ACTUATOR, i, "actuator");
   const std::string who = "actuator '" + out.name + "'";
@@ -98,7 +127,7 @@ bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator&
     return false;
   }
   const int j = m->actuator_trnid[2 * i];
-  out.joint = name_of(m, mjOBJ_JOINT, j, "joint");
+  out.joint = names.joint[static_cast<size_t>(j)];
   if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) {
     why_not = who + " on joint '" + out.joint +
               "': only hinge and slide joints are driven; ignored";
@@ -138,9 +167,8 @@ bool map_actuator(const mjModel* m, int i, const UrdfRobot& robot, MjcfActuator&
     out.ctrl_lower = m->actuator_ctrlrange[2 * i];
     out.ctrl_upper = m->actuator_ctrlrange[2 * i + 1];
   }
-  out.dof = -1;
-  for (const Link& link : robot.model->links)
-    if (link.joint_name == out.joint) out.dof = link.v_index;
+  const auto link = link_of_joint.find(out.joint);
+  out.dof = link == link_of_joint.end() ? -1 : robot.model->links[link->second].v_index;
   if (out.kind != MjcfActuatorKind::motor) {
     const double gear2 = out.gear * out.gear;
     out.actuator.kind = ActuatorKind::ideal_pd;
@@ -165,7 +193,10 @@ double effort_of(const MjcfActuator& a) {
 // but the last massless). A link frame is its body's frame moved by the body's joints so far and
 // shifted to the last joint's anchor (jnt_pos), so that a hinge turns it about its own origin.
 struct Converter {
-  const mjModel* m = nullptr;
+  Converter(const mjModel* model, const Names& n, const std::string& f, const UrdfOptions& o)
+      : m(model), names(n), file(f), options(o) {}
+  const mjModel* m;
+  const Names& names;
   std::string file;
   UrdfOptions options;
   MjcfRobot robot;
@@ -177,7 +208,7 @@ struct Converter {
   void add(LinkSpec spec) { robot.links.push_back(std::move(spec)); }
 
   void convert_bodies() {
-    for (int j = 0; j < m->njnt; ++j) joint_names.insert(name_of(m, mjOBJ_JOINT, j, "joint"));
+    for (int j = 0; j < m->njnt; ++j) joint_names.insert(names.joint[static_cast<size_t>(j)]);
     std::vector<int> tops;
     for (int b = 1; b < m->nbody; ++b)
       if (m->body_parentid[b] == 0) tops.push_back(b);
@@ -189,7 +220,7 @@ struct Converter {
     if (world_root && !options.fixed_base)
       for (int b : tops)
         if (m->body_jntnum[b] == 1 && m->jnt_type[m->body_jntadr[b]] == mjJNT_FREE)
-          fail(file, "body '" + name_of(m, mjOBJ_BODY, b, "body") +
+          fail(file, "body '" + names.body[static_cast<size_t>(b)] +
                          "': a free body beside other top-level bodies or joints (one "
                          "articulation with one root is supported; fixed_base welds it)");
     link_of_body.assign(static_cast<size_t>(m->nbody), "");
@@ -208,7 +239,7 @@ struct Converter {
   }
 
   void convert_body(int b) {
-    const std::string body = name_of(m, mjOBJ_BODY, b, "body");
+    const std::string body = names.body[static_cast<size_t>(b)];
     const int parent = m->body_parentid[b];
     const bool is_root = !world_root && parent == 0;
     // The body frame (before its joints move it) in the parent link frame.
@@ -237,7 +268,7 @@ struct Converter {
     Vec3 previous_anchor = Vec3::Zero();
     for (int k = 0; k < n; ++k) {
       const int j = first + k;
-      const std::string joint = name_of(m, mjOBJ_JOINT, j, "joint");
+      const std::string joint = names.joint[static_cast<size_t>(j)];
       const Vec3 anchor = vec3(m->jnt_pos + 3 * j);
       const Vec3 axis = vec3(m->jnt_axis + 3 * j);
       // Joint frame in the previous link frame: the body frame at the anchor (k = 0), or the
@@ -328,30 +359,52 @@ void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions&
                        " is not used; gravity is " + format_vec3(options.gravity));
 }
 
-// A massless link or parallel axes in one body can leave a direction of motion without inertia;
-// ABA would divide by zero. The mass matrix (armature included) is checked at qpos0.
+// A massless subtree, or two joints of one body moving it the same way, leave a direction of
+// motion without inertia: ABA would divide by zero. ABA factors the mass matrix (det M is the
+// product of det D_i, D_i = S_i^T IA_i S_i + armature: the inertia joint i moves with every joint
+// below it free), so M is singular exactly when some D_i is. Each D_i is compared with its own
+// scale, IA_i's largest entry at the link's origin, so that a long chain's conditioning does not
+// count against it. O(n), at qpos0.
 void check_well_posed(const MjcfRobot& robot, const std::string& file) {
   const Model& model = *robot.model;
   if (model.nv == 0) return;
   Data data(model);
-  const Eigen::SelfAdjointEigenSolver<MatX> eigen(crba(model, data, robot.q0));
-  const VecX& lambda = eigen.eigenvalues();  // ascending
-  if (lambda[0] > 1e-12 * lambda[model.nv - 1]) return;
-  Eigen::Index dof = 0;
-  eigen.eigenvectors().col(0).cwiseAbs().maxCoeff(&dof);
-  fail(file, "the mass matrix is singular at qpos0 (eigenvalue " + format_double(lambda[0]) +
-                 " of largest " + format_double(lambda[model.nv - 1]) + ", mostly dof '" +
-                 model.dof_names[static_cast<size_t>(dof)] +
-                 "'): a massless body, or two joints of one body on one axis");
+  forward_kinematics(model, data, robot.q0);
+  articulated_inertias(model, data);
+  // Children come after parents: a singular D_i spoils its ancestors' IA only, so the first one
+  // found from the end is a cause.
+  for (int i = model.num_links() - 1; i >= 0; --i) {
+    const int nv = data.info[i].nv;
+    if (nv == 0) continue;
+    const int v = data.info[i].v_index;
+    // At the link origin p (world axes): IA_p = Y^T IA Y and S_p = Y^-1 S, Y = [1 0; [p]x 1].
+    const Vec3 p = data.world_position[i] - data.frame_origin;
+    Mat6 Y = Mat6::Identity();
+    Y.bottomLeftCorner<3, 3>() = skew(p);
+    const Mat6 IA = Y.transpose() * data.articulated_inertia[i] * Y;
+    MatX S = nv == 1 ? MatX(data.one_dof[i].S) : MatX(data.motion_subspace[i]);
+    S.bottomRows<3>() -= skew(p) * S.topRows<3>();
+    MatX D = S.transpose() * IA * S;
+    for (int k = 0; k < nv; ++k) D(k, k) += model.armature[v + k];
+    const double scale = IA.cwiseAbs().maxCoeff() * S.colwise().squaredNorm().maxCoeff() +
+                         model.armature.segment(v, nv).maxCoeff();
+    const double pivot =
+        nv == 1 ? D(0, 0) : Eigen::SelfAdjointEigenSolver<MatX>(D).eigenvalues()[0];
+    if (pivot > 1e-9 * scale) continue;
+    const Link& link = model.links[static_cast<size_t>(i)];
+    fail(file, "joint '" + link.joint_name + "' (link '" + link.name +
+                   "') moves no inertia at qpos0 (the mass matrix's pivot " +
+                   format_double(pivot) + " against " + format_double(scale) +
+                   "): no mass below it, or another joint of its body moving it the same way; "
+                   "give the body mass or the joint armature");
+  }
 }
 
 MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& options,
                   std::vector<std::string> warnings) {
-  refuse_unsupported(m, file);
-  Converter c;
-  c.m = m;
-  c.file = file;
-  c.options = options;
+  const Names names(m);
+  refuse_unsupported(m, names, file);
+  Converter c(m, names, file, options);
   c.robot.path = file;
   c.robot.options = options;
   c.robot.name = m->names;  // the model's name comes first in MuJoCo's name buffer
@@ -363,14 +416,16 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
 
   // MuJoCo's qpos0 in our q: same joint order, same layout per joint.
   robot.q0 = VecX::Zero(model.nq);
-  std::map<std::string, int> link_of;
-  for (int i = 0; i < model.num_links(); ++i) link_of.emplace(model.links[i].name, i);
+  // The link of each joint name, once (a search per joint is quadratic in large models).
+  std::map<std::string, int> link_of_joint;
+  for (int i = 0; i < model.num_links(); ++i) link_of_joint.emplace(model.links[i].joint_name, i);
   for (int j = 0; j < m->njnt; ++j) {
-    const std::string name = name_of(m, mjOBJ_JOINT, j, "joint");
-    for (const Link& link : model.links)
-      if (link.joint_name == name && link.nq > 0)
-        robot.q0.segment(link.q_index, link.nq) =
-            Eigen::Map<const VecX>(m->qpos0 + m->jnt_qposadr[j], link.nq);
+    const auto it = link_of_joint.find(names.joint[static_cast<size_t>(j)]);
+    if (it == link_of_joint.end()) continue;
+    const Link& link = model.links[static_cast<size_t>(it->second)];
+    if (link.nq > 0)
+      robot.q0.segment(link.q_index, link.nq) =
+          Eigen::Map<const VecX>(m->qpos0 + m->jnt_qposadr[j], link.nq);
   }
   for (const Link& link : model.links)
     if (link.joint_type == JointType::spherical) robot.q0[link.q_index] = 1.0;
@@ -382,24 +437,33 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
   robot.urdf_joint_of_dof.assign(static_cast<size_t>(model.nv), -1);
   robot.dof_order.clear();
   for (int d = 0; d < model.nv; ++d) robot.dof_order.push_back(d);
-  for (size_t j = 0; j < n; ++j)
-    for (int i = 0; i < model.num_links(); ++i) {
-      const Link& link = model.links[i];
-      if (link.joint_name != robot.joint_order[j]) continue;
-      robot.link_of_urdf_joint[j] = i;
-      robot.dof_of_urdf_joint[j] = link.v_index;
-      for (int d = 0; d < link.nv; ++d)
-        robot.urdf_joint_of_dof[static_cast<size_t>(link.v_index + d)] = static_cast<int>(j);
-    }
+  for (size_t j = 0; j < n; ++j) {
+    const auto it = link_of_joint.find(robot.joint_order[j]);
+    if (it == link_of_joint.end()) continue;
+    const Link& link = model.links[static_cast<size_t>(it->second)];
+    robot.link_of_urdf_joint[j] = it->second;
+    robot.dof_of_urdf_joint[j] = link.v_index;
+    for (int d = 0; d < link.nv; ++d)
+      robot.urdf_joint_of_dof[static_cast<size_t>(link.v_index + d)] = static_cast<int>(j);
+  }
 
   std::map<std::string, double> effort;  // summed over each joint's actuators
   for (int i = 0; i < m->nu; ++i) {
     MjcfActuator actuator;
     std::string why_not;
-    if (!map_actuator(m, i, robot, actuator, why_not)) {
+    if (!map_actuator(m, names, i, robot, link_of_joint, actuator, why_not)) {
       warnings.push_back(why_not);
       continue;
     }
+    const std::string who = "actuator '" + actuator.name + "' on joint '" + actuator.joint + "'";
+    if (actuator.gear == 0.0 || !std::isfinite(actuator.gear))
+      fail(file, who + ": gear = " + format_double(actuator.gear) +
+                     ": the joint force is gear times the actuator's, and its target ctrl / gear");
+    const double gain = actuator.actuator.stiffness + actuator.actuator.damping;
+    if (!std::isfinite(gain))
+      fail(file, who + ": gain " + format_double(actuator.gain) + " x gear^2 (gear " +
+                     format_double(actuator.gear) + ") = " + format_double(gain) +
+                     ": does not fit a double");
     if (actuator.force_lower != -actuator.force_upper && actuator.kind != MjcfActuatorKind::motor)
       warnings.push_back("actuator '" + actuator.name + "': forcerange [" +
                          format_double(actuator.force_lower) + ", " +
@@ -425,12 +489,15 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
 }
 
 MjcfRobot load(const char* filename, const mjVFS* vfs, const std::string& file,
-               const UrdfOptions& options) {
+               const UrdfOptions& options, std::vector<std::filesystem::path>& files) {
   std::vector<std::string> warnings;
   std::string error;
-  const mujoco_calls::ModelPtr m = mujoco_calls::load_xml(filename, vfs, error, warnings);
+  const mujoco_calls::ModelPtr m =
+      mujoco_calls::load_xml(filename, vfs, error, warnings, &files);
   if (!m) fail(file, "MuJoCo cannot load it: " + error);
-  return convert(m.get(), file, options, std::move(warnings));
+  MjcfRobot robot = convert(m.get(), file, options, std::move(warnings));
+  robot.input_files = std::move(files);
+  return robot;
 }
 
 }  // namespace
@@ -445,18 +512,25 @@ const char* to_string(MjcfActuatorKind kind) {
 }
 
 MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options) {
-  // Refuses folders, FIFOs and huge files with our one-line messages before MuJoCo reads it.
-  (void)read_input_file(path, "the MJCF file");
-  MjcfRobot robot = load(path.c_str(), nullptr, path.string(), options);
+  std::vector<std::filesystem::path> files;  // load_xml checks the document and fills it
+  MjcfRobot robot = load(path.c_str(), nullptr, path.string(), options, files);
   robot.path = path;
   return robot;
+}
+
+std::vector<std::filesystem::path> mjcf_input_files(const std::filesystem::path& path) {
+  return mjcf_document::check(path.string(), nullptr, path.string());
 }
 
 MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options) {
   if (xml.find('\0') != std::string::npos) fail(name, "a NUL character in the text");
+  if (xml.empty()) fail(name, "empty text (an MJCF file is <mujoco>...</mujoco>)");
+  if (xml.size() > kMaxInputBytes)
+    fail(name, "the text is larger than " + std::to_string(kMaxInputBytes >> 20) + " MiB");
   // mjVFS holds 2000 file names of 1000 bytes: too large for the stack.
   const auto vfs = std::make_unique<mjVFS>();
+  mujoco_calls::route_warnings();  // MuJoCo's errors throw from here on
   mj_defaultVFS(vfs.get());
   const char* filename = "model.xml";
   if (mj_makeEmptyFileVFS(vfs.get(), filename, static_cast<int>(xml.size())) != 0)
@@ -464,7 +538,8 @@ MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
   std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), filename)], xml.data(), xml.size());
   MjcfRobot robot;
   try {
-    robot = load(filename, vfs.get(), name, options);
+    std::vector<std::filesystem::path> files = mjcf_document::check(filename, vfs.get(), name);
+    robot = load(filename, vfs.get(), name, options, files);
   } catch (...) {
     mj_deleteVFS(vfs.get());
     throw;

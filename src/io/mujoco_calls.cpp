@@ -3,6 +3,8 @@
 #include <array>
 #include <mutex>
 
+#include "mjcf_document.hpp"
+
 namespace featherdrive::mujoco_calls {
 namespace {
 
@@ -11,6 +13,10 @@ thread_local std::vector<std::string>* collector = nullptr;
 void route(const char* text) {
   if (collector) collector->push_back("MuJoCo: " + one_line(text));
 }
+
+// MuJoCo's own compiler throws from this hook (it swaps in its handler while it compiles), so an
+// exception through its frames is a path it takes itself.
+[[noreturn]] void raise(const char* text) { throw MujocoError("MuJoCo: " + one_line(text)); }
 
 }  // namespace
 
@@ -29,18 +35,27 @@ std::string one_line(const std::string& text) {
 
 void route_warnings() {
   static std::once_flag installed;
-  std::call_once(installed, [] { mju_user_warning = route; });
+  std::call_once(installed, [] {
+    mju_user_warning = route;
+    mju_user_error = raise;
+  });
 }
 
 ModelPtr load_xml(const char* filename, const mjVFS* vfs, std::string& error,
-                  std::vector<std::string>& warnings) {
+                  std::vector<std::string>& warnings, std::vector<std::filesystem::path>* files) {
   route_warnings();
+  if (!vfs) {
+    std::vector<std::filesystem::path> read = mjcf_document::check(filename, nullptr, filename);
+    if (files) files->insert(files->end(), read.begin(), read.end());
+  }
   static std::mutex loading;
   const std::lock_guard<std::mutex> lock(loading);
   std::array<char, 1024> message{};
-  collector = &warnings;
+  struct Collect {  // reset on every way out, an exception from the error hook included
+    explicit Collect(std::vector<std::string>& w) { collector = &w; }
+    ~Collect() { collector = nullptr; }
+  } collect(warnings);
   ModelPtr m(mj_loadXML(filename, vfs, message.data(), static_cast<int>(message.size())));
-  collector = nullptr;
   if (!m)
     error = one_line(message[0] ? message.data() : "unknown error");
   else if (message[0])

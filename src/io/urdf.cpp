@@ -359,6 +359,7 @@ void UrdfRobot::rebuild() {
 UrdfRobot load_urdf(const std::filesystem::path& path, const UrdfOptions& options) {
   UrdfRobot robot = parse_urdf(read_input_file(path), path.string(), options);
   robot.path = path;
+  robot.input_files = {path};  // featherdrive reads no mesh of a URDF
   return robot;
 }
 

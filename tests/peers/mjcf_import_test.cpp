@@ -499,12 +499,34 @@ TEST(MjcfImport, BadFilesGiveOneLineNamingTheFile) {
       <body name="b"><freejoint/><geom size=".1"/></body></worldbody></mujoco>)", "two.xml"),
             "two.xml: free bodies 'a', 'b': featherdrive simulates one articulation with at "
             "most one free root");
-  // Two hinges of one body on one axis: M = [I I; I I] has no inertia along (1, -1).
+  // Two hinges of one body on one axis: M = [I I; I I] has no inertia along (1, -1); the first
+  // joint moves nothing the second does not.
   EXPECT_THAT(load_error(R"(<mujoco><worldbody><body name="a"><joint name="j1" axis="0 0 1"/>
       <joint name="j2" axis="0 0 1"/><geom size=".1"/></body></worldbody></mujoco>)", "axis.xml"),
-              testing::MatchesRegex("axis.xml: the mass matrix is singular at qpos0 \\(eigenvalue "
-                                    ".* mostly dof 'j[12]'\\): a massless body, or two joints of "
-                                    "one body on one axis"));
+              testing::MatchesRegex("axis.xml: joint 'j1' \\(link 'a/j1'\\) moves no inertia at "
+                                    "qpos0 \\(the mass matrix's pivot .* against .*\\): no mass "
+                                    "below it, or another joint of its body moving it the same way; "
+                                    "give the body mass or the joint armature"));
+}
+
+// MuJoCo's fatal error (default: print, wait for Enter, exit) throws once featherdrive has
+// loaded a model, through MuJoCo's C frames too; the process goes on and loads again.
+TEST(MjcfImport, MujocoFatalErrorsThrowInsteadOfExiting) {
+  EXPECT_THROW(parse_mjcf("", "empty.xml"), InputError);
+  (void)parse_mjcf("<mujoco><worldbody><body><joint/><geom size=\".1\"/></body></worldbody>"
+                   "</mujoco>", "ok.xml");
+  EXPECT_THROW(mju_error("boom"), std::runtime_error);
+  try {
+    mju_error_i("bad index %d", 7);
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "MuJoCo: bad index 7");
+  }
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  EXPECT_THROW(mj_makeEmptyFileVFS(vfs.get(), "x.xml", 0), std::runtime_error);
+  mj_deleteVFS(vfs.get());
+  EXPECT_EQ(parse_mjcf("<mujoco><worldbody><body><joint/><geom size=\".1\"/></body></worldbody>"
+                       "</mujoco>", "again.xml").model->nv, 1);
 }
 
 }  // namespace

@@ -12,6 +12,22 @@
 
 namespace featherdrive {
 
+/// Bounds on what an MJCF document may ask of MuJoCo 2.2.2, checked before its compiler runs
+/// (docs/mujoco_bridge.md, "Refused, warned, ignored"). Elements nested, includes followed
+/// (MuJoCo's parser and compiler recurse per level, about 4 KiB of stack each):
+inline constexpr int kMaxMjcfDepth = 1000;
+/// <include> elements followed in one document (each names a file of its own).
+inline constexpr int kMaxMjcfIncludes = 1000;
+/// <size nkey> and the number of <key> elements (the compiler's time is quadratic in them).
+inline constexpr long kMaxMjcfKeyframes = 1000;
+/// <size nuser_body>, nuser_jnt, ... (numbers allocated per element).
+inline constexpr long kMaxMjcfUserValues = 1000;
+/// <size nuserdata> and nstack (numbers allocated in every mjData).
+inline constexpr long kMaxMjcfUserData = 1000000;
+inline constexpr long kMaxMjcfStack = 10000000;
+/// <size njmax> and nconmax (a constraint row is as long as the model's dofs).
+inline constexpr long kMaxMjcfConstraints = 100000;
+
 /// What an MJCF actuator on a joint is, by its compiled gain and bias (MuJoCo's shortcuts).
 enum class MjcfActuatorKind {
   motor,     ///< force = gain * ctrl: no featherdrive drive (the scene gives one)
@@ -49,7 +65,11 @@ struct MjcfRobot : UrdfRobot {
 };
 
 /// Reads an MJCF file through MuJoCo's compiler (includes and meshes resolve as MuJoCo resolves
-/// them). options.fixed_base welds a free root to the world where it stands; options.gravity is
+/// them). Before the compiler runs, the document and every file it names are checked: files
+/// must be regular (a FIFO, folder or device is refused, not opened), nesting, includes and
+/// <size> counts stay within the bounds above, and no numeric attribute is NaN or infinite
+/// (refused naming the element and attribute; MuJoCo would take its default). The robot's
+/// input_files lists the file, its includes and its asset files. options.fixed_base welds a free root to the world where it stands; options.gravity is
 /// the model's (a warning says when the file's <option gravity> differs). Throws InputError, one
 /// line naming the file: MuJoCo's own load error, a tendon or equality constraint (refused,
 /// naming the element and its name), several free bodies, a free joint not alone in its body.
@@ -58,7 +78,8 @@ struct MjcfRobot : UrdfRobot {
 MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options = {});
 
 /// The same from a string (through MuJoCo's virtual file system); `name` stands for the file in
-/// messages. Files the text includes are read from disk relative to the working directory.
+/// messages. Files the text includes are read from disk relative to the working directory (and
+/// listed in input_files).
 MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
                      const UrdfOptions& options = {});
 
@@ -77,6 +98,11 @@ std::string describe_actuators(const MjcfRobot& robot);
 /// A robot file of either kind, chosen by is_mjcf_file: load_mjcf's robot (the UrdfRobot part)
 /// or load_urdf's. Scenes' `model` key reads it.
 UrdfRobot load_robot(const std::filesystem::path& path, const UrdfOptions& options = {});
+
+/// The files load_mjcf(path) reads, without compiling: the file, its includes and its asset
+/// files, found as MuJoCo finds them. Throws InputError as load_mjcf does for what its checks
+/// refuse.
+std::vector<std::filesystem::path> mjcf_input_files(const std::filesystem::path& path);
 
 /// Whether `path` names an MJCF file: a .xml extension, or else a root element <mujoco> (the
 /// first element of the file). URDF files have the extension .urdf or the root <robot>.

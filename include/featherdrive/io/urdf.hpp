@@ -95,6 +95,10 @@ struct UrdfRobot {
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
   /// The URDF effort limit of each moving joint (informative; drives need their own max_force).
   std::map<std::string, double> effort_limits;
+  /// Every file the loader read or that MuJoCo opens for it: the robot file, and for MJCF its
+  /// includes and its mesh, skin, hfield and texture files. No output of a run may replace one
+  /// (the CLI's check_outputs).
+  std::vector<std::filesystem::path> input_files;
 
   /// Builds model from links again; throws InputError naming the file.
   void rebuild();
