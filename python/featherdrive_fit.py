@@ -16,6 +16,7 @@ import argparse
 import dataclasses
 import math
 import os
+import pathlib
 import sys
 import tempfile
 import time
@@ -665,7 +666,8 @@ def main(argv=None):
                                      description="Fit a scene's fit: parameters to a log.")
     parser.add_argument("scene")
     parser.add_argument("--data", required=True, help="the log, a CSV")
-    parser.add_argument("--out", default="fit_out", help="folder for the outputs (fit_out)")
+    parser.add_argument("--out", help="folder for the outputs (default: out/<scene name>_fit, the "
+                        "commands' one convention)")
     parser.add_argument("--scheduler", help="a Dask scheduler's address")
     parser.add_argument("--threads", type=int,
                         help="threads per batch (default: 1 for small batches, else all cores)")
@@ -674,7 +676,8 @@ def main(argv=None):
     try:
         if args.scheduler:
             client = featherdrive_distributed.connect(args.scheduler)
-        result = fit(args.scene, args.data, client=client, threads=args.threads, out=args.out,
+        out = args.out or os.path.join("out", f"{pathlib.Path(args.scene).stem}_fit")
+        result = fit(args.scene, args.data, client=client, threads=args.threads, out=out,
                      verbose=True)
     except ValueError as e:
         print(f"featherdrive fit: {' '.join(str(e).splitlines())}", file=sys.stderr)

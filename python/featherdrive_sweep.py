@@ -491,13 +491,13 @@ def main(argv=None):
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on the Dask cluster of this scheduler (tcp://host:8786)")
     parser.add_argument("--out", metavar="DIR",
-                        help="folder for sweep.csv and sweep.png (default: sweep-<scene name>)")
+                        help="folder for sweep.csv and sweep.png (default: out/<scene name>_sweep)")
     parser.add_argument("--threads", type=int, default=0,
                         help="threads of each Batch (0: all cores; the default)")
     args = parser.parse_args(argv)
     client = None
     try:
-        out = pathlib.Path(args.out or f"sweep-{pathlib.Path(args.scene).stem}")
+        out = pathlib.Path(args.out or pathlib.Path("out") / f"{pathlib.Path(args.scene).stem}_sweep")
         if out.exists() and not out.is_dir():
             raise ValueError(f"--out {out}: exists and is not a folder")
         axes = parse_grid(args.grid)

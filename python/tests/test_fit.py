@@ -3,6 +3,7 @@ featherdrive made with known parameters (the truth the fit never sees), the fitt
 the log, identical fits on 1 and 2 threads and Dask workers, and one-line errors."""
 import csv
 import os
+import pathlib
 import re
 import shutil
 import subprocess
@@ -351,7 +352,7 @@ def test_the_command(tmp_path, module_dir):
                          capture_output=True, text=True, cwd=tmp_path)
     assert run.returncode == 2
     assert run.stderr == f"featherdrive fit: {tmp_path / 'bad.csv'}: missing column q:joint2\n"
-    assert not (tmp_path / "fit_out").exists()
+    assert not (tmp_path / "out" / f"{pathlib.Path(scene).stem}_fit").exists()
     # python -m featherdrive_fit, which the command runs: a bad fit: section, one line, exit 2.
     write(scene, scene_text("pgs", fit.replace("[50, 5000]", "[5000, 50]")))
     run = subprocess.run([sys.executable, "-m", "featherdrive_fit", str(scene), "--data",
@@ -360,7 +361,7 @@ def test_the_command(tmp_path, module_dir):
     assert run.returncode == 2
     assert run.stderr == (f"featherdrive fit: {scene}: fit.parameters[0].bounds = [5000, 50]: "
                           "lower must be below upper\n")
-    assert not (tmp_path / "fit_out").exists()
+    assert not (tmp_path / "out" / f"{pathlib.Path(scene).stem}_fit").exists()
 
 
 # Hardening (issue 36): the C++ commands' input and output rules, numbers as the C++ readers
