@@ -132,8 +132,9 @@ def read_log(path, scene) -> Log:
     grid (fit.data.resample). ValueError names the file, the column or row and the value."""
     path = os.fspath(path)
     model = scene.model
-    if model.nq != model.nv:
-        raise _log_error(scene.path, "fit: only robots of one-dof joints (a fixed base) are fitted")
+    if model.floating_base():
+        raise _log_error(scene.path, "fit: robots with a fixed base are fitted (a floating "
+                                     "root's pose is not a dof position)")
     rows = common.read_csv(path, "the log")
     if len(rows) < 3:
         raise _log_error(path, f"{max(len(rows) - 1, 0)} data rows: the log needs at least 2")
@@ -339,7 +340,13 @@ def simulate_batch(job):
         batch.set_armature(armature)
     if friction is not None:
         batch.set_joint_friction(*friction)
-    batch.set_q(np.tile(job["q0"], (P, 1)))
+    # The log holds dof positions (a spherical axis's, not its quaternion): q from them.
+    model = scene.model
+    q0 = np.asarray(job["q0"])
+    if model.nq != model.nv:
+        q0 = np.array([fd.set_dof_positions(model, model.neutral_configuration(), None, row)
+                       for row in q0])
+    batch.set_q(np.tile(q0, (P, 1)))
     batch.set_qd(np.tile(job["qd0"], (P, 1)))
     tp, tv = job["target_position"], job["target_velocity"]
     delays = np.asarray(job["delays"])
@@ -352,7 +359,7 @@ def simulate_batch(job):
         rows = np.maximum(np.tile(starts + k, P)[:, None] - delays[None, :], 0)
         batch.set_drive_targets(tp[rows, dofs], tv[rows, dofs])
         batch.step()
-        q[:, k] = batch.q
+        q[:, k] = batch.q if model.nq == model.nv else fd.dof_positions(model, batch.q)
         qd[:, k] = batch.qd
     shape = (P, S, L, tp.shape[1])
     return q.reshape(shape), qd.reshape(shape)

@@ -231,6 +231,34 @@ def test_a_log_cut_from_running_motion_with_a_delay(tmp_path):
         fd.fit(str(scene), str(tmp_path / "short.csv"), threads=1)
 
 
+def test_a_floating_base_is_refused_and_a_ball_joint_fitted_per_axis(tmp_path, module_dir):
+    """A floating root's pose is no dof position: refused in one line. The spherical wrist's
+    twist stiffness comes back from simulate's own CSV (its q:wrist:twist columns)."""
+    floating = write(tmp_path / "floating.yaml", scene_text("pgs", FIT_GAINS) +
+                     "fixed_base: false\n")
+    truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene)
+    with pytest.raises(ValueError, match="fit: robots with a fixed base are fitted"):
+        fd.fit(str(floating), str(tmp_path / "log.csv"))
+    wrist = os.path.join(os.path.dirname(ARM), "spherical_wrist.urdf")
+    text = (f"model: {wrist}\ndt: 0.0166666667\nsteps: 60\n"
+            "solver: {type: tgs, position_iterations: 8, velocity_iterations: 1}\n"
+            "initial: {q: {wrist:twist: 0.2, wrist:swing1: -0.1}, qd: {wrist:swing2: 1.0}}\n"
+            "drives:\n  shoulder: {type: force, stiffness: 300, damping: 20, target_position: 0.4}\n"
+            "  wrist:twist: {type: force, stiffness: STIFF, damping: 1, target_position: 0.4}\n"
+            "  wrist:swing1: {type: force, stiffness: 20, damping: 1, target_position: 0.3}\n")
+    truth = write(tmp_path / "wrist.yaml", text.replace("STIFF", "20"))
+    log = tmp_path / "wrist.csv"
+    run = subprocess.run([str(module_dir.parent / "tools" / "featherdrive"),
+                          "simulate", str(truth), "--out", str(log)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    guess = write(tmp_path / "guess.yaml", text.replace("STIFF", "30") +
+                  "fit: {parameters: [{quantity: stiffness, joints: [wrist:twist], "
+                  "bounds: [5, 100]}]}\n")
+    result = fd.fit(str(guess), str(log), threads=1)
+    assert abs(result.estimates[0].value - 20) < 1e-6 * 20
+
+
 def test_resampled_log(tmp_path):
     """A log at twice the scene's rate, resampled (linear), recovers what the log at dt does."""
     truth_scene = fd.parse_scene(scene_text(), str(tmp_path / "truth.yaml"))

@@ -36,7 +36,6 @@ CORPUS = {
 # What a face refuses, by design, on a robot of the corpus: exit 2 and one line saying why
 # (docs/testing.md, "The composition matrix").
 REFUSED = {
-    ("spherical_wrist", "fit"): "only robots of one-dof joints",
     ("spherical_wrist", "compare-mujoco"): "is spherical",
     ("humanoid_floating", "compare-mujoco"): "fixed_base = false",
     ("atlas_floating", "compare-mujoco"): "fixed_base = false",
