@@ -491,15 +491,17 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
           it == effort.end() ? kInf : it->second;
     }
   if (!effort.empty()) robot.rebuild();
-  // Joint equalities q1 = c0 + c1 q2 (refuse_unsupported let only these through) as a URDF's
-  // mimic tags: joint1 = c1 joint2 + c0, the row q1 - c1 q2 - c0 = 0.
+  // Joint equalities (refuse_unsupported let only these through) as a URDF's mimic tags.
+  // MuJoCo's law is relative to qpos0 (the joints' refs r): q1 - r1 = c0 + c1 (q2 - r2), so
+  // joint1 = c1 joint2 + c0 + r1 - c1 r2.
   for (int i = 0; i < m->neq; ++i) {
     const mjtNum* c = m->eq_data + mjNEQDATA * i;
+    const int j1 = m->eq_obj1id[i], j2 = m->eq_obj2id[i];
     UrdfMimic& tag = robot.mimics.emplace_back();
-    tag.joint = names.joint[static_cast<size_t>(m->eq_obj1id[i])];
-    tag.leader = names.joint[static_cast<size_t>(m->eq_obj2id[i])];
+    tag.joint = names.joint[static_cast<size_t>(j1)];
+    tag.leader = names.joint[static_cast<size_t>(j2)];
     tag.multiplier = c[1];
-    tag.offset = c[0];
+    tag.offset = c[0] + m->qpos0[m->jnt_qposadr[j1]] - c[1] * m->qpos0[m->jnt_qposadr[j2]];
     MimicJoint& row = robot.mimic_joints.emplace_back();
     row.dof_a = robot.model->dof_index(tag.joint);
     row.dof_b = robot.model->dof_index(tag.leader);

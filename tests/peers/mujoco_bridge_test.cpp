@@ -764,6 +764,16 @@ TEST(MujocoBridge, OtherEqualitiesStayRefused) {
   EXPECT_EQ(robot.mimic_joints[0].dof_b, 0);
   EXPECT_EQ(robot.mimic_joints[0].gear_ratio, 2.0);  // k - (-2) j - 0.25 = 0
   EXPECT_EQ(robot.mimic_joints[0].offset, -0.25);
+  // MuJoCo's law is relative to the refs: k - 0.5 = 0.25 - 2 (j - 0.25), so k + 2 j - 1.25 = 0.
+  const MjcfRobot refs = parse_mjcf(
+      R"(<mujoco><compiler angle="radian"/><worldbody><body name="a">
+      <joint name="j" ref="0.25"/><geom size=".1"/><body name="b" pos="0 0 1">
+      <joint name="k" ref="0.5"/><geom size=".1"/></body></body></worldbody>
+      <equality><joint joint1="k" joint2="j" polycoef="0.25 -2 0 0 0"/></equality></mujoco>)",
+      "refs.xml");
+  ASSERT_EQ(refs.mimic_joints.size(), 1u);
+  EXPECT_EQ(refs.mimic_joints[0].gear_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(refs.mimic_joints[0].offset, -1.25);
 }
 
 }  // namespace
