@@ -90,6 +90,16 @@ std::string free_name(std::string base, const std::set<std::string>& taken) {
   return base;
 }
 
+// Whether equality i is a mimic row: an active joint equality q1 = c0 + c1 q2 between two
+// hinge or slide joints, c1 nonzero and no higher terms.
+bool is_mimic(const mjModel* m, int i) {
+  if (m->eq_type[i] != mjEQ_JOINT || !m->eq_active[i] || m->eq_obj2id[i] < 0) return false;
+  for (const int j : {m->eq_obj1id[i], m->eq_obj2id[i]})
+    if (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE) return false;
+  const mjtNum* c = m->eq_data + mjNEQDATA * i;
+  return c[1] != 0.0 && c[2] == 0.0 && c[3] == 0.0 && c[4] == 0.0;
+}
+
 // What MJCF cannot bring over whole: refused with one line, before anything is built.
 void refuse_unsupported(const mjModel* m, const Names& names, const std::string& file) {
   if (m->ntendon > 0)
@@ -97,10 +107,11 @@ void refuse_unsupported(const mjModel* m, const Names& names, const std::string&
                    std::to_string(m->ntendon) +
                    " in all): tendons are not supported (featherdrive has no tendon "
                    "constraints or tendon actuators)");
-  if (m->neq > 0)
-    fail(file, "<equality><" + std::string(equality_name(m->eq_type[0])) + "> '" +
-                   name_of(m, mjOBJ_EQUALITY, 0, "equality") + "' (" + std::to_string(m->neq) +
-                   " in all): equality constraints are not supported");
+  for (int i = 0; i < m->neq; ++i)
+    if (!is_mimic(m, i))
+      fail(file, "<equality><" + std::string(equality_name(m->eq_type[i])) + "> '" +
+                     name_of(m, mjOBJ_EQUALITY, i, "equality") + "' (" +
+                     std::to_string(m->neq) + " in all): equality constraints are not supported");
   std::vector<std::string> free_bodies;
   for (int j = 0; j < m->njnt; ++j) {
     if (m->jnt_type[j] != mjJNT_FREE) continue;
@@ -480,6 +491,28 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
           it == effort.end() ? kInf : it->second;
     }
   if (!effort.empty()) robot.rebuild();
+  // Joint equalities (refuse_unsupported let only these through) as a URDF's mimic tags.
+  // MuJoCo's law is relative to qpos0 (the joints' refs r): q1 - r1 = c0 + c1 (q2 - r2), so
+  // joint1 = c1 joint2 + c0 + r1 - c1 r2.
+  for (int i = 0; i < m->neq; ++i) {
+    const mjtNum* c = m->eq_data + mjNEQDATA * i;
+    const int j1 = m->eq_obj1id[i], j2 = m->eq_obj2id[i];
+    UrdfMimic& tag = robot.mimics.emplace_back();
+    tag.joint = names.joint[static_cast<size_t>(j1)];
+    tag.leader = names.joint[static_cast<size_t>(j2)];
+    tag.multiplier = c[1];
+    tag.offset = c[0] + m->qpos0[m->jnt_qposadr[j1]] - c[1] * m->qpos0[m->jnt_qposadr[j2]];
+    MimicJoint& row = robot.mimic_joints.emplace_back();
+    row.dof_a = robot.model->dof_index(tag.joint);
+    row.dof_b = robot.model->dof_index(tag.leader);
+    row.gear_ratio = -tag.multiplier;
+    row.offset = -tag.offset;
+  }
+  try {
+    validate_mimic_joints(*robot.model, robot.mimic_joints);
+  } catch (const std::invalid_argument& e) {
+    fail(file, std::string("<equality><joint>: ") + e.what());
+  }
   warn_about_ignored(m, c, options, warnings);
   if (!options.fixed_base && !robot.model->floating_base())
     warnings.push_back("fixed_base is false but no body has a free joint: the root stays welded");

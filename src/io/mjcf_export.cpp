@@ -240,7 +240,7 @@ void write_bodies(const Model& model, int depth, const JointExtras* extras,
 
 std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator integrator,
                       const JointExtras* extras, const std::string& actuators,
-                      const MjcfExportOptions& options = {}) {
+                      const MjcfExportOptions& options = {}, const std::string& equality = "") {
   std::ostringstream xml;
   const Vec3& g = model.gravity;
   const GeomTable geoms = geom_table(model, options.geometry);
@@ -256,12 +256,42 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
   xml << "  <worldbody>\n";
   write_bodies(model, 2, extras, &geoms, &options.geometry, xml);
   xml << "  </worldbody>\n";
+  if (!equality.empty()) xml << "  <equality>\n" << equality << "  </equality>\n";
   if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
   if (!options.scene_record.empty())
     xml << "  <custom>\n    <text name=\"" << kMjcfSceneText << "\" data=\""
         << attr(options.scene_record) << "\"/>\n  </custom>\n";
   xml << "</mujoco>\n";
   return xml.str();
+}
+
+// Mimic rows q_a + gear_ratio q_b + offset = 0 as joint equalities q_a = c0 + c1 q_b
+// (polycoef c0 = -offset, c1 = -gear_ratio). MuJoCo's equality is a soft constraint,
+// a_ref = -b v - k r: with impedance 0.9999 (mjMAXIMP) the row's acceleration is a_ref, and
+// k = 1 / h^2, b = 1 / h (solref "-k -b") make MuJoCo's semi-implicit Euler step take (r, h v)
+// to (0, -r): an error is gone after one step, its velocity after two (MuJoCo's timeconst
+// form stops at refsafe's 2 h, which leaves 3/4 of an error per step).
+std::string mimic_equalities(const Model& model, const std::vector<MimicJoint>& mimic,
+                             double timestep, std::vector<std::string>& notes) {
+  std::string xml, soft;
+  const auto joint = [&](int dof) {
+    return model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(dof)])].joint_name;
+  };
+  for (const MimicJoint& row : mimic) {
+    xml += "    <joint joint1=\"" + attr(joint(row.dof_a)) + "\" joint2=\"" +
+           attr(joint(row.dof_b)) + "\" polycoef=\"" +
+           nums({-row.offset, -row.gear_ratio, 0.0, 0.0, 0.0}) + "\" solref=\"" +
+           nums({-1.0 / (timestep * timestep), -1.0 / timestep}) + "\" solimp=\"0.9999 0.9999 0.001 0.5 2\"/>\n";
+    if (row.natural_frequency > 0.0 && row.damping_ratio > 0.0) soft += " " + joint(row.dof_a);
+  }
+  if (!mimic.empty())
+    notes.push_back(
+        "mimic joints as <equality><joint>: MuJoCo's equality is a soft constraint, PhysX's "
+        "mimic row a rigid one; MuJoCo damps joints after its constraint solve, so a damped "
+        "joint's pair parts for a step");
+  if (!soft.empty())
+    notes.push_back("soft mimic rows exported as MuJoCo's stiffest equality:" + soft);
+  return xml;
 }
 
 struct MjDataDeleter {
@@ -372,7 +402,9 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   }
   // Every translated drive of a TGS scene has the same sub-steps (the position iterations).
   out.timestep = o.dt / out.substeps;
-  out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str(), options);
+  const std::string equality = mimic_equalities(model, sim.mimic_joints(), out.timestep, out.notes);
+  out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str(), options,
+                      equality);
   if (!friction.empty())
     out.notes.push_back("joint friction not exported (MuJoCo's frictionloss is another law):" +
                         friction);

@@ -77,6 +77,31 @@ def mjcf_robots(cli, source, out_dir):
         check(r.returncode == 0 and "21 dofs" in r.stdout, "the MJCF loads back (21 dofs)", r)
 
 
+def mimic_gripper(cli, source):
+    """The gripper's mimic rows reach MuJoCo as joint equalities. Literal drives (no joint
+    damping): both engines hold knuckle = 12.5 finger - 0.1, so the knuckle's q difference is
+    12.5 times the finger's (measured: 5.55e-2 = 12.5 x 4.44e-3). Translated drives: MuJoCo damps
+    the finger after its constraint solve and the knuckle trails for a step (measured: 9.5e-2 of
+    the scale; uncoupled, 1.2)."""
+    scene = os.path.join(source, "tests", "data", "composition", "mimic_gripper.yaml")
+    for mapping in ("--literal", "--translate"):
+        r = run(cli, "compare-mujoco", scene, mapping)
+        found = tables(r.stdout)
+        check(r.returncode == 0 and len(found) == 1 and "knuckle" in found[0],
+              f"compare-mujoco mimic_gripper {mapping}: a table with the knuckle", r)
+        if r.returncode != 0 or len(found) != 1 or "knuckle" not in found[0]:
+            continue
+        knuckle, finger = found[0]["knuckle"][0], found[0]["left_finger"][0]
+        if mapping == "--literal":
+            check(abs(knuckle - 12.5 * finger) <= 0.02 * knuckle,
+                  f"mimic_gripper literal: knuckle q difference {knuckle} = 12.5 x the "
+                  f"finger's {finger}", r)
+        else:
+            check(found[0]["knuckle"][2] < 0.15,
+                  f"mimic_gripper translated: knuckle relative q difference "
+                  f"{found[0]['knuckle'][2]} < 0.15", r)
+
+
 def round_trips(cli, source, out_dir):
     """scene -> MJCF (translate --to mujoco) -> scene (translate --to physx): the scene comes
     back key by key with the MJCF as its model, the robot keeps its name, and both scenes
@@ -84,8 +109,10 @@ def round_trips(cli, source, out_dir):
     import yaml
     for name, robot in (("slider.yaml", "slider"), ("arm7_tgs.yaml", "arm7"),
                         ("spherical_wrist.yaml", "spherical_wrist"),
-                        ("humanoid_hold.yaml", "Humanoid")):
-        scene = os.path.join(source, "examples", name)
+                        ("humanoid_hold.yaml", "Humanoid"),
+                        ("../tests/data/composition/mimic_gripper.yaml", "mimic_gripper")):
+        scene = os.path.normpath(os.path.join(source, "examples", name))
+        name = os.path.basename(name)
         xml = os.path.join(out_dir, "rt_" + name.replace(".yaml", ".xml"))
         back = os.path.join(out_dir, "rt_" + name)
         r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml)
@@ -353,6 +380,7 @@ def main():
     r = run(cli, "compare-mujoco", scene, "--integrator", "rk4")
     one_line_error(r, ["--integrator"], "an unknown integrator")
 
+    mimic_gripper(cli, source)
     mjcf_robots(cli, source, out_dir)
     round_trips(cli, source, out_dir)
     urdf_geometry(cli, source, out_dir)

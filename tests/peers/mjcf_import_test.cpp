@@ -491,8 +491,8 @@ TEST(MjcfImport, BadFilesGiveOneLineNamingTheFile) {
             "has no tendon constraints or tendon actuators)");
   EXPECT_EQ(load_error(R"(<mujoco><worldbody><body name="a"><joint name="j"/><geom size=".1"/>
       <body name="b"><joint name="k"/><geom size=".1"/></body></body></worldbody>
-      <equality><joint name="couple" joint1="j" joint2="k"/></equality></mujoco>)", "eq.xml"),
-            "eq.xml: <equality><joint> 'couple' (1 in all): equality constraints are not "
+      <equality><weld name="couple" body1="a" body2="b"/></equality></mujoco>)", "eq.xml"),
+            "eq.xml: <equality><weld> 'couple' (1 in all): equality constraints are not "
             "supported");
   EXPECT_EQ(load_error(R"(<mujoco><worldbody>
       <body name="a"><freejoint/><geom size=".1"/></body>

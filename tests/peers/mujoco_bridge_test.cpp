@@ -194,6 +194,20 @@ TEST(MujocoBridge, LiteralCopyPastTheLimitDivergesInMujocoAndTheMapSaysSo) {
   EXPECT_LE(translated.worst[0], 1e-9);
 }
 
+// MuJoCo's own model of MJCF text (through its virtual file system); nullptr and its message
+// when it refuses the text.
+mjModel* load_in_mujoco(const std::string& xml, std::string& message) {
+  std::array<char, 1000> error{};
+  auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  if (mj_makeEmptyFileVFS(vfs.get(), "a.xml", static_cast<int>(xml.size())) != 0) return nullptr;
+  std::copy(xml.begin(), xml.end(), static_cast<char*>(vfs->filedata[0]));
+  mjModel* m = mj_loadXML("a.xml", vfs.get(), error.data(), 1000);
+  mj_deleteVFS(vfs.get());
+  message = error.data();
+  return m;
+}
+
 TEST(MujocoBridge, ExportLoadsWithItsSettings) {
   const UrdfRobot robot = load_urdf(std::string(FEATHERDRIVE_SOURCE_DIR) + "/examples/arm7.urdf");
   Simulation sim(robot.model, solver(SolverType::tgs, 4, 1));
@@ -201,14 +215,9 @@ TEST(MujocoBridge, ExportLoadsWithItsSettings) {
   sim.set_joint_limits(1, -1.0, 1.5);
   const MjcfExport e = export_mjcf(sim);
   ASSERT_EQ(mujoco_compile_error(e.xml), "");
-  std::array<char, 1000> error{};
-  auto vfs = std::make_unique<mjVFS>();
-  mj_defaultVFS(vfs.get());
-  ASSERT_EQ(mj_makeEmptyFileVFS(vfs.get(), "a.xml", static_cast<int>(e.xml.size())), 0);
-  std::copy(e.xml.begin(), e.xml.end(), static_cast<char*>(vfs->filedata[0]));
-  mjModel* m = mj_loadXML("a.xml", vfs.get(), error.data(), 1000);
-  mj_deleteVFS(vfs.get());
-  ASSERT_NE(m, nullptr) << error.data();
+  std::string error;
+  mjModel* m = load_in_mujoco(e.xml, error);
+  ASSERT_NE(m, nullptr) << error;
   EXPECT_EQ(m->opt.integrator, mjINT_EULER);
   EXPECT_DOUBLE_EQ(m->opt.timestep, kDt / 4);  // TGS's 4 sub-steps
   EXPECT_TRUE(m->opt.disableflags & mjDSBL_CONTACT);
@@ -668,6 +677,103 @@ TEST(MujocoBridge, AtlasExportsWithItsCollisionMeshes) {
   EXPECT_GT(check.meshes, 20);
   EXPECT_LT(check.worst, 1e-5);
   mj_deleteModel(with.m);
+}
+
+}  // namespace
+}  // namespace featherdrive
+
+namespace featherdrive {
+namespace {
+
+// The gripper's URDF mimic tags (joint = multiplier leader + offset) are MuJoCo's joint
+// equalities joint1 = c0 + c1 joint2: c0 = offset, c1 = multiplier, read off the URDF's text; the
+// exported file loads back with the URDF's rows.
+TEST(MujocoBridge, MimicJointsExportAsJointEqualities) {
+  const Scene scene =
+      load_scene(FEATHERDRIVE_SOURCE_DIR "/tests/data/composition/mimic_gripper.yaml");
+  const Simulation sim = make_simulation(scene);
+  const MjcfExport e = export_mjcf(sim);
+  std::string error;
+  mjModel* m = load_in_mujoco(e.xml, error);
+  ASSERT_NE(m, nullptr) << error;
+  struct Tag {
+    const char *joint, *leader;
+    double multiplier, offset;
+  };
+  const std::array<Tag, 2> tags{{{"right_finger", "left_finger", -1.0, 0.0},
+                                 {"knuckle", "left_finger", 12.5, -0.1}}};
+  ASSERT_EQ(m->neq, 2);
+  for (int i = 0; i < m->neq; ++i) {
+    const Tag& tag = tags[static_cast<size_t>(i)];
+    EXPECT_EQ(m->eq_type[i], mjEQ_JOINT);
+    EXPECT_EQ(m->eq_obj1id[i], mj_name2id(m, mjOBJ_JOINT, tag.joint)) << tag.joint;
+    EXPECT_EQ(m->eq_obj2id[i], mj_name2id(m, mjOBJ_JOINT, tag.leader)) << tag.joint;
+    const mjtNum* c = m->eq_data + mjNEQDATA * i;
+    EXPECT_EQ(c[0], tag.offset) << tag.joint;
+    EXPECT_EQ(c[1], tag.multiplier) << tag.joint;
+    for (int k = 2; k < 5; ++k) EXPECT_EQ(c[k], 0.0) << tag.joint;
+    // a_ref = -k r - b v with k = 1 / h^2, b = 1 / h: an error is gone after one Euler step.
+    const double h = m->opt.timestep;
+    EXPECT_DOUBLE_EQ(m->eq_solref[2 * i], -1.0 / (h * h));
+    EXPECT_DOUBLE_EQ(m->eq_solref[2 * i + 1], -1.0 / h);
+  }
+  mj_deleteModel(m);
+
+  const MjcfRobot back = parse_mjcf(e.xml, "gripper.xml");
+  ASSERT_EQ(back.mimic_joints.size(), tags.size());
+  for (size_t i = 0; i < tags.size(); ++i) {
+    const MimicJoint& row = back.mimic_joints[i];
+    EXPECT_EQ(row.dof_a, back.model->dof_index(tags[i].joint));
+    EXPECT_EQ(row.dof_b, back.model->dof_index(tags[i].leader));
+    EXPECT_EQ(row.gear_ratio, -tags[i].multiplier);
+    EXPECT_EQ(row.offset, -tags[i].offset);
+    EXPECT_EQ(row.dof_a, scene.robot.mimic_joints[i].dof_a);
+    EXPECT_EQ(row.dof_b, scene.robot.mimic_joints[i].dof_b);
+  }
+}
+
+// Only q1 = c0 + c1 q2 between hinges and slides is a mimic row; other equalities stay refused.
+TEST(MujocoBridge, OtherEqualitiesStayRefused) {
+  const std::string bodies =
+      R"(<mujoco><worldbody><body name="a"><joint name="j"/><geom size=".1"/>
+      <body name="b" pos="0 0 1"><joint name="k"/><geom size=".1"/></body></body></worldbody>)";
+  const auto error = [&](const std::string& equality) {
+    try {
+      parse_mjcf(bodies + "<equality>" + equality + "</equality></mujoco>", "eq.xml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(error(R"(<joint name="q" joint1="j" joint2="k" polycoef="0 1 0.5 0 0"/>)"),
+            "eq.xml: <equality><joint> 'q' (1 in all): equality constraints are not supported");
+  EXPECT_EQ(error(R"(<joint name="fix" joint1="j"/>)"),
+            "eq.xml: <equality><joint> 'fix' (1 in all): equality constraints are not supported");
+  EXPECT_EQ(error(R"(<joint name="z" joint1="j" joint2="k" polycoef="0 0 0 0 0"/>)"),
+            "eq.xml: <equality><joint> 'z' (1 in all): equality constraints are not supported");
+  EXPECT_EQ(error(R"(<joint name="off" joint1="j" joint2="k" active="false"/>)"),
+            "eq.xml: <equality><joint> 'off' (1 in all): equality constraints are not supported");
+  EXPECT_EQ(error(R"(<joint joint1="j" joint2="k"/><connect name="c" body1="a" body2="b"
+      anchor="0 0 0"/>)"),
+            "eq.xml: <equality><connect> 'c' (2 in all): equality constraints are not supported");
+  const MjcfRobot robot = parse_mjcf(
+      bodies + R"(<equality><joint joint1="k" joint2="j" polycoef="0.25 -2 0 0 0"/></equality>
+      </mujoco>)", "eq.xml");
+  ASSERT_EQ(robot.mimic_joints.size(), 1u);
+  EXPECT_EQ(robot.mimic_joints[0].dof_a, 1);
+  EXPECT_EQ(robot.mimic_joints[0].dof_b, 0);
+  EXPECT_EQ(robot.mimic_joints[0].gear_ratio, 2.0);  // k - (-2) j - 0.25 = 0
+  EXPECT_EQ(robot.mimic_joints[0].offset, -0.25);
+  // MuJoCo's law is relative to the refs: k - 0.5 = 0.25 - 2 (j - 0.25), so k + 2 j - 1.25 = 0.
+  const MjcfRobot refs = parse_mjcf(
+      R"(<mujoco><compiler angle="radian"/><worldbody><body name="a">
+      <joint name="j" ref="0.25"/><geom size=".1"/><body name="b" pos="0 0 1">
+      <joint name="k" ref="0.5"/><geom size=".1"/></body></body></worldbody>
+      <equality><joint joint1="k" joint2="j" polycoef="0.25 -2 0 0 0"/></equality></mujoco>)",
+      "refs.xml");
+  ASSERT_EQ(refs.mimic_joints.size(), 1u);
+  EXPECT_EQ(refs.mimic_joints[0].gear_ratio, 2.0);
+  EXPECT_DOUBLE_EQ(refs.mimic_joints[0].offset, -1.25);
 }
 
 }  // namespace

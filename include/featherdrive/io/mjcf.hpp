@@ -71,8 +71,10 @@ struct MjcfRobot : UrdfRobot {
 /// (refused naming the element and attribute; MuJoCo would take its default). The robot's
 /// input_files lists the file, its includes and its asset files. options.fixed_base welds a free root to the world where it stands; options.gravity is
 /// the model's (a warning says when the file's <option gravity> differs). Throws InputError, one
-/// line naming the file: MuJoCo's own load error, a tendon or equality constraint (refused,
-/// naming the element and its name), several free bodies, a free joint not alone in its body.
+/// line naming the file: MuJoCo's own load error, a tendon or an equality constraint other than
+/// a mimic joint (refused, naming the element and its name; an active joint equality
+/// q1 = c0 + c1 q2 between hinges or slides, c1 != 0, is the robot's mimic_joints row
+/// q1 - c1 q2 - c0 = 0, as a URDF <mimic> tag), several free bodies, a free joint not alone in its body.
 /// Contacts, joint springs, ball ranges and unsupported actuators are warned about and ignored.
 /// Loads from several threads run one at a time (MuJoCo's warning hook is a global).
 MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options = {});

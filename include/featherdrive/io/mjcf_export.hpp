@@ -12,7 +12,8 @@
 // own fullinertia diagonalisation stops ~1e-6 rad short of the axes). Fixed joints weld a body to
 // its parent, spherical joints are ball joints, a floating root is a free joint (qvel differs:
 // MuJoCo's is [world linear velocity; body angular velocity]). A link named "world" is written as
-// "world_link" (MuJoCo reserves the name).
+// "world_link" (MuJoCo reserves the name). Mimic rows q_a + gear_ratio q_b + offset = 0 are
+// <equality><joint> q_a = -offset - gear_ratio q_b: MuJoCo's soft constraint at its stiffest.
 #pragma once
 
 #include <filesystem>
