@@ -167,6 +167,10 @@ void check_supported(const Simulation& s) {
     if (s.drive_delay(d) != 0)
       unsupported("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
   }
+  // The lane step has no mimic rows: a prototype with one would run uncoupled.
+  for (const MimicJoint& mimic : s.mimic_joints())
+    unsupported("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,
+                "a mimic row (" + describe(m, mimic) + ")");
 }
 
 auto row_of(const RowMatrix& m, size_t j) {

@@ -262,6 +262,10 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   Simulation v = s;
   v.set_max_joint_velocity(1, 3.0);
   expect_refused(v, "joint '" + joint + "' has max_velocity 3");
+  Simulation mimic = s;
+  mimic.set_mimic_joints({{2, 1, 1.5, 0.0}});
+  const std::string follower = s.model().links[s.model().dof_link[2]].joint_name;
+  expect_refused(mimic, "joint '" + follower + "' has a mimic row");
   SimulationOptions physx = s.options();
   physx.compat = Compat::physx;
   expect_refused(Simulation(s.model_ptr(), physx), "compat: physx");
