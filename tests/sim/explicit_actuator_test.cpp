@@ -497,7 +497,7 @@ TEST(ImplicitActuator, EachClipActsOnTheImpulse) {
     }
   }
   {  // dc_motor on its torque-speed line from rest: v1 = (v0 + h S / M) / (1 + h S / (M vmax)),
-     // eq. I10, which tends to v_max without overshoot (S = 400 N, v_max = 0.5 m/s: h S / (M
+     // eq. I12, which tends to v_max without overshoot (S = 400 N, v_max = 0.5 m/s: h S / (M
      // v_max) = 2.9, where the explicit line overshoots and rings).
     const double S = 400.0, v_max = 0.5;
     Simulation sim = implicit_slider(h);
@@ -554,7 +554,7 @@ TEST(ImplicitActuator, EachClipActsOnTheImpulse) {
 }
 
 // kp dt^2 / M from 0.1 to 1e4: the implicit law stays bounded and settles on its target (implicit
-// Euler never adds energy, eq. I9: |q - q*| never exceeds its start); the explicit one diverges
+// Euler never adds energy, eq. I14: |q - q*| never exceeds its start); the explicit one diverges
 // at the high end (symplectic Euler on kp alone is stable only below kp dt^2 / M = 4).
 TEST(ImplicitActuator, StableAtEveryGainWhereTheExplicitLawDiverges) {
   const double h = 0.01, target = 0.1;

@@ -1,6 +1,6 @@
 // An implicit actuator's row: the law of an explicit actuator (docs/math/explicit_actuators.md,
 // eq. 1-9) linearised at the end of the (sub-)step and solved as the dof's force drive row, with
-// the law's own clip on the row's impulse. docs/math/implicit_actuators.md, eq. I1-I14.
+// the law's own clip on the row's impulse. docs/math/implicit_actuators.md, eq. I1-I16.
 #pragma once
 
 #include <algorithm>
