@@ -521,6 +521,22 @@ TEST(ImplicitActuator, EachClipActsOnTheImpulse) {
     sim.step();
     const double v1 = (0.2 - h * S / kM) / (1.0 + h * S / (kM * v_max));
     expect_close(sim.qd()[0], v1, 1e-12, "dc lower bound");
+    // TGS bounds the impulse summed over the sub-steps at each sub-step's velocity: the first
+    // sub-step takes the whole of (I10) and the later ones hold it, so every sub-step ends at
+    // the PGS step's v1 and q1 = q0 + h v1.
+    for (int n : {2, 5}) {
+      Simulation tgs = implicit_slider(h, SolverType::tgs, n);
+      tgs.set_actuator(0, implicit(dc_motor(1e4, 0.0, kInf, S, v_max)));
+      tgs.set_drive_target(0, 100.0, 0.0);
+      double vt = 0.0, qt = 0.0;
+      for (int k = 0; k < 10; ++k) {
+        tgs.step();
+        vt = (vt + h * S / kM) / (1.0 + h * S / (kM * v_max));
+        qt += h * vt;
+        expect_close(tgs.qd()[0], vt, 1e-12, "dc tgs qd " + std::to_string(k));
+        expect_close(tgs.q()[0], qt, 1e-12, "dc tgs q " + std::to_string(k));
+      }
+    }
     // And cut at E: with E = 30 below the line's S (1 - v / v_max), the step is E's.
     Simulation cut = implicit_slider(h);
     cut.set_actuator(0, implicit(dc_motor(1e4, 0.0, 30.0, S, v_max)));
