@@ -99,19 +99,28 @@ void featherdrive::python::bind_settings(py::module_& m) {
       .value("dc_motor", ActuatorKind::dc_motor, "DCMotor: within the torque-speed line")
       .value("remotized_pd", ActuatorKind::remotized_pd,
              "RemotizedPDActuator: within a position-dependent limit");
+  py::enum_<ActuatorIntegration>(m, "ActuatorIntegration",
+                                 "Where an actuator's law is evaluated "
+                                 "(docs/math/implicit_actuators.md).")
+      .value("explicit", ActuatorIntegration::explicit_law,
+             "on the step-start state, applied through the step (Isaac Lab's)")
+      .value("implicit", ActuatorIntegration::implicit_law,
+             "at the step's end, solved as the dof's row: stable at any gain");
   py::class_<ExplicitActuator>(m, "ExplicitActuator",
                                "An explicit actuator of one joint; checked when given to "
                                "Simulation.set_actuator.")
       .def(py::init([](py::handle kind, double kp, double kd, double effort_limit, double sat,
-                       double speed, py::handle lookup, py::handle delay) {
+                       double speed, py::handle lookup, py::handle delay, py::handle integration) {
              return make_actuator(to_actuator_kind(kind), kp, kd, effort_limit, sat, speed, lookup,
-                                  delay);
+                                  delay, integration);
            }),
            py::arg("kind") = ActuatorKind::ideal_pd, py::kw_only(), py::arg("stiffness") = 0.0,
            py::arg("damping") = 0.0, py::arg("effort_limit") = kInf,
            py::arg("saturation_effort") = 0.0, py::arg("velocity_limit") = 0.0,
            py::arg("lookup") = py::none(), py::arg("delay") = 0,
-           "kind: an ActuatorKind or its name; lookup: (n, 2) rows of (position, max effort).")
+           py::arg("integration") = ActuatorIntegration::explicit_law,
+           "kind: an ActuatorKind or its name; lookup: (n, 2) rows of (position, max effort); "
+           "integration: 'explicit' or 'implicit' (or an ActuatorIntegration).")
       .def_readwrite("kind", &ExplicitActuator::kind, "ActuatorKind")
       .def_readwrite("stiffness", &ExplicitActuator::stiffness, "N/m or Nm/rad")
       .def_readwrite("damping", &ExplicitActuator::damping, "Ns/m or Nms/rad")
@@ -136,6 +145,10 @@ void featherdrive::python::bind_settings(py::module_& m) {
             a.delay = to_int(d, "delay", 0, kMaxActuatorDelay);
           },
           "physics steps between a command and its effort")
+      .def_property(
+          "integration", [](const ExplicitActuator& a) { return a.integration; },
+          [](ExplicitActuator& a, py::handle i) { a.integration = to_actuator_integration(i); },
+          "ActuatorIntegration: explicit (the default) or implicit")
       .def("__repr__", [](const ExplicitActuator& a) {
         return std::string("ExplicitActuator('") + to_string(a.kind) +
                "', stiffness=" + fmt(a.stiffness) + ", damping=" + fmt(a.damping) +
@@ -143,34 +156,40 @@ void featherdrive::python::bind_settings(py::module_& m) {
                ", saturation_effort=" + fmt(a.saturation_effort) +
                ", velocity_limit=" + fmt(a.velocity_limit) +
                ", lookup=" + std::to_string(a.lookup.size()) +
-               " points, delay=" + std::to_string(a.delay) + ")";
+               " points, delay=" + std::to_string(a.delay) +
+               ", integration='" + to_string(a.integration) + "')";
       });
   m.def(
       "IdealPD",
-      [](double kp, double kd, double effort_limit, py::handle delay) {
+      [](double kp, double kd, double effort_limit, py::handle delay, py::handle integration) {
         return make_actuator(ActuatorKind::ideal_pd, kp, kd, effort_limit, 0.0, 0.0, py::none(),
-                             delay);
+                             delay, integration);
       },
       py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
       py::arg("effort_limit") = kInf, py::arg("delay") = 0,
+      py::arg("integration") = ActuatorIntegration::explicit_law,
       "Isaac Lab's IdealPDActuator (DelayedPDActuator with a delay): an ExplicitActuator.");
   m.def(
       "DCMotor",
-      [](double kp, double kd, double effort_limit, double sat, double speed, py::handle delay) {
+      [](double kp, double kd, double effort_limit, double sat, double speed, py::handle delay,
+         py::handle integration) {
         return make_actuator(ActuatorKind::dc_motor, kp, kd, effort_limit, sat, speed, py::none(),
-                             delay);
+                             delay, integration);
       },
       py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
       py::arg("effort_limit") = kInf, py::arg("saturation_effort"), py::arg("velocity_limit"),
-      py::arg("delay") = 0, "Isaac Lab's DCMotor: an ExplicitActuator.");
+      py::arg("delay") = 0, py::arg("integration") = ActuatorIntegration::explicit_law,
+      "Isaac Lab's DCMotor: an ExplicitActuator.");
   m.def(
       "RemotizedPD",
-      [](double kp, double kd, py::handle lookup, double effort_limit, py::handle delay) {
+      [](double kp, double kd, py::handle lookup, double effort_limit, py::handle delay,
+         py::handle integration) {
         return make_actuator(ActuatorKind::remotized_pd, kp, kd, effort_limit, 0.0, 0.0, lookup,
-                             delay);
+                             delay, integration);
       },
       py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0, py::arg("lookup"),
       py::arg("effort_limit") = kInf, py::arg("delay") = 0,
+      py::arg("integration") = ActuatorIntegration::explicit_law,
       "Isaac Lab's RemotizedPDActuator: an ExplicitActuator; lookup (n, 2) rows of (position, "
       "max effort).");
 

@@ -514,6 +514,13 @@ inline ActuatorKind to_actuator_kind(py::handle obj) {
                                "'none', 'ideal_pd', 'dc_motor' or 'remotized_pd'");
 }
 
+inline ActuatorIntegration to_actuator_integration(py::handle obj) {
+  return to_enum<ActuatorIntegration>(obj, "integration",
+                                      {{"explicit", ActuatorIntegration::explicit_law},
+                                       {"implicit", ActuatorIntegration::implicit_law}},
+                                      "'explicit' or 'implicit'");
+}
+
 inline std::vector<std::pair<double, double>> to_lookup(py::handle obj) {
   std::vector<std::pair<double, double>> table;
   if (obj.is_none()) return table;
@@ -527,7 +534,8 @@ inline std::vector<std::pair<double, double>> to_lookup(py::handle obj) {
 
 inline ExplicitActuator make_actuator(ActuatorKind kind, double stiffness, double damping,
                                       double effort_limit, double saturation_effort,
-                                      double velocity_limit, py::handle lookup, py::handle delay) {
+                                      double velocity_limit, py::handle lookup, py::handle delay,
+                                      py::handle integration) {
   ExplicitActuator a;
   a.kind = kind;
   a.stiffness = stiffness;
@@ -537,6 +545,7 @@ inline ExplicitActuator make_actuator(ActuatorKind kind, double stiffness, doubl
   a.velocity_limit = velocity_limit;
   a.lookup = to_lookup(lookup);
   a.delay = to_int(delay, "delay", 0, kMaxActuatorDelay);
+  a.integration = to_actuator_integration(integration);
   return a;
 }
 

@@ -103,6 +103,11 @@ class ActuatorKind(enum.Enum):
     dc_motor = 2
     remotized_pd = 3
 
+class ActuatorIntegration(enum.Enum):
+    """Where an actuator's law is evaluated (docs/math/implicit_actuators.md)."""
+    explicit = 0
+    implicit = 1
+
 class ExplicitActuator:
     """An explicit actuator of one joint; checked when given to Simulation.set_actuator."""
     kind: ActuatorKind
@@ -113,18 +118,26 @@ class ExplicitActuator:
     velocity_limit: float
     lookup: Vector
     delay: int
+    integration: ActuatorIntegration
     def __init__(self, kind: Union[ActuatorKind, str] = ActuatorKind.ideal_pd, *,
                  stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
                  saturation_effort: float = 0.0, velocity_limit: float = 0.0,
-                 lookup: ArrayLike | None = None, delay: Int = 0) -> None: ...
+                 lookup: ArrayLike | None = None, delay: Int = 0,
+                 integration: Union[ActuatorIntegration, str] = ActuatorIntegration.explicit
+                 ) -> None: ...
 
 def IdealPD(*, stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
-            delay: Int = 0) -> ExplicitActuator: ...
+            delay: Int = 0,
+            integration: Union[ActuatorIntegration, str] = ActuatorIntegration.explicit
+            ) -> ExplicitActuator: ...
 def DCMotor(*, stiffness: float = 0.0, damping: float = 0.0, effort_limit: float = ...,
-            saturation_effort: float, velocity_limit: float,
-            delay: Int = 0) -> ExplicitActuator: ...
+            saturation_effort: float, velocity_limit: float, delay: Int = 0,
+            integration: Union[ActuatorIntegration, str] = ActuatorIntegration.explicit
+            ) -> ExplicitActuator: ...
 def RemotizedPD(*, stiffness: float = 0.0, damping: float = 0.0, lookup: ArrayLike,
-                effort_limit: float = ..., delay: Int = 0) -> ExplicitActuator: ...
+                effort_limit: float = ..., delay: Int = 0,
+                integration: Union[ActuatorIntegration, str] = ActuatorIntegration.explicit
+                ) -> ExplicitActuator: ...
 
 class Compat(enum.Enum):
     """Whose defaults and step details a simulation follows."""

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -141,7 +142,17 @@ void print_drive_table(const Scene& scene, const Simulation& sim,
   const Model& model = sim.model();
   std::printf("  per drive: errors target - position in rad (m on prismatic joints), forces in "
               "N m (N); share of steps at the bound ('-': none set)\n");
-  std::printf("  %-16s %-12s %11s %11s %11s %11s %10s %10s %10s\n", "joint", "drive",
+  // The driver of each row: the drive's type, or the actuator and where its law is solved (one
+  // word, as the table's columns are split on spaces).
+  auto driver = [](const DriveSpec& d) -> const char* {
+    if (!d.actuator) return to_string(d.drive.type);
+    return d.actuator->integration == ActuatorIntegration::implicit_law ? "actuator(implicit)"
+                                                                         : "actuator";
+  };
+  int width = 12;
+  for (const DriveSpec& d : scene.drives)
+    width = std::max(width, static_cast<int>(std::strlen(driver(d))));
+  std::printf("  %-16s %-*s %11s %11s %11s %11s %10s %10s %10s\n", "joint", width, "drive",
               "final error", "rms error", "max |error|", "max |force|", "max_force", "vel. limit",
               "pos. limit");
   std::string unconverged;
@@ -151,9 +162,8 @@ void print_drive_table(const Scene& scene, const Simulation& sim,
     const double final_error = d.target_at(t_end).first - dof_position(model, sim.q(), d.dof);
     const bool limited =
         std::isfinite(sim.lower_limit(d.dof)) || std::isfinite(sim.upper_limit(d.dof));
-    const char* drive = d.actuator ? "actuator" : to_string(d.drive.type);
-    std::printf("  %-16s %-12s %11.3e %11.3e %11.3e %11.4g %10s %10s %10s\n", d.joint.c_str(),
-                drive, final_error, s.rms.value(steps), s.max_error, s.max_force,
+    std::printf("  %-16s %-*s %11.3e %11.3e %11.3e %11.4g %10s %10s %10s\n", d.joint.c_str(),
+                width, driver(d), final_error, s.rms.value(steps), s.max_error, s.max_force,
                 share(s.at_max_force, steps, std::isfinite(DriveStats::force_bound(sim, d.dof)))
                     .c_str(),
                 share(s.at_velocity_limit, steps, std::isfinite(sim.max_joint_velocity(d.dof)))

@@ -165,3 +165,66 @@ def test_urdf_effort_option(slider):
     assert sim.actuator("slide").effort_limit == 200.0
     with pytest.raises(ValueError, match="effort = 'sim'"):
         fd.UrdfOptions(effort="sim")
+
+
+def test_implicit_integration_is_implicit_euler_of_the_law(slider):
+    """integration='implicit' (docs/math/implicit_actuators.md eq. I3): each step is implicit
+    Euler of M x'' = kp (x* - x) + kd (v* - v) + ff, at gains where the explicit law diverges."""
+    h, kp, kd, ff = 0.02, 5e4, 40.0, 3.0  # kp h^2 / M = 8: beyond the explicit law's 4
+    actuator = fd.IdealPD(stiffness=kp, damping=kd, integration="implicit")
+    assert actuator.integration == fd.ActuatorIntegration.implicit
+    assert fd.IdealPD().integration == fd.ActuatorIntegration.explicit  # the default
+    assert "integration='implicit'" in repr(actuator)
+    sim = fd.Simulation(slider, dt=h)
+    sim.set_actuator("slide", actuator)
+    sim.set_actuator_feedforward("slide", ff)
+    x, v = 0.0, 0.0
+    for k in range(50):
+        target, target_v = 0.3 * np.sin(0.2 * k), 0.1
+        sim.set_drive_target("slide", target, target_v)
+        sim.step()
+        v = (M * v + h * (kp * (target - x) + kd * target_v + ff)) / (M + h * kd + h * h * kp)
+        x += h * v
+        assert sim.q[0] == pytest.approx(x, rel=1e-12, abs=1e-12)
+        assert sim.qd[0] == pytest.approx(v, rel=1e-12, abs=1e-12)
+        assert sim.actuator_force[0] == pytest.approx(kp * (target - x) + kd * (target_v - v) + ff,
+                                                      rel=1e-9, abs=1e-9)
+        assert sim.drive_force[0] == 0.0
+    explicit = fd.Simulation(slider, dt=h)
+    explicit.set_actuator("slide", fd.IdealPD(stiffness=kp, damping=kd))
+    explicit.set_drive_target("slide", 0.3, 0.0)
+    explicit.step(200)
+    # The explicit law never settles: it rings at the slider's 10 m/s velocity limit.
+    assert abs(explicit.q[0] - 0.3) > 0.05 and abs(explicit.qd[0]) > 1.0
+
+
+def test_integration_setting_and_bad_values():
+    a = fd.DCMotor(saturation_effort=5.0, velocity_limit=1.0, integration=fd.ActuatorIntegration.implicit)
+    assert a.integration == fd.ActuatorIntegration.implicit
+    a.integration = "explicit"
+    assert a.integration == fd.ActuatorIntegration.explicit
+    assert fd.RemotizedPD(lookup=[[0.0, 1.0]], integration="implicit").integration == \
+        fd.ActuatorIntegration.implicit
+    with pytest.raises(ValueError, match="integration = 'semi': must be 'explicit' or 'implicit'"):
+        fd.IdealPD(integration="semi")
+    with pytest.raises(TypeError):
+        a.integration = 1
+
+
+def test_batch_with_implicit_actuators_equals_single_simulations(slider):
+    proto = fd.Simulation(slider, dt=H)
+    batch = fd.Batch(proto, 2)
+    motor = fd.DCMotor(stiffness=5e5, damping=20.0, saturation_effort=60.0, velocity_limit=1.5,
+                       delay=1, integration="implicit")
+    batch.set_actuator("slide", motor)
+    single = fd.Simulation(slider, dt=H)
+    single.set_actuator("slide", motor)
+    for k in range(40):
+        for s in (batch.sim(0), batch.sim(1), single):
+            s.set_drive_target("slide", 0.2 * np.sin(0.1 * k), 0.0)
+        batch.step()
+        single.step()
+    for i in range(2):
+        assert hexes(batch.sim(i).q) == hexes(single.q)
+        assert hexes(batch.sim(i).actuator_force) == hexes(single.actuator_force)
+    assert batch.sim(1).actuator("slide").integration == fd.ActuatorIntegration.implicit

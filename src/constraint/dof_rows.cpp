@@ -119,6 +119,9 @@ double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
     if (rows.has_envelope)
       next = clamp_to_envelope(rows.envelope, next, rows.drive_impulse, v, rows.response,
                                rows.external_impulse, phase.dt);
+    if (rows.actuator)
+      next = clip_actuator_impulse(*rows.actuator, next, rows.drive_impulse, v, rows.response,
+                                   rows.actuator_x0, phase.delta_x, phase.h, phase.dt);
     const double delta = next - rows.drive_impulse;
     rows.drive_impulse = next;
     apply(delta);

@@ -116,6 +116,7 @@ void write_actuators(Writer& p, const Simulation& sim) {
     const ExplicitActuator& a = actuators.actuator(d);
     p.u8(static_cast<std::uint8_t>(a.kind));
     if (a.kind == ActuatorKind::none) continue;
+    p.u8(static_cast<std::uint8_t>(a.integration));  // version 6
     for (double v : {a.stiffness, a.damping, a.effort_limit, a.saturation_effort, a.velocity_limit})
       p.f64(v);
     p.i64(a.delay);
@@ -129,7 +130,7 @@ void write_actuators(Writer& p, const Simulation& sim) {
   p.vec(sim.actuator_force());
 }
 
-void read_actuators(Reader& r, Simulation& next, const std::string& name) {
+void read_actuators(Reader& r, Simulation& next, const std::string& name, std::uint32_t version) {
   const Model& model = next.model();
   for (int d = 0; d < model.nv; ++d) {
     ExplicitActuator a;
@@ -139,6 +140,13 @@ void read_actuators(Reader& r, Simulation& next, const std::string& name) {
                      std::to_string(d));
     a.kind = static_cast<ActuatorKind>(kind);
     if (a.kind == ActuatorKind::none) continue;  // cleared before the drives were set
+    if (version >= 6) {  // before it, every actuator was explicit
+      const std::uint8_t integration = r.u8();
+      if (integration > static_cast<std::uint8_t>(ActuatorIntegration::implicit_law))
+        fail(name, "corrupt checkpoint: actuator integration " + std::to_string(integration) +
+                       " of dof " + std::to_string(d));
+      a.integration = static_cast<ActuatorIntegration>(integration);
+    }
     a.stiffness = r.f64();
     a.damping = r.f64();
     a.effort_limit = r.f64();
@@ -492,7 +500,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     }
     const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
                friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
-    read_actuators(r, next, name);
+    read_actuators(r, next, name, version);
     if (version >= 4) read_drive_delays(r, next, name);  // version 3 has none
     if (version >= 5) read_joint_coupling(r, next, name);  // 3 and 4 have none
     if (r.pos() != bytes.size() - 8)

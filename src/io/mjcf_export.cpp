@@ -343,9 +343,10 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   for (const Link& link : model.links) {
     if (link.nv != 1) continue;
     const int d = link.v_index;
-    if (sim.has_actuator(d))
-      throw InputError("joint " + link.joint_name +
-                       ": an explicit actuator cannot be exported to MuJoCo (use a drive)");
+    if (sim.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
+      throw InputError("joint " + link.joint_name + ": an " +
+                       to_string(sim.actuator(d).integration) +
+                       " actuator cannot be exported to MuJoCo (use a drive)");
     if (sim.joint_friction(d).active() || sim.friction_coefficient(d) > 0.0)
       friction += " " + link.joint_name;
     if (std::isfinite(sim.max_joint_velocity(d))) velocity_limited += " " + link.joint_name;

@@ -61,6 +61,13 @@ std::string dof_fields(const Simulation& sim, int d, const std::string& name) {
   if (sim.actuator_envelope(d).active())
     throw std::invalid_argument("physx export: joint '" + name +
                                 "' has an actuator envelope, which the harness cannot set");
+  // PhysX has no actuator models (Isaac Lab evaluates them outside it): the harness would run
+  // the dof undriven.
+  if (sim.has_actuator(d))
+    throw std::invalid_argument("physx export: joint '" + name + "' has an " +
+                                to_string(sim.actuator(d).integration) + " " +
+                                to_string(sim.actuator(d).kind) +
+                                " actuator, which the harness cannot set (give it a drive)");
   std::ostringstream js;
   js << "\"armature\": " << num(sim.model().armature[d]);
   if (sim.applied_force()[d] != 0.0) js << ", \"applied_force\": " << num(sim.applied_force()[d]);

@@ -140,7 +140,7 @@ ExplicitActuator read_actuator(const Reader& r, const YAML::Node& node, const st
                                ExplicitActuator a, const std::string& joint) {
   r.map(node, path,
         {"type", "stiffness", "damping", "effort_limit", "saturation_effort", "velocity_limit",
-         "lookup", "delay"});
+         "lookup", "delay", "integration"});
   const auto at = [&](const char* key) { return Reader::join(path, key); };
   if (node["type"]) {
     const std::string type = r.text(node["type"], at("type"));
@@ -164,6 +164,15 @@ ExplicitActuator read_actuator(const Reader& r, const YAML::Node& node, const st
     a.velocity_limit = r.positive(node["velocity_limit"], at("velocity_limit"));
   if (node["delay"])
     a.delay = static_cast<int>(r.integer(node["delay"], at("delay"), 0, kMaxActuatorDelay));
+  if (node["integration"]) {
+    const std::string integration = r.text(node["integration"], at("integration"));
+    if (integration == "explicit")
+      a.integration = ActuatorIntegration::explicit_law;
+    else if (integration == "implicit")
+      a.integration = ActuatorIntegration::implicit_law;
+    else
+      r.fail(at("integration"), node["integration"], "must be explicit or implicit");
+  }
   if (const YAML::Node table = node["lookup"]) {
     const std::string tpath = at("lookup");
     if (!table.IsSequence() || table.size() == 0)

@@ -27,9 +27,22 @@ const char* to_string(ActuatorKind kind) {
   return "unknown";
 }
 
+const char* to_string(ActuatorIntegration integration) {
+  switch (integration) {
+    case ActuatorIntegration::explicit_law: return "explicit";
+    case ActuatorIntegration::implicit_law: return "implicit";
+  }
+  return "unknown";
+}
+
 void validate_actuator(const ExplicitActuator& a, const std::string& joint) {
   if (a.kind == ActuatorKind::none) return;
   const char* kind = to_string(a.kind);
+  if (a.integration != ActuatorIntegration::explicit_law &&
+      a.integration != ActuatorIntegration::implicit_law)
+    throw std::invalid_argument("actuator on joint '" + joint + "': integration = " +
+                                std::to_string(static_cast<int>(a.integration)) +
+                                " must be explicit or implicit");
   if (!std::isfinite(a.stiffness) || a.stiffness < 0.0)
     reject(joint, "stiffness", a.stiffness, "must be finite and >= 0");
   if (!std::isfinite(a.damping) || a.damping < 0.0)
@@ -137,6 +150,10 @@ void ExplicitActuators::compute(const Model& model, const VecX& q, const VecX& q
     const Drive& drive = drives[static_cast<size_t>(d)];
     const ActuatorCommand& seen =
         s.history.push({drive.target_position, drive.target_velocity, s.feedforward});
+    if (s.actuator.integration == ActuatorIntegration::implicit_law) {
+      s.seen = seen;  // the rows solve the law (setup_dof_rows)
+      continue;
+    }
     effort[d] = actuator_effort(s.actuator, q[model.links[model.dof_link[d]].q_index], qd[d], seen);
   }
 }

@@ -163,7 +163,9 @@ void check_supported(const Simulation& s) {
     if (std::isfinite(s.max_joint_velocity(d)))
       unsupported("joint", joint, "max_velocity " + format_double(s.max_joint_velocity(d)));
     if (s.actuator_envelope(d).active()) unsupported("joint", joint, "an actuator envelope");
-    if (s.has_actuator(d)) unsupported("joint", joint, "an explicit actuator");
+    if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
+      unsupported("joint", joint,
+                  std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
     if (s.drive_delay(d) != 0)
       unsupported("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
   }

@@ -460,6 +460,11 @@ void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorE
 void Simulation::set_actuator(int dof, const ExplicitActuator& actuator) {
   check_dof(dof);
   const Link& link = model_->links[model_->dof_link[dof]];
+  // An implicit actuator's dof is never a lone drive (setup_rows): its rows are set up again.
+  if (actuators_.implicit(dof) ||
+      (actuator.kind != ActuatorKind::none &&
+       actuator.integration == ActuatorIntegration::implicit_law))
+    row_kinds_changed_ = true;
   if (actuator.kind == ActuatorKind::none) {
     actuators_.set(dof, actuator);
     return;

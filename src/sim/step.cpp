@@ -67,6 +67,10 @@ void Simulation::step() {
   for (int d = 0; d < model.nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
     drive_force_[d] = r.drive_impulse * inv_dt;
+    if (actuated_ && actuators_.implicit(d)) {  // the row was the actuator's
+      actuator_force_[d] = drive_force_[d];
+      drive_force_[d] = 0.0;
+    }
     limit_force_[d] = (r.low_impulse + r.high_impulse) * inv_dt;
     friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
@@ -98,7 +102,9 @@ void Simulation::setup_rows(double h, bool tgs) {
     int front = 0, back = nv;
     for (int d = 0; d < nv; ++d) {
       setup_dof_rows(d, h, tgs);
+      // An implicit actuator's row is set up from the actuator, not from drives_.
       const bool lone = rows_[static_cast<size_t>(d)].drive_only && !drive_delays_.delayed(d) &&
+                        !actuators_.implicit(d) &&
                         model.links[model.dof_link[d]].joint_type != JointType::spherical;
       order[lone ? front++ : --back] = d;
     }
@@ -191,7 +197,8 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
                               link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
   rows.response = r;
   const Drive& drive = drive_seen(d);
-  rows.has_drive = drive.type != DriveType::none;
+  const bool driven = drive.type != DriveType::none;
+  rows.has_drive = driven;
   // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
   // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
   const double x0_drive =
@@ -201,8 +208,17 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
                                                            ? r + cfm : r, x0_drive, h, dt, tgs)
                               : DriveRow{};
+  // An implicit actuator's law is the row of its (driveless) dof (implicit_actuators.md, I4-I7).
+  rows.actuator = nullptr;
+  if (actuators_.implicit(d)) {
+    const ExplicitActuator& actuator = actuators_.actuator(d);
+    rows.has_drive = true;
+    rows.drive = setup_actuator_row(actuator, actuators_.command_seen(d), r, x0, h, dt, tgs);
+    if (actuator_clip_depends_on_state(actuator)) rows.actuator = &actuator;
+    rows.actuator_x0 = x0;
+  }
   const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
-  rows.has_envelope = rows.has_drive && envelope.active();
+  rows.has_envelope = driven && envelope.active();
   rows.envelope = envelope;
   rows.external_impulse = applied_force_[d] * dt;
   const JointFriction& friction = friction_[static_cast<size_t>(d)];
@@ -218,7 +234,8 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
   rows.error_high = upper_limit_[d] - x0;
   rows.max_velocity = max_velocity_[d];
-  rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.has_transmission_friction &&
+  rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.actuator &&
+                    !rows.has_transmission_friction &&
                     !rows.has_friction && !rows.has_limit &&
                     !(rows.max_velocity < DofRows::kNoVelocityLimit);
   // 1 / (r + cfm) is read by every row but a lone drive.

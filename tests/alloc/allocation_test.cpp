@@ -309,29 +309,35 @@ INSTANTIATE_TEST_SUITE_P(Models, StepAllocations,
                          [](const auto& p) { return std::string(p.param.name); });
 
 // Explicit actuators of every kind, with delays, on the planar chain: none after the first step
-// (their delay rings are sized when they are set).
+// (their delay rings are sized when they are set); every other one implicit (solved as a row),
+// under PGS and TGS.
 TEST(ExplicitActuatorAllocations, NoneInTheStep) {
   auto model = test::make_planar_chain(6, 1.0, 0.5);
-  Simulation sim(model);
-  for (int d = 0; d < model->nv; ++d) {
-    ExplicitActuator a;
-    a.kind = d % 3 == 0 ? ActuatorKind::ideal_pd
-             : d % 3 == 1 ? ActuatorKind::dc_motor : ActuatorKind::remotized_pd;
-    a.stiffness = 50.0;
-    a.damping = 2.0;
-    a.effort_limit = 20.0;
-    if (a.kind == ActuatorKind::dc_motor) a.saturation_effort = 30.0, a.velocity_limit = 4.0;
-    if (a.kind == ActuatorKind::remotized_pd) a.lookup = {{-1.0, 5.0}, {0.0, 15.0}, {1.0, 8.0}};
-    a.delay = d;
-    sim.set_actuator(d, a);
-    sim.set_drive_target(d, 0.2, 0.0);
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o;
+    o.solver = solver;
+    Simulation sim(model, o);
+    for (int d = 0; d < model->nv; ++d) {
+      ExplicitActuator a;
+      a.kind = d % 3 == 0 ? ActuatorKind::ideal_pd
+               : d % 3 == 1 ? ActuatorKind::dc_motor : ActuatorKind::remotized_pd;
+      a.stiffness = 50.0;
+      a.damping = 2.0;
+      a.effort_limit = 20.0;
+      if (a.kind == ActuatorKind::dc_motor) a.saturation_effort = 30.0, a.velocity_limit = 4.0;
+      if (a.kind == ActuatorKind::remotized_pd) a.lookup = {{-1.0, 5.0}, {0.0, 15.0}, {1.0, 8.0}};
+      a.delay = d;
+      if (d % 2 == 1) a.integration = ActuatorIntegration::implicit_law;
+      sim.set_actuator(d, a);
+      sim.set_drive_target(d, 0.2, 0.0);
+    }
+    sim.step();
+    EXPECT_EQ(allocations_in([&] {
+                for (int k = 0; k < 30; ++k) sim.step();
+              }),
+              0);
+    EXPECT_NE(sim.actuator_force().squaredNorm(), 0.0);
   }
-  sim.step();
-  EXPECT_EQ(allocations_in([&] {
-              for (int k = 0; k < 30; ++k) sim.step();
-            }),
-            0);
-  EXPECT_NE(sim.actuator_force().squaredNorm(), 0.0);
 }
 
 }  // namespace

@@ -294,15 +294,18 @@ def main():
     check(r.returncode == 0, "the translated scene runs", r)
 
     slider_urdf = os.path.abspath(os.path.join(source, "examples", "slider.urdf"))
-    actuated = os.path.join(out_dir, "mj_actuated.yaml")
-    with open(actuated, "w") as f:
-        f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
-                "  slide: {type: none, actuator: {type: ideal_pd, stiffness: 100}}\n")
-    for command in (["compare-mujoco", actuated], ["translate", actuated, "--to", "mujoco",
-                                                   "--out", os.path.join(out_dir, "x.xml")]):
-        r = run(cli, *command)
-        one_line_error(r, ["mj_actuated.yaml", "joint slide", "explicit actuator"],
-                       f"{command[0]} with an explicit actuator")
+    for integration in ("explicit", "implicit"):
+        actuated = os.path.join(out_dir, f"mj_actuated_{integration}.yaml")
+        with open(actuated, "w") as f:
+            f.write(f"model: {slider_urdf}\nsteps: 10\ndrives:\n"
+                    "  slide: {type: none, actuator: {type: ideal_pd, stiffness: 100, "
+                    f"integration: {integration}}}}}\n")
+        for command in (["compare-mujoco", actuated], ["translate", actuated, "--to", "mujoco",
+                                                       "--out", os.path.join(out_dir, "x.xml")]):
+            r = run(cli, *command)
+            one_line_error(r, [f"mj_actuated_{integration}.yaml", "joint slide",
+                               f"{integration} actuator"],
+                           f"{command[0]} with an {integration} actuator")
     undriven = os.path.join(out_dir, "mj_undriven.yaml")
     with open(undriven, "w") as f:
         f.write(f"model: {slider_urdf}\nsteps: 10\n")

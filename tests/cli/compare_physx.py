@@ -140,6 +140,16 @@ def messages(cli, source, out_dir):
                 "drives: {slide: {type: force, stiffness: 10, damping: 1, envelope: {max_effort: 5}}}\n")
     one_line_error(run(cli, "compare-physx", envelope, env=environment(PATH=empty)), 2,
                    [f"{envelope}: physx export: joint 'slide' has an actuator envelope"], "an envelope")
+    # An actuator (either integration): PhysX has no actuator model.
+    for integration in ("explicit", "implicit"):
+        actuated = os.path.join(out_dir, f"actuated_{integration}.yaml")
+        with open(actuated, "w") as f:
+            f.write(f"model: {os.path.join(source, 'examples', 'slider.urdf')}\nsteps: 3\n"
+                    "drives: {slide: {type: none, actuator: {type: dc_motor, stiffness: 10, "
+                    f"saturation_effort: 5, velocity_limit: 1, integration: {integration}}}}}}}\n")
+        one_line_error(run(cli, "compare-physx", actuated, env=environment(PATH=empty)), 2,
+                       [f"{actuated}: physx export: joint 'slide' has an {integration} dc_motor "
+                        "actuator, which the harness cannot set"], f"an {integration} actuator")
 
 
 def main():

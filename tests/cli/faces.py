@@ -9,7 +9,10 @@ the summary's shares of steps at a bound, each against an independent expectatio
   gravity) gains 4/60/2.5 m/s per step while saturated: saturated in steps 1..37 of 60 (v after
   37 steps 0.987 < 1), and with max_velocity 0.5 the velocity limit acts from step 19
   (19 * 0.02667 > 0.5) on: 42 of 60 steps;
-- PGS 4/1 on the arm warns that the drives have not converged, 64 iterations do not.
+- PGS 4/1 on the arm warns that the drives have not converged, 64 iterations do not;
+- an implicit actuator (integration: implicit) at kp dt^2 / m = 100, where the explicit law
+  diverges, is named `actuator(implicit)` in the summary and its CSV is implicit Euler of the law
+  (docs/math/implicit_actuators.md eq. I3), its force column m (v1 - v0) / dt.
 
 usage: faces.py FEATHERDRIVE SOURCE_DIR OUT_DIR
 """
@@ -143,6 +146,33 @@ def shares(cli, source, out_dir):
               f"{tag}: at max_force / at the velocity limit {got}, closed form {want}", r)
 
 
+def implicit_actuator(cli, source, out_dir):
+    urdf = os.path.join(source, "examples", "slider.urdf")
+    # A target near enough that the URDF's 10 m/s velocity limit never acts.
+    m, h, kp, kd, target = 2.5, 1.0 / 60.0, 100 * 2.5 * 3600.0, 30.0, 0.02
+    scene = os.path.join(out_dir, "faces_implicit_actuator.yaml")
+    with open(scene, "w") as f:
+        f.write(f"model: {urdf}\ngravity: [0, 0, 0]\ndt: {h!r}\nsteps: 30\n"
+                f"drives: {{slide: {{type: none, target_position: {target}, actuator: "
+                f"{{type: ideal_pd, stiffness: {kp!r}, damping: {kd}, integration: implicit}}}}}}\n")
+    out = os.path.join(out_dir, "faces_implicit_actuator.csv")
+    r = run(cli, "simulate", scene, "--out", out)
+    check(r.returncode == 0 and re.search(r"^\s+slide\s+actuator\(implicit\)\s", r.stdout, re.M),
+          "the summary names the implicit actuator", r)
+    if r.returncode != 0:
+        return
+    data = read_csv(out)
+    x = v = 0.0
+    for k in range(1, 31):
+        v0 = v
+        v = (m * v + h * kp * (target - x)) / (m + h * kd + h * h * kp)
+        x += h * v
+        check(abs(data["q:slide"][k] - x) <= 1e-12 and
+              abs(data["f:slide"][k] - m * (v - v0) / h) <= 1e-9 * max(1.0, abs(m * (v - v0) / h)),
+              f"implicit actuator step {k}: q {data['q:slide'][k]} vs {x}, "
+              f"f {data['f:slide'][k]} vs {m * (v - v0) / h}")
+
+
 def convergence(cli, source):
     scene = os.path.join(source, "examples", "arm7_pgs.yaml")
     r = run(cli, "simulate", scene)
@@ -172,6 +202,7 @@ def main():
     fit_round_trip(cli, source, out_dir)
     shares(cli, source, out_dir)
     convergence(cli, source)
+    implicit_actuator(cli, source, out_dir)
     r = run(cli, "--version")
     check(r.returncode == 0 and r.stdout.startswith("featherdrive "), "--version", r)
     r = run(cli, "simulate", "--help")
@@ -181,7 +212,7 @@ def main():
         print("FAIL:\n" + "\n".join(failures))
         sys.exit(1)
     print("ok: summary = CSV on a ball joint and a floating base, fit reads simulate's log, "
-          "shares at bounds, convergence warning")
+          "shares at bounds, convergence warning, an implicit actuator")
 
 
 if __name__ == "__main__":

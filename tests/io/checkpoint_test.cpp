@@ -277,7 +277,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 5)");
+            "to 6)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -613,6 +613,100 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   EXPECT_EQ(error_of(forged(with_delay, pushes_at, 0x7fffffffffffffffULL), c),
             "state.ckpt: bad value in the checkpoint: drive delay history of dof " +
                 std::to_string(driven) + ": pushes = 9223372036854775807 must be in [0, 2^53]");
+}
+
+// Implicit actuators (docs/math/implicit_actuators.md) of each kind, with delays, under TGS: the
+// integration is in the checkpoint (version 6) and the resumed run equals the uninterrupted one
+// bit for bit.
+TEST(Checkpoint, ImplicitActuatorsResumeBitForBit) {
+  auto model = test::make_planar_chain(3, 1.0, 0.5);
+  auto setup = [&] {
+    SimulationOptions o;
+    o.solver = SolverType::tgs;
+    o.position_iterations = 3;
+    Simulation sim(model, o);
+    ExplicitActuator pd;
+    pd.kind = ActuatorKind::ideal_pd;
+    pd.stiffness = 4e4;  // kp dt^2 / m of order 10: the explicit law would diverge
+    pd.damping = 20.0;
+    pd.effort_limit = 600.0;
+    pd.delay = 2;
+    pd.integration = ActuatorIntegration::implicit_law;
+    ExplicitActuator motor = pd;
+    motor.kind = ActuatorKind::dc_motor;
+    motor.saturation_effort = 90.0;
+    motor.velocity_limit = 2.0;
+    motor.delay = 1;
+    ExplicitActuator table = pd;
+    table.kind = ActuatorKind::remotized_pd;
+    table.effort_limit = kInf;
+    table.lookup = {{-0.5, 20.0}, {0.5, 50.0}};
+    sim.set_actuator(0, pd);
+    sim.set_actuator(1, motor);
+    sim.set_actuator(2, table);
+    return sim;
+  };
+  auto command = [](Simulation& sim, int k) {
+    for (int d = 0; d < 3; ++d) {
+      sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
+      sim.set_actuator_feedforward(d, 0.05 * k - d);
+    }
+  };
+  Simulation run = setup();
+  for (int k = 0; k < 10; ++k) command(run, k), run.step();
+  const std::string bytes = checkpoint_bytes(run);
+  Simulation resumed(model, run.options());
+  restore_checkpoint(bytes, resumed, "state.ckpt");
+  EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+  for (int d = 0; d < 3; ++d)
+    EXPECT_EQ(resumed.actuator(d).integration, ActuatorIntegration::implicit_law) << d;
+  for (int k = 10; k < 30; ++k)
+    for (Simulation* s : {&run, &resumed}) command(*s, k), s->step();
+  expect_same_state(run, resumed);
+  EXPECT_TRUE(same_bits(resumed.actuator_force(), run.actuator_force()));
+  EXPECT_NE(run.actuator_force().squaredNorm(), 0.0);
+}
+
+// Version 5 (before the integration) is still read, every actuator as explicit: version 6's bytes
+// without the integration byte after each actuator's kind.
+TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
+  auto model = test::make_planar_chain(2, 1.0, 0.5);
+  Simulation a(model);
+  ExplicitActuator pd;
+  pd.kind = ActuatorKind::ideal_pd;
+  pd.stiffness = 30.0;
+  pd.delay = 1;
+  a.set_actuator(0, pd);
+  a.set_actuator(1, pd);
+  a.set_drive_target(1, 0.2, 0.0);
+  a.step(3);
+  const std::string bytes = checkpoint_bytes(a);
+  const size_t nv = 2;
+  // From the end: checksum, mimic count, wrap bytes, drive delays, actuator forces; before them
+  // each actuator: kind, integration, 5 settings, delay, table size, feed-forward, pushes and a
+  // ring of 2 commands.
+  const size_t per_actuator = 1 + 1 + 5 * 8 + 8 + 8 + 8 + 8 + 2 * 24;
+  const size_t first = bytes.size() - 8 - 8 - nv - 8 * nv - 8 * nv - 2 * per_actuator;
+  ASSERT_EQ(bytes[first], static_cast<char>(ActuatorKind::ideal_pd));
+  ASSERT_EQ(bytes[first + per_actuator], static_cast<char>(ActuatorKind::ideal_pd));
+  std::string v5 = bytes;
+  v5.erase(first + per_actuator + 1, 1);  // the later one first: the offsets before it stay
+  v5.erase(first + 1, 1);
+  std::uint64_t payload = 0;
+  for (size_t i = 0; i < 8; ++i)
+    payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(v5[28 + i])) << (8 * i);
+  v5 = forged(forged(v5, 8, 5, 4), 28, payload - 2);
+  Simulation b(model);
+  ExplicitActuator late = pd;
+  late.integration = ActuatorIntegration::implicit_law;
+  b.set_actuator(0, late);  // replaced by the file's explicit one
+  restore_checkpoint(v5, b, "old.ckpt");
+  expect_same_state(a, b);
+  EXPECT_EQ(b.actuator(0).integration, ActuatorIntegration::explicit_law);
+  EXPECT_EQ(checkpoint_bytes(b), bytes);
+  // A forged integration is refused naming the dof.
+  EXPECT_EQ(error_of(forged(bytes, first + 1, 7, 1), b),
+            "state.ckpt: corrupt checkpoint: actuator integration 7 of dof 0");
 }
 
 }  // namespace

@@ -443,6 +443,7 @@ TEST(Scene, ActuatorsAndUrdfEffortReachTheSimulation) {
     EXPECT_EQ(a.saturation_effort, 300.0);
     EXPECT_EQ(a.velocity_limit, 4.0);
     EXPECT_EQ(a.delay, 2);
+    EXPECT_EQ(a.integration, ActuatorIntegration::explicit_law);  // the default
     EXPECT_EQ(a.effort_limit, std::string(mode) == "effort_limit" ? 200.0 : kInf) << mode;
     EXPECT_EQ(sim.drive(0).type, DriveType::none);
     // The first step: x = v = 0, demand 500 * 0.3 = 150 within min(S, E) = 200 (or 300).
@@ -471,6 +472,15 @@ TEST(Scene, ActuatorsAndUrdfEffortReachTheSimulation) {
   ASSERT_TRUE(table.drives[0].actuator);
   EXPECT_EQ(table.drives[0].actuator->lookup,
             (std::vector<std::pair<double, double>>{{-0.5, 10.0}, {0.5, 40.0}}));
+  // integration: implicit solves the law at the step's end (docs/math/implicit_actuators.md, eq.
+  // I2): the first step's force is the PD law at the state it ends in.
+  Simulation late = make_simulation(scene_from(
+      head + "drives:\n  slide: {type: none, target_position: 0.3, actuator: {type: ideal_pd, "
+             "stiffness: 500, damping: 20, integration: implicit}}\n"));
+  EXPECT_EQ(late.actuator(0).integration, ActuatorIntegration::implicit_law);
+  late.step();
+  EXPECT_NEAR(late.actuator_force()[0], 500.0 * (0.3 - late.q()[0]) - 20.0 * late.qd()[0], 1e-9);
+  EXPECT_EQ(late.drive_force()[0], 0.0);
 }
 
 TEST(Scene, BadActuatorsNameTheKeyPath) {
@@ -494,6 +504,9 @@ TEST(Scene, BadActuatorsNameTheKeyPath) {
   EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: ideal_pd, "
                             "delay: -1}}\n"),
             file + "drives.slide.actuator.delay = -1: must be >= 0");
+  EXPECT_EQ(error_of(head + "drives:\n  slide: {type: none, actuator: {type: ideal_pd, "
+                            "integration: semi}}\n"),
+            file + "drives.slide.actuator.integration = semi: must be explicit or implicit");
   EXPECT_EQ(error_of(head + "urdf_effort: sim\n"),
             file + "urdf_effort = sim: must be none, max_force or effort_limit");
 }

@@ -347,5 +347,352 @@ TEST(ExplicitActuatorSimulation, ADivergedStepLeavesTheHistoryAsItWas) {
   EXPECT_EQ(sim.qd()[0], reference.qd()[0]);
 }
 
+// ---- Implicit actuators (docs/math/implicit_actuators.md) ----------------------------------
+// On a slider of mass 2.5 kg with armature 0.3 kg (M = 2.8 kg along the slide), gravity across
+// it: one PGS step is an implicit Euler step of the law linearised at the step's end (eq. I3),
+//   v1 = (M v0 + h (kp (q* - q0) + kd v* + ff)) / (M + h kd + h^2 kp),  q1 = q0 + h v1,
+// and TGS's n sub-steps are n such steps of rho = h / n towards the target interpolated as
+// q*_i = q* - v* (h - i rho) (implicit_drives.md eq. 41).
+
+constexpr double kArmature = 0.3;
+constexpr double kM = kMass + kArmature;
+
+std::shared_ptr<const Model> armature_slider() {
+  ModelBuilder b;
+  b.set_gravity(Vec3(0, -kG, 0));
+  b.add_link(make_link("base", "", 1.0, Vec3::Zero(), test::box_inertia(1.0, Vec3(0.1, 0.1, 0.1)),
+                       fixed_joint("world_joint")));
+  LinkSpec slider = make_link("slider", "base", kMass, Vec3::Zero(),
+                              test::box_inertia(kMass, Vec3(0.1, 0.1, 0.1)),
+                              prismatic_joint("slide", Vec3::UnitZ()));
+  slider.joint.armature = {kArmature};
+  b.add_link(slider);
+  return std::make_shared<const Model>(b.build());
+}
+
+Simulation implicit_slider(double dt, SolverType solver = SolverType::pgs, int iterations = 4) {
+  SimulationOptions o;
+  o.dt = dt;
+  o.solver = solver;
+  o.position_iterations = iterations;
+  return Simulation(armature_slider(), o);
+}
+
+ExplicitActuator implicit(ExplicitActuator a) {
+  a.integration = ActuatorIntegration::implicit_law;
+  return a;
+}
+
+void set_state(Simulation& sim, double q, double qd) {
+  sim.set_q(VecX::Constant(1, q));
+  sim.set_qd(VecX::Constant(1, qd));
+}
+
+// |a - b| within rel of the larger magnitude (and of 1 for values near zero).
+void expect_close(double a, double b, double rel, const std::string& what) {
+  ASSERT_LE(std::abs(a - b), rel * std::max({1.0, std::abs(a), std::abs(b)})) << what;
+}
+
+TEST(ImplicitActuator, IntegrationDefaultsToExplicitAndNamesItself) {
+  EXPECT_EQ(ExplicitActuator{}.integration, ActuatorIntegration::explicit_law);
+  EXPECT_STREQ(to_string(ActuatorIntegration::explicit_law), "explicit");
+  EXPECT_STREQ(to_string(ActuatorIntegration::implicit_law), "implicit");
+}
+
+// The default (explicit) law against numbers stored from its closed form (semi-implicit Euler
+// under the effort of the step-start state; M = 2.8, kp 200, kd 5, ff 1, target 0.1, h 0.01,
+// from q = 0, qd = 0.5): step 1: F = 20 - 2.5 + 1 = 18.5, v1 = 0.5 + 0.01 * 18.5 / 2.8,
+// q1 = 0.01 v1; step 2: F = 200 (0.1 - q1) - 5 v1 + 1 = 17.0375, likewise.
+TEST(ImplicitActuator, TheDefaultStaysTheExplicitLaw) {
+  Simulation sim = implicit_slider(0.01);
+  sim.set_actuator(0, ideal(200.0, 5.0));
+  sim.set_actuator_feedforward(0, 1.0);
+  sim.set_drive_target(0, 0.1, 0.0);
+  set_state(sim, 0.0, 0.5);
+  const double v1 = 0.5660714285714286, q1 = 0.005660714285714285;
+  const double v2 = 0.6269196428571429, q2 = 0.011929910714285714;
+  sim.step();
+  expect_close(sim.actuator_force()[0], 18.5, 1e-14, "F1");
+  expect_close(sim.qd()[0], v1, 1e-14, "v1");
+  expect_close(sim.q()[0], q1, 1e-14, "q1");
+  sim.step();
+  expect_close(sim.actuator_force()[0], 200.0 * (0.1 - q1) - 5.0 * v1 + 1.0, 1e-14, "F2");
+  expect_close(sim.qd()[0], v2, 1e-14, "v2");
+  expect_close(sim.q()[0], q2, 1e-14, "q2");
+}
+
+TEST(ImplicitActuator, PgsStepIsImplicitEulerOfTheLinearisedLaw) {
+  const double h = 1.0 / 60.0, kp = 400.0, kd = 12.0, ff = 1.5;
+  for (ActuatorKind kind :
+       {ActuatorKind::ideal_pd, ActuatorKind::dc_motor, ActuatorKind::remotized_pd}) {
+    Simulation sim = implicit_slider(h);
+    // Clips far beyond what the law asks: the row is the linear law alone.
+    ExplicitActuator a = kind == ActuatorKind::ideal_pd   ? ideal(kp, kd, 1e6)
+                         : kind == ActuatorKind::dc_motor ? dc_motor(kp, kd, 1e6, 1e6, 1e4)
+                                                          : remotized(kp, kd, {{0.0, 1e6}});
+    sim.set_actuator(0, implicit(a));
+    sim.set_actuator_feedforward(0, ff);
+    double q = 0.05, v = -0.3;
+    set_state(sim, q, v);
+    for (int k = 0; k < 50; ++k) {
+      const double target = 0.3 * std::sin(0.1 * k), target_v = 0.5 * std::cos(0.1 * k);
+      sim.set_drive_target(0, target, target_v);
+      sim.step();
+      const double v1 = (kM * v + h * (kp * (target - q) + kd * target_v + ff)) /
+                        (kM + h * kd + h * h * kp);
+      q += h * v1;
+      v = v1;
+      const std::string at = std::string(to_string(kind)) + " step " + std::to_string(k);
+      expect_close(sim.qd()[0], v, 1e-12, at + " qd");
+      expect_close(sim.q()[0], q, 1e-12, at + " q");
+      // The force is the law at the step's end state (eq. I2), reported as the actuator's.
+      expect_close(sim.actuator_force()[0], kp * (target - q) + kd * (target_v - v) + ff, 1e-10,
+                   at + " force");
+      ASSERT_EQ(sim.drive_force()[0], 0.0) << at;
+    }
+  }
+}
+
+TEST(ImplicitActuator, TgsSubStepsAreImplicitEulerSubSteps) {
+  const double h = 1.0 / 30.0, kp = 900.0, kd = 20.0, ff = -2.0;
+  for (int n : {1, 3, 8}) {
+    Simulation sim = implicit_slider(h, SolverType::tgs, n);
+    sim.set_actuator(0, implicit(ideal(kp, kd)));
+    sim.set_actuator_feedforward(0, ff);
+    double q = 0.0, v = 0.2;
+    set_state(sim, q, v);
+    const double rho = h / n;
+    for (int k = 0; k < 50; ++k) {
+      const double target = 0.2 + 0.1 * k / 50.0, target_v = 0.4 - 0.01 * k;
+      sim.set_drive_target(0, target, target_v);
+      sim.step();
+      const double v_start = v;
+      for (int i = 1; i <= n; ++i) {
+        const double target_i = target - target_v * (h - i * rho);
+        v = (kM * v + rho * (kp * (target_i - q) + kd * target_v + ff)) /
+            (kM + rho * kd + rho * rho * kp);
+        q += rho * v;
+      }
+      const std::string at = "n " + std::to_string(n) + " step " + std::to_string(k);
+      expect_close(sim.qd()[0], v, 1e-12, at + " qd");
+      expect_close(sim.q()[0], q, 1e-12, at + " q");
+      expect_close(sim.actuator_force()[0], kM * (v - v_start) / h, 1e-10, at + " force");
+    }
+  }
+}
+
+// Each clip active, on its closed form.
+TEST(ImplicitActuator, EachClipActsOnTheImpulse) {
+  const double h = 0.01;
+  {  // ideal_pd at E: a far target, |effort| = E, v1 = v0 + h E / M.
+    Simulation sim = implicit_slider(h);
+    sim.set_actuator(0, implicit(ideal(1e5, 10.0, 7.0)));
+    sim.set_drive_target(0, 5.0, 0.0);
+    double v = 0.0;
+    for (int k = 0; k < 20; ++k) {
+      sim.step();
+      v += h * 7.0 / kM;
+      expect_close(sim.actuator_force()[0], 7.0, 1e-12, "ideal force " + std::to_string(k));
+      expect_close(sim.qd()[0], v, 1e-12, "ideal qd " + std::to_string(k));
+    }
+  }
+  {  // dc_motor on its torque-speed line from rest: v1 = (v0 + h S / M) / (1 + h S / (M vmax)),
+     // eq. I12, which tends to v_max without overshoot (S = 400 N, v_max = 0.5 m/s: h S / (M
+     // v_max) = 2.9, where the explicit line overshoots and rings).
+    const double S = 400.0, v_max = 0.5;
+    Simulation sim = implicit_slider(h);
+    sim.set_actuator(0, implicit(dc_motor(1e4, 0.0, kInf, S, v_max)));
+    sim.set_drive_target(0, 100.0, 0.0);
+    double v = 0.0;
+    for (int k = 0; k < 15; ++k) {
+      const double v0 = v;
+      sim.step();
+      v = (v + h * S / kM) / (1.0 + h * S / (kM * v_max));
+      expect_close(sim.qd()[0], v, 1e-12, "dc qd " + std::to_string(k));
+      expect_close(sim.actuator_force()[0], S * (1.0 - v / v_max), 1e-9,
+                   "dc force on the line at the end velocity " + std::to_string(k));
+      ASSERT_GT(v, v0);
+      ASSERT_LT(v, v_max);
+    }
+    EXPECT_NEAR(v, v_max, 1e-6);  // (v_max - v) shrinks by 1 / 3.9 a step
+    // Driven backwards from beyond the no-load speed, the lower bound S (-1 - v / v_max).
+    set_state(sim, 0.0, 0.2);
+    sim.set_drive_target(0, -100.0, 0.0);
+    sim.step();
+    const double v1 = (0.2 - h * S / kM) / (1.0 + h * S / (kM * v_max));
+    expect_close(sim.qd()[0], v1, 1e-12, "dc lower bound");
+    // TGS bounds the impulse summed over the sub-steps at each sub-step's velocity: the first
+    // sub-step takes the whole of (I10) and the later ones hold it, so every sub-step ends at
+    // the PGS step's v1 and q1 = q0 + h v1.
+    for (int n : {2, 5}) {
+      Simulation tgs = implicit_slider(h, SolverType::tgs, n);
+      tgs.set_actuator(0, implicit(dc_motor(1e4, 0.0, kInf, S, v_max)));
+      tgs.set_drive_target(0, 100.0, 0.0);
+      double vt = 0.0, qt = 0.0;
+      for (int k = 0; k < 10; ++k) {
+        tgs.step();
+        vt = (vt + h * S / kM) / (1.0 + h * S / (kM * v_max));
+        qt += h * vt;
+        expect_close(tgs.qd()[0], vt, 1e-12, "dc tgs qd " + std::to_string(k));
+        expect_close(tgs.q()[0], qt, 1e-12, "dc tgs q " + std::to_string(k));
+      }
+    }
+    // And cut at E: with E = 30 below the line's S (1 - v / v_max), the step is E's.
+    Simulation cut = implicit_slider(h);
+    cut.set_actuator(0, implicit(dc_motor(1e4, 0.0, 30.0, S, v_max)));
+    cut.set_drive_target(0, 100.0, 0.0);
+    cut.step();
+    expect_close(cut.actuator_force()[0], 30.0, 1e-12, "dc at E");
+  }
+  {  // remotized_pd on a flat table: |effort| = L.
+    Simulation sim = implicit_slider(h);
+    sim.set_actuator(0, implicit(remotized(1e5, 10.0, {{-1.0, 4.0}, {1.0, 4.0}})));
+    sim.set_drive_target(0, -5.0, 0.0);
+    double v = 0.0;
+    for (int k = 0; k < 20; ++k) {
+      sim.step();
+      v -= h * 4.0 / kM;
+      expect_close(sim.actuator_force()[0], -4.0, 1e-12, "remotized force " + std::to_string(k));
+      expect_close(sim.qd()[0], v, 1e-12, "remotized qd " + std::to_string(k));
+    }
+    // On a sloped table the limit is read at the iterate's end position, a fixed point (eq.
+    // I13): after the step's iterations it matches the table at the step's end closely.
+    Simulation slope = implicit_slider(h);
+    const std::vector<std::pair<double, double>> table = {{-1.0, 2.0}, {1.0, 12.0}};
+    slope.set_actuator(0, implicit(remotized(1e5, 10.0, table)));
+    slope.set_drive_target(0, 5.0, 0.0);
+    for (int k = 0; k < 30; ++k) {
+      slope.step();
+      expect_close(slope.actuator_force()[0], 7.0 + 5.0 * slope.q()[0], 1e-9,
+                   "sloped table " + std::to_string(k));
+    }
+  }
+}
+
+// kp dt^2 / M from 0.1 to 1e4: the implicit law stays bounded and settles on its target (implicit
+// Euler never adds energy, eq. I14: |q - q*| never exceeds its start); the explicit one diverges
+// at the high end (symplectic Euler on kp alone is stable only below kp dt^2 / M = 4).
+TEST(ImplicitActuator, StableAtEveryGainWhereTheExplicitLawDiverges) {
+  const double h = 0.01, target = 0.1;
+  for (ActuatorKind kind :
+       {ActuatorKind::ideal_pd, ActuatorKind::dc_motor, ActuatorKind::remotized_pd}) {
+    for (double ratio : {0.1, 1.0, 10.0, 100.0, 1e3, 1e4}) {
+      const double kp = ratio * kM / (h * h), kd = 0.0;
+      const ExplicitActuator a = kind == ActuatorKind::ideal_pd ? ideal(kp, kd)
+                                 : kind == ActuatorKind::dc_motor
+                                     ? dc_motor(kp, kd, 60.0, 80.0, 2.0)
+                                     : remotized(kp, kd, {{-1.0, 50.0}, {1.0, 70.0}});
+      const std::string at = std::string(to_string(kind)) + " kp dt^2/M " + std::to_string(ratio);
+      Simulation sim = implicit_slider(h);
+      sim.set_actuator(0, implicit(a));
+      sim.set_drive_target(0, target, 0.0);
+      double worst = 0.0;
+      for (int k = 0; k < 2000; ++k) {
+        sim.step();
+        worst = std::max(worst, std::abs(sim.q()[0] - target));
+      }
+      EXPECT_LE(worst, target * (1.0 + 1e-9)) << at;
+      // Undamped, implicit Euler's loss per step is small at low gains: settled at the high ones.
+      if (ratio >= 10.0) {
+        EXPECT_LT(std::abs(sim.q()[0] - target), 1e-6) << at;
+        EXPECT_LT(std::abs(sim.qd()[0]), 1e-4) << at;
+      }
+      Simulation expl = implicit_slider(h);
+      expl.set_actuator(0, a);
+      expl.set_drive_target(0, target, 0.0);
+      double expl_worst = 0.0;
+      try {
+        for (int k = 0; k < 2000; ++k) {
+          expl.step();
+          expl_worst = std::max(expl_worst, std::abs(expl.q()[0] - target));
+        }
+      } catch (const DivergenceError&) {
+        expl_worst = kInf;
+      }
+      // Below 4 symplectic Euler rings within a bounded envelope.
+      if (ratio <= 1.0) EXPECT_LE(expl_worst, 3.0 * target) << at;
+      // The ideal PD diverges; the clipped kinds stay bounded by their clip but keep ringing.
+      if (ratio >= 1e3 && kind == ActuatorKind::ideal_pd) EXPECT_EQ(expl_worst, kInf) << at;
+      if (ratio >= 1e3 && kind != ActuatorKind::ideal_pd)
+        EXPECT_GT(std::abs(expl.q()[0] - target) + h * std::abs(expl.qd()[0]), 1e-3) << at;
+    }
+  }
+}
+
+// At low gains the two laws agree to O(dt): both are first-order integrators of the same ODE, so
+// their difference at a fixed time is c dt + O(dt^2) and halves with dt (ratio 2 up to O(dt)).
+TEST(ImplicitActuator, AgreesWithTheExplicitLawToFirstOrderInDt) {
+  const double kp = 30.0, kd = 2.0, T = 1.0;
+  std::vector<double> gaps;
+  for (double h : {1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0}) {
+    double q[2] = {0.0, 0.0};
+    for (int which = 0; which < 2; ++which) {
+      Simulation sim = implicit_slider(h);
+      ExplicitActuator a = ideal(kp, kd);
+      if (which == 1) a = implicit(a);
+      sim.set_actuator(0, a);
+      sim.set_actuator_feedforward(0, 0.5);
+      const int steps = static_cast<int>(std::lround(T / h));
+      for (int k = 0; k < steps; ++k) {
+        const double t = k * h;
+        sim.set_drive_target(0, 0.2 * std::sin(3.0 * t), 0.6 * std::cos(3.0 * t));
+        sim.step();
+      }
+      q[which] = sim.q()[0];
+    }
+    gaps.push_back(std::abs(q[1] - q[0]));
+  }
+  EXPECT_GT(gaps[0], 1e-5);  // the laws differ
+  for (int i = 0; i + 1 < 3; ++i) {
+    const double ratio = gaps[static_cast<size_t>(i)] / gaps[static_cast<size_t>(i) + 1];
+    EXPECT_GE(ratio, 1.8) << "dt halving " << i;
+    EXPECT_LE(ratio, 2.2) << "dt halving " << i;
+  }
+}
+
+// Delay d: step k's row uses the command of step max(k - d, 0) (explicit_actuators.md eq. 8-9).
+TEST(ImplicitActuator, DelayFeedsTheRowTheCommandOfDStepsAgo) {
+  const double h = 0.02, kp = 250.0, kd = 6.0;
+  for (int d : {0, 2, 5}) {
+    Simulation sim = implicit_slider(h);
+    sim.set_actuator(0, implicit(ideal(kp, kd, kInf, d)));
+    std::vector<ActuatorCommand> commands;
+    double q = 0.0, v = 0.0;
+    for (int k = 0; k < 30; ++k) {
+      commands.push_back({0.1 * std::sin(0.3 * k), 0.2 * std::cos(0.5 * k), 0.4 * k - 3.0});
+      sim.set_drive_target(0, commands.back().position, commands.back().velocity);
+      sim.set_actuator_feedforward(0, commands.back().effort);
+      sim.step();
+      const ActuatorCommand& c = commands[static_cast<size_t>(std::max(k - d, 0))];
+      v = (kM * v + h * (kp * (c.position - q) + kd * c.velocity + c.effort)) /
+          (kM + h * kd + h * h * kp);
+      q += h * v;
+      expect_close(sim.q()[0], q, 1e-12, "delay " + std::to_string(d) + " step " +
+                                             std::to_string(k));
+    }
+  }
+}
+
+// An implicit actuator beside rows of its own dof (a limit) and switching between the laws.
+TEST(ImplicitActuator, SharesItsDofWithALimitAndSwitchesBack) {
+  Simulation sim = implicit_slider(0.01);
+  sim.set_joint_limits(0, -0.05, 0.05);
+  sim.set_actuator(0, implicit(ideal(1e4, 0.0)));
+  sim.set_drive_target(0, 1.0, 0.0);
+  for (int k = 0; k < 50; ++k) sim.step();
+  // Held at the limit against the far target: at rest, the limit takes what the actuator gives.
+  EXPECT_NEAR(sim.q()[0], 0.05, 1e-3);
+  EXPECT_GT(sim.actuator_force()[0], 1e3);
+  EXPECT_NEAR(sim.actuator_force()[0], -sim.limit_force()[0],
+              1e-6 * std::abs(sim.limit_force()[0]));
+  // Back to explicit: the force is the step-start law again, and the row is gone.
+  sim.set_joint_limits(0, -kInf, kInf);
+  sim.set_actuator(0, ideal(100.0, 0.0));
+  set_state(sim, 0.0, 0.0);
+  sim.step();
+  EXPECT_EQ(sim.actuator_force()[0], 100.0);
+  EXPECT_EQ(sim.drive_force()[0], 0.0);
+}
+
 }  // namespace
 }  // namespace featherdrive

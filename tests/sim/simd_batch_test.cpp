@@ -266,6 +266,19 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   mimic.set_mimic_joints({{2, 1, 1.5, 0.0}});
   const std::string follower = s.model().links[s.model().dof_link[2]].joint_name;
   expect_refused(mimic, "joint '" + follower + "' has a mimic row");
+  // An actuator of either integration (the lane step has no actuator rows).
+  for (ActuatorIntegration integration :
+       {ActuatorIntegration::explicit_law, ActuatorIntegration::implicit_law}) {
+    Simulation actuated = s;
+    actuated.set_drive(1, Drive{});
+    ExplicitActuator a;
+    a.kind = ActuatorKind::ideal_pd;
+    a.stiffness = 10.0;
+    a.integration = integration;
+    actuated.set_actuator(1, a);
+    expect_refused(actuated, "joint '" + joint + "' has an " + to_string(integration) +
+                                 " actuator");
+  }
   SimulationOptions physx = s.options();
   physx.compat = Compat::physx;
   expect_refused(Simulation(s.model_ptr(), physx), "compat: physx");

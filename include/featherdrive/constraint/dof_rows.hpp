@@ -4,6 +4,7 @@
 // docs/math/joint_constraints.md.
 #pragma once
 
+#include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/joint_constraints.hpp"
 
@@ -46,6 +47,12 @@ struct DofRows {
   double error_high = 0.0;  ///< upper - q0
 
   double max_velocity = 0.0;  ///< +inf for none
+
+  /// An implicit actuator whose clip depends on the state (actuator_row.hpp): the drive row is
+  /// its row and clip_actuator_impulse bounds it. Points into the simulation's actuators, set
+  /// again by every step's setup; null otherwise.
+  const ExplicitActuator* actuator = nullptr;
+  double actuator_x0 = 0.0;  ///< the dof's position at the step's start
 
   // Accumulated over the step.
   double friction_impulse = 0.0;

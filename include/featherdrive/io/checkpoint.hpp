@@ -11,7 +11,8 @@
 //                 dof the drive, limits, friction, max velocity, envelope and friction
 //                 coefficient, per link its LinkParameters, then the last step's drive, limit,
 //                 friction and velocity-limit forces, then per dof its explicit actuator (kind;
-//                 if any: settings, table, feed-forward, pushes and its delay ring of
+//                 if any: its integration (version 6), settings, table, feed-forward, pushes
+//                 and its delay ring of
 //                 delay + 1 commands) and the last step's actuator forces, then per dof the
 //                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets),
 //                 then per dof its revolute wrap and the mimic joints (count, then each one's
@@ -35,7 +36,8 @@ namespace featherdrive {
 /// drive delays).
 /// 5: revolute wrap and mimic joints. Versions 3 and 4 are still read (the simulation keeps its
 /// own).
-inline constexpr std::uint32_t kCheckpointVersion = 5;
+/// 6: an actuator's integration (explicit or implicit). Versions 3 to 5 read as explicit.
+inline constexpr std::uint32_t kCheckpointVersion = 6;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file

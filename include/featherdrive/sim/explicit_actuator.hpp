@@ -1,7 +1,9 @@
 // Isaac Lab's explicit actuators (isaaclab.actuators: IdealPDActuator, DCMotor,
 // RemotizedPDActuator, with DelayedPDActuator's delay): a joint effort computed from the state at
 // the start of a step and applied through the whole step, beside (never on the same dof as) the
-// implicit drive. docs/math/explicit_actuators.md has the equations.
+// implicit drive. docs/math/explicit_actuators.md has the equations. With integration implicit_law
+// the same law is linearised at the step's end and solved in the sweep as the dof's drive row
+// (constraint/actuator_row.hpp, docs/math/implicit_actuators.md).
 #pragma once
 
 #include <limits>
@@ -23,6 +25,14 @@ enum class ActuatorKind {
 };
 const char* to_string(ActuatorKind kind);
 
+/// Where an actuator's law is evaluated.
+enum class ActuatorIntegration {
+  explicit_law,  ///< on the step-start state, applied as a constant force (Isaac Lab's way)
+  implicit_law,  ///< linearised at the step's end and solved as a row (implicit_actuators.md)
+};
+/// "explicit" or "implicit" (the scene's and Python's spelling).
+const char* to_string(ActuatorIntegration integration);
+
 /// The most steps an actuator may delay its commands (a ring of delay + 1 commands per dof).
 inline constexpr int kMaxActuatorDelay = kMaxDelay;
 
@@ -40,6 +50,7 @@ struct ExplicitActuator {
   /// linear between them, the end values beyond them.
   std::vector<std::pair<double, double>> lookup;
   int delay = 0;  ///< physics steps between a command and the effort it gives, eq. (8)
+  ActuatorIntegration integration = ActuatorIntegration::explicit_law;
 };
 
 /// Throws std::invalid_argument naming the joint, the field and the value: gains not finite or
@@ -74,6 +85,12 @@ class ExplicitActuators {
   const ExplicitActuator& actuator(int dof) const { return slot(dof).actuator; }
   bool active(int dof) const { return actuator(dof).kind != ActuatorKind::none; }
   bool any() const { return !active_.empty(); }
+  /// dof's actuator is solved in the step's rows (integration implicit_law).
+  bool implicit(int dof) const {
+    return active(dof) && actuator(dof).integration == ActuatorIntegration::implicit_law;
+  }
+  /// The command an implicit actuator sees this step, eq. (8)-(9): set by the step's compute().
+  const ActuatorCommand& command_seen(int dof) const { return slot(dof).seen; }
   void set_feedforward(int dof, double effort) {
     slots_[static_cast<size_t>(dof)].feedforward = effort;
   }
@@ -82,7 +99,8 @@ class ExplicitActuators {
   void reset_history();
 
   /// Once per step: pushes every active dof's command (the targets of `drives`, the feed-forward)
-  /// and writes the effort each applies at the step-start q, qd into `effort` (nv; 0 elsewhere).
+  /// and writes the effort each explicit one applies at the step-start q, qd into `effort` (nv;
+  /// 0 elsewhere); an implicit one keeps the command it sees for the rows (command_seen).
   void compute(const Model& model, const VecX& q, const VecX& qd, const std::vector<Drive>& drives,
                VecX& effort);
   /// Takes back the last compute()'s pushes (a step that diverged).
@@ -99,6 +117,7 @@ class ExplicitActuators {
     ExplicitActuator actuator;
     double feedforward = 0.0;
     DelayLine<ActuatorCommand> history;
+    ActuatorCommand seen;  ///< implicit: this step's command
   };
   const Slot& slot(int dof) const { return slots_[static_cast<size_t>(dof)]; }
   std::vector<Slot> slots_;
