@@ -167,8 +167,8 @@ double linear_step_radius(const Simulation& sim, const Coordinates& c) {
   }
 }
 
-// Eq. S5-S6 on a run of `steps` steps of a copy of sim with dt / substeps (the targets of
-// before_step's step index held over the sub-steps). Returns "" when bounded.
+// Eq. S5-S6 on a run of `steps` steps of dt, made as steps * substeps steps of dt / substeps of a
+// copy of sim. Returns "" when bounded, else how it diverged.
 std::string trial_run(const Simulation& sim, int steps, int substeps,
                       const StabilityCheckOptions& options, double& worst) {
   Simulation copy = sim;
@@ -180,7 +180,7 @@ std::string trial_run(const Simulation& sim, int steps, int substeps,
   const double e0 = check_energy(copy), scale = check_energy_scale(copy);
   worst = 0.0;
   for (int k = 0; k < steps * substeps; ++k) {
-    if (options.before_step) options.before_step(copy, k / substeps);
+    if (options.before_step) options.before_step(copy, k, substeps);
     try {
       copy.step();
     } catch (const DivergenceError&) {

@@ -84,9 +84,11 @@ struct StabilityCheckOptions {
   /// Search the fixes of unstable joints (eq. S7-S9) and of an unstable robot (the trial's
   /// sub-steps); off, only the verdict and the table.
   bool find_fixes = true;
-  /// Called before each trial step with the simulation and the step's index (from 0): a scene
-  /// sets its time-varying targets there (apply_targets); empty: the targets stay as they are.
-  std::function<void(Simulation&, int)> before_step;
+  /// Called before each physics step of a trial run with the simulation, the step's index (from
+  /// 0) and the sub-steps the run makes per step of the original dt (1, or the robot fix's 2, 4,
+  /// ...; the simulation's dt is then dt / substeps): a scene sets its time-varying targets there
+  /// (apply_targets with control.substeps times that many). Empty: the targets stay as they are.
+  std::function<void(Simulation&, int, int)> before_step;
 };
 
 struct RobotStability {
