@@ -353,7 +353,7 @@ StabilityReport check_stability(const Simulation& sim, const StabilityCheckOptio
   if (options.find_fixes && joints_stable && !r.trial_bounded)
     for (int k = 2; k <= options.max_robot_substeps; k *= 2) {
       double worst = 0.0;
-      if (trial_run(sim, steps, k, options, worst).empty()) {
+      if (trial_run(sim, steps * options.robot_fix_length, k, options, worst).empty()) {
         r.substeps = k;
         break;
       }

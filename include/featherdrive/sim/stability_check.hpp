@@ -81,6 +81,9 @@ struct StabilityCheckOptions {
   /// For an unstable robot whose joints are all stable: the sub-steps tried on the trial run
   /// (2, 4, ... up to this).
   int max_robot_substeps = 64;
+  /// ... on a trial this many times longer (in simulated time) than the check's own: a trial as
+  /// long as the check's accepted sub-steps whose long runs still diverged (docs, "Fixes").
+  int robot_fix_length = 4;
   /// Search the fixes of unstable joints (eq. S7-S9) and of an unstable robot (the trial's
   /// sub-steps); off, only the verdict and the table.
   bool find_fixes = true;
