@@ -35,7 +35,9 @@ TEST(StabilityCheck, ExplicitMapRadiusMatchesClosedForm) {
           << "a " << a << " b " << b;
       // Jury's conditions for a 2x2 map: |det| < 1, |tr| < 1 + det.
       const bool jury = std::abs(1.0 - b) < 1.0 && std::abs(2.0 - a - b) < 2.0 - b;
-      if (b > 0.0) EXPECT_EQ(step_spectral_radius(A) < 1.0, jury) << "a " << a << " b " << b;
+      if (b > 0.0) {
+        EXPECT_EQ(step_spectral_radius(A) < 1.0, jury) << "a " << a << " b " << b;
+      }
     }
 }
 
