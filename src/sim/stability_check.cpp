@@ -205,6 +205,8 @@ const char* to_string(JointLaw law) {
   return "?";
 }
 
+// The one place that picks a dof's law; an actuator solved implicitly would be the map of a
+// force drive with the actuator's gains (law drive).
 JointGains joint_gains(const Simulation& sim, int dof) {
   JointGains g;
   if (sim.has_actuator(dof)) {
