@@ -903,3 +903,52 @@ def dof_positions(model: Model, q: ArrayLike, dofs: Sequence[Int] | None = None)
 def set_dof_positions(model: Model, q: ArrayLike, dofs: Sequence[Int] | None,
                       values: ArrayLike) -> Vector:
     """A copy of q with the dofs' positions set (the inverse of dof_positions)."""
+
+# The stability check (docs/stability_check.md; python/bind_check.cpp).
+class JointLaw(enum.Enum):
+    """What acts on a dof in the one-joint step map."""
+    none = 0
+    drive = 1
+    explicit_pd = 2
+
+class JointStability:
+    joint: str
+    dof: int
+    axis: int
+    """A spherical joint's axis 0, 1, 2; -1 for revolute and prismatic."""
+    law: JointLaw
+    mass: float
+    """m = 1 / (M^-1)_jj, armature included."""
+    stiffness_ratio: float
+    """kp dt^2 / m (acceleration drives: kp dt^2)."""
+    damping_ratio: float
+    """kd / (2 sqrt(kp m)) (acceleration drives: kd / (2 sqrt(kp))); nan without kp."""
+    rho: float
+    """Spectral radius of the one-joint map of one physics step."""
+    stable: bool
+    substeps: int
+    """For an unstable dof: the fewest physics steps per step of dt (0: none up to 1024)."""
+    armature: float
+    """For an unstable dof: the least armature to add (< 0: none)."""
+    damping: float
+    """For an unstable dof: the least damping to add (< 0: none)."""
+
+class RobotStability:
+    linear_rho: float
+    linear_dofs: int
+    linear_stable: bool
+    trial_steps: int
+    trial_bounded: bool
+    trial_note: str
+    substeps: int
+    """For a diverging trial whose dofs are all stable: sub-steps that keep it bounded (0: none)."""
+
+class StabilityReport:
+    joints: list[JointStability]
+    robot: RobotStability
+    stable: bool
+    verdict: str
+    """'stable' or 'unstable: <joints and why>'."""
+
+def check(scene: PathLike | Simulation) -> StabilityReport:
+    """Will the run stay bounded? Per-dof step maps, a trial run, the smallest fixes."""

@@ -59,4 +59,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_view(m);
   bind_joints(m);
   bind_simd(m);
+  bind_check(m);
 }

@@ -18,6 +18,7 @@
 #include <limits>
 #include <optional>
 
+#include "check.hpp"
 #include "cli_common.hpp"
 #include "compare_physx.hpp"
 #include "mujoco_commands.hpp"
@@ -384,6 +385,8 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("--plot", cmp_args.plot, "PNG of the differences over time per joint");
   cmp_args.overrides.add_options(cmp_cmd, " (PhysX: 1 to 255)", " (PhysX: 0 to 255)");
   MujocoCommands mujoco(app);  // compare-mujoco, translate (compare_mujoco.cpp, translate.cpp)
+  CheckArgs check_args;
+  CLI::App* check_cmd = add_check_command(app, check_args);  // check.cpp
 
   add_python_tool(app, argc, argv, "sweep", "featherdrive_sweep",
                   "Map the drives' tracking error over a grid of gains (CSV and heat map)");
@@ -404,9 +407,9 @@ int main(int argc, char** argv) {
     const std::string first = argc > 1 ? argv[1] : "";
     if (!first.empty() && first[0] != '-' && first != "simulate" && first != "info" &&
         first != "compare-physx" && first != "compare-mujoco" && first != "translate" &&
-        first != "sweep" && first != "fit" && first != "view")
+        first != "sweep" && first != "fit" && first != "view" && first != "check")
       report("unknown command '" + first + "' (expected simulate, info, compare-physx, "
-             "compare-mujoco, translate, sweep, fit or view; see featherdrive --help)");
+             "compare-mujoco, translate, check, sweep, fit or view; see featherdrive --help)");
     else
       report(std::string(e.what()) + " (see featherdrive --help)");
     return 2;
@@ -422,6 +425,10 @@ int main(int argc, char** argv) {
       return compare_physx(cmp_args);
     }
     if (mujoco.selected()) return mujoco.run();
+    if (*check_cmd) {
+      check_args.overrides.parse();
+      return check_scene_command(check_args);
+    }
     return info(urdf, floating);
   } catch (const std::invalid_argument& e) {  // bad input: InputError and the core's validation
     report(e.what());

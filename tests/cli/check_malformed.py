@@ -18,8 +18,15 @@ def main():
     for line in lines[1:]:
         if line.startswith("file: "):
             named = line[len("file: "):]
-    command = "info" if path.endswith((".urdf", ".xml")) else "simulate"
-    args = [cli, command, path] + (["--steps", "2"] if command == "simulate" else [])
+    # A scene is refused alike by simulate and by check (which also runs the scene's targets).
+    commands = ([["info", path]] if path.endswith((".urdf", ".xml"))
+                else [["simulate", path, "--steps", "2"], ["check", path]])
+    for command in commands:
+        stderr = run_one([cli] + command, expected, named)
+    print("ok:", stderr)
+
+
+def run_one(args, expected, named):
     run = subprocess.run(args, capture_output=True, text=True, timeout=60)
     errors = []
     if run.returncode != 2:
@@ -40,6 +47,7 @@ def main():
         for e in errors:
             print("FAIL:", e)
         sys.exit(1)
+    return stderr
     print("ok:", stderr)
 
 

@@ -46,6 +46,30 @@ def main():
           "info shows the mimic joint", r)
     check("dofs in the file's order: right1 left right2" in r.stdout, "info lists dofs in URDF order", r)
 
+    # check: the verdict is the last line, exit 0 for both verdicts, 2 for bad input.
+    r = run(cli, "check", ex("slider.yaml"))
+    check(r.returncode == 0 and r.stdout.splitlines()[-1] == "verdict: stable",
+          "check slider: verdict stable", r)
+    check(any(line.split()[:2] == ["slide", "drive"] for line in r.stdout.splitlines()),
+          "check slider: the table has the drive", r)
+    unstable = os.path.join(out_dir, "check_unstable.yaml")
+    with open(unstable, "w") as f:  # an undamped explicit PD at kp dt^2/m = 200 (stable to 4)
+        f.write(f"model: {ex('slider.urdf')}\ndt: 0.01\nsteps: 10\ndrives:\n"
+                "  slide: {type: none, target_position: 0.1, "
+                "actuator: {type: ideal_pd, stiffness: 5000000}}\n")
+    r = run(cli, "check", unstable)
+    last = r.stdout.splitlines()[-1] if r.stdout else ""
+    check(r.returncode == 0 and last.startswith("verdict: unstable: slide (explicit_pd"),
+          "check: an explicit PD past kp dt^2/m = 4 is unstable", r)
+    # The fixes from the threshold 4: 200 / n^2 <= 4 from n = 8; armature kp dt^2 / 4 - m.
+    check("substeps 8 (dt 0.00125" in r.stdout and "armature +122.5" in r.stdout
+          and "damping: none" in r.stdout, "check: the fixes of the slider", r)
+    one_line_error(run(cli, "check", os.path.join(out_dir, "no_such_scene.yaml")), 2,
+                   "no_such_scene.yaml")
+    one_line_error(run(cli, "check", data("malformed/applied_force_nan.yaml")), 2,
+                   "applied_force.slide")
+    one_line_error(run(cli, "check"), 2, "scene is required")
+
     # Overrides: steps, solver, iterations.
     out = os.path.join(out_dir, "chain3_override.csv")
     r = run(cli, "simulate", ex("chain3.yaml"), "--steps", "7", "--solver", "pgs",
