@@ -228,6 +228,47 @@ void featherdrive::python::bind_settings(py::module_& m) {
         return s;
       });
 
+  // The step guard (docs/math/step_guard.md); each value is checked as validate_options does.
+  auto checked_guard = [](const StepGuard& g) {
+    SimulationOptions o;
+    o.guard = g;
+    validate_options(o);
+    return g;
+  };
+  py::class_<StepGuard>(m, "StepGuard",
+                        "The step guard: a step in which a joint moves more than max_joint_step "
+                        "or the energy grows more than the joint forces' work is redone as 2, 4, "
+                        "... sub-steps, at most max_substeps.")
+      .def(py::init([checked_guard](bool enabled, double max_joint_step, py::handle max_substeps) {
+             return checked_guard(StepGuard{enabled, max_joint_step,
+                                            to_int(max_substeps, "guard.max_substeps", 2,
+                                                   kMaxGuardSubsteps)});
+           }),
+           py::arg("enabled") = true, py::arg("max_joint_step") = 0.25,
+           py::arg("max_substeps") = 64,
+           "A guard (on unless enabled=False). Raises ValueError naming guard.max_joint_step "
+           "(finite > 0) or guard.max_substeps (in [2, 4096]).")
+      .def_readwrite("enabled", &StepGuard::enabled)
+      .def_property(
+          "max_joint_step", [](const StepGuard& g) { return g.max_joint_step; },
+          [checked_guard](StepGuard& g, double v) {
+            StepGuard next = g;
+            next.max_joint_step = v;
+            g = checked_guard(next);
+          },
+          "rad or m per (sub-)step; a spherical joint's or floating base's rotation angle")
+      .def_property(
+          "max_substeps", [](const StepGuard& g) { return g.max_substeps; },
+          [](StepGuard& g, py::handle n) {
+            g.max_substeps = to_int(n, "guard.max_substeps", 2, kMaxGuardSubsteps);
+          },
+          "in [2, 4096]")
+      .def("__repr__", [](const StepGuard& g) {
+        return std::string("StepGuard(enabled=") + (g.enabled ? "True" : "False") +
+               ", max_joint_step=" + fmt(g.max_joint_step) +
+               ", max_substeps=" + std::to_string(g.max_substeps) + ")";
+      });
+
   py::class_<SimulationOptions>(m, "SimulationOptions", "Time step and solver settings.")
       .def(py::init(&make_options), py::arg("dt") = 1.0 / 60.0, py::arg("solver") = "pgs",
            py::arg("position_iterations") = 4, py::arg("velocity_iterations") = 1,
@@ -249,6 +290,7 @@ void featherdrive::python::bind_settings(py::module_& m) {
           },
           ">= 0")
       .def_readwrite("compat", &SimulationOptions::compat, "Compat, chosen at construction")
+      .def_readwrite("guard", &SimulationOptions::guard, "StepGuard (off by default)")
       .def("__repr__", [](const SimulationOptions& o) {
         return "SimulationOptions(dt=" + fmt(o.dt) + ", solver='" + to_string(o.solver) +
                "', position_iterations=" + std::to_string(o.position_iterations) +

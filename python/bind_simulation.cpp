@@ -80,6 +80,22 @@ void featherdrive::python::bind_simulation(py::module_& m) {
           "step_count",
           [](const Simulation& s) { return locked(s, [&] { return s.step_count(); }); },
           "Steps made.")
+      .def_property_readonly(
+          "guard_substeps",
+          [](const Simulation& s) { return locked(s, [&] { return s.guard_substeps(); }); },
+          "Sub-steps the step guard took for the last step (1: not redone).")
+      .def_property_readonly(
+          "guard_triggers",
+          [](const Simulation& s) { return locked(s, [&] { return s.guard_triggers(); }); },
+          "Steps the step guard redid since construction or reset_guard_counters().")
+      .def_property_readonly(
+          "guard_exhausted",
+          [](const Simulation& s) { return locked(s, [&] { return s.guard_exhausted(); }); },
+          "Steps whose max_substeps sub-steps still failed the guard's tests.")
+      .def(
+          "reset_guard_counters",
+          [](Simulation& s) { locked(s, [&] { s.reset_guard_counters(); }); },
+          "Zeroes guard_triggers and guard_exhausted.")
       .def(
           "set_applied_force",
           [](Simulation& s, py::handle tau) {

@@ -155,6 +155,17 @@ class LinkParameters:
                  angular_damping: float = 0.0, max_linear_velocity: float = ...,
                  max_angular_velocity: float = ...) -> None: ...
 
+class StepGuard:
+    """The step guard (docs/math/step_guard.md): a step that moves a joint more than
+    max_joint_step or gains more energy than the joint forces' work is redone as 2, 4, ...
+    sub-steps, at most max_substeps."""
+    enabled: bool
+    max_joint_step: float
+    max_substeps: int
+    def __init__(self, enabled: bool = True, max_joint_step: float = 0.25,
+                 max_substeps: Int = 64) -> None:
+        """ValueError naming guard.max_joint_step (finite > 0) or guard.max_substeps ([2, 4096])."""
+
 class SimulationOptions:
     """Time step and solver settings."""
     dt: float
@@ -162,6 +173,7 @@ class SimulationOptions:
     position_iterations: int
     velocity_iterations: int
     compat: Compat
+    guard: StepGuard
     def __init__(self, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
                  position_iterations: Int = 4, velocity_iterations: Int = 1,
                  compat: Union[str, Compat] = "none") -> None:
@@ -318,6 +330,13 @@ class Simulation:
     def time(self) -> float: ...
     @property
     def step_count(self) -> int: ...
+    @property
+    def guard_substeps(self) -> int: ...
+    @property
+    def guard_triggers(self) -> int: ...
+    @property
+    def guard_exhausted(self) -> int: ...
+    def reset_guard_counters(self) -> None: ...
     def set_applied_force(self, tau: ArrayLike) -> None: ...
     @property
     def applied_force(self) -> Vector: ...

@@ -202,6 +202,7 @@ int simulate(const SimulateArgs& args) {
   if (!args.load_state.empty()) {
     load_checkpoint(args.load_state, sim);
     SimulationOptions o = sim.options();
+    o.guard = scene.options.guard;  // the scene's: checkpoints do not keep the guard
     args.overrides.apply(o);
     sim.set_options(o);
     if (sim.step_count() + scene.steps > std::numeric_limits<int>::max())
@@ -235,7 +236,8 @@ int simulate(const SimulateArgs& args) {
   std::ostream* csv_stream = out_file ? &out_file->stream() : plot_csv ? &*plot_csv : nullptr;
   std::optional<TrajectoryWriter> csv;
   std::optional<TargetWriter> targets;
-  if (csv_stream) csv.emplace(*csv_stream, scene.robot, target_dofs(scene));
+  if (csv_stream)
+    csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled);
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {
@@ -259,6 +261,7 @@ int simulate(const SimulateArgs& args) {
     if (csv) csv->write(k, s, /*initial=*/k == first && args.load_state.empty());
   };
   int last = first;  // the last whole step written
+  int largest_substeps = 1;  // the step guard's largest n
   for (int k = first; k < first + scene.steps && !interrupted(); ++k) {
     apply_targets(scene, sim, k);
     write_row(k, sim);
@@ -269,6 +272,7 @@ int simulate(const SimulateArgs& args) {
       throw;
     }
     const double t = (k + 1) * dt;
+    largest_substeps = std::max(largest_substeps, sim.guard_substeps());
     for (size_t i = 0; i < n; ++i) stats[i].add(scene.drives[i], sim, t);
     if (targets) targets->write(k + 1, t);
     last = k + 1;
@@ -308,6 +312,12 @@ int simulate(const SimulateArgs& args) {
   if (scene.control.substeps > 1)
     std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
                 to_string(scene.control.targets));
+  if (options.guard.enabled)
+    std::printf("  step guard (max_joint_step %.6g, max_substeps %d): %s redone, largest %d "
+                "sub-steps, %ld exhausted\n",
+                options.guard.max_joint_step, options.guard.max_substeps,
+                count_of(sim.guard_triggers(), "step").c_str(), largest_substeps,
+                sim.guard_exhausted());
   if (n > 0) print_drive_table(scene, sim, stats, (first + scene.steps) * dt, scene.steps);
   std::printf("  wall time %.3f s, %.0f steps/s\n", wall, wall > 0.0 ? scene.steps / wall : 0.0);
   if (!args.out.empty()) std::printf("  trajectory: %s\n", args.out.c_str());

@@ -431,7 +431,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
-         "control", "urdf_effort", "fit", "applied_force", "mimic"});
+         "control", "urdf_effort", "fit", "applied_force", "mimic", "guard"});
 
   Scene scene;
   scene.path = path;
@@ -512,6 +512,21 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       else if (targets != "hold")
         r.fail("control.targets", c["targets"], "must be hold or linear");
     }
+  }
+
+  // The step guard (docs/math/step_guard.md): present = on, its bounds default.
+  if (const YAML::Node g = root["guard"]) {
+    r.map(g, "guard", {"max_joint_step", "max_substeps"});
+    scene.options.guard.enabled = true;
+    if (g["max_joint_step"]) {
+      const double bound = r.number(g["max_joint_step"], "guard.max_joint_step");
+      if (!std::isfinite(bound) || bound <= 0.0)
+        r.fail("guard.max_joint_step", g["max_joint_step"], "must be finite and > 0");
+      scene.options.guard.max_joint_step = bound;
+    }
+    if (g["max_substeps"])
+      scene.options.guard.max_substeps = static_cast<int>(
+          r.integer(g["max_substeps"], "guard.max_substeps", 2, kMaxGuardSubsteps));
   }
 
   // Joint settings first: armature changes the model.

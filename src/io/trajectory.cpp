@@ -52,11 +52,13 @@ std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
 }
 
 TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot,
-                                   const std::vector<int>& target_dofs)
-    : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order), target_order_(target_dofs) {
+                                   const std::vector<int>& target_dofs, bool guard_substeps)
+    : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order), target_order_(target_dofs),
+      guard_substeps_(guard_substeps) {
   out_ << "step,t";
   for (const std::string& c : trajectory_columns(robot, target_dofs))
     out_ << ',' << csv_field(c);
+  if (guard_substeps_) out_ << ",guard_substeps";
   out_ << '\n';
 }
 
@@ -70,6 +72,7 @@ void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
     out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d] + sim.actuator_force()[d]);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_position);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_velocity);
+  if (guard_substeps_) out_ << ',' << (initial ? 1 : sim.guard_substeps());
   out_ << '\n';
 }
 

@@ -158,6 +158,16 @@ void ExplicitActuators::compute(const Model& model, const VecX& q, const VecX& q
   }
 }
 
+void ExplicitActuators::evaluate(const Model& model, const VecX& q, const VecX& qd,
+                                 VecX& effort) const {
+  effort.setZero();
+  for (const int d : active_) {
+    const Slot& s = slot(d);
+    effort[d] = actuator_effort(s.actuator, q[model.links[model.dof_link[d]].q_index], qd[d],
+                                s.history.last_seen());
+  }
+}
+
 void ExplicitActuators::undo_push() {
   for (const int d : active_) slots_[static_cast<size_t>(d)].history.undo_push();
 }

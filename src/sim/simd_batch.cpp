@@ -138,6 +138,8 @@ namespace {
 void check_supported(const Simulation& s) {
   const Model& m = s.model();
   if (s.options().compat != Compat::none) unsupported("simulation", "options", "compat: physx");
+  // The lanes step in lockstep: one lane's redone step would hold up every other.
+  if (s.options().guard.enabled) unsupported("simulation", "options", "the step guard");
   for (const Link& link : m.links) {
     const bool one_dof =
         link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic;

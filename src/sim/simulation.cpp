@@ -115,6 +115,13 @@ void validate_options(const SimulationOptions& o) {
   if (o.velocity_iterations > kMaxIterations)
     throw std::invalid_argument("simulation options: velocity_iterations = " +
                                 std::to_string(o.velocity_iterations) + " must be <= " + most);
+  if (!std::isfinite(o.guard.max_joint_step) || o.guard.max_joint_step <= 0.0)
+    throw std::invalid_argument("simulation options: guard.max_joint_step = " +
+                                fmt(o.guard.max_joint_step) + " must be finite and > 0");
+  if (o.guard.max_substeps < 2 || o.guard.max_substeps > kMaxGuardSubsteps)
+    throw std::invalid_argument("simulation options: guard.max_substeps = " +
+                                std::to_string(o.guard.max_substeps) + " must be in [2, " +
+                                std::to_string(kMaxGuardSubsteps) + "]");
 }
 
 Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options)
@@ -167,6 +174,8 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
     }
   }
   update_link_damping_active();
+  dt_ = options_.dt;
+  if (options_.guard.enabled) size_guard();
 }
 
 void Simulation::set_track_convergence(bool on) {
@@ -181,6 +190,7 @@ void Simulation::set_options(const SimulationOptions& options) {
                                 to_string(options.compat) + " differs from the simulation's " +
                                 to_string(options_.compat) + ": compat is chosen at construction");
   options_ = options;
+  if (options_.guard.enabled && !guard_data_) size_guard();
 }
 
 void Simulation::set_model(std::shared_ptr<const Model> model) {
@@ -194,6 +204,7 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
   sweep_ = SweepWorkspace(*model);
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
+  if (guard_data_) guard_data_.emplace(*model_);  // the guard's energies read the masses too
 }
 
 void Simulation::set_q(const VecX& q) {

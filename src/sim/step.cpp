@@ -21,15 +21,34 @@ double limit_erp(SolverType solver, int position_iterations) {
 
 }  // namespace
 
+// The step's stages: its start (once per step), the physics advance over dt, its end. With the
+// guard on, the advance may be redone as sub-steps (step_guard.cpp, docs/math/step_guard.md).
 void Simulation::step() {
-  const Model& model = *model_;
-  const double dt = options_.dt;
-  load_state();  // the storage keeps the step's start until commit_state
-  // Explicit actuators on the step-start state; tau = applied force + their efforts.
-  const VecX& tau = apply_actuators();
-  // Delayed drives: the targets their rows use this step (drive_delay.cpp).
-  if (drive_delays_.any()) drive_delays_.push(drives_);
+  const VecX& tau = begin_step();
+  if (options_.guard.enabled) {
+    guarded_advance(tau);
+  } else {
+    dt_ = options_.dt;
+    target_lead_ = 0.0;
+    advance(tau);
+    row_forces();
+  }
+  end_step();
+}
 
+// Explicit actuators on the step-start state (tau = applied force + their efforts), and the
+// delayed drives' targets for this step (drive_delay.cpp): pushed once per step.
+const VecX& Simulation::begin_step() {
+  load_state();  // the storage keeps the step's start until commit_state
+  const VecX& tau = apply_actuators();
+  if (drive_delays_.any()) drive_delays_.push(drives_);
+  return tau;
+}
+
+// The physics over dt_ from q_, qd_ with joint force tau: the rows' impulses are left in rows_.
+void Simulation::advance(const VecX& tau) {
+  const Model& model = *model_;
+  const double dt = dt_;
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
   // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
@@ -62,9 +81,12 @@ void Simulation::step() {
   if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
   wrap_revolute_positions(model, wrapped_, q_);
-  // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
-  const double inv_dt = 1.0 / dt;
-  for (int d = 0; d < model.nv; ++d) {
+}
+
+// Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
+void Simulation::row_forces() {
+  const double inv_dt = 1.0 / options_.dt;
+  for (int d = 0; d < model_->nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
     drive_force_[d] = r.drive_impulse * inv_dt;
     if (actuated_ && actuators_.implicit(d)) {  // the row was the actuator's
@@ -75,9 +97,12 @@ void Simulation::step() {
     friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
   }
+}
+
+void Simulation::end_step() {
   check_finite_or_throw();
   commit_state();
-  time_ += dt;
+  time_ += options_.dt;
   ++step_count_;
 }
 
@@ -126,6 +151,7 @@ void Simulation::setup_rows(double h, bool tgs) {
   delta_x_.setZero();
   if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
     mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
+  if (target_lead_ != 0.0) lead_drive_targets();  // a guard sub-step (step_guard.cpp)
 }
 
 // The lone drives' rows (setup_dof_rows's fields that change from step to step), in one loop
@@ -141,7 +167,7 @@ void Simulation::setup_lone_drives(double h, bool tgs) {
   const Drive* const drives = drives_.data();
   DofRows* const rows = rows_.data();
   const int* const order = dof_order_.data();
-  const double dt = options_.dt;
+  const double dt = dt_;
   for (int k = 0; k < num_lone_drives_; ++k) {
     const int d = order[k];
     const int i = dof_link[d];
@@ -161,7 +187,7 @@ void Simulation::setup_lone_drives(double h, bool tgs) {
 // Dof d's rows, every field.
 void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   const Model& model = *model_;
-  const double dt = options_.dt;
+  const double dt = dt_;
   auto drive_seen = [this](int dof) -> const Drive& {
     return drive_delays_.delayed(dof) ? drive_delays_.drive_seen(dof)
                                       : drives_[static_cast<size_t>(dof)];
@@ -270,7 +296,7 @@ void Simulation::sweep(RowPhase& phase) {
 // position iterations; velocity iterations continue the same update without new position error
 // (spec "PGS Velocity Iteration").
 void Simulation::solve_pgs() {
-  const double dt = options_.dt;
+  const double dt = dt_;
   setup_rows(dt, /*tgs=*/false);
   RowPhase phase;
   phase.dt = dt;
@@ -298,7 +324,7 @@ void Simulation::solve_pgs() {
 // of the step's start. Drive impulses are frozen in the velocity iterations (spec "TGS Velocity
 // Iteration"); friction, limits and velocity limits keep acting there.
 void Simulation::solve_tgs() {
-  const double dt = options_.dt;
+  const double dt = dt_;
   const int n = options_.position_iterations;
   const double rho = dt / n;
   setup_rows(rho, /*tgs=*/true);

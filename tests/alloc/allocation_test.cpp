@@ -195,6 +195,38 @@ TEST_P(StepAllocations, NoneAfterTheFirstStep) {
   }
 }
 
+// The step guard's redone steps (docs/math/step_guard.md) run on scratch sized with the options:
+// a bound so small that every step is redone, explicit actuators re-evaluated per sub-step.
+TEST(StepAllocations, NoneInGuardedStepsThatAreRedone) {
+  const auto tree = test::make_random_tree(11, 24, /*floating=*/true, true, 0.01);
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions options;
+    options.dt = 1.0 / 60.0;
+    options.solver = solver;
+    options.guard = {true, 1e-3, 16};
+    Simulation sim(tree, options);
+    std::mt19937 rng(3);
+    constrain_every_joint(sim, rng);
+    int actuated = 0;
+    for (const Link& l : tree->links)
+      if (l.joint_type == JointType::revolute && actuated++ < 3) {
+        sim.set_drive(l.v_index, Drive{});
+        ExplicitActuator a;
+        a.kind = ActuatorKind::ideal_pd;
+        a.stiffness = 300.0;
+        a.damping = 5.0;
+        sim.set_actuator(l.v_index, a);
+      }
+    sim.set_qd(test::random_vector(tree->nv, rng, 0.5));
+    sim.step();
+    const long n = allocations_in([&] {
+      for (int k = 0; k < 20; ++k) sim.step();
+    });
+    EXPECT_EQ(n, 0) << to_string(solver);
+    EXPECT_EQ(sim.guard_triggers(), 21) << to_string(solver);
+  }
+}
+
 // A batch allocates its bookkeeping once per call (a slot per copy, TBB's arena), never per
 // step: 1 step and 40 steps a call cost the same, on 1 and 2 threads.
 TEST(BatchAllocations, PerCallNotPerStep) {

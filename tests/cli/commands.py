@@ -134,6 +134,31 @@ def main():
                 "joints: {slide: {lower: -.inf, upper: .inf, max_velocity: .inf}}\n")
     one_line_error(run(cli, "simulate", diverge), 1, "simulation diverged")
 
+    # The step guard (docs/math/step_guard.md): the summary counts the redone steps, the CSV's
+    # guard_substeps column has the n of each, and a bad bound is one line, exit 2.
+    guarded = os.path.join(out_dir, "guarded.yaml")
+    base = (f"model: {ex('slider.urdf')}\ndt: 0.03333333333333333\nsteps: 20\n"
+            "drives: {slide: {type: force, stiffness: 900, damping: 10, target_position: 0.5}}\n")
+    with open(guarded, "w") as f:
+        f.write(base + "guard: {max_joint_step: 0.06}\n")
+    trajectory = os.path.join(out_dir, "guarded.csv")
+    r = run(cli, "simulate", guarded, "--out", trajectory)
+    check(r.returncode == 0, "a guarded simulation succeeds", r)
+    with open(trajectory) as f:
+        rows = list(csv.DictReader(f))
+    substeps = [int(row["guard_substeps"]) for row in rows]
+    redone = sum(1 for n in substeps if n > 1)
+    check(substeps[0] == 1 and redone > 0 and all(n in (1, 2, 4, 8, 16, 32, 64) for n in substeps),
+          f"guard_substeps column: {substeps}", r)
+    check(f"step guard (max_joint_step 0.06, max_substeps 64): {redone} steps redone, largest "
+          f"{max(substeps)} sub-steps, 0 exhausted" in r.stdout, "the guard's summary line", r)
+    r = run(cli, "simulate", ex("slider.yaml"), "--out", os.path.join(out_dir, "plain.csv"))
+    with open(os.path.join(out_dir, "plain.csv")) as f:
+        check("guard_substeps" not in f.readline(), "no guard column without the guard", r)
+    with open(guarded, "w") as f:
+        f.write(base + "guard: {max_substeps: 0}\n")
+    one_line_error(run(cli, "simulate", guarded), 2, "guard.max_substeps = 0: must be >= 2")
+
     # An output that cannot be written: exit 1.
     r = run(cli, "simulate", ex("chain3.yaml"), "--out", "/proc/featherdrive/x.csv")
     check(r.returncode == 1, "an unwritable --out exits 1", r)

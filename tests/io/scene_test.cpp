@@ -324,6 +324,32 @@ TEST(Scene, ControlDefaultsToOneHeldStepAndBadValuesNameTheKey) {
             std::string::npos);
 }
 
+// guard: present = on, its bounds defaulted; bad bounds name the key and the value
+// (docs/math/step_guard.md).
+TEST(Scene, GuardIsOnWhenPresentAndBadValuesNameTheKey) {
+  EXPECT_FALSE(scene_from(slider_with("")).options.guard.enabled);
+  const Scene plain = scene_from(slider_with("guard: {}\n"));
+  EXPECT_TRUE(plain.options.guard.enabled);
+  EXPECT_EQ(plain.options.guard.max_joint_step, 0.25);
+  EXPECT_EQ(plain.options.guard.max_substeps, 64);
+  const Scene set = scene_from(slider_with("guard: {max_joint_step: 0.1, max_substeps: 16}\n"));
+  EXPECT_EQ(set.options.guard.max_joint_step, 0.1);
+  EXPECT_EQ(set.options.guard.max_substeps, 16);
+  EXPECT_TRUE(make_simulation(set).options().guard.enabled);
+  EXPECT_EQ(error_of(slider_with("guard: {max_joint_step: -0.5}\n")),
+            kExamples + "inline.yaml: guard.max_joint_step = -0.5: must be finite and > 0");
+  EXPECT_EQ(error_of(slider_with("guard: {max_joint_step: .nan}\n")),
+            kExamples + "inline.yaml: guard.max_joint_step = .nan: must be finite and > 0");
+  EXPECT_EQ(error_of(slider_with("guard: {max_substeps: 0}\n")),
+            kExamples + "inline.yaml: guard.max_substeps = 0: must be >= 2");
+  EXPECT_EQ(error_of(slider_with("guard: {max_substeps: 100000}\n")),
+            kExamples + "inline.yaml: guard.max_substeps = 100000: must be <= 4096");
+  EXPECT_NE(error_of(slider_with("guard: {max_step: 2}\n"))
+                .find("guard.max_step: unknown key (expected one of: max_joint_step, "
+                      "max_substeps)"),
+            std::string::npos);
+}
+
 // The scene's per-step rule (what the CLI and compare-physx run) against the core's control step
 // fed the sine at the control times t = (m + 1) k dt, from the sine at t = 0 for linear.
 TEST(Scene, ControlStepsMatchTheCoreControlStepBitForBit) {

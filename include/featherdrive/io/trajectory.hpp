@@ -1,5 +1,6 @@
 // Trajectory CSV files: one row per state, columns per dof in the URDF's joint order.
 //   step,t,q:<joint>...,qd:<joint>...,f:<joint>...[,target:<joint>...,target_velocity:<joint>...]
+//   [,guard_substeps]
 // q:<joint> is each dof's position (model/dof_position.hpp): a spherical joint's three axes are
 // PhysX's positions, a floating root's q its 7 entries. The targets of row k are the drive's
 // commanded target during the step from row k to row k + 1, as `featherdrive fit` reads a log.
@@ -32,8 +33,10 @@ std::vector<int> target_dofs(const Scene& scene);
 class TrajectoryWriter {
  public:
   /// target_dofs: the dofs whose drive targets each row holds (target_dofs(scene), or none).
+  /// guard_substeps: a last column with the sub-steps the step guard took for the step that
+  /// reached the row's state (1 for the initial row; docs/math/step_guard.md).
   TrajectoryWriter(std::ostream& out, const UrdfRobot& robot,
-                   const std::vector<int>& target_dofs = {});
+                   const std::vector<int>& target_dofs = {}, bool guard_substeps = false);
   /// One row of the simulation's state and its drives' current targets; `initial` writes f = 0
   /// (no step has run).
   void write(long step, const Simulation& sim, bool initial = false);
@@ -41,6 +44,7 @@ class TrajectoryWriter {
  private:
   std::ostream& out_;
   std::vector<int> q_order_, v_order_, target_order_;
+  bool guard_substeps_ = false;
 };
 
 /// The drive targets of a scene at each row's time t = step dt (target position per driven

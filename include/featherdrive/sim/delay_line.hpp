@@ -38,6 +38,12 @@ class DelayLine {
     ++pushes_;
     return seen;
   }
+  /// The sample the last push returned (push must have been called since set_delay or reset).
+  const Sample& last_seen() const {
+    const long n = static_cast<long>(ring_.size());
+    const long last = pushes_ - 1;
+    return ring_[static_cast<size_t>((last - std::min<long>(n - 1, last)) % n)];
+  }
   /// Takes back the last push (a step that diverged): it overwrote the sample delay + 1 pushes
   /// old, which no step reads again.
   void undo_push() {

@@ -5,6 +5,7 @@
 #include <array>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,12 +31,24 @@ const char* to_string(SolverType type);
 enum class Compat { none, physx };
 const char* to_string(Compat compat);
 
+/// The step guard (docs/math/step_guard.md): a step in which a joint moves more than
+/// max_joint_step, or the kinetic + gravity energy grows more than the joint forces' work, is
+/// redone as 2, 4, ... sub-steps of dt / n (at most max_substeps). Off by default; a step it
+/// does not redo is the unguarded step, bit for bit.
+struct StepGuard {
+  bool enabled = false;
+  double max_joint_step = 0.25;  ///< rad or m per (sub-)step; a spherical joint's rotation angle
+  int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
+};
+inline constexpr int kMaxGuardSubsteps = 4096;
+
 struct SimulationOptions {
   double dt = 1.0 / 60.0;           ///< time step tau [s]
   SolverType solver = SolverType::pgs;
   int position_iterations = 4;      ///< >= 1
   int velocity_iterations = 1;      ///< >= 0
   Compat compat = Compat::none;
+  StepGuard guard;
 };
 
 /// dt must be a normal double (no subnormal: 1 / dt and impulse / dt stay finite) up to kMaxDt, so
@@ -49,7 +62,8 @@ inline constexpr long kMaxStepCount = 1L << 53;
 
 /// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
 /// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
-/// [0, kMaxIterations].
+/// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
+/// [2, kMaxGuardSubsteps].
 void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
@@ -253,6 +267,15 @@ class Simulation {
   /// frame 0 (velocity0); the link-frame velocities (Data::velocity) are not computed by a step.
   const Data& data() const { return data_; }
 
+  // The step guard (options().guard; docs/math/step_guard.md). Not kept in checkpoints.
+  /// The sub-steps the last step took: 1 when the guard did not redo it (or is off).
+  int guard_substeps() const { return guard_substeps_; }
+  /// Steps the guard redid since construction (or reset_guard_counters).
+  long guard_triggers() const { return guard_triggers_; }
+  /// Steps whose max_substeps sub-steps still failed a test (kept as they were).
+  long guard_exhausted() const { return guard_exhausted_; }
+  void reset_guard_counters();
+
  private:
   friend class Batch;  // lends the storage of state_
   int check_dof(int dof) const;
@@ -277,6 +300,21 @@ class Simulation {
   /// The actuators' efforts of this step on the step-start state; the joint force the step uses.
   const VecX& apply_actuators();
   void undo_actuators();
+  // The step's stages (step.cpp): begin (actuators, delays; once per step), the physics advance
+  // over dt_, the end (outputs, finite check, commit, clock).
+  const VecX& begin_step();
+  void advance(const VecX& tau);
+  void row_forces();
+  void end_step();
+  // The guard (step_guard.cpp).
+  void size_guard();
+  void guarded_advance(const VecX& tau);
+  /// Tests (i) and (ii) of the advance just made from guard_q0_, guard_qd0_ (energies e0);
+  /// leaves the end's energies in e1.
+  bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);
+  void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
+  const VecX& guard_substep_force();
+  void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
   SimulationOptions options_;
@@ -331,6 +369,17 @@ class Simulation {
   DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
   std::vector<char> wrapped_;  ///< per dof: a revolute joint of PhysX's wrapping type
   MimicSolver mimic_;
+
+  // The step guard: the time the advance covers (options_.dt, or dt / n in a guard sub-step),
+  // how long before the step's end the sub-step ends (its drive targets lead by it), the
+  // scratch (sized by size_guard, so that a guarded step allocates nothing) and the counters.
+  double dt_ = 0.0;
+  double target_lead_ = 0.0;
+  std::optional<Data> guard_data_;  ///< for the energies (a second Data: data_ keeps the step's)
+  VecX guard_q0_, guard_qd0_, guard_force_, guard_actuator_, guard_impulse_[4];
+  int guard_substeps_ = 1;
+  long guard_triggers_ = 0;
+  long guard_exhausted_ = 0;
 };
 
 }  // namespace featherdrive

@@ -1,0 +1,130 @@
+// The step guard on the benchmark chain (docs/benchmarks.md, "Where long chains diverge"; issue
+// 35): make_chain(n) (axes cycling y, z, x, 1 kg, 0.5 m) with the benchmark's drives (1000 Nm/rad,
+// 50 Nms/rad towards its random targets in +-0.5 rad), gravity off, from rest at q = 0, dt 1/60 s,
+// 4 position and 1 velocity iterations, STEPS steps. Per solver and n, three ways of stepping:
+// unguarded, guarded (options.guard on, its defaults) and 8 fixed sub-steps per step
+// (step_control, substeps 8, targets held). Not a test: a measurement, printed as a table.
+//   featherdrive_guard_chain [STEPS] [N ...]   defaults 10000, 2 4 8 16 32 48 64 96 128 192 256
+//
+// Diverged: DivergenceError, or the energy (kinetic + the drives' springs 1/2 kp (q - target)^2)
+// above its initial value by more than 1000 n m g (n l) / 2, divergence_length.cpp's bound (the
+// system is passive: it cannot gain energy). Tracking: the RMS of q - target at the end. Cost:
+// wall time per step of the whole run (one core), where the run stayed bounded.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench_models.hpp"
+#include "featherdrive/algorithm/energy.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/sim/control_step.hpp"
+
+using namespace featherdrive;
+using namespace featherdrive::bench;
+
+namespace {
+
+enum class Mode { unguarded, guarded, substeps8 };
+
+struct Outcome {
+  bool diverged = false;
+  long steps = 0;           ///< steps made (to the divergence)
+  double rms = NAN;         ///< final RMS of q - target
+  double us_per_step = 0.0;
+  long triggers = 0, exhausted = 0;
+  int largest_n = 1;
+};
+
+double energy(const Simulation& sim, Data& data, const VecX& target) {
+  const Model& model = sim.model();
+  forward_kinematics(model, data, sim.q(), sim.qd());
+  const double springs = 0.5 * kStiffness * (sim.q() - target).squaredNorm();
+  return kinetic_energy(model, data, sim.qd()) + potential_energy(model, data) + springs;
+}
+
+Outcome run(int links, SolverType solver, Mode mode, long steps) {
+  const BenchRobot robot = make_chain(links);
+  auto model = std::make_shared<Model>(*robot.model);
+  model->gravity.setZero();
+  SimulationOptions options;
+  options.dt = 1.0 / 60.0;
+  options.solver = solver;
+  options.position_iterations = 4;
+  options.velocity_iterations = 1;
+  options.guard.enabled = mode == Mode::guarded;
+  const int k = mode == Mode::substeps8 ? 8 : 1;
+  if (k > 1) options.dt /= k;
+  Simulation sim(model, options);
+  add_drives(sim, robot);
+  Data data(*model);
+  const double e0 = energy(sim, data, robot.target);
+  const double bound = 1000.0 * links * 1.0 * 9.81 * links * 0.5;
+  const VecX zero = VecX::Zero(model->nv);
+  const ControlStep control{k, TargetInterpolation::hold};
+  Outcome out;
+  const auto start = std::chrono::steady_clock::now();
+  for (long s = 0; s < steps; ++s) {
+    try {
+      if (k > 1) step_control(sim, robot.target, zero, control);
+      else sim.step();
+    } catch (const DivergenceError&) {
+      out.diverged = true;
+      break;
+    }
+    ++out.steps;
+    if (mode == Mode::guarded) out.largest_n = std::max(out.largest_n, sim.guard_substeps());
+    if (s % 100 == 99 || s == steps - 1) {  // the energy test every 100 steps and at the end
+      const double e = energy(sim, data, robot.target);
+      if (!(e - e0 <= bound)) {
+        out.diverged = true;
+        break;
+      }
+    }
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.us_per_step = 1e6 * seconds / std::max(1L, out.steps);
+  out.rms = std::sqrt((sim.q() - robot.target).squaredNorm() / model->nv);
+  out.triggers = sim.guard_triggers();
+  out.exhausted = sim.guard_exhausted();
+  return out;
+}
+
+std::string cell(const Outcome& o, long steps) {
+  char buf[128];
+  if (o.diverged) std::snprintf(buf, sizeof buf, "diverged at step %ld", o.steps + 1);
+  else std::snprintf(buf, sizeof buf, "bounded, RMS %.1e, %.1f us", o.rms, o.us_per_step);
+  (void)steps;
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const long steps = argc > 1 ? std::stol(argv[1]) : 10000;
+  std::vector<int> sizes;
+  for (int i = 2; i < argc; ++i) sizes.push_back(std::stoi(argv[i]));
+  if (sizes.empty()) sizes = {2, 4, 8, 16, 32, 48, 64, 96, 128, 192, 256};
+  std::printf("| solver | N | unguarded | guarded | guard triggers (exhausted), largest n | "
+              "8 fixed sub-steps | guarded / unguarded | guarded / 8 sub-steps |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs})
+    for (int n : sizes) {
+      const Outcome u = run(n, solver, Mode::unguarded, steps);
+      const Outcome g = run(n, solver, Mode::guarded, steps);
+      const Outcome f = run(n, solver, Mode::substeps8, steps);
+      char ratio_u[32] = "-", ratio_f[32] = "-";
+      if (!u.diverged && !g.diverged)
+        std::snprintf(ratio_u, sizeof ratio_u, "%.2f", g.us_per_step / u.us_per_step);
+      if (!f.diverged && !g.diverged)
+        std::snprintf(ratio_f, sizeof ratio_f, "%.2f", g.us_per_step / f.us_per_step);
+      std::printf("| %s 4/1 | %d | %s | %s | %ld (%ld), %d | %s | %s | %s |\n", to_string(solver),
+                  n, cell(u, steps).c_str(), cell(g, steps).c_str(), g.triggers, g.exhausted,
+                  g.largest_n, cell(f, steps).c_str(), ratio_u, ratio_f);
+      std::fflush(stdout);
+    }
+  return 0;
+}

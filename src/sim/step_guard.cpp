@@ -1,0 +1,183 @@
+// The step guard (docs/math/step_guard.md): after the step's physics advance, test (i) how far
+// each joint moved and (ii) whether the kinetic + gravity energy grew by more than the joint
+// forces' work; on a failure redo the advance as n = 2, 4, ... sub-steps of dt / n from the
+// step's start. Everything here runs on scratch sized by size_guard: a guarded step allocates
+// nothing.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "featherdrive/algorithm/energy.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+namespace {
+
+// Test (ii)'s tolerance, eq. (G-5): the energy may exceed the work by this share of the step's
+// energy scale. Measured (docs/math/step_guard.md, "The tolerance").
+constexpr double kEnergyTolerance = 0.02;
+// Rounding of the energies themselves (sums over the links, a potential of any offset).
+constexpr double kEnergyRounding = 1e-12;
+
+// The rotation angle from unit quaternion a to b, eq. (G-2): 4 atan2(|a - b|, |a + b|) with b's
+// sign chosen nearer a (accurate at small and large angles alike; layout-free).
+double rotation_angle(const double* a, const double* b) {
+  const Eigen::Map<const Eigen::Vector4d> qa(a), qb(b);
+  const double s = qa.dot(qb) < 0.0 ? -1.0 : 1.0;
+  return 4.0 * std::atan2((qa - s * qb).norm(), (qa + s * qb).norm());
+}
+
+}  // namespace
+
+void Simulation::size_guard() {
+  guard_data_.emplace(*model_);
+  const Eigen::Index nq = model_->nq, nv = model_->nv;
+  guard_q0_ = VecX::Zero(nq);
+  guard_qd0_ = guard_force_ = guard_actuator_ = VecX::Zero(nv);
+  for (VecX& v : guard_impulse_) v = VecX::Zero(nv);
+}
+
+void Simulation::reset_guard_counters() {
+  guard_substeps_ = 1;
+  guard_triggers_ = 0;
+  guard_exhausted_ = 0;
+}
+
+void Simulation::guard_energy(const VecX& q, const VecX& qd, double e[2]) {
+  forward_kinematics(*model_, *guard_data_, q, qd);
+  e[0] = kinetic_energy(*model_, *guard_data_, qd);
+  e[1] = potential_energy(*model_, *guard_data_);
+}
+
+bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
+  const Model& model = *model_;
+  const double h = dt_;
+  const double bound = options_.guard.max_joint_step;
+  bool moved_too_far = false;
+  double work = 0.0;  // eq. (G-3): sum over dofs of the joint force's impulse times the motion
+  double work_rounding = 0.0;  // sum |F| (|q| + |dq|): the positions' rounding carried into it
+  // Explicit actuators' efforts are evaluated at the start of the (sub-)step: their work is the
+  // trapezoid of the efforts at its start and end (eq. G-3), which for a spring is the change of
+  // its energy, so that an explicit law's overshoot shows as energy gained.
+  const bool actuated = actuators_.any();
+  if (actuated) actuators_.evaluate(*model_, q_, qd_, guard_force_);
+  auto impulse = [&](int d) {
+    const DofRows& r = rows_[static_cast<size_t>(d)];
+    const double explicit_force =
+        actuated ? tau[d] + 0.5 * (guard_force_[d] - (tau[d] - applied_force_[d])) : tau[d];
+    return explicit_force * h + r.drive_impulse + r.low_impulse + r.high_impulse +
+           r.friction_impulse + r.transmission_friction_applied + r.velocity_limit_impulse;
+  };
+  for (const Link& link : model.links) {
+    if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
+      // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
+      double dq = q_[link.q_index] - guard_q0_[link.q_index];
+      if (wrapped_[static_cast<size_t>(link.v_index)]) dq = std::remainder(dq, 2.0 * std::numbers::pi);
+      moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
+      const double force = impulse(link.v_index) / h;
+      work += force * dq;
+      work_rounding += std::abs(force) * (std::abs(q_[link.q_index]) + std::abs(dq));
+    } else if (link.joint_type == JointType::spherical || link.joint_type == JointType::floating) {
+      // The rotation's angle (a floating base's translation is not bounded); the work over the
+      // velocity coordinates, the motion h qd.
+      const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
+      moved_too_far = moved_too_far ||
+                      !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
+      for (int k = 0; k < link.nv; ++k) work += impulse(link.v_index + k) * qd_[link.v_index + k];
+    }
+  }
+  guard_energy(q_, qd_, e1);
+  // eq. (G-4), (G-5); a NaN anywhere fails.
+  const double excess = (e1[0] + e1[1]) - (e0[0] + e0[1]) - work;
+  const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
+  const double rounding =
+      kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
+  return !moved_too_far && excess <= kEnergyTolerance * scale + rounding;
+}
+
+// The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
+void Simulation::guarded_advance(const VecX& tau_step) {
+  const double dt = options_.dt;
+  const int most = options_.guard.max_substeps;
+  double e_start[2], e0[2], e1[2];
+  guard_q0_ = q_;
+  guard_qd0_ = qd_;
+  guard_energy(guard_q0_, guard_qd0_, e_start);
+  dt_ = dt;
+  target_lead_ = 0.0;
+  advance(tau_step);
+  guard_substeps_ = 1;
+  if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
+    row_forces();
+    return;
+  }
+  ++guard_triggers_;
+  for (int n = 2;; n = std::min(2 * n, most)) {
+    load_state();  // the step's start again
+    for (VecX& v : guard_impulse_) v.setZero();
+    guard_actuator_.setZero();
+    dt_ = dt / n;
+    e0[0] = e_start[0];
+    e0[1] = e_start[1];
+    bool passed = true;
+    // A failing sub-step ends this n, unless n is the last one there is: that one is kept.
+    for (int i = 1; i <= n && (passed || n == most); ++i) {
+      // Sub-step i's targets: x_T - v_T (n - i) dt / n, eq. (G-6).
+      target_lead_ = (n - i) * dt_;
+      guard_q0_ = q_;
+      guard_qd0_ = qd_;
+      const VecX& tau = guard_substep_force();
+      advance(tau);
+      for (int d = 0; d < model_->nv; ++d) {
+        const DofRows& r = rows_[static_cast<size_t>(d)];
+        guard_impulse_[0][d] += r.drive_impulse;
+        guard_impulse_[1][d] += r.low_impulse + r.high_impulse;
+        guard_impulse_[2][d] += r.friction_impulse + r.transmission_friction_applied;
+        guard_impulse_[3][d] += r.velocity_limit_impulse;
+      }
+      const bool ok = guard_passes(tau, e0, e1);
+      passed = passed && ok;
+      e0[0] = e1[0];
+      e0[1] = e1[1];
+    }
+    if (passed || n == most) {
+      guard_substeps_ = n;
+      if (!passed) ++guard_exhausted_;
+      const double inv_dt = 1.0 / dt;  // the step's forces: its summed impulses / dt
+      drive_force_ = guard_impulse_[0] * inv_dt;
+      limit_force_ = guard_impulse_[1] * inv_dt;
+      friction_force_ = guard_impulse_[2] * inv_dt;
+      velocity_limit_force_ = guard_impulse_[3] * inv_dt;
+      if (actuators_.any()) actuator_force_ = guard_actuator_ / n;  // the step's mean effort
+      dt_ = dt;
+      target_lead_ = 0.0;
+      return;
+    }
+  }
+}
+
+// Explicit actuators at a sub-step's start: the step's (delayed) commands, this state.
+const VecX& Simulation::guard_substep_force() {
+  if (!actuators_.any()) return applied_force_;
+  actuators_.evaluate(*model_, q_, qd_, guard_force_);
+  guard_actuator_ += guard_force_;
+  joint_force_ = applied_force_ + guard_force_;
+  return joint_force_;
+}
+
+// A sub-step ending target_lead_ before the step's end drives towards x_T - v_T target_lead_
+// (eq. G-6): the row's constant term x (b + h kp (x_T - x0)) moves by -(x h kp) v_T lead, its
+// bias_coefficient times -v_T lead (eq. 20, 23 of docs/math/implicit_drives.md).
+void Simulation::lead_drive_targets() {
+  for (int d = 0; d < model_->nv; ++d) {
+    DofRows& rows = rows_[static_cast<size_t>(d)];
+    if (!rows.has_drive) continue;
+    const Drive& drive = drive_delays_.delayed(d) ? drive_delays_.drive_seen(d)
+                                                  : drives_[static_cast<size_t>(d)];
+    rows.drive.target_vel_plus_initial_bias -=
+        rows.drive.bias_coefficient * drive.target_velocity * target_lead_;
+  }
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,259 @@
+// The step guard (docs/math/step_guard.md): bit for bit the unguarded step where it does not
+// trigger, the closed form of a redone step on a slider, bounded runs where the unguarded step
+// diverges, the bad values refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/sim/batch.hpp"
+#include "featherdrive/sim/simd_batch.hpp"
+#include "support/compare.hpp"
+#include "support/drives.hpp"
+#include "support/models.hpp"
+
+namespace featherdrive {
+namespace {
+
+using test::kInf;
+
+// The chain: n links of 1 kg and 0.5 m about y, z, x in turn, kp 1000, kd 50 towards
+// random targets in +-0.5 rad (bench_models.cpp's make_chain and targets, built here).
+std::shared_ptr<const Model> guard_chain_model(int n, const Vec3& gravity) {
+  const Vec3 axes[3] = {Vec3::UnitY(), Vec3::UnitZ(), Vec3::UnitX()};
+  const double r = 0.05, l = 0.5;
+  const Mat3 inertia = Vec3((3 * r * r + l * l) / 12, (3 * r * r + l * l) / 12, r * r / 2).asDiagonal();
+  ModelBuilder b;
+  b.set_gravity(gravity);
+  b.add_link(make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity() * (0.02 / 12), fixed_joint("fix")));
+  std::string parent = "base";
+  for (int i = 0; i < n; ++i) {
+    const std::string name = "link" + std::to_string(i + 1);
+    b.add_link(make_link(name, parent, 1.0, Vec3(0, 0, -l / 2), inertia,
+                         revolute_joint("joint" + std::to_string(i + 1), axes[i % 3],
+                                        i == 0 ? Vec3::Zero() : Vec3(0, 0, -l))));
+    parent = name;
+  }
+  return std::make_shared<const Model>(b.build());
+}
+
+VecX guard_drive_chain(Simulation& sim) {
+  std::mt19937 rng(42u + static_cast<unsigned>(sim.model().nv));
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  VecX target(sim.model().nv);
+  for (int d = 0; d < sim.model().nv; ++d) {
+    target[d] = u(rng);
+    sim.set_drive(d, Drive{DriveType::force, 1000.0, 50.0, kInf, target[d], 0.0});
+  }
+  return target;
+}
+
+SimulationOptions guard_options(SolverType solver, bool guard, double dt = 1.0 / 60.0) {
+  SimulationOptions o;
+  o.dt = dt;
+  o.solver = solver;
+  o.guard.enabled = guard;
+  return o;
+}
+
+bool guard_same_outputs(const Simulation& a, const Simulation& b) {
+  return test::same_bits(a.q(), b.q()) && test::same_bits(a.qd(), b.qd()) &&
+         test::same_bits(a.drive_force(), b.drive_force()) &&
+         test::same_bits(a.limit_force(), b.limit_force()) &&
+         test::same_bits(a.friction_force(), b.friction_force()) &&
+         test::same_bits(a.velocity_limit_force(), b.velocity_limit_force());
+}
+
+// Where no test fails, the guard changes nothing: the same bits as the unguarded step, every
+// step, for PGS and TGS, compat none and physx, with gravity, limits, friction and a delay.
+TEST(StepGuard, NotTriggeringIsTheUnguardedStepBitForBit) {
+  const auto model = guard_chain_model(6, Vec3(0, 0, -9.81));
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      SimulationOptions off = guard_options(solver, false, 1.0 / 240.0), on = off;
+      off.compat = on.compat = compat;
+      on.guard.enabled = true;
+      Simulation a(model, off), b(model, on);
+      for (Simulation* s : {&a, &b}) {
+        std::mt19937 rng(5);
+        test::drive_every_joint(*s, rng, 200.0, 20.0);
+        s->set_joint_friction(3, JointFriction{0.2, 0.1, 0.05});
+        s->set_drive_delay(4, 2);
+      }
+      for (int k = 0; k < 200; ++k) {
+        a.step();
+        b.step();
+        ASSERT_TRUE(guard_same_outputs(a, b)) << to_string(compat) << " " << to_string(solver)
+                                              << " step " << k << " n " << b.guard_substeps();
+        ASSERT_EQ(b.guard_substeps(), 1);
+      }
+      EXPECT_EQ(b.guard_triggers(), 0);
+    }
+}
+
+// A triggered step on a slider (no force along the axis): the first n = 2, 4, ... whose every
+// sub-step moves at most max_joint_step, each sub-step n P implicit-Euler steps of dt / (n P)
+// towards the target x_T - v_T (time to the step's end) (P = 1 for PGS, the position
+// iterations for TGS: docs/math/implicit_drives.md, eq. 41), written here from the spec.
+TEST(StepGuard, TriggeredSliderStepIsImplicitEulerSubsteps) {
+  const double m = 2.0, kp = 900.0, kd = 10.0, xT = 0.5, vT = 0.4, dt = 1.0 / 30.0, bound = 0.06;
+  const auto model = test::make_slider(m, Vec3(1, 0, 0), Vec3(0, 0, -9.81));
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o = guard_options(solver, true, dt);
+    o.guard.max_joint_step = bound;
+    Simulation sim(model, o);
+    sim.set_drive("slide", Drive{DriveType::force, kp, kd, kInf, xT, vT});
+    const int P = solver == SolverType::tgs ? o.position_iterations : 1;
+    double x = 0.0, v = 0.0;
+    int triggered = 0;
+    for (int k = 0; k < 20; ++k) {
+      double x1 = x, v1 = v, impulse = 0.0;
+      int chosen = 0;
+      for (int n = 1; n <= o.guard.max_substeps && !chosen; n *= 2) {
+        x1 = x, v1 = v, impulse = 0.0;
+        bool within = true;
+        const int K = n * P;
+        const double h = dt / K;
+        for (int i = 0; i < n; ++i) {
+          const double start = x1;
+          for (int j = 1; j <= P; ++j) {
+            const int step = i * P + j;  // of K
+            const double target = xT - vT * (K - step) * h;
+            const double vn = (m * v1 + h * (kp * (target - x1) + kd * vT)) / (m + h * h * kp + h * kd);
+            impulse += m * (vn - v1);
+            v1 = vn;
+            x1 += h * vn;
+          }
+          within = within && std::abs(x1 - start) <= bound;
+        }
+        if (within) chosen = n;
+      }
+      ASSERT_GT(chosen, 0);
+      sim.step();
+      triggered += chosen > 1;
+      ASSERT_EQ(sim.guard_substeps(), chosen) << to_string(solver) << " step " << k;
+      ASSERT_NEAR(sim.q()[0], x1, 1e-12) << to_string(solver) << " step " << k;
+      ASSERT_NEAR(sim.qd()[0], v1, 1e-12) << to_string(solver) << " step " << k;
+      ASSERT_NEAR(sim.drive_force()[0], impulse / dt, 1e-9 * (1 + std::abs(impulse / dt)));
+      x = x1;
+      v = v1;
+    }
+    EXPECT_GE(triggered, 2) << to_string(solver);  // the case exercises the sub-steps
+    EXPECT_EQ(sim.guard_triggers(), triggered);
+    EXPECT_EQ(sim.guard_exhausted(), 0);
+  }
+}
+
+// The chain diverges unguarded within the horizon and stays bounded guarded, near its
+// targets.
+TEST(StepGuard, KeepsTheDivergingChainBounded) {
+  const auto model = guard_chain_model(64, Vec3::Zero());
+  const SolverType solver = SolverType::tgs;
+  const int steps = 1000;
+  Simulation unguarded(model, guard_options(solver, false)), guarded(model, guard_options(solver, true));
+  guard_drive_chain(unguarded);
+  guard_drive_chain(guarded);
+  bool diverged = false;
+  for (int k = 0; k < steps && !diverged; ++k) {
+    try {
+      unguarded.step();
+    } catch (const DivergenceError&) {
+      diverged = true;
+    }
+    diverged = diverged || !(unguarded.qd().norm() < 1e3);
+  }
+  EXPECT_TRUE(diverged);
+  for (int k = 0; k < steps; ++k) ASSERT_NO_THROW(guarded.step()) << k;
+  EXPECT_GT(guarded.guard_triggers(), 0);
+  EXPECT_LT(guarded.qd().norm(), 10.0);
+  EXPECT_TRUE(guarded.q().allFinite());
+}
+
+// An explicit PD actuator on a 1 kg slider at kp dt^2 / m = 10: explicit Euler's oscillation
+// grows without bound; the guard's sub-steps of dt / n (kp (dt / n)^2 / m <= 10 / 16) settle it
+// on the target.
+TEST(StepGuard, BoundsAStiffExplicitActuator) {
+  const double m = 1.0, dt = 0.01, kp = 10.0 * m / (dt * dt), kd = 20.0;
+  const auto model = test::make_slider(m, Vec3(1, 0, 0), Vec3(0, 0, -9.81));
+  for (const bool guard : {false, true}) {
+    Simulation sim(model, guard_options(SolverType::pgs, guard, dt));
+    ExplicitActuator a;
+    a.kind = ActuatorKind::ideal_pd;
+    a.stiffness = kp;
+    a.damping = kd;
+    sim.set_actuator(0, a);
+    sim.set_drive_target(0, 0.2, 0.0);
+    bool diverged = false;
+    for (int k = 0; k < 300 && !diverged; ++k) {
+      try {
+        sim.step();
+      } catch (const DivergenceError&) {
+        diverged = true;
+      }
+      diverged = diverged || !(std::abs(sim.q()[0]) < 10.0);
+    }
+    EXPECT_EQ(diverged, !guard);
+    if (guard) {
+      EXPECT_NEAR(sim.q()[0], 0.2, 1e-6);
+      EXPECT_GT(sim.guard_triggers(), 0);
+      EXPECT_EQ(sim.guard_exhausted(), 0);
+    }
+  }
+}
+
+// A Batch steps its Simulations: one guarded environment equals a guarded Simulation bit for bit
+// (through triggered steps); SimdBatch refuses the guard in one line.
+TEST(StepGuard, BatchEqualsASimulationAndSimdBatchRefuses) {
+  const auto model = guard_chain_model(32, Vec3::Zero());
+  const SimulationOptions o = guard_options(SolverType::pgs, true);
+  Simulation alone(model, o);
+  guard_drive_chain(alone);
+  Batch batch(model, 2, o);
+  for (int i = 0; i < 2; ++i) guard_drive_chain(batch.sim(i));
+  alone.step(60);
+  batch.step(60);
+  EXPECT_GT(alone.guard_triggers(), 0);
+  EXPECT_EQ(batch.sim(1).guard_triggers(), alone.guard_triggers());
+  EXPECT_TRUE(guard_same_outputs(batch.sim(1), alone));
+  try {
+    SimdBatch simd(alone, 4);
+    FAIL() << "SimdBatch took a guarded prototype";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("step guard"), std::string::npos) << e.what();
+  }
+}
+
+TEST(StepGuard, BadBoundsAreRefusedNamingKeyAndValue) {
+  auto message = [](const StepGuard& g) {
+    SimulationOptions o;
+    o.guard = g;
+    try {
+      validate_options(o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message({true, -0.1, 64}),
+            "simulation options: guard.max_joint_step = -0.1 must be finite and > 0");
+  EXPECT_EQ(message({true, 0.0, 64}),
+            "simulation options: guard.max_joint_step = 0 must be finite and > 0");
+  EXPECT_EQ(message({true, kInf, 64}),
+            "simulation options: guard.max_joint_step = inf must be finite and > 0");
+  EXPECT_EQ(message({true, 0.25, 0}),
+            "simulation options: guard.max_substeps = 0 must be in [2, 4096]");
+  EXPECT_EQ(message({true, 0.25, 1000000}),
+            "simulation options: guard.max_substeps = 1000000 must be in [2, 4096]");
+  EXPECT_EQ(message({true, 0.25, 4096}), "");
+  const auto model = test::make_slider(1.0, Vec3(1, 0, 0), Vec3::Zero());
+  Simulation sim(model);
+  SimulationOptions o;
+  o.guard = {true, std::nan(""), 8};
+  EXPECT_THROW(sim.set_options(o), std::invalid_argument);
+  EXPECT_FALSE(sim.options().guard.enabled);  // unchanged
+}
+
+}  // namespace
+}  // namespace featherdrive
