@@ -163,6 +163,7 @@ void ExplicitActuators::evaluate(const Model& model, const VecX& q, const VecX& 
   effort.setZero();
   for (const int d : active_) {
     const Slot& s = slot(d);
+    if (s.actuator.integration == ActuatorIntegration::implicit_law) continue;  // in the rows
     effort[d] = actuator_effort(s.actuator, q[model.links[model.dof_link[d]].q_index], qd[d],
                                 s.history.last_seen());
   }

@@ -149,7 +149,14 @@ void Simulation::guarded_advance(const VecX& tau_step) {
       limit_force_ = guard_impulse_[1] * inv_dt;
       friction_force_ = guard_impulse_[2] * inv_dt;
       velocity_limit_force_ = guard_impulse_[3] * inv_dt;
-      if (actuators_.any()) actuator_force_ = guard_actuator_ / n;  // the step's mean effort
+      if (actuators_.any()) {
+        actuator_force_ = guard_actuator_ / n;  // the explicit ones' mean effort
+        for (int d = 0; d < model_->nv; ++d)
+          if (actuators_.implicit(d)) {  // the row was the actuator's
+            actuator_force_[d] = drive_force_[d];
+            drive_force_[d] = 0.0;
+          }
+      }
       dt_ = dt;
       target_lead_ = 0.0;
       return;
@@ -173,10 +180,13 @@ void Simulation::lead_drive_targets() {
   for (int d = 0; d < model_->nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
     if (!rows.has_drive) continue;
-    const Drive& drive = drive_delays_.delayed(d) ? drive_delays_.drive_seen(d)
-                                                  : drives_[static_cast<size_t>(d)];
+    // An implicit actuator's row drives towards the command its delay line gives.
+    const double target_velocity =
+        actuators_.implicit(d)     ? actuators_.command_seen(d).velocity
+        : drive_delays_.delayed(d) ? drive_delays_.drive_seen(d).target_velocity
+                                   : drives_[static_cast<size_t>(d)].target_velocity;
     rows.drive.target_vel_plus_initial_bias -=
-        rows.drive.bias_coefficient * drive.target_velocity * target_lead_;
+        rows.drive.bias_coefficient * target_velocity * target_lead_;
   }
 }
 

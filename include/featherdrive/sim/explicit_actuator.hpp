@@ -103,8 +103,8 @@ class ExplicitActuators {
   /// 0 elsewhere); an implicit one keeps the command it sees for the rows (command_seen).
   void compute(const Model& model, const VecX& q, const VecX& qd, const std::vector<Drive>& drives,
                VecX& effort);
-  /// The efforts at q, qd for the commands the last compute() used, pushing nothing (a guard
-  /// sub-step's start: docs/math/step_guard.md).
+  /// The explicit efforts at q, qd for the commands the last compute() used, pushing nothing (a
+  /// guard sub-step's start: docs/math/step_guard.md); 0 for implicit ones, which the rows solve.
   void evaluate(const Model& model, const VecX& q, const VecX& qd, VecX& effort) const;
   /// Takes back the last compute()'s pushes (a step that diverged).
   void undo_push();
