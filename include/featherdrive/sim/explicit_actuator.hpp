@@ -50,6 +50,7 @@ struct ExplicitActuator {
   /// linear between them, the end values beyond them.
   std::vector<std::pair<double, double>> lookup;
   int delay = 0;  ///< physics steps between a command and the effort it gives, eq. (8)
+  /// explicit: eq. (1)-(10) here; implicit: solved at the step's end (implicit_actuators.md).
   ActuatorIntegration integration = ActuatorIntegration::explicit_law;
 };
 
