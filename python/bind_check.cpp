@@ -45,11 +45,13 @@ void featherdrive::python::bind_check(py::module_& m) {
       .def("__repr__", [](const StabilityReport& r) { return "StabilityReport(" + r.verdict + ")"; });
   m.def(
       "check",
-      [](py::object what) -> StabilityReport {
+      [](py::object what, std::optional<int> trial_steps) -> StabilityReport {
+        StabilityCheckOptions options;
+        if (trial_steps) options.min_trial_steps = options.max_trial_steps = *trial_steps;
         if (py::isinstance<Simulation>(what)) {
           const Simulation& sim = what.cast<const Simulation&>();
           StabilityReport report;
-          locked_nogil(sim, [&] { report = check_stability(sim); });
+          locked_nogil(sim, [&] { report = check_stability(sim, options); });
           return report;
         }
         if (!py::isinstance<py::str>(what) &&
@@ -59,11 +61,13 @@ void featherdrive::python::bind_check(py::module_& m) {
                                std::string(py::str(what.get_type().attr("__name__"))));
         const std::filesystem::path path = what.cast<std::filesystem::path>();
         py::gil_scoped_release nogil;
-        return check_scene(load_scene(path));
+        return check_scene(load_scene(path), options);
       },
-      py::arg("scene"),
+      py::arg("scene"), py::arg("trial_steps") = py::none(),
       "Will the run stay bounded? Per dof the one-joint step map at the initial state (and the "
       "smallest substeps, armature and damping that make an unstable one stable), for the robot "
       "a linearised step and a trial run (a scene's: following its targets). .verdict is "
-      "'stable' or 'unstable: ...', .stable the same as a bool. ValueError for a bad scene.");
+      "'stable' or 'unstable: ...', .stable the same as a bool. trial_steps: the trial's length "
+      "(default: 2 s, 500 to 1000 steps; 0: none, the linearised step decides). ValueError for "
+      "a bad scene or trial_steps outside [0, 100000].");
 }

@@ -969,5 +969,6 @@ class StabilityReport:
     verdict: str
     """'stable' or 'unstable: <joints and why>'."""
 
-def check(scene: PathLike | Simulation) -> StabilityReport:
-    """Will the run stay bounded? Per-dof step maps, a trial run, the smallest fixes."""
+def check(scene: PathLike | Simulation, trial_steps: int | None = None) -> StabilityReport:
+    """Will the run stay bounded? Per-dof step maps, a trial run, the smallest fixes.
+    trial_steps: the trial's length (default: 2 s, 500 to 1000 steps; 0: none)."""

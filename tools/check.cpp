@@ -41,12 +41,21 @@ CLI::App* add_check_command(CLI::App& app, CheckArgs& args) {
       "of the robot, the smallest fixes; last line 'verdict: stable' or 'verdict: unstable: ...'");
   cmd->add_option("scene", args.scene, "Scene file (YAML or JSON)")->required();
   args.overrides.add_options(cmd);
+  cmd->add_option("--trial-steps", args.trial_steps,
+                  "Steps of the robot's trial run, 0 to " + std::to_string(kMaxTrialSteps) +
+                      " (default: 2 s of the scene's time, at least 500 and at most 1000 steps); "
+                      "0: no trial, the linearised step decides")
+      ->type_name("INT");
   return cmd;
 }
 
 int check_scene_command(const CheckArgs& args) {
+  StabilityCheckOptions options;
+  if (args.trial_steps)
+    options.min_trial_steps = options.max_trial_steps =
+        integer_option("--trial-steps", *args.trial_steps, 0, kMaxTrialSteps);
   const Scene scene = args.overrides.load(args.scene);
-  const StabilityReport report = check_scene(scene);
+  const StabilityReport report = check_scene(scene, options);
   const SimulationOptions& o = scene.options;
   const int control = scene.control.substeps;
   std::printf("%s: robot %s, dt %.6g s, solver %s %d/%d", args.scene.c_str(),

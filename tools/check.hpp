@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
 #include <string>
 
 #include "scene_overrides.hpp"
@@ -12,6 +13,7 @@
 struct CheckArgs {
   std::string scene;
   SceneOverrides overrides;
+  std::optional<std::string> trial_steps;  ///< --trial-steps as typed
 };
 
 /// The subcommand on `app`.

@@ -78,3 +78,12 @@ def test_bad_input(tmp_path):
         fd.check(bad)
     with pytest.raises(TypeError, match="scene path"):
         fd.check(3)
+    for steps in (-1, 100_001):
+        with pytest.raises(ValueError, match="trial_steps = " + str(steps)):
+            fd.check(str(ROOT / "examples" / "slider.yaml"), trial_steps=steps)
+
+
+def test_trial_steps(slider):
+    sim = fd.Simulation(slider, dt=0.01)
+    assert fd.check(sim, trial_steps=0).robot.trial_steps == 0
+    assert fd.check(sim, trial_steps=1234).robot.trial_steps == 1234

@@ -8,6 +8,7 @@
 #include <complex>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/algorithm/energy.hpp"
@@ -291,7 +292,31 @@ double check_energy_scale(const Simulation& sim) {
   return std::max(weight + free, 1e-6);
 }
 
+namespace {
+
+void validate(const StabilityCheckOptions& o) {
+  auto refuse = [](const std::string& field, const std::string& value, const char* range) {
+    throw std::invalid_argument("stability check: " + field + " = " + value + ": must be " + range);
+  };
+  const std::string most = std::to_string(kMaxTrialSteps);
+  if (o.min_trial_steps < 0 || o.min_trial_steps > kMaxTrialSteps)
+    refuse("min_trial_steps", std::to_string(o.min_trial_steps), ("in [0, " + most + "]").c_str());
+  if (o.max_trial_steps < 0 || o.max_trial_steps > kMaxTrialSteps)
+    refuse("max_trial_steps", std::to_string(o.max_trial_steps), ("in [0, " + most + "]").c_str());
+  if (!std::isfinite(o.trial_seconds)) refuse("trial_seconds", fmt(o.trial_seconds), "finite");
+  if (!(o.energy_factor > 0.0) || !std::isfinite(o.energy_factor))
+    refuse("energy_factor", fmt(o.energy_factor), "finite and > 0");
+  if (!(o.linear_tolerance >= 0.0)) refuse("linear_tolerance", fmt(o.linear_tolerance), ">= 0");
+  if (o.max_robot_substeps < 1 || o.max_robot_substeps > 1024)
+    refuse("max_robot_substeps", std::to_string(o.max_robot_substeps), "in [1, 1024]");
+  if (o.robot_fix_length < 1 || o.robot_fix_length > 100)
+    refuse("robot_fix_length", std::to_string(o.robot_fix_length), "in [1, 100]");
+}
+
+}  // namespace
+
 StabilityReport check_stability(const Simulation& sim, const StabilityCheckOptions& options) {
+  validate(options);
   const Model& model = sim.model();
   const SimulationOptions& o = sim.options();
   StabilityReport report;

@@ -64,6 +64,12 @@ def main():
     # The fixes from the threshold 4: 200 / n^2 <= 4 from n = 8; armature kp dt^2 / 4 - m.
     check("substeps 8 (dt 0.00125" in r.stdout and "armature +122.5" in r.stdout
           and "damping: none" in r.stdout, "check: the fixes of the slider", r)
+    r = run(cli, "check", ex("slider.yaml"), "--trial-steps", "0")
+    check(r.returncode == 0 and "trial run" not in r.stdout
+          and r.stdout.splitlines()[-1] == "verdict: stable", "check --trial-steps 0: no trial", r)
+    r = run(cli, "check", ex("slider.yaml"), "--trial-steps", "2000")
+    check(r.returncode == 0 and "trial run of 2000 steps" in r.stdout, "check --trial-steps 2000", r)
+    one_line_error(run(cli, "check", ex("slider.yaml"), "--trial-steps", "-1"), 2, "--trial-steps")
     one_line_error(run(cli, "check", os.path.join(out_dir, "no_such_scene.yaml")), 2,
                    "no_such_scene.yaml")
     one_line_error(run(cli, "check", data("malformed/applied_force_nan.yaml")), 2,

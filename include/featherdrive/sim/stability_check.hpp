@@ -64,6 +64,9 @@ struct JointStability {
   double damping = -1.0;     ///< damping to add to kd (force units; acceleration drives: their own); < 0: none
 };
 
+/// The longest trial run check_stability accepts (its robot fix may run 504 times as many steps).
+inline constexpr int kMaxTrialSteps = 100'000;
+
 struct StabilityCheckOptions {
   /// The trial run: this many seconds of simulated time, but at least min_trial_steps and at
   /// most max_trial_steps steps; max_trial_steps 0 skips it.
@@ -112,6 +115,8 @@ struct StabilityReport {
 };
 
 /// The check at sim's current state (not changed: the trial and the linearisation run copies).
+/// std::invalid_argument naming the field and value for trial steps outside [0, kMaxTrialSteps],
+/// a non-finite trial_seconds or energy_factor <= 0, or max_robot_substeps / robot_fix_length < 1.
 StabilityReport check_stability(const Simulation& sim, const StabilityCheckOptions& options = {});
 
 /// The energy of eq. S5 (kinetic + gravity + the drives' and actuators' springs towards their
