@@ -10,7 +10,8 @@ void featherdrive::python::bind_check(py::module_& m) {
   py::enum_<JointLaw>(m, "JointLaw", "What acts on a dof in the one-joint step map.")
       .value("none", JointLaw::none)
       .value("drive", JointLaw::drive)
-      .value("explicit_pd", JointLaw::explicit_pd);
+      .value("explicit_pd", JointLaw::explicit_pd)
+      .value("implicit_pd", JointLaw::implicit_pd);
   py::class_<JointStability>(m, "JointStability",
                              "One dof's one-joint step map at the initial state and its fixes.")
       .def_readonly("joint", &JointStability::joint)

@@ -929,6 +929,7 @@ class JointLaw(enum.Enum):
     none = 0
     drive = 1
     explicit_pd = 2
+    implicit_pd = 3
 
 class JointStability:
     joint: str

@@ -202,6 +202,7 @@ const char* to_string(JointLaw law) {
     case JointLaw::none: return "none";
     case JointLaw::drive: return "drive";
     case JointLaw::explicit_pd: return "explicit_pd";
+    case JointLaw::implicit_pd: return "implicit_pd";
   }
   return "?";
 }
@@ -212,7 +213,9 @@ JointGains joint_gains(const Simulation& sim, int dof) {
   JointGains g;
   if (sim.has_actuator(dof)) {
     const ExplicitActuator& a = sim.actuator(dof);
-    g.law = JointLaw::explicit_pd;
+    // An implicit actuator's row is a force drive with its gains (implicit_actuators.md, I4).
+    g.law = a.integration == ActuatorIntegration::implicit_law ? JointLaw::implicit_pd
+                                                                : JointLaw::explicit_pd;
     g.stiffness = a.stiffness;
     g.damping = a.damping;
   } else if (sim.drive(dof).type != DriveType::none) {
@@ -236,6 +239,13 @@ Eigen::Matrix2d joint_step_matrix(double m, const JointGains& gains,
       return physx_step_map(m, gains.drive, options).A;
     case JointLaw::explicit_pd:
       return explicit_pd_step_matrix(m, gains.stiffness, gains.damping, options.dt);
+    case JointLaw::implicit_pd: {
+      Drive drive;
+      drive.type = DriveType::force;
+      drive.stiffness = gains.stiffness;
+      drive.damping = gains.damping;
+      return physx_step_map(m, drive, options).A;
+    }
     case JointLaw::none:
       break;
   }
@@ -259,7 +269,7 @@ double check_energy(const Simulation& sim) {
   for (const Link& l : model.links) {
     if (!one_dof(l.joint_type)) continue;
     const JointGains g = joint_gains(sim, l.v_index);
-    double kp = g.law == JointLaw::explicit_pd ? g.stiffness : 0.0;
+    double kp = g.law == JointLaw::explicit_pd || g.law == JointLaw::implicit_pd ? g.stiffness : 0.0;
     if (g.law == JointLaw::drive) {
       kp = g.drive.stiffness;
       if (g.drive.type == DriveType::acceleration) {

@@ -106,5 +106,28 @@ TEST(StabilityCheck, FixesOfAnUndampedExplicitPdFollowTheThresholdOfFour) {
   EXPECT_FALSE(r.robot.trial_bounded);  // the run itself diverges
 }
 
+TEST(StabilityCheck, TheSameActuatorSolvedImplicitlyIsStable) {
+  // The actuator above at a = 25 with integration implicit: its map is one implicit Euler step,
+  // A = [1 - h c, h alpha; -c, alpha] with alpha = m / (m + h kd + h^2 kp), c = alpha h kp / m
+  // (undamped: complex poles of modulus sqrt(det A) = sqrt(alpha) = 1 / sqrt(1 + a)).
+  const double m = 2.0, dt = 0.01, a = 25.0, kp = a * m / (dt * dt);
+  SimulationOptions o;
+  o.dt = dt;
+  Simulation sim(test::make_slider(m, Vec3::UnitX(), Vec3::Zero()), o);
+  ExplicitActuator pd;
+  pd.kind = ActuatorKind::ideal_pd;
+  pd.stiffness = kp;
+  pd.integration = ActuatorIntegration::implicit_law;
+  sim.set_actuator(0, pd);
+  sim.set_drive_target(0, 0.1, 0.0);
+  const StabilityReport r = check_stability(sim);
+  ASSERT_EQ(r.joints.size(), 1u);
+  EXPECT_EQ(r.joints[0].law, JointLaw::implicit_pd);
+  EXPECT_NEAR(r.joints[0].rho, 1.0 / std::sqrt(1.0 + a), 1e-12);
+  EXPECT_TRUE(r.joints[0].stable);
+  EXPECT_TRUE(r.stable) << r.verdict;
+  EXPECT_EQ(r.verdict, "stable");
+}
+
 }  // namespace
 }  // namespace featherdrive

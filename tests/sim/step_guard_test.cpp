@@ -100,11 +100,24 @@ TEST(StepGuard, NotTriggeringIsTheUnguardedStepBitForBit) {
 TEST(StepGuard, TriggeredSliderStepIsImplicitEulerSubsteps) {
   const double m = 2.0, kp = 900.0, kd = 10.0, xT = 0.5, vT = 0.4, dt = 1.0 / 30.0, bound = 0.06;
   const auto model = test::make_slider(m, Vec3(1, 0, 0), Vec3(0, 0, -9.81));
+  // The same law as an implicit actuator (implicit_actuators.md, I4): the same sub-steps, its
+  // force reported as the actuator's.
+  for (const bool actuator : {false, true})
   for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     SimulationOptions o = guard_options(solver, true, dt);
     o.guard.max_joint_step = bound;
     Simulation sim(model, o);
-    sim.set_drive("slide", Drive{DriveType::force, kp, kd, kInf, xT, vT});
+    if (actuator) {
+      ExplicitActuator pd;
+      pd.kind = ActuatorKind::ideal_pd;
+      pd.stiffness = kp;
+      pd.damping = kd;
+      pd.integration = ActuatorIntegration::implicit_law;
+      sim.set_actuator("slide", pd);
+      sim.set_drive_target("slide", xT, vT);
+    } else {
+      sim.set_drive("slide", Drive{DriveType::force, kp, kd, kInf, xT, vT});
+    }
     const int P = solver == SolverType::tgs ? o.position_iterations : 1;
     double x = 0.0, v = 0.0;
     int triggered = 0;
@@ -136,7 +149,9 @@ TEST(StepGuard, TriggeredSliderStepIsImplicitEulerSubsteps) {
       ASSERT_EQ(sim.guard_substeps(), chosen) << to_string(solver) << " step " << k;
       ASSERT_NEAR(sim.q()[0], x1, 1e-12) << to_string(solver) << " step " << k;
       ASSERT_NEAR(sim.qd()[0], v1, 1e-12) << to_string(solver) << " step " << k;
-      ASSERT_NEAR(sim.drive_force()[0], impulse / dt, 1e-9 * (1 + std::abs(impulse / dt)));
+      const double force = actuator ? sim.actuator_force()[0] : sim.drive_force()[0];
+      ASSERT_NEAR(force, impulse / dt, 1e-9 * (1 + std::abs(impulse / dt)));
+      if (actuator) ASSERT_EQ(sim.drive_force()[0], 0.0);
       x = x1;
       v = v1;
     }

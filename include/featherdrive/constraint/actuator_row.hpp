@@ -6,7 +6,7 @@
 #include <algorithm>
 
 #include "featherdrive/constraint/drive.hpp"
-#include "featherdrive/sim/explicit_actuator.hpp"
+#include "featherdrive/constraint/actuator_law.hpp"
 
 namespace featherdrive {
 

@@ -11,68 +11,21 @@
 #include <utility>
 #include <vector>
 
+#include "featherdrive/constraint/actuator_law.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/model/model.hpp"
 #include "featherdrive/sim/delay_line.hpp"
 
 namespace featherdrive {
 
-enum class ActuatorKind {
-  none,          ///< no explicit actuator on this dof
-  ideal_pd,      ///< PD + feed-forward clipped to +-effort_limit, eq. (1)-(2)
-  dc_motor,      ///< ideal PD within the torque-speed line of a DC motor, eq. (3)-(5)
-  remotized_pd,  ///< ideal PD within a position-dependent limit from a table, eq. (6)-(7)
-};
-const char* to_string(ActuatorKind kind);
-
-/// Where an actuator's law is evaluated.
-enum class ActuatorIntegration {
-  explicit_law,  ///< on the step-start state, applied as a constant force (Isaac Lab's way)
-  implicit_law,  ///< linearised at the step's end and solved as a row (implicit_actuators.md)
-};
-/// "explicit" or "implicit" (the scene's and Python's spelling).
-const char* to_string(ActuatorIntegration integration);
-
 /// The most steps an actuator may delay its commands (a ring of delay + 1 commands per dof).
 inline constexpr int kMaxActuatorDelay = kMaxDelay;
-
-/// One dof's explicit actuator. Fields a kind does not use must keep their defaults.
-struct ExplicitActuator {
-  ActuatorKind kind = ActuatorKind::none;
-  double stiffness = 0.0;  ///< N/m or Nm/rad
-  double damping = 0.0;    ///< Ns/m or Nms/rad
-  /// The actuator's clip |effort| <= effort_limit (N or Nm; Isaac Lab's effort_limit), apart from
-  /// the implicit drive's max_force (Isaac Lab's effort_limit_sim).
-  double effort_limit = std::numeric_limits<double>::infinity();
-  double saturation_effort = 0.0;  ///< dc_motor: the stall effort at zero speed (N or Nm)
-  double velocity_limit = 0.0;     ///< dc_motor: the no-load speed (m/s or rad/s)
-  /// remotized_pd: (joint position, largest |effort|) pairs, positions strictly increasing;
-  /// linear between them, the end values beyond them.
-  std::vector<std::pair<double, double>> lookup;
-  int delay = 0;  ///< physics steps between a command and the effort it gives, eq. (8)
-  /// explicit: eq. (1)-(10) here; implicit: solved at the step's end (implicit_actuators.md).
-  ActuatorIntegration integration = ActuatorIntegration::explicit_law;
-};
 
 /// Throws std::invalid_argument naming the joint, the field and the value: gains not finite or
 /// < 0, effort_limit not > 0, a dc_motor without a finite saturation_effort > 0 and velocity_limit
 /// > 0, a remotized_pd without a table or with positions not strictly increasing or efforts not
 /// finite and >= 0, a field the kind does not use, delay outside [0, kMaxActuatorDelay].
 void validate_actuator(const ExplicitActuator& actuator, const std::string& joint);
-
-/// What an actuator is told: target position and velocity, feed-forward effort.
-struct ActuatorCommand {
-  double position = 0.0;
-  double velocity = 0.0;
-  double effort = 0.0;
-};
-
-/// The effort the actuator applies at joint position q and velocity qd for `command`, eq. (1)-(7).
-double actuator_effort(const ExplicitActuator& actuator, double q, double qd,
-                       const ActuatorCommand& command);
-
-/// The remotized table's limit at q, eq. (6).
-double lookup_effort_limit(const std::vector<std::pair<double, double>>& lookup, double q);
 
 /// The explicit actuators of one simulation: per dof the actuator, its feed-forward effort and a
 /// ring of its last delay + 1 commands, sized when the actuator is set, so a step allocates

@@ -18,6 +18,7 @@ enum class JointLaw {
   none,          ///< no drive, no actuator: a free dof (map [[1, dt], [0, 1]])
   drive,         ///< PhysX's implicit drive (physx_step_map)
   explicit_pd,   ///< an explicit actuator's PD law, semi-implicit Euler (eq. S3)
+  implicit_pd,   ///< an implicit actuator's PD law: a force drive's map with its gains
 };
 const char* to_string(JointLaw law);
 
@@ -26,7 +27,7 @@ const char* to_string(JointLaw law);
 struct JointGains {
   JointLaw law = JointLaw::none;
   Drive drive;            ///< law drive: the drive (targets ignored)
-  double stiffness = 0.0; ///< law explicit_pd
+  double stiffness = 0.0; ///< laws explicit_pd and implicit_pd
   double damping = 0.0;
 };
 
