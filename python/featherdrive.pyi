@@ -653,6 +653,11 @@ class UrdfRobot:
 
 def apply_urdf_effort_limits(robot: UrdfRobot, sim: Simulation) -> None:
     """The URDF effort limits as max_force or effort_limit where none is set (robot.options)."""
+def example_path(name: str) -> str:
+    """The path of an example robot (examples/NAME, copied beside the module when it was built),
+    e.g. example_path('arm7.urdf'); ValueError naming the ones there are."""
+    ...
+
 def load_urdf(path: PathLike, options: UrdfOptions = ...) -> UrdfRobot:
     """Raises InputError (a ValueError) naming the file."""
 def parse_urdf(xml: str, name: str, options: UrdfOptions = ...) -> UrdfRobot: ...
