@@ -14,9 +14,6 @@
 namespace featherdrive {
 namespace {
 
-// Test (ii)'s tolerance, eq. (G-5): the energy may exceed the work by this share of the step's
-// energy scale. Measured (docs/math/step_guard.md, "The tolerance").
-constexpr double kEnergyTolerance = 0.02;
 // Rounding of the energies themselves (sums over the links, a potential of any offset).
 constexpr double kEnergyRounding = 1e-12;
 
@@ -93,7 +90,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
   const double rounding =
       kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
-  return !moved_too_far && excess <= kEnergyTolerance * scale + rounding;
+  return !moved_too_far && excess <= options_.guard.energy_tolerance * scale + rounding;
 }
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.

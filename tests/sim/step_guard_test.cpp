@@ -247,6 +247,10 @@ TEST(StepGuard, BadBoundsAreRefusedNamingKeyAndValue) {
   EXPECT_EQ(message({true, 0.25, 1000000}),
             "simulation options: guard.max_substeps = 1000000 must be in [2, 4096]");
   EXPECT_EQ(message({true, 0.25, 4096}), "");
+  EXPECT_EQ(message({true, 0.25, 64, 0.0}),
+            "simulation options: guard.energy_tolerance = 0 must be in (0, 1]");
+  EXPECT_EQ(message({true, 0.25, 64, 1.5}),
+            "simulation options: guard.energy_tolerance = 1.5 must be in (0, 1]");
   const auto model = test::make_slider(1.0, Vec3(1, 0, 0), Vec3::Zero());
   Simulation sim(model);
   SimulationOptions o;

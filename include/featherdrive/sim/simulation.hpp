@@ -39,6 +39,8 @@ struct StepGuard {
   bool enabled = false;
   double max_joint_step = 0.25;  ///< rad or m per (sub-)step; a spherical joint's rotation angle
   int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
+  /// Test (ii)'s share of the step's energy scale that may appear from nowhere; in (0, 1].
+  double energy_tolerance = 0.02;
 };
 inline constexpr int kMaxGuardSubsteps = 4096;
 
@@ -63,7 +65,7 @@ inline constexpr long kMaxStepCount = 1L << 53;
 /// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
 /// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
 /// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
-/// [2, kMaxGuardSubsteps].
+/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1].
 void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
