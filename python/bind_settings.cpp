@@ -216,6 +216,14 @@ void featherdrive::python::bind_settings(py::module_& m) {
     validate_options(o);
     return g;
   };
+  // A setter of one double field that leaves the guard as it was if the value is refused.
+  auto checked_setter = [checked_guard](double StepGuard::*field) {
+    return [checked_guard, field](StepGuard& g, double v) {
+      StepGuard next = g;
+      next.*field = v;
+      g = checked_guard(next);
+    };
+  };
   py::class_<StepGuard>(m, "StepGuard",
                         "The step guard: a step in which a joint moves more than max_joint_step "
                         "or the energy grows more than the joint forces' work is redone as 2, 4, "
@@ -235,11 +243,7 @@ void featherdrive::python::bind_settings(py::module_& m) {
       .def_readwrite("enabled", &StepGuard::enabled)
       .def_property(
           "max_joint_step", [](const StepGuard& g) { return g.max_joint_step; },
-          [checked_guard](StepGuard& g, double v) {
-            StepGuard next = g;
-            next.max_joint_step = v;
-            g = checked_guard(next);
-          },
+          checked_setter(&StepGuard::max_joint_step),
           "rad or m per (sub-)step; a spherical joint's or floating base's rotation angle")
       .def_property(
           "max_substeps", [](const StepGuard& g) { return g.max_substeps; },
@@ -249,11 +253,7 @@ void featherdrive::python::bind_settings(py::module_& m) {
           "in [2, 4096]")
       .def_property(
           "energy_tolerance", [](const StepGuard& g) { return g.energy_tolerance; },
-          [checked_guard](StepGuard& g, double v) {
-            StepGuard next = g;
-            next.energy_tolerance = v;
-            g = checked_guard(next);
-          },
+          checked_setter(&StepGuard::energy_tolerance),
           "test (ii)'s share of the step's energy scale, in (0, 1]")
       .def("__repr__", [](const StepGuard& g) {
         return std::string("StepGuard(enabled=") + (g.enabled ? "True" : "False") +

@@ -207,7 +207,7 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
   sweep_ = SweepWorkspace(*model);
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
-  if (guard_data_) guard_data_.emplace(*model_);  // the guard's energies read the masses too
+  if (guard_data_) size_guard();  // the guard's energies read the masses too
 }
 
 void Simulation::set_q(const VecX& q) {

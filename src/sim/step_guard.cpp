@@ -31,8 +31,10 @@ void Simulation::size_guard() {
   guard_data_.emplace(*model_);
   const Eigen::Index nq = model_->nq, nv = model_->nv;
   guard_q0_ = VecX::Zero(nq);
-  guard_qd0_ = guard_force_ = guard_actuator_ = VecX::Zero(nv);
+  guard_qd0_ = guard_force_ = guard_actuator_ = guard_qd1_ = VecX::Zero(nv);
+  guard_q1_ = VecX::Zero(nq);
   for (VecX& v : guard_impulse_) v = VecX::Zero(nv);
+  guard_e1_valid_ = false;
 }
 
 void Simulation::reset_guard_counters() {
@@ -100,13 +102,22 @@ void Simulation::guarded_advance(const VecX& tau_step) {
   double e_start[2], e0[2], e1[2];
   guard_q0_ = q_;
   guard_qd0_ = qd_;
-  guard_energy(guard_q0_, guard_qd0_, e_start);
+  // The start's energies are the last step's end's where nothing moved the state since (a
+  // comparison instead of a forward kinematics pass).
+  if (guard_e1_valid_ && q_ == guard_q1_ && qd_ == guard_qd1_) {
+    e_start[0] = guard_e1_[0];
+    e_start[1] = guard_e1_[1];
+  } else {
+    guard_energy(guard_q0_, guard_qd0_, e_start);
+  }
+  guard_e1_valid_ = false;  // valid again once this step has ended
   dt_ = dt;
   target_lead_ = 0.0;
   advance(tau_step);
   guard_substeps_ = 1;
   if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
     row_forces();
+    keep_guard_end(e1);
     return;
   }
   ++guard_triggers_;
@@ -149,9 +160,20 @@ void Simulation::guarded_advance(const VecX& tau_step) {
       if (actuators_.any()) actuator_force_ = guard_actuator_ / n;  // the step's mean effort
       dt_ = dt;
       target_lead_ = 0.0;
+      keep_guard_end(e1);
       return;
     }
   }
+}
+
+// The end of a step that may be committed: end_step's finite check may still refuse it, and then
+// the state is the start again, which the comparison tells apart.
+void Simulation::keep_guard_end(const double e1[2]) {
+  guard_q1_ = q_;
+  guard_qd1_ = qd_;
+  guard_e1_[0] = e1[0];
+  guard_e1_[1] = e1[1];
+  guard_e1_valid_ = true;
 }
 
 // Explicit actuators at a sub-step's start: the step's (delayed) commands, this state.

@@ -316,6 +316,7 @@ class Simulation {
   bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);
   void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
   const VecX& guard_substep_force();
+  void keep_guard_end(const double e1[2]);
   void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
@@ -379,6 +380,10 @@ class Simulation {
   double target_lead_ = 0.0;
   std::optional<Data> guard_data_;  ///< for the energies (a second Data: data_ keeps the step's)
   VecX guard_q0_, guard_qd0_, guard_force_, guard_actuator_, guard_impulse_[4];
+  /// The last step's end state and energies: the next step's start, unless a setter moved it.
+  VecX guard_q1_, guard_qd1_;
+  double guard_e1_[2] = {0.0, 0.0};
+  bool guard_e1_valid_ = false;
   int guard_substeps_ = 1;
   long guard_triggers_ = 0;
   long guard_exhausted_ = 0;
