@@ -32,8 +32,8 @@ enum class Mode { unguarded, guarded, tight, substeps8 };
 
 struct Outcome {
   bool diverged = false;
-  long steps = 0;           ///< steps made (to the divergence)
-  double rms = NAN;         ///< final RMS of q - target
+  long steps = 0;    ///< steps made (to the divergence)
+  double rms = NAN;  ///< final RMS of q - target
   double us_per_step = 0.0;
   long triggers = 0, exhausted = 0;
   int largest_n = 1;
@@ -70,8 +70,10 @@ Outcome run(int links, SolverType solver, Mode mode, long steps) {
   const auto start = std::chrono::steady_clock::now();
   for (long s = 0; s < steps; ++s) {
     try {
-      if (k > 1) step_control(sim, robot.target, zero, control);
-      else sim.step();
+      if (k > 1)
+        step_control(sim, robot.target, zero, control);
+      else
+        sim.step();
     } catch (const DivergenceError&) {
       out.diverged = true;
       break;
@@ -97,8 +99,10 @@ Outcome run(int links, SolverType solver, Mode mode, long steps) {
 
 std::string cell(const Outcome& o, bool guard = false) {
   char buf[160];
-  if (o.diverged) std::snprintf(buf, sizeof buf, "diverged at step %ld", o.steps + 1);
-  else std::snprintf(buf, sizeof buf, "RMS %.1e, %.3g us", o.rms, o.us_per_step);
+  if (o.diverged)
+    std::snprintf(buf, sizeof buf, "diverged at step %ld", o.steps + 1);
+  else
+    std::snprintf(buf, sizeof buf, "RMS %.1e, %.3g us", o.rms, o.us_per_step);
   std::string s = buf;
   if (guard) {
     std::snprintf(buf, sizeof buf, "; %ld redone (%ld exh.), n <= %d", o.triggers, o.exhausted,
@@ -122,9 +126,10 @@ int main(int argc, char** argv) {
   std::vector<int> sizes;
   for (int i = 2; i < argc; ++i) sizes.push_back(std::stoi(argv[i]));
   if (sizes.empty()) sizes = {2, 4, 8, 16, 32, 48, 64, 96, 128, 192, 256};
-  std::printf("| solver | N | unguarded | guarded (defaults) | guarded, energy_tolerance 0.005 | "
-              "8 fixed sub-steps | cost guarded / unguarded, / 8 sub-steps | same, tolerance "
-              "0.005 |\n");
+  std::printf(
+      "| solver | N | unguarded | guarded (defaults) | guarded, energy_tolerance 0.005 | "
+      "8 fixed sub-steps | cost guarded / unguarded, / 8 sub-steps | same, tolerance "
+      "0.005 |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (SolverType solver : {SolverType::pgs, SolverType::tgs})
     for (int n : sizes) {

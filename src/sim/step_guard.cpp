@@ -72,7 +72,8 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
       // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
       double dq = q_[link.q_index] - guard_q0_[link.q_index];
-      if (wrapped_[static_cast<size_t>(link.v_index)]) dq = std::remainder(dq, 2.0 * std::numbers::pi);
+      if (wrapped_[static_cast<size_t>(link.v_index)])
+        dq = std::remainder(dq, 2.0 * std::numbers::pi);
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
       work += force * dq;
@@ -81,8 +82,8 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
       // The rotation's angle (a floating base's translation is not bounded); the work over the
       // velocity coordinates, the motion h qd.
       const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
-      moved_too_far = moved_too_far ||
-                      !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
+      moved_too_far =
+          moved_too_far || !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
       for (int k = 0; k < link.nv; ++k) work += impulse(link.v_index + k) * qd_[link.v_index + k];
     }
   }
@@ -192,8 +193,8 @@ void Simulation::lead_drive_targets() {
   for (int d = 0; d < model_->nv; ++d) {
     DofRows& rows = rows_[static_cast<size_t>(d)];
     if (!rows.has_drive) continue;
-    const Drive& drive = drive_delays_.delayed(d) ? drive_delays_.drive_seen(d)
-                                                  : drives_[static_cast<size_t>(d)];
+    const Drive& drive =
+        drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : drives_[static_cast<size_t>(d)];
     rows.drive.target_vel_plus_initial_bias -=
         rows.drive.bias_coefficient * drive.target_velocity * target_lead_;
   }
