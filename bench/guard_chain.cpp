@@ -1,9 +1,10 @@
 // The step guard on the benchmark chain (docs/benchmarks.md, "Where long chains diverge"; issue
 // 35): make_chain(n) (axes cycling y, z, x, 1 kg, 0.5 m) with the benchmark's drives (1000 Nm/rad,
 // 50 Nms/rad towards its random targets in +-0.5 rad), gravity off, from rest at q = 0, dt 1/60 s,
-// 4 position and 1 velocity iterations, STEPS steps. Per solver and n, three ways of stepping:
-// unguarded, guarded (options.guard on, its defaults) and 8 fixed sub-steps per step
-// (step_control, substeps 8, targets held). Not a test: a measurement, printed as a table.
+// 4 position and 1 velocity iterations, STEPS steps. Per solver and n, four ways of stepping:
+// unguarded, guarded (options.guard on, its defaults), guarded with energy_tolerance 0.005, and
+// 8 fixed sub-steps per step (step_control, substeps 8, targets held). Not a test: a
+// measurement, printed as a table.
 //   featherdrive_guard_chain [STEPS] [N ...]   defaults 10000, 2 4 8 16 32 48 64 96 128 192 256
 //
 // Diverged: DivergenceError, or the energy (kinetic + the drives' springs 1/2 kp (q - target)^2)
@@ -27,12 +28,12 @@ using namespace featherdrive::bench;
 
 namespace {
 
-enum class Mode { unguarded, guarded, substeps8 };
+enum class Mode { unguarded, guarded, tight, substeps8 };
 
 struct Outcome {
   bool diverged = false;
-  long steps = 0;           ///< steps made (to the divergence)
-  double rms = NAN;         ///< final RMS of q - target
+  long steps = 0;    ///< steps made (to the divergence)
+  double rms = NAN;  ///< final RMS of q - target
   double us_per_step = 0.0;
   long triggers = 0, exhausted = 0;
   int largest_n = 1;
@@ -54,7 +55,8 @@ Outcome run(int links, SolverType solver, Mode mode, long steps) {
   options.solver = solver;
   options.position_iterations = 4;
   options.velocity_iterations = 1;
-  options.guard.enabled = mode == Mode::guarded;
+  options.guard.enabled = mode == Mode::guarded || mode == Mode::tight;
+  if (mode == Mode::tight) options.guard.energy_tolerance = 0.005;
   const int k = mode == Mode::substeps8 ? 8 : 1;
   if (k > 1) options.dt /= k;
   Simulation sim(model, options);
@@ -68,14 +70,16 @@ Outcome run(int links, SolverType solver, Mode mode, long steps) {
   const auto start = std::chrono::steady_clock::now();
   for (long s = 0; s < steps; ++s) {
     try {
-      if (k > 1) step_control(sim, robot.target, zero, control);
-      else sim.step();
+      if (k > 1)
+        step_control(sim, robot.target, zero, control);
+      else
+        sim.step();
     } catch (const DivergenceError&) {
       out.diverged = true;
       break;
     }
     ++out.steps;
-    if (mode == Mode::guarded) out.largest_n = std::max(out.largest_n, sim.guard_substeps());
+    if (options.guard.enabled) out.largest_n = std::max(out.largest_n, sim.guard_substeps());
     if (s % 100 == 99 || s == steps - 1) {  // the energy test every 100 steps and at the end
       const double e = energy(sim, data, robot.target);
       if (!(e - e0 <= bound)) {
@@ -93,11 +97,25 @@ Outcome run(int links, SolverType solver, Mode mode, long steps) {
   return out;
 }
 
-std::string cell(const Outcome& o, long steps) {
-  char buf[128];
-  if (o.diverged) std::snprintf(buf, sizeof buf, "diverged at step %ld", o.steps + 1);
-  else std::snprintf(buf, sizeof buf, "bounded, RMS %.1e, %.1f us", o.rms, o.us_per_step);
-  (void)steps;
+std::string cell(const Outcome& o, bool guard = false) {
+  char buf[160];
+  if (o.diverged)
+    std::snprintf(buf, sizeof buf, "diverged at step %ld", o.steps + 1);
+  else
+    std::snprintf(buf, sizeof buf, "RMS %.1e, %.3g us", o.rms, o.us_per_step);
+  std::string s = buf;
+  if (guard) {
+    std::snprintf(buf, sizeof buf, "; %ld redone (%ld exh.), n <= %d", o.triggers, o.exhausted,
+                  o.largest_n);
+    s += buf;
+  }
+  return s;
+}
+
+std::string ratio(const Outcome& a, const Outcome& b) {
+  if (a.diverged || b.diverged) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", a.us_per_step / b.us_per_step);
   return buf;
 }
 
@@ -108,22 +126,21 @@ int main(int argc, char** argv) {
   std::vector<int> sizes;
   for (int i = 2; i < argc; ++i) sizes.push_back(std::stoi(argv[i]));
   if (sizes.empty()) sizes = {2, 4, 8, 16, 32, 48, 64, 96, 128, 192, 256};
-  std::printf("| solver | N | unguarded | guarded | guard triggers (exhausted), largest n | "
-              "8 fixed sub-steps | guarded / unguarded | guarded / 8 sub-steps |\n");
+  std::printf(
+      "| solver | N | unguarded | guarded (defaults) | guarded, energy_tolerance 0.005 | "
+      "8 fixed sub-steps | cost guarded / unguarded, / 8 sub-steps | same, tolerance "
+      "0.005 |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (SolverType solver : {SolverType::pgs, SolverType::tgs})
     for (int n : sizes) {
       const Outcome u = run(n, solver, Mode::unguarded, steps);
       const Outcome g = run(n, solver, Mode::guarded, steps);
+      const Outcome t = run(n, solver, Mode::tight, steps);
       const Outcome f = run(n, solver, Mode::substeps8, steps);
-      char ratio_u[32] = "-", ratio_f[32] = "-";
-      if (!u.diverged && !g.diverged)
-        std::snprintf(ratio_u, sizeof ratio_u, "%.2f", g.us_per_step / u.us_per_step);
-      if (!f.diverged && !g.diverged)
-        std::snprintf(ratio_f, sizeof ratio_f, "%.2f", g.us_per_step / f.us_per_step);
-      std::printf("| %s 4/1 | %d | %s | %s | %ld (%ld), %d | %s | %s | %s |\n", to_string(solver),
-                  n, cell(u, steps).c_str(), cell(g, steps).c_str(), g.triggers, g.exhausted,
-                  g.largest_n, cell(f, steps).c_str(), ratio_u, ratio_f);
+      std::printf("| %s 4/1 | %d | %s | %s | %s | %s | %s, %s | %s, %s |\n", to_string(solver), n,
+                  cell(u).c_str(), cell(g, true).c_str(), cell(t, true).c_str(), cell(f).c_str(),
+                  ratio(g, u).c_str(), ratio(g, f).c_str(), ratio(t, u).c_str(),
+                  ratio(t, f).c_str());
       std::fflush(stdout);
     }
   return 0;

@@ -235,27 +235,34 @@ void featherdrive::python::bind_settings(py::module_& m) {
     validate_options(o);
     return g;
   };
+  // A setter of one double field that leaves the guard as it was if the value is refused.
+  auto checked_setter = [checked_guard](double StepGuard::*field) {
+    return [checked_guard, field](StepGuard& g, double v) {
+      StepGuard next = g;
+      next.*field = v;
+      g = checked_guard(next);
+    };
+  };
   py::class_<StepGuard>(m, "StepGuard",
                         "The step guard: a step in which a joint moves more than max_joint_step "
                         "or the energy grows more than the joint forces' work is redone as 2, 4, "
                         "... sub-steps, at most max_substeps.")
-      .def(py::init([checked_guard](bool enabled, double max_joint_step, py::handle max_substeps) {
+      .def(py::init([checked_guard](bool enabled, double max_joint_step, py::handle max_substeps,
+                                    double energy_tolerance) {
              return checked_guard(StepGuard{enabled, max_joint_step,
                                             to_int(max_substeps, "guard.max_substeps", 2,
-                                                   kMaxGuardSubsteps)});
+                                                   kMaxGuardSubsteps),
+                                            energy_tolerance});
            }),
            py::arg("enabled") = true, py::arg("max_joint_step") = 0.25,
-           py::arg("max_substeps") = 64,
+           py::arg("max_substeps") = 64, py::arg("energy_tolerance") = 0.02,
            "A guard (on unless enabled=False). Raises ValueError naming guard.max_joint_step "
-           "(finite > 0) or guard.max_substeps (in [2, 4096]).")
+           "(finite > 0), guard.max_substeps (in [2, 4096]) or guard.energy_tolerance "
+           "(in (0, 1]).")
       .def_readwrite("enabled", &StepGuard::enabled)
       .def_property(
           "max_joint_step", [](const StepGuard& g) { return g.max_joint_step; },
-          [checked_guard](StepGuard& g, double v) {
-            StepGuard next = g;
-            next.max_joint_step = v;
-            g = checked_guard(next);
-          },
+          checked_setter(&StepGuard::max_joint_step),
           "rad or m per (sub-)step; a spherical joint's or floating base's rotation angle")
       .def_property(
           "max_substeps", [](const StepGuard& g) { return g.max_substeps; },
@@ -263,10 +270,15 @@ void featherdrive::python::bind_settings(py::module_& m) {
             g.max_substeps = to_int(n, "guard.max_substeps", 2, kMaxGuardSubsteps);
           },
           "in [2, 4096]")
+      .def_property(
+          "energy_tolerance", [](const StepGuard& g) { return g.energy_tolerance; },
+          checked_setter(&StepGuard::energy_tolerance),
+          "test (ii)'s share of the step's energy scale, in (0, 1]")
       .def("__repr__", [](const StepGuard& g) {
         return std::string("StepGuard(enabled=") + (g.enabled ? "True" : "False") +
                ", max_joint_step=" + fmt(g.max_joint_step) +
-               ", max_substeps=" + std::to_string(g.max_substeps) + ")";
+               ", max_substeps=" + std::to_string(g.max_substeps) +
+               ", energy_tolerance=" + fmt(g.energy_tolerance) + ")";
       });
 
   py::class_<SimulationOptions>(m, "SimulationOptions", "Time step and solver settings.")

@@ -162,9 +162,11 @@ class StepGuard:
     enabled: bool
     max_joint_step: float
     max_substeps: int
+    energy_tolerance: float
     def __init__(self, enabled: bool = True, max_joint_step: float = 0.25,
-                 max_substeps: Int = 64) -> None:
-        """ValueError naming guard.max_joint_step (finite > 0) or guard.max_substeps ([2, 4096])."""
+                 max_substeps: Int = 64, energy_tolerance: float = 0.02) -> None:
+        """ValueError naming guard.max_joint_step (finite > 0), guard.max_substeps ([2, 4096])
+        or guard.energy_tolerance ((0, 1])."""
 
 class SimulationOptions:
     """Time step and solver settings."""

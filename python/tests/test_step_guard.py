@@ -64,6 +64,7 @@ def test_scene_guard_key(tmp_path):
     (dict(max_joint_step=float("nan")), "guard.max_joint_step = nan must be finite and > 0"),
     (dict(max_substeps=0), "guard.max_substeps"),
     (dict(max_substeps=10**6), "guard.max_substeps"),
+    (dict(energy_tolerance=0.0), "guard.energy_tolerance = 0 must be in (0, 1]"),
 ])
 def test_bad_bounds_raise_one_value_error(kwargs, message):
     with pytest.raises(ValueError) as error:
@@ -71,8 +72,6 @@ def test_bad_bounds_raise_one_value_error(kwargs, message):
     assert message in str(error.value) and "\n" not in str(error.value)
     guard = fd.StepGuard()
     with pytest.raises(ValueError):
-        if "max_joint_step" in kwargs:
-            guard.max_joint_step = kwargs["max_joint_step"]
-        else:
-            guard.max_substeps = kwargs["max_substeps"]
-    assert guard.max_joint_step == 0.25 and guard.max_substeps == 64  # unchanged
+        for key, value in kwargs.items():
+            setattr(guard, key, value)
+    assert (guard.max_joint_step, guard.max_substeps, guard.energy_tolerance) == (0.25, 64, 0.02)

@@ -516,7 +516,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
 
   // The step guard (docs/math/step_guard.md): present = on, its bounds default.
   if (const YAML::Node g = root["guard"]) {
-    r.map(g, "guard", {"max_joint_step", "max_substeps"});
+    r.map(g, "guard", {"max_joint_step", "max_substeps", "energy_tolerance"});
     scene.options.guard.enabled = true;
     if (g["max_joint_step"]) {
       const double bound = r.number(g["max_joint_step"], "guard.max_joint_step");
@@ -527,6 +527,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     if (g["max_substeps"])
       scene.options.guard.max_substeps = static_cast<int>(
           r.integer(g["max_substeps"], "guard.max_substeps", 2, kMaxGuardSubsteps));
+    if (g["energy_tolerance"]) {
+      const double tolerance = r.number(g["energy_tolerance"], "guard.energy_tolerance");
+      if (!(tolerance > 0.0 && tolerance <= 1.0))
+        r.fail("guard.energy_tolerance", g["energy_tolerance"], "must be in (0, 1]");
+      scene.options.guard.energy_tolerance = tolerance;
+    }
   }
 
   // Joint settings first: armature changes the model.

@@ -122,6 +122,9 @@ void validate_options(const SimulationOptions& o) {
     throw std::invalid_argument("simulation options: guard.max_substeps = " +
                                 std::to_string(o.guard.max_substeps) + " must be in [2, " +
                                 std::to_string(kMaxGuardSubsteps) + "]");
+  if (!(o.guard.energy_tolerance > 0.0 && o.guard.energy_tolerance <= 1.0))
+    throw std::invalid_argument("simulation options: guard.energy_tolerance = " +
+                                fmt(o.guard.energy_tolerance) + " must be in (0, 1]");
 }
 
 Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options)
@@ -204,7 +207,7 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
   sweep_ = SweepWorkspace(*model);
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
-  if (guard_data_) guard_data_.emplace(*model_);  // the guard's energies read the masses too
+  if (guard_data_) size_guard();  // the guard's energies read the masses too
 }
 
 void Simulation::set_q(const VecX& q) {

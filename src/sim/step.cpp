@@ -314,7 +314,10 @@ void Simulation::solve_pgs() {
   departures_.qd_position = qd_;
   integrate_positions(dt);
   phase.velocity_iteration = true;
-  for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  // A guard sub-step runs none: at every sub-step they fed energy into long chains
+  // (docs/math/step_guard.md, "The sub-step law").
+  const int velocity_iterations = dt_ == options_.dt ? options_.velocity_iterations : 0;
+  for (int it = 0; it < velocity_iterations; ++it) sweep(phase);
   if (physx())  // prismatic_limits.cpp
     clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
 }

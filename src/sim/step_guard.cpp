@@ -14,9 +14,6 @@
 namespace featherdrive {
 namespace {
 
-// Test (ii)'s tolerance, eq. (G-5): the energy may exceed the work by this share of the step's
-// energy scale. Measured (docs/math/step_guard.md, "The tolerance").
-constexpr double kEnergyTolerance = 0.02;
 // Rounding of the energies themselves (sums over the links, a potential of any offset).
 constexpr double kEnergyRounding = 1e-12;
 
@@ -34,8 +31,10 @@ void Simulation::size_guard() {
   guard_data_.emplace(*model_);
   const Eigen::Index nq = model_->nq, nv = model_->nv;
   guard_q0_ = VecX::Zero(nq);
-  guard_qd0_ = guard_force_ = guard_actuator_ = VecX::Zero(nv);
+  guard_qd0_ = guard_force_ = guard_actuator_ = guard_qd1_ = VecX::Zero(nv);
+  guard_q1_ = VecX::Zero(nq);
   for (VecX& v : guard_impulse_) v = VecX::Zero(nv);
+  guard_e1_valid_ = false;
 }
 
 void Simulation::reset_guard_counters() {
@@ -73,7 +72,8 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
       // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
       double dq = q_[link.q_index] - guard_q0_[link.q_index];
-      if (wrapped_[static_cast<size_t>(link.v_index)]) dq = std::remainder(dq, 2.0 * std::numbers::pi);
+      if (wrapped_[static_cast<size_t>(link.v_index)])
+        dq = std::remainder(dq, 2.0 * std::numbers::pi);
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
       work += force * dq;
@@ -82,8 +82,8 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
       // The rotation's angle (a floating base's translation is not bounded); the work over the
       // velocity coordinates, the motion h qd.
       const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
-      moved_too_far = moved_too_far ||
-                      !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
+      moved_too_far =
+          moved_too_far || !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
       for (int k = 0; k < link.nv; ++k) work += impulse(link.v_index + k) * qd_[link.v_index + k];
     }
   }
@@ -93,7 +93,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
   const double rounding =
       kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
-  return !moved_too_far && excess <= kEnergyTolerance * scale + rounding;
+  return !moved_too_far && excess <= options_.guard.energy_tolerance * scale + rounding;
 }
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
@@ -103,13 +103,22 @@ void Simulation::guarded_advance(const VecX& tau_step) {
   double e_start[2], e0[2], e1[2];
   guard_q0_ = q_;
   guard_qd0_ = qd_;
-  guard_energy(guard_q0_, guard_qd0_, e_start);
+  // The start's energies are the last step's end's where nothing moved the state since (a
+  // comparison instead of a forward kinematics pass).
+  if (guard_e1_valid_ && q_ == guard_q1_ && qd_ == guard_qd1_) {
+    e_start[0] = guard_e1_[0];
+    e_start[1] = guard_e1_[1];
+  } else {
+    guard_energy(guard_q0_, guard_qd0_, e_start);
+  }
+  guard_e1_valid_ = false;  // valid again once this step has ended
   dt_ = dt;
   target_lead_ = 0.0;
   advance(tau_step);
   guard_substeps_ = 1;
   if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
     row_forces();
+    keep_guard_end(e1);
     return;
   }
   ++guard_triggers_;
@@ -159,9 +168,20 @@ void Simulation::guarded_advance(const VecX& tau_step) {
       }
       dt_ = dt;
       target_lead_ = 0.0;
+      keep_guard_end(e1);
       return;
     }
   }
+}
+
+// The end of a step that may be committed: end_step's finite check may still refuse it, and then
+// the state is the start again, which the comparison tells apart.
+void Simulation::keep_guard_end(const double e1[2]) {
+  guard_q1_ = q_;
+  guard_qd1_ = qd_;
+  guard_e1_[0] = e1[0];
+  guard_e1_[1] = e1[1];
+  guard_e1_valid_ = true;
 }
 
 // Explicit actuators at a sub-step's start: the step's (delayed) commands, this state.

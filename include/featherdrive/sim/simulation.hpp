@@ -39,6 +39,8 @@ struct StepGuard {
   bool enabled = false;
   double max_joint_step = 0.25;  ///< rad or m per (sub-)step; a spherical joint's rotation angle
   int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
+  /// Test (ii)'s share of the step's energy scale that may appear from nowhere; in (0, 1].
+  double energy_tolerance = 0.02;
 };
 inline constexpr int kMaxGuardSubsteps = 4096;
 
@@ -63,7 +65,7 @@ inline constexpr long kMaxStepCount = 1L << 53;
 /// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
 /// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
 /// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
-/// [2, kMaxGuardSubsteps].
+/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1].
 void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
@@ -314,6 +316,7 @@ class Simulation {
   bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);
   void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
   const VecX& guard_substep_force();
+  void keep_guard_end(const double e1[2]);
   void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
@@ -377,6 +380,10 @@ class Simulation {
   double target_lead_ = 0.0;
   std::optional<Data> guard_data_;  ///< for the energies (a second Data: data_ keeps the step's)
   VecX guard_q0_, guard_qd0_, guard_force_, guard_actuator_, guard_impulse_[4];
+  /// The last step's end state and energies: the next step's start, unless a setter moved it.
+  VecX guard_q1_, guard_qd1_;
+  double guard_e1_[2] = {0.0, 0.0};
+  bool guard_e1_valid_ = false;
   int guard_substeps_ = 1;
   long guard_triggers_ = 0;
   long guard_exhausted_ = 0;
