@@ -485,6 +485,31 @@ TEST(Checkpoint, ClockAndRestoreStateValidateTheirArguments) {
   EXPECT_EQ(s.q()[3], 1.0);
 }
 
+// Three actuators of the kinds ideal_pd, dc_motor and remotized_pd on dofs 0-2 of a 3-dof
+// chain, from `pd`'s gains and delay, their limits scaled by `scale`.
+void set_three_actuators(Simulation& sim, const ExplicitActuator& pd, double scale) {
+  ExplicitActuator motor = pd;
+  motor.kind = ActuatorKind::dc_motor;
+  motor.saturation_effort = 9.0 * scale;
+  motor.velocity_limit = 2.0;
+  motor.delay = 1;
+  ExplicitActuator table = pd;
+  table.kind = ActuatorKind::remotized_pd;
+  table.effort_limit = kInf;
+  table.lookup = {{-0.5, 2.0 * scale}, {0.5, 5.0 * scale}};
+  sim.set_actuator(0, pd);
+  sim.set_actuator(1, motor);
+  sim.set_actuator(2, table);
+}
+
+// Step k's commands of the three actuators.
+void command_three_actuators(Simulation& sim, int k) {
+  for (int d = 0; d < 3; ++d) {
+    sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
+    sim.set_actuator_feedforward(d, 0.05 * k - d);
+  }
+}
+
 // Explicit actuators with delays resume bit for bit: their settings, feed-forward, delay rings
 // and push counts are in the checkpoint (version 3).
 TEST(Checkpoint, ExplicitActuatorsResumeWithTheirDelayHistories) {
@@ -497,26 +522,10 @@ TEST(Checkpoint, ExplicitActuatorsResumeWithTheirDelayHistories) {
     pd.damping = 2.0;
     pd.effort_limit = 6.0;
     pd.delay = 3;
-    ExplicitActuator motor = pd;
-    motor.kind = ActuatorKind::dc_motor;
-    motor.saturation_effort = 9.0;
-    motor.velocity_limit = 2.0;
-    motor.delay = 1;
-    ExplicitActuator table = pd;
-    table.kind = ActuatorKind::remotized_pd;
-    table.effort_limit = kInf;
-    table.lookup = {{-0.5, 2.0}, {0.5, 5.0}};
-    sim.set_actuator(0, pd);
-    sim.set_actuator(1, motor);
-    sim.set_actuator(2, table);
+    set_three_actuators(sim, pd, 1.0);
     return sim;
   };
-  auto command = [](Simulation& sim, int k) {
-    for (int d = 0; d < 3; ++d) {
-      sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
-      sim.set_actuator_feedforward(d, 0.05 * k - d);
-    }
-  };
+  const auto command = command_three_actuators;
   Simulation run = setup();
   for (int k = 0; k < 10; ++k) command(run, k), run.step();
   const std::string bytes = checkpoint_bytes(run);
@@ -632,26 +641,10 @@ TEST(Checkpoint, ImplicitActuatorsResumeBitForBit) {
     pd.effort_limit = 600.0;
     pd.delay = 2;
     pd.integration = ActuatorIntegration::implicit_law;
-    ExplicitActuator motor = pd;
-    motor.kind = ActuatorKind::dc_motor;
-    motor.saturation_effort = 90.0;
-    motor.velocity_limit = 2.0;
-    motor.delay = 1;
-    ExplicitActuator table = pd;
-    table.kind = ActuatorKind::remotized_pd;
-    table.effort_limit = kInf;
-    table.lookup = {{-0.5, 20.0}, {0.5, 50.0}};
-    sim.set_actuator(0, pd);
-    sim.set_actuator(1, motor);
-    sim.set_actuator(2, table);
+    set_three_actuators(sim, pd, 10.0);
     return sim;
   };
-  auto command = [](Simulation& sim, int k) {
-    for (int d = 0; d < 3; ++d) {
-      sim.set_drive_target(d, 0.3 * std::sin(0.4 * k + d), 0.1 * d);
-      sim.set_actuator_feedforward(d, 0.05 * k - d);
-    }
-  };
+  const auto command = command_three_actuators;
   Simulation run = setup();
   for (int k = 0; k < 10; ++k) command(run, k), run.step();
   const std::string bytes = checkpoint_bytes(run);

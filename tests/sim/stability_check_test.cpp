@@ -20,6 +20,20 @@ double explicit_radius_closed_form(double a, double b) {
   return std::max(std::abs((tr + d) / 2.0), std::abs((tr - d) / 2.0));
 }
 
+// A slider of mass m stepped at dt with an undamped ideal PD actuator of stiffness kp.
+Simulation undamped_pd_slider(double m, double dt, double kp, ActuatorIntegration integration) {
+  SimulationOptions o;
+  o.dt = dt;
+  Simulation sim(test::make_slider(m, Vec3::UnitX(), Vec3::Zero()), o);
+  ExplicitActuator pd;
+  pd.kind = ActuatorKind::ideal_pd;
+  pd.stiffness = kp;
+  pd.integration = integration;
+  sim.set_actuator(0, pd);
+  sim.set_drive_target(0, 0.1, 0.0);
+  return sim;
+}
+
 TEST(StabilityCheck, ExplicitMapRadiusMatchesClosedForm) {
   const double m = 2.5, h = 0.01;
   for (double a : {0.01, 0.5, 1.0, 3.0, 3.99, 4.5, 20.0})
@@ -83,14 +97,7 @@ TEST(StabilityCheck, FixesOfAnUndampedExplicitPdFollowTheThresholdOfFour) {
   // kp dt^2 / (m + armature) <= 4 (armature = kp dt^2 / 4 - m), never with more damping (at a > 4
   // every kd >= 0 leaves a pole below -1: tr = 2 - a - b < -(1 + det) = -(2 - b)).
   const double m = 2.0, dt = 0.01, a = 25.0, kp = a * m / (dt * dt);
-  SimulationOptions o;
-  o.dt = dt;
-  Simulation sim(test::make_slider(m, Vec3::UnitX(), Vec3::Zero()), o);
-  ExplicitActuator pd;
-  pd.kind = ActuatorKind::ideal_pd;
-  pd.stiffness = kp;
-  sim.set_actuator(0, pd);
-  sim.set_drive_target(0, 0.1, 0.0);
+  Simulation sim = undamped_pd_slider(m, dt, kp, ActuatorIntegration::explicit_law);
   const StabilityReport r = check_stability(sim);
   ASSERT_EQ(r.joints.size(), 1u);
   const JointStability& j = r.joints[0];
@@ -111,15 +118,7 @@ TEST(StabilityCheck, TheSameActuatorSolvedImplicitlyIsStable) {
   // A = [1 - h c, h alpha; -c, alpha] with alpha = m / (m + h kd + h^2 kp), c = alpha h kp / m
   // (undamped: complex poles of modulus sqrt(det A) = sqrt(alpha) = 1 / sqrt(1 + a)).
   const double m = 2.0, dt = 0.01, a = 25.0, kp = a * m / (dt * dt);
-  SimulationOptions o;
-  o.dt = dt;
-  Simulation sim(test::make_slider(m, Vec3::UnitX(), Vec3::Zero()), o);
-  ExplicitActuator pd;
-  pd.kind = ActuatorKind::ideal_pd;
-  pd.stiffness = kp;
-  pd.integration = ActuatorIntegration::implicit_law;
-  sim.set_actuator(0, pd);
-  sim.set_drive_target(0, 0.1, 0.0);
+  Simulation sim = undamped_pd_slider(m, dt, kp, ActuatorIntegration::implicit_law);
   const StabilityReport r = check_stability(sim);
   ASSERT_EQ(r.joints.size(), 1u);
   EXPECT_EQ(r.joints[0].law, JointLaw::implicit_pd);
