@@ -1,5 +1,6 @@
 // The stability check's verdict (docs/stability_check.md, "Accuracy") against actual runs of
-// random robots, gains, steps and solvers, and its robot fix against a long run. In the main
+// random robots, gains, steps and solvers, its robot fix against a long run, and the step guard on
+// issue 35's diverging chain. In the main
 // build's peer binary: it needs the optimised library (about 1 s there; over 2 minutes under the
 // sanitizer build's ASan, UBSan and fuzzing coverage).
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/stability_check.hpp"
+#include "support/drives.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -192,6 +194,40 @@ TEST(StabilityCheck, VerdictAgainstActualRuns) {
   EXPECT_GE(t.configurations - t.diverged, 30);
   EXPECT_GE(t.verdict.right, 91);
   EXPECT_LE(t.verdict.missed, 5);
+}
+
+// The step guard (docs/math/step_guard.md), a long run: the issue's chain diverges unguarded within the horizon and stays bounded guarded (the guard's
+// defaults): PGS 4/1 at 48 links, TGS 4/1 at 64 (benchmarks.md: unguarded they diverge at steps
+// 466 and 333, guarded they stay bounded for 10 000).
+TEST(StepGuard, KeepsTheDivergingChainBounded) {
+  const int steps = 1000;
+  for (const auto& [solver, links] :
+       {std::pair{SolverType::pgs, 48}, std::pair{SolverType::tgs, 64}}) {
+    const auto model = test::make_benchmark_chain(links, Vec3::Zero());
+    SimulationOptions off;
+    off.solver = solver;
+    SimulationOptions on = off;
+    on.guard.enabled = true;
+    Simulation unguarded(model, off);
+    Simulation guarded(model, on);
+    test::drive_benchmark_chain(unguarded);
+    test::drive_benchmark_chain(guarded);
+    bool diverged = false;
+    for (int k = 0; k < steps && !diverged; ++k) {
+      try {
+        unguarded.step();
+      } catch (const DivergenceError&) {
+        diverged = true;
+      }
+      diverged = diverged || !(unguarded.qd().norm() < 1e3);
+    }
+    EXPECT_TRUE(diverged) << to_string(solver);
+    for (int k = 0; k < steps; ++k)
+      ASSERT_NO_THROW(guarded.step()) << to_string(solver) << " " << k;
+    EXPECT_GT(guarded.guard_triggers(), 0) << to_string(solver);
+    EXPECT_LT(guarded.qd().norm(), 10.0) << to_string(solver);
+    EXPECT_TRUE(guarded.q().allFinite());
+  }
 }
 
 }  // namespace

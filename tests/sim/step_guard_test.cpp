@@ -20,39 +20,6 @@ namespace {
 
 using test::kInf;
 
-// The chain: n links of 1 kg and 0.5 m about y, z, x in turn, kp 1000, kd 50 towards
-// random targets in +-0.5 rad (bench_models.cpp's make_chain and targets, built here).
-std::shared_ptr<const Model> guard_chain_model(int n, const Vec3& gravity) {
-  const Vec3 axes[3] = {Vec3::UnitY(), Vec3::UnitZ(), Vec3::UnitX()};
-  const double r = 0.05, l = 0.5;
-  const Mat3 inertia =
-      Vec3((3 * r * r + l * l) / 12, (3 * r * r + l * l) / 12, r * r / 2).asDiagonal();
-  ModelBuilder b;
-  b.set_gravity(gravity);
-  b.add_link(
-      make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity() * (0.02 / 12), fixed_joint("fix")));
-  std::string parent = "base";
-  for (int i = 0; i < n; ++i) {
-    const std::string name = "link" + std::to_string(i + 1);
-    b.add_link(make_link(name, parent, 1.0, Vec3(0, 0, -l / 2), inertia,
-                         revolute_joint("joint" + std::to_string(i + 1), axes[i % 3],
-                                        i == 0 ? Vec3::Zero() : Vec3(0, 0, -l))));
-    parent = name;
-  }
-  return std::make_shared<const Model>(b.build());
-}
-
-VecX guard_drive_chain(Simulation& sim) {
-  std::mt19937 rng(42u + static_cast<unsigned>(sim.model().nv));
-  std::uniform_real_distribution<double> u(-0.5, 0.5);
-  VecX target(sim.model().nv);
-  for (int d = 0; d < sim.model().nv; ++d) {
-    target[d] = u(rng);
-    sim.set_drive(d, Drive{DriveType::force, 1000.0, 50.0, kInf, target[d], 0.0});
-  }
-  return target;
-}
-
 SimulationOptions guard_options(SolverType solver, bool guard, double dt = 1.0 / 60.0) {
   SimulationOptions o;
   o.dt = dt;
@@ -72,7 +39,7 @@ bool guard_same_outputs(const Simulation& a, const Simulation& b) {
 // Where no test fails, the guard changes nothing: the same bits as the unguarded step, every
 // step, for PGS and TGS, compat none and physx, with gravity, limits, friction and a delay.
 TEST(StepGuard, NotTriggeringIsTheUnguardedStepBitForBit) {
-  const auto model = guard_chain_model(6, Vec3(0, 0, -9.81));
+  const auto model = test::make_benchmark_chain(6, Vec3(0, 0, -9.81));
   for (const Compat compat : {Compat::none, Compat::physx})
     for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
       SimulationOptions off = guard_options(solver, false, 1.0 / 240.0), on = off;
@@ -165,36 +132,6 @@ TEST(StepGuard, TriggeredSliderStepIsImplicitEulerSubsteps) {
   }
 }
 
-// The chain diverges unguarded within the horizon and stays bounded guarded (the guard's
-// defaults): PGS 4/1 at 48 links, TGS 4/1 at 64 (benchmarks.md: unguarded they diverge at steps
-// 466 and 333, guarded they stay bounded for 10 000).
-TEST(StepGuard, KeepsTheDivergingChainBounded) {
-  const int steps = 1000;
-  for (const auto& [solver, links] :
-       {std::pair{SolverType::pgs, 48}, std::pair{SolverType::tgs, 64}}) {
-    const auto model = guard_chain_model(links, Vec3::Zero());
-    Simulation unguarded(model, guard_options(solver, false));
-    Simulation guarded(model, guard_options(solver, true));
-    guard_drive_chain(unguarded);
-    guard_drive_chain(guarded);
-    bool diverged = false;
-    for (int k = 0; k < steps && !diverged; ++k) {
-      try {
-        unguarded.step();
-      } catch (const DivergenceError&) {
-        diverged = true;
-      }
-      diverged = diverged || !(unguarded.qd().norm() < 1e3);
-    }
-    EXPECT_TRUE(diverged) << to_string(solver);
-    for (int k = 0; k < steps; ++k)
-      ASSERT_NO_THROW(guarded.step()) << to_string(solver) << " " << k;
-    EXPECT_GT(guarded.guard_triggers(), 0) << to_string(solver);
-    EXPECT_LT(guarded.qd().norm(), 10.0) << to_string(solver);
-    EXPECT_TRUE(guarded.q().allFinite());
-  }
-}
-
 // An explicit PD actuator on a 1 kg slider at kp dt^2 / m = 10: explicit Euler's oscillation
 // grows without bound; the guard's sub-steps of dt / n (kp (dt / n)^2 / m <= 10 / 16) settle it
 // on the target.
@@ -231,16 +168,16 @@ TEST(StepGuard, BoundsAStiffExplicitActuator) {
 // (through triggered steps), as does one that recomputes every start's energies; SimdBatch
 // refuses the guard in one line.
 TEST(StepGuard, BatchEqualsASimulationAndSimdBatchRefuses) {
-  const auto model = guard_chain_model(32, Vec3::Zero());
+  const auto model = test::make_benchmark_chain(32, Vec3::Zero());
   const SimulationOptions o = guard_options(SolverType::pgs, true);
   Simulation alone(model, o);
-  guard_drive_chain(alone);
+  test::drive_benchmark_chain(alone);
   Batch batch(model, 2, o);
-  for (int i = 0; i < 2; ++i) guard_drive_chain(batch.sim(i));
+  for (int i = 0; i < 2; ++i) test::drive_benchmark_chain(batch.sim(i));
   // The start's energies reused from the last step's end (step_guard.cpp) are the ones a new
   // forward kinematics pass gives: set_model (same model) drops them every step here.
   Simulation recomputed(model, o);
-  guard_drive_chain(recomputed);
+  test::drive_benchmark_chain(recomputed);
   for (int k = 0; k < 60; ++k) {
     recomputed.set_model(recomputed.model_ptr());
     recomputed.step();

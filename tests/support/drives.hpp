@@ -1,6 +1,7 @@
 // Helpers for driven simulations in tests.
 #pragma once
 
+#include <limits>
 #include <random>
 
 #include "featherdrive/algorithm/crba.hpp"
@@ -56,6 +57,20 @@ inline OneDofState tgs_one_dof_orbit(double m, double kp, double kd, double xT, 
   OneDofState s{xT, 0.0};
   for (int k = 0; k < 20000; ++k) tgs_one_dof_step(s, m, kp, kd, xT, vT, F, tau, n);
   return s;
+}
+
+/// The benchmark chain's drives (kp 1000, kd 50) towards targets uniform in +-0.5 rad, drawn from
+/// the seed 42 + nv; returns the targets.
+inline VecX drive_benchmark_chain(Simulation& sim) {
+  std::mt19937 rng(42u + static_cast<unsigned>(sim.model().nv));
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  VecX target(sim.model().nv);
+  for (int d = 0; d < sim.model().nv; ++d) {
+    target[d] = u(rng);
+    sim.set_drive(d, Drive{DriveType::force, 1000.0, 50.0,
+                           std::numeric_limits<double>::infinity(), target[d], 0.0});
+  }
+  return target;
 }
 
 }  // namespace featherdrive::test

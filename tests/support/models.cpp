@@ -28,6 +28,26 @@ std::shared_ptr<const Model> make_pendulum(double mass, double length, double in
   return std::make_shared<const Model>(b.build());
 }
 
+std::shared_ptr<const Model> make_benchmark_chain(int n, const Vec3& gravity) {
+  const Vec3 axes[3] = {Vec3::UnitY(), Vec3::UnitZ(), Vec3::UnitX()};
+  const double r = 0.05, l = 0.5;
+  const Mat3 inertia =
+      Vec3((3 * r * r + l * l) / 12, (3 * r * r + l * l) / 12, r * r / 2).asDiagonal();
+  ModelBuilder b;
+  b.set_gravity(gravity);
+  b.add_link(
+      make_link("base", "", 1.0, Vec3::Zero(), Mat3::Identity() * (0.02 / 12), fixed_joint("fix")));
+  std::string parent = "base";
+  for (int i = 0; i < n; ++i) {
+    const std::string name = "link" + std::to_string(i + 1);
+    b.add_link(make_link(name, parent, 1.0, Vec3(0, 0, -l / 2), inertia,
+                         revolute_joint("joint" + std::to_string(i + 1), axes[i % 3],
+                                        i == 0 ? Vec3::Zero() : Vec3(0, 0, -l))));
+    parent = name;
+  }
+  return std::make_shared<const Model>(b.build());
+}
+
 std::shared_ptr<const Model> make_planar_chain(int n, double mass, double length,
                                                const Vec3& gravity) {
   ModelBuilder b;

@@ -24,6 +24,10 @@ std::shared_ptr<const Model> make_pendulum(double mass, double length, double in
 std::shared_ptr<const Model> make_planar_chain(int n, double mass, double length,
                                                const Vec3& gravity = Vec3(0, 0, -9.81));
 
+/// Issue 35's benchmark chain (bench/bench_models.cpp, make_chain): n links of 1 kg and 0.5 m,
+/// solid cylinders of radius 0.05 along -z, revolute axes cycling y, z, x, from a fixed base.
+std::shared_ptr<const Model> make_benchmark_chain(int n, const Vec3& gravity);
+
 /// A random tree of n links with every joint type (revolute, prismatic, spherical, fixed),
 /// random frames, axes, inertias and armature; root fixed or floating.
 std::shared_ptr<const Model> make_random_tree(unsigned seed, int n, bool floating,
