@@ -1,5 +1,5 @@
 // The stability check (docs/stability_check.md): the one-joint maps against their closed forms.
-// The verdict against actual runs is tests/peers/stability_accuracy_test.cpp (the main build's).
+// The verdict against actual runs is tests/peers/long_runs_test.cpp (the main build's).
 #include <gtest/gtest.h>
 
 #include <cmath>
