@@ -423,6 +423,10 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
         "solver row; they differ where a joint reaches its limit:" +
         limited);
   if (!envelopes.empty()) out.notes.push_back("actuator envelopes not exported:" + envelopes);
+  if (o.guard.enabled)
+    out.notes.push_back(
+        "step guard not exported: MuJoCo steps unguarded, featherdrive redoes the steps the guard "
+        "rejects (docs/math/step_guard.md)");
   bool link_parameters = false;
   for (int i = 0; i < model.num_links(); ++i) {
     const LinkParameters& p = sim.link_parameters(i);

@@ -138,6 +138,10 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     throw std::invalid_argument("physx export: the root joint '" + model.links[0].joint_name +
                                 "' is " + to_string(root_type) +
                                 "; PhysX needs a fixed or floating root");
+  if (o.guard.enabled)
+    throw std::invalid_argument(
+        "physx export: the step guard (guard:) has no PhysX counterpart: PhysX would run every "
+        "step unguarded (remove guard: to compare)");
   if (!sim.mimic_joints().empty())
     throw std::invalid_argument("physx export: " + describe(model, sim.mimic_joints()[0]) +
                                 ": the WebAssembly PhysX has no mimic joints");

@@ -306,6 +306,16 @@ def main():
             one_line_error(r, [f"mj_actuated_{integration}.yaml", "joint slide",
                                f"{integration} actuator"],
                            f"{command[0]} with an {integration} actuator")
+    # The step guard: MuJoCo steps unguarded, which both tools say in a note.
+    guarded = os.path.join(out_dir, "mj_guarded.yaml")
+    with open(guarded, "w") as f:
+        f.write(f"model: {slider_urdf}\nsteps: 10\n"
+                "drives: {slide: {type: force, stiffness: 10, damping: 1}}\nguard: {}\n")
+    for command in (["compare-mujoco", guarded], ["translate", guarded, "--to", "mujoco",
+                                                  "--out", os.path.join(out_dir, "g.xml")]):
+        r = run(cli, *command)
+        check(r.returncode == 0 and "note: step guard not exported: MuJoCo steps unguarded" in r.stdout,
+              f"{command[0]} of a guarded scene notes the guard", r)
     undriven = os.path.join(out_dir, "mj_undriven.yaml")
     with open(undriven, "w") as f:
         f.write(f"model: {slider_urdf}\nsteps: 10\n")

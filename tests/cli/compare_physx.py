@@ -150,6 +150,14 @@ def messages(cli, source, out_dir):
         one_line_error(run(cli, "compare-physx", actuated, env=environment(PATH=empty)), 2,
                        [f"{actuated}: physx export: joint 'slide' has an {integration} dc_motor "
                         "actuator, which the harness cannot set"], f"an {integration} actuator")
+    # The step guard: PhysX would step unguarded, so the comparison is refused.
+    guarded = os.path.join(out_dir, "guarded.yaml")
+    with open(guarded, "w") as f:
+        f.write(f"model: {os.path.join(source, 'examples', 'slider.urdf')}\nsteps: 3\n"
+                "drives: {slide: {type: force, stiffness: 10, damping: 1}}\nguard: {}\n")
+    one_line_error(run(cli, "compare-physx", guarded, env=environment(PATH=empty)), 2,
+                   [f"{guarded}: physx export: the step guard (guard:) has no PhysX counterpart"],
+                   "a guarded scene")
 
 
 def main():
