@@ -87,10 +87,6 @@ std::complex<double> pole(const Eigen::Matrix2d& A, int k) {
   return tr / 2.0 + (k == 0 ? root : -root);
 }
 
-double spectral_radius(const Eigen::Matrix2d& A) {
-  return std::max(std::abs(pole(A, 0)), std::abs(pole(A, 1)));
-}
-
 // Sub-step gains (h^2 kp, h kd) of an implicit step of h with inertia m whose map has trace tr
 // and determinant det (eq. B11): det = m / (m + h kd + h^2 kp), tr = 1 + det - h^2 kp det / m.
 ForceGains implicit_gains_for_poles(double m, double h, double tr, double det) {
@@ -106,6 +102,10 @@ std::string fmt(double v) {
 }
 
 }  // namespace
+
+double step_spectral_radius(const Eigen::Matrix2d& A) {
+  return std::max(std::abs(pole(A, 0)), std::abs(pole(A, 1)));
+}
 
 const char* to_string(MujocoIntegrator integrator) {
   return integrator == MujocoIntegrator::euler ? "euler" : "implicit";
@@ -180,12 +180,12 @@ DriveStepMap mujoco_step_map(double m, const MujocoDrive& drive, double dt) {
 }
 
 bool stable(const DriveStepMap& map) {
-  return spectral_radius(map.A) < 1.0 + 1e-12;
+  return step_spectral_radius(map.A) < 1.0 + 1e-12;
 }
 
 MapDistance map_distance(const DriveStepMap& a, const DriveStepMap& b, int steps) {
   MapDistance d;
-  const double radius = std::max(spectral_radius(a.A), spectral_radius(b.A));
+  const double radius = std::max(step_spectral_radius(a.A), step_spectral_radius(b.A));
   if (steps <= 0) {
     // Until the slower response has settled to 1e-4 of the step (10 000 steps at most).
     steps = radius < 1.0 ? static_cast<int>(std::ceil(std::log(1e-4) / std::log(radius))) : 1000;

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <complex>
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
@@ -250,12 +249,6 @@ Eigen::Matrix2d joint_step_matrix(double m, const JointGains& gains,
       break;
   }
   return explicit_pd_step_matrix(m, 0.0, 0.0, options.dt);
-}
-
-double step_spectral_radius(const Eigen::Matrix2d& A) {
-  const double tr = A.trace(), det = A.determinant();
-  const std::complex<double> root = std::sqrt(std::complex<double>(tr * tr / 4.0 - det));
-  return std::max(std::abs(tr / 2.0 + root), std::abs(tr / 2.0 - root));
 }
 
 double check_energy(const Simulation& sim) {

@@ -72,6 +72,9 @@ struct MapDistance {
 };
 MapDistance map_distance(const DriveStepMap& a, const DriveStepMap& b, int steps = 0);
 
+/// The largest |eigenvalue| of a step map's A (its poles).
+double step_spectral_radius(const Eigen::Matrix2d& A);
+
 /// Whether a step is stable: both poles strictly inside the unit circle (or on it only at 1 for
 /// a drive without stiffness).
 bool stable(const DriveStepMap& map);

@@ -43,8 +43,7 @@ Eigen::Matrix2d joint_step_matrix(double m, const JointGains& gains,
 /// q1 = q0 + h v1.
 Eigen::Matrix2d explicit_pd_step_matrix(double m, double kp, double kd, double h);
 
-/// The largest |eigenvalue| of a 2x2 matrix.
-double step_spectral_radius(const Eigen::Matrix2d& A);
+/// step_spectral_radius (gain_translation.hpp) gives the largest |eigenvalue| of a map.
 
 /// Stable: spectral radius <= 1 + kStableTolerance (a free or undamped dof sits on the circle).
 inline constexpr double kStableTolerance = 1e-9;
