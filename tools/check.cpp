@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include "featherdrive/io/scene_check.hpp"
@@ -50,6 +51,10 @@ CLI::App* add_check_command(CLI::App& app, CheckArgs& args) {
 }
 
 int check_scene_command(const CheckArgs& args) {
+  // The scene's run length is not what check runs: refused rather than ignored.
+  if (args.overrides.steps_text)
+    throw std::invalid_argument("--steps = " + *args.overrides.steps_text +
+                                ": check runs no scene steps; its trial's length is --trial-steps");
   StabilityCheckOptions options;
   if (args.trial_steps)
     options.min_trial_steps = options.max_trial_steps =

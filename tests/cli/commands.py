@@ -70,6 +70,8 @@ def main():
     r = run(cli, "check", ex("slider.yaml"), "--trial-steps", "2000")
     check(r.returncode == 0 and "trial run of 2000 steps" in r.stdout, "check --trial-steps 2000", r)
     one_line_error(run(cli, "check", ex("slider.yaml"), "--trial-steps", "-1"), 2, "--trial-steps")
+    one_line_error(run(cli, "check", ex("slider.yaml"), "--steps", "50"), 2,
+                   "--steps = 50: check runs no scene steps")
     one_line_error(run(cli, "check", os.path.join(out_dir, "no_such_scene.yaml")), 2,
                    "no_such_scene.yaml")
     one_line_error(run(cli, "check", data("malformed/applied_force_nan.yaml")), 2,
