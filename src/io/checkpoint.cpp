@@ -310,6 +310,8 @@ std::string checkpoint_bytes(const Simulation& sim) {
   write_actuators(p, sim);
   write_drive_delays(p, sim);
   write_joint_coupling(p, sim);
+  const GuardAccount& a = sim.guard_account();  // version 7
+  for (double v : {a.created, a.dissipated, a.scale}) p.f64(v);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -386,6 +388,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                      "at most 2 * steps * " +
                      format_double(kMaxDt) + " s)");
     SimulationOptions o;
+    o.guard = sim.options().guard;  // how to step, not state: the simulation's own
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
     if (solver > static_cast<std::uint8_t>(SolverType::tgs))
@@ -503,6 +506,15 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     read_actuators(r, next, name, version);
     if (version >= 4) read_drive_delays(r, next, name);  // version 3 has none
     if (version >= 5) read_joint_coupling(r, next, name);  // 3 and 4 have none
+    if (version >= 7) {  // before it, the guard's account starts empty
+      GuardAccount a;
+      a.created = r.f64();
+      a.dissipated = r.f64();
+      a.scale = r.f64();
+      next.set_guard_account(a);
+    } else {
+      next.set_guard_account({});
+    }
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

@@ -41,6 +41,18 @@ struct StepGuard {
   int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
   /// Test (ii)'s share of the step's energy scale that may appear from nowhere; in (0, 1].
   double energy_tolerance = 0.02;
+  /// Test (iii)'s share of the energy the dampers dissipated that the step may create over the
+  /// run (eq. G-9); in (0, 100].
+  double dissipation_share = 0.15;
+};
+
+/// Test (iii)'s account (docs/math/step_guard.md, eq. G-7, G-8): leaky sums over the run of the
+/// energy created beyond the work (X), of what the dampers dissipated (D) and of the steps'
+/// energy scales (S). Part of the state: a checkpoint keeps it.
+struct GuardAccount {
+  double created = 0.0;
+  double dissipated = 0.0;
+  double scale = 0.0;
 };
 inline constexpr int kMaxGuardSubsteps = 4096;
 
@@ -65,7 +77,8 @@ inline constexpr long kMaxStepCount = 1L << 53;
 /// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
 /// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
 /// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
-/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1].
+/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1],
+/// guard.dissipation_share outside (0, 100].
 void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
@@ -277,6 +290,11 @@ class Simulation {
   /// Steps whose max_substeps sub-steps still failed a test (kept as they were).
   long guard_exhausted() const { return guard_exhausted_; }
   void reset_guard_counters();
+  /// Test (iii)'s account (eq. G-7, G-8), carried from step to step; checkpoints keep it.
+  const GuardAccount& guard_account() const { return guard_account_; }
+  /// Throws std::invalid_argument for a negative or non-finite scale or dissipation, or a
+  /// non-finite created energy.
+  void set_guard_account(const GuardAccount& account);
 
  private:
   friend class Batch;  // lends the storage of state_
@@ -317,6 +335,8 @@ class Simulation {
   void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
   const VecX& guard_substep_force();
   void keep_guard_end(const double e1[2]);
+  double damper_power() const;
+  double drive_bracket(int d, double q0, double dq, double h) const;
   void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
@@ -384,6 +404,8 @@ class Simulation {
   VecX guard_q1_, guard_qd1_;
   double guard_e1_[2] = {0.0, 0.0};
   bool guard_e1_valid_ = false;
+  GuardAccount guard_account_;  ///< test (iii): committed with the step
+  GuardAccount guard_account_next_;  ///< the account after the (sub-)step being tested
   int guard_substeps_ = 1;
   long guard_triggers_ = 0;
   long guard_exhausted_ = 0;
