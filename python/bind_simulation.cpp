@@ -73,6 +73,50 @@ void featherdrive::python::bind_simulation(py::module_& m) {
             locked(s, [&] { s.set_qd(v); });
           },
           py::arg("qd"), "Sets the joint velocities (nv,).")
+      .def(
+          "set_base_state",
+          [](Simulation& s, py::handle position, py::handle orientation,
+             py::handle linear_velocity, py::handle angular_velocity) {
+            const Model& m = *model_of(s);
+            auto given = [](py::handle x, Eigen::Index n, const char* what) {
+              return x.is_none() ? std::optional<VecX>() : std::optional<VecX>(to_vector(x, n, what));
+            };
+            const auto p = given(position, 3, "base position");
+            const auto o = given(orientation, 4, "base orientation");
+            const auto v = given(linear_velocity, 3, "base linear_velocity");
+            const auto w = given(angular_velocity, 3, "base angular_velocity");
+            locked(s, [&] {
+              BaseState base = base_state(m, s.q(), s.qd());  // what is not given stays
+              if (p) base.position = *p;
+              if (o) base.orientation = Quat((*o)[0], (*o)[1], (*o)[2], (*o)[3]);
+              if (v) base.linear_velocity = *v;
+              if (w) base.angular_velocity = *w;
+              VecX q = s.q(), qd = s.qd();
+              set_base_state(m, base, q, qd);
+              s.set_q(q);
+              s.set_qd(qd);
+            });
+          },
+          py::arg("position") = py::none(), py::arg("orientation") = py::none(),
+          py::arg("linear_velocity") = py::none(), py::arg("angular_velocity") = py::none(),
+          "Places a floating root: its origin's position, orientation (w, x, y, z), the origin's "
+          "velocity and the angular velocity, all in world axes; what is not given stays. "
+          "ValueError without a floating root or for a zero orientation.")
+      .def(
+          "base_state",
+          [](const Simulation& s) {
+            const auto model = model_of(s);  // it takes the lock itself
+            const BaseState b = locked(s, [&] { return base_state(*model, s.q(), s.qd()); });
+            py::dict d;
+            d["position"] = VecX(b.position);
+            d["orientation"] = VecX(Eigen::Vector4d(b.orientation.w(), b.orientation.x(),
+                                                    b.orientation.y(), b.orientation.z()));
+            d["linear_velocity"] = VecX(b.linear_velocity);
+            d["angular_velocity"] = VecX(b.angular_velocity);
+            return d;
+          },
+          "The floating root's position, orientation (w, x, y, z), linear and angular velocity "
+          "in world axes, as a dict of arrays. ValueError without a floating root.")
       .def_property_readonly(
           "time", [](const Simulation& s) { return locked(s, [&] { return s.time(); }); },
           "Simulated time [s].")

@@ -30,6 +30,7 @@
 #include "featherdrive/algorithm/center_of_mass.hpp"
 #include "featherdrive/algorithm/crba.hpp"
 #include "featherdrive/algorithm/energy.hpp"
+#include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/algorithm/jacobian.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/rnea.hpp"

@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/constraint/drive_range.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
@@ -652,7 +653,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   scene.q0 = m->neutral_configuration();
   scene.qd0 = VecX::Zero(m->nv);
   if (const YAML::Node init = root["initial"]) {
-    r.map(init, "initial", {"q", "qd"});
+    r.map(init, "initial", {"q", "qd", "base"});
     for (const char* which : {"q", "qd"}) {
       const YAML::Node values = init[which];
       if (!values) continue;
@@ -679,6 +680,29 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
             angle > 0.0 ? Quat(Eigen::AngleAxisd(angle, theta / angle)) : Quat::Identity();
         scene.q0.segment<4>(m->links[link].q_index) << Q.w(), Q.x(), Q.y(), Q.z();
       }
+    }
+    // A floating root's pose and velocity in world axes (algorithm/floating_base.hpp).
+    if (const YAML::Node b = init["base"]) {
+      r.map(b, "initial.base", {"position", "orientation", "linear_velocity", "angular_velocity"});
+      if (!m->floating_base())
+        r.fail("initial.base", b, "the robot has no floating root (fixed_base: false gives one)");
+      BaseState base = base_state(*m, scene.q0, scene.qd0);
+      if (b["position"]) base.position = r.vec3(b["position"], "initial.base.position");
+      if (const YAML::Node o = b["orientation"]) {
+        if (!o.IsSequence() || o.size() != 4)
+          r.fail("initial.base.orientation", o, "must be a list of 4 numbers (w, x, y, z)");
+        double wxyz[4];
+        for (int i = 0; i < 4; ++i)
+          wxyz[i] = r.finite(o[i], "initial.base.orientation[" + std::to_string(i) + "]");
+        if (!(Eigen::Vector4d(wxyz[0], wxyz[1], wxyz[2], wxyz[3]).norm() > 1e-150))
+          r.fail("initial.base.orientation", o, "must not be zero");
+        base.orientation = Quat(wxyz[0], wxyz[1], wxyz[2], wxyz[3]);
+      }
+      if (b["linear_velocity"])
+        base.linear_velocity = r.vec3(b["linear_velocity"], "initial.base.linear_velocity");
+      if (b["angular_velocity"])
+        base.angular_velocity = r.vec3(b["angular_velocity"], "initial.base.angular_velocity");
+      set_base_state(*m, base, scene.q0, scene.qd0);
     }
   }
 

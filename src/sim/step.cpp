@@ -102,7 +102,7 @@ void Simulation::row_forces() {
 void Simulation::end_step() {
   check_finite_or_throw();
   commit_state();
-  if (options_.guard.enabled) guard_account_ = guard_account_next_;  // test (iii)'s, G-8
+  if (options_.guard.enabled) commit_guard_account();
   time_ += options_.dt;
   ++step_count_;
 }

@@ -254,6 +254,15 @@ void Simulation::guarded_advance(const VecX& tau_step) {
   }
 }
 
+// Test (iii)'s account after a committed step (eq. G-8). One that overflowed (gains near the
+// largest double make inf - inf) starts again empty rather than failing every later step.
+void Simulation::commit_guard_account() {
+  const GuardAccount& a = guard_account_next_;
+  const bool finite = std::isfinite(a.created) && std::isfinite(a.dissipated) &&
+                      std::isfinite(a.scale);
+  guard_account_ = finite ? a : GuardAccount{};
+}
+
 // The end of a step that may be committed: end_step's finite check may still refuse it, and then
 // the state is the start again, which the comparison tells apart.
 void Simulation::keep_guard_end(const double e1[2]) {

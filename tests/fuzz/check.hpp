@@ -3,6 +3,8 @@
 // they were. A failure aborts, so libFuzzer records the input.
 #pragma once
 
+#include <bit>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -38,12 +40,15 @@ inline bool checked_step(Simulation& sim) {
              fr = sim.friction_force(), vl = sim.velocity_limit_force();
   const double t = sim.time();
   const long n = sim.step_count();
+  const GuardAccount account = sim.guard_account();
   try {
     sim.step();
   } catch (const DivergenceError&) {
     if (!same_bits(q, sim.q()) || !same_bits(qd, sim.qd()) || !same_bits(f, sim.drive_force()) ||
         !same_bits(l, sim.limit_force()) || !same_bits(fr, sim.friction_force()) ||
-        !same_bits(vl, sim.velocity_limit_force()) || sim.time() != t || sim.step_count() != n)
+        !same_bits(vl, sim.velocity_limit_force()) || sim.time() != t || sim.step_count() != n ||
+        std::bit_cast<std::uint64_t>(account.created) !=
+            std::bit_cast<std::uint64_t>(sim.guard_account().created))
       bug("a diverging step changed the state");
     return false;
   }

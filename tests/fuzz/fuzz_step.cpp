@@ -1,7 +1,8 @@
 // libFuzzer: model building and stepping from fuzzed parameters. The bytes decode into a small
 // tree (1 to 5 links, every joint type, extreme masses, inertias, frames and axes), solver
 // settings (dt, PGS/TGS, iterations), drives (type, gains, limits, targets), joint limits,
-// friction, velocity limits, envelopes, applied forces and the initial state. Refused parameters
+// friction, velocity limits, envelopes, applied forces, the initial state, actuators, delays, a
+// floating root's world pose and the step guard. Refused parameters
 // (std::invalid_argument, ModelError) and DivergenceError are fine; a crash, undefined behaviour,
 // a non-finite state without an error, a diverging step that changes the state, or a checkpoint
 // that does not restore bit for bit are bugs.
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "check.hpp"
+#include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/model/model_builder.hpp"
 
@@ -195,6 +197,55 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try_set([&] { sim.set_mimic_joints(rows); });
     fuzz::check_finite(sim);
     for (int k = in.small(4); k > 0; --k)
+      if (!fuzz::checked_step(sim)) break;
+  }
+
+  // Then actuators (both laws, delays, feed-forward), drive delays, a floating root placed in world
+  // axes and the step guard (read last, so that older inputs decode as they did).
+  if (in.flag()) {
+    for (int d = 0; d < nv; ++d) {
+      if (in.flag()) {
+        ExplicitActuator a;
+        a.kind = static_cast<ActuatorKind>(in.small(4));
+        a.stiffness = in.number();
+        a.damping = in.number();
+        if (in.flag()) a.effort_limit = in.number();
+        a.saturation_effort = in.number();
+        a.velocity_limit = in.number();
+        if (in.flag()) a.lookup = {{in.number(), in.number()}, {in.number(), in.number()}};
+        a.delay = in.small(4);
+        if (in.flag()) a.integration = ActuatorIntegration::implicit_law;
+        try_set([&] { sim.set_actuator(d, a); });
+        const double effort = in.number();
+        if (in.flag()) try_set([&] { sim.set_actuator_feedforward(d, effort); });
+      }
+      if (in.flag()) {
+        const int delay = in.small(4);
+        try_set([&] { sim.set_drive_delay(d, delay); });
+      }
+    }
+    if (in.flag()) {
+      BaseState base;
+      base.position = in.vec3();
+      base.orientation = Quat(in.number(), in.number(), in.number(), in.number());
+      base.linear_velocity = in.vec3();
+      base.angular_velocity = in.vec3();
+      VecX q = sim.q(), qd = sim.qd();
+      try_set([&] {
+        set_base_state(*model, base, q, qd);
+        sim.set_q(q);
+        sim.set_qd(qd);
+      });
+    }
+    SimulationOptions o = sim.options();
+    o.guard.enabled = in.flag();
+    o.guard.max_joint_step = in.flag() ? in.number() : 0.01 * (1 + in.small(30));
+    o.guard.max_substeps = 1 + in.small(64);  // 1 is refused
+    if (in.flag()) o.guard.energy_tolerance = in.number();
+    if (in.flag()) o.guard.dissipation_share = in.number();
+    try_set([&] { sim.set_options(o); });
+    fuzz::check_finite(sim);
+    for (int k = in.small(6); k > 0; --k)
       if (!fuzz::checked_step(sim)) break;
   }
 

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/io/trajectory.hpp"
 #include "support/compare.hpp"
 #include "support/source_tree.hpp"
@@ -205,6 +207,45 @@ TEST(Scene, BadValuesNameTheFileTheKeyPathAndTheValue) {
                 .find("slider.urdf: link 'base' has no <inertial>"),
             std::string::npos);
   EXPECT_THROW(load_scene(kExamples + "no_such_scene.yaml"), InputError);
+}
+
+// initial.base places a floating root in world axes: forward kinematics of the simulation the
+// scene makes finds the root link there, moving as the scene says; given to a fixed robot, or
+// malformed, it is refused naming the key.
+TEST(Scene, InitialBasePlacesAFloatingRootInWorldAxes) {
+  const std::string head =
+      "model: /usr/share/mujoco/model/humanoid/humanoid.xml\nfixed_base: false\nsteps: 1\n";
+  const Scene scene = scene_from(
+      head + "initial: {base: {position: [0.1, -0.2, 1.5], orientation: [0, 0, 0, 2], "
+             "linear_velocity: [1, 0, -0.5], angular_velocity: [0, 0.3, 0]}}\n");
+  const Simulation sim = make_simulation(scene);
+  const Model& model = sim.model();
+  ASSERT_TRUE(model.floating_base());
+  Data data(model);
+  forward_kinematics(model, data, sim.q(), sim.qd());
+  // (0, 0, 0, 2) normalised: half a turn about z.
+  EXPECT_LT((data.world_rotation[0] - Vec3(-1, -1, 1).asDiagonal().toDenseMatrix()).norm(), 1e-15);
+  EXPECT_LT((data.world_position[0] - Vec3(0.1, -0.2, 1.5)).norm(), 1e-15);
+  const Vec6 v = link_velocity(model, data, 0, ReferenceFrame::world_aligned);
+  EXPECT_LT((v.head<3>() - Vec3(0, 0.3, 0)).norm(), 1e-15);
+  EXPECT_LT((v.tail<3>() - Vec3(1, 0, -0.5)).norm(), 1e-15);
+  // Keys left out keep the model's pose: its position with only the velocity given.
+  const Scene moving = scene_from(head + "initial: {base: {linear_velocity: [0, 0, 2]}}\n");
+  const Scene still = scene_from(head);
+  EXPECT_EQ(moving.q0, still.q0);
+  EXPECT_EQ(error_of("model: slider.urdf\nsteps: 1\ninitial: {base: {position: [0, 0, 1]}}\n"),
+            kExamples + "inline.yaml: initial.base = {position: [0, 0, 1]}: the robot has no "
+                        "floating root (fixed_base: false gives one)");
+  EXPECT_EQ(error_of(head + "initial: {base: {orientation: [0, 0, 0, 0]}}\n"),
+            kExamples + "inline.yaml: initial.base.orientation = [0, 0, 0, 0]: must not be zero");
+  EXPECT_EQ(error_of(head + "initial: {base: {orientation: [1, 0, 0]}}\n"),
+            kExamples + "inline.yaml: initial.base.orientation = [1, 0, 0]: must be a list of 4 "
+                        "numbers (w, x, y, z)");
+  EXPECT_EQ(error_of(head + "initial: {base: {position: [0, .nan, 0]}}\n"),
+            kExamples + "inline.yaml: initial.base.position[1] = .nan: must be finite");
+  EXPECT_NE(error_of(head + "initial: {base: {pos: [0, 0, 0]}}\n")
+                .find("initial.base.pos: unknown key"),
+            std::string::npos);
 }
 
 std::string repeat(const std::string& s, int n) {

@@ -336,6 +336,7 @@ class Simulation {
   const VecX& guard_substep_force();
   void keep_guard_end(const double e1[2]);
   double damper_power() const;
+  void commit_guard_account();
   double drive_bracket(int d, double q0, double dq, double h) const;
   void lead_drive_targets();
 
