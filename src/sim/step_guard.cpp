@@ -52,7 +52,7 @@ void Simulation::guard_energy(const VecX& q, const VecX& qd, double e[2]) {
 bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
   const Model& model = *model_;
   const double h = dt_;
-  const double bound = options_.guard.max_joint_step;
+  const double bound = settings_.options.guard.max_joint_step;
   bool moved_too_far = false;
   double work = 0.0;  // eq. (G-3): sum over dofs of the joint force's impulse times the motion
   double work_rounding = 0.0;  // sum |F| (|q| + |dq|): the positions' rounding carried into it
@@ -72,7 +72,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
       // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
       double dq = q_[link.q_index] - guard_q0_[link.q_index];
-      if (wrapped_[static_cast<size_t>(link.v_index)])
+      if (settings_.revolute_wrap[static_cast<size_t>(link.v_index)] == RevoluteWrap::wrapped)
         dq = std::remainder(dq, 2.0 * std::numbers::pi);
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
@@ -93,13 +93,13 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
   const double rounding =
       kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
-  return !moved_too_far && excess <= options_.guard.energy_tolerance * scale + rounding;
+  return !moved_too_far && excess <= settings_.options.guard.energy_tolerance * scale + rounding;
 }
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
 void Simulation::guarded_advance(const VecX& tau_step) {
-  const double dt = options_.dt;
-  const int most = options_.guard.max_substeps;
+  const double dt = settings_.options.dt;
+  const int most = settings_.options.guard.max_substeps;
   double e_start[2], e0[2], e1[2];
   guard_q0_ = q_;
   guard_qd0_ = qd_;
@@ -204,7 +204,7 @@ void Simulation::lead_drive_targets() {
     const double target_velocity =
         actuators_.implicit(d)     ? actuators_.command_seen(d).velocity
         : drive_delays_.delayed(d) ? drive_delays_.drive_seen(d).target_velocity
-                                   : drives_[static_cast<size_t>(d)].target_velocity;
+                                   : settings_.drives[static_cast<size_t>(d)].target_velocity;
     rows.drive.target_vel_plus_initial_bias -=
         rows.drive.bias_coefficient * target_velocity * target_lead_;
   }
