@@ -144,19 +144,71 @@ void Simulation::set_q(const VecX& q) {
 }
 
 void Simulation::set_clock(double time, long step_count) {
-  if (step_count < 0 || step_count > kMaxStepCount)
-    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
-                                " must be in [0, " + std::to_string(kMaxStepCount) + "]");
-  if (!std::isfinite(time) || time < 0.0)
-    throw std::invalid_argument("clock: time = " + fmt(time) + " must be finite and >= 0");
-  // Each step adds one dt <= kMaxDt; the factor 2 covers the rounding of the sum (< n eps).
-  const double most = 2.0 * static_cast<double>(step_count) * kMaxDt;
-  if (time > most)
-    throw std::invalid_argument("clock: time = " + fmt(time) + " s after " +
-                                std::to_string(step_count) + " steps: no run reaches it (at most " +
-                                fmt(most) + " s, 2 * steps * " + fmt(kMaxDt) + " s)");
+  check_clock(time, step_count);
   time_ = time;
   step_count_ = step_count;
+}
+
+State Simulation::state() const {
+  State s;
+  s.q = q();
+  s.qd = qd();
+  s.applied_force = applied_force();
+  s.time = time_;
+  s.step_count = step_count_;
+  s.drive_force = drive_force();
+  s.limit_force = limit_force();
+  s.friction_force = friction_force();
+  s.velocity_limit_force = velocity_limit_force();
+  s.actuator_force = actuator_force_;
+  const auto nv = static_cast<size_t>(model_->nv);
+  s.actuator_history.resize(nv);
+  s.drive_delay_history.resize(nv);
+  for (int d = 0; d < model_->nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    if (actuators_.active(d)) s.actuator_history[k] = {actuators_.pushes(d), actuators_.ring(d)};
+    if (drive_delays_.delayed(d))
+      s.drive_delay_history[k] = {drive_delays_.pushes(d), drive_delays_.ring(d)};
+  }
+  return s;
+}
+
+void Simulation::set_state(const State& s) {
+  const int nv = model_->nv;
+  check_clock(s.time, s.step_count);
+  check_state_vector(s.qd, nv, "qd");
+  check_state_vector(s.applied_force, nv, "applied_force");
+  check_state_vector(s.actuator_force, nv, "actuator_force");
+  for (const size_t n : {s.actuator_history.size(), s.drive_delay_history.size()})
+    if (n != static_cast<size_t>(nv))
+      throw std::invalid_argument("state: " + std::to_string(n) + " delay histories, expected " +
+                                  "one per dof (nv = " + std::to_string(nv) + ")");
+  // The histories are restored into copies: nothing changes if one is refused.
+  ExplicitActuators actuators = actuators_;
+  DriveDelays delays = drive_delays_;
+  for (int d = 0; d < nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    const DelayHistory<ActuatorCommand>& a = s.actuator_history[k];
+    if (actuators.active(d)) actuators.restore_history(d, a.pushes, a.ring);
+    else if (a.pushes != 0 || !a.ring.empty())
+      throw std::invalid_argument("actuator history of dof " + std::to_string(d) +
+                                  ": the dof has no actuator");
+    const DelayHistory<DriveTarget>& t = s.drive_delay_history[k];
+    if (delays.delayed(d)) delays.restore_history(d, t.pushes, t.ring);
+    else if (t.pushes != 0 || !t.ring.empty())
+      throw std::invalid_argument("drive delay history of dof " + std::to_string(d) +
+                                  ": the dof has no drive delay");
+  }
+  // Checks q and the outputs before it changes anything; nothing below throws.
+  restore_state(s.q, s.drive_force, s.limit_force, s.friction_force, s.velocity_limit_force);
+  state_[StateStorage::qd] = s.qd;
+  state_[StateStorage::applied_force] = s.applied_force;
+  time_ = s.time;
+  step_count_ = s.step_count;
+  actuator_force_ = s.actuator_force;
+  actuated_ = true;  // actuator_force_ may be nonzero
+  actuators_ = std::move(actuators);
+  drive_delays_ = std::move(delays);
 }
 
 void Simulation::restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
@@ -350,11 +402,6 @@ void Simulation::set_actuator_feedforward(const std::string& joint, double effor
   set_actuator_feedforward(driven_dof(joint), effort);
 }
 
-void Simulation::restore_actuator_history(int dof, long pushes,
-                                          const std::vector<ActuatorCommand>& ring) {
-  actuators_.restore_history(check_dof(dof), pushes, ring);
-}
-
 void Simulation::check_drive_delay(int dof, int delay) const {
   check_dof(dof);
   featherdrive::check_drive_delay(*model_, dof, delay, settings_.drives[static_cast<size_t>(dof)],
@@ -374,17 +421,6 @@ void Simulation::set_delay(int dof, int delay) {
 }
 void Simulation::set_drive_delay(const std::string& joint, int delay) {
   set_drive_delay(driven_dof(joint), delay);
-}
-
-void Simulation::restore_drive_delay_history(int dof, long pushes,
-                                             const std::vector<DriveTarget>& ring) {
-  drive_delays_.restore_history(check_dof(dof), pushes, ring);
-}
-
-void Simulation::restore_actuator_force(const VecX& force) {
-  check_state_vector(force, model_->nv, "actuator_force");
-  actuator_force_ = force;
-  actuated_ = true;
 }
 
 // Called by step() first: the efforts on the state the step starts from, added to the applied

@@ -6,6 +6,7 @@
 
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/sim/settings.hpp"
 
 namespace featherdrive {
 
@@ -36,6 +37,22 @@ VecX checked_configuration(const Model& model, const VecX& q, bool unit) {
   VecX checked = q;
   if (!unit) normalize_configuration(model, checked);
   return checked;
+}
+
+void check_clock(double time, long step_count) {
+  if (step_count < 0 || step_count > kMaxStepCount)
+    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
+                                " must be in [0, " + std::to_string(kMaxStepCount) + "]");
+  if (!std::isfinite(time) || time < 0.0)
+    throw std::invalid_argument("clock: time = " + format_double(time) +
+                                " must be finite and >= 0");
+  // Each step adds one dt <= kMaxDt; the factor 2 covers the rounding of the sum (< n eps).
+  const double most = 2.0 * static_cast<double>(step_count) * kMaxDt;
+  if (time > most)
+    throw std::invalid_argument("clock: time = " + format_double(time) + " s after " +
+                                std::to_string(step_count) + " steps: no run reaches it (at most " +
+                                format_double(most) + " s, 2 * steps * " + format_double(kMaxDt) +
+                                " s)");
 }
 
 }  // namespace featherdrive

@@ -1,6 +1,6 @@
-// Settings as a value (issue 32): the defaults are the model's values (and PhysX's where compat
-// physx says so), Settings::validate throws the very message the setter of the same field throws,
-// and a simulation given another's settings steps as that one, bit for bit.
+// Settings and State as values (issue 32): the defaults are the model's values (and PhysX's where
+// compat physx says so), Settings::validate throws the very message the setter of the same field
+// throws, and a simulation given another's settings and state steps as that one, bit for bit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -253,6 +253,71 @@ TEST(Settings, ASimulationGivenAnothersSettingsStepsTheSameBits) {
     EXPECT_EQ(c.drive_delay(r), 0);
     EXPECT_TRUE(c.mimic_joints().empty());
   }
+}
+
+// A run with every kind of history, its state taken mid-run and given to a fresh simulation with
+// the same settings: the two continue with the same bits. Bad states change nothing.
+TEST(State, AStateGivenToAnotherSimulationContinuesTheSameBits) {
+  const auto model = tree();
+  const int r = first_dof(*model, JointType::revolute);
+  const int r2 = second_revolute(*model);
+  SimulationOptions options;
+  options.dt = 1.0 / 240.0;
+  Simulation a(model, options);
+  a.set_drive(r, Drive{.type = DriveType::force, .stiffness = 300.0, .damping = 3.0});
+  a.set_drive_delay(r, 3);
+  a.set_actuator(
+      r2, ExplicitActuator{
+              .kind = ActuatorKind::ideal_pd, .stiffness = 60.0, .damping = 1.0, .delay = 2});
+  std::mt19937 rng(11);
+  a.set_q(test::random_configuration(*model, rng));
+  for (int k = 0; k < 37; ++k) {
+    a.set_drive_target(r, 0.01 * k, 0.0);
+    a.set_drive_target(r2, -0.01 * k, 0.0);
+    a.step();
+  }
+  const State mid = a.state();
+  EXPECT_EQ(mid.step_count, 37);
+  EXPECT_EQ(mid.drive_delay_history[static_cast<size_t>(r)].ring.size(), 4u);
+  EXPECT_EQ(mid.actuator_history[static_cast<size_t>(r2)].ring.size(), 3u);
+  Simulation b(model, options);
+  b.set_settings(a.settings());
+  b.set_state(mid);
+  for (Simulation* s : {&a, &b}) {
+    s->set_drive_target(r, -0.3, 0.0);
+    s->set_drive_target(r2, 0.4, 0.0);
+    s->step(40);
+  }
+  EXPECT_TRUE(same_bits(a.q(), b.q()));
+  EXPECT_TRUE(same_bits(a.qd(), b.qd()));
+  EXPECT_TRUE(same_bits(a.drive_force(), b.drive_force()));
+  EXPECT_TRUE(same_bits(a.actuator_force(), b.actuator_force()));
+  EXPECT_EQ(a.time(), b.time());
+
+  const State before = b.state();
+  const auto refused = [&](const std::function<void(State&)>& change) {
+    State s = mid;
+    change(s);
+    const std::string e = message_of([&] { b.set_state(s); });
+    EXPECT_TRUE(same_bits(b.q(), before.q));
+    EXPECT_EQ(b.step_count(), before.step_count);
+    EXPECT_EQ(b.drive_delays().pushes(r),
+              before.drive_delay_history[static_cast<size_t>(r)].pushes);
+    return e;
+  };
+  EXPECT_EQ(refused([](State& s) { s.time = 1.0, s.step_count = 0; }),
+            "clock: time = 1 s after 0 steps: no run reaches it (at most 0 s, 2 * steps * 1000 s)");
+  EXPECT_EQ(refused([](State& s) { s.qd[0] = test::kInf; }), "qd[0] = inf is not finite");
+  EXPECT_NE(refused([](State& s) { s.q.segment<4>(3) *= 2.0; }).find(", expected 1"),
+            std::string::npos);  // the floating base's quaternion
+  EXPECT_EQ(refused([&](State& s) { s.actuator_history[static_cast<size_t>(r)].pushes = 1; }),
+            "actuator history of dof " + std::to_string(r) + ": the dof has no actuator");
+  EXPECT_NE(
+      refused([&](State& s) { s.drive_delay_history[static_cast<size_t>(r)].ring.pop_back(); }),
+      "(no error)");
+  EXPECT_EQ(refused([](State& s) { s.drive_delay_history.pop_back(); }),
+            "state: " + std::to_string(model->nv - 1) +
+                " delay histories, expected one per dof (nv = " + std::to_string(model->nv) + ")");
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "featherdrive/sim/physx_departures.hpp"
 #include "featherdrive/sim/revolute_wrap.hpp"
 #include "featherdrive/sim/settings.hpp"
+#include "featherdrive/sim/state.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 #include "featherdrive/solver/mimic_solve.hpp"
 
@@ -92,13 +93,20 @@ class Simulation {
   void set_qd(const VecX& qd);
   double time() const { return time_; }
   long step_count() const { return step_count_; }
-  /// Sets the clock (for resuming from a checkpoint) to one a run could have reached; throws
-  /// std::invalid_argument for a step count outside [0, kMaxStepCount], a time that is not finite
-  /// or < 0, a time > 0 at step 0, or a time above 2 * step_count * kMaxDt (step_count steps of
-  /// at most kMaxDt, with room for the rounding of the sum).
+  /// Sets the clock to one a run could have reached; throws std::invalid_argument otherwise
+  /// (check_clock, state.hpp).
   void set_clock(double time, long step_count);
+  /// The whole state as one value (state.hpp): q, qd, applied force, clock, the last step's
+  /// outputs and the delay histories.
+  State state() const;
+  /// Restores a state() of a simulation with the same settings, bit for bit (q as given: its
+  /// quaternions must have unit norm within 1e-9). Throws std::invalid_argument naming the part
+  /// for a size, a non-finite value, a clock no run reaches, or a history that is not the
+  /// settings' (ring of delay + 1 on exactly the dofs with an actuator or a drive delay); nothing
+  /// changes then.
+  void set_state(const State& state);
   /// Restores q exactly as given (no normalisation, unlike set_q; quaternions must have unit norm
-  /// within 1e-9) and the outputs of the last step, for resuming from a checkpoint bit for bit.
+  /// within 1e-9) and the outputs of the last step (a SimdBatch environment as a Simulation).
   /// Sizes and finiteness are checked; nothing changes if a check fails.
   void restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
                      const VecX& friction_force, const VecX& velocity_limit_force);
@@ -165,9 +173,6 @@ class Simulation {
   /// Empties every actuator's delay history (eq. 9), e.g. when an episode starts over.
   void reset_actuator_history() { actuators_.reset_history(); }
   const ExplicitActuators& actuators() const { return actuators_; }
-  /// For checkpoints: a dof's pushes and ring (ExplicitActuators::restore_history).
-  void restore_actuator_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
-  void restore_actuator_force(const VecX& force);  ///< the last step's, for checkpoints
   /// The effort each actuator applied in the last step (nv; 0 on dofs without one), clipped.
   const VecX& actuator_force() const { return actuator_force_; }
 
@@ -187,8 +192,6 @@ class Simulation {
   /// Empties every drive's delay history (eq. 9), e.g. when an episode starts over.
   void reset_drive_delay_history() { drive_delays_.reset_history(); }
   const DriveDelays& drive_delays() const { return drive_delays_; }
-  /// For checkpoints: a dof's pushes and ring (DriveDelays::restore_history).
-  void restore_drive_delay_history(int dof, long pushes, const std::vector<DriveTarget>& ring);
 
   // Link parameters (link_parameters.hpp): inert by default; PhysX 5.6.1's defaults with
   // Compat::physx. Throw std::invalid_argument naming the link, field and value.
