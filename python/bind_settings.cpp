@@ -248,17 +248,18 @@ void featherdrive::python::bind_settings(py::module_& m) {
                         "or the energy grows more than the joint forces' work is redone as 2, 4, "
                         "... sub-steps, at most max_substeps.")
       .def(py::init([checked_guard](bool enabled, double max_joint_step, py::handle max_substeps,
-                                    double energy_tolerance) {
+                                    double energy_tolerance, double dissipation_share) {
              return checked_guard(StepGuard{enabled, max_joint_step,
                                             to_int(max_substeps, "guard.max_substeps", 2,
                                                    kMaxGuardSubsteps),
-                                            energy_tolerance});
+                                            energy_tolerance, dissipation_share});
            }),
            py::arg("enabled") = true, py::arg("max_joint_step") = 0.25,
            py::arg("max_substeps") = 64, py::arg("energy_tolerance") = 0.02,
+           py::arg("dissipation_share") = 0.15,
            "A guard (on unless enabled=False). Raises ValueError naming guard.max_joint_step "
-           "(finite > 0), guard.max_substeps (in [2, 4096]) or guard.energy_tolerance "
-           "(in (0, 1]).")
+           "(finite > 0), guard.max_substeps (in [2, 4096]), guard.energy_tolerance "
+           "(in (0, 1]) or guard.dissipation_share (in (0, 100]).")
       .def_readwrite("enabled", &StepGuard::enabled)
       .def_property(
           "max_joint_step", [](const StepGuard& g) { return g.max_joint_step; },
@@ -274,11 +275,16 @@ void featherdrive::python::bind_settings(py::module_& m) {
           "energy_tolerance", [](const StepGuard& g) { return g.energy_tolerance; },
           checked_setter(&StepGuard::energy_tolerance),
           "test (ii)'s share of the step's energy scale, in (0, 1]")
+      .def_property(
+          "dissipation_share", [](const StepGuard& g) { return g.dissipation_share; },
+          checked_setter(&StepGuard::dissipation_share),
+          "test (iii)'s share of the dampers' dissipation the run may create, in (0, 100]")
       .def("__repr__", [](const StepGuard& g) {
         return std::string("StepGuard(enabled=") + (g.enabled ? "True" : "False") +
                ", max_joint_step=" + fmt(g.max_joint_step) +
                ", max_substeps=" + std::to_string(g.max_substeps) +
-               ", energy_tolerance=" + fmt(g.energy_tolerance) + ")";
+               ", energy_tolerance=" + fmt(g.energy_tolerance) +
+               ", dissipation_share=" + fmt(g.dissipation_share) + ")";
       });
 
   py::class_<SimulationOptions>(m, "SimulationOptions", "Time step and solver settings.")

@@ -163,10 +163,12 @@ class StepGuard:
     max_joint_step: float
     max_substeps: int
     energy_tolerance: float
+    dissipation_share: float
     def __init__(self, enabled: bool = True, max_joint_step: float = 0.25,
-                 max_substeps: Int = 64, energy_tolerance: float = 0.02) -> None:
-        """ValueError naming guard.max_joint_step (finite > 0), guard.max_substeps ([2, 4096])
-        or guard.energy_tolerance ((0, 1])."""
+                 max_substeps: Int = 64, energy_tolerance: float = 0.02,
+                 dissipation_share: float = 0.15) -> None:
+        """ValueError naming guard.max_joint_step (finite > 0), guard.max_substeps ([2, 4096]),
+        guard.energy_tolerance ((0, 1]) or guard.dissipation_share ((0, 100])."""
 
 class SimulationOptions:
     """Time step and solver settings."""

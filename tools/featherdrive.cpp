@@ -313,10 +313,10 @@ int simulate(const SimulateArgs& args) {
     std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
                 to_string(scene.control.targets));
   if (options.guard.enabled)
-    std::printf("  step guard (max_joint_step %.6g, max_substeps %d, energy_tolerance %.6g): %s "
-                "redone, largest %d sub-steps, %ld exhausted\n",
+    std::printf("  step guard (max_joint_step %.6g, max_substeps %d, energy_tolerance %.6g, "
+                "dissipation_share %.6g): %s redone, largest %d sub-steps, %ld exhausted\n",
                 options.guard.max_joint_step, options.guard.max_substeps,
-                options.guard.energy_tolerance,
+                options.guard.energy_tolerance, options.guard.dissipation_share,
                 count_of(sim.guard_triggers(), "step").c_str(), largest_substeps,
                 sim.guard_exhausted());
   if (n > 0) print_drive_table(scene, sim, stats, (first + scene.steps) * dt, scene.steps);

@@ -65,6 +65,8 @@ def test_scene_guard_key(tmp_path):
     (dict(max_substeps=0), "guard.max_substeps"),
     (dict(max_substeps=10**6), "guard.max_substeps"),
     (dict(energy_tolerance=0.0), "guard.energy_tolerance = 0 must be in (0, 1]"),
+    (dict(dissipation_share=0.0), "guard.dissipation_share = 0 must be in (0, 100]"),
+    (dict(dissipation_share=101.0), "guard.dissipation_share = 101 must be in (0, 100]"),
 ])
 def test_bad_bounds_raise_one_value_error(kwargs, message):
     with pytest.raises(ValueError) as error:
@@ -74,4 +76,5 @@ def test_bad_bounds_raise_one_value_error(kwargs, message):
     with pytest.raises(ValueError):
         for key, value in kwargs.items():
             setattr(guard, key, value)
-    assert (guard.max_joint_step, guard.max_substeps, guard.energy_tolerance) == (0.25, 64, 0.02)
+    assert (guard.max_joint_step, guard.max_substeps, guard.energy_tolerance,
+            guard.dissipation_share) == (0.25, 64, 0.02, 0.15)

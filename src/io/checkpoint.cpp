@@ -311,6 +311,8 @@ std::string checkpoint_bytes(const Simulation& sim) {
   write_actuators(p, settings, state);
   write_drive_delays(p, settings, state);
   write_joint_coupling(p, settings);
+  const GuardAccount& account = sim.guard_account();  // version 7
+  for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -397,6 +399,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     state.step_count = static_cast<long>(step_count);
     SimulationOptions& o = settings.options;
     o = SimulationOptions{};
+    o.guard = held.options.guard;  // how to step, not state: the simulation's own
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
     if (solver > static_cast<std::uint8_t>(SolverType::tgs))
@@ -507,11 +510,18 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     read_actuators(r, settings, state, name, version);
     if (version >= 4) read_drive_delays(r, settings, state, name);    // version 3 has none
     if (version >= 5) read_joint_coupling(r, model, settings, name);  // 3 and 4 have none
+    GuardAccount account;  // before version 7, the guard's account starts empty
+    if (version >= 7) {
+      account.created = r.f64();
+      account.dissipated = r.f64();
+      account.scale = r.f64();
+    }
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");
     next.set_settings(settings);
     next.set_state(state);
+    next.set_guard_account(account);
   } catch (const CheckpointError&) {
     throw;
   } catch (const std::invalid_argument& e) {

@@ -516,7 +516,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
 
   // The step guard (docs/math/step_guard.md): present = on, its bounds default.
   if (const YAML::Node g = root["guard"]) {
-    r.map(g, "guard", {"max_joint_step", "max_substeps", "energy_tolerance"});
+    r.map(g, "guard", {"max_joint_step", "max_substeps", "energy_tolerance",
+                       "dissipation_share"});
     scene.options.guard.enabled = true;
     if (g["max_joint_step"]) {
       const double bound = r.number(g["max_joint_step"], "guard.max_joint_step");
@@ -532,6 +533,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       if (!(tolerance > 0.0 && tolerance <= 1.0))
         r.fail("guard.energy_tolerance", g["energy_tolerance"], "must be in (0, 1]");
       scene.options.guard.energy_tolerance = tolerance;
+    }
+    if (g["dissipation_share"]) {
+      const double share = r.number(g["dissipation_share"], "guard.dissipation_share");
+      if (!(share > 0.0 && share <= 100.0))
+        r.fail("guard.dissipation_share", g["dissipation_share"], "must be in (0, 100]");
+      scene.options.guard.dissipation_share = share;
     }
   }
 

@@ -82,6 +82,9 @@ void validate_options(const SimulationOptions& o) {
   if (!(o.guard.energy_tolerance > 0.0 && o.guard.energy_tolerance <= 1.0))
     throw std::invalid_argument("simulation options: guard.energy_tolerance = " +
                                 fmt(o.guard.energy_tolerance) + " must be in (0, 1]");
+  if (!(o.guard.dissipation_share > 0.0 && o.guard.dissipation_share <= 100.0))
+    throw std::invalid_argument("simulation options: guard.dissipation_share = " +
+                                fmt(o.guard.dissipation_share) + " must be in (0, 100]");
 }
 
 Settings Settings::defaults(const Model& model, const SimulationOptions& options) {

@@ -103,6 +103,7 @@ void Simulation::row_forces() {
 void Simulation::end_step() {
   check_finite_or_throw();
   commit_state();
+  if (settings_.options.guard.enabled) guard_account_ = guard_account_next_;  // test (iii)'s, G-8
   time_ += settings_.options.dt;
   ++step_count_;
 }

@@ -6,9 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "featherdrive/algorithm/energy.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/core/format.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
@@ -16,6 +19,13 @@ namespace {
 
 // Rounding of the energies themselves (sums over the links, a potential of any offset).
 constexpr double kEnergyRounding = 1e-12;
+// Test (iii), eq. (G-7)-(G-9): the account's memory per step (a time constant of 1000 steps) and
+// the share of the remembered scale that may be created without dissipation paying for it.
+constexpr double kAccountLeak = 0.999;
+constexpr double kAccountSlack = 0.1;
+// Eq. (G-11): a TGS drive's force changes between its sub-steps; F dq measured over the step
+// then differs from the work by at most about 2 kp dq^2 (motion monotone within the step).
+constexpr double kTgsSpringCredit = 2.0;
 
 // The rotation angle from unit quaternion a to b, eq. (G-2): 4 atan2(|a - b|, |a + b|) with b's
 // sign chosen nearer a (accurate at small and large angles alike; layout-free).
@@ -37,6 +47,19 @@ void Simulation::size_guard() {
   guard_e1_valid_ = false;
 }
 
+void Simulation::set_guard_account(const GuardAccount& account) {
+  auto check = [](double v, const char* name, bool signed_ok) {
+    if (!(std::isfinite(v) && (signed_ok || v >= 0.0)))
+      throw std::invalid_argument(std::string("guard account: ") + name + " = " +
+                                  format_double(v) +
+                                  (signed_ok ? " must be finite" : " must be finite and >= 0"));
+  };
+  check(account.created, "created", true);
+  check(account.dissipated, "dissipated", false);
+  check(account.scale, "scale", false);
+  guard_account_ = account;
+}
+
 void Simulation::reset_guard_counters() {
   guard_substeps_ = 1;
   guard_triggers_ = 0;
@@ -56,6 +79,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   bool moved_too_far = false;
   double work = 0.0;  // eq. (G-3): sum over dofs of the joint force's impulse times the motion
   double work_rounding = 0.0;  // sum |F| (|q| + |dq|): the positions' rounding carried into it
+  double bracket = 0.0;  // eq. (G-10), the drives' work beyond their springs' and dampers'
   // Explicit actuators' efforts are evaluated at the start of the (sub-)step: their work is the
   // trapezoid of the efforts at its start and end (eq. G-3), which for a spring is the change of
   // its energy, so that an explicit law's overshoot shows as energy gained.
@@ -77,6 +101,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
       work += force * dq;
+      bracket += drive_bracket(link.v_index, guard_q0_[link.q_index], dq, h);
       work_rounding += std::abs(force) * (std::abs(q_[link.q_index]) + std::abs(dq));
     } else if (link.joint_type == JointType::spherical || link.joint_type == JointType::floating) {
       // The rotation's angle (a floating base's translation is not bounded); the work over the
@@ -93,7 +118,60 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
   const double rounding =
       kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
-  return !moved_too_far && excess <= settings_.options.guard.energy_tolerance * scale + rounding;
+  const double allowed = settings_.options.guard.energy_tolerance * scale + rounding;
+  // Test (iii), eq. (G-7)-(G-9): the account over the run, a sub-step's memory fading by its
+  // share of the step.
+  const double leak = h == settings_.options.dt ? kAccountLeak : std::pow(kAccountLeak, h / settings_.options.dt);
+  GuardAccount& next = guard_account_next_;
+  const double created = excess + bracket;
+  next.created = leak * next.created + created;
+  next.dissipated = leak * next.dissipated + h * damper_power();
+  next.scale = leak * next.scale + scale;
+  const double budget = settings_.options.guard.dissipation_share * next.dissipated +
+                        kAccountSlack * (1.0 - kAccountLeak) * next.scale + allowed;
+  // Over budget, a (sub-)step still passes if it pays back: it creates at most what the leak
+  // forgives it (eq. G-9), so that the debt shrinks and old debts do not fail every sub-step.
+  const bool account_ok = next.created <= budget || created <= (1.0 - leak) * budget;
+  return !moved_too_far && excess <= allowed && account_ok;
+}
+
+// Eq. (G-10): a force or acceleration drive's work beyond what its spring released and its damper
+// took, F dq + dU + kd (dq / h - v_T) dq; -kp dq^2 / 2 for a converged PGS row, positive where
+// an unconverged row pushed harder than its spring. Not for rows another bound shaped (max force,
+// an envelope) nor actuators' rows. TGS applies its force in sub-steps: credit (G-11).
+double Simulation::drive_bracket(int d, double q0, double dq, double h) const {
+  const DofRows& r = rows_[static_cast<size_t>(d)];
+  if (!r.has_drive || actuators_.active(d) || r.has_envelope ||
+      std::abs(r.drive_impulse) >= r.drive.max_impulse)
+    return 0.0;
+  const Drive& drive =
+      drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : settings_.drives[static_cast<size_t>(d)];
+  const double inv_m = drive.type == DriveType::acceleration ? 1.0 / r.response : 1.0;
+  const double kp = drive.stiffness * inv_m, kd = drive.damping * inv_m;
+  const double x = drive.target_position - drive.target_velocity * target_lead_;
+  const double q1 = q0 + dq;  // before a wrap: the branch the row's error was taken on
+  const double credit = settings_.options.solver == SolverType::tgs ? kTgsSpringCredit * kp * dq * dq : 0.0;
+  return r.drive_impulse / h * dq + 0.5 * kp * ((q1 - x) * (q1 - x) - (q0 - x) * (q0 - x)) +
+         kd * (dq / h - drive.target_velocity) * dq - credit;
+}
+
+// Eq. (G-7): the power the dampers take out at the end velocity, sum c_d v_d^2: a force drive's
+// (or an actuator's) damping, an acceleration drive's times the dof's effective mass 1 / r,
+// viscous friction. A drive at its force bound is not counted (its damper is not acting).
+double Simulation::damper_power() const {
+  double power = 0.0;
+  for (int d = 0; d < model_->nv; ++d) {
+    const DofRows& r = rows_[static_cast<size_t>(d)];
+    double c = settings_.friction[static_cast<size_t>(d)].viscous;
+    if (actuators_.active(d)) c += actuators_.actuator(d).damping;
+    if (r.has_drive && !actuators_.implicit(d) &&
+        !(std::abs(r.drive_impulse) >= r.drive.max_impulse)) {
+      const Drive& drive = settings_.drives[static_cast<size_t>(d)];
+      c += drive.type == DriveType::acceleration ? drive.damping / r.response : drive.damping;
+    }
+    power += c * qd_[d] * qd_[d];
+  }
+  return power;
 }
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
@@ -116,6 +194,7 @@ void Simulation::guarded_advance(const VecX& tau_step) {
   target_lead_ = 0.0;
   advance(tau_step);
   guard_substeps_ = 1;
+  guard_account_next_ = guard_account_;
   if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
     row_forces();
     keep_guard_end(e1);
@@ -129,6 +208,7 @@ void Simulation::guarded_advance(const VecX& tau_step) {
     dt_ = dt / n;
     e0[0] = e_start[0];
     e0[1] = e_start[1];
+    guard_account_next_ = guard_account_;
     bool passed = true;
     // A failing sub-step ends this n, unless n is the last one there is: that one is kept.
     for (int i = 1; i <= n && (passed || n == most); ++i) {

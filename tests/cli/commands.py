@@ -158,7 +158,8 @@ def main():
     redone = sum(1 for n in substeps if n > 1)
     check(substeps[0] == 1 and redone > 0 and all(n in (1, 2, 4, 8, 16, 32, 64) for n in substeps),
           f"guard_substeps column: {substeps}", r)
-    check(f"step guard (max_joint_step 0.06, max_substeps 64, energy_tolerance 0.02): {redone} "
+    check(f"step guard (max_joint_step 0.06, max_substeps 64, energy_tolerance 0.02, "
+          f"dissipation_share 0.15): {redone} "
           f"steps redone, largest "
           f"{max(substeps)} sub-steps, 0 exhausted" in r.stdout, "the guard's summary line", r)
     r = run(cli, "simulate", ex("slider.yaml"), "--out", os.path.join(out_dir, "plain.csv"))

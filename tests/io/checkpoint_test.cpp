@@ -277,7 +277,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 6)");
+            "to 7)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -579,6 +579,10 @@ TEST(Checkpoint, DriveDelaysResumeMidDelayWithTheirPendingTargets) {
   EXPECT_FALSE(same_bits(naive.q(), run.q()));
 }
 
+// The step guard's account (version 7), last before the checksum: three doubles, zero when the
+// guard never ran.
+constexpr size_t kAccountBytes = 24;
+
 // Version 3 (before drive delays) is still read: a version-4 file without delays is version 3's
 // bytes plus one zero delay per dof.
 TEST(Checkpoint, VersionThreeIsStillRead) {
@@ -586,8 +590,9 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   a.step(4);
   std::string bytes = checkpoint_bytes(a);
   const size_t delays = 8 * static_cast<size_t>(a.model().nv);
-  // Version 5's revolute wrap (a byte per dof) and mimic joints (their count) come last.
-  const size_t coupling = static_cast<size_t>(a.model().nv) + 8;
+  // Version 5's revolute wrap (a byte per dof) and mimic joints (their count), then version 7's
+  // guard account, come last.
+  const size_t coupling = static_cast<size_t>(a.model().nv) + 8 + kAccountBytes;
   ASSERT_EQ(bytes.substr(bytes.size() - 8 - coupling - delays, coupling + delays),
             std::string(coupling + delays, '\0'));
   bytes.erase(bytes.size() - 8 - coupling - delays, coupling + delays);
@@ -679,16 +684,18 @@ TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
   // each actuator: kind, integration, 5 settings, delay, table size, feed-forward, pushes and a
   // ring of 2 commands.
   const size_t per_actuator = 1 + 1 + 5 * 8 + 8 + 8 + 8 + 8 + 2 * 24;
-  const size_t first = bytes.size() - 8 - 8 - nv - 8 * nv - 8 * nv - 2 * per_actuator;
+  const size_t first =
+      bytes.size() - 8 - kAccountBytes - 8 - nv - 8 * nv - 8 * nv - 2 * per_actuator;
   ASSERT_EQ(bytes[first], static_cast<char>(ActuatorKind::ideal_pd));
   ASSERT_EQ(bytes[first + per_actuator], static_cast<char>(ActuatorKind::ideal_pd));
   std::string v5 = bytes;
+  v5.erase(v5.size() - 8 - kAccountBytes, kAccountBytes);  // version 7's, last
   v5.erase(first + per_actuator + 1, 1);  // the later one first: the offsets before it stay
   v5.erase(first + 1, 1);
   std::uint64_t payload = 0;
   for (size_t i = 0; i < 8; ++i)
     payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(v5[28 + i])) << (8 * i);
-  v5 = forged(forged(v5, 8, 5, 4), 28, payload - 2);
+  v5 = forged(forged(v5, 8, 5, 4), 28, payload - 2 - kAccountBytes);
   Simulation b(model);
   ExplicitActuator late = pd;
   late.integration = ActuatorIntegration::implicit_law;
@@ -700,6 +707,57 @@ TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
   // A forged integration is refused naming the dof.
   EXPECT_EQ(error_of(forged(bytes, first + 1, 7, 1), b),
             "state.ckpt: corrupt checkpoint: actuator integration 7 of dof 0");
+}
+
+// A guarded run: the guard's account (test (iii), docs/math/step_guard.md) is in the checkpoint
+// (version 7), so the resumed run redoes the same steps and equals the uninterrupted one bit for
+// bit; a version 6 file reads with an empty account; a forged account is refused.
+TEST(Checkpoint, GuardedRunResumesBitForBit) {
+  auto model = test::make_planar_chain(4, 1.0, 0.5);
+  SimulationOptions o;
+  o.guard.enabled = true;
+  o.guard.max_joint_step = 0.05;  // the first steps from rest are redone
+  Simulation run(model, o);
+  for (int d = 0; d < model->nv; ++d) {
+    run.set_drive(d, Drive{DriveType::force, 400.0, 20.0});
+    run.set_drive_target(d, 0.6 * (d % 2 ? 1.0 : -1.0), 0.0);
+  }
+  run.step(15);
+  ASSERT_GT(run.guard_triggers(), 0);
+  ASSERT_GT(run.guard_account().scale, 0.0);
+  ASSERT_GT(run.guard_account().dissipated, 0.0);
+  const std::string bytes = checkpoint_bytes(run);
+  Simulation resumed(model, o);
+  restore_checkpoint(bytes, resumed, "state.ckpt");
+  EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+  const long before = run.guard_triggers();
+  for (int k = 0; k < 40; ++k) run.step(), resumed.step();
+  expect_same_state(run, resumed);
+  EXPECT_EQ(resumed.guard_triggers(), run.guard_triggers() - before);  // counters: not kept
+  EXPECT_TRUE(same_bits(resumed.drive_force(), run.drive_force()));
+  const GuardAccount& a = run.guard_account(), &b = resumed.guard_account();
+  EXPECT_EQ(bits(a.created), bits(b.created));
+  EXPECT_EQ(bits(a.dissipated), bits(b.dissipated));
+  EXPECT_EQ(bits(a.scale), bits(b.scale));
+  // Version 6: the same bytes without the account.
+  std::string v6 = bytes;
+  v6.erase(v6.size() - 8 - kAccountBytes, kAccountBytes);
+  std::uint64_t payload = 0;
+  for (size_t i = 0; i < 8; ++i)
+    payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(v6[28 + i])) << (8 * i);
+  v6 = forged(forged(v6, 8, 6, 4), 28, payload - kAccountBytes);
+  Simulation old(model, o);
+  old.set_guard_account({1.0, 2.0, 3.0});
+  restore_checkpoint(v6, old, "old.ckpt");
+  EXPECT_EQ(old.guard_account().created, 0.0);
+  EXPECT_EQ(old.guard_account().dissipated, 0.0);
+  EXPECT_EQ(old.guard_account().scale, 0.0);
+  // A negative dissipation is refused in one line.
+  const std::string bad =
+      forged(bytes, bytes.size() - 8 - 16, std::bit_cast<std::uint64_t>(-1.0));
+  EXPECT_EQ(error_of(bad, old),
+            "state.ckpt: bad value in the checkpoint: guard account: dissipated = -1 must be "
+            "finite and >= 0");
 }
 
 }  // namespace

@@ -333,11 +333,14 @@ TEST(Scene, GuardIsOnWhenPresentAndBadValuesNameTheKey) {
   EXPECT_EQ(plain.options.guard.max_joint_step, 0.25);
   EXPECT_EQ(plain.options.guard.max_substeps, 64);
   EXPECT_EQ(plain.options.guard.energy_tolerance, 0.02);
+  EXPECT_EQ(plain.options.guard.dissipation_share, 0.15);
   const Scene set = scene_from(
-      slider_with("guard: {max_joint_step: 0.1, max_substeps: 16, energy_tolerance: 0.005}\n"));
+      slider_with("guard: {max_joint_step: 0.1, max_substeps: 16, energy_tolerance: 0.005, "
+                  "dissipation_share: 2.5}\n"));
   EXPECT_EQ(set.options.guard.max_joint_step, 0.1);
   EXPECT_EQ(set.options.guard.max_substeps, 16);
   EXPECT_EQ(set.options.guard.energy_tolerance, 0.005);
+  EXPECT_EQ(set.options.guard.dissipation_share, 2.5);
   EXPECT_TRUE(make_simulation(set).options().guard.enabled);
   EXPECT_EQ(error_of(slider_with("guard: {max_joint_step: -0.5}\n")),
             kExamples + "inline.yaml: guard.max_joint_step = -0.5: must be finite and > 0");
@@ -349,9 +352,11 @@ TEST(Scene, GuardIsOnWhenPresentAndBadValuesNameTheKey) {
             kExamples + "inline.yaml: guard.max_substeps = 100000: must be <= 4096");
   EXPECT_EQ(error_of(slider_with("guard: {energy_tolerance: 0}\n")),
             kExamples + "inline.yaml: guard.energy_tolerance = 0: must be in (0, 1]");
+  EXPECT_EQ(error_of(slider_with("guard: {dissipation_share: 150}\n")),
+            kExamples + "inline.yaml: guard.dissipation_share = 150: must be in (0, 100]");
   EXPECT_NE(error_of(slider_with("guard: {max_step: 2}\n"))
                 .find("guard.max_step: unknown key (expected one of: max_joint_step, "
-                      "max_substeps, energy_tolerance)"),
+                      "max_substeps, energy_tolerance, dissipation_share)"),
             std::string::npos);
 }
 

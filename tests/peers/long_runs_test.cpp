@@ -233,6 +233,44 @@ TEST(StepGuard, KeepsTheDivergingChainBounded) {
   }
 }
 
+// Test (iii), the guard's account (eq. G-7..G-11): with it the chain settles on its targets (the
+// drives' equilibrium, q = target, since gravity is off); with tests (i) and (ii) alone
+// (dissipation_share 100 leaves (iii) no say) the steps they pass still feed energy in, and the
+// chain keeps thrashing around them or diverges. 48 links, 3000 steps, PGS and TGS 4/1.
+TEST(StepGuard, TheAccountMakesTheChainSettleOnItsTargets) {
+  const int links = 48, steps = 3000;
+  const auto model = test::make_benchmark_chain(links, Vec3::Zero());
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    // The largest RMS of q - target over the last 1000 steps (infinite once diverged).
+    auto worst_late_error = [&](double share) {
+      SimulationOptions o;
+      o.solver = solver;
+      o.guard.enabled = true;
+      o.guard.dissipation_share = share;
+      Simulation sim(model, o);
+      const VecX target = test::drive_benchmark_chain(sim);
+      double worst = 0.0;
+      for (int k = 0; k < steps; ++k) {
+        try {
+          sim.step();
+        } catch (const DivergenceError&) {
+          return std::numeric_limits<double>::infinity();
+        }
+        const double rms = std::sqrt((sim.q() - target).squaredNorm() / links);
+        if (!(rms < 10.0)) return std::numeric_limits<double>::infinity();
+        if (k >= steps - 1000) worst = std::max(worst, rms);
+      }
+      return worst;
+    };
+    const double with_account = worst_late_error(StepGuard{}.dissipation_share);
+    const double without = worst_late_error(100.0);
+    EXPECT_LT(with_account, 0.08) << to_string(solver);
+    EXPECT_GT(without, 0.2) << to_string(solver);
+    std::printf("  %s: worst RMS of the last 1000 steps %.4f with the account, %.4f without\n",
+                to_string(solver), with_account, without);
+  }
+}
+
 // Period from the times of successive upward zero crossings, linearly interpolated.
 double measured_period(Simulation& sim, int steps) {
   std::vector<double> crossings;

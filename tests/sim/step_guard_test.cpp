@@ -197,6 +197,36 @@ TEST(StepGuard, BatchEqualsASimulationAndSimdBatchRefuses) {
   }
 }
 
+// Test (iii)'s account on a slider without gravity, PGS, steps the guard keeps: each step is the
+// implicit Euler of the drive law, v1 = (m v0 + h (kp (xT - x0) + kd vT)) / (m + h kd + h^2 kp),
+// so the energy created beyond the work is -m (v1 - v0)^2 / 2 (G-4), the drive's work beyond its
+// spring and damper -kp (h v1)^2 / 2 (G-10), the dampers' share h kd v1^2 (G-7) and the scale
+// K0 + K1 + |W| (G-5). The account is their sums, leaking by 0.999 a step (G-8).
+TEST(StepGuard, TheAccountOfASliderIsItsClosedForm) {
+  const double m = 2.0, kp = 50.0, kd = 3.0, xT = 0.1, vT = 0.05, h = 1.0 / 60.0;
+  const auto model = test::make_slider(m, Vec3(1, 0, 0), Vec3::Zero());
+  Simulation sim(model, guard_options(SolverType::pgs, true, h));
+  sim.set_drive("slide", Drive{DriveType::force, kp, kd, kInf, xT, vT});
+  sim.set_qd(VecX::Constant(1, 0.3));
+  double x = 0.0, v = 0.3, created = 0.0, dissipated = 0.0, scale = 0.0;
+  for (int k = 0; k < 5; ++k) {
+    const double v1 = (m * v + h * (kp * (xT - x) + kd * vT)) / (m + h * kd + h * h * kp);
+    const double work = m * (v1 - v) * v1;  // the drive's force (impulse / h) times h v1
+    created = 0.999 * created - 0.5 * m * (v1 - v) * (v1 - v) - 0.5 * kp * h * v1 * h * v1;
+    dissipated = 0.999 * dissipated + h * kd * v1 * v1;
+    scale = 0.999 * scale + 0.5 * m * (v * v + v1 * v1) + std::abs(work);
+    x += h * v1;
+    v = v1;
+    sim.step();
+    ASSERT_EQ(sim.guard_triggers(), 0);
+    EXPECT_NEAR(sim.q()[0], x, 1e-14);
+    const GuardAccount& a = sim.guard_account();
+    EXPECT_NEAR(a.created, created, 1e-12 * std::abs(created)) << k;
+    EXPECT_NEAR(a.dissipated, dissipated, 1e-12 * dissipated) << k;
+    EXPECT_NEAR(a.scale, scale, 1e-12 * scale) << k;
+  }
+}
+
 TEST(StepGuard, BadBoundsAreRefusedNamingKeyAndValue) {
   auto message = [](const StepGuard& g) {
     SimulationOptions o;
@@ -223,6 +253,11 @@ TEST(StepGuard, BadBoundsAreRefusedNamingKeyAndValue) {
             "simulation options: guard.energy_tolerance = 0 must be in (0, 1]");
   EXPECT_EQ(message({true, 0.25, 64, 1.5}),
             "simulation options: guard.energy_tolerance = 1.5 must be in (0, 1]");
+  EXPECT_EQ(message({true, 0.25, 64, 0.02, 0.0}),
+            "simulation options: guard.dissipation_share = 0 must be in (0, 100]");
+  EXPECT_EQ(message({true, 0.25, 64, 0.02, 101.0}),
+            "simulation options: guard.dissipation_share = 101 must be in (0, 100]");
+  EXPECT_EQ(message({true, 0.25, 64, 0.02, 100.0}), "");
   const auto model = test::make_slider(1.0, Vec3(1, 0, 0), Vec3::Zero());
   Simulation sim(model);
   SimulationOptions o;

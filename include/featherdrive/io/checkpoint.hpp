@@ -16,7 +16,8 @@
 //                 delay + 1 commands) and the last step's actuator forces, then per dof the
 //                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets),
 //                 then per dof its revolute wrap and the mimic joints (count, then each one's
-//                 dofs, gear ratio, offset, natural frequency and damping ratio)
+//                 dofs, gear ratio, offset, natural frequency and damping ratio), then the
+//                 step guard's account (created, dissipated, scale; version 7)
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
@@ -37,7 +38,9 @@ namespace featherdrive {
 /// 5: revolute wrap and mimic joints. Versions 3 and 4 are still read (the simulation keeps its
 /// own).
 /// 6: an actuator's integration (explicit or implicit). Versions 3 to 5 read as explicit.
-inline constexpr std::uint32_t kCheckpointVersion = 6;
+/// 7: the step guard's account (docs/math/step_guard.md, test (iii)). Versions 3 to 6 read with
+/// an empty account.
+inline constexpr std::uint32_t kCheckpointVersion = 7;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file
@@ -55,7 +58,8 @@ std::uint64_t model_fingerprint(const Model& model);
 /// The checkpoint of `sim` as bytes.
 std::string checkpoint_bytes(const Simulation& sim);
 
-/// Restores `sim` from checkpoint bytes; `name` stands for the file in messages. Throws
+/// Restores `sim` from checkpoint bytes; `name` stands for the file in messages. The step guard's
+/// options stay sim's (the file keeps its account, not its options). Throws
 /// CheckpointError and leaves `sim` unchanged when the bytes are not a checkpoint of sim's model.
 void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::string& name);
 

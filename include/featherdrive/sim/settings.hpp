@@ -37,6 +37,18 @@ struct StepGuard {
   int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
   /// Test (ii)'s share of the step's energy scale that may appear from nowhere; in (0, 1].
   double energy_tolerance = 0.02;
+  /// Test (iii)'s share of the energy the dampers dissipated that the step may create over the
+  /// run (eq. G-9); in (0, 100].
+  double dissipation_share = 0.15;
+};
+
+/// Test (iii)'s account (docs/math/step_guard.md, eq. G-7, G-8): leaky sums over the run of the
+/// energy created beyond the work (X), of what the dampers dissipated (D) and of the steps'
+/// energy scales (S). Part of the state: a checkpoint keeps it.
+struct GuardAccount {
+  double created = 0.0;
+  double dissipated = 0.0;
+  double scale = 0.0;
 };
 inline constexpr int kMaxGuardSubsteps = 4096;
 
@@ -61,7 +73,8 @@ inline constexpr long kMaxStepCount = 1L << 53;
 /// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
 /// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
 /// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
-/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1].
+/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1],
+/// guard.dissipation_share outside (0, 100].
 void validate_options(const SimulationOptions& options);
 
 struct Settings {

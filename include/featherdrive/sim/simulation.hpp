@@ -249,6 +249,11 @@ class Simulation {
   /// Steps whose max_substeps sub-steps still failed a test (kept as they were).
   long guard_exhausted() const { return guard_exhausted_; }
   void reset_guard_counters();
+  /// Test (iii)'s account (eq. G-7, G-8), carried from step to step; checkpoints keep it.
+  const GuardAccount& guard_account() const { return guard_account_; }
+  /// Throws std::invalid_argument for a negative or non-finite scale or dissipation, or a
+  /// non-finite created energy.
+  void set_guard_account(const GuardAccount& account);
 
  private:
   friend class Batch;  // lends the storage of state_
@@ -289,6 +294,8 @@ class Simulation {
   void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
   const VecX& guard_substep_force();
   void keep_guard_end(const double e1[2]);
+  double damper_power() const;
+  double drive_bracket(int d, double q0, double dq, double h) const;
   void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
@@ -351,6 +358,8 @@ class Simulation {
   VecX guard_q1_, guard_qd1_;
   double guard_e1_[2] = {0.0, 0.0};
   bool guard_e1_valid_ = false;
+  GuardAccount guard_account_;  ///< test (iii): committed with the step
+  GuardAccount guard_account_next_;  ///< the account after the (sub-)step being tested
   int guard_substeps_ = 1;
   long guard_triggers_ = 0;
   long guard_exhausted_ = 0;
