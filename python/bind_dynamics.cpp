@@ -1,6 +1,7 @@
 // Kinematics and dynamics queries: Simulation methods and module functions of (model, q, qd).
 #include "bindings.hpp"
 #include "featherdrive/algorithm/aba.hpp"
+#include "featherdrive/sim/state.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
@@ -23,13 +24,16 @@ KinematicState state_of(const Simulation& s) {
   return locked(s, [&] { return KinematicState{s.model_ptr(), s.q(), s.qd()}; });
 }
 
-/// q (and qd unless None; zero then) checked and normalised by a scratch simulation's setters.
+/// q (and qd unless None; zero then) checked and normalised as Simulation's setters do.
 KinematicState state_at(const ModelPtr& model, py::handle q, py::handle qd) {
   if (!model) throw py::type_error("model must be a Model, not None");
-  Simulation check(model, SimulationOptions{});
-  check.set_q(to_vector(q, model->nq, "q"));
-  if (!qd.is_none()) check.set_qd(to_vector(qd, model->nv, "qd"));
-  return {model, check.q(), check.qd()};
+  KinematicState state{model, checked_configuration(*model, to_vector(q, model->nq, "q")),
+                       VecX::Zero(model->nv)};
+  if (!qd.is_none()) {
+    state.qd = to_vector(qd, model->nv, "qd");
+    check_state_vector(state.qd, model->nv, "qd");
+  }
+  return state;
 }
 
 ReferenceFrame to_reference(py::handle obj) {

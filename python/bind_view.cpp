@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include "bindings.hpp"
+#include "featherdrive/sim/state.hpp"
 
 namespace py = pybind11;
 
@@ -49,17 +50,16 @@ py::tuple link_world_poses(const ModelPtr& model, py::handle q_rows, py::handle 
   const py::ssize_t rows = q.shape(0), count = static_cast<py::ssize_t>(names.size());
   py::array_t<double> poses({rows, count, py::ssize_t{7}});
   auto out = poses.mutable_unchecked<3>();
-  Simulation check(model, SimulationOptions{});  // set_q checks each row as Simulation does
   Data data(*model);
   for (py::ssize_t t = 0; t < rows; ++t) {
     VecX row(model->nq);
     for (int k = 0; k < model->nq; ++k) row[k] = q.at(t, k);
     try {
-      check.set_q(row);
+      row = checked_configuration(*model, row);  // as Simulation::set_q checks and normalises
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("q row " + std::to_string(t) + ": " + e.what());
     }
-    forward_kinematics(*model, data, check.q());
+    forward_kinematics(*model, data, row);
     for (py::ssize_t l = 0; l < count; ++l) {
       const int i = link_of[static_cast<size_t>(l)];
       const MergedLink& f = offset[static_cast<size_t>(l)];

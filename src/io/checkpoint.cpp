@@ -110,10 +110,9 @@ void hash_double(Writer& w, double v) { w.f64(v); }
 }
 
 // Version 3: per dof the explicit actuator and its delay history, then the actuator forces.
-void write_actuators(Writer& p, const Simulation& sim) {
-  const ExplicitActuators& actuators = sim.actuators();
-  for (int d = 0; d < sim.model().nv; ++d) {
-    const ExplicitActuator& a = actuators.actuator(d);
+void write_actuators(Writer& p, const Settings& settings, const State& state) {
+  for (size_t d = 0; d < settings.actuators.size(); ++d) {
+    const ExplicitActuator& a = settings.actuators[d];
     p.u8(static_cast<std::uint8_t>(a.kind));
     if (a.kind == ActuatorKind::none) continue;
     p.u8(static_cast<std::uint8_t>(a.integration));  // version 6
@@ -122,24 +121,25 @@ void write_actuators(Writer& p, const Simulation& sim) {
     p.i64(a.delay);
     p.u64(a.lookup.size());
     for (const auto& [position, effort] : a.lookup) p.f64(position), p.f64(effort);
-    p.f64(actuators.feedforward(d));
-    p.i64(actuators.pushes(d));
-    for (const ActuatorCommand& c : actuators.ring(d))
+    p.f64(settings.actuator_feedforward[static_cast<Eigen::Index>(d)]);
+    p.i64(state.actuator_history[d].pushes);
+    for (const ActuatorCommand& c : state.actuator_history[d].ring)
       p.f64(c.position), p.f64(c.velocity), p.f64(c.effort);
   }
-  p.vec(sim.actuator_force());
+  p.vec(state.actuator_force);
 }
 
-void read_actuators(Reader& r, Simulation& next, const std::string& name, std::uint32_t version) {
-  const Model& model = next.model();
-  for (int d = 0; d < model.nv; ++d) {
+void read_actuators(Reader& r, Settings& settings, State& state, const std::string& name,
+                    std::uint32_t version) {
+  const int nv = static_cast<int>(settings.actuators.size());
+  for (int d = 0; d < nv; ++d) {
     ExplicitActuator a;
     const std::uint8_t kind = r.u8();
     if (kind > static_cast<std::uint8_t>(ActuatorKind::remotized_pd))
       fail(name, "corrupt checkpoint: actuator kind " + std::to_string(kind) + " of dof " +
                      std::to_string(d));
     a.kind = static_cast<ActuatorKind>(kind);
-    if (a.kind == ActuatorKind::none) continue;  // cleared before the drives were set
+    if (a.kind == ActuatorKind::none) continue;  // cleared before the settings were read
     if (version >= 6) {  // before it, every actuator was explicit
       const std::uint8_t integration = r.u8();
       if (integration > static_cast<std::uint8_t>(ActuatorIntegration::implicit_law))
@@ -163,64 +163,65 @@ void read_actuators(Reader& r, Simulation& next, const std::string& name, std::u
       const double position = r.f64();
       a.lookup.emplace_back(position, r.f64());
     }
-    next.set_actuator(d, a);
-    next.set_actuator_feedforward(d, r.f64());
-    const std::int64_t pushes = r.i64();
-    std::vector<ActuatorCommand> ring(static_cast<size_t>(a.delay) + 1);
-    for (ActuatorCommand& c : ring) c = {r.f64(), r.f64(), r.f64()};
-    next.restore_actuator_history(d, static_cast<long>(pushes), ring);
+    settings.actuators[static_cast<size_t>(d)] = a;
+    settings.actuator_feedforward[d] = r.f64();
+    DelayHistory<ActuatorCommand>& history = state.actuator_history[static_cast<size_t>(d)];
+    history.pushes = static_cast<long>(r.i64());
+    history.ring.resize(static_cast<size_t>(a.delay) + 1);
+    for (ActuatorCommand& c : history.ring) c = {r.f64(), r.f64(), r.f64()};
   }
-  next.restore_actuator_force(r.vec(model.nv));
+  state.actuator_force = r.vec(nv);
 }
 
 // Version 4: per dof the implicit drive's delay and, if any, its pushes and ring of delay + 1
 // targets.
-void write_drive_delays(Writer& p, const Simulation& sim) {
-  const DriveDelays& delays = sim.drive_delays();
-  for (int d = 0; d < sim.model().nv; ++d) {
-    p.i64(delays.delay(d));
-    if (delays.delay(d) == 0) continue;
-    p.i64(delays.pushes(d));
-    for (const DriveTarget& t : delays.ring(d)) p.f64(t.position), p.f64(t.velocity);
+void write_drive_delays(Writer& p, const Settings& settings, const State& state) {
+  for (size_t d = 0; d < settings.drive_delay.size(); ++d) {
+    p.i64(settings.drive_delay[d]);
+    if (settings.drive_delay[d] == 0) continue;
+    p.i64(state.drive_delay_history[d].pushes);
+    for (const DriveTarget& t : state.drive_delay_history[d].ring)
+      p.f64(t.position), p.f64(t.velocity);
   }
 }
 
-void read_drive_delays(Reader& r, Simulation& next, const std::string& name) {
-  for (int d = 0; d < next.model().nv; ++d) {
+void read_drive_delays(Reader& r, Settings& settings, State& state, const std::string& name) {
+  for (size_t d = 0; d < settings.drive_delay.size(); ++d) {
     const std::int64_t delay = r.i64();
     if (delay < 0 || delay > kMaxDelay)
       fail(name, "corrupt checkpoint: drive delay " + std::to_string(delay) + " of dof " +
                      std::to_string(d) + " is outside [0, " + std::to_string(kMaxDelay) + "]");
-    if (delay == 0) continue;  // cleared before the drives were set
-    next.set_drive_delay(d, static_cast<int>(delay));
-    const std::int64_t pushes = r.i64();
-    std::vector<DriveTarget> ring(static_cast<size_t>(delay) + 1);
-    for (DriveTarget& t : ring) t = {r.f64(), r.f64()};
-    next.restore_drive_delay_history(d, static_cast<long>(pushes), ring);
+    if (delay == 0) continue;  // cleared before the settings were read
+    settings.drive_delay[d] = static_cast<int>(delay);
+    DelayHistory<DriveTarget>& history = state.drive_delay_history[d];
+    history.pushes = static_cast<long>(r.i64());
+    history.ring.resize(static_cast<size_t>(delay) + 1);
+    for (DriveTarget& t : history.ring) t = {r.f64(), r.f64()};
   }
 }
 
 // Version 5: per dof its revolute wrap (1: wrapped), then the mimic joints.
-void write_joint_coupling(Writer& p, const Simulation& sim) {
-  for (int d = 0; d < sim.model().nv; ++d)
-    p.u8(sim.revolute_wrap(d) == RevoluteWrap::wrapped ? 1 : 0);
-  p.i64(static_cast<std::int64_t>(sim.mimic_joints().size()));
-  for (const MimicJoint& m : sim.mimic_joints()) {
+void write_joint_coupling(Writer& p, const Settings& settings) {
+  for (const RevoluteWrap wrap : settings.revolute_wrap)
+    p.u8(wrap == RevoluteWrap::wrapped ? 1 : 0);
+  p.i64(static_cast<std::int64_t>(settings.mimic_joints.size()));
+  for (const MimicJoint& m : settings.mimic_joints) {
     p.i64(m.dof_a);
     p.i64(m.dof_b);
     for (double v : {m.gear_ratio, m.offset, m.natural_frequency, m.damping_ratio}) p.f64(v);
   }
 }
 
-void read_joint_coupling(Reader& r, Simulation& next, const std::string& name) {
-  const Model& model = next.model();
+void read_joint_coupling(Reader& r, const Model& model, Settings& settings,
+                         const std::string& name) {
   for (int d = 0; d < model.nv; ++d) {
     const std::uint8_t wrapped = r.u8();
     if (wrapped > 1)
       fail(name, "corrupt checkpoint: revolute wrap " + std::to_string(wrapped) + " of dof " +
                      std::to_string(d) + " is neither 0 nor 1");
     if (wrapped || model.links[model.dof_link[d]].joint_type == JointType::revolute)
-      next.set_revolute_wrap(d, wrapped ? RevoluteWrap::wrapped : RevoluteWrap::unwrapped);
+      settings.revolute_wrap[static_cast<size_t>(d)] =
+          wrapped ? RevoluteWrap::wrapped : RevoluteWrap::unwrapped;
   }
   const std::int64_t count = r.i64();
   if (count < 0 || count > model.nv)
@@ -234,7 +235,7 @@ void read_joint_coupling(Reader& r, Simulation& next, const std::string& name) {
                      std::to_string(b) + " of " + std::to_string(model.nv));
     m = {static_cast<int>(a), static_cast<int>(b), r.f64(), r.f64(), r.f64(), r.f64()};
   }
-  next.set_mimic_joints(rows);
+  settings.mimic_joints = std::move(rows);
 }
 
 }  // namespace
@@ -267,51 +268,51 @@ std::uint64_t model_fingerprint(const Model& model) {
 
 std::string checkpoint_bytes(const Simulation& sim) {
   const Model& model = sim.model();
-  const int nv = model.nv;
+  const Settings& settings = sim.settings();
+  const State state = sim.state();
   Writer p;  // payload
-  p.f64(sim.time());
-  p.i64(sim.step_count());
-  const SimulationOptions& o = sim.options();
+  p.f64(state.time);
+  p.i64(state.step_count);
+  const SimulationOptions& o = settings.options;
   p.f64(o.dt);
   p.u8(static_cast<std::uint8_t>(o.solver));
   p.i64(o.position_iterations);
   p.i64(o.velocity_iterations);
   p.u8(static_cast<std::uint8_t>(o.compat));
-  p.vec(sim.q());
-  p.vec(sim.qd());
-  p.vec(sim.applied_force());
-  for (int d = 0; d < nv; ++d) {
-    const Drive& drive = sim.drive(d);
+  p.vec(state.q);
+  p.vec(state.qd);
+  p.vec(state.applied_force);
+  for (int d = 0; d < model.nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    const Drive& drive = settings.drives[k];
     p.u8(static_cast<std::uint8_t>(drive.type));
     for (double v : {drive.stiffness, drive.damping, drive.max_force, drive.max_impulse,
                      drive.target_position, drive.target_velocity})
       p.f64(v);
-    p.f64(sim.lower_limit(d));
-    p.f64(sim.upper_limit(d));
-    p.f64(sim.max_joint_velocity(d));
-    const JointFriction& f = sim.joint_friction(d);
+    p.f64(settings.lower_limit[d]);
+    p.f64(settings.upper_limit[d]);
+    p.f64(settings.max_joint_velocity[d]);
+    const JointFriction& f = settings.friction[k];
     for (double v : {f.static_effort, f.dynamic_effort, f.viscous}) p.f64(v);
-    const ActuatorEnvelope& e = sim.actuator_envelope(d);
+    const ActuatorEnvelope& e = settings.envelopes[k];
     for (double v : {e.max_effort, e.max_actuator_velocity, e.speed_effort_gradient,
                      e.velocity_dependent_resistance})
       p.f64(v);
-    p.f64(sim.friction_coefficient(d));
+    p.f64(settings.friction_coefficient[d]);
   }
-  for (int i = 0; i < model.num_links(); ++i) {
-    const LinkParameters& l = sim.link_parameters(i);
+  for (const LinkParameters& l : settings.link_parameters)
     for (double v : {l.cfm_scale, l.linear_damping, l.angular_damping, l.max_linear_velocity,
                      l.max_angular_velocity})
       p.f64(v);
-  }
-  p.vec(sim.drive_force());
-  p.vec(sim.limit_force());
-  p.vec(sim.friction_force());
-  p.vec(sim.velocity_limit_force());
-  write_actuators(p, sim);
-  write_drive_delays(p, sim);
-  write_joint_coupling(p, sim);
-  const GuardAccount& a = sim.guard_account();  // version 7
-  for (double v : {a.created, a.dissipated, a.scale}) p.f64(v);
+  p.vec(state.drive_force);
+  p.vec(state.limit_force);
+  p.vec(state.friction_force);
+  p.vec(state.velocity_limit_force);
+  write_actuators(p, settings, state);
+  write_drive_delays(p, settings, state);
+  write_joint_coupling(p, settings);
+  const GuardAccount& account = sim.guard_account();  // version 7
+  for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -367,28 +368,38 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                    "; this model: nq " + std::to_string(model.nq) + ", nv " +
                    std::to_string(model.nv) + ", fingerprint " + hex(ours) + ")");
 
-  // Restore into a copy, so that sim stays as it was if any value is refused.
-  Simulation next = sim;
-  for (int d = 0; d < model.nv; ++d) {  // the checkpoint's, or none
-    next.clear_actuator(d);
-    next.set_drive_delay(d, 0);
-  }
+  // The checkpoint's settings and state as values; the simulation's where the version has none
+  // (drive delays before 4, wrap and mimic joints before 5). Actuators and delays are the
+  // checkpoint's, or none.
+  const Settings& held = sim.settings();
+  Settings settings = held;
+  std::fill(settings.actuators.begin(), settings.actuators.end(), ExplicitActuator{});
+  settings.actuator_feedforward.setZero();
+  std::fill(settings.drive_delay.begin(), settings.drive_delay.end(), 0);
+  State state;
+  state.actuator_history.resize(static_cast<size_t>(model.nv));
+  state.drive_delay_history.resize(static_cast<size_t>(model.nv));
   Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
+  // Restored into a copy, so that sim stays as it was if any value is refused.
+  Simulation next = sim;
   try {
-    const double time = r.f64();
+    state.time = r.f64();
     const std::int64_t step_count = r.i64();
-    // The clock must be one a run reaches (Simulation::set_clock's rule), or resuming overflows.
+    // The clock must be one a run reaches (check_clock's rule), or resuming overflows.
     if (step_count < 0 || step_count > kMaxStepCount)
       fail(name, "corrupt checkpoint: step count " + std::to_string(step_count) +
                      " is outside [0, " + std::to_string(kMaxStepCount) + "]");
+    const double time = state.time;
     if (!std::isfinite(time) || time < 0.0 || time > 2.0 * static_cast<double>(step_count) * kMaxDt)
       fail(name, "corrupt checkpoint: time " + format_double(time) + " s after " +
                      std::to_string(step_count) +
                      " steps is not one a run reaches (finite, >= 0, "
                      "at most 2 * steps * " +
                      format_double(kMaxDt) + " s)");
-    SimulationOptions o;
-    o.guard = sim.options().guard;  // how to step, not state: the simulation's own
+    state.step_count = static_cast<long>(step_count);
+    SimulationOptions& o = settings.options;
+    o = SimulationOptions{};
+    o.guard = held.options.guard;  // how to step, not state: the simulation's own
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
     if (solver > static_cast<std::uint8_t>(SolverType::tgs))
@@ -407,17 +418,16 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     if (compat > static_cast<std::uint8_t>(Compat::physx))
       fail(name, "corrupt checkpoint: compat = " + std::to_string(compat));
     o.compat = static_cast<Compat>(compat);
-    if (o.compat != sim.options().compat)
+    if (o.compat != held.options.compat)
       fail(name, std::string("the checkpoint is of a compat ") + to_string(o.compat) +
-                     " simulation, this simulation is compat " + to_string(sim.options().compat) +
+                     " simulation, this simulation is compat " + to_string(held.options.compat) +
                      " (compat is chosen when a simulation is made)");
-    next.set_options(o);
-    next.set_clock(time, static_cast<long>(step_count));
-    const VecX q = r.vec(model.nq);
-    next.set_qd(r.vec(model.nv));
-    next.set_applied_force(r.vec(model.nv));
+    state.q = r.vec(model.nq);
+    state.qd = r.vec(model.nv);
+    state.applied_force = r.vec(model.nv);
     for (int d = 0; d < model.nv; ++d) {
-      Drive drive;
+      const auto k = static_cast<size_t>(d);
+      Drive& drive = settings.drives[k];
       const std::uint8_t type = r.u8();
       if (type > static_cast<std::uint8_t>(DriveType::acceleration))
         fail(name, "corrupt checkpoint: drive type " + std::to_string(type) + " of dof " +
@@ -440,19 +450,14 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       e.speed_effort_gradient = r.f64();
       e.velocity_dependent_resistance = r.f64();
       const double friction_coefficient = r.f64();
-      next.set_drive(d, drive);
       // The per-joint settings exist for revolute, prismatic and spherical joints only; elsewhere
-      // the model's values stand (the fingerprint matched), and a setter is called only to change
-      // a value, so what the model itself allows (e.g. a velocity limit of 0) is kept as it is.
-      const auto same = [](double a, double b) {
-        return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-      };
+      // the simulation's values stand (no setter can change them, so a run saved them as they
+      // are), and Settings::validate passes a value equal to the default as it is.
       const JointType jt = model.links[model.dof_link[d]].joint_type;
       if (jt != JointType::revolute && jt != JointType::prismatic &&
           jt != JointType::spherical) {
-        // No setter can change these here, so a run saves the simulation's own values.
-        const JointFriction& f0 = next.joint_friction(d);
-        const ActuatorEnvelope& e0 = next.actuator_envelope(d);
+        const JointFriction& f0 = held.friction[k];
+        const ActuatorEnvelope& e0 = held.envelopes[k];
         const double saved[] = {lower,
                                 upper,
                                 max_velocity,
@@ -464,9 +469,9 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                                 e.speed_effort_gradient,
                                 e.velocity_dependent_resistance,
                                 friction_coefficient};
-        const double held[] = {next.lower_limit(d),
-                               next.upper_limit(d),
-                               next.max_joint_velocity(d),
+        const double kept[] = {held.lower_limit[d],
+                               held.upper_limit[d],
+                               held.max_joint_velocity[d],
                                f0.static_effort,
                                f0.dynamic_effort,
                                f0.viscous,
@@ -474,51 +479,49 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                                e0.max_actuator_velocity,
                                e0.speed_effort_gradient,
                                e0.velocity_dependent_resistance,
-                               next.friction_coefficient(d)};
-        for (int k = 0; k < 11; ++k)
-          if (!same(saved[k], held[k]))
+                               held.friction_coefficient[d]};
+        for (int i = 0; i < 11; ++i)
+          if (std::bit_cast<std::uint64_t>(saved[i]) != std::bit_cast<std::uint64_t>(kept[i]))
             fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
                            " joint '" + model.links[model.dof_link[d]].joint_name +
-                           "' has joint setting #" + std::to_string(k) + " = " +
-                           format_double(saved[k]) +
+                           "' has joint setting #" + std::to_string(i) + " = " +
+                           format_double(saved[i]) +
                            ", which only a revolute, prismatic or spherical joint can change");
         continue;
       }
-      if (!same(lower, next.lower_limit(d)) || !same(upper, next.upper_limit(d)))
-        next.set_joint_limits(d, lower, upper);
-      if (!same(max_velocity, next.max_joint_velocity(d)))
-        next.set_max_joint_velocity(d, max_velocity);
-      next.set_joint_friction(d, f);
-      next.set_actuator_envelope(d, e);
-      next.set_friction_coefficient(d, friction_coefficient);
+      settings.lower_limit[d] = lower;
+      settings.upper_limit[d] = upper;
+      settings.max_joint_velocity[d] = max_velocity;
+      settings.friction[k] = f;
+      settings.envelopes[k] = e;
+      settings.friction_coefficient[d] = friction_coefficient;
     }
-    for (int i = 0; i < model.num_links(); ++i) {
-      LinkParameters l;
+    for (LinkParameters& l : settings.link_parameters) {
       l.cfm_scale = r.f64();
       l.linear_damping = r.f64();
       l.angular_damping = r.f64();
       l.max_linear_velocity = r.f64();
       l.max_angular_velocity = r.f64();
-      next.set_link_parameters(i, l);
     }
-    const VecX drive_force = r.vec(model.nv), limit_force = r.vec(model.nv),
-               friction_force = r.vec(model.nv), velocity_limit_force = r.vec(model.nv);
-    read_actuators(r, next, name, version);
-    if (version >= 4) read_drive_delays(r, next, name);  // version 3 has none
-    if (version >= 5) read_joint_coupling(r, next, name);  // 3 and 4 have none
-    if (version >= 7) {  // before it, the guard's account starts empty
-      GuardAccount a;
-      a.created = r.f64();
-      a.dissipated = r.f64();
-      a.scale = r.f64();
-      next.set_guard_account(a);
-    } else {
-      next.set_guard_account({});
+    state.drive_force = r.vec(model.nv);
+    state.limit_force = r.vec(model.nv);
+    state.friction_force = r.vec(model.nv);
+    state.velocity_limit_force = r.vec(model.nv);
+    read_actuators(r, settings, state, name, version);
+    if (version >= 4) read_drive_delays(r, settings, state, name);    // version 3 has none
+    if (version >= 5) read_joint_coupling(r, model, settings, name);  // 3 and 4 have none
+    GuardAccount account;  // before version 7, the guard's account starts empty
+    if (version >= 7) {
+      account.created = r.f64();
+      account.dissipated = r.f64();
+      account.scale = r.f64();
     }
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");
-    next.restore_state(q, drive_force, limit_force, friction_force, velocity_limit_force);
+    next.set_settings(settings);
+    next.set_state(state);
+    next.set_guard_account(account);
   } catch (const CheckpointError&) {
     throw;
   } catch (const std::invalid_argument& e) {

@@ -18,6 +18,7 @@
 #include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/model/model_variant.hpp"
+#include "featherdrive/sim/state.hpp"
 
 namespace featherdrive {
 namespace {
@@ -27,13 +28,6 @@ void check_size(const VecX& x, int expected, const char* function, const char* w
     throw std::invalid_argument(std::string(function) + ": " + what + " has " +
                                 std::to_string(x.size()) + " values, expected nv = " +
                                 std::to_string(expected));
-}
-
-// Dofs with drives and per-dof joint settings: revolute, prismatic and a spherical joint's axes.
-bool drivable(const Model& model, int dof) {
-  const JointType type = model.links[model.dof_link[dof]].joint_type;
-  return type == JointType::revolute || type == JointType::prismatic ||
-         type == JointType::spherical;
 }
 
 /// The drives set_drive_targets would set; throws before anything changes.
@@ -73,7 +67,7 @@ std::vector<Drive> drives_with_gains(const Simulation& sim, const VecX& stiffnes
     Drive drive = sim.drive(d);
     drive.stiffness = stiffness[d];
     drive.damping = damping[d];
-    if (drivable(model, d)) {
+    if (dof_has_rows(model, d)) {
       drive.type = type;
       // Refused here, before anything changes, rather than half-way by set_drive.
       if (type != DriveType::none && sim.has_actuator(d))
@@ -234,17 +228,16 @@ std::vector<int> Batch::check_env_ids(std::span<const int> env_ids) const {
   return {env_ids.begin(), env_ids.end()};
 }
 
-// set(sim, row) for the environments env_ids, each row first set on a scratch simulation so that
-// a bad one throws before anything changes.
-template <class Set>
+// set(sim, row) for the environments env_ids, every row checked first (check(row) throws the
+// setter's message), so that a bad one throws before anything changes.
+template <class Check, class Set>
 void Batch::set_rows(std::span<const int> env_ids, const RowMatrix& values, Eigen::Index cols,
-                     const char* what, Set set) {
+                     const char* what, Check check, Set set) {
   const std::vector<int> envs = check_env_ids(env_ids);
   check_values(values, envs.size(), cols, what);
-  Simulation scratch(model_ptr());
   for (size_t j = 0; j < envs.size(); ++j) {
     try {
-      set(scratch, row_of(values, j).transpose());
+      check(row_of(values, j).transpose());
     } catch (const std::invalid_argument& e) {
       rethrow_for(envs[j], e);
     }
@@ -255,16 +248,23 @@ void Batch::set_rows(std::span<const int> env_ids, const RowMatrix& values, Eige
 
 void Batch::set_q(const RowMatrix& q) { set_q(every(size()), q); }
 void Batch::set_q(std::span<const int> env_ids, const RowMatrix& q) {
-  set_rows(env_ids, q, model().nq, "q", [](Simulation& s, const VecX& v) { s.set_q(v); });
+  set_rows(
+      env_ids, q, model().nq, "q", [&](const VecX& v) { checked_configuration(model(), v); },
+      [](Simulation& s, const VecX& v) { s.set_q(v); });
 }
 void Batch::set_qd(const RowMatrix& qd) { set_qd(every(size()), qd); }
 void Batch::set_qd(std::span<const int> env_ids, const RowMatrix& qd) {
-  set_rows(env_ids, qd, model().nv, "qd", [](Simulation& s, const VecX& v) { s.set_qd(v); });
+  set_rows(
+      env_ids, qd, model().nv, "qd",
+      [&](const VecX& v) { check_state_vector(v, model().nv, "qd"); },
+      [](Simulation& s, const VecX& v) { s.set_qd(v); });
 }
 void Batch::set_applied_force(const RowMatrix& tau) { set_applied_force(every(size()), tau); }
 void Batch::set_applied_force(std::span<const int> env_ids, const RowMatrix& tau) {
-  set_rows(env_ids, tau, model().nv, "applied_force",
-           [](Simulation& s, const VecX& v) { s.set_applied_force(v); });
+  set_rows(
+      env_ids, tau, model().nv, "applied_force",
+      [&](const VecX& v) { check_state_vector(v, model().nv, "applied_force"); },
+      [](Simulation& s, const VecX& v) { s.set_applied_force(v); });
 }
 
 void Batch::set_drive_targets(const RowMatrix& positions, const RowMatrix& velocities) {
@@ -306,11 +306,10 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
   const std::vector<int> envs = check_env_ids(env_ids);
   if (q) check_values(*q, envs.size(), model().nq, "q");
   if (qd) check_values(*qd, envs.size(), model().nv, "qd");
-  Simulation scratch(model_ptr());
   for (size_t j = 0; j < envs.size(); ++j) {
     try {
-      if (q) scratch.set_q(row_of(*q, j).transpose());
-      if (qd) scratch.set_qd(row_of(*qd, j).transpose());
+      if (q) checked_configuration(model(), row_of(*q, j).transpose());
+      if (qd) check_state_vector(row_of(*qd, j).transpose(), model().nv, "qd");
     } catch (const std::invalid_argument& e) {
       rethrow_for(envs[j], e);
     }
@@ -332,14 +331,14 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
 }
 
 // For every environment envs[j] and dof d: apply(sim, d, x) with x[k] = values[k] at (j, d), on
-// dofs of revolute and prismatic joints, tried on a scratch simulation first; dofs of other
-// joints take no such setting and must be given what they have (same(sim, d, x)).
-template <class Apply, class Same>
+// dofs of revolute and prismatic joints and spherical axes, every one checked first
+// (check(model, d, x): the setter's check, settings.hpp); dofs of other joints take no such
+// setting and must be given what they have (same(sim, d, x)).
+template <class Check, class Apply, class Same>
 void Batch::set_per_dof(const std::vector<int>& envs,
                         std::initializer_list<const RowMatrix*> values, const char* what,
-                        Apply apply, Same same) {
+                        Check check, Apply apply, Same same) {
   const Model& model = this->model();
-  Simulation scratch(model_ptr());
   std::vector<double> x(values.size());
   auto at = [&](size_t j, int d) {
     size_t k = 0;
@@ -350,8 +349,8 @@ void Batch::set_per_dof(const std::vector<int>& envs,
     const Simulation& sim = sims_[static_cast<size_t>(envs[j])];
     for (int d = 0; d < model.nv; ++d) {
       try {
-        if (drivable(model, d)) {
-          apply(scratch, d, at(j, d));
+        if (dof_has_rows(model, d)) {
+          check(model, d, at(j, d));
         } else if (!same(sim, d, at(j, d))) {
           const Link& link =
               model.links[static_cast<size_t>(model.dof_link[static_cast<size_t>(d)])];
@@ -368,7 +367,7 @@ void Batch::set_per_dof(const std::vector<int>& envs,
   }
   for (size_t j = 0; j < envs.size(); ++j)
     for (int d = 0; d < model.nv; ++d)
-      if (drivable(model, d)) apply(sims_[static_cast<size_t>(envs[j])], d, at(j, d));
+      if (dof_has_rows(model, d)) apply(sims_[static_cast<size_t>(envs[j])], d, at(j, d));
 }
 
 void Batch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& lower,
@@ -378,6 +377,7 @@ void Batch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& lowe
   check_values(upper, envs.size(), model().nv, "upper");
   set_per_dof(
       envs, {&lower, &upper}, "joint limits",
+      [](const Model& m, int d, const double* x) { check_joint_limits(m, d, x[0], x[1]); },
       [](Simulation& s, int d, const double* x) { s.set_joint_limits(d, x[0], x[1]); },
       [](const Simulation& s, int d, const double* x) {
         return x[0] == s.lower_limit(d) && x[1] == s.upper_limit(d);
@@ -392,6 +392,9 @@ void Batch::set_joint_friction(std::span<const int> env_ids, const RowMatrix& st
   check_values(viscous, envs.size(), model().nv, "viscous friction");
   set_per_dof(
       envs, {&static_effort, &dynamic_effort, &viscous}, "joint friction",
+      [](const Model& m, int d, const double* x) {
+        check_joint_friction(m, d, JointFriction{x[0], x[1], x[2]});
+      },
       [](Simulation& s, int d, const double* x) {
         s.set_joint_friction(d, JointFriction{x[0], x[1], x[2]});
       },
@@ -406,6 +409,7 @@ void Batch::set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix
   check_values(max_velocity, envs.size(), model().nv, "max joint velocity");
   set_per_dof(
       envs, {&max_velocity}, "max joint velocity",
+      [](const Model& m, int d, const double* x) { check_max_joint_velocity(m, d, x[0]); },
       [](Simulation& s, int d, const double* x) { s.set_max_joint_velocity(d, x[0]); },
       [](const Simulation& s, int d, const double* x) { return x[0] == s.max_joint_velocity(d); });
 }
@@ -457,6 +461,8 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
   for (size_t j = 0; j < envs.size(); ++j) {
     Simulation& sim = sims_[static_cast<size_t>(envs[j])];
     sim.drive_delays_ = std::move(made[j]);
+    for (int d = 0; d < nv; ++d)
+      sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.drive_delays_.delay(d);
     sim.row_kinds_changed_ = true;
   }
 }

@@ -25,9 +25,9 @@ double wrap_revolute_position(double q) {
   return std::clamp(q, -2.0 * two_pi, 2.0 * two_pi);
 }
 
-void wrap_revolute_positions(const Model& model, const std::vector<char>& wrapped, VecX& q) {
+void wrap_revolute_positions(const Model& model, const std::vector<RevoluteWrap>& wrap, VecX& q) {
   for (int d = 0; d < model.nv; ++d)
-    if (wrapped[static_cast<size_t>(d)]) {
+    if (wrap[static_cast<size_t>(d)] == RevoluteWrap::wrapped) {
       double& x = q[model.links[model.dof_link[d]].q_index];
       x = wrap_revolute_position(x);
     }

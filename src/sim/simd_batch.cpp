@@ -495,11 +495,10 @@ void SimdBatch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& 
   const int nv = model_->nv;
   check_shape(lower, es.size(), nv, "lower");
   check_shape(upper, es.size(), nv, "upper");
-  Simulation check(model_);  // Simulation's own check of each pair
-  for (size_t j = 0; j < es.size(); ++j)
+  for (size_t j = 0; j < es.size(); ++j)  // Simulation's own check of each pair
     for (int d = 0; d < nv; ++d) {
       try {
-        check.set_joint_limits(d, row_of(lower, j)[d], row_of(upper, j)[d]);
+        check_joint_limits(*model_, d, row_of(lower, j)[d], row_of(upper, j)[d]);
       } catch (const std::invalid_argument& e) {
         rethrow_for_env(es[j], e);
       }
@@ -518,13 +517,13 @@ void SimdBatch::set_joint_friction(std::span<const int> env_ids, const RowMatrix
   check_shape(static_effort, es.size(), nv, "static friction");
   check_shape(dynamic_effort, es.size(), nv, "dynamic friction");
   check_shape(viscous, es.size(), nv, "viscous friction");
-  Simulation check(model_);  // Simulation's own check of each dof's friction
-  for (size_t j = 0; j < es.size(); ++j)
+  for (size_t j = 0; j < es.size(); ++j)  // Simulation's own check of each dof's friction
     for (int d = 0; d < nv; ++d) {
       try {
-        check.set_joint_friction(
-            d, JointFriction{row_of(static_effort, j)[d], row_of(dynamic_effort, j)[d],
-                             row_of(viscous, j)[d]});
+        check_joint_friction(
+            *model_, d,
+            JointFriction{row_of(static_effort, j)[d], row_of(dynamic_effort, j)[d],
+                          row_of(viscous, j)[d]});
       } catch (const std::invalid_argument& e) {
         rethrow_for_env(es[j], e);
       }

@@ -9,44 +9,12 @@
 
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/model/model_variant.hpp"
+#include "featherdrive/sim/state.hpp"
 
 namespace featherdrive {
 namespace {
 
 std::string fmt(double v) { return format_double(v); }
-
-// The joints whose dofs carry rows (drives, limits, friction, velocity limits): revolute,
-// prismatic, and spherical per axis (twist, swing1, swing2; docs/math/spherical_joints.md).
-bool has_axis_rows(JointType type) {
-  return type == JointType::revolute || type == JointType::prismatic ||
-         type == JointType::spherical;
-}
-
-void check_vector(const VecX& x, Eigen::Index expected, const char* what) {
-  if (x.size() != expected)
-    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(expected) +
-                                " values, got " + std::to_string(x.size()));
-  for (Eigen::Index i = 0; i < x.size(); ++i)
-    if (!std::isfinite(x[i]))
-      throw std::invalid_argument(std::string(what) + "[" + std::to_string(i) + "] = " +
-                                  fmt(x[i]) + " is not finite");
-}
-
-// Quaternions of spherical and floating joints: a norm of 0 (or one that under- or overflows)
-// has no rotation; with `unit`, the norm must be 1 within 1e-9.
-void check_quaternions(const Model& model, const VecX& q, bool unit) {
-  for (const Link& link : model.links) {
-    if (link.joint_type != JointType::spherical && link.joint_type != JointType::floating) continue;
-    const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
-    const double norm = q.segment<4>(iq).norm();
-    const bool ok = unit ? std::abs(norm - 1.0) <= 1e-9 : (norm > 1e-150 && std::isfinite(norm));
-    if (!ok)
-      throw std::invalid_argument("q: the quaternion of joint '" + link.joint_name + "' (q[" +
-                                  std::to_string(iq) + "..." + std::to_string(iq + 3) +
-                                  "]) has norm " + fmt(norm) +
-                                  (unit ? ", expected 1" : ": it must not be zero"));
-  }
-}
 
 }  // namespace
 
@@ -92,65 +60,16 @@ void StateStorage::lend(const std::array<double*, kFields>& rows) {
   lent_ = true;
 }
 
-const char* to_string(SolverType type) { return type == SolverType::pgs ? "pgs" : "tgs"; }
-const char* to_string(Compat compat) { return compat == Compat::physx ? "physx" : "none"; }
-
-void validate_options(const SimulationOptions& o) {
-  if (!std::isfinite(o.dt) || o.dt <= 0.0)
-    throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) + " must be finite and > 0");
-  if (!(o.dt >= kMinDt && o.dt <= kMaxDt))
-    throw std::invalid_argument("simulation options: dt = " + fmt(o.dt) +
-                                " must be a normal number in [" + fmt(kMinDt) + ", " + fmt(kMaxDt) +
-                                "] s");
-  const std::string most = std::to_string(kMaxIterations);
-  if (o.position_iterations < 1)
-    throw std::invalid_argument("simulation options: position_iterations = " +
-                                std::to_string(o.position_iterations) + " must be >= 1");
-  if (o.position_iterations > kMaxIterations)
-    throw std::invalid_argument("simulation options: position_iterations = " +
-                                std::to_string(o.position_iterations) + " must be <= " + most);
-  if (o.velocity_iterations < 0)
-    throw std::invalid_argument("simulation options: velocity_iterations = " +
-                                std::to_string(o.velocity_iterations) + " must be >= 0");
-  if (o.velocity_iterations > kMaxIterations)
-    throw std::invalid_argument("simulation options: velocity_iterations = " +
-                                std::to_string(o.velocity_iterations) + " must be <= " + most);
-  if (!std::isfinite(o.guard.max_joint_step) || o.guard.max_joint_step <= 0.0)
-    throw std::invalid_argument("simulation options: guard.max_joint_step = " +
-                                fmt(o.guard.max_joint_step) + " must be finite and > 0");
-  if (o.guard.max_substeps < 2 || o.guard.max_substeps > kMaxGuardSubsteps)
-    throw std::invalid_argument("simulation options: guard.max_substeps = " +
-                                std::to_string(o.guard.max_substeps) + " must be in [2, " +
-                                std::to_string(kMaxGuardSubsteps) + "]");
-  if (!(o.guard.energy_tolerance > 0.0 && o.guard.energy_tolerance <= 1.0))
-    throw std::invalid_argument("simulation options: guard.energy_tolerance = " +
-                                fmt(o.guard.energy_tolerance) + " must be in (0, 1]");
-  if (!(o.guard.dissipation_share > 0.0 && o.guard.dissipation_share <= 100.0))
-    throw std::invalid_argument("simulation options: guard.dissipation_share = " +
-                                fmt(o.guard.dissipation_share) + " must be in (0, 100]");
-}
-
 Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options)
     : model_(model ? std::move(model) : throw std::invalid_argument("Simulation: model is null")),
-      options_(options),
       data_(*model_),
       sweep_(*model_),
       departures_(*model_) {
-  validate_options(options_);
+  validate_options(options);
+  settings_ = Settings::defaults(*model_, options);
   const int nv = model_->nv;
   state_ = StateStorage(model_->nq, nv);
   state_[StateStorage::q] = model_->neutral_configuration();
-  drives_.assign(static_cast<size_t>(nv), Drive{});
-  lower_limit_ = model_->lower_limit;
-  upper_limit_ = model_->upper_limit;
-  max_velocity_ = model_->velocity_limit;
-  friction_.assign(static_cast<size_t>(nv), JointFriction{});
-  envelopes_.assign(static_cast<size_t>(nv), ActuatorEnvelope{});
-  for (int d = 0; d < nv; ++d) {
-    const JointType type = model_->links[model_->dof_link[d]].joint_type;
-    if (!has_axis_rows(type)) continue;
-    friction_[static_cast<size_t>(d)] = {model_->friction[d], model_->friction[d], model_->damping[d]};
-  }
   actuators_ = ExplicitActuators(nv);
   drive_delays_ = DriveDelays(nv);
   actuator_force_ = actuator_force_start_ = joint_force_ = VecX::Zero(nv);
@@ -161,27 +80,13 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   delta_x_ = VecX::Zero(nv);
   last_drive_change_ = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model_->num_links());
-  friction_coefficient_ = VecX::Zero(nv);
-  link_parameters_.assign(n, LinkParameters{});
   link_force_.assign(n, Vec6::Zero());
   subtree_force_.assign(n, Vec6::Zero());
   transmitted_force_ = VecX::Zero(model_->num_links());
   link_cfm_ = VecX::Zero(model_->num_links());
-  wrapped_.assign(static_cast<size_t>(nv), 0);
-  if (options_.compat == Compat::physx) {
-    // PhysX 5.6.1's defaults for everything nobody set; a model's velocity limit counts as set.
-    link_parameters_.assign(n, physx_default::link());
-    for (int d = 0; d < nv; ++d) {
-      const JointType type = model_->links[model_->dof_link[d]].joint_type;
-      if (!has_axis_rows(type)) continue;
-      wrapped_[static_cast<size_t>(d)] = type == JointType::revolute;  // PhysX's eREVOLUTE
-      friction_coefficient_[d] = physx_default::friction_coefficient;
-      if (!std::isfinite(max_velocity_[d])) max_velocity_[d] = physx_default::max_joint_velocity;
-    }
-  }
   update_link_damping_active();
-  dt_ = options_.dt;
-  if (options_.guard.enabled) size_guard();
+  dt_ = settings_.options.dt;
+  if (settings_.options.guard.enabled) size_guard();
 }
 
 void Simulation::set_track_convergence(bool on) {
@@ -191,12 +96,33 @@ void Simulation::set_track_convergence(bool on) {
 
 void Simulation::set_options(const SimulationOptions& options) {
   validate_options(options);
-  if (options.compat != options_.compat)
+  if (options.compat != settings_.options.compat)
     throw std::invalid_argument(std::string("simulation options: compat = ") +
                                 to_string(options.compat) + " differs from the simulation's " +
-                                to_string(options_.compat) + ": compat is chosen at construction");
-  options_ = options;
-  if (options_.guard.enabled && !guard_data_) size_guard();
+                                to_string(settings_.options.compat) +
+                                ": compat is chosen at construction");
+  settings_.options = options;
+  if (settings_.options.guard.enabled && !guard_data_) size_guard();
+}
+
+void Simulation::set_settings(const Settings& settings) {
+  settings.validate(*model_);
+  set_options(settings.options);  // the compat check; options are values, nothing else changes
+  // Everything that may throw or allocate is made before anything changes.
+  MimicSolver mimic(*model_, settings.mimic_joints);
+  Settings next = settings;
+  for (int d = 0; d < model_->nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    if (!(settings.actuators[k] == settings_.actuators[k]))
+      set_actuator_unchecked(d, settings.actuators[k]);
+    if (settings.actuators[k].kind != ActuatorKind::none)
+      actuators_.set_feedforward(d, settings.actuator_feedforward[d]);
+    if (settings.drive_delay[k] != settings_.drive_delay[k]) set_delay(d, settings.drive_delay[k]);
+  }
+  settings_ = std::move(next);
+  mimic_ = std::move(mimic);
+  row_kinds_changed_ = true;
+  update_link_damping_active();
 }
 
 void Simulation::set_model(std::shared_ptr<const Model> model) {
@@ -214,38 +140,85 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
 }
 
 void Simulation::set_q(const VecX& q) {
-  check_vector(q, model_->nq, "q");
-  check_quaternions(*model_, q, /*unit=*/false);
-  VecX normalized = q;
-  normalize_configuration(*model_, normalized);
-  state_[StateStorage::q] = normalized;
+  state_[StateStorage::q] = checked_configuration(*model_, q);
 }
 
 void Simulation::set_clock(double time, long step_count) {
-  if (step_count < 0 || step_count > kMaxStepCount)
-    throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +
-                                " must be in [0, " + std::to_string(kMaxStepCount) + "]");
-  if (!std::isfinite(time) || time < 0.0)
-    throw std::invalid_argument("clock: time = " + fmt(time) + " must be finite and >= 0");
-  // Each step adds one dt <= kMaxDt; the factor 2 covers the rounding of the sum (< n eps).
-  const double most = 2.0 * static_cast<double>(step_count) * kMaxDt;
-  if (time > most)
-    throw std::invalid_argument("clock: time = " + fmt(time) + " s after " +
-                                std::to_string(step_count) + " steps: no run reaches it (at most " +
-                                fmt(most) + " s, 2 * steps * " + fmt(kMaxDt) + " s)");
+  check_clock(time, step_count);
   time_ = time;
   step_count_ = step_count;
 }
 
+State Simulation::state() const {
+  State s;
+  s.q = q();
+  s.qd = qd();
+  s.applied_force = applied_force();
+  s.time = time_;
+  s.step_count = step_count_;
+  s.drive_force = drive_force();
+  s.limit_force = limit_force();
+  s.friction_force = friction_force();
+  s.velocity_limit_force = velocity_limit_force();
+  s.actuator_force = actuator_force_;
+  const auto nv = static_cast<size_t>(model_->nv);
+  s.actuator_history.resize(nv);
+  s.drive_delay_history.resize(nv);
+  for (int d = 0; d < model_->nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    if (actuators_.active(d)) s.actuator_history[k] = {actuators_.pushes(d), actuators_.ring(d)};
+    if (drive_delays_.delayed(d))
+      s.drive_delay_history[k] = {drive_delays_.pushes(d), drive_delays_.ring(d)};
+  }
+  return s;
+}
+
+void Simulation::set_state(const State& s) {
+  const int nv = model_->nv;
+  check_clock(s.time, s.step_count);
+  check_state_vector(s.qd, nv, "qd");
+  check_state_vector(s.applied_force, nv, "applied_force");
+  check_state_vector(s.actuator_force, nv, "actuator_force");
+  for (const size_t n : {s.actuator_history.size(), s.drive_delay_history.size()})
+    if (n != static_cast<size_t>(nv))
+      throw std::invalid_argument("state: " + std::to_string(n) + " delay histories, expected " +
+                                  "one per dof (nv = " + std::to_string(nv) + ")");
+  // The histories are restored into copies: nothing changes if one is refused.
+  ExplicitActuators actuators = actuators_;
+  DriveDelays delays = drive_delays_;
+  for (int d = 0; d < nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    const DelayHistory<ActuatorCommand>& a = s.actuator_history[k];
+    if (actuators.active(d)) actuators.restore_history(d, a.pushes, a.ring);
+    else if (a.pushes != 0 || !a.ring.empty())
+      throw std::invalid_argument("actuator history of dof " + std::to_string(d) +
+                                  ": the dof has no actuator");
+    const DelayHistory<DriveTarget>& t = s.drive_delay_history[k];
+    if (delays.delayed(d)) delays.restore_history(d, t.pushes, t.ring);
+    else if (t.pushes != 0 || !t.ring.empty())
+      throw std::invalid_argument("drive delay history of dof " + std::to_string(d) +
+                                  ": the dof has no drive delay");
+  }
+  // Checks q and the outputs before it changes anything; nothing below throws.
+  restore_state(s.q, s.drive_force, s.limit_force, s.friction_force, s.velocity_limit_force);
+  state_[StateStorage::qd] = s.qd;
+  state_[StateStorage::applied_force] = s.applied_force;
+  time_ = s.time;
+  step_count_ = s.step_count;
+  actuator_force_ = s.actuator_force;
+  actuated_ = true;  // actuator_force_ may be nonzero
+  actuators_ = std::move(actuators);
+  drive_delays_ = std::move(delays);
+}
+
 void Simulation::restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
                                const VecX& friction_force, const VecX& velocity_limit_force) {
-  check_vector(q, model_->nq, "q");
-  check_quaternions(*model_, q, /*unit=*/true);
-  check_vector(drive_force, model_->nv, "drive_force");
-  check_vector(limit_force, model_->nv, "limit_force");
-  check_vector(friction_force, model_->nv, "friction_force");
-  check_vector(velocity_limit_force, model_->nv, "velocity_limit_force");
-  state_[StateStorage::q] = q;
+  VecX exact = checked_configuration(*model_, q, /*unit=*/true);
+  check_state_vector(drive_force, model_->nv, "drive_force");
+  check_state_vector(limit_force, model_->nv, "limit_force");
+  check_state_vector(friction_force, model_->nv, "friction_force");
+  check_state_vector(velocity_limit_force, model_->nv, "velocity_limit_force");
+  state_[StateStorage::q] = exact;
   state_[StateStorage::drive_force] = drive_force;
   state_[StateStorage::limit_force] = limit_force;
   state_[StateStorage::friction_force] = friction_force;
@@ -253,58 +226,24 @@ void Simulation::restore_state(const VecX& q, const VecX& drive_force, const Vec
 }
 
 void Simulation::set_qd(const VecX& qd) {
-  check_vector(qd, model_->nv, "qd");
+  check_state_vector(qd, model_->nv, "qd");
   state_[StateStorage::qd] = qd;
 }
 
 void Simulation::set_applied_force(const VecX& tau) {
-  check_vector(tau, model_->nv, "applied_force");
+  check_state_vector(tau, model_->nv, "applied_force");
   state_[StateStorage::applied_force] = tau;
-}
-
-int Simulation::check_dof(int dof) const {
-  if (dof < 0 || dof >= model_->nv)
-    throw std::invalid_argument("dof index " + std::to_string(dof) + " is out of range [0, " +
-                                std::to_string(model_->nv) + ")");
-  return dof;
-}
-
-int Simulation::driven_dof(const std::string& joint) const {
-  // A spherical joint's axes go by their dof names ("ball:twist", "ball:swing1", "ball:swing2").
-  for (int d = 0; d < model_->nv; ++d)
-    if (model_->dof_names[d] == joint &&
-        model_->links[model_->dof_link[d]].joint_type == JointType::spherical)
-      return d;
-  const Link& link = model_->links[model_->joint_link_index(joint)];
-  if (link.joint_type == JointType::spherical)
-    throw std::invalid_argument("joint '" + joint + "' is spherical: name one of its axes, '" +
-                                joint + ":twist', '" + joint + ":swing1' or '" + joint +
-                                ":swing2'");
-  if (!has_axis_rows(link.joint_type))
-    throw std::invalid_argument("joint '" + joint + "' is " + to_string(link.joint_type) +
-                                ": this setting acts on revolute, prismatic and spherical "
-                                "joints only");
-  return link.v_index;
 }
 
 void Simulation::set_drive(int dof, const Drive& drive) {
   check_dof(dof);
-  const Link& link = model_->links[model_->dof_link[dof]];
-  if (drive.type != DriveType::none && !has_axis_rows(link.joint_type))
-    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
-                                to_string(link.joint_type) +
-                                ": drives act on revolute, prismatic and spherical joints only");
-  validate_drive(drive, link.joint_name);
-  if (drive.type != DriveType::none && actuators_.active(dof))
-    throw std::invalid_argument("joint '" + link.joint_name + "' has an explicit actuator (" +
-                                to_string(actuators_.actuator(dof).kind) + "): a " +
-                                to_string(drive.type) + " drive cannot act beside it (clear the "
-                                "actuator first; a drive of type none sets its targets)");
+  check_drive(*model_, dof, drive, settings_.actuators[static_cast<size_t>(dof)].kind);
   // New targets or gains leave a lone drive one.
-  if (drive.type != drives_[static_cast<size_t>(dof)].type) row_kinds_changed_ = true;
-  drives_[static_cast<size_t>(dof)] = drive;
+  Drive& kept = settings_.drives[static_cast<size_t>(dof)];
+  if (drive.type != kept.type) row_kinds_changed_ = true;
+  kept = drive;
   // No drive, no delay: what set_drive_delay refuses is not kept either (checkpoints restore it).
-  if (drive.type == DriveType::none && drive_delays_.delayed(dof)) drive_delays_.set(dof, 0);
+  if (drive.type == DriveType::none && drive_delays_.delayed(dof)) set_delay(dof, 0);
 }
 
 void Simulation::set_drive(const std::string& joint, const Drive& drive) {
@@ -313,28 +252,20 @@ void Simulation::set_drive(const std::string& joint, const Drive& drive) {
 
 // Driven by the implicit drive or by an explicit actuator, which reads the drive's targets.
 bool Simulation::accepts_targets(int dof) const {
-  return drives_[static_cast<size_t>(dof)].type != DriveType::none || has_actuator(dof);
-}
-
-std::string Simulation::no_drive_message(int dof) const {
-  const Link& link = model_->links[model_->dof_link[dof]];
-  const std::string joint = "joint '" + model_->dof_names[dof] + "' (dof " + std::to_string(dof);
-  if (!has_axis_rows(link.joint_type))
-    return joint + ") is " + to_string(link.joint_type) + ": it takes no drive, so no target";
-  return joint + ") has no drive (type none), so a target would do nothing: give it one first "
-                 "(set_drive, set_drive_gains for every joint, or set_actuator)";
+  return settings_.drives[static_cast<size_t>(dof)].type != DriveType::none || has_actuator(dof);
 }
 
 void Simulation::check_targets_have_drives(const VecX& positions, const VecX& velocities) const {
   for (int d = 0; d < std::min(positions.size(), velocities.size()); ++d)
     if ((positions[d] != 0.0 || velocities[d] != 0.0) && !accepts_targets(d))
-      throw std::invalid_argument(no_drive_message(d) + "; this vector sets its target to " +
-                                  fmt(positions[d]) + ", velocity " + fmt(velocities[d]));
+      throw std::invalid_argument(no_drive_message(*model_, d) +
+                                  "; this vector sets its target to " + fmt(positions[d]) +
+                                  ", velocity " + fmt(velocities[d]));
 }
 
 void Simulation::set_drive_target(int dof, double position, double velocity) {
   check_dof(dof);
-  if (!accepts_targets(dof)) throw std::invalid_argument(no_drive_message(dof));
+  if (!accepts_targets(dof)) throw std::invalid_argument(no_drive_message(*model_, dof));
   Drive d = drive(dof);
   d.target_position = position;
   d.target_velocity = velocity;
@@ -345,35 +276,10 @@ void Simulation::set_drive_target(const std::string& joint, double position, dou
   set_drive_target(driven_dof(joint), position, velocity);
 }
 
-int Simulation::one_dof_joint(int dof) const {
-  check_dof(dof);
-  const Link& link = model_->links[model_->dof_link[dof]];
-  if (!has_axis_rows(link.joint_type))
-    throw std::invalid_argument("joint '" + link.joint_name + "' is " + to_string(link.joint_type) +
-                                ": limits, friction and velocity limits act on revolute, "
-                                "prismatic and spherical joints only");
-  return dof;
-}
-
 void Simulation::set_joint_limits(int dof, double lower, double upper) {
-  one_dof_joint(dof);
-  // +-inf stand for "no limit" on their own side only; validate_limits does not know that.
-  const std::string& joint = model_->links[model_->dof_link[dof]].joint_name;
-  if (lower == std::numeric_limits<double>::infinity())
-    throw std::invalid_argument("limits on joint '" + joint + "': lower = inf leaves no position");
-  if (upper == -std::numeric_limits<double>::infinity())
-    throw std::invalid_argument("limits on joint '" + joint + "': upper = -inf leaves no position");
-  validate_limits(lower, upper, model_->links[model_->dof_link[dof]].joint_name);
-  // PhysX's spherical positions lie in [-pi, pi] (setLimitParams refuses wider limits).
-  if (model_->links[model_->dof_link[dof]].joint_type == JointType::spherical)
-    for (const double limit : {lower, upper})
-      if (std::isfinite(limit) && std::abs(limit) > std::numbers::pi)
-        throw std::invalid_argument("limits on joint '" + model_->dof_names[dof] + "': " +
-                                    (limit == lower ? "lower = " : "upper = ") + fmt(limit) +
-                                    " is outside [-pi, pi], where a spherical axis's position "
-                                    "lies");
-  lower_limit_[dof] = lower;
-  upper_limit_[dof] = upper;
+  check_joint_limits(*model_, dof, lower, upper);
+  settings_.lower_limit[dof] = lower;
+  settings_.upper_limit[dof] = upper;
   row_kinds_changed_ = true;
 }
 void Simulation::set_joint_limits(const std::string& joint, double lower, double upper) {
@@ -381,9 +287,8 @@ void Simulation::set_joint_limits(const std::string& joint, double lower, double
 }
 
 void Simulation::set_joint_friction(int dof, const JointFriction& friction) {
-  one_dof_joint(dof);
-  validate_friction(friction, model_->links[model_->dof_link[dof]].joint_name);
-  friction_[static_cast<size_t>(dof)] = friction;
+  check_joint_friction(*model_, dof, friction);
+  settings_.friction[static_cast<size_t>(dof)] = friction;
   row_kinds_changed_ = true;
 }
 void Simulation::set_joint_friction(const std::string& joint, const JointFriction& friction) {
@@ -391,9 +296,8 @@ void Simulation::set_joint_friction(const std::string& joint, const JointFrictio
 }
 
 void Simulation::set_max_joint_velocity(int dof, double max_velocity) {
-  one_dof_joint(dof);
-  validate_max_velocity(max_velocity, model_->links[model_->dof_link[dof]].joint_name);
-  max_velocity_[dof] = max_velocity;
+  check_max_joint_velocity(*model_, dof, max_velocity);
+  settings_.max_joint_velocity[dof] = max_velocity;
   row_kinds_changed_ = true;
 }
 void Simulation::set_max_joint_velocity(const std::string& joint, double max_velocity) {
@@ -401,9 +305,8 @@ void Simulation::set_max_joint_velocity(const std::string& joint, double max_vel
 }
 
 void Simulation::set_friction_coefficient(int dof, double coefficient) {
-  one_dof_joint(dof);
-  validate_friction_coefficient(coefficient, model_->links[model_->dof_link[dof]].joint_name);
-  friction_coefficient_[dof] = coefficient;
+  check_friction_coefficient(*model_, dof, coefficient);
+  settings_.friction_coefficient[dof] = coefficient;
   row_kinds_changed_ = true;
 }
 void Simulation::set_friction_coefficient(const std::string& joint, double coefficient) {
@@ -411,30 +314,26 @@ void Simulation::set_friction_coefficient(const std::string& joint, double coeff
 }
 
 void Simulation::set_revolute_wrap(int dof, RevoluteWrap wrap) {
-  check_dof(dof);
-  const Link& link = model_->links[model_->dof_link[dof]];
-  if (link.joint_type != JointType::revolute)
-    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
-                                to_string(link.joint_type) + ": revolute = " + to_string(wrap) +
-                                " acts on revolute joints only");
-  wrapped_[static_cast<size_t>(dof)] = wrap == RevoluteWrap::wrapped;
+  check_revolute_wrap(*model_, dof, wrap);
+  settings_.revolute_wrap[static_cast<size_t>(dof)] = wrap;
 }
 void Simulation::set_revolute_wrap(const std::string& joint, RevoluteWrap wrap) {
   set_revolute_wrap(model_->links[model_->joint_link_index(joint)].v_index, wrap);
 }
 RevoluteWrap Simulation::revolute_wrap(int dof) const {
-  return wrapped_[static_cast<size_t>(check_dof(dof))] ? RevoluteWrap::wrapped
-                                                        : RevoluteWrap::unwrapped;
+  return settings_.revolute_wrap[static_cast<size_t>(check_dof(dof))];
 }
 
 void Simulation::set_mimic_joints(const std::vector<MimicJoint>& mimic) {
-  mimic_ = MimicSolver(*model_, mimic);
+  MimicSolver solver(*model_, mimic);  // validates
+  settings_.mimic_joints = mimic;
+  mimic_ = std::move(solver);
 }
 
 void Simulation::update_link_damping_active() {
   link_damping_active_ = false;
   link_cfm_active_ = false;
-  for (const LinkParameters& p : link_parameters_) {
+  for (const LinkParameters& p : settings_.link_parameters) {
     link_damping_active_ = link_damping_active_ || p.linear_damping > 0.0 ||
                            p.angular_damping > 0.0 || std::isfinite(p.max_linear_velocity) ||
                            std::isfinite(p.max_angular_velocity);
@@ -444,11 +343,8 @@ void Simulation::update_link_damping_active() {
 }
 
 void Simulation::set_link_parameters(int link, const LinkParameters& parameters) {
-  if (link < 0 || link >= model_->num_links())
-    throw std::invalid_argument("link index " + std::to_string(link) + " is out of range [0, " +
-                                std::to_string(model_->num_links()) + ")");
-  validate_link_parameters(parameters, model_->links[link].name);
-  link_parameters_[static_cast<size_t>(link)] = parameters;
+  check_link_parameters_of(*model_, link, parameters);
+  settings_.link_parameters[static_cast<size_t>(link)] = parameters;
   update_link_damping_active();
 }
 void Simulation::set_link_parameters(const std::string& link, const LinkParameters& parameters) {
@@ -458,16 +354,15 @@ const LinkParameters& Simulation::link_parameters(int link) const {
   if (link < 0 || link >= model_->num_links())
     throw std::invalid_argument("link index " + std::to_string(link) + " is out of range [0, " +
                                 std::to_string(model_->num_links()) + ")");
-  return link_parameters_[static_cast<size_t>(link)];
+  return settings_.link_parameters[static_cast<size_t>(link)];
 }
 const LinkParameters& Simulation::link_parameters(const std::string& link) const {
   return link_parameters(model_->link_index(link));
 }
 
 void Simulation::set_actuator_envelope(int dof, const ActuatorEnvelope& envelope) {
-  one_dof_joint(dof);
-  validate_envelope(envelope, model_->links[model_->dof_link[dof]].joint_name);
-  envelopes_[static_cast<size_t>(dof)] = envelope;
+  check_actuator_envelope(*model_, dof, envelope);
+  settings_.envelopes[static_cast<size_t>(dof)] = envelope;
   row_kinds_changed_ = true;
 }
 void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope) {
@@ -476,87 +371,56 @@ void Simulation::set_actuator_envelope(const std::string& joint, const ActuatorE
 
 void Simulation::set_actuator(int dof, const ExplicitActuator& actuator) {
   check_dof(dof);
-  const Link& link = model_->links[model_->dof_link[dof]];
+  check_actuator(*model_, dof, actuator, settings_.drives[static_cast<size_t>(dof)]);
+  set_actuator_unchecked(dof, actuator);
+}
+
+// actuators_ and the settings' copy, kept equal; the feed-forward of a cleared one is 0.
+void Simulation::set_actuator_unchecked(int dof, const ExplicitActuator& actuator) {
   // An implicit actuator's dof is never a lone drive (setup_rows): its rows are set up again.
   if (actuators_.implicit(dof) ||
       (actuator.kind != ActuatorKind::none &&
        actuator.integration == ActuatorIntegration::implicit_law))
     row_kinds_changed_ = true;
-  if (actuator.kind == ActuatorKind::none) {
-    actuators_.set(dof, actuator);
-    return;
-  }
-  if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic)
-    throw std::invalid_argument("joint '" + link.joint_name + "' is " +
-                                to_string(link.joint_type) +
-                                ": explicit actuators act on revolute and prismatic joints only");
-  validate_actuator(actuator, link.joint_name);
-  if (drives_[static_cast<size_t>(dof)].type != DriveType::none)
-    throw std::invalid_argument("joint '" + link.joint_name + "' has a " +
-                                to_string(drives_[static_cast<size_t>(dof)].type) +
-                                " drive: an explicit " + to_string(actuator.kind) +
-                                " actuator cannot act beside it (set the drive's type to none)");
   actuators_.set(dof, actuator);
+  settings_.actuators[static_cast<size_t>(dof)] = actuator;
+  settings_.actuator_feedforward[dof] = actuators_.feedforward(dof);
 }
+
 void Simulation::set_actuator(const std::string& joint, const ExplicitActuator& actuator) {
   set_actuator(driven_dof(joint), actuator);
 }
 
 void Simulation::set_actuator_feedforward(int dof, double effort) {
   check_dof(dof);
-  const std::string& joint = model_->links[model_->dof_link[dof]].joint_name;
-  if (!actuators_.active(dof))
-    throw std::invalid_argument("joint '" + joint + "' has no explicit actuator to take a "
-                                "feed-forward effort (use set_applied_force)");
-  if (!std::isfinite(effort))
-    throw std::invalid_argument("actuator on joint '" + joint + "': feedforward = " + fmt(effort) +
-                                " must be finite");
+  check_actuator_feedforward(*model_, dof, effort,
+                             settings_.actuators[static_cast<size_t>(dof)].kind);
   actuators_.set_feedforward(dof, effort);
+  settings_.actuator_feedforward[dof] = effort;
 }
 void Simulation::set_actuator_feedforward(const std::string& joint, double effort) {
   set_actuator_feedforward(driven_dof(joint), effort);
 }
 
-void Simulation::restore_actuator_history(int dof, long pushes,
-                                          const std::vector<ActuatorCommand>& ring) {
-  actuators_.restore_history(check_dof(dof), pushes, ring);
-}
-
 void Simulation::check_drive_delay(int dof, int delay) const {
   check_dof(dof);
-  const std::string& joint = model_->dof_names[dof];
-  if (delay < 0 || delay > kMaxDelay)
-    throw std::invalid_argument("drive of joint '" + joint + "': delay = " +
-                                std::to_string(delay) + " must be in [0, " +
-                                std::to_string(kMaxDelay) + "] steps");
-  if (delay == 0) return;
-  if (actuators_.active(dof))
-    throw std::invalid_argument("joint '" + joint + "' has an explicit actuator: a drive delay "
-                                "of " + std::to_string(delay) + " steps would do nothing (give "
-                                "the actuator its own delay)");
-  if (drives_[static_cast<size_t>(dof)].type == DriveType::none)
-    throw std::invalid_argument(no_drive_message(dof) + "; a drive delay of " +
-                                std::to_string(delay) + " steps would do nothing too");
+  featherdrive::check_drive_delay(*model_, dof, delay, settings_.drives[static_cast<size_t>(dof)],
+                                  settings_.actuators[static_cast<size_t>(dof)].kind);
 }
 
 void Simulation::set_drive_delay(int dof, int delay) {
   check_drive_delay(dof, delay);
+  set_delay(dof, delay);
+}
+
+// drive_delays_ and the settings' copy, kept equal.
+void Simulation::set_delay(int dof, int delay) {
   drive_delays_.set(dof, delay);
+  settings_.drive_delay[static_cast<size_t>(dof)] = delay;
   row_kinds_changed_ = true;
 }
 void Simulation::set_drive_delay(const std::string& joint, int delay) {
   set_drive_delay(driven_dof(joint), delay);
-}
-
-void Simulation::restore_drive_delay_history(int dof, long pushes,
-                                             const std::vector<DriveTarget>& ring) {
-  drive_delays_.restore_history(check_dof(dof), pushes, ring);
-}
-
-void Simulation::restore_actuator_force(const VecX& force) {
-  check_vector(force, model_->nv, "actuator_force");
-  actuator_force_ = force;
-  actuated_ = true;
 }
 
 // Called by step() first: the efforts on the state the step starts from, added to the applied
@@ -569,7 +433,7 @@ const VecX& Simulation::apply_actuators() {
     actuated_ = false;
     return applied_force_;
   }
-  actuators_.compute(*model_, q_, qd_, drives_, actuator_force_);
+  actuators_.compute(*model_, q_, qd_, settings_.drives, actuator_force_);
   joint_force_ = applied_force_ + actuator_force_;
   actuated_ = true;
   return joint_force_;
@@ -625,7 +489,7 @@ void Simulation::check_finite_or_throw() {
   const double zero = (qd_.array() * 0.0).sum() + (drive_force_.array() * 0.0).sum() +
                       (limit_force_.array() * 0.0).sum() + (friction_force_.array() * 0.0).sum() +
                       (velocity_limit_force_.array() * 0.0).sum() + (q_.array() * 0.0).sum();
-  if (zero == 0.0 && std::isfinite(time_ + options_.dt)) return;
+  if (zero == 0.0 && std::isfinite(time_ + settings_.options.dt)) return;
   // Velocities and forces first: a non-finite velocity also makes the position non-finite, and
   // the velocity is the nearer cause.
   for (int d = 0; d < model.nv; ++d) {
@@ -642,12 +506,12 @@ void Simulation::check_finite_or_throw() {
         if (link.nv > 0) fail("position q", link.v_index + std::min(k, link.nv - 1), q_[link.q_index + k]);
       }
   // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
-  if (!std::isfinite(time_ + options_.dt)) {
+  if (!std::isfinite(time_ + settings_.options.dt)) {
     undo_actuators();
     std::ostringstream s;
     s.precision(6);
     s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_
-      << " s): time t + dt = " << time_ + options_.dt
+      << " s): time t + dt = " << time_ + settings_.options.dt
       << " is not finite; the state is left as it was before this step (lower dt)";
     throw DivergenceError(s.str());
   }

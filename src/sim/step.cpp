@@ -25,10 +25,10 @@ double limit_erp(SolverType solver, int position_iterations) {
 // guard on, the advance may be redone as sub-steps (step_guard.cpp, docs/math/step_guard.md).
 void Simulation::step() {
   const VecX& tau = begin_step();
-  if (options_.guard.enabled) {
+  if (settings_.options.guard.enabled) {
     guarded_advance(tau);
   } else {
-    dt_ = options_.dt;
+    dt_ = settings_.options.dt;
     target_lead_ = 0.0;
     advance(tau);
     row_forces();
@@ -41,7 +41,7 @@ void Simulation::step() {
 const VecX& Simulation::begin_step() {
   load_state();  // the storage keeps the step's start until commit_state
   const VecX& tau = apply_actuators();
-  if (drive_delays_.any()) drive_delays_.push(drives_);
+  if (drive_delays_.any()) drive_delays_.push(settings_.drives);
   return tau;
 }
 
@@ -56,8 +56,8 @@ void Simulation::advance(const VecX& tau) {
   if (physx() || link_damping_active_) forward_kinematics(model, data_, q_, qd_);
   else world_poses(model, data_, q_);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
-  any_link_force_ =
-      link_damping_active_ && link_damping_forces(model, data_, link_parameters_, dt, link_force_);
+  any_link_force_ = link_damping_active_ &&
+                    link_damping_forces(model, data_, settings_.link_parameters, dt, link_force_);
   const std::vector<Vec6>* link_force = any_link_force_ ? &link_force_ : nullptr;
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1);
   // with the accelerations, in the same pass, the unit responses r = (M^-1)_jj and the
@@ -65,7 +65,7 @@ void Simulation::advance(const VecX& tau) {
   articulated_bodies(model, data_, qd_, tau, link_force);
   accelerations_and_response(model, data_);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
-  if ((friction_coefficient_.array() > 0.0).any())
+  if ((settings_.friction_coefficient.array() > 0.0).any())
     transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
   qd_ += dt * data_.qdd;
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
@@ -74,18 +74,19 @@ void Simulation::advance(const VecX& tau) {
     if (model.floating_base())
       correct_free_velocity_momentum(model, data_, tau, link_force, dt, departures_, qd_);
   }
-  if (link_cfm_active_) link_cfm(model, data_, link_parameters_, link_cfm_);  // link_cfm.cpp
+  if (link_cfm_active_)
+    link_cfm(model, data_, settings_.link_parameters, link_cfm_);  // link_cfm.cpp
   // Rows, position iterations, position update, velocity iterations.
-  if (options_.solver == SolverType::pgs) solve_pgs();
+  if (settings_.options.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
   if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
-  wrap_revolute_positions(model, wrapped_, q_);
+  wrap_revolute_positions(model, settings_.revolute_wrap, q_);
 }
 
 // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
 void Simulation::row_forces() {
-  const double inv_dt = 1.0 / options_.dt;
+  const double inv_dt = 1.0 / settings_.options.dt;
   for (int d = 0; d < model_->nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
     drive_force_[d] = r.drive_impulse * inv_dt;
@@ -102,8 +103,8 @@ void Simulation::row_forces() {
 void Simulation::end_step() {
   check_finite_or_throw();
   commit_state();
-  if (options_.guard.enabled) commit_guard_account();
-  time_ += options_.dt;
+  if (settings_.options.guard.enabled) commit_guard_account();
+  time_ += settings_.options.dt;
   ++step_count_;
 }
 
@@ -113,7 +114,8 @@ void Simulation::end_step() {
 void Simulation::scale_to_velocity_limits() {
   double ratio = 1.0;
   for (int d = 0; d < model_->nv; ++d)
-    if (std::abs(qd_[d]) > max_velocity_[d]) ratio = std::min(ratio, max_velocity_[d] / std::abs(qd_[d]));
+    if (std::abs(qd_[d]) > settings_.max_joint_velocity[d])
+      ratio = std::min(ratio, settings_.max_joint_velocity[d] / std::abs(qd_[d]));
   if (ratio < 1.0) qd_ *= ratio;
 }
 
@@ -128,7 +130,7 @@ void Simulation::setup_rows(double h, bool tgs) {
     int front = 0, back = nv;
     for (int d = 0; d < nv; ++d) {
       setup_dof_rows(d, h, tgs);
-      // An implicit actuator's row is set up from the actuator, not from drives_.
+      // An implicit actuator's row is set up from the actuator, not from settings_.drives.
       const bool lone = rows_[static_cast<size_t>(d)].drive_only && !drive_delays_.delayed(d) &&
                         !actuators_.implicit(d) &&
                         model.links[model.dof_link[d]].joint_type != JointType::spherical;
@@ -151,7 +153,8 @@ void Simulation::setup_rows(double h, bool tgs) {
   only_lone_drives_pgs_ = !other_rows && !tgs && !physx() && mimic_.empty();
   delta_x_.setZero();
   if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
-    mimic_.setup(model, data_, h, limit_erp(options_.solver, options_.position_iterations));
+    mimic_.setup(model, data_, h,
+                 limit_erp(settings_.options.solver, settings_.options.position_iterations));
   if (target_lead_ != 0.0) lead_drive_targets();  // a guard sub-step (step_guard.cpp)
 }
 
@@ -165,7 +168,7 @@ void Simulation::setup_lone_drives(double h, bool tgs) {
   const double* const q = q_.data();
   const double* const cfm = link_cfm_.data();
   const double* const applied = applied_force_.data();
-  const Drive* const drives = drives_.data();
+  const Drive* const drives = settings_.drives.data();
   DofRows* const rows = rows_.data();
   const int* const order = dof_order_.data();
   const double dt = dt_;
@@ -191,7 +194,7 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   const double dt = dt_;
   auto drive_seen = [this](int dof) -> const Drive& {
     return drive_delays_.delayed(dof) ? drive_delays_.drive_seen(dof)
-                                      : drives_[static_cast<size_t>(dof)];
+                                      : settings_.drives[static_cast<size_t>(dof)];
   };
   // A spherical joint's three drives, twist first: their targets make one rotation.
   auto axis_drives = [&](int dof) {
@@ -244,23 +247,24 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
     if (actuator_clip_depends_on_state(actuator)) rows.actuator = &actuator;
     rows.actuator_x0 = x0;
   }
-  const ActuatorEnvelope& envelope = envelopes_[static_cast<size_t>(d)];
+  const ActuatorEnvelope& envelope = settings_.envelopes[static_cast<size_t>(d)];
   rows.has_envelope = driven && envelope.active();
   rows.envelope = envelope;
   rows.external_impulse = applied_force_[d] * dt;
-  const JointFriction& friction = friction_[static_cast<size_t>(d)];
-  rows.has_transmission_friction = friction_coefficient_[d] > 0.0 &&
+  const JointFriction& friction = settings_.friction[static_cast<size_t>(d)];
+  rows.has_transmission_friction = settings_.friction_coefficient[d] > 0.0 &&
                                    friction.static_effort == 0.0 && friction.viscous == 0.0;
   rows.transmission_friction_bound =
-      friction_coefficient_[d] * h * transmitted_force_[model.dof_link[d]];
+      settings_.friction_coefficient[d] * h * transmitted_force_[model.dof_link[d]];
   rows.has_friction = friction.active();
   rows.static_friction_impulse = friction.static_effort * dt;
   rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
   rows.viscous_friction = friction.viscous * dt;
-  rows.has_limit = std::isfinite(lower_limit_[d]) || std::isfinite(upper_limit_[d]);
-  rows.error_low = x0 - lower_limit_[d];   // +inf where unbounded
-  rows.error_high = upper_limit_[d] - x0;
-  rows.max_velocity = max_velocity_[d];
+  rows.has_limit =
+      std::isfinite(settings_.lower_limit[d]) || std::isfinite(settings_.upper_limit[d]);
+  rows.error_low = x0 - settings_.lower_limit[d];  // +inf where unbounded
+  rows.error_high = settings_.upper_limit[d] - x0;
+  rows.max_velocity = settings_.max_joint_velocity[d];
   rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.actuator &&
                     !rows.has_transmission_friction &&
                     !rows.has_friction && !rows.has_limit &&
@@ -302,8 +306,8 @@ void Simulation::solve_pgs() {
   RowPhase phase;
   phase.dt = dt;
   phase.h = dt;
-  phase.limit_erp = limit_erp(SolverType::pgs, options_.position_iterations);
-  const int last = options_.position_iterations - 1;
+  phase.limit_erp = limit_erp(SolverType::pgs, settings_.options.position_iterations);
+  const int last = settings_.options.position_iterations - 1;
   for (int it = 0; it < last; ++it) sweep(phase);
   if (track_convergence_)  // the impulses before the last iteration, then its change
     for (int d = 0; d < model_->nv; ++d)
@@ -317,10 +321,11 @@ void Simulation::solve_pgs() {
   phase.velocity_iteration = true;
   // A guard sub-step runs none: at every sub-step they fed energy into long chains
   // (docs/math/step_guard.md, "The sub-step law").
-  const int velocity_iterations = dt_ == options_.dt ? options_.velocity_iterations : 0;
+  const int velocity_iterations =
+      dt_ == settings_.options.dt ? settings_.options.velocity_iterations : 0;
   for (int it = 0; it < velocity_iterations; ++it) sweep(phase);
   if (physx())  // prismatic_limits.cpp
-    clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
+    clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
 }
 
 // TGS: each position iteration is a sub-step of rho = dt / n with a fresh drive impulse, the
@@ -329,7 +334,7 @@ void Simulation::solve_pgs() {
 // Iteration"); friction, limits and velocity limits keep acting there.
 void Simulation::solve_tgs() {
   const double dt = dt_;
-  const int n = options_.position_iterations;
+  const int n = settings_.options.position_iterations;
   const double rho = dt / n;
   setup_rows(rho, /*tgs=*/true);
   if (track_convergence_) last_drive_change_.setZero();  // no iteration to converge
@@ -346,7 +351,8 @@ void Simulation::solve_tgs() {
     // PhysX clamps a limited prismatic joint's position in every sub-step (propagateTransform,
     // from recordDeltaMotion), so the next sub-step's rows and the velocity iterations measure
     // the position change from the clamped pose (prismatic_limits.cpp).
-    if (physx()) clamp_prismatic_positions(*model_, lower_limit_, upper_limit_, q_);
+    if (physx())
+      clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
     delta_x_ += rho * qd_;
     if (physx()) {
       // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
@@ -360,7 +366,7 @@ void Simulation::solve_tgs() {
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.
   if (!any_undriven_rows_ && mimic_.empty()) return;
-  for (int it = 0; it < options_.velocity_iterations; ++it) sweep(phase);
+  for (int it = 0; it < settings_.options.velocity_iterations; ++it) sweep(phase);
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of

@@ -75,7 +75,7 @@ void Simulation::guard_energy(const VecX& q, const VecX& qd, double e[2]) {
 bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
   const Model& model = *model_;
   const double h = dt_;
-  const double bound = options_.guard.max_joint_step;
+  const double bound = settings_.options.guard.max_joint_step;
   bool moved_too_far = false;
   double work = 0.0;  // eq. (G-3): sum over dofs of the joint force's impulse times the motion
   double work_rounding = 0.0;  // sum |F| (|q| + |dq|): the positions' rounding carried into it
@@ -96,7 +96,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
       // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
       double dq = q_[link.q_index] - guard_q0_[link.q_index];
-      if (wrapped_[static_cast<size_t>(link.v_index)])
+      if (settings_.revolute_wrap[static_cast<size_t>(link.v_index)] == RevoluteWrap::wrapped)
         dq = std::remainder(dq, 2.0 * std::numbers::pi);
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
@@ -118,16 +118,16 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
   const double rounding =
       kEnergyRounding * (e0[0] + e1[0] + std::abs(e0[1]) + std::abs(e1[1]) + work_rounding);
-  const double allowed = options_.guard.energy_tolerance * scale + rounding;
+  const double allowed = settings_.options.guard.energy_tolerance * scale + rounding;
   // Test (iii), eq. (G-7)-(G-9): the account over the run, a sub-step's memory fading by its
   // share of the step.
-  const double leak = h == options_.dt ? kAccountLeak : std::pow(kAccountLeak, h / options_.dt);
+  const double leak = h == settings_.options.dt ? kAccountLeak : std::pow(kAccountLeak, h / settings_.options.dt);
   GuardAccount& next = guard_account_next_;
   const double created = excess + bracket;
   next.created = leak * next.created + created;
   next.dissipated = leak * next.dissipated + h * damper_power();
   next.scale = leak * next.scale + scale;
-  const double budget = options_.guard.dissipation_share * next.dissipated +
+  const double budget = settings_.options.guard.dissipation_share * next.dissipated +
                         kAccountSlack * (1.0 - kAccountLeak) * next.scale + allowed;
   // Over budget, a (sub-)step still passes if it pays back: it creates at most what the leak
   // forgives it (eq. G-9), so that the debt shrinks and old debts do not fail every sub-step.
@@ -145,12 +145,12 @@ double Simulation::drive_bracket(int d, double q0, double dq, double h) const {
       std::abs(r.drive_impulse) >= r.drive.max_impulse)
     return 0.0;
   const Drive& drive =
-      drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : drives_[static_cast<size_t>(d)];
+      drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : settings_.drives[static_cast<size_t>(d)];
   const double inv_m = drive.type == DriveType::acceleration ? 1.0 / r.response : 1.0;
   const double kp = drive.stiffness * inv_m, kd = drive.damping * inv_m;
   const double x = drive.target_position - drive.target_velocity * target_lead_;
   const double q1 = q0 + dq;  // before a wrap: the branch the row's error was taken on
-  const double credit = options_.solver == SolverType::tgs ? kTgsSpringCredit * kp * dq * dq : 0.0;
+  const double credit = settings_.options.solver == SolverType::tgs ? kTgsSpringCredit * kp * dq * dq : 0.0;
   return r.drive_impulse / h * dq + 0.5 * kp * ((q1 - x) * (q1 - x) - (q0 - x) * (q0 - x)) +
          kd * (dq / h - drive.target_velocity) * dq - credit;
 }
@@ -162,11 +162,11 @@ double Simulation::damper_power() const {
   double power = 0.0;
   for (int d = 0; d < model_->nv; ++d) {
     const DofRows& r = rows_[static_cast<size_t>(d)];
-    double c = friction_[static_cast<size_t>(d)].viscous;
+    double c = settings_.friction[static_cast<size_t>(d)].viscous;
     if (actuators_.active(d)) c += actuators_.actuator(d).damping;
     if (r.has_drive && !actuators_.implicit(d) &&
         !(std::abs(r.drive_impulse) >= r.drive.max_impulse)) {
-      const Drive& drive = drives_[static_cast<size_t>(d)];
+      const Drive& drive = settings_.drives[static_cast<size_t>(d)];
       c += drive.type == DriveType::acceleration ? drive.damping / r.response : drive.damping;
     }
     power += c * qd_[d] * qd_[d];
@@ -176,8 +176,8 @@ double Simulation::damper_power() const {
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
 void Simulation::guarded_advance(const VecX& tau_step) {
-  const double dt = options_.dt;
-  const int most = options_.guard.max_substeps;
+  const double dt = settings_.options.dt;
+  const int most = settings_.options.guard.max_substeps;
   double e_start[2], e0[2], e1[2];
   guard_q0_ = q_;
   guard_qd0_ = qd_;
@@ -293,7 +293,7 @@ void Simulation::lead_drive_targets() {
     const double target_velocity =
         actuators_.implicit(d)     ? actuators_.command_seen(d).velocity
         : drive_delays_.delayed(d) ? drive_delays_.drive_seen(d).target_velocity
-                                   : drives_[static_cast<size_t>(d)].target_velocity;
+                                   : settings_.drives[static_cast<size_t>(d)].target_velocity;
     rows.drive.target_vel_plus_initial_bias -=
         rows.drive.bias_coefficient * target_velocity * target_lead_;
   }

@@ -194,14 +194,7 @@ INSTANTIATE_TEST_SUITE_P(Solvers, Divergence, ::testing::Values(SolverType::pgs,
 
 // --- bad arguments -------------------------------------------------------------------------------
 
-std::string invalid_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+constexpr auto invalid_of = test::invalid_argument_message;
 
 TEST(BadArguments, OptionsAreValidated) {
   auto model = test::make_slider(1.0, Vec3::UnitX(), Vec3::Zero());

@@ -186,14 +186,7 @@ TEST(DriveDelay, BatchEnvironmentsEqualSimulationsAndResetClearsTheHistory) {
   EXPECT_EQ(batch.sim(2).drive_delays().pushes(2), 30);
 }
 
-std::string delay_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+constexpr auto delay_error = test::invalid_argument_message;
 
 TEST(DriveDelay, BadDelaysGetOneLineAndChangeNothing) {
   Simulation sim = driven_chain(SolverType::pgs, DriveType::force, 0);

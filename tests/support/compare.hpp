@@ -3,7 +3,10 @@
 #pragma once
 
 #include <cstring>
+#include <functional>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace featherdrive::test {
 
@@ -14,6 +17,16 @@ template <class A, class B>
 bool same_bits(const A& a, const B& b) {
   return a.size() == b.size() &&
          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+}
+
+/// The message of the std::invalid_argument f throws, or "(no error)".
+inline std::string invalid_argument_message(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(no error)";
 }
 
 }  // namespace featherdrive::test

@@ -42,6 +42,8 @@ struct ExplicitActuator {
   int delay = 0;  ///< physics steps between a command and the effort it gives, eq. (8)
   /// explicit: eq. (1)-(10) here; implicit: solved at the step's end (implicit_actuators.md).
   ActuatorIntegration integration = ActuatorIntegration::explicit_law;
+
+  bool operator==(const ExplicitActuator&) const = default;
 };
 
 /// What an actuator is told: target position and velocity, feed-forward effort.

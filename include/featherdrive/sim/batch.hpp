@@ -179,12 +179,12 @@ class Batch {
   void parallel(int n, int grain, F f) const;
   template <class F>
   RowMatrix per_environment(Eigen::Index cols, F row_of) const;
-  template <class Set>
+  template <class Check, class Set>
   void set_rows(std::span<const int> env_ids, const RowMatrix& values, Eigen::Index cols,
-                const char* what, Set set);
-  template <class Apply, class Same>
+                const char* what, Check check, Set set);
+  template <class Check, class Apply, class Same>
   void set_per_dof(const std::vector<int>& envs, std::initializer_list<const RowMatrix*> values,
-                   const char* what, Apply apply, Same same);
+                   const char* what, Check check, Apply apply, Same same);
   template <class Make>
   void vary_models(const std::vector<int>& envs, bool broadcast, Make make);
 

@@ -18,7 +18,7 @@ RevoluteWrap parse_revolute_wrap(const std::string& text);
 /// eq. (1): q - 4 pi above 2 pi, q + 4 pi below -2 pi, then clamped to [-4 pi, 4 pi].
 double wrap_revolute_position(double q);
 
-/// Wraps q (nq) at every dof whose `wrapped` entry (nv) is set.
-void wrap_revolute_positions(const Model& model, const std::vector<char>& wrapped, VecX& q);
+/// Wraps q (nq) at every dof whose `wrap` entry (nv) is wrapped.
+void wrap_revolute_positions(const Model& model, const std::vector<RevoluteWrap>& wrap, VecX& q);
 
 }  // namespace featherdrive

@@ -17,69 +17,12 @@
 #include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/physx_departures.hpp"
 #include "featherdrive/sim/revolute_wrap.hpp"
+#include "featherdrive/sim/settings.hpp"
+#include "featherdrive/sim/state.hpp"
 #include "featherdrive/solver/gauss_seidel.hpp"
 #include "featherdrive/solver/mimic_solve.hpp"
 
 namespace featherdrive {
-
-enum class SolverType { pgs, tgs };
-const char* to_string(SolverType type);
-
-/// Whose defaults and step details a simulation follows. physx: PhysX 5.6.1's defaults for the
-/// per-link and per-joint parameters nobody set, and its two departures from textbook Gauss-Seidel
-/// (../shared/physx/NOTES.md; docs/physx_parity.md). Chosen at construction.
-enum class Compat { none, physx };
-const char* to_string(Compat compat);
-
-/// The step guard (docs/math/step_guard.md): a step in which a joint moves more than
-/// max_joint_step, or the kinetic + gravity energy grows more than the joint forces' work, is
-/// redone as 2, 4, ... sub-steps of dt / n (at most max_substeps). Off by default; a step it
-/// does not redo is the unguarded step, bit for bit.
-struct StepGuard {
-  bool enabled = false;
-  double max_joint_step = 0.25;  ///< rad or m per (sub-)step; a spherical joint's rotation angle
-  int max_substeps = 64;         ///< in [2, kMaxGuardSubsteps]
-  /// Test (ii)'s share of the step's energy scale that may appear from nowhere; in (0, 1].
-  double energy_tolerance = 0.02;
-  /// Test (iii)'s share of the energy the dampers dissipated that the step may create over the
-  /// run (eq. G-9); in (0, 100].
-  double dissipation_share = 0.15;
-};
-
-/// Test (iii)'s account (docs/math/step_guard.md, eq. G-7, G-8): leaky sums over the run of the
-/// energy created beyond the work (X), of what the dampers dissipated (D) and of the steps'
-/// energy scales (S). Part of the state: a checkpoint keeps it.
-struct GuardAccount {
-  double created = 0.0;
-  double dissipated = 0.0;
-  double scale = 0.0;
-};
-inline constexpr int kMaxGuardSubsteps = 4096;
-
-struct SimulationOptions {
-  double dt = 1.0 / 60.0;           ///< time step tau [s]
-  SolverType solver = SolverType::pgs;
-  int position_iterations = 4;      ///< >= 1
-  int velocity_iterations = 1;      ///< >= 0
-  Compat compat = Compat::none;
-  StepGuard guard;
-};
-
-/// dt must be a normal double (no subnormal: 1 / dt and impulse / dt stay finite) up to kMaxDt, so
-/// that kMaxStepCount steps keep the clock finite.
-inline constexpr double kMinDt = std::numeric_limits<double>::min();
-inline constexpr double kMaxDt = 1e3;
-inline constexpr int kMaxIterations = 1'000'000;  ///< per step, position and velocity each
-/// The most steps a clock may count: 2^53, beyond which neither the count nor t = sum dt is exact
-/// (and no run gets there: 2^53 steps at 1 ns each take 104 days).
-inline constexpr long kMaxStepCount = 1L << 53;
-
-/// Throws std::invalid_argument naming the field and value for dt outside [kMinDt, kMaxDt] or
-/// non-finite, position_iterations outside [1, kMaxIterations], velocity_iterations outside
-/// [0, kMaxIterations], guard.max_joint_step not finite and > 0, guard.max_substeps outside
-/// [2, kMaxGuardSubsteps], guard.energy_tolerance outside (0, 1],
-/// guard.dissipation_share outside (0, 100].
-void validate_options(const SimulationOptions& options);
 
 /// A step that would leave a non-finite position, velocity or force. The simulation keeps the
 /// state it had before that step.
@@ -128,9 +71,15 @@ class Simulation {
 
   const Model& model() const { return *model_; }
   const std::shared_ptr<const Model>& model_ptr() const { return model_; }
-  const SimulationOptions& options() const { return options_; }
+  const SimulationOptions& options() const { return settings_.options; }
   /// Throws std::invalid_argument for invalid options or a different compat.
   void set_options(const SimulationOptions& options);
+  /// Every setting as one value (settings.hpp): what the setters below change one field at a time.
+  const Settings& settings() const { return settings_; }
+  /// Replaces every setting. Throws std::invalid_argument (Settings::validate; a compat other
+  /// than the simulation's) and changes nothing then. The delay histories of the actuators and
+  /// drive delays that change are emptied, as their setters do.
+  void set_settings(const Settings& settings);
   /// Replaces the model by one of the same topology (link and joint names, parents, joint types
   /// and axes, tree transforms, nq, nv), e.g. other masses, centres of mass or armature
   /// (model_builder.hpp: with_link_inertial, with_armature); state and settings stay. Throws
@@ -144,13 +93,20 @@ class Simulation {
   void set_qd(const VecX& qd);
   double time() const { return time_; }
   long step_count() const { return step_count_; }
-  /// Sets the clock (for resuming from a checkpoint) to one a run could have reached; throws
-  /// std::invalid_argument for a step count outside [0, kMaxStepCount], a time that is not finite
-  /// or < 0, a time > 0 at step 0, or a time above 2 * step_count * kMaxDt (step_count steps of
-  /// at most kMaxDt, with room for the rounding of the sum).
+  /// Sets the clock to one a run could have reached; throws std::invalid_argument otherwise
+  /// (check_clock, state.hpp).
   void set_clock(double time, long step_count);
+  /// The whole state as one value (state.hpp): q, qd, applied force, clock, the last step's
+  /// outputs and the delay histories.
+  State state() const;
+  /// Restores a state() of a simulation with the same settings, bit for bit (q as given: its
+  /// quaternions must have unit norm within 1e-9). Throws std::invalid_argument naming the part
+  /// for a size, a non-finite value, a clock no run reaches, or a history that is not the
+  /// settings' (ring of delay + 1 on exactly the dofs with an actuator or a drive delay); nothing
+  /// changes then.
+  void set_state(const State& state);
   /// Restores q exactly as given (no normalisation, unlike set_q; quaternions must have unit norm
-  /// within 1e-9) and the outputs of the last step, for resuming from a checkpoint bit for bit.
+  /// within 1e-9) and the outputs of the last step (a SimdBatch environment as a Simulation).
   /// Sizes and finiteness are checked; nothing changes if a check fails.
   void restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
                      const VecX& friction_force, const VecX& velocity_limit_force);
@@ -161,7 +117,9 @@ class Simulation {
   VecView applied_force() const { return state_[StateStorage::applied_force]; }
   void set_drive(int dof, const Drive& drive);
   void set_drive(const std::string& joint, const Drive& drive);
-  const Drive& drive(int dof) const { return drives_.at(static_cast<size_t>(check_dof(dof))); }
+  const Drive& drive(int dof) const {
+    return settings_.drives[static_cast<size_t>(check_dof(dof))];
+  }
   /// Throws std::invalid_argument naming the joint if the dof has no drive (a target would do
   /// nothing): give it one first (set_drive, set_drive_gains).
   void set_drive_target(int dof, double position, double velocity);
@@ -175,24 +133,30 @@ class Simulation {
   // model.friction with viscous = model.damping, max velocity = model.velocity_limit.
   void set_joint_limits(int dof, double lower, double upper);
   void set_joint_limits(const std::string& joint, double lower, double upper);
-  double lower_limit(int dof) const { return lower_limit_[check_dof(dof)]; }
-  double upper_limit(int dof) const { return upper_limit_[check_dof(dof)]; }
+  double lower_limit(int dof) const { return settings_.lower_limit[check_dof(dof)]; }
+  double upper_limit(int dof) const { return settings_.upper_limit[check_dof(dof)]; }
   void set_joint_friction(int dof, const JointFriction& friction);
   void set_joint_friction(const std::string& joint, const JointFriction& friction);
-  const JointFriction& joint_friction(int dof) const { return friction_.at(static_cast<size_t>(check_dof(dof))); }
+  const JointFriction& joint_friction(int dof) const {
+    return settings_.friction[static_cast<size_t>(check_dof(dof))];
+  }
   /// Largest |qd| (m/s or rad/s); +inf for none.
   void set_max_joint_velocity(int dof, double max_velocity);
   void set_max_joint_velocity(const std::string& joint, double max_velocity);
-  double max_joint_velocity(int dof) const { return max_velocity_[check_dof(dof)]; }
+  double max_joint_velocity(int dof) const { return settings_.max_joint_velocity[check_dof(dof)]; }
   /// PhysX's older joint friction: |impulse| <= coefficient * h * |F| per solve, F the spatial
   /// force the joint transmits (docs/math/joint_constraints.md). 0 (none) by default;
   /// PhysX's 0.05 with Compat::physx. Not applied where static or viscous friction is set.
   void set_friction_coefficient(int dof, double coefficient);
   void set_friction_coefficient(const std::string& joint, double coefficient);
-  double friction_coefficient(int dof) const { return friction_coefficient_[check_dof(dof)]; }
+  double friction_coefficient(int dof) const {
+    return settings_.friction_coefficient[check_dof(dof)];
+  }
   void set_actuator_envelope(int dof, const ActuatorEnvelope& envelope);
   void set_actuator_envelope(const std::string& joint, const ActuatorEnvelope& envelope);
-  const ActuatorEnvelope& actuator_envelope(int dof) const { return envelopes_.at(static_cast<size_t>(check_dof(dof))); }
+  const ActuatorEnvelope& actuator_envelope(int dof) const {
+    return settings_.envelopes[static_cast<size_t>(check_dof(dof))];
+  }
 
   // Explicit actuators (explicit_actuator.hpp), on revolute and prismatic dofs without an implicit
   // drive: the dof's drive targets are their targets. Setting one (kind none clears) empties its
@@ -209,9 +173,6 @@ class Simulation {
   /// Empties every actuator's delay history (eq. 9), e.g. when an episode starts over.
   void reset_actuator_history() { actuators_.reset_history(); }
   const ExplicitActuators& actuators() const { return actuators_; }
-  /// For checkpoints: a dof's pushes and ring (ExplicitActuators::restore_history).
-  void restore_actuator_history(int dof, long pushes, const std::vector<ActuatorCommand>& ring);
-  void restore_actuator_force(const VecX& force);  ///< the last step's, for checkpoints
   /// The effort each actuator applied in the last step (nv; 0 on dofs without one), clipped.
   const VecX& actuator_force() const { return actuator_force_; }
 
@@ -231,8 +192,6 @@ class Simulation {
   /// Empties every drive's delay history (eq. 9), e.g. when an episode starts over.
   void reset_drive_delay_history() { drive_delays_.reset_history(); }
   const DriveDelays& drive_delays() const { return drive_delays_; }
-  /// For checkpoints: a dof's pushes and ring (DriveDelays::restore_history).
-  void restore_drive_delay_history(int dof, long pushes, const std::vector<DriveTarget>& ring);
 
   // Link parameters (link_parameters.hpp): inert by default; PhysX 5.6.1's defaults with
   // Compat::physx. Throw std::invalid_argument naming the link, field and value.
@@ -251,7 +210,7 @@ class Simulation {
   /// Replaces the mimic joints (rows q_a + gear_ratio q_b + offset = 0); {} removes them. Throws
   /// std::invalid_argument (validate_mimic_joints); nothing changes then.
   void set_mimic_joints(const std::vector<MimicJoint>& mimic);
-  const std::vector<MimicJoint>& mimic_joints() const { return mimic_.joints(); }
+  const std::vector<MimicJoint>& mimic_joints() const { return settings_.mimic_joints; }
 
   // Outputs of the last step.
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
@@ -298,12 +257,12 @@ class Simulation {
 
  private:
   friend class Batch;  // lends the storage of state_
-  int check_dof(int dof) const;
-  int one_dof_joint(int dof) const;
-  int driven_dof(const std::string& joint) const;
+  int check_dof(int dof) const { return check_dof_index(*model_, dof); }
+  int driven_dof(const std::string& joint) const { return setting_dof(*model_, joint); }
   /// Whether a drive target on this dof acts: the one test of every target setter.
   bool accepts_targets(int dof) const;
-  std::string no_drive_message(int dof) const;
+  void set_actuator_unchecked(int dof, const ExplicitActuator& actuator);
+  void set_delay(int dof, int delay);
   void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
   void setup_dof_rows(int dof, double h, bool tgs);
@@ -315,7 +274,7 @@ class Simulation {
   void load_state();
   void commit_state();
   void update_link_damping_active();
-  bool physx() const { return options_.compat == Compat::physx; }
+  bool physx() const { return settings_.options.compat == Compat::physx; }
   void integrate_positions(double h);
   /// The actuators' efforts of this step on the step-start state; the joint force the step uses.
   const VecX& apply_actuators();
@@ -341,7 +300,9 @@ class Simulation {
   void lead_drive_targets();
 
   std::shared_ptr<const Model> model_;
-  SimulationOptions options_;
+  /// Every setting. The actuators, drive delays and mimic rows are also held, with their delay
+  /// histories and buffers, by actuators_, drive_delays_ and mimic_, which the setters keep equal.
+  Settings settings_;
   Data data_;
   SweepWorkspace sweep_;
 
@@ -352,12 +313,6 @@ class Simulation {
   double time_ = 0.0;
   long step_count_ = 0;
   VecX applied_force_;
-  std::vector<Drive> drives_;
-  VecX lower_limit_, upper_limit_, max_velocity_;
-  std::vector<JointFriction> friction_;
-  std::vector<ActuatorEnvelope> envelopes_;
-  VecX friction_coefficient_;
-  std::vector<LinkParameters> link_parameters_;
   VecX drive_force_, limit_force_, friction_force_, velocity_limit_force_;
   bool track_convergence_ = false;
   VecX last_drive_change_;  ///< see last_drive_impulse_change (nv)
@@ -391,10 +346,9 @@ class Simulation {
   bool actuated_ = false;  ///< the last step had actuators (actuator_force_ may be nonzero)
   bool actuated_start_ = false;
   DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
-  std::vector<char> wrapped_;  ///< per dof: a revolute joint of PhysX's wrapping type
   MimicSolver mimic_;
 
-  // The step guard: the time the advance covers (options_.dt, or dt / n in a guard sub-step),
+  // The step guard: the time the advance covers (options().dt, or dt / n in a guard sub-step),
   // how long before the step's end the sub-step ends (its drive targets lead by it), the
   // scratch (sized by size_guard, so that a guarded step allocates nothing) and the counters.
   double dt_ = 0.0;

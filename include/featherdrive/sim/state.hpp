@@ -1,0 +1,53 @@
+// What a step changes, as one value (docs/architecture.md, "Model, Settings, State, Workspace"),
+// and the checks of a state's parts, shared by Simulation's setters and by whatever checks a
+// state without a Simulation (Batch, the Python kinematics, checkpoints).
+#pragma once
+
+#include <vector>
+
+#include "featherdrive/constraint/actuator_law.hpp"
+#include "featherdrive/model/model.hpp"
+#include "featherdrive/sim/drive_delay.hpp"
+
+namespace featherdrive {
+
+/// A delay line's contents: the pushes since its delay was set (or the history emptied) and its
+/// ring of delay + 1 samples (delay_line.hpp).
+template <class Sample>
+struct DelayHistory {
+  long pushes = 0;
+  std::vector<Sample> ring;
+};
+
+/// A simulation's state (Simulation::state, set_state): what the next step starts from and the
+/// outputs of the last one. Sizes in brackets.
+struct State {
+  VecX q;              ///< configuration (nq)
+  VecX qd;             ///< joint velocities (nv)
+  VecX applied_force;  ///< the joint force held through each step (nv)
+  double time = 0.0;   ///< [s]
+  long step_count = 0;
+  /// The outputs of the last step (nv each), as Simulation::drive_force() etc. report them.
+  VecX drive_force, limit_force, friction_force, velocity_limit_force;
+  VecX actuator_force;  ///< the actuators' efforts in the last step (nv)
+  /// Per dof (nv): the actuator's last commands (empty on a dof without one) and the implicit
+  /// drive's last targets (empty on a dof without a delay).
+  std::vector<DelayHistory<ActuatorCommand>> actuator_history;
+  std::vector<DelayHistory<DriveTarget>> drive_delay_history;
+};
+
+/// Throws std::invalid_argument "what: expected n values, got m" or "what[i] = x is not finite".
+void check_state_vector(const VecX& x, Eigen::Index expected, const char* what);
+
+/// q checked (nq finite values; the quaternions of spherical and floating joints of a norm that
+/// is neither zero nor overflows, or of norm 1 within 1e-9 with `unit`) and, unless `unit`,
+/// normalised: what Simulation::set_q stores. Throws std::invalid_argument naming the joint.
+VecX checked_configuration(const Model& model, const VecX& q, bool unit = false);
+
+/// A clock a run can reach: throws std::invalid_argument for a step count outside
+/// [0, kMaxStepCount], a time that is not finite or < 0, or a time above 2 * step_count * kMaxDt
+/// (step_count steps of at most kMaxDt, with room for the rounding of the sum; so none > 0 at
+/// step 0).
+void check_clock(double time, long step_count);
+
+}  // namespace featherdrive
