@@ -17,6 +17,15 @@ const char* to_string(JointType type) {
   return "unknown";
 }
 
+const char* to_string(ShapeType type) {
+  switch (type) {
+    case ShapeType::sphere: return "sphere";
+    case ShapeType::capsule: return "capsule";
+    case ShapeType::box: return "box";
+  }
+  return "unknown";
+}
+
 namespace {
 
 // Edit distance with adjacent transpositions (optimal string alignment): "tpc" is 1 from "tcp".

@@ -3,6 +3,7 @@
 #include "featherdrive/core/format.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -174,6 +175,45 @@ ModelBuilder& ModelBuilder::add_frame(std::string name, std::string link, const 
   frames_.emplace_back(std::move(f), std::move(link));
   return *this;
 }
+
+ModelBuilder& ModelBuilder::add_shape(std::string link, CollisionShape shape) {
+  shapes_.emplace_back(std::move(shape), std::move(link));
+  return *this;
+}
+
+namespace {
+
+// A shape's sizes, pose and material (docs/math/contact.md, section 1).
+void check_shape(const std::string& who, const CollisionShape& s) {
+  const char* names[3] = {"radius", "half_length", ""};
+  int count = 1;
+  if (s.type == ShapeType::capsule) count = 2;
+  if (s.type == ShapeType::box) {
+    names[0] = "half_extent.x";
+    names[1] = "half_extent.y";
+    names[2] = "half_extent.z";
+    count = 3;
+  }
+  for (int k = 0; k < count; ++k)
+    if (!(std::isfinite(s.size[k]) && s.size[k] > 0.0))
+      fail(who + ": " + names[k] + " = " + fmt(s.size[k]) + " must be finite and > 0");
+  check_finite(who, "position", s.position);
+  if (!s.rotation.allFinite() ||
+      !(s.rotation.transpose() * s.rotation).isApprox(Mat3::Identity(), 1e-9) ||
+      s.rotation.determinant() < 0.0)
+    fail(who + ": rotation is not a rotation matrix");
+  const Material& m = s.material;
+  auto check_friction = [&](const char* field, double v) {
+    if (!(std::isfinite(v) && v >= 0.0))
+      fail(who + ": " + field + " = " + fmt(v) + " must be finite and >= 0");
+  };
+  check_friction("static_friction", m.static_friction);
+  check_friction("dynamic_friction", m.dynamic_friction);
+  if (!(m.restitution >= 0.0 && m.restitution <= 1.0))
+    fail(who + ": restitution = " + fmt(m.restitution) + " must be in [0, 1]");
+}
+
+}  // namespace
 
 Model ModelBuilder::build() const {
   if (!gravity_.allFinite()) fail("gravity = " + fmt(gravity_) + " is not finite");
@@ -381,6 +421,18 @@ Model ModelBuilder::build() const {
     frame.link = new_index[it->second];
     model.frames.push_back(std::move(frame));
   }
+  for (auto [shape, link] : shapes_) {
+    const std::string who = "shape " + (shape.name.empty() ? std::string("#") +
+                            std::to_string(model.shapes.size()) : "'" + shape.name + "'") +
+                            " (" + to_string(shape.type) + ") of link '" + link + "'";
+    const auto it = by_name.find(link);
+    if (it == by_name.end()) fail(who + ": the link is not a link of the model");
+    check_shape(who, shape);
+    shape.link = new_index[it->second];
+    model.shapes.push_back(std::move(shape));
+  }
+  std::stable_sort(model.shapes.begin(), model.shapes.end(),
+                   [](const CollisionShape& a, const CollisionShape& b) { return a.link < b.link; });
   return model;
 }
 

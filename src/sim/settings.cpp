@@ -161,6 +161,8 @@ void Settings::validate(const Model& model) const {
   for (int i = 0; i < model.num_links(); ++i)
     check_link_parameters_of(model, i, link_parameters[static_cast<size_t>(i)]);
   validate_mimic_joints(model, mimic_joints);
+  check_ground(ground);
+  check_contact_options(contact);
 }
 
 int check_dof_index(const Model& model, int dof) {
@@ -312,6 +314,35 @@ void check_actuator_feedforward(const Model& model, int dof, double effort,
   if (!std::isfinite(effort))
     throw std::invalid_argument("actuator on joint '" + joint + "': feedforward = " + fmt(effort) +
                                 " must be finite");
+}
+
+void check_ground(const Ground& ground) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument("ground." + what); };
+  if (!std::isfinite(ground.height)) bad("height = " + fmt(ground.height) + " is not finite");
+  const double length = ground.normal.norm();
+  if (!ground.normal.allFinite() || !(length > 1e-12) || !std::isfinite(length))
+    bad("normal = " + format_vec3(ground.normal) + " must be finite and of non-zero length");
+  const Material& m = ground.material;
+  auto friction = [&](const char* field, double v) {
+    if (!(std::isfinite(v) && v >= 0.0)) bad(std::string(field) + " = " + fmt(v) +
+                                            " must be finite and >= 0");
+  };
+  friction("static_friction", m.static_friction);
+  friction("dynamic_friction", m.dynamic_friction);
+  if (!(m.restitution >= 0.0 && m.restitution <= 1.0))
+    bad("restitution = " + fmt(m.restitution) + " must be in [0, 1]");
+}
+
+void check_contact_options(const ContactOptions& options) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument("contact." + what); };
+  if (!(std::isfinite(options.rest_offset) && std::isfinite(options.contact_offset)))
+    bad("contact_offset = " + fmt(options.contact_offset) + ", rest_offset = " +
+        fmt(options.rest_offset) + ": must be finite");
+  if (!(options.rest_offset >= 0.0 && options.contact_offset > options.rest_offset))
+    bad("contact_offset = " + fmt(options.contact_offset) + ", rest_offset = " +
+        fmt(options.rest_offset) + ": need 0 <= rest_offset < contact_offset");
+  if (!(std::isfinite(options.bounce_threshold) && options.bounce_threshold >= 0.0))
+    bad("bounce_threshold = " + fmt(options.bounce_threshold) + " must be finite and >= 0");
 }
 
 void check_link_parameters_of(const Model& model, int link, const LinkParameters& parameters) {

@@ -84,6 +84,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   subtree_force_.assign(n, Vec6::Zero());
   transmitted_force_ = VecX::Zero(model_->num_links());
   link_cfm_ = VecX::Zero(model_->num_links());
+  link_contact_force_.assign(n, Vec3::Zero());
   update_link_damping_active();
   dt_ = settings_.options.dt;
   if (settings_.options.guard.enabled) size_guard();
@@ -111,6 +112,7 @@ void Simulation::set_settings(const Settings& settings) {
   // Everything that may throw or allocate is made before anything changes.
   MimicSolver mimic(*model_, settings.mimic_joints);
   Settings next = settings;
+  next.ground.normal.normalize();
   for (int d = 0; d < model_->nv; ++d) {
     const auto k = static_cast<size_t>(d);
     if (!(settings.actuators[k] == settings_.actuators[k]))
@@ -328,6 +330,17 @@ void Simulation::set_mimic_joints(const std::vector<MimicJoint>& mimic) {
   MimicSolver solver(*model_, mimic);  // validates
   settings_.mimic_joints = mimic;
   mimic_ = std::move(solver);
+}
+
+void Simulation::set_ground(const Ground& ground) {
+  check_ground(ground);
+  settings_.ground = ground;
+  settings_.ground.normal.normalize();
+}
+
+void Simulation::set_contact_options(const ContactOptions& options) {
+  check_contact_options(options);
+  settings_.contact = options;
 }
 
 void Simulation::update_link_damping_active() {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "featherdrive/model/shape.hpp"
 #include "featherdrive/spatial/spatial.hpp"
 
 namespace featherdrive {
@@ -75,6 +76,8 @@ struct Model {
   std::vector<std::string> dof_names;  ///< joint name, or joint name + ":twist" etc. for multi-dof
 
   std::vector<NamedFrame> frames;      ///< merged links' frames (names unlike any link's)
+  /// Collision shapes, grouped by link in link order (a merged link's shapes are its parent's).
+  std::vector<CollisionShape> shapes;
 
   bool floating_base() const { return !links.empty() && links[0].joint_type == JointType::floating; }
   int num_links() const { return static_cast<int>(links.size()); }

@@ -78,6 +78,9 @@ class ModelBuilder {
   /// checks that the link exists and the name is new.
   ModelBuilder& add_frame(std::string name, std::string link, const Vec3& xyz,
                           const Mat3& rotation);
+  /// A collision shape on `link` (shape.link is set by build()); build() checks the link, the
+  /// sizes (finite, > 0), the pose and the material (friction >= 0, restitution in [0, 1]).
+  ModelBuilder& add_shape(std::string link, CollisionShape shape);
   /// Validates everything and returns the model; throws ModelError naming the offending link or
   /// joint, field and value.
   Model build() const;
@@ -86,6 +89,7 @@ class ModelBuilder {
   Vec3 gravity_{0.0, 0.0, -9.81};
   std::vector<LinkSpec> links_;
   std::vector<std::pair<NamedFrame, std::string>> frames_;  // the frame and its link's name
+  std::vector<std::pair<CollisionShape, std::string>> shapes_;  // the shape and its link's name
 };
 
 }  // namespace featherdrive

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "featherdrive/constraint/contact.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/joint_constraints.hpp"
 #include "featherdrive/constraint/mimic_row.hpp"
@@ -96,6 +97,9 @@ struct Settings {
   std::vector<LinkParameters> link_parameters;  ///< per link (num_links)
   std::vector<MimicJoint> mimic_joints;         ///< docs/math/mimic_joints.md
 
+  Ground ground;                  ///< contacts with the model's shapes when enabled
+  ContactOptions contact;         ///< docs/math/contact.md, section 8
+
   /// What a new Simulation of `model` starts with: limits, friction (static = dynamic =
   /// model.friction, viscous = model.damping) and velocity limits from the model; with
   /// Compat::physx, PhysX 5.6.1's defaults for what the model leaves unset (wrapped revolute
@@ -135,6 +139,10 @@ void check_drive_delay(const Model& model, int dof, int delay, const Drive& driv
 /// An actuator's feed-forward effort: finite, on a dof with an actuator.
 void check_actuator_feedforward(const Model& model, int dof, double effort,
                                 ActuatorKind actuator_kind);
+/// The ground: finite height, a normal of finite non-zero length, a valid material.
+void check_ground(const Ground& ground);
+/// Offsets finite, 0 <= rest_offset < contact_offset; bounce_threshold finite and >= 0.
+void check_contact_options(const ContactOptions& options);
 void check_link_parameters_of(const Model& model, int link, const LinkParameters& parameters);
 /// The message of a target on a dof that neither a drive nor an actuator reads.
 std::string no_drive_message(const Model& model, int dof);

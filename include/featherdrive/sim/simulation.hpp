@@ -212,7 +212,20 @@ class Simulation {
   void set_mimic_joints(const std::vector<MimicJoint>& mimic);
   const std::vector<MimicJoint>& mimic_joints() const { return settings_.mimic_joints; }
 
+  // Ground contact (docs/math/contact.md): the model's shapes against the ground.
+  /// Throws std::invalid_argument (check_ground); the normal is stored normalised.
+  void set_ground(const Ground& ground);
+  const Ground& ground() const { return settings_.ground; }
+  /// Throws std::invalid_argument (check_contact_options).
+  void set_contact_options(const ContactOptions& options);
+  const ContactOptions& contact_options() const { return settings_.contact; }
+
   // Outputs of the last step.
+  /// The contact points of the last step and their impulses (empty without a ground).
+  const std::vector<ContactReport>& contacts() const { return contacts_; }
+  /// The contact force on each link in the last step (num_links; world frame, N): the sum of its
+  /// points' impulses / dt.
+  const std::vector<Vec3>& link_contact_force() const { return link_contact_force_; }
   /// The drive force of each dof: the step's accumulated drive impulse / dt (ERRATA 7).
   VecView drive_force() const { return state_[StateStorage::drive_force]; }
   /// The position-limit force of each dof (impulse / dt; positive pushes towards +q).
@@ -347,6 +360,11 @@ class Simulation {
   bool actuated_start_ = false;
   DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
   MimicSolver mimic_;
+
+  // Contacts (contact.cpp): the last step's points and per-link forces, capacity fixed at
+  // construction (the shapes' most points).
+  std::vector<ContactReport> contacts_;
+  std::vector<Vec3> link_contact_force_;
 
   // The step guard: the time the advance covers (options().dt, or dt / n in a guard sub-step),
   // how long before the step's end the sub-step ends (its drive targets lead by it), the
