@@ -85,6 +85,9 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   transmitted_force_ = VecX::Zero(model_->num_links());
   link_cfm_ = VecX::Zero(model_->num_links());
   link_contact_force_.assign(n, Vec3::Zero());
+  contact_rows_ = ContactRows(*model_);
+  contacts_.assign(static_cast<size_t>(contact_rows_.max_points()), ContactReport{});
+  contact_link_velocity_.assign(n, Vec6::Zero());
   update_link_damping_active();
   dt_ = settings_.options.dt;
   if (settings_.options.guard.enabled) size_guard();
@@ -125,6 +128,7 @@ void Simulation::set_settings(const Settings& settings) {
   mimic_ = std::move(mimic);
   row_kinds_changed_ = true;
   update_link_damping_active();
+  update_contacts_active();
 }
 
 void Simulation::set_model(std::shared_ptr<const Model> model) {
@@ -138,6 +142,9 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
   sweep_ = SweepWorkspace(*model);
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
+  contact_rows_ = ContactRows(*model_);  // the shapes may differ
+  contacts_.assign(static_cast<size_t>(contact_rows_.max_points()), ContactReport{});
+  update_contacts_active();
   if (guard_data_) size_guard();  // the guard's energies read the masses too
 }
 
@@ -336,6 +343,7 @@ void Simulation::set_ground(const Ground& ground) {
   check_ground(ground);
   settings_.ground = ground;
   settings_.ground.normal.normalize();
+  update_contacts_active();
 }
 
 void Simulation::set_contact_options(const ContactOptions& options) {

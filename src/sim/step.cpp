@@ -67,7 +67,11 @@ void Simulation::advance(const VecX& tau) {
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((settings_.friction_coefficient.array() > 0.0).any())
     transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
+  const bool classical_root = !physx() && model.floating_base();
+  Vec6 root_qd0 = Vec6::Zero();
+  if (classical_root) root_qd0 = qd_.head<6>();
   qd_ += dt * data_.qdd;
+  if (classical_root) begin_classical_root(root_qd0, dt);
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
   if (physx()) {
     compute_link_bias(model, data_, qd_, dt, departures_);
@@ -80,6 +84,7 @@ void Simulation::advance(const VecX& tau) {
   if (settings_.options.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
   if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
+  if (classical_root) end_classical_root();
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
   wrap_revolute_positions(model, settings_.revolute_wrap, q_);
 }
@@ -98,6 +103,7 @@ void Simulation::row_forces() {
     friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
   }
+  contact_forces();  // contact.cpp
 }
 
 void Simulation::end_step() {
@@ -280,21 +286,39 @@ void Simulation::sweep(RowPhase& phase) {
   // PhysX solves the mimic rows first in every iteration (solveInternalConstraints).
   if (!mimic_.empty())
     mimic_.solve(*model_, data_, q_, departures_.row_bias.data(), phase.velocity_iteration, qd_);
-  if (!any_rows_) return;
+  if (!any_rows_ && !contacts_active_) return;
   // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
   DofRows* const rows = rows_.data();
+  const double* const row_bias = departures_.row_bias.data();
+  const double* const delta_x = delta_x_.data();
+  auto solve_row = [rows, row_bias, delta_x, phase](int dof, double v) mutable {
+    phase.delta_x = delta_x[dof];
+    return solve_dof_rows(rows[dof], v + row_bias[dof], phase);
+  };
+  if (contacts_active_) {
+    // Each link's contact rows right after its joint's rows (docs/math/contact.md, C15), at
+    // the link's velocity of the sweep's start plus the sweep's change.
+    link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+    ContactPhase contact_phase;
+    contact_phase.dt = phase.dt;
+    contact_phase.h = phase.h;
+    contact_phase.tgs = phase.tgs;
+    contact_phase.velocity_iteration = phase.velocity_iteration;
+    // TGS: the time at the sub-step's start; the velocity iterations run at dt (C7).
+    contact_phase.elapsed = phase.velocity_iteration ? phase.dt
+                                                     : phase.dt - phase.time_to_step_end - phase.h;
+    gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row, [&](int link, Vec6& dv) {
+      return contact_rows_.solve_link(link, contact_link_velocity_[static_cast<size_t>(link)], dv,
+                                      contact_phase);
+    });
+    return;
+  }
   if (only_lone_drives_pgs_) {  // the common case of drives alone, without the general row law
     gauss_seidel_sweep(*model_, data_, sweep_, qd_,
                        [rows](int dof, double v) { return solve_lone_drive_pgs(rows[dof], v); });
     return;
   }
-  const double* const row_bias = departures_.row_bias.data();
-  const double* const delta_x = delta_x_.data();
-  gauss_seidel_sweep(*model_, data_, sweep_, qd_,
-                     [rows, row_bias, delta_x, phase](int dof, double v) mutable {
-                       phase.delta_x = delta_x[dof];
-                       return solve_dof_rows(rows[dof], v + row_bias[dof], phase);
-                     });
+  gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row);
 }
 
 // PGS: the rows converge on the coupled implicit step; positions move with the velocity after the
@@ -307,6 +331,7 @@ void Simulation::solve_pgs() {
   phase.dt = dt;
   phase.h = dt;
   phase.limit_erp = limit_erp(SolverType::pgs, settings_.options.position_iterations);
+  if (contacts_active_) setup_contacts(phase);
   const int last = settings_.options.position_iterations - 1;
   for (int it = 0; it < last; ++it) sweep(phase);
   if (track_convergence_)  // the impulses before the last iteration, then its change
@@ -343,6 +368,7 @@ void Simulation::solve_tgs() {
   phase.h = rho;
   phase.tgs = true;
   phase.limit_erp = limit_erp(SolverType::tgs, n);
+  if (contacts_active_) setup_contacts(phase);
   departures_.qd_position.setZero();
   for (int i = 1; i <= n; ++i) {
     phase.time_to_step_end = dt - i * rho;
@@ -354,6 +380,7 @@ void Simulation::solve_tgs() {
     if (physx())
       clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
     delta_x_ += rho * qd_;
+    if (contacts_active_) track_contacts(rho);
     if (physx()) {
       // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
       // a prismatic row's is measured again below.
@@ -365,8 +392,23 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.
-  if (!any_undriven_rows_ && mimic_.empty()) return;
+  if (!any_undriven_rows_ && mimic_.empty() && !contacts_active_) return;
   for (int it = 0; it < settings_.options.velocity_iterations; ++it) sweep(phase);
+}
+
+// compat none: a floating root's body-frame velocity (omega_b, v_b) gains dt (omega_b x v_b)
+// over the free update, which makes R0 v_b the classical velocity of its origin at the step's end
+// (v_O + dt a_O) instead of the spatial one; the rows and the position update use that, and the
+// step's end expresses it in the root's new axes (docs/math/contact.md, C26-C28).
+void Simulation::begin_classical_root(const Vec6& root_qd0, double dt) {
+  const Vec3 w = root_qd0.head<3>(), v = root_qd0.tail<3>();
+  qd_.segment<3>(3) += dt * w.cross(v);
+  root_rotation0_ = Quat(q_[3], q_[4], q_[5], q_[6]).normalized().toRotationMatrix();
+}
+
+void Simulation::end_classical_root() {
+  const Mat3 R1 = Quat(q_[3], q_[4], q_[5], q_[6]).normalized().toRotationMatrix();
+  qd_.segment<3>(3) = R1.transpose() * (root_rotation0_ * qd_.segment<3>(3));
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of
@@ -376,8 +418,14 @@ void Simulation::integrate_positions(double h) {
   // the rotations before the sub-step.
   const bool spherical = physx() && has_spherical_joints(*model_);
   if (spherical) world_pose(*model_, q_, departures_.now);
-  if (!physx() || !model_->floating_base()) {
+  if (!model_->floating_base()) {
     integrate_configuration(*model_, q_, qd_, h, q_);
+  } else if (!physx()) {
+    // The root's origin moves with its world velocity in the step's start axes (R0 v_b), the
+    // velocity the rows solved for (docs/math/contact.md, C27).
+    const Vec3 p = q_.head<3>();
+    integrate_configuration(*model_, q_, qd_, h, q_);
+    q_.head<3>() = p + h * (root_rotation0_ * qd_.segment<3>(3));
   } else {
     const int iq = model_->links[0].q_index;
     const Eigen::Matrix<double, 7, 1> root = q_.segment<7>(iq);

@@ -372,5 +372,41 @@ TEST(ExplicitActuatorAllocations, NoneInTheStep) {
   }
 }
 
+// Ground contact (docs/math/contact.md): a sphere on every link of a floating tree that starts
+// half sunk into the ground, under PGS and TGS, and a copy of such a simulation: the contact rows
+// and reports are sized with the model's shapes.
+TEST(ContactAllocations, NoneInTheStep) {
+  Model m = *test::make_random_tree(11, 12, true, true, 0.01);
+  for (int i = 0; i < m.num_links(); ++i) {
+    CollisionShape s;
+    s.link = i;
+    s.type = i % 3 == 0 ? ShapeType::sphere : i % 3 == 1 ? ShapeType::capsule : ShapeType::box;
+    s.size = Vec3(0.2, 0.15, 0.1);
+    m.shapes.push_back(s);
+  }
+  auto model = std::make_shared<const Model>(m);
+  Data data(*model);
+  forward_kinematics(*model, data, model->neutral_configuration());
+  double low = data.world_position[0].z();
+  for (int i = 0; i < model->num_links(); ++i) low = std::min(low, data.world_position[i].z());
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o;
+    o.solver = solver;
+    Simulation sim(model, o);
+    Ground ground;
+    ground.enabled = true;
+    ground.height = low + 0.1;
+    sim.set_ground(ground);
+    sim.step();
+    Simulation copy = sim;
+    EXPECT_EQ(allocations_in([&] {
+                for (int k = 0; k < 30; ++k) sim.step();
+                for (int k = 0; k < 30; ++k) copy.step();
+              }),
+              0);
+    EXPECT_GT(sim.contacts().size(), 0u);
+  }
+}
+
 }  // namespace
 }  // namespace featherdrive

@@ -19,6 +19,23 @@ inline VecX free_velocity(const Model& model, const VecX& q, const VecX& v, cons
   return v + dt * M.ldlt().solve(tau - bias);
 }
 
+/// The step's free velocity of a floating root with compat none (docs/math/contact.md, C26):
+/// its body-frame linear velocity gains dt (omega_b x v_b) of the step's start.
+inline VecX with_classical_root(const Model& model, const VecX& v0, double dt, VecX vstar) {
+  if (model.floating_base())
+    vstar.segment<3>(3) += dt * Vec3(v0.head<3>()).cross(Vec3(v0.segment<3>(3)));
+  return vstar;
+}
+
+/// A step's end velocity with a floating root's linear part in the root's axes at the step's
+/// start (q0) instead of its end (q1): C28 undone.
+inline VecX in_start_axes(const Model& model, const VecX& q0, const VecX& q1, VecX qd1) {
+  if (!model.floating_base()) return qd1;
+  auto R = [](const VecX& q) { return Quat(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix(); };
+  qd1.segment<3>(3) = R(q0).transpose() * (R(q1) * qd1.segment<3>(3));
+  return qd1;
+}
+
 /// Puts a force drive with random targets on every revolute and prismatic dof.
 inline void drive_every_joint(Simulation& sim, std::mt19937& rng, double kp, double kd,
                               DriveType type = DriveType::force) {

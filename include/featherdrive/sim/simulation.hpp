@@ -6,11 +6,13 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/constraint/contact_rows.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/sim/drive_delay.hpp"
 #include "featherdrive/sim/explicit_actuator.hpp"
@@ -222,7 +224,9 @@ class Simulation {
 
   // Outputs of the last step.
   /// The contact points of the last step and their impulses (empty without a ground).
-  const std::vector<ContactReport>& contacts() const { return contacts_; }
+  std::span<const ContactReport> contacts() const {
+    return {contacts_.data(), static_cast<size_t>(num_contacts_)};
+  }
   /// The contact force on each link in the last step (num_links; world frame, N): the sum of its
   /// points' impulses / dt.
   const std::vector<Vec3>& link_contact_force() const { return link_contact_force_; }
@@ -281,6 +285,11 @@ class Simulation {
   void setup_dof_rows(int dof, double h, bool tgs);
   void setup_lone_drives(double h, bool tgs);
   void sweep(RowPhase& phase);
+  // Contacts (contact.cpp, docs/math/contact.md).
+  void update_contacts_active();
+  void setup_contacts(const RowPhase& phase);
+  void track_contacts(double h);
+  void contact_forces();
   void solve_pgs();
   void solve_tgs();
   void check_finite_or_throw();
@@ -289,6 +298,8 @@ class Simulation {
   void update_link_damping_active();
   bool physx() const { return settings_.options.compat == Compat::physx; }
   void integrate_positions(double h);
+  void begin_classical_root(const Vec6& root_qd0, double dt);
+  void end_classical_root();
   /// The actuators' efforts of this step on the step-start state; the joint force the step uses.
   const VecX& apply_actuators();
   void undo_actuators();
@@ -344,6 +355,7 @@ class Simulation {
   int num_lone_drives_ = 0;
   bool row_kinds_changed_ = true;
   VecX delta_x_;               ///< TGS: position change accumulated over the sub-steps per dof
+  Mat3 root_rotation0_ = Mat3::Identity();  ///< a floating root's axes at the step's start
   PhysxDepartures departures_; ///< compat physx: the link bias and momentum corrections
   // PhysX's parameters (physx_stages.hpp), per link.
   std::vector<Vec6> link_force_;     ///< link damping / velocity-limit forces, frame 0
@@ -361,9 +373,13 @@ class Simulation {
   DriveDelays drive_delays_;  ///< pushed after the actuators, read by setup_rows
   MimicSolver mimic_;
 
-  // Contacts (contact.cpp): the last step's points and per-link forces, capacity fixed at
-  // construction (the shapes' most points).
+  // Contacts (contact.cpp): the rows, the last step's points (the first num_contacts_ of
+  // contacts_, sized for the shapes' most points at construction) and per-link forces.
+  ContactRows contact_rows_;
+  bool contacts_active_ = false;  ///< the ground is on and the model has shapes
+  std::vector<Vec6> contact_link_velocity_;  ///< frame 0, at a sweep's start
   std::vector<ContactReport> contacts_;
+  int num_contacts_ = 0;
   std::vector<Vec3> link_contact_force_;
 
   // The step guard: the time the advance covers (options().dt, or dt / n in a guard sub-step),

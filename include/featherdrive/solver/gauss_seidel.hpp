@@ -6,6 +6,7 @@
 // (data.hpp), so nothing is transformed from link to link.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
@@ -42,9 +43,17 @@ struct SweepWorkspace {
     /// One dof, finished on leave, and its one-dof parent's only child: leaving it is the
     /// tight loop of detail::leave_links.
     bool chain_up = false;
+    /// It has contact rows (docs/math/contact.md, C15): solved right after its joint's rows, their
+    /// impulse starts its pA, so its first child adds to pA instead of setting it.
+    bool contacts = false;
   };
   std::vector<Link> links;
   std::vector<int> finish_after;
+  /// Marks the links that have contact rows (num_links flags) and sets the flags that depend on
+  /// it; all false restores the sweep without contacts.
+  void set_contact_links(const std::vector<char>& has_contacts);
+  bool any_contacts = false;
+  std::vector<bool> first_child_free_, chain_next_free_;  ///< the flags without contacts
   Vec6 zero = Vec6::Zero();                ///< the world's velocity change
 };
 
@@ -197,10 +206,14 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
 }  // namespace detail
 
 /// One sweep. qd (nv) holds the exact joint velocities on entry and on exit. For every dof with
-/// ws.has_rows set, solve_row(dof, current_qd) returns the impulse to apply there.
-template <class RowSolver>
+/// ws.has_rows set, solve_row(dof, current_qd) returns the impulse to apply there. For every link
+/// marked with contacts, solve_contacts(link, dv) is called right after the link's joint rows
+/// with dv its velocity change of the sweep (frame 0, exact then); it solves the link's contact
+/// rows, adds their velocity change to dv and returns the spatial impulse they applied (frame 0):
+/// the sweep carries it to the rest of the articulation as an external impulse on the link.
+template <class RowSolver, class ContactSolver>
 void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
-                        RowSolver&& solve_row) {
+                        RowSolver&& solve_row, ContactSolver&& solve_contacts) {
   const int n = model.num_links();
   const SweepWorkspace::Link* const links = ws.links.data();
   const Data::OneDof* const one_dof = data.one_dof.data();
@@ -244,7 +257,10 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
         entry_velocity_change[d] = dqd;
         Vec6& dv = velocity_change[i];
         dv = *dv_parent - h * J.W + dqd * J.S;
-        if (!next) break;
+        if (!next) {  // a link with contacts ends its run (set_contact_links)
+          if (links[i].contacts) ws.subtree_impulse[i] = -solve_contacts(i, dv);
+          break;
+        }
         base = ahead + impulse * per_impulse;
         dv_parent = &dv;
         previous = ++i;
@@ -253,6 +269,7 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
     }
     if (link.nv == 0) {
       velocity_change[i] = from_parent;
+      if (link.contacts) ws.subtree_impulse[i] = -solve_contacts(i, velocity_change[i]);
       continue;
     }
     const int nv = link.nv;
@@ -273,11 +290,20 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
     const VecN dqd = D_inv * r;
     ws.entry_velocity_change.segment(v0, nv) = dqd;
     ws.link_velocity_change[i] = parent_now + data.motion_subspace[i] * dqd;
+    if (link.contacts) ws.subtree_impulse[i] = -solve_contacts(i, ws.link_velocity_change[i]);
   }
   detail::leave_links(data, ws, v, previous, -1, false);
   // The joints not finished when left: several dofs, or a later subtree whose impulses also move
   // them (detail::finish_link), root first.
   for (const int i : ws.finish_after) detail::finish_link(data, ws, i, qd);
+}
+
+/// The sweep without contact rows.
+template <class RowSolver>
+void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
+                        RowSolver&& solve_row) {
+  gauss_seidel_sweep(model, data, ws, qd, std::forward<RowSolver>(solve_row),
+                     [](int, Vec6&) { return Vec6(Vec6::Zero()); });
 }
 
 }  // namespace featherdrive

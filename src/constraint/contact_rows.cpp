@@ -1,0 +1,314 @@
+#include "featherdrive/constraint/contact_rows.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace featherdrive {
+namespace {
+
+// PhysX 5.6.1's constants (docs/math/contact.md, section 8).
+constexpr double kPgsBias = 0.8;                  // C3
+constexpr double kFrictionMassScale = 0.8;        // C11
+constexpr double kFrictionOffsetThreshold = 0.04;  // m: anchors lie closer (section 4)
+constexpr double kMinNormalShare = 0.25;          // C12
+
+int shape_points(ShapeType type) {
+  switch (type) {
+    case ShapeType::sphere: return 1;
+    case ShapeType::capsule: return 2;
+    case ShapeType::box: return 8;
+  }
+  return 0;
+}
+
+// A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
+Vec3 fallback_tangent(const Vec3& n) {
+  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  return (a - n * n.dot(a)).normalized();
+}
+
+// A unit impulse along u at the point r (relative to frame 0's origin) as a spatial force.
+Vec6 spatial_force(const Vec3& r, const Vec3& u) {
+  Vec6 f;
+  f.head<3>() = r.cross(u);
+  f.tail<3>() = u;
+  return f;
+}
+
+}  // namespace
+
+void link_velocities0(const Model& model, const Data& data, const VecX& qd, std::vector<Vec6>& V) {
+  for (int i = 0; i < model.num_links(); ++i) {
+    const Data::LinkInfo& link = data.info[i];
+    Vec6 v = link.parent >= 0 ? V[link.parent] : Vec6(Vec6::Zero());
+    if (link.nv == 1) v += data.one_dof[i].S * qd[link.v_index];
+    else if (link.nv > 0) v += data.motion_subspace[i] * qd.segment(link.v_index, link.nv);
+    V[i] = v;
+  }
+}
+
+ContactRows::ContactRows(const Model& model) {
+  const auto n = static_cast<size_t>(model.num_links());
+  has_shapes_.assign(n, 0);
+  link_first_patch_.assign(n, 0);
+  link_end_patch_.assign(n, 0);
+  int points = 0;
+  for (const CollisionShape& s : model.shapes) {
+    has_shapes_[static_cast<size_t>(s.link)] = 1;
+    points += shape_points(s.type);
+  }
+  normals_.resize(static_cast<size_t>(points));
+  frictions_.resize(4 * model.shapes.size());
+  patches_.resize(model.shapes.size());
+}
+
+int ContactRows::setup(const Model& model, const Data& data, const Ground& ground,
+                        const ContactOptions& options, const std::vector<Vec6>& link_velocity,
+                        const VecX& link_cfm, int position_iterations, const ContactPhase& phase,
+                        std::vector<ContactReport>& reports) {
+  num_normals_ = num_frictions_ = num_patches_ = 0;
+  std::fill(link_first_patch_.begin(), link_first_patch_.end(), 0);
+  std::fill(link_end_patch_.begin(), link_end_patch_.end(), 0);
+  const Vec3 n = ground.normal;
+  normal_ = n;
+  const double contact_distance = 2.0 * options.contact_offset;  // C1
+  const double rest_distance = 2.0 * options.rest_offset;
+  const double dt = phase.dt;
+  const Vec3& origin = data.frame_origin;
+  // TGS's share of a penetration corrected per sub-step (C6).
+  const double tgs_share = std::min(kPgsBias, 2.0 * std::sqrt(1.0 / position_iterations));
+  Vec3 points[8];
+  double separations[8];
+  for (int k = 0; k < static_cast<int>(model.shapes.size()); ++k) {
+    const CollisionShape& shape = model.shapes[static_cast<size_t>(k)];
+    const int L = shape.link;
+    const Mat6& lambda = data.response[L];
+    const Mat3 R = data.world_rotation[L] * shape.rotation;
+    const Vec3 c = data.world_position[L] + data.world_rotation[L] * shape.position;
+    // The narrow phase against the plane n . x = height (section 1): points on the shape.
+    int count = 0;
+    auto add = [&](const Vec3& x, double d) {
+      if (d <= contact_distance) {
+        points[count] = x;
+        separations[count++] = d;
+      }
+    };
+    switch (shape.type) {
+      case ShapeType::sphere:
+        add(c - shape.size.x() * n, n.dot(c) - ground.height - shape.size.x());
+        break;
+      case ShapeType::capsule:
+        for (const double side : {1.0, -1.0}) {
+          const Vec3 end = c + side * shape.size.y() * R.col(2);
+          add(end - shape.size.x() * n, n.dot(end) - ground.height - shape.size.x());
+        }
+        break;
+      case ShapeType::box:
+        for (int v = 0; v < 8; ++v) {
+          const Vec3 corner(v & 1 ? shape.size.x() : -shape.size.x(),
+                            v & 2 ? shape.size.y() : -shape.size.y(),
+                            v & 4 ? shape.size.z() : -shape.size.z());
+          const Vec3 x = c + R * corner;
+          add(x, n.dot(x) - ground.height);
+        }
+        break;
+    }
+    if (count == 0) continue;
+    const double cfm = link_cfm[L];
+    // Rows on a link that cannot move (a fixed root) do nothing.
+    const Vec6 probe = spatial_force(points[0] - origin, n);
+    if (!(probe.dot(lambda * probe) + cfm > 0.0)) continue;
+    ContactPatch& patch = patches_[static_cast<size_t>(num_patches_)];
+    if (link_end_patch_[L] == 0) link_first_patch_[L] = num_patches_;
+    link_end_patch_[L] = ++num_patches_;
+    patch.link = L;
+    patch.first_normal = num_normals_;
+    patch.num_normals = count;
+    patch.broken = false;
+    const Material& a = shape.material;
+    const Material& b = ground.material;
+    const double restitution = 0.5 * (a.restitution + b.restitution);
+    const Vec6& V = link_velocity[L];
+    double min_normal = 0.0;
+    for (int p = 0; p < count; ++p) {
+      ContactReport& report = reports[static_cast<size_t>(num_normals_)];
+      ContactNormalRow& row = normals_[static_cast<size_t>(num_normals_++)];
+      report.link = L;
+      report.shape = k;
+      report.position = points[p];
+      report.normal = n;
+      report.separation = separations[p];
+      row.J = spatial_force(points[p] - origin, n);
+      row.response = lambda * row.J;
+      row.mass = 1.0 / (row.J.dot(row.response) + cfm);  // C20
+      row.impulse = 0.0;
+      row.dx = 0.0;
+      const double p0 = separations[p] - rest_distance;  // C2
+      const double vn = row.J.dot(V);
+      // C8: an impact faster than the threshold that closes the gap within the step bounces.
+      const bool bounce =
+          restitution > 0.0 && vn < -options.bounce_threshold && -vn > p0 / dt;
+      row.target = bounce ? -restitution * vn : 0.0;
+      if (!phase.tgs) {
+        row.separation = p0;
+        row.bias = bounce ? 0.0 : (p0 >= 0.0 ? p0 / dt : kPgsBias * p0 / dt);  // C3
+      } else {
+        // C6, C7: the bounce leaves from where the body meets the ground.
+        row.separation = bounce ? p0 + row.target * (dt + p0 / vn) : p0;
+        row.bias = p0 > 0.0 ? -1.0 / phase.h : -tgs_share / phase.h;
+      }
+      min_normal += std::max(row.mass * (row.target - vn - std::max(p0 / dt, 0.0)), 0.0);
+    }
+    patch.min_normal_impulse = kMinNormalShare * min_normal / count;  // C12
+    // Anchors (section 4): the first point near enough, then the one farthest from it, each
+    // later point replacing an anchor when it spreads the pair wider.
+    int anchors[2];
+    int num_anchors = 0;
+    const double anchor_distance = kFrictionOffsetThreshold + rest_distance;
+    for (int p = 0; p < count; ++p) {
+      if (!(separations[p] < anchor_distance)) continue;
+      if (num_anchors == 0) {
+        anchors[num_anchors++] = p;
+      } else if (num_anchors == 1) {
+        if ((points[p] - points[anchors[0]]).squaredNorm() > 1e-12) anchors[num_anchors++] = p;
+      } else {
+        const double spread = (points[anchors[1]] - points[anchors[0]]).squaredNorm();
+        if ((points[p] - points[anchors[0]]).squaredNorm() > spread) anchors[1] = p;
+        else if ((points[p] - points[anchors[1]]).squaredNorm() > spread) anchors[0] = p;
+      }
+    }
+    // C10: along the link's centre-of-mass velocity, relative to the ground.
+    const Vec3 com = data.world_position[L] + data.world_rotation[L] * data.constants[L].com;
+    const Vec3 v_com = V.tail<3>() + V.head<3>().cross(com - origin);
+    const Vec3 v_t = v_com - n * n.dot(v_com);
+    patch.t0 = v_t.squaredNorm() > 1e-4 ? Vec3(v_t.normalized()) : fallback_tangent(n);
+    patch.t1 = n.cross(patch.t0);
+    const double share = num_anchors == 2 ? 0.5 : 1.0;  // C12
+    patch.static_friction = share * 0.5 * (a.static_friction + b.static_friction);
+    patch.dynamic_friction = share * 0.5 * (a.dynamic_friction + b.dynamic_friction);
+    patch.first_friction = num_frictions_;
+    patch.num_anchors = num_anchors;
+    for (int j = 0; j < num_anchors; ++j) {
+      patch.anchor_point[j] = patch.first_normal + anchors[j];
+      for (const Vec3* t : {&patch.t0, &patch.t1}) {
+        ContactFrictionRow& row = frictions_[static_cast<size_t>(num_frictions_++)];
+        row.J = spatial_force(points[anchors[j]] - origin, *t);
+        row.response = lambda * row.J;
+        row.mass = kFrictionMassScale / (row.J.dot(row.response) + cfm);  // C11
+        row.dx = 0.0;
+        row.impulse = 0.0;
+      }
+    }
+  }
+  return num_normals_;
+}
+
+Vec6 ContactRows::solve_link(int link, const Vec6& v, Vec6& dv, const ContactPhase& phase) {
+  Vec6 applied = Vec6::Zero();
+  Vec6 V = v + dv;
+  auto apply = [&](const Vec6& J, const Vec6& response, double delta) {
+    V += delta * response;
+    dv += delta * response;
+    applied += delta * J;
+  };
+  const int end = link_end_patch_[static_cast<size_t>(link)];
+  for (int k = link_first_patch_[static_cast<size_t>(link)]; k < end; ++k) {
+    ContactPatch& patch = patches_[static_cast<size_t>(k)];
+    double normal_sum = 0.0;
+    for (int r = patch.first_normal; r < patch.first_normal + patch.num_normals; ++r) {
+      ContactNormalRow& row = normals_[static_cast<size_t>(r)];
+      const double vn = row.J.dot(V);
+      double delta;
+      if (!phase.tgs) {
+        // C4; C5 in the velocity iterations: the push-out goes, a gap still limits the approach.
+        const double b = phase.velocity_iteration ? std::max(row.bias, 0.0) : row.bias;
+        delta = std::max(row.mass * (row.target - b - vn), -row.impulse);
+      } else {
+        // C7: the separation tracked through the sub-steps.
+        double sigma = row.separation + row.dx - row.target * phase.elapsed;
+        if (phase.velocity_iteration) sigma = std::max(sigma, 0.0);
+        delta = std::max(row.mass * (row.bias * sigma + row.target - vn), -row.impulse);
+      }
+      row.impulse += delta;
+      apply(row.J, row.response, delta);
+      normal_sum += row.impulse;
+    }
+    if (patch.num_anchors == 0) continue;
+    // C12: the bound from this iteration's normal impulses, floored by the estimate.
+    const double N = std::max(normal_sum, patch.min_normal_impulse);
+    const double static_limit = patch.static_friction * N;
+    const double dynamic_limit = patch.dynamic_friction * N;
+    for (int j = 0; j < patch.num_anchors; ++j) {
+      ContactFrictionRow* rows = &frictions_[static_cast<size_t>(patch.first_friction + 2 * j)];
+      if (!phase.tgs) {
+        // C13: each row alone; fresh anchors have no position error to correct.
+        for (int a = 0; a < 2; ++a) {
+          ContactFrictionRow& row = rows[a];
+          double next = row.impulse - row.mass * row.J.dot(V);
+          if (std::abs(next) > static_limit) {
+            next = std::clamp(next, -dynamic_limit, dynamic_limit);
+            patch.broken = true;
+          }
+          const double delta = next - row.impulse;
+          row.impulse = next;
+          apply(row.J, row.response, delta);
+        }
+      } else {
+        // C14: both rows of the anchor together, each pulled back to where the anchor was.
+        const double bias_scale = kPgsBias / phase.h;
+        double next[2];
+        for (int a = 0; a < 2; ++a)
+          next[a] = rows[a].impulse - rows[a].mass * (rows[a].J.dot(V) + bias_scale * rows[a].dx);
+        const double magnitude = std::hypot(next[0], next[1]);
+        if (magnitude > static_limit) {
+          const double scale = std::min(dynamic_limit, magnitude) / magnitude;
+          next[0] *= scale;
+          next[1] *= scale;
+          patch.broken = true;
+        }
+        for (int a = 0; a < 2; ++a) {
+          const double delta = next[a] - rows[a].impulse;
+          rows[a].impulse = next[a];
+          apply(rows[a].J, rows[a].response, delta);
+        }
+      }
+    }
+  }
+  return applied;
+}
+
+void ContactRows::track(const std::vector<Vec6>& link_velocity, double h) {
+  for (int k = 0; k < num_patches_; ++k) {
+    const ContactPatch& patch = patches_[static_cast<size_t>(k)];
+    const Vec6& V = link_velocity[static_cast<size_t>(patch.link)];
+    for (int r = patch.first_normal; r < patch.first_normal + patch.num_normals; ++r)
+      normals_[static_cast<size_t>(r)].dx += h * normals_[static_cast<size_t>(r)].J.dot(V);
+    for (int r = patch.first_friction; r < patch.first_friction + 2 * patch.num_anchors; ++r)
+      frictions_[static_cast<size_t>(r)].dx += h * frictions_[static_cast<size_t>(r)].J.dot(V);
+  }
+}
+
+void ContactRows::report(double dt, std::vector<ContactReport>& reports,
+                         std::vector<Vec3>& link_force) const {
+  std::fill(link_force.begin(), link_force.end(), Vec3::Zero());
+  const double inv_dt = 1.0 / dt;
+  for (int k = 0; k < num_patches_; ++k) {
+    const ContactPatch& patch = patches_[static_cast<size_t>(k)];
+    Vec3 total = Vec3::Zero();
+    for (int r = patch.first_normal; r < patch.first_normal + patch.num_normals; ++r) {
+      const double impulse = normals_[static_cast<size_t>(r)].impulse;
+      reports[static_cast<size_t>(r)].normal_impulse = impulse;
+      reports[static_cast<size_t>(r)].friction_impulse.setZero();
+      total += impulse * normal_;
+    }
+    for (int j = 0; j < patch.num_anchors; ++j) {
+      const ContactFrictionRow* rows = &frictions_[static_cast<size_t>(patch.first_friction + 2 * j)];
+      const Vec3 impulse = rows[0].impulse * patch.t0 + rows[1].impulse * patch.t1;
+      reports[static_cast<size_t>(patch.anchor_point[j])].friction_impulse = impulse;
+      total += impulse;
+    }
+    link_force[static_cast<size_t>(patch.link)] += inv_dt * total;
+  }
+}
+
+}  // namespace featherdrive

@@ -1,0 +1,44 @@
+// The step's contact stages (docs/math/contact.md): rows set up from the step-start poses after
+// the free velocity, solved link by link inside each sweep (C15), tracked through TGS's
+// sub-steps (C16) and reported.
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+
+void Simulation::update_contacts_active() {
+  contacts_active_ = settings_.ground.enabled && contact_rows_.any_shapes();
+  if (contacts_active_) {
+    sweep_.set_contact_links(contact_rows_.links_with_shapes());
+  } else if (sweep_.any_contacts) {
+    sweep_.set_contact_links(std::vector<char>(static_cast<size_t>(model_->num_links()), 0));
+  }
+  if (!contacts_active_) {
+    num_contacts_ = 0;
+    std::fill(link_contact_force_.begin(), link_contact_force_.end(), Vec3::Zero());
+  }
+}
+
+void Simulation::setup_contacts(const RowPhase& phase) {
+  link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+  ContactPhase contact_phase;
+  contact_phase.dt = phase.dt;
+  contact_phase.h = phase.h;
+  contact_phase.tgs = phase.tgs;
+  num_contacts_ = contact_rows_.setup(*model_, data_, settings_.ground, settings_.contact,
+                                      contact_link_velocity_, link_cfm_,
+                                      settings_.options.position_iterations, contact_phase,
+                                      contacts_);
+}
+
+// TGS: the points move with the sub-step's velocities (C7's displacement).
+void Simulation::track_contacts(double h) {
+  link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+  contact_rows_.track(contact_link_velocity_, h);
+}
+
+void Simulation::contact_forces() {
+  if (!contacts_active_) return;
+  contact_rows_.report(settings_.options.dt, contacts_, link_contact_force_);
+}
+
+}  // namespace featherdrive
