@@ -33,12 +33,19 @@ struct JointTrajectory {
   /// The harness's floating root, [row][13]: root:px py pz qw qx qy qz (link frame pose), world
   /// angular velocity wx wy wz, world velocity of the link origin vx vy vz; empty without them.
   std::vector<std::vector<double>> root;
+  /// With a ground: the links that have shapes (the harness's contact:<link>:fx,fy,fz columns) and
+  /// per row the ground's force on each over the step [row][link] (world frame, N; row 0 zero).
+  /// PhysX's are its reported normal impulses summed over the link's points, over dt: the
+  /// bindings report no friction impulses (tests/physx/README.md, "Contact forces").
+  std::vector<std::string> contact_links;
+  std::vector<std::vector<Vec3>> contact_force;
   size_t rows() const { return q.size(); }
 };
 
 /// Reads a CSV of the harness (tests/physx/README.md) or of `featherdrive simulate` for a robot
 /// without a floating root: step,t,q:<joint>...,qd:<joint>...,f:<joint>... (other columns, e.g.
-/// the harness's root:* columns, are read into `root` when all 13 are there, or ignored). Fields
+/// the harness's root:* columns, are read into `root` when all 13 are there, its
+/// contact:<link>:fx,fy,fz into `contact_force`, others ignored). Fields
 /// may be quoted as RFC 4180 says (a joint name with a comma). `name` is the file named in
 /// messages. Throws PhysxError naming the file, line, column and value for a missing column, a
 /// short row or a bad number.
@@ -50,8 +57,9 @@ JointTrajectory read_joint_csv(const std::filesystem::path& path);
 double physx_joint_force(const Simulation& sim, int dof);
 
 /// Appends sim's state as one row of `out`, whose `joints` name the columns (1-dof joints of sim's
-/// model, in any order); f is physx_joint_force. Throws std::invalid_argument for a name that is
-/// not a 1-dof joint of the model.
+/// model, in any order); f is physx_joint_force; `contact_links`, when named, get
+/// sim.link_contact_force(). Throws std::invalid_argument for a name that is not a 1-dof joint or
+/// a link of the model.
 void append_state(JointTrajectory& out, const Simulation& sim);
 
 /// An empty trajectory with the columns PhysX reports for sim's model: its 1-dof joints in link
