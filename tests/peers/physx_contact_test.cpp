@@ -9,7 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
+
+#include <unistd.h>
 
 #include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/io/physx_runner.hpp"
@@ -192,6 +196,45 @@ TEST(PhysxContact, NoGroundNoContactColumns) {
   EXPECT_TRUE(px.contact_links.empty());
   EXPECT_TRUE(px.contact_force.empty());
   EXPECT_NEAR(px.root[10][kVz], -9.81 * 0.1, 1e-5);  // falling freely
+}
+
+// The harness refuses bad shapes, grounds and contact options with exit 2 and one line naming the
+// field and the value (the exported box scene, one field changed).
+TEST(PhysxContact, HarnessRefusesBadContactInput) {
+  const std::string good =
+      physx_scene_json(test::ground_box_simulation(SolverType::pgs, 0.0), 1);
+  const std::pair<std::string, std::string> cases[][2] = {
+      {{"\"half_extents\": [0.1, 0.1, 0.1]", "\"half_extents\": [0.1, -1, 0.1]"},
+       {"", "scene.links[0].shapes[0].half_extents[1]: must be > 0, got -1"}},
+      {{"\"type\": \"box\"", "\"type\": \"cone\""},
+       {"", "scene.links[0].shapes[0].type: expected \"sphere\", \"capsule\" or \"box\", got \"cone\""}},
+      {{"\"normal\": [0, 0, 1]", "\"normal\": [0, 0, 0]"},
+       {"", "scene.ground.normal: axis must be a unit vector (norm 0)"}},
+      {{"\"rest_offset\": 0", "\"rest_offset\": 0.5"},
+       {"", "scene.contact.rest_offset: must be below contact_offset (0.02), got 0.5"}},
+      {{"\"restitution\": 0},\n  \"contact\"", "\"restitution\": 2},\n  \"contact\""},
+       {"", "scene.ground.restitution: must be <= 1, got 2"}}};
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("featherdrive-contact-input-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const auto& c : cases) {
+    std::string scene = good;
+    const size_t at = scene.find(c[0].first);
+    ASSERT_NE(at, std::string::npos) << c[0].first;
+    scene.replace(at, c[0].first.size(), c[0].second);
+    std::ofstream(dir / "scene.json") << scene;
+    const int rc = run_program({FEATHERDRIVE_NODE, std::string(FEATHERDRIVE_PHYSX_DIR) + "/harness.js",
+                                (dir / "scene.json").string(), (dir / "out.csv").string()},
+                               dir / "stderr.txt");
+    std::ifstream in(dir / "stderr.txt");
+    std::string line, rest;
+    std::getline(in, line);
+    std::getline(in, rest, '\0');
+    EXPECT_EQ(rc, 2) << c[0].second;
+    EXPECT_EQ(line, "harness.js: error: " + c[1].second);
+    EXPECT_EQ(rest, "") << "more than one line";
+  }
+  std::filesystem::remove_all(dir);
 }
 
 // The CSV reader's contact columns (a link name with a colon: the suffix decides), and its error
