@@ -233,6 +233,16 @@ void append_state(JointTrajectory& out, const Simulation& sim) {
   out.contact_force.push_back(std::move(force));
 }
 
+std::vector<std::string> physx_contact_links(const Simulation& sim) {
+  std::vector<std::string> links;
+  if (!sim.ground().enabled) return links;
+  for (const CollisionShape& shape : sim.model().shapes) {  // sorted by link
+    const std::string& name = sim.model().links[static_cast<size_t>(shape.link)].name;
+    if (links.empty() || links.back() != name) links.push_back(name);
+  }
+  return links;
+}
+
 std::string physx_install_hint() {
   return "install node and npm (Debian: apt-get install -y nodejs npm), then the pinned PhysX "
          "package with `make physx` (runs tests/physx/install.sh build/physx)";
@@ -413,6 +423,31 @@ double TrajectoryComparison::relative_qd() const {
 }
 double TrajectoryComparison::relative_f() const {
   return relative(joints, &JointDifference::f, scale_f);
+}
+
+ContactComparison compare_contact_forces(const JointTrajectory& a, const JointTrajectory& reference,
+                                         const Vec3& normal) {
+  if (a.contact_force.size() != reference.contact_force.size())
+    throw PhysxError("the contact forces have " + std::to_string(a.contact_force.size()) +
+                     " and " + std::to_string(reference.contact_force.size()) + " rows");
+  ContactComparison c;
+  for (size_t l = 0; l < reference.contact_links.size(); ++l) {
+    const std::string& name = reference.contact_links[l];
+    const auto it = std::find(a.contact_links.begin(), a.contact_links.end(), name);
+    if (it == a.contact_links.end())
+      throw PhysxError("link '" + name + "' has contact forces in one trajectory only");
+    const size_t la = static_cast<size_t>(it - a.contact_links.begin());
+    LargestDifference d;
+    for (size_t k = 0; k < reference.contact_force.size(); ++k) {
+      const double ref = normal.dot(reference.contact_force[k][l]);
+      double diff = std::abs(normal.dot(a.contact_force[k][la]) - ref);
+      if (std::isnan(diff)) diff = std::numeric_limits<double>::infinity();
+      if (diff > d.value) d = {diff, k};
+      c.scale = std::max(c.scale, std::abs(ref));
+    }
+    c.links.emplace_back(name, d);
+  }
+  return c;
 }
 
 TrajectoryComparison compare_trajectories(const JointTrajectory& a,

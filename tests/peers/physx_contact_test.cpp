@@ -102,7 +102,9 @@ void expect_quadruped(double lift, const QuadrupedRow (&bench)[2]) {
   const char* legs[] = {"fl", "fr", "hl", "hr"};
   const double total_mass = 4.0 + 4 * (0.5 + 0.3);
   for (int s = 0; s < 2; ++s) {
-    const JointTrajectory px = physx(test::quadruped_simulation(kSolvers[s].type, lift), 200);
+    const Simulation sim = test::quadruped_simulation(kSolvers[s].type, lift);
+    const JointTrajectory px = physx(sim, 200);
+    EXPECT_EQ(px.contact_links, physx_contact_links(sim));
     const size_t end = 200;
     std::printf("%c %s: base z %.9f\n", lift > 0 ? 'e' : 'd', kSolvers[s].name,
                 px.root[end][kPz]);
@@ -248,6 +250,18 @@ TEST(PhysxContact, CsvContactColumns) {
   ASSERT_EQ(t.contact_force.size(), 2u);
   EXPECT_EQ(t.contact_force[1][0], Vec3(1.5, -2, 3));
   EXPECT_EQ(t.contact_force[1][1], Vec3(0, 0, 9.81));
+  // Differences along the normal only (PhysX reports no friction), the largest per link.
+  JointTrajectory other = t;
+  other.contact_force[1][0] += Vec3(5.0, 0.0, -0.25);
+  std::swap(other.contact_links[0], other.contact_links[1]);
+  std::swap(other.contact_force[1][0], other.contact_force[1][1]);
+  const ContactComparison c = compare_contact_forces(other, t, Vec3::UnitZ());
+  ASSERT_EQ(c.links.size(), 2u);
+  EXPECT_EQ(c.links[0].first, "a:b");
+  EXPECT_EQ(c.links[0].second.value, 0.25);
+  EXPECT_EQ(c.links[0].second.row, 1u);
+  EXPECT_EQ(c.links[1].second.value, 0.0);
+  EXPECT_EQ(c.scale, 9.81);
   try {
     parse_joint_csv("step,t,contact:c:fx,contact:c:fz\n0,0,0,0\n", "px.csv");
     ADD_FAILURE() << "no error";

@@ -66,6 +66,10 @@ void append_state(JointTrajectory& out, const Simulation& sim);
 /// order.
 JointTrajectory empty_trajectory(const Model& model);
 
+/// The links the harness reports contact forces for (JointTrajectory::contact_links): with the
+/// ground enabled, every link with shapes in link order; none without it.
+std::vector<std::string> physx_contact_links(const Simulation& sim);
+
 /// Where node and the installed harness are: `dir` holds harness.js and
 /// node_modules/physx-js-webidl (what tests/physx/install.sh DIR makes).
 struct PhysxInstall {
@@ -120,6 +124,19 @@ struct TrajectoryComparison {
   double relative_qd() const;
   double relative_f() const;
 };
+
+/// Per link, the largest |n . (a - reference)| of the contact forces (n the ground's normal: PhysX
+/// reports normal impulses only) and the row where it occurs; `scale` is the largest |n . f| of
+/// `reference` over all links and rows.
+struct ContactComparison {
+  std::vector<std::pair<std::string, LargestDifference>> links;
+  double scale = 0.0;
+};
+
+/// Compares the contact forces of `a` with `reference`'s link by link (matched by name). Throws
+/// PhysxError when the row counts differ or a link of `reference` is missing from `a`.
+ContactComparison compare_contact_forces(const JointTrajectory& a, const JointTrajectory& reference,
+                                         const Vec3& normal);
 
 /// Compares `a` with `reference` joint by joint (matched by name) and row by row. Throws
 /// PhysxError when the row counts differ or a joint of `reference` is missing from `a`.
