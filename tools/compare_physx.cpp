@@ -89,6 +89,7 @@ int compare_physx(const ComparePhysxArgs& args) {
       find_physx({FEATHERDRIVE_PHYSX_BUILD_DIR, FEATHERDRIVE_PHYSX_SOURCE_DIR});
 
   JointTrajectory fd = empty_trajectory(model);
+  fd.contact_links = physx_contact_links(sim);
   {
     Simulation run = sim;
     append_state(fd, run);
@@ -127,6 +128,17 @@ int compare_physx(const ComparePhysxArgs& args) {
                 friction_off.c_str());
   if (model.floating_base()) std::printf("  the floating root's pose is not compared\n");
   print_difference_table(c, "PhysX");
+  if (!px.contact_links.empty()) {
+    // PhysX's bindings report normal impulses only (tests/physx/README.md, "Contact forces").
+    const ContactComparison cc = compare_contact_forces(fd, px, sim.ground().normal);
+    std::printf("  the ground's normal force per link (PhysX reports no friction): largest "
+                "|featherdrive - PhysX|, at step; relative: / PhysX's largest, %.4g N\n",
+                cc.scale);
+    for (const auto& [link, d] : cc.links)
+      std::printf("  %-16s %10.2e %5zu %9.1e\n", link.c_str(), d.value, d.row,
+                  cc.scale > 0.0 ? d.value / cc.scale
+                  : d.value > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+  }
 
   if (!args.plot.empty()) {
     std::fflush(stdout);

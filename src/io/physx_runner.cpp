@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <string_view>
 
 #include "featherdrive/model/dof_position.hpp"
 
@@ -123,6 +125,25 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
     if (col >= 0) root_col.push_back(col);
   }
   if (root_col.size() != 13) root_col.clear();
+  // contact:<link>:fx, :fy, :fz (a link name may hold colons: the suffix decides).
+  std::vector<std::array<int, 3>> contact_col;
+  for (const std::string& h : header) {
+    constexpr std::string_view prefix = "contact:", suffix = ":fx";
+    if (h.size() < prefix.size() + suffix.size() || h.rfind(prefix, 0) != 0 ||
+        h.compare(h.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    const std::string link = h.substr(prefix.size(), h.size() - prefix.size() - suffix.size());
+    std::array<int, 3> cols{};
+    for (int c = 0; c < 3; ++c) {
+      const std::string column = "contact:" + link + ":" + "f" + "xyz"[c];
+      cols[static_cast<size_t>(c)] = find_column(header, column);
+      if (cols[static_cast<size_t>(c)] < 0)
+        throw PhysxError(name + ": header: column '" + column + "' is missing for link '" +
+                         link + "'");
+    }
+    t.contact_links.push_back(link);
+    contact_col.push_back(cols);
+  }
   const size_t n = t.joints.size();
   for (long row_line = line_no; next_record(text, pos, line_no, cells, name); row_line = line_no) {
     if (cells.size() == 1 && cells[0].empty()) continue;  // a blank line
@@ -153,6 +174,12 @@ JointTrajectory parse_joint_csv(const std::string& text, const std::string& name
       std::vector<double> root;
       for (int col : root_col) root.push_back(value(col));
       t.root.push_back(std::move(root));
+    }
+    if (!contact_col.empty()) {
+      std::vector<Vec3> force;
+      for (const auto& cols : contact_col)
+        force.emplace_back(value(cols[0]), value(cols[1]), value(cols[2]));
+      t.contact_force.push_back(std::move(force));
     }
   }
   return t;
@@ -199,6 +226,21 @@ void append_state(JointTrajectory& out, const Simulation& sim) {
   out.q.push_back(std::move(q));
   out.qd.push_back(std::move(qd));
   out.f.push_back(std::move(f));
+  if (out.contact_links.empty()) return;
+  std::vector<Vec3> force;
+  for (const std::string& link : out.contact_links)
+    force.push_back(sim.link_contact_force()[static_cast<size_t>(model.link_index(link))]);
+  out.contact_force.push_back(std::move(force));
+}
+
+std::vector<std::string> physx_contact_links(const Simulation& sim) {
+  std::vector<std::string> links;
+  if (!sim.ground().enabled) return links;
+  for (const CollisionShape& shape : sim.model().shapes) {  // sorted by link
+    const std::string& name = sim.model().links[static_cast<size_t>(shape.link)].name;
+    if (links.empty() || links.back() != name) links.push_back(name);
+  }
+  return links;
 }
 
 std::string physx_install_hint() {
@@ -381,6 +423,31 @@ double TrajectoryComparison::relative_qd() const {
 }
 double TrajectoryComparison::relative_f() const {
   return relative(joints, &JointDifference::f, scale_f);
+}
+
+ContactComparison compare_contact_forces(const JointTrajectory& a, const JointTrajectory& reference,
+                                         const Vec3& normal) {
+  if (a.contact_force.size() != reference.contact_force.size())
+    throw PhysxError("the contact forces have " + std::to_string(a.contact_force.size()) +
+                     " and " + std::to_string(reference.contact_force.size()) + " rows");
+  ContactComparison c;
+  for (size_t l = 0; l < reference.contact_links.size(); ++l) {
+    const std::string& name = reference.contact_links[l];
+    const auto it = std::find(a.contact_links.begin(), a.contact_links.end(), name);
+    if (it == a.contact_links.end())
+      throw PhysxError("link '" + name + "' has contact forces in one trajectory only");
+    const size_t la = static_cast<size_t>(it - a.contact_links.begin());
+    LargestDifference d;
+    for (size_t k = 0; k < reference.contact_force.size(); ++k) {
+      const double ref = normal.dot(reference.contact_force[k][l]);
+      double diff = std::abs(normal.dot(a.contact_force[k][la]) - ref);
+      if (std::isnan(diff)) diff = std::numeric_limits<double>::infinity();
+      if (diff > d.value) d = {diff, k};
+      c.scale = std::max(c.scale, std::abs(ref));
+    }
+    c.links.emplace_back(name, d);
+  }
+  return c;
 }
 
 TrajectoryComparison compare_trajectories(const JointTrajectory& a,

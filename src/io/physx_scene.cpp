@@ -126,6 +126,48 @@ void helper_inertial(const Model& model, int i, double& mass, Mat3& inertia) {
   inertia = Mat3::Identity() * (kHelperMass * b.inertia_com.trace() / 3.0);
 }
 
+// A material's fields, each as `, "key": value`.
+std::string material_fields(const Material& m) {
+  return ", \"static_friction\": " + num(m.static_friction) + ", \"dynamic_friction\": " +
+         num(m.dynamic_friction) + ", \"restitution\": " + num(m.restitution);
+}
+
+// The link's collision shapes as `"shapes": [...],` (empty for none), in the link frame with the
+// shape's own conventions (a capsule along its z: the harness turns it onto PhysX's x).
+std::string shapes_field(const Model& model, int link) {
+  std::ostringstream js;
+  bool first = true;
+  for (const CollisionShape& shape : model.shapes) {
+    if (shape.link != link) continue;
+    js << (first ? "\"shapes\": [\n       {" : ",\n       {") << "\"name\": " << str(shape.name)
+       << ", \"type\": " << str(to_string(shape.type));
+    if (shape.type == ShapeType::box)
+      js << ", \"half_extents\": " << vec(shape.size);
+    else
+      js << ", \"radius\": " << num(shape.size.x());
+    if (shape.type == ShapeType::capsule) js << ", \"half_length\": " << num(shape.size.y());
+    js << ", \"xyz\": " << vec(shape.position) << ", \"quat\": " << quat(shape.rotation)
+       << material_fields(shape.material) << "}";
+    first = false;
+  }
+  if (!first) js << "],\n     ";
+  return js.str();
+}
+
+// The ground (when enabled) and the contact options (docs/math/contact.md, section 8).
+std::string contact_fields(const Simulation& sim) {
+  std::ostringstream js;
+  const Ground& g = sim.ground();
+  if (g.enabled)
+    js << "  \"ground\": {\"height\": " << num(g.height) << ", \"normal\": " << vec(g.normal)
+       << material_fields(g.material) << "},\n";
+  const ContactOptions& c = sim.contact_options();
+  js << "  \"contact\": {\"contact_offset\": " << num(c.contact_offset)
+     << ", \"rest_offset\": " << num(c.rest_offset)
+     << ", \"bounce_threshold\": " << num(c.bounce_threshold) << "},\n";
+  return js.str();
+}
+
 }  // namespace
 
 std::string physx_scene_json(const Simulation& sim, int steps,
@@ -149,7 +191,7 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   forward_kinematics(model, data, sim.q(), sim.qd());
 
   std::ostringstream js;
-  js << "{\n  \"format\": \"featherdrive-physx/1\",\n";
+  js << "{\n  \"format\": \"featherdrive-physx/2\",\n";
   js << "  \"dt\": " << num(o.dt) << ",\n  \"steps\": " << steps << ",\n";
   js << "  \"gravity\": " << vec(model.gravity) << ",\n";
   js << "  \"solver\": {\"type\": " << str(to_string(o.solver))
@@ -173,7 +215,7 @@ std::string physx_scene_json(const Simulation& sim, int steps,
        << ", \"angular_velocity\": " << vec(R * v.head<3>())
        << ", \"linear_velocity\": " << vec(R * v.tail<3>()) << "},\n";
   }
-  js << "  \"links\": [\n";
+  js << contact_fields(sim) << "  \"links\": [\n";
   for (int i = 0; i < model.num_links(); ++i) {
     const Link& l = model.links[i];
     // PhysX needs a positive mass and inertia on every link; a fixed root's (e.g. a URDF's empty
@@ -193,7 +235,8 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     js << "\"cfm_scale\": " << num(lp.cfm_scale) << ", \"linear_damping\": "
        << num(lp.linear_damping) << ", \"angular_damping\": " << num(lp.angular_damping)
        << ", \"max_linear_velocity\": " << num(lp.max_linear_velocity)
-       << ", \"max_angular_velocity\": " << num(lp.max_angular_velocity) << ",\n     \"joint\": ";
+       << ", \"max_angular_velocity\": " << num(lp.max_angular_velocity) << ",\n     ";
+    js << shapes_field(model, i) << "\"joint\": ";
     if (i == 0) {
       js << "null}";
     } else {

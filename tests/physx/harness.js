@@ -5,9 +5,10 @@
 //   node harness.js SCENE.json OUT.csv
 //   node harness.js --serve SOCKET [IDLE_SECONDS]     (runs many, PhysX loaded once)
 //
-// Builds the articulation described by SCENE.json (format "featherdrive-physx/1", see
-// README.md) in PhysX 5.6.1 (WebAssembly build, CPU solver, float32), steps it and writes
-// the joint trajectory and the per-step drive forces as CSV.
+// Builds the articulation described by SCENE.json (format "featherdrive-physx/2", see
+// README.md) in PhysX 5.6.1 (WebAssembly build, CPU solver, float32), with its collision shapes
+// and a ground plane when the scene has them, steps it and writes the joint trajectory, the
+// per-step drive forces and the per-link contact forces as CSV.
 //
 // Exit status: 0 success, 2 bad input (unreadable/invalid scene, or PhysX rejected a
 // parameter while the scene was built), 1 any other failure (PhysX error while stepping,
@@ -17,7 +18,8 @@ const fs = require('fs');
 const path = require('path');
 const { loadPhysX } = require('./physx_loader.js');
 
-const FORMAT = 'featherdrive-physx/1';
+// /2 added shapes, the ground and contact options (a /1 scene is a /2 scene without them).
+const FORMAT = 'featherdrive-physx/2';
 // PhysX rejects max link velocities above 1e16 (it stores their squares in float32).
 const PHYSX_MAX_LINK_VELOCITY = 1e16;
 const HUGE = 1e30;
@@ -27,6 +29,12 @@ const JOINT_TYPE_REVOLUTE_UNWRAPPED = 3;
 // A spherical joint's axes (eTWIST, eSWING1, eSWING2 about its joint frame's x, y, z): their
 // columns and their names in initial / targets are `<joint>:<axis>`.
 const SPHERICAL_AXES = ['twist', 'swing1', 'swing2'];
+// PhysX 5.6.1's scene default (PxSceneDesc: 0.2 x PxTolerancesScale::speed) and shape default
+// (0.02 x PxTolerancesScale::length): docs/math/contact.md, section 8.
+const DEFAULT_BOUNCE_THRESHOLD = 2;
+const DEFAULT_CONTACT_OFFSET = 0.02;
+// about y by -90 degrees: PhysX's capsule lies along its shape frame's x, the scene's along z.
+const Q_CAPSULE_X_TO_Z = [Math.SQRT1_2, 0, -Math.SQRT1_2, 0];
 
 class InputError extends Error {}
 
@@ -207,6 +215,64 @@ function parseAxis(A, w) {
   return axis;
 }
 
+// A surface's friction and restitution, each optional (PhysX's PxMaterial; featherdrive's Material
+// defaults).
+function parseMaterial(M, w) {
+  return {
+    static_friction: optNum(M, 'static_friction', w, 0.5, { min: 0 }),
+    dynamic_friction: optNum(M, 'dynamic_friction', w, 0.5, { min: 0 }),
+    restitution: optNum(M, 'restitution', w, 0, { min: 0, max: 1 }),
+  };
+}
+
+// One collision shape of a link: sphere {radius}, capsule {radius, half_length} (its segment along
+// the shape frame's z), box {half_extents}; its frame (xyz, quat) in the link frame.
+function parseShape(S, w) {
+  if (!isObj(S)) throw new InputError(`${w}: expected an object`);
+  const shape = { name: typeof S.name === 'string' ? S.name : '' };
+  if (!['sphere', 'capsule', 'box'].includes(S.type)) {
+    throw new InputError(`${w}.type: expected "sphere", "capsule" or "box", got ${JSON.stringify(S.type)}`);
+  }
+  shape.type = S.type;
+  if (S.type === 'box') {
+    shape.half_extents = vec(S.half_extents, 3, `${w}.half_extents`);
+    shape.half_extents.forEach((x, k) => num(x, `${w}.half_extents[${k}]`, { gt: 0 }));
+  } else {
+    shape.radius = num(S.radius, `${w}.radius`, { gt: 0 });
+    if (S.type === 'capsule') shape.half_length = num(S.half_length, `${w}.half_length`, { gt: 0 });
+  }
+  shape.pose = {
+    p: S.xyz === undefined ? [0, 0, 0] : vec(S.xyz, 3, `${w}.xyz`),
+    q: S.quat === undefined ? [1, 0, 0, 0] : unitQuat(S.quat, `${w}.quat`),
+  };
+  shape.material = parseMaterial(S, w);
+  return shape;
+}
+
+// The ground (the plane normal . x = height) and the contact options of every shape and of it.
+function parseContact(doc, s) {
+  s.ground = null;
+  if (doc.ground !== undefined && doc.ground !== null) {
+    const G = doc.ground;
+    if (!isObj(G)) throw new InputError('scene.ground: expected null or an object');
+    s.ground = {
+      height: optNum(G, 'height', 'scene.ground', 0),
+      normal: G.normal === undefined ? [0, 0, 1] : unitVec(G.normal, 'scene.ground.normal'),
+      material: parseMaterial(G, 'scene.ground'),
+    };
+  }
+  const C = doc.contact === undefined || doc.contact === null ? {} : doc.contact;
+  if (!isObj(C)) throw new InputError('scene.contact: expected an object');
+  s.contact = {
+    contact_offset: optNum(C, 'contact_offset', 'scene.contact', DEFAULT_CONTACT_OFFSET, { min: 0 }),
+    rest_offset: optNum(C, 'rest_offset', 'scene.contact', 0),
+    bounce_threshold: optNum(C, 'bounce_threshold', 'scene.contact', DEFAULT_BOUNCE_THRESHOLD, { min: 0 }),
+  };
+  if (!(s.contact.rest_offset < s.contact.contact_offset)) {
+    throw new InputError(`scene.contact.rest_offset: must be below contact_offset (${s.contact.contact_offset}), got ${s.contact.rest_offset}`);
+  }
+}
+
 function parseScene(doc) {
   if (!isObj(doc)) throw new InputError('scene: top level must be a JSON object');
   if (doc.format !== FORMAT) throw new InputError(`scene.format: expected "${FORMAT}", got ${JSON.stringify(doc.format)}`);
@@ -267,6 +333,10 @@ function parseScene(doc) {
     link.max_linear_velocity = Math.min(optNum(L, 'max_linear_velocity', w, HUGE, { min: 0 }), PHYSX_MAX_LINK_VELOCITY);
     link.max_angular_velocity = Math.min(optNum(L, 'max_angular_velocity', w, HUGE, { min: 0 }), PHYSX_MAX_LINK_VELOCITY);
     link.cfm_scale = optNum(L, 'cfm_scale', w, 0, { min: 0, max: 1 });
+    if (L.shapes !== undefined && L.shapes !== null && !Array.isArray(L.shapes)) {
+      throw new InputError(`${w}.shapes: expected an array`);
+    }
+    link.shapes = (L.shapes || []).map((S, k) => parseShape(S, `${w}.shapes[${k}]`));
 
     const J = L.joint;
     if (i === 0) {
@@ -380,6 +450,7 @@ function parseScene(doc) {
       s.forces.push(m);
     });
   }
+  parseContact(doc, s);
   return s;
 }
 
@@ -436,6 +507,42 @@ function pxQuat(P, q) { return new P.PxQuat(q[1], q[2], q[3], q[0]); } // PxQuat
 function pxTransform(P, pose) { return new P.PxTransform(pxVec3(P, pose.p), pxQuat(P, pose.q)); }
 function fromPxVec3(v) { return [v.x, v.y, v.z]; }
 
+// Contact reports for a scene with a ground. PhysX's default filter shader solves contacts but
+// reports none; the bindings' pass-through shader gives every pair the default solve flags plus
+// the notifications, and the callback below collects each step's points (PxContactPairPoint:
+// position, normal, separation and impulse = normal impulse x normal; no friction impulses).
+function contactReports(P, sceneDesc) {
+  const F = P.PxPairFlagEnum;
+  const pairFlags = F.eSOLVE_CONTACT | F.eDETECT_DISCRETE_CONTACT | F.eNOTIFY_TOUCH_FOUND |
+                    F.eNOTIFY_TOUCH_PERSISTS | F.eNOTIFY_CONTACT_POINTS;
+  const shader = new P.PassThroughFilterShaderImpl();
+  shader.filterShader = function filterShader() { this.outputPairFlags = pairFlags; return 0; };
+  P.setupPassThroughFilterShader(sceneDesc, shader);
+  const capacity = 64;  // a box on a plane has at most 8 points
+  const r = { shader, shapeLink: new Map(), pairs: [], buffer: new P.PxArray_PxContactPairPoint(capacity) };
+  const callback = new P.PxSimulationEventCallbackImpl();
+  callback.onContact = (headerPtr, pairsPtr, nbPairs) => {
+    const first = P.wrapPointer(pairsPtr, P.PxContactPair);
+    for (let i = 0; i < nbPairs; ++i) {
+      const pair = P.NativeArrayHelpers.prototype.getContactPairAt(first, i);
+      const n = pair.extractContacts(r.buffer.begin(), capacity);
+      const impulse = [0, 0, 0];
+      for (let c = 0; c < n; ++c) {
+        const pt = r.buffer.get(c);
+        impulse[0] += pt.impulse.x; impulse[1] += pt.impulse.y; impulse[2] += pt.impulse.z;
+      }
+      r.pairs.push({ shapes: [P.getPointer(pair.get_shapes(0)), P.getPointer(pair.get_shapes(1))], impulse });
+    }
+  };
+  callback.onConstraintBreak = () => {};
+  callback.onWake = () => {};
+  callback.onSleep = () => {};
+  callback.onTrigger = () => {};
+  sceneDesc.simulationEventCallback = callback;
+  r.callback = callback;
+  return r;
+}
+
 // Builds the scene and the articulation; returns a handle used by step()/readState().
 function build(P, s) {
   const world = getWorld(P);
@@ -445,10 +552,38 @@ function build(P, s) {
   const sceneDesc = new P.PxSceneDesc(world.tolerances);
   sceneDesc.gravity = pxVec3(P, s.gravity);
   sceneDesc.cpuDispatcher = world.dispatcher;
-  sceneDesc.filterShader = P.DefaultFilterShader();
   sceneDesc.solverType = s.solver.type === 'tgs' ? P.PxSolverTypeEnum.eTGS : P.PxSolverTypeEnum.ePGS;
+  sceneDesc.bounceThresholdVelocity = s.contact.bounce_threshold;
+  const contacts = s.ground ? contactReports(P, sceneDesc) : null;
+  if (!contacts) sceneDesc.filterShader = P.DefaultFilterShader();
   const scene = physics.createScene(sceneDesc);
   if (!scene) throw new Error('PhysX could not create the scene');
+  // Materials by value, one PxMaterial each (PhysX averages a pair's values: C1's section 1).
+  const materials = new Map();
+  const material = (M) => {
+    const key = `${M.static_friction},${M.dynamic_friction},${M.restitution}`;
+    if (!materials.has(key)) {
+      materials.set(key, physics.createMaterial(M.static_friction, M.dynamic_friction, M.restitution));
+    }
+    return materials.get(key);
+  };
+  const offsets = (shape) => {
+    shape.setContactOffset(s.contact.contact_offset);
+    shape.setRestOffset(s.contact.rest_offset);
+  };
+  // The ground first, as PxCreatePlane makes it: a static actor whose one shape is the plane
+  // through the frame's origin with normal x (PxPlane n . x + d = 0, d = -height).
+  let plane = null;
+  if (s.ground) {
+    const n = s.ground.normal;
+    plane = P.CreatePlane(physics, new P.PxPlane(n[0], n[1], n[2], -s.ground.height),
+                          material(s.ground.material), new P.PxFilterData(0, 0, 0, 0));
+    if (!plane) throw new InputError('PhysX could not create the ground plane');
+    const buf = new P.PxArray_PxShapePtr(1);
+    plane.getShapes(buf.begin(), 1, 0);
+    offsets(buf.get(0));
+    scene.addActor(plane);
+  }
 
   const art = physics.createArticulationReducedCoordinate();
   art.setArticulationFlag(P.PxArticulationFlagEnum.eFIX_BASE, !s.floating_base);
@@ -477,6 +612,20 @@ function build(P, s) {
     link.setMaxLinearVelocity(L.max_linear_velocity);
     link.setMaxAngularVelocity(L.max_angular_velocity);
     link.setCfmScale(L.cfm_scale);
+    for (const S of L.shapes) {
+      const geometry = S.type === 'sphere' ? new P.PxSphereGeometry(S.radius)
+        : S.type === 'capsule' ? new P.PxCapsuleGeometry(S.radius, S.half_length)
+          : new P.PxBoxGeometry(S.half_extents[0], S.half_extents[1], S.half_extents[2]);
+      const shape = physics.createShape(geometry, material(S.material), true);
+      if (!shape) throw new InputError(`PhysX could not create shape ${JSON.stringify(S.name)} of link "${L.name}"`);
+      offsets(shape);
+      // The local pose is relative to the link's actor frame, which is the scene's link frame
+      // (the centre of mass is cMassLocalPose, set above).
+      const q = S.type === 'capsule' ? qnormalize(qmul(S.pose.q, Q_CAPSULE_X_TO_Z)) : S.pose.q;
+      shape.setLocalPose(pxTransform(P, { p: S.pose.p, q }));
+      link.attachShape(shape);
+      if (contacts) contacts.shapeLink.set(P.getPointer(shape), i);
+    }
     links.push(link);
 
     if (i === 0) { joints.push(null); return; }
@@ -578,6 +727,8 @@ function build(P, s) {
   const anyForce = s.forces.length > 0 || movableJoints.some((j) => j.spec.applied_force !== 0);
   const h = {
     P, world, s, scene, art, links, joints, movableJoints, cache, cacheFlags, anyForce, stepCount: 0,
+    contacts, plane, materials: [...materials.values()],
+    contactLinks: contacts ? s.links.map((L, i) => i).filter((i) => s.links[i].shapes.length) : [],
   };
   return h;
 }
@@ -626,6 +777,7 @@ function linkPose(link) {
 function step(h) {
   // Link poses at the start of the step, needed to read the drive forces (readForces).
   h.prePoses = h.movableJoints.map((j) => linkPose(h.links[j.linkIndex]));
+  if (h.contacts) h.contacts.pairs.length = 0;
   h.scene.simulate(h.s.dt);
   h.scene.fetchResults(true);
   h.stepCount += 1;
@@ -682,6 +834,25 @@ function readForces(h) {
   });
 }
 
+// The ground's force on each link with shapes over the last step: the normal impulses PhysX
+// reports for the link's contact points, summed, over dt (world frame, N). A pair's impulse acts
+// on its first shape (PxContactPairPoint::normal points the way shape 0 is pushed).
+function readContactForces(h) {
+  const force = new Map(h.contactLinks.map((i) => [i, [0, 0, 0]]));
+  if (!h.contacts) return [];
+  for (const pair of h.contacts.pairs) {
+    for (const [k, sign] of [[0, 1], [1, -1]]) {
+      const link = h.contacts.shapeLink.get(pair.shapes[k]);
+      if (link === undefined) continue;
+      const f = force.get(link);
+      for (let c = 0; c < 3; ++c) f[c] += sign * pair.impulse[c];
+    }
+  }
+  const out = [];
+  for (const i of h.contactLinks) out.push(...force.get(i).map((x) => x / h.s.dt));
+  return out;
+}
+
 function readState(h) {
   const q = h.movableJoints.map((j) => j.px.getJointPosition(j.axis));
   const qd = h.movableJoints.map((j) => j.px.getJointVelocity(j.axis));
@@ -704,6 +875,9 @@ function csvHeader(h) {
   const cols = ['step', 't', ...names.map((n) => `q:${n}`), ...names.map((n) => `qd:${n}`), ...names.map((n) => `f:${n}`)];
   if (h.s.floating_base) {
     for (const c of ['px', 'py', 'pz', 'qw', 'qx', 'qy', 'qz', 'wx', 'wy', 'wz', 'vx', 'vy', 'vz']) cols.push(`root:${c}`);
+  }
+  for (const i of h.contactLinks) {
+    for (const c of ['fx', 'fy', 'fz']) cols.push(`contact:${h.s.links[i].name}:${c}`);
   }
   // RFC 4180, as featherdrive writes and reads them: a name with a comma, quote or line break.
   const field = (c) => (/[",\r\n]/.test(c) ? `"${c.replace(/"/g, '""')}"` : c);
@@ -728,6 +902,7 @@ function simulate(P, s, onRow) {
     const st = readState(h);
     const row = [k, k * s.dt, ...st.q, ...st.qd, ...f];
     if (st.root) row.push(...st.root);
+    row.push(...(k === 0 ? h.contactLinks.flatMap(() => [0, 0, 0]) : readContactForces(h)));
     rows.push(row);
     if (onRow) onRow(row, h);
   };
@@ -747,6 +922,8 @@ function simulate(P, s, onRow) {
 function release(h) {
   try { h.cache.release(); } catch (e) { /* ignore */ }
   try { h.scene.release(); } catch (e) { /* ignore */ }
+  try { if (h.plane) h.plane.release(); } catch (e) { /* ignore */ }
+  for (const m of h.materials) { try { m.release(); } catch (e) { /* ignore */ } }
 }
 
 // One run: SCENE.json in, OUT.csv out. Returns the exit status; messages go to `say` (one line
@@ -848,7 +1025,8 @@ async function main(argv) {
 }
 
 module.exports = {
-  parseScene, simulate, build, step, setTargets, readState, readForces, csvHeader, release,
+  parseScene, simulate, build, step, setTargets, readState, readForces, readContactForces, csvHeader,
+  release,
   InputError, symmetricEigen3, quatFromMatrix, rotationXTo, qrot, qmul,
 };
 

@@ -29,7 +29,7 @@ function link(name, parent, mass, com, inertia, joint) {
 }
 function baseScene(over) {
   return Object.assign({
-    format: 'featherdrive-physx/1', dt: DT, steps: 100, gravity: [0, 0, -9.81],
+    format: 'featherdrive-physx/2', dt: DT, steps: 100, gravity: [0, 0, -9.81],
     solver: { type: 'pgs', position_iterations: 1, velocity_iterations: 1 },
     drive_limits_are_forces: true, floating_base: false,
     root: { position: [0, 0, 0], quat: [1, 0, 0, 0] },

@@ -33,12 +33,19 @@ struct JointTrajectory {
   /// The harness's floating root, [row][13]: root:px py pz qw qx qy qz (link frame pose), world
   /// angular velocity wx wy wz, world velocity of the link origin vx vy vz; empty without them.
   std::vector<std::vector<double>> root;
+  /// With a ground: the links that have shapes (the harness's contact:<link>:fx,fy,fz columns) and
+  /// per row the ground's force on each over the step [row][link] (world frame, N; row 0 zero).
+  /// PhysX's are its reported normal impulses summed over the link's points, over dt: the
+  /// bindings report no friction impulses (tests/physx/README.md, "Contact forces").
+  std::vector<std::string> contact_links;
+  std::vector<std::vector<Vec3>> contact_force;
   size_t rows() const { return q.size(); }
 };
 
 /// Reads a CSV of the harness (tests/physx/README.md) or of `featherdrive simulate` for a robot
 /// without a floating root: step,t,q:<joint>...,qd:<joint>...,f:<joint>... (other columns, e.g.
-/// the harness's root:* columns, are read into `root` when all 13 are there, or ignored). Fields
+/// the harness's root:* columns, are read into `root` when all 13 are there, its
+/// contact:<link>:fx,fy,fz into `contact_force`, others ignored). Fields
 /// may be quoted as RFC 4180 says (a joint name with a comma). `name` is the file named in
 /// messages. Throws PhysxError naming the file, line, column and value for a missing column, a
 /// short row or a bad number.
@@ -50,13 +57,18 @@ JointTrajectory read_joint_csv(const std::filesystem::path& path);
 double physx_joint_force(const Simulation& sim, int dof);
 
 /// Appends sim's state as one row of `out`, whose `joints` name the columns (1-dof joints of sim's
-/// model, in any order); f is physx_joint_force. Throws std::invalid_argument for a name that is
-/// not a 1-dof joint of the model.
+/// model, in any order); f is physx_joint_force; `contact_links`, when named, get
+/// sim.link_contact_force(). Throws std::invalid_argument for a name that is not a 1-dof joint or
+/// a link of the model.
 void append_state(JointTrajectory& out, const Simulation& sim);
 
 /// An empty trajectory with the columns PhysX reports for sim's model: its 1-dof joints in link
 /// order.
 JointTrajectory empty_trajectory(const Model& model);
+
+/// The links the harness reports contact forces for (JointTrajectory::contact_links): with the
+/// ground enabled, every link with shapes in link order; none without it.
+std::vector<std::string> physx_contact_links(const Simulation& sim);
 
 /// Where node and the installed harness are: `dir` holds harness.js and
 /// node_modules/physx-js-webidl (what tests/physx/install.sh DIR makes).
@@ -112,6 +124,19 @@ struct TrajectoryComparison {
   double relative_qd() const;
   double relative_f() const;
 };
+
+/// Per link, the largest |n . (a - reference)| of the contact forces (n the ground's normal: PhysX
+/// reports normal impulses only) and the row where it occurs; `scale` is the largest |n . f| of
+/// `reference` over all links and rows.
+struct ContactComparison {
+  std::vector<std::pair<std::string, LargestDifference>> links;
+  double scale = 0.0;
+};
+
+/// Compares the contact forces of `a` with `reference`'s link by link (matched by name). Throws
+/// PhysxError when the row counts differ or a link of `reference` is missing from `a`.
+ContactComparison compare_contact_forces(const JointTrajectory& a, const JointTrajectory& reference,
+                                         const Vec3& normal);
 
 /// Compares `a` with `reference` joint by joint (matched by name) and row by row. Throws
 /// PhysxError when the row counts differ or a joint of `reference` is missing from `a`.

@@ -1,6 +1,6 @@
 // Export of a simulation to the PhysX comparison harness's JSON description
-// (tests/physx/README.md, format "featherdrive-physx/1"), so that PhysX 5.6.1 can run the same
-// robot, drives, solver settings and initial state.
+// (tests/physx/README.md, format "featherdrive-physx/2"), so that PhysX 5.6.1 can run the same
+// robot, drives, solver settings and initial state, with its collision shapes and the ground.
 #pragma once
 
 #include <map>
@@ -17,8 +17,9 @@ using TargetsByJoint = std::map<std::string, std::pair<double, double>>;
 /// Joint forces by joint name, applied through one step (PhysX's cache jointForce).
 using ForcesByJoint = std::map<std::string, double>;
 
-/// The JSON scene for the harness: the model, the current state, drives, limits, velocity
-/// limits and armature of `sim`, its solver options, `steps` steps and `targets[k]` applied
+/// The JSON scene for the harness: the model with its collision shapes, the current state, drives,
+/// limits, velocity limits and armature of `sim`, its ground and contact options, its solver
+/// options, `steps` steps and `targets[k]` applied
 /// before step k + 1 (a spherical joint's axes by their dof names, `ball:twist`); `forces[k]` are
 /// the joint forces of step k + 1 (a joint it does not name, or a step past its end, has sim's
 /// applied force). Revolute joints are PhysX's eREVOLUTE where sim wraps them, else
