@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace featherdrive {
 namespace {
@@ -11,6 +13,8 @@ constexpr double kPgsBias = 0.8;                  // C3
 constexpr double kFrictionMassScale = 0.8;        // C11
 constexpr double kFrictionOffsetThreshold = 0.04;  // m: anchors lie closer (section 4)
 constexpr double kMinNormalShare = 0.25;          // C12
+constexpr double kCorrelationDistance = 0.025;    // m: a kept anchor's drift along n (C9)
+constexpr double kSameNormal = 0.999;              // PXC_SAME_NORMAL: cos of about 2.6 degrees
 
 int shape_points(ShapeType type) {
   switch (type) {
@@ -60,6 +64,40 @@ ContactRows::ContactRows(const Model& model) {
   normals_.resize(static_cast<size_t>(points));
   frictions_.resize(4 * model.shapes.size());
   patches_.resize(model.shapes.size());
+  anchors_.assign(model.shapes.size(), FrictionAnchors{});
+  next_anchors_ = anchors_;
+  shape_patch_.assign(model.shapes.size(), -1);
+}
+
+void ContactRows::set_anchors(const std::vector<FrictionAnchors>& anchors) {
+  check_anchors(anchors);
+  anchors_ = anchors;
+}
+
+void ContactRows::check_anchors(const std::vector<FrictionAnchors>& anchors) const {
+  if (anchors.size() != anchors_.size())
+    throw std::invalid_argument("friction_anchors: expected " + std::to_string(anchors_.size()) +
+                                " shapes, got " + std::to_string(anchors.size()));
+  for (size_t k = 0; k < anchors.size(); ++k) {
+    const FrictionAnchors& a = anchors[k];
+    bool finite = a.normal.allFinite();
+    for (int j = 0; j < 2; ++j) finite = finite && a.body[j].allFinite() && a.ground[j].allFinite();
+    if (a.count < 0 || a.count > 2 || !finite)
+      throw std::invalid_argument("friction_anchors[" + std::to_string(k) + "]: count " +
+                                  std::to_string(a.count) + " must be 0, 1 or 2 with finite points");
+  }
+}
+
+void ContactRows::clear_anchors() {
+  for (FrictionAnchors& a : anchors_) a.count = 0;
+}
+
+void ContactRows::conclude() {
+  for (size_t k = 0; k < anchors_.size(); ++k) {
+    const int p = shape_patch_[k];
+    if (p >= 0 && !patches_[static_cast<size_t>(p)].broken) anchors_[k] = next_anchors_[k];
+    else anchors_[k].count = 0;
+  }
 }
 
 int ContactRows::setup(const Model& model, const Data& data, const Ground& ground,
@@ -67,6 +105,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
                         const VecX& link_cfm, int position_iterations, const ContactPhase& phase,
                         std::vector<ContactReport>& reports) {
   num_normals_ = num_frictions_ = num_patches_ = 0;
+  std::fill(shape_patch_.begin(), shape_patch_.end(), -1);
   std::fill(link_first_patch_.begin(), link_first_patch_.end(), 0);
   std::fill(link_end_patch_.begin(), link_end_patch_.end(), 0);
   const Vec3 n = ground.normal;
@@ -119,6 +158,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     const Vec6 probe = spatial_force(points[0] - origin, n);
     if (!(probe.dot(lambda * probe) + cfm > 0.0)) continue;
     ContactPatch& patch = patches_[static_cast<size_t>(num_patches_)];
+    shape_patch_[static_cast<size_t>(k)] = num_patches_;
     if (link_end_patch_[L] == 0) link_first_patch_[L] = num_patches_;
     link_end_patch_[L] = ++num_patches_;
     patch.link = L;
@@ -160,21 +200,39 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
       min_normal += std::max(row.mass * (row.target - vn - std::max(p0 / dt, 0.0)), 0.0);
     }
     patch.min_normal_impulse = kMinNormalShare * min_normal / count;  // C12
-    // Anchors (section 4): the first point near enough, then the one farthest from it, each
-    // later point replacing an anchor when it spreads the pair wider.
-    int anchors[2];
+    // Anchors (section 4, C9): last step's, while they stuck and stay within the correlation
+    // distance of the ground along n; then, up to two, the first point near enough, the next one
+    // apart from it, and (fresh anchors only) later points that spread the pair wider.
+    const FrictionAnchors& kept = anchors_[static_cast<size_t>(k)];
+    Vec3 anchor_at[2], anchor_ground[2];
     int num_anchors = 0;
+    // The normal is kept in the link's frame: a link that turned (a rolling ball) drops them.
+    if (kept.count > 0 && (data.world_rotation[L] * kept.normal).dot(n) > kSameNormal) {
+      bool correlated = true;
+      for (int j = 0; j < kept.count; ++j) {
+        anchor_at[j] = data.world_position[L] + data.world_rotation[L] * kept.body[j];
+        anchor_ground[j] = kept.ground[j];
+        correlated = correlated &&
+                     std::abs(n.dot(anchor_at[j] - anchor_ground[j])) <= kCorrelationDistance;
+      }
+      if (correlated) num_anchors = kept.count;
+    }
+    const bool fresh = num_anchors == 0;
     const double anchor_distance = kFrictionOffsetThreshold + rest_distance;
     for (int p = 0; p < count; ++p) {
       if (!(separations[p] < anchor_distance)) continue;
-      if (num_anchors == 0) {
-        anchors[num_anchors++] = p;
-      } else if (num_anchors == 1) {
-        if ((points[p] - points[anchors[0]]).squaredNorm() > 1e-12) anchors[num_anchors++] = p;
-      } else {
-        const double spread = (points[anchors[1]] - points[anchors[0]]).squaredNorm();
-        if ((points[p] - points[anchors[0]]).squaredNorm() > spread) anchors[1] = p;
-        else if ((points[p] - points[anchors[1]]).squaredNorm() > spread) anchors[0] = p;
+      const Vec3& x = points[p];
+      if (num_anchors < 2) {
+        if (num_anchors == 0 || (x - anchor_at[0]).squaredNorm() > 1e-12) {
+          anchor_at[num_anchors] = x;
+          anchor_ground[num_anchors++] = x;
+        }
+      } else if (fresh) {
+        const double spread = (anchor_at[1] - anchor_at[0]).squaredNorm();
+        const int replace = (x - anchor_at[0]).squaredNorm() > spread   ? 1
+                            : (x - anchor_at[1]).squaredNorm() > spread ? 0
+                                                                        : -1;
+        if (replace >= 0) anchor_at[replace] = anchor_ground[replace] = x;
       }
     }
     // C10: along the link's centre-of-mass velocity, relative to the ground.
@@ -188,11 +246,23 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     patch.dynamic_friction = share * 0.5 * (a.dynamic_friction + b.dynamic_friction);
     patch.first_friction = num_frictions_;
     patch.num_anchors = num_anchors;
+    FrictionAnchors& next = next_anchors_[static_cast<size_t>(k)];
+    next.count = num_anchors;
+    next.normal = data.world_rotation[L].transpose() * n;
     for (int j = 0; j < num_anchors; ++j) {
-      patch.anchor_point[j] = patch.first_normal + anchors[j];
+      next.body[j] = data.world_rotation[L].transpose() * (anchor_at[j] - data.world_position[L]);
+      next.ground[j] = anchor_ground[j];
+      // The friction impulse is reported on the point nearest the anchor.
+      int nearest = 0;
+      for (int p = 1; p < count; ++p)
+        if ((points[p] - anchor_at[j]).squaredNorm() < (points[nearest] - anchor_at[j]).squaredNorm())
+          nearest = p;
+      patch.anchor_point[j] = patch.first_normal + nearest;
+      const Vec3 drift = anchor_at[j] - anchor_ground[j];
       for (const Vec3* t : {&patch.t0, &patch.t1}) {
         ContactFrictionRow& row = frictions_[static_cast<size_t>(num_frictions_++)];
-        row.J = spatial_force(points[anchors[j]] - origin, *t);
+        row.J = spatial_force(anchor_at[j] - origin, *t);
+        row.error = t->dot(drift);
         row.response = lambda * row.J;
         row.mass = kFrictionMassScale / (row.J.dot(row.response) + cfm);  // C11
         row.dx = 0.0;
@@ -241,10 +311,12 @@ Vec6 ContactRows::solve_link(int link, const Vec6& v, Vec6& dv, const ContactPha
     for (int j = 0; j < patch.num_anchors; ++j) {
       ContactFrictionRow* rows = &frictions_[static_cast<size_t>(patch.first_friction + 2 * j)];
       if (!phase.tgs) {
-        // C13: each row alone; fresh anchors have no position error to correct.
+        // C13: each row alone.
         for (int a = 0; a < 2; ++a) {
           ContactFrictionRow& row = rows[a];
-          double next = row.impulse - row.mass * row.J.dot(V);
+          // C9: a kept anchor is pulled back to its ground point in the position iterations.
+          const double bias = phase.velocity_iteration ? 0.0 : row.error / phase.dt;
+          double next = row.impulse - row.mass * (row.J.dot(V) + bias);
           if (std::abs(next) > static_limit) {
             next = std::clamp(next, -dynamic_limit, dynamic_limit);
             patch.broken = true;
@@ -258,7 +330,8 @@ Vec6 ContactRows::solve_link(int link, const Vec6& v, Vec6& dv, const ContactPha
         const double bias_scale = kPgsBias / phase.h;
         double next[2];
         for (int a = 0; a < 2; ++a)
-          next[a] = rows[a].impulse - rows[a].mass * (rows[a].J.dot(V) + bias_scale * rows[a].dx);
+          next[a] = rows[a].impulse -
+                    rows[a].mass * (rows[a].J.dot(V) + bias_scale * (rows[a].error + rows[a].dx));
         const double magnitude = std::hypot(next[0], next[1]);
         if (magnitude > static_limit) {
           const double scale = std::min(dynamic_limit, magnitude) / magnitude;

@@ -39,6 +39,7 @@ void Simulation::track_contacts(double h) {
 void Simulation::contact_forces() {
   if (!contacts_active_) return;
   contact_rows_.report(settings_.options.dt, contacts_, link_contact_force_);
+  contact_rows_.conclude();
 }
 
 }  // namespace featherdrive

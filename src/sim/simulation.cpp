@@ -124,10 +124,14 @@ void Simulation::set_settings(const Settings& settings) {
       actuators_.set_feedforward(d, settings.actuator_feedforward[d]);
     if (settings.drive_delay[k] != settings_.drive_delay[k]) set_delay(d, settings.drive_delay[k]);
   }
+  // A moved ground invalidates the anchors kept on it.
+  const bool ground_moved = !(settings_.ground.normal == next.ground.normal) ||
+                            settings_.ground.height != next.ground.height;
   settings_ = std::move(next);
   mimic_ = std::move(mimic);
   row_kinds_changed_ = true;
   update_link_damping_active();
+  if (ground_moved) contact_rows_.clear_anchors();
   update_contacts_active();
 }
 
@@ -150,6 +154,7 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
 
 void Simulation::set_q(const VecX& q) {
   state_[StateStorage::q] = checked_configuration(*model_, q);
+  contact_rows_.clear_anchors();  // moved by hand: the kept anchors no longer hold
 }
 
 void Simulation::set_clock(double time, long step_count) {
@@ -179,6 +184,7 @@ State Simulation::state() const {
     if (drive_delays_.delayed(d))
       s.drive_delay_history[k] = {drive_delays_.pushes(d), drive_delays_.ring(d)};
   }
+  s.friction_anchors = contact_rows_.anchors();
   return s;
 }
 
@@ -208,8 +214,11 @@ void Simulation::set_state(const State& s) {
       throw std::invalid_argument("drive delay history of dof " + std::to_string(d) +
                                   ": the dof has no drive delay");
   }
+  if (!s.friction_anchors.empty()) contact_rows_.check_anchors(s.friction_anchors);
   // Checks q and the outputs before it changes anything; nothing below throws.
   restore_state(s.q, s.drive_force, s.limit_force, s.friction_force, s.velocity_limit_force);
+  if (s.friction_anchors.empty()) contact_rows_.clear_anchors();
+  else contact_rows_.set_anchors(s.friction_anchors);
   state_[StateStorage::qd] = s.qd;
   state_[StateStorage::applied_force] = s.applied_force;
   time_ = s.time;
@@ -343,6 +352,7 @@ void Simulation::set_ground(const Ground& ground) {
   check_ground(ground);
   settings_.ground = ground;
   settings_.ground.normal.normalize();
+  contact_rows_.clear_anchors();
   update_contacts_active();
 }
 

@@ -2,14 +2,12 @@
 // of docs/math/contact.md, section 11 (tests/support/contact_models.hpp; physx_contact_test.cpp
 // checks that the harness builds them as the bench does). featherdrive's side is read through the
 // Simulation API only: q(), contacts(), link_contact_force(), drive forces.
-//
-// DISABLED_ until the contact engine (branch h-engine) merges: before it, contacts() is empty and
-// the robots fall through the ground. The lead enables them (drop the prefix) after the merge.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/io/physx_runner.hpp"
@@ -41,7 +39,7 @@ const SolverType kSolvers[] = {SolverType::pgs, SolverType::tgs};
 // PhysX's at every step after the first 100 (PhysX's own z moves by 1.8e-6 m over them), the sum
 // of its normal forces within PhysX's float32 spread of m g (2e-5 of it per step, PGS; the mean to
 // 1e-6), and link_contact_force's normal part equal to that sum.
-TEST(PhysxContactParity, DISABLED_RestingBox) {
+TEST(PhysxContactParity, RestingBox) {
   const double m = 1.0, mg = m * test::kContactGravity;
   for (const SolverType solver : kSolvers) {
     Simulation sim = test::ground_box_simulation(solver, 0.0);
@@ -71,7 +69,7 @@ TEST(PhysxContactParity, DISABLED_RestingBox) {
 }
 
 // (b) The box sliding at 2 m/s, mu 0.5: it stops within 1e-3 (relative) of PhysX's distance.
-TEST(PhysxContactParity, DISABLED_SlidingBox) {
+TEST(PhysxContactParity, SlidingBox) {
   for (const SolverType solver : kSolvers) {
     Simulation sim = test::ground_box_simulation(solver, 2.0);
     const JointTrajectory px = physx(sim, 80);
@@ -113,6 +111,10 @@ void expect_quadruped_as_physx(double lift) {
       scale_f = std::max(scale_f, std::abs(px.f[end][j]));
       dq = std::max(dq, std::abs(sim.q()[model.links[model.dof_link[dof]].q_index] - px.q[end][j]));
       df = std::max(df, std::abs(physx_joint_force(sim, dof) - px.f[end][j]));
+      if (std::getenv("FD_DEBUG"))
+        std::printf("  %s q %.5f (%.5f) f %.4f (%.4f) drive %.4f fric %.4f\n", px.joints[j].c_str(),
+                    sim.q()[model.links[model.dof_link[dof]].q_index], px.q[end][j],
+                    physx_joint_force(sim, dof), px.f[end][j], sim.drive_force()[dof], sim.friction_force()[dof]);
     }
     double mass = 0.0;
     for (const Link& l : model.links) mass += l.mass;
@@ -136,9 +138,9 @@ void expect_quadruped_as_physx(double lift) {
   }
 }
 
-TEST(PhysxContactParity, DISABLED_QuadrupedStanding) { expect_quadruped_as_physx(0.0); }
+TEST(PhysxContactParity, QuadrupedStanding) { expect_quadruped_as_physx(0.0); }
 
-TEST(PhysxContactParity, DISABLED_QuadrupedDroppedFrom20cm) { expect_quadruped_as_physx(0.2); }
+TEST(PhysxContactParity, QuadrupedDroppedFrom20cm) { expect_quadruped_as_physx(0.2); }
 
 }  // namespace
 }  // namespace featherdrive

@@ -36,6 +36,7 @@ struct ContactFrictionRow {
   Vec6 J = Vec6::Zero();
   Vec6 response = Vec6::Zero();
   double mass = 0.0;             ///< 0.8 / (J . Lambda_L J + cfm_L) (C11)
+  double error = 0.0;            ///< t . e: the kept anchor's drift from its ground point (C9)
   double dx = 0.0;               ///< TGS: t . the anchor's displacement since the step's start
   double impulse = 0.0;
 };
@@ -51,6 +52,15 @@ struct ContactPatch {
   double min_normal_impulse = 0.0;          ///< N_min (C12)
   Vec3 t0 = Vec3::UnitX(), t1 = Vec3::UnitY();  ///< friction directions (C10)
   bool broken = false;                       ///< slipped this step (C13, C14)
+};
+
+/// A shape's friction anchors kept from the last step while its patch sticks (C9): each anchor's
+/// point on the body (link frame) and on the ground (world). Part of a simulation's state.
+struct FrictionAnchors {
+  int count = 0;  ///< 0, 1 or 2
+  Vec3 normal = Vec3::UnitZ();  ///< the ground's normal when they were made, link frame
+  Vec3 body[2] = {Vec3::Zero(), Vec3::Zero()};
+  Vec3 ground[2] = {Vec3::Zero(), Vec3::Zero()};
 };
 
 class ContactRows {
@@ -80,6 +90,18 @@ class ContactRows {
 
   /// The impulses of the step into the reports, and each link's contact force (sum / dt).
   void report(double dt, std::vector<ContactReport>& reports, std::vector<Vec3>& link_force) const;
+  /// The step's end: the anchors of the patches that stuck are kept for the next step, the others
+  /// dropped (C9).
+  void conclude();
+
+  /// The kept anchors, one entry per shape.
+  const std::vector<FrictionAnchors>& anchors() const { return anchors_; }
+  /// Throws std::invalid_argument for another number of shapes, a count outside [0, 2] or a
+  /// non-finite point.
+  void set_anchors(const std::vector<FrictionAnchors>& anchors);
+  void check_anchors(const std::vector<FrictionAnchors>& anchors) const;
+  /// Forgets every kept anchor (the robot was moved by hand).
+  void clear_anchors();
 
   bool empty() const { return num_patches_ == 0; }
   /// The most points the shapes can have on the ground at once.
@@ -91,7 +113,9 @@ class ContactRows {
   std::vector<ContactNormalRow> normals_;
   std::vector<ContactFrictionRow> frictions_;
   std::vector<ContactPatch> patches_;
-  std::vector<int> patch_link_;   ///< scratch
+  std::vector<FrictionAnchors> anchors_;       ///< kept from the last step, per shape
+  std::vector<FrictionAnchors> next_anchors_;  ///< this step's, per shape
+  std::vector<int> shape_patch_;               ///< this step's patch of each shape, or -1
   int num_normals_ = 0, num_frictions_ = 0, num_patches_ = 0;
   Vec3 normal_ = Vec3::UnitZ();
 };

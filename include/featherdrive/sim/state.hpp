@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "featherdrive/constraint/actuator_law.hpp"
+#include "featherdrive/constraint/contact_rows.hpp"
 #include "featherdrive/model/model.hpp"
 #include "featherdrive/sim/drive_delay.hpp"
 
@@ -34,6 +35,9 @@ struct State {
   /// drive's last targets (empty on a dof without a delay).
   std::vector<DelayHistory<ActuatorCommand>> actuator_history;
   std::vector<DelayHistory<DriveTarget>> drive_delay_history;
+  /// Per shape (Model::shapes): the friction anchors kept from the last step (C9 of
+  /// docs/math/contact.md); empty: none kept.
+  std::vector<FrictionAnchors> friction_anchors;
 };
 
 /// Throws std::invalid_argument "what: expected n values, got m" or "what[i] = x is not finite".
