@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
+#include "featherdrive/core/format.hpp"
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/trajectory.hpp"
 
 namespace featherdrive {
 namespace {
@@ -149,6 +152,47 @@ TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {
             "shape yet (sphere, capsule, box) (2 such shapes in all); leave the ground off or "
             "replace the geometry");
   EXPECT_EQ(contact_scene_error(collisions + "ground: false\n"), "no error");
+}
+
+TEST(SceneContact, TheCsvHasContactColumnsForLinksWithShapesWithTheGroundOn) {
+  const Scene scene = parse_scene(kChain + R"(
+ground: {height: -5}
+shapes:
+  - {link: link3, type: sphere, radius: 0.05}
+  - {link: link1, type: sphere, radius: 0.05}
+  - {link: link3, type: box, half_extents: [0.1, 0.1, 0.1]}
+)",
+                                  "s.yaml");
+  EXPECT_EQ(shape_links(*scene.model()),
+            (std::vector<int>{scene.model()->link_index("link1"),
+                              scene.model()->link_index("link3")}));
+  Simulation sim = make_simulation(scene);
+  std::ostringstream out;
+  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled);
+  writer.write(0, sim, true);
+  sim.step();
+  writer.write(1, sim);
+  std::istringstream in(out.str());
+  std::string header, initial, row;
+  std::getline(in, header);
+  std::getline(in, initial);
+  std::getline(in, row);
+  const std::string columns =
+      ",contact:link1:fx,contact:link1:fy,contact:link1:fz,contact:link3:fx,contact:link3:fy,"
+      "contact:link3:fz";
+  ASSERT_GE(header.size(), columns.size());
+  EXPECT_EQ(header.substr(header.size() - columns.size()), columns);
+  EXPECT_EQ(initial.substr(initial.size() - 12), ",0,0,0,0,0,0");
+  std::string values;
+  for (const char* link : {"link1", "link3"}) {
+    const Vec3 f = sim.link_contact_force()[static_cast<size_t>(scene.model()->link_index(link))];
+    for (int k = 0; k < 3; ++k) values += "," + format_double(f[k]);
+  }
+  EXPECT_EQ(row.substr(row.size() - values.size()), values);
+  // Without the ground, no contact columns.
+  std::ostringstream plain;
+  TrajectoryWriter(plain, scene.robot).write(0, sim, true);
+  EXPECT_EQ(plain.str().find("contact:"), std::string::npos);
 }
 
 }  // namespace
