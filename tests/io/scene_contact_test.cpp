@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -107,43 +108,44 @@ TEST(SceneContact, AnMjcfFloorIsTheGroundUnlessTheSceneSaysOtherwise) {
 }
 
 TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {
-  EXPECT_EQ(contact_scene_error(kChain + "ground: {normal: [0, 0, 0]}\n"),
-            "s.yaml: ground.normal = [0, 0, 0]: must be of finite non-zero length");
-  EXPECT_EQ(contact_scene_error(kChain + "ground: {height: .nan}\n"),
-            "s.yaml: ground.height = .nan: must be finite");
-  EXPECT_EQ(contact_scene_error(kChain + "ground: {dynamic_friction: -0.5}\n"),
-            "s.yaml: ground.dynamic_friction = -0.5: must be finite and >= 0");
-  EXPECT_EQ(contact_scene_error(kChain + "ground: [1, 2]\n"),
-            "s.yaml: ground = [1, 2]: must be a map (key: value, ...)");
-  EXPECT_EQ(contact_scene_error(kChain + "ground: maybe\n"),
-            "s.yaml: ground = maybe: must be true or false");
-  EXPECT_EQ(contact_scene_error(kChain + "contact: {rest_offset: 0.02}\n"),
-            "s.yaml: contact = {rest_offset: 0.02}: the contact offset must be above the rest "
-            "offset (0.02)");
-  EXPECT_EQ(contact_scene_error(kChain + "contact: {contact_offset: .inf}\n"),
-            "s.yaml: contact.contact_offset = .inf: must be finite");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: sphere}\n"),
-            "s.yaml: shapes[0].radius: missing (a sphere needs it)");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {type: sphere, radius: 1}\n"),
-            "s.yaml: shapes[0].link: missing");
+  const std::pair<std::string, std::string> cases[] = {
+      {"ground: {normal: [0, 0, 0]}\n",
+       "s.yaml: ground.normal = [0, 0, 0]: must be of finite non-zero length"},
+      {"ground: {height: .nan}\n",
+       "s.yaml: ground.height = .nan: must be finite"},
+      {"ground: {dynamic_friction: -0.5}\n",
+       "s.yaml: ground.dynamic_friction = -0.5: must be finite and >= 0"},
+      {"ground: [1, 2]\n",
+       "s.yaml: ground = [1, 2]: must be a map (key: value, ...)"},
+      {"ground: maybe\n",
+       "s.yaml: ground = maybe: must be true or false"},
+      {"contact: {rest_offset: 0.02}\n",
+       "s.yaml: contact = {rest_offset: 0.02}: the contact offset must be above the rest offset "
+       "(0.02)"},
+      {"contact: {contact_offset: .inf}\n",
+       "s.yaml: contact.contact_offset = .inf: must be finite"},
+      {"shapes:\n  - {link: link3, type: sphere}\n",
+       "s.yaml: shapes[0].radius: missing (a sphere needs it)"},
+      {"shapes:\n  - {type: sphere, radius: 1}\n",
+       "s.yaml: shapes[0].link: missing"},
+      {"shapes:\n  - {link: link3, type: sphere, radius: 1, half_length: 2}\n",
+       "s.yaml: shapes[0].half_length = 2: is not a size of a sphere"},
+      {"shapes:\n  - {link: link3, type: capsule, radius: 1, half_length: .inf}\n",
+       "s.yaml: shapes[0].half_length = .inf: must be finite and > 0"},
+      {"shapes:\n  - {link: link3, type: box, half_extents: [1, 2]}\n",
+       "s.yaml: shapes[0].half_extents = [1, 2]: must be a list of 3 numbers"},
+      {"shapes:\n  - {link: link3, type: box, half_extents: [1, 1, 1], xyz: [0, .nan, 0]}\n",
+       "s.yaml: shapes[0].xyz[1] = .nan: must be finite"},
+      {"shapes:\n  - {link: link3, type: sphere, radius: 1, static_friction: -1}\n",
+       "s.yaml: shapes[0].static_friction = -1: must be finite and >= 0"},
+  };
+  for (const auto& [text, message] : cases)
+    EXPECT_EQ(contact_scene_error(kChain + text), message);
   EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: sphere, radius: 1, "
-                                 "half_length: 2}\n"),
-            "s.yaml: shapes[0].half_length = 2: is not a size of a sphere");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: capsule, radius: 1, "
-                                 "half_length: .inf}\n"),
-            "s.yaml: shapes[0].half_length = .inf: must be finite and > 0");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: box, half_extents: [1, 2]}\n"),
-            "s.yaml: shapes[0].half_extents = [1, 2]: must be a list of 3 numbers");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: box, half_extents: [1, 1, 1], "
-                                 "xyz: [0, .nan, 0]}\n"),
-            "s.yaml: shapes[0].xyz[1] = .nan: must be finite");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: sphere, radius: 1, "
-                                 "static_friction: -1}\n"),
-            "s.yaml: shapes[0].static_friction = -1: must be finite and >= 0");
-  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: sphere, radius: 1, "
-                                 "colour: red}\n")
+                                         "colour: red}\n")
                 .rfind("s.yaml: shapes[0].colour: unknown key", 0),
             0u);
+
   // A robot whose geometry contacts cannot use yet: the ground is refused in one line.
   const std::string collisions =
       "model: " + kContactSource + "/tests/data/collisions.urdf\ndt: 0.01\nsteps: 1\n";
