@@ -152,7 +152,8 @@ TEST(MjcfShapes, VisualGeomsAreSkippedAndOtherKindsListed) {
   EXPECT_TRUE(m.shapes[0].size.isApprox(Vec3(0.1, 0.2, 0.3)));
   EXPECT_TRUE(m.shapes[0].position.isApprox(Vec3(0.1, 0, 0)));
   EXPECT_EQ(m.unsupported_shapes,
-            (std::vector<std::string>{"link 'b': ellipsoid geom 'egg'", "link 'b': cylinder geom #5"}));
+            (std::vector<std::string>{"link 'b': ellipsoid geom 'egg'",
+                                      "link 'b': cylinder geom #5"}));
   // The tilted plane: normal (0, 1, 1)/sqrt 2 through (0, 0, 0.3): height 0.3/sqrt 2.
   ASSERT_TRUE(robot.ground.has_value());
   EXPECT_TRUE(robot.ground->normal.isApprox(Vec3(0, 1, 1).normalized(), 1e-12));

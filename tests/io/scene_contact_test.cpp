@@ -3,7 +3,11 @@
 // scene says `ground:` itself; bad values are refused naming the file, key and value.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -16,9 +20,11 @@ namespace featherdrive {
 namespace {
 
 const std::string kContactSource = FEATHERDRIVE_SOURCE_DIR;
-const std::string kChain = "model: " + kContactSource + "/examples/chain3.urdf\ndt: 0.01\nsteps: 5\n";
+const std::string kChain =
+    "model: " + kContactSource + "/examples/chain3.urdf\ndt: 0.01\nsteps: 5\n";
 const std::string kHumanoidScene =
-    "model: /usr/share/mujoco/model/humanoid/humanoid.xml\nfixed_base: false\ndt: 0.005\nsteps: 2\n";
+    "model: /usr/share/mujoco/model/humanoid/humanoid.xml\nfixed_base: false\ndt: 0.005\n"
+    "steps: 2\n";
 
 std::string contact_scene_error(const std::string& text) {
   try {
@@ -103,8 +109,25 @@ TEST(SceneContact, AnMjcfFloorIsTheGroundUnlessTheSceneSaysOtherwise) {
       make_simulation(parse_scene(kHumanoidScene + "ground: {height: -0.5}\n", "s.yaml"));
   EXPECT_EQ(own.ground().height, -0.5);
   EXPECT_EQ(own.ground().material.static_friction, 0.5);  // the scene's defaults, not the file's
-  const Simulation none = make_simulation(parse_scene(kHumanoidScene + "ground: false\n", "s.yaml"));
+  const Simulation none =
+      make_simulation(parse_scene(kHumanoidScene + "ground: false\n", "s.yaml"));
   EXPECT_FALSE(none.ground().enabled);
+  // A floor beside a geom contacts cannot use: the scene loads without a ground, and says why.
+  const std::filesystem::path xml = std::filesystem::temp_directory_path() /
+                                    ("featherdrive-egg-" + std::to_string(::getpid()) + ".xml");
+  std::ofstream(xml) << R"(<mujoco><worldbody><geom type="plane" size="1 1 1"/>
+      <body name="b" pos="0 0 1"><freejoint/><geom name="egg" type="ellipsoid" size="0.1 0.2 0.3"/>
+      </body></worldbody></mujoco>)";
+  const Scene egg =
+      parse_scene("model: " + xml.string() + "\nfixed_base: false\nsteps: 1\n", "s.yaml");
+  std::filesystem::remove(xml);
+  EXPECT_TRUE(egg.robot.ground.has_value());
+  EXPECT_FALSE(egg.ground.enabled);
+  EXPECT_FALSE(make_simulation(egg).ground().enabled);
+  ASSERT_FALSE(egg.robot.warnings.empty());
+  EXPECT_EQ(egg.robot.warnings.back(),
+            "the file's floor is not used as the ground: link 'b': ellipsoid geom 'egg' is a shape "
+            "contacts do not support yet (sphere, capsule, box)");
 }
 
 TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {

@@ -59,10 +59,12 @@ TEST(UrdfShapes, BoxesAndSpheresWithTheirPosesComposedThroughMergedLinks) {
   // (-0.03 sin 0.5, 0, 0.03 cos 0.5).
   expect_shape(m, 4, "palm", "arm", ShapeType::box, Vec3(0.04, 0.01, 0.02),
                Vec3(0.01 - 0.03 * std::sin(0.5), -0.02, -0.5 + 0.03 * std::cos(0.5)),
-               axis_rotation(Vec3::UnitX(), h) * axis_rotation(Vec3::UnitZ(), 0.5) * axis_rotation(Vec3::UnitY(), 0.4));
+               axis_rotation(Vec3::UnitX(), h) * axis_rotation(Vec3::UnitZ(), 0.5) *
+                   axis_rotation(Vec3::UnitY(), 0.4));
   EXPECT_EQ(m.unsupported_shapes,
-            (std::vector<std::string>{"link 'base': cylinder collision 'wheel'",
-                                      "link 'arm': mesh collision 'package://collisions/arm.stl'"}));
+            (std::vector<std::string>{
+                "link 'base': cylinder collision 'wheel'",
+                "link 'arm': mesh collision 'package://collisions/arm.stl'"}));
   // rebuild() (armature from a scene) keeps them.
   UrdfRobot copy = robot;
   copy.links[1].joint.armature = {0.1};
@@ -103,7 +105,8 @@ TEST(UrdfShapes, BadSizesAreRefusedNamingTheFileLinkAndValue) {
             "r.urdf: link 'base': <collision name='c'> <box size> = [0.1, -1, 0.1]: must be finite "
             "and > 0");
   EXPECT_EQ(error("<sphere radius='0'/>"),
-            "r.urdf: link 'base': <collision name='c'> <sphere radius> = 0: must be finite and > 0");
+            "r.urdf: link 'base': <collision name='c'> <sphere radius> = 0: must be finite and "
+            "> 0");
   EXPECT_EQ(error("<sphere radius='-0.5'/>"),
             "r.urdf: link 'base': <collision name='c'> <sphere radius> = -0.5: must be finite and "
             "> 0");

@@ -164,7 +164,8 @@ TEST(ModelShapes, EveryBadSizePoseAndMaterialIsRefusedNamingShapeLinkFieldAndVal
   ModelBuilder b = shapes_chain();
   b.add_shape("lowr", s);
   EXPECT_EQ(shape_error([&] { (void)b.build(); }),
-            "model: shape #0 (sphere) of link 'lowr': the link is not a link or frame of the model");
+            "model: shape #0 (sphere) of link 'lowr': the link is not a link or frame of the "
+            "model");
   EXPECT_THAT(shape_error([&] { (void)with_shapes(shapes_chain().build(), {{"lowr", s}}); }),
               HasSubstr("model: shape #0 (sphere) of link 'lowr': no link or frame named 'lowr'"));
 }
