@@ -364,11 +364,14 @@ const char* geom_type_name(int type) {
 // The geoms that collide (contype or conaffinity set; the others are visual) as contact shapes
 // on their bodies' links: sphere, capsule (fromto is already size and pose in mjModel) and box,
 // friction[0] as static and dynamic friction (MuJoCo's sliding friction; restitution 0). The
-// first plane on the world body is the robot's ground; other world geoms are warned about, and
+// first plane on the world body is the robot's ground (none where the file disables contacts);
+// other world geoms are warned about, and
 // the kinds contacts cannot use yet are listed (Model::unsupported_shapes).
 // Returns the warning about the world's other geoms, or "".
 std::string convert_geoms(const mjModel* m, const Converter& c, MjcfRobot& robot) {
   std::vector<std::string> world_geoms;
+  // <option><flag contact="disable"/>: the file simulates no contacts, so it has no floor.
+  const bool contacts = !(m->opt.disableflags & mjDSBL_CONTACT);
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->geom_contype[g] == 0 && m->geom_conaffinity[g] == 0) continue;
     const char* given = mj_id2name(m, mjOBJ_GEOM, g);
@@ -379,14 +382,14 @@ std::string convert_geoms(const mjModel* m, const Converter& c, MjcfRobot& robot
     const Mat3 R = rotation(m->geom_quat + 4 * g);
     const double friction = m->geom_friction[3 * g];
     if (b == 0) {
-      if (type == mjGEOM_PLANE && !robot.ground) {
+      if (type == mjGEOM_PLANE && !robot.ground && contacts) {
         Ground ground;
         ground.enabled = true;
         ground.normal = R.col(2);  // a plane geom's normal is its frame's z
         ground.height = ground.normal.dot(vec3(m->geom_pos + 3 * g));
         ground.material = Material{friction, friction, 0.0};
         robot.ground = ground;
-      } else {
+      } else if (contacts) {
         world_geoms.push_back(std::string(geom_type_name(type)) + " " + label);
       }
       continue;

@@ -166,5 +166,16 @@ TEST(MjcfShapes, VisualGeomsAreSkippedAndOtherKindsListed) {
   EXPECT_TRUE(warned);
 }
 
+TEST(MjcfShapes, AFileWithContactsDisabledHasNoFloor) {
+  const std::string xml = R"(<mujoco><option><flag contact="disable"/></option><worldbody>
+      <geom type="plane" size="1 1 1"/><geom name="rock" type="box" size="1 1 1" pos="3 0 0"/>
+      <body name="b" pos="0 0 1"><freejoint/><geom type="sphere" size="0.1"/></body>
+      </worldbody></mujoco>)";
+  const MjcfRobot robot = parse_mjcf(xml, "m.xml", UrdfOptions{.fixed_base = false});
+  EXPECT_FALSE(robot.ground.has_value());
+  EXPECT_EQ(robot.model->shapes.size(), 1u);  // the shapes stay: a scene's ground: may use them
+  for (const std::string& w : robot.warnings) EXPECT_EQ(w.find("world body"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace featherdrive
