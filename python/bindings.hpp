@@ -64,6 +64,7 @@ void bind_view(py::module_& m);  // bind_view.cpp: fd.view, fd.link_world_poses
 void bind_joints(py::module_& m);  // after bind_io: it extends Scene
 void bind_simd(py::module_& m);  // bind_simd.cpp: SimdBatch
 void bind_check(py::module_& m);  // bind_check.cpp: fd.check
+void bind_contact(py::module_& m);  // bind_contact.cpp: after bind_io (UrdfRobot, Scene)
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

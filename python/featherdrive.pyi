@@ -257,6 +257,78 @@ class Model:
     def joint_link_index(self, joint_name: str) -> int: ...
     def dof_index(self, joint_name: str) -> int: ...
     def neutral_configuration(self) -> Vector: ...
+    @property
+    def shapes(self) -> list[CollisionShape]:
+        """Collision shapes, grouped by link in link order."""
+    @property
+    def unsupported_shapes(self) -> list[str]:
+        """Collision geometry contacts cannot use yet; a ground is refused while there is any."""
+
+class ShapeType(enum.Enum):
+    """The kind of a collision shape."""
+    sphere = 0
+    capsule = 1
+    box = 2
+
+class Material:
+    """Friction and restitution of a surface (a contact averages its two surfaces')."""
+    static_friction: float
+    dynamic_friction: float
+    restitution: float
+    def __init__(self, static_friction: float = 0.5, dynamic_friction: float = 0.5,
+                 restitution: float = 0.0) -> None: ...
+
+class CollisionShape:
+    """A collision shape of a Model (read-only). size: sphere (r, 0, 0), capsule (r, half length,
+    0) along the shape's z, box half extents."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def link(self) -> int: ...
+    @property
+    def type(self) -> ShapeType: ...
+    @property
+    def size(self) -> Vector: ...
+    @property
+    def position(self) -> Vector: ...
+    @property
+    def rotation(self) -> Vector: ...
+    @property
+    def material(self) -> Material: ...
+
+class Ground:
+    """The plane normal . x = height with a material; contacts when enabled."""
+    enabled: bool
+    height: float
+    normal: Vector
+    material: Material
+    def __init__(self, enabled: bool = True, height: float = 0.0,
+                 normal: ArrayLike = (0.0, 0.0, 1.0), material: Material = ...) -> None: ...
+
+class ContactOptions:
+    """PhysX 5.6.1's contact offset, rest offset (m) and bounce threshold (m/s)."""
+    contact_offset: float
+    rest_offset: float
+    bounce_threshold: float
+    def __init__(self, contact_offset: float = 0.02, rest_offset: float = 0.0,
+                 bounce_threshold: float = 2.0) -> None: ...
+
+class ContactReport:
+    """One contact point of the last step (read-only)."""
+    @property
+    def link(self) -> int: ...
+    @property
+    def shape(self) -> int: ...
+    @property
+    def position(self) -> Vector: ...
+    @property
+    def normal(self) -> Vector: ...
+    @property
+    def separation(self) -> float: ...
+    @property
+    def normal_impulse(self) -> float: ...
+    @property
+    def friction_impulse(self) -> Vector: ...
 
 class JointSpec:
     """The inbound joint of a link, as in URDF."""
@@ -368,6 +440,15 @@ class Simulation:
     def friction_coefficient(self, joint: Joint) -> float: ...
     def set_link_parameters(self, link: Union[str, Int], parameters: LinkParameters) -> None: ...
     def link_parameters(self, link: Union[str, Int]) -> LinkParameters: ...
+    def set_ground(self, ground: Ground) -> None:
+        """ValueError naming the field and value, or the first of Model.unsupported_shapes."""
+    def ground(self) -> Ground: ...
+    def set_contact_options(self, options: ContactOptions) -> None: ...
+    def contact_options(self) -> ContactOptions: ...
+    def contacts(self) -> list[ContactReport]:
+        """The contact points of the last step."""
+    def link_contact_force(self) -> Vector:
+        """The ground's force on each link over the last step (num_links, 3), world axes, N."""
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
@@ -655,6 +736,11 @@ class UrdfRobot:
     warnings: list[str]
     effort_limits: dict[str, float]
     @property
+    def ground(self) -> Ground | None:
+        """The file's floor (an MJCF plane on the world body), or None."""
+    @property
+    def unsupported_shapes(self) -> list[str]: ...
+    @property
     def model(self) -> Model: ...
     def rebuild(self) -> None: ...
     @property
@@ -732,6 +818,11 @@ class Scene:
     fit: FitSpec | None
     @property
     def model(self) -> Model: ...
+    @property
+    def ground(self) -> Ground:
+        """The scene's ground (key ground, or the robot file's floor)."""
+    @property
+    def contact(self) -> ContactOptions: ...
 
 def load_scene(path: PathLike) -> Scene:
     """Raises InputError (a ValueError) naming the file, key and value."""

@@ -60,4 +60,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_joints(m);
   bind_simd(m);
   bind_check(m);
+  bind_contact(m);
 }

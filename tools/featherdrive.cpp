@@ -237,7 +237,8 @@ int simulate(const SimulateArgs& args) {
   std::optional<TrajectoryWriter> csv;
   std::optional<TargetWriter> targets;
   if (csv_stream)
-    csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled);
+    csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled,
+                sim.ground().enabled);
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {
@@ -309,6 +310,16 @@ int simulate(const SimulateArgs& args) {
     std::printf("  resumed from %s at step %d\n", args.load_state.c_str(), first);
   std::printf("  solver %s: %d position / %d velocity iterations\n", to_string(options.solver),
               options.position_iterations, options.velocity_iterations);
+  if (sim.ground().enabled) {
+    const ContactOptions& c = sim.contact_options();
+    std::printf("  ground: %s; contact offset %.6g m, rest offset %.6g m, bounce threshold "
+                "%.6g m/s\n",
+                describe_ground(sim.ground()).c_str(), c.contact_offset, c.rest_offset,
+                c.bounce_threshold);
+  }
+  if (!model.shapes.empty())
+    std::printf("  collision shapes (%zu):\n%s", model.shapes.size(),
+                describe_shapes(model, "    ").c_str());
   if (scene.control.substeps > 1)
     std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
                 to_string(scene.control.targets));

@@ -200,6 +200,32 @@ void read_drive_delays(Reader& r, Settings& settings, State& state, const std::s
   }
 }
 
+// Version 8: the ground (enabled, height, normal, material) and the contact options. Contacts
+// keep no state between steps (docs/math/contact.md), so nothing else is needed to resume.
+void write_contact_settings(Writer& p, const Settings& settings) {
+  const Ground& g = settings.ground;
+  p.u8(g.enabled ? 1 : 0);
+  for (double v : {g.height, g.normal.x(), g.normal.y(), g.normal.z(), g.material.static_friction,
+                   g.material.dynamic_friction, g.material.restitution})
+    p.f64(v);
+  const ContactOptions& c = settings.contact;
+  for (double v : {c.contact_offset, c.rest_offset, c.bounce_threshold}) p.f64(v);
+}
+
+void read_contact_settings(Reader& r, Settings& settings) {
+  Ground& g = settings.ground;
+  g.enabled = r.u8() != 0;
+  g.height = r.f64();
+  for (int i = 0; i < 3; ++i) g.normal[i] = r.f64();
+  g.material.static_friction = r.f64();
+  g.material.dynamic_friction = r.f64();
+  g.material.restitution = r.f64();
+  ContactOptions& c = settings.contact;
+  c.contact_offset = r.f64();
+  c.rest_offset = r.f64();
+  c.bounce_threshold = r.f64();
+}
+
 // Version 5: per dof its revolute wrap (1: wrapped), then the mimic joints.
 void write_joint_coupling(Writer& p, const Settings& settings) {
   for (const RevoluteWrap wrap : settings.revolute_wrap)
@@ -263,6 +289,19 @@ std::uint64_t model_fingerprint(const Model& model) {
     w.i64(link.v_index);
   }
   for (const VecX* v : {&model.armature, &model.lower_limit, &model.upper_limit}) w.vec(*v);
+  // The collision shapes, where there are any (a model without keeps its older fingerprint).
+  if (!model.shapes.empty()) w.i64(static_cast<std::int64_t>(model.shapes.size()));
+  for (const CollisionShape& s : model.shapes) {
+    w.i64(s.link);
+    w.i64(static_cast<std::int64_t>(s.type));
+    for (int i = 0; i < 3; ++i) hash_double(w, s.size[i]);
+    for (int i = 0; i < 3; ++i) hash_double(w, s.position[i]);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) hash_double(w, s.rotation(r, c));
+    for (double v : {s.material.static_friction, s.material.dynamic_friction,
+                     s.material.restitution})
+      hash_double(w, v);
+  }
   return fnv1a(w.str().data(), w.str().size());
 }
 
@@ -313,6 +352,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   write_joint_coupling(p, settings);
   const GuardAccount& account = sim.guard_account();  // version 7
   for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
+  write_contact_settings(p, settings);  // version 8
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -516,6 +556,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       account.dissipated = r.f64();
       account.scale = r.f64();
     }
+    if (version >= 8) read_contact_settings(r, settings);  // before, the simulation's own
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

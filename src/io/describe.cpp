@@ -93,7 +93,38 @@ void link_lines(std::ostringstream& out, const UrdfRobot& robot, const Model& mo
   }
 }
 
+std::string shape_text(const CollisionShape& s) {
+  std::string out = to_string(s.type);
+  if (!s.name.empty()) out += " '" + s.name + "'";
+  if (s.type == ShapeType::box)
+    out += " (half extents " + vec(s.size) + ")";
+  else if (s.type == ShapeType::capsule)
+    out += " (r " + num(s.size.x()) + ", half length " + num(s.size.y()) + ")";
+  else
+    out += " (r " + num(s.size.x()) + ")";
+  return out + " at " + vec(s.position) + " m";
+}
+
 }  // namespace
+
+std::string describe_shapes(const Model& model, const std::string& indent) {
+  std::ostringstream out;
+  for (size_t i = 0; i < model.shapes.size(); ++i) {
+    const CollisionShape& s = model.shapes[i];
+    const bool first = i == 0 || model.shapes[i - 1].link != s.link;
+    if (first) out << indent << model.links[static_cast<size_t>(s.link)].name << ": ";
+    else out << ", ";
+    out << shape_text(s);
+    if (i + 1 == model.shapes.size() || model.shapes[i + 1].link != s.link) out << "\n";
+  }
+  return out.str();
+}
+
+std::string describe_ground(const Ground& g) {
+  return "height " + num(g.height) + " m, normal " + vec(g.normal) + ", friction " +
+         num(g.material.static_friction) + " / " + num(g.material.dynamic_friction) +
+         ", restitution " + num(g.material.restitution);
+}
 
 std::string describe(const UrdfRobot& robot) {
   const Model& model = *robot.model;
@@ -113,6 +144,13 @@ std::string describe(const UrdfRobot& robot) {
   for (const UrdfMimic& m : robot.mimics)
     out << "mimic: " << m.joint << " = " << num(m.multiplier) << " * " << m.leader << " + "
         << num(m.offset) << " (a mimic joint in scenes)\n";
+  if (!model.shapes.empty())
+    out << "\ncollision shapes (" << model.shapes.size() << ", poses in the link frame):\n"
+        << describe_shapes(model, "  ");
+  for (const std::string& what : model.unsupported_shapes)
+    out << "not usable by contacts yet: " << what << "\n";
+  if (robot.ground)
+    out << "ground (the file's floor): " << describe_ground(*robot.ground) << "\n";
   return out.str();
 }
 

@@ -347,6 +347,88 @@ struct Converter {
   std::vector<std::string> springs, passive, ball_ranges;
 };
 
+const char* geom_type_name(int type) {
+  switch (type) {
+    case mjGEOM_PLANE: return "plane";
+    case mjGEOM_HFIELD: return "hfield";
+    case mjGEOM_SPHERE: return "sphere";
+    case mjGEOM_CAPSULE: return "capsule";
+    case mjGEOM_ELLIPSOID: return "ellipsoid";
+    case mjGEOM_CYLINDER: return "cylinder";
+    case mjGEOM_BOX: return "box";
+    case mjGEOM_MESH: return "mesh";
+    default: return "unknown";
+  }
+}
+
+// The geoms that collide (contype or conaffinity set; the others are visual) as contact shapes
+// on their bodies' links: sphere, capsule (fromto is already size and pose in mjModel) and box,
+// friction[0] as static and dynamic friction (MuJoCo's sliding friction; restitution 0). The
+// first plane on the world body is the robot's ground (none where the file disables contacts);
+// other world geoms are warned about, and
+// the kinds contacts cannot use yet are listed (Model::unsupported_shapes).
+// Returns the warning about the world's other geoms, or "".
+std::string convert_geoms(const mjModel* m, const Converter& c, MjcfRobot& robot) {
+  std::vector<std::string> world_geoms;
+  // <option><flag contact="disable"/>: the file simulates no contacts, so it has no floor.
+  const bool contacts = !(m->opt.disableflags & mjDSBL_CONTACT);
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_contype[g] == 0 && m->geom_conaffinity[g] == 0) continue;
+    const char* given = mj_id2name(m, mjOBJ_GEOM, g);
+    const std::string name = given ? given : "";
+    const std::string label = name.empty() ? "#" + std::to_string(g) : "'" + name + "'";
+    const int type = m->geom_type[g];
+    const int b = m->geom_bodyid[g];
+    const Mat3 R = rotation(m->geom_quat + 4 * g);
+    const double friction = m->geom_friction[3 * g];
+    if (b == 0) {
+      if (type == mjGEOM_PLANE && !robot.ground && contacts) {
+        Ground ground;
+        ground.enabled = true;
+        ground.normal = R.col(2);  // a plane geom's normal is its frame's z
+        ground.height = ground.normal.dot(vec3(m->geom_pos + 3 * g));
+        ground.material = Material{friction, friction, 0.0};
+        robot.ground = ground;
+      } else if (contacts) {
+        world_geoms.push_back(std::string(geom_type_name(type)) + " " + label);
+      }
+      continue;
+    }
+    const std::string& link = c.link_of_body[static_cast<size_t>(b)];
+    CollisionShape shape;
+    shape.name = name;
+    // The body frame and its last link's frame differ by the anchor only (Converter).
+    shape.position = vec3(m->geom_pos + 3 * g) - c.anchor_of_body[static_cast<size_t>(b)];
+    shape.rotation = R;
+    shape.material = Material{friction, friction, 0.0};
+    const mjtNum* size = m->geom_size + 3 * g;
+    switch (type) {
+      case mjGEOM_SPHERE:
+        shape.type = ShapeType::sphere;
+        shape.size = Vec3(size[0], 0.0, 0.0);
+        break;
+      case mjGEOM_CAPSULE:
+        shape.type = ShapeType::capsule;
+        shape.size = Vec3(size[0], size[1], 0.0);
+        break;
+      case mjGEOM_BOX:
+        shape.type = ShapeType::box;
+        shape.size = vec3(size);
+        break;
+      default:
+        robot.unsupported_shapes.push_back("link '" + link + "': " + geom_type_name(type) +
+                                           " geom " + label);
+        continue;
+    }
+    robot.shapes.emplace_back(link, std::move(shape));
+  }
+  std::string out;
+  for (const std::string& g : world_geoms)
+    out += (out.empty() ? "geoms of the world body other than its first plane (the ground) are "
+                          "not simulated: " : ", ") + g;
+  return out;
+}
+
 void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions& options,
                         std::vector<std::string>& warnings) {
   int colliding = 0;
@@ -421,6 +503,7 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
   c.robot.name = m->names;  // the model's name comes first in MuJoCo's name buffer
   c.convert_bodies();
   MjcfRobot& robot = c.robot;
+  const std::string world_geoms = convert_geoms(m, c, robot);
   robot.rebuild();
   const std::shared_ptr<const Model> built = robot.model;  // rebuilt below with effort limits
   const Model& model = *built;
@@ -514,6 +597,7 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
     fail(file, std::string("<equality><joint>: ") + e.what());
   }
   warn_about_ignored(m, c, options, warnings);
+  if (!world_geoms.empty()) warnings.push_back(world_geoms);
   if (!options.fixed_base && !robot.model->floating_base())
     warnings.push_back("fixed_base is false but no body has a free joint: the root stays welded");
   robot.warnings = std::move(warnings);

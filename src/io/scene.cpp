@@ -14,12 +14,14 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 #include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/constraint/drive_range.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/io/mjcf.hpp"
+#include "featherdrive/model/model_variant.hpp"
 #include "fit_spec_reader.hpp"
 #include "yaml_reader.hpp"
 
@@ -328,6 +330,131 @@ RevoluteWrap read_revolute(const Reader& r, const YAML::Node& node, const std::s
   }
 }
 
+// A material's keys where the node has them (shapes[i], ground).
+void read_material(const Reader& r, const YAML::Node& node, const std::string& path,
+                   Material& m) {
+  const auto at = [&](const char* key) { return Reader::join(path, key); };
+  if (node["static_friction"])
+    m.static_friction = r.non_negative(node["static_friction"], at("static_friction"));
+  if (node["dynamic_friction"])
+    m.dynamic_friction = r.non_negative(node["dynamic_friction"], at("dynamic_friction"));
+  if (node["restitution"]) {
+    m.restitution = r.number(node["restitution"], at("restitution"));
+    if (!(m.restitution >= 0.0 && m.restitution <= 1.0))
+      r.fail(at("restitution"), node["restitution"], "must be in [0, 1]");
+  }
+}
+
+// ground: {height, normal, static_friction, dynamic_friction, restitution}, or false (none, not
+// even the robot file's floor) or true (the defaults).
+Ground read_ground(const Reader& r, const YAML::Node& node) {
+  Ground ground;
+  if (node.IsScalar()) {
+    ground.enabled = r.boolean(node, "ground");
+    return ground;
+  }
+  r.map(node, "ground", {"height", "normal", "static_friction", "dynamic_friction", "restitution"});
+  ground.enabled = true;
+  if (node["height"]) ground.height = r.finite(node["height"], "ground.height");
+  if (node["normal"]) {
+    ground.normal = r.vec3(node["normal"], "ground.normal");
+    const double length = ground.normal.norm();
+    if (!(length > 1e-12 && std::isfinite(length)))
+      r.fail("ground.normal", node["normal"], "must be of finite non-zero length");
+    ground.normal /= length;
+  }
+  read_material(r, node, "ground", ground.material);
+  return ground;
+}
+
+// contact: {contact_offset, rest_offset, bounce_threshold}.
+ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
+  r.map(node, "contact", {"contact_offset", "rest_offset", "bounce_threshold"});
+  ContactOptions c;
+  if (node["contact_offset"])
+    c.contact_offset = r.finite(node["contact_offset"], "contact.contact_offset");
+  if (node["rest_offset"])
+    c.rest_offset = r.non_negative(node["rest_offset"], "contact.rest_offset");
+  if (node["bounce_threshold"])
+    c.bounce_threshold = r.non_negative(node["bounce_threshold"], "contact.bounce_threshold");
+  if (!(c.contact_offset > c.rest_offset))
+    r.fail(node["contact_offset"] ? "contact.contact_offset" : "contact",
+           node["contact_offset"] ? node["contact_offset"] : node,
+           "the contact offset must be above the rest offset (" +
+               format_double(c.rest_offset) + ")");
+  return c;
+}
+
+// shapes: [{link, type, radius, half_length, half_extents, xyz, rpy, name, static_friction,
+// dynamic_friction, restitution}]: each shape's keys are those of its type.
+std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
+                                                                const YAML::Node& node,
+                                                                const Model& model) {
+  if (!node.IsSequence())
+    r.fail("shapes", node, "must be a list of {link, type, ...} (sphere, capsule or box)");
+  std::vector<std::pair<std::string, CollisionShape>> shapes;
+  for (size_t i = 0; i < node.size(); ++i) {
+    const std::string p = "shapes[" + std::to_string(i) + "]";
+    const YAML::Node e = node[i];
+    const auto at = [&](const char* key) { return Reader::join(p, key); };
+    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "xyz", "rpy", "name",
+                 "static_friction", "dynamic_friction", "restitution"});
+    for (const char* key : {"link", "type"})
+      if (!e[key]) r.fail(at(key), "missing");
+    CollisionShape shape;
+    const std::string link = r.text(e["link"], at("link"));
+    try {
+      (void)model.frame(link);  // a link, or a link merged into one (its shapes go there)
+    } catch (const std::invalid_argument& error) {
+      r.fail(at("link"), e["link"], error.what());
+    }
+    const std::string type = r.text(e["type"], at("type"));
+    std::vector<const char*> sizes;  // the size keys of the type, in size's order
+    if (type == "sphere") {
+      shape.type = ShapeType::sphere;
+      sizes = {"radius"};
+    } else if (type == "capsule") {
+      shape.type = ShapeType::capsule;
+      sizes = {"radius", "half_length"};
+    } else if (type == "box") {
+      shape.type = ShapeType::box;
+      sizes = {"half_extents"};
+    } else {
+      r.fail(at("type"), e["type"], "must be sphere, capsule or box");
+    }
+    for (const char* key : {"radius", "half_length", "half_extents"}) {
+      const bool wanted =
+          std::find(sizes.begin(), sizes.end(), std::string_view(key)) != sizes.end();
+      if (!wanted && e[key]) r.fail(at(key), e[key], "is not a size of a " + type);
+      if (wanted && !e[key]) r.fail(at(key), std::string("missing (a ") + type + " needs it)");
+    }
+    auto positive = [&](const YAML::Node& v, const std::string& where) {
+      const double x = r.number(v, where);
+      if (!(std::isfinite(x) && x > 0.0)) r.fail(where, v, "must be finite and > 0");
+      return x;
+    };
+    if (shape.type == ShapeType::box) {
+      const YAML::Node h = e["half_extents"];
+      if (!h.IsSequence() || h.size() != 3)
+        r.fail(at("half_extents"), h, "must be a list of 3 numbers");
+      for (int k = 0; k < 3; ++k)
+        shape.size[k] = positive(h[k], at("half_extents") + "[" + std::to_string(k) + "]");
+    } else {
+      shape.size.x() = positive(e["radius"], at("radius"));
+      if (shape.type == ShapeType::capsule)
+        shape.size.y() = positive(e["half_length"], at("half_length"));
+    }
+    if (e["xyz"]) shape.position = r.vec3(e["xyz"], at("xyz"));
+    if (e["rpy"]) shape.rotation = rotation_from_rpy(r.vec3(e["rpy"], at("rpy")));
+    if (e["name"]) shape.name = r.text(e["name"], at("name"));
+    if (const std::string why = name_problem(shape.name); !shape.name.empty() && !why.empty())
+      r.fail(at("name"), "shape " + why);
+    read_material(r, e, p, shape.material);
+    shapes.emplace_back(link, std::move(shape));
+  }
+  return shapes;
+}
+
 // applied_force: {joint: force or {sine: ...}}.
 std::vector<AppliedForceSpec> read_applied_forces(const Reader& r, const YAML::Node& node,
                                                   const UrdfRobot& robot) {
@@ -432,7 +559,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   r.map(root, "",
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
-         "control", "urdf_effort", "fit", "applied_force", "mimic", "guard"});
+         "control", "urdf_effort", "fit", "applied_force", "mimic", "guard", "ground", "contact",
+         "shapes"});
 
   Scene scene;
   scene.path = path;
@@ -609,6 +737,28 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       }
     if (rebuild) scene.robot.rebuild();
     m = scene.robot.model.get();
+  }
+
+  // Shapes after the armature's rebuild; robot.shapes keeps them for a later rebuild.
+  if (root["shapes"]) {
+    scene.shapes = read_shapes(r, root["shapes"], *m);
+    try {
+      scene.robot.model = std::make_shared<const Model>(with_shapes(*m, scene.shapes));
+    } catch (const ModelError& e) {
+      r.fail("shapes", e.what());
+    }
+    scene.robot.shapes.insert(scene.robot.shapes.end(), scene.shapes.begin(), scene.shapes.end());
+    m = scene.robot.model.get();
+  }
+  if (root["contact"]) scene.contact = read_contact(r, root["contact"]);
+  if (root["ground"]) {
+    scene.ground = read_ground(r, root["ground"]);
+  } else if (scene.robot.ground && m->unsupported_shapes.empty()) {
+    scene.ground = *scene.robot.ground;
+  } else if (scene.robot.ground) {
+    scene.robot.warnings.push_back(
+        "the file's floor is not used as the ground: " + m->unsupported_shapes.front() +
+        " is a shape contacts do not support yet (sphere, capsule, box)");
   }
 
   if (const YAML::Node jd = root["joint_defaults"]) {
@@ -789,6 +939,8 @@ Simulation make_simulation(const Scene& scene) {
       if (js.revolute) sim.set_revolute_wrap(js.dof, *js.revolute);
     }
     sim.set_mimic_joints(scene.mimic);
+    sim.set_contact_options(scene.contact);
+    sim.set_ground(scene.ground);
     for (const DriveSpec& d : scene.drives) {
       sim.set_drive(d.dof, d.drive);
       if (d.delay > 0 && d.drive.type != DriveType::none) sim.set_drive_delay(d.dof, d.delay);

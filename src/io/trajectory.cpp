@@ -35,8 +35,16 @@ std::vector<int> target_dofs(const Scene& scene) {
   return dofs;
 }
 
+std::vector<int> shape_links(const Model& model) {
+  std::vector<int> links;
+  for (const CollisionShape& s : model.shapes)  // grouped by link in link order
+    if (links.empty() || links.back() != s.link) links.push_back(s.link);
+  return links;
+}
+
 std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
-                                            const std::vector<int>& target_dofs) {
+                                            const std::vector<int>& target_dofs,
+                                            const std::vector<int>& contact_links) {
   const Model& model = *robot.model;
   std::vector<std::string> columns;
   if (model.floating_base())
@@ -48,15 +56,20 @@ std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
     for (int d : robot.dof_order) columns.push_back(prefix + model.dof_names[d]);
   for (const char* prefix : {"target:", "target_velocity:"})
     for (int d : target_dofs) columns.push_back(prefix + model.dof_names[d]);
+  for (int link : contact_links)
+    for (const char* axis : {":fx", ":fy", ":fz"})
+      columns.push_back("contact:" + model.links[static_cast<size_t>(link)].name + axis);
   return columns;
 }
 
 TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot,
-                                   const std::vector<int>& target_dofs, bool guard_substeps)
+                                   const std::vector<int>& target_dofs, bool guard_substeps,
+                                   bool contact_forces)
     : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order), target_order_(target_dofs),
+      contact_links_(contact_forces ? shape_links(*robot.model) : std::vector<int>{}),
       guard_substeps_(guard_substeps) {
   out_ << "step,t";
-  for (const std::string& c : trajectory_columns(robot, target_dofs))
+  for (const std::string& c : trajectory_columns(robot, target_dofs, contact_links_))
     out_ << ',' << csv_field(c);
   if (guard_substeps_) out_ << ",guard_substeps";
   out_ << '\n';
@@ -72,6 +85,10 @@ void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
     out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d] + sim.actuator_force()[d]);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_position);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_velocity);
+  for (int link : contact_links_) {
+    const Vec3 f = initial ? Vec3::Zero() : sim.link_contact_force()[static_cast<size_t>(link)];
+    for (int k = 0; k < 3; ++k) out_ << ',' << format_double(f[k]);
+  }
   if (guard_substeps_) out_ << ',' << (initial ? 1 : sim.guard_substeps());
   out_ << '\n';
 }

@@ -276,11 +276,12 @@ void collect_geometry(UrdfRobot& robot, const urdf::ModelInterface& urdf_model,
                       const std::vector<std::string>& link_order,
                       const std::map<std::string, std::string>& anchor,
                       const std::map<std::string, Pose>& in_anchor) {
-  auto add = [&](const std::string& link, bool collision, int index, const urdf::Pose& origin,
-                 const urdf::GeometrySharedPtr& g) {
+  auto add = [&](const std::string& link, bool collision, int index, const std::string& name,
+                 const urdf::Pose& origin, const urdf::GeometrySharedPtr& g) {
     if (!g) return;
     UrdfGeometry out;
     out.link = link;
+    out.name = name;
     out.body = anchor.at(link);
     out.collision = collision;
     out.index = index;
@@ -321,12 +322,54 @@ void collect_geometry(UrdfRobot& robot, const urdf::ModelInterface& urdf_model,
     if (!link || !anchor.count(name)) continue;
     for (size_t k = 0; k < link->visual_array.size(); ++k)
       if (link->visual_array[k])
-        add(name, false, static_cast<int>(k), link->visual_array[k]->origin,
+        add(name, false, static_cast<int>(k), link->visual_array[k]->name,
+            link->visual_array[k]->origin,
             link->visual_array[k]->geometry);
     for (size_t k = 0; k < link->collision_array.size(); ++k)
       if (link->collision_array[k])
-        add(name, true, static_cast<int>(k), link->collision_array[k]->origin,
+        add(name, true, static_cast<int>(k), link->collision_array[k]->name,
+            link->collision_array[k]->origin,
             link->collision_array[k]->geometry);
+  }
+}
+
+// The collisions as contact shapes on their model links (boxes: half the URDF's full extents);
+// what contacts cannot use yet is listed (docs/math/contact.md, section 10).
+void collision_shapes(UrdfRobot& robot, const std::string& file) {
+  for (const UrdfGeometry& g : robot.geometry) {
+    if (!g.collision) continue;
+    const std::string who = "link '" + g.link + "': <collision" +
+                            (g.name.empty() ? "> #" + std::to_string(g.index)
+                                            : " name='" + g.name + "'>");
+    CollisionShape shape;
+    shape.name = g.name;
+    shape.position = g.xyz;
+    shape.rotation = g.rotation;
+    switch (g.shape) {
+      case UrdfGeometry::Shape::box:
+        if (!(g.size.allFinite() && g.size.minCoeff() > 0.0))
+          fail(file, who + " <box size> = " + format_vec3(g.size) + ": must be finite and > 0");
+        shape.type = ShapeType::box;
+        shape.size = 0.5 * g.size;
+        break;
+      case UrdfGeometry::Shape::sphere:
+        if (!(std::isfinite(g.size.x()) && g.size.x() > 0.0))
+          fail(file, who + " <sphere radius> = " + format_double(g.size.x()) +
+                         ": must be finite and > 0");
+        shape.type = ShapeType::sphere;
+        shape.size = g.size;
+        break;
+      case UrdfGeometry::Shape::cylinder:
+        robot.unsupported_shapes.push_back(
+            "link '" + g.link + "': cylinder collision " +
+            (g.name.empty() ? "#" + std::to_string(g.index) : "'" + g.name + "'"));
+        continue;
+      case UrdfGeometry::Shape::mesh:
+        robot.unsupported_shapes.push_back("link '" + g.link + "': mesh collision '" +
+                                           g.filename + "'");
+        continue;
+    }
+    robot.shapes.emplace_back(g.body, std::move(shape));
   }
 }
 
@@ -347,6 +390,8 @@ void UrdfRobot::rebuild() {
   builder.set_gravity(options.gravity);
   for (const LinkSpec& l : links) builder.add_link(l);
   for (const auto& [name, m] : merged) builder.add_frame(name, m.into, m.xyz, m.rotation);
+  for (const auto& [link, shape] : shapes) builder.add_shape(link, shape);
+  for (const std::string& what : unsupported_shapes) builder.add_unsupported_shape(what);
   try {
     model = std::make_shared<const Model>(builder.build());
   } catch (const ModelError& e) {
@@ -552,6 +597,7 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
   }
 
   collect_geometry(robot, *urdf_model, link_order, anchor, in_anchor);
+  collision_shapes(robot, file);
 
   // The root's joint needs a name no URDF joint has.
   robot.root_joint = "root_joint";

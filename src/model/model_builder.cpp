@@ -181,8 +181,6 @@ ModelBuilder& ModelBuilder::add_shape(std::string link, CollisionShape shape) {
   return *this;
 }
 
-namespace {
-
 // A shape's sizes, pose and material (docs/math/contact.md, section 1).
 void check_shape(const std::string& who, const CollisionShape& s) {
   const char* names[3] = {"radius", "half_length", ""};
@@ -198,10 +196,14 @@ void check_shape(const std::string& who, const CollisionShape& s) {
     if (!(std::isfinite(s.size[k]) && s.size[k] > 0.0))
       fail(who + ": " + names[k] + " = " + fmt(s.size[k]) + " must be finite and > 0");
   check_finite(who, "position", s.position);
-  if (!s.rotation.allFinite() ||
-      !(s.rotation.transpose() * s.rotation).isApprox(Mat3::Identity(), 1e-9) ||
-      s.rotation.determinant() < 0.0)
-    fail(who + ": rotation is not a rotation matrix");
+  if (!s.rotation.allFinite())
+    fail(who + ": rotation has an entry that is not finite (" +
+         fmt(Vec3(s.rotation.row(0).transpose())) + " ...)");
+  const double off = (s.rotation.transpose() * s.rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+  const double det = s.rotation.determinant();
+  if (!(off <= 1e-9) || det < 0.0)
+    fail(who + ": rotation is not a rotation matrix (max |R^T R - I| = " + fmt(off) +
+         ", det R = " + fmt(det) + ")");
   const Material& m = s.material;
   auto check_friction = [&](const char* field, double v) {
     if (!(std::isfinite(v) && v >= 0.0))
@@ -213,7 +215,15 @@ void check_shape(const std::string& who, const CollisionShape& s) {
     fail(who + ": restitution = " + fmt(m.restitution) + " must be in [0, 1]");
 }
 
-}  // namespace
+std::string shape_label(const CollisionShape& shape, size_t index, const std::string& link) {
+  return "shape " + (shape.name.empty() ? "#" + std::to_string(index) : "'" + shape.name + "'") +
+         " (" + to_string(shape.type) + ") of link '" + link + "'";
+}
+
+ModelBuilder& ModelBuilder::add_unsupported_shape(std::string description) {
+  unsupported_shapes_.push_back(std::move(description));
+  return *this;
+}
 
 Model ModelBuilder::build() const {
   if (!gravity_.allFinite()) fail("gravity = " + fmt(gravity_) + " is not finite");
@@ -422,17 +432,24 @@ Model ModelBuilder::build() const {
     model.frames.push_back(std::move(frame));
   }
   for (auto [shape, link] : shapes_) {
-    const std::string who = "shape " + (shape.name.empty() ? std::string("#") +
-                            std::to_string(model.shapes.size()) : "'" + shape.name + "'") +
-                            " (" + to_string(shape.type) + ") of link '" + link + "'";
-    const auto it = by_name.find(link);
-    if (it == by_name.end()) fail(who + ": the link is not a link of the model");
+    const std::string who = shape_label(shape, model.shapes.size(), link);
     check_shape(who, shape);
-    shape.link = new_index[it->second];
+    if (const auto it = by_name.find(link); it != by_name.end()) {
+      shape.link = new_index[it->second];
+    } else {
+      const std::string& frame = link;  // this clang cannot capture a structured binding
+      const auto f = std::find_if(model.frames.begin(), model.frames.end(),
+                                  [&frame](const NamedFrame& x) { return x.name == frame; });
+      if (f == model.frames.end()) fail(who + ": the link is not a link or frame of the model");
+      shape.link = f->link;  // a merged link: its pose in the link it went into
+      shape.position = f->position + f->rotation * shape.position;
+      shape.rotation = f->rotation * shape.rotation;
+    }
     model.shapes.push_back(std::move(shape));
   }
   std::stable_sort(model.shapes.begin(), model.shapes.end(),
                    [](const CollisionShape& a, const CollisionShape& b) { return a.link < b.link; });
+  model.unsupported_shapes = unsupported_shapes_;
   return model;
 }
 

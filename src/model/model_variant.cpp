@@ -1,5 +1,6 @@
 #include "featherdrive/model/model_variant.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -63,6 +64,31 @@ Model with_link_inertial(const Model& model, int link, double mass, const Vec3& 
   if (!std::isfinite(total_mass) || !std::isfinite(inertia_sum))
     throw ModelError("model: link '" + target.name + "': mass = " + format_double(mass) +
                      ": the model's total mass or inertia overflows");
+  return out;
+}
+
+Model with_shapes(const Model& model,
+                  const std::vector<std::pair<std::string, CollisionShape>>& shapes) {
+  Model out = model;
+  for (const auto& [name, given] : shapes) {
+    CollisionShape shape = given;
+    const std::string who = shape_label(shape, out.shapes.size(), name);
+    check_shape(who, shape);
+    NamedFrame frame;
+    try {
+      frame = model.frame(name);  // a link, or a merged link's frame on its link
+    } catch (const std::invalid_argument& e) {
+      throw ModelError("model: " + who + ": " + e.what());
+    }
+    shape.link = frame.link;
+    shape.position = frame.position + frame.rotation * shape.position;
+    shape.rotation = frame.rotation * shape.rotation;
+    out.shapes.push_back(std::move(shape));
+  }
+  std::stable_sort(out.shapes.begin(), out.shapes.end(),
+                   [](const CollisionShape& a, const CollisionShape& b) {
+                     return a.link < b.link;  // the model's own first within a link
+                   });
   return out;
 }
 

@@ -162,6 +162,7 @@ void Settings::validate(const Model& model) const {
     check_link_parameters_of(model, i, link_parameters[static_cast<size_t>(i)]);
   validate_mimic_joints(model, mimic_joints);
   check_ground(ground);
+  check_ground_supported(model, ground);
   check_contact_options(contact);
 }
 
@@ -331,6 +332,16 @@ void check_ground(const Ground& ground) {
   friction("dynamic_friction", m.dynamic_friction);
   if (!(m.restitution >= 0.0 && m.restitution <= 1.0))
     bad("restitution = " + fmt(m.restitution) + " must be in [0, 1]");
+}
+
+void check_ground_supported(const Model& model, const Ground& ground) {
+  if (!ground.enabled || model.unsupported_shapes.empty()) return;
+  const size_t n = model.unsupported_shapes.size();
+  throw std::invalid_argument(
+      "ground: " + model.unsupported_shapes.front() +
+      ": contacts do not support this shape yet (sphere, capsule, box)" +
+      (n > 1 ? " (" + std::to_string(n) + " such shapes in all)" : std::string()) +
+      "; leave the ground off or replace the geometry");
 }
 
 void check_contact_options(const ContactOptions& options) {

@@ -350,6 +350,7 @@ void Simulation::set_mimic_joints(const std::vector<MimicJoint>& mimic) {
 
 void Simulation::set_ground(const Ground& ground) {
   check_ground(ground);
+  check_ground_supported(*model_, ground);
   settings_.ground = ground;
   settings_.ground.normal.normalize();
   contact_rows_.clear_anchors();

@@ -27,6 +27,67 @@ def one_line_error(result, code, text):
     check(text in result.stderr, f"stderr holds {text!r}", result)
 
 
+def contact(cli, source, out_dir):
+    """Collision geometry and the ground (issue 34): info lists a robot's shapes, what contacts
+    cannot use yet and an MJCF floor; simulate prints the ground and the shapes and its CSV has
+    contact:<link>:fx,fy,fz columns; a checkpoint keeps the ground and its model's shapes."""
+    chain = os.path.join(source, "examples", "chain3.urdf")
+    collisions = os.path.join(source, "tests", "data", "collisions.urdf")
+
+    r = run(cli, "info", collisions)
+    check(r.returncode == 0, "info collisions.urdf", r)
+    for text in ("collision shapes (5, poses in the link frame):",
+                 "  base: box 'body' (half extents [0.2, 0.1, 0.05]) at [0, 0, 0.05] m, sphere (r 0.05)",
+                 "  arm: box 'arm_box'",
+                 "not usable by contacts yet: link 'base': cylinder collision 'wheel'",
+                 "not usable by contacts yet: link 'arm': mesh collision 'package://collisions/arm.stl'"):
+        check(text in r.stdout, f"info collisions.urdf shows {text!r}", r)
+    r = run(cli, "info", "/usr/share/mujoco/model/humanoid/humanoid.xml")
+    check("ground (the file's floor): height 0 m, normal [0, 0, 1], friction 1 / 1, restitution 0"
+          in r.stdout, "info humanoid shows its floor", r)
+
+    shapes = ("drive_defaults: {type: force, stiffness: 100, damping: 10}\nshapes:\n"
+              "  - {link: link3, type: sphere, radius: 0.05, name: tip}\n"
+              "  - {link: link1, type: box, half_extents: [0.1, 0.1, 0.1]}\n")
+
+    def scene_file(name, text):
+        path = os.path.join(out_dir, name)
+        with open(path, "w") as f:
+            f.write(f"model: {chain}\ndt: 0.01\n" + text)
+        return path
+
+    scene = scene_file("contact_scene.yaml", "steps: 3\nground: {height: -2, static_friction: 0.8}\n"
+                       "contact: {contact_offset: 0.03}\n" + shapes)
+    out_csv = os.path.join(out_dir, "contact_scene.csv")
+    state = os.path.join(out_dir, "contact_scene.ckpt")
+    r = run(cli, "simulate", scene, "--out", out_csv, "--save-state", state)
+    check(r.returncode == 0, "simulate a scene with a ground", r)
+    check("  ground: height -2 m, normal [0, 0, 1], friction 0.8 / 0.5, restitution 0; contact "
+          "offset 0.03 m, rest offset 0 m, bounce threshold 2 m/s" in r.stdout,
+          "simulate prints the ground", r)
+    check("  collision shapes (2):\n    link1: box (half extents [0.1, 0.1, 0.1]) at [0, 0, 0] m\n"
+          "    link3: sphere 'tip' (r 0.05) at [0, 0, 0] m\n" in r.stdout,
+          "simulate prints the shapes per link", r)
+    if os.path.exists(out_csv):
+        with open(out_csv) as f:
+            rows = list(csv.reader(f))
+        header = rows[0]
+        wanted = [f"contact:{link}:{axis}" for link in ("link1", "link3") for axis in ("fx", "fy", "fz")]
+        check(header[-6:] == wanted, f"the CSV ends with {wanted}, not {header[-6:]}")
+        check(len(rows) == 5 and all(len(row) == len(header) for row in rows), "5 whole rows")
+        check(rows[1][-6:] == ["0"] * 6, "the initial row's contact forces are 0")
+    # The checkpoint keeps the ground: resuming in a scene without one gives the file's.
+    plain = scene_file("contact_plain.yaml", "steps: 1\n" + shapes)
+    r = run(cli, "simulate", plain, "--load-state", state)
+    check(r.returncode == 0 and "  ground: height -2 m" in r.stdout,
+          "a resumed run has the checkpoint's ground", r)
+    # A scene without the shapes is another model: its checkpoint is refused.
+    bare = scene_file("contact_bare.yaml", "steps: 1\n")
+    r = run(cli, "simulate", bare, "--load-state", state)
+    check(r.returncode == 2 and "different model" in r.stderr,
+          "a checkpoint of the model with shapes is refused without them", r)
+
+
 def main():
     cli, source, out_dir = sys.argv[1:4]
     os.makedirs(out_dir, exist_ok=True)
@@ -172,6 +233,7 @@ def main():
     # An output that cannot be written: exit 1.
     r = run(cli, "simulate", ex("chain3.yaml"), "--out", "/proc/featherdrive/x.csv")
     check(r.returncode == 1, "an unwritable --out exits 1", r)
+    contact(cli, source, out_dir)
 
     if failures:
         for f in failures:

@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/model/model_variant.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
 #include "support/source_tree.hpp"
@@ -277,7 +279,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 7)");
+            "to 8)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -343,6 +345,18 @@ std::string forged(std::string bytes, size_t at, std::uint64_t value, size_t siz
 }
 std::uint64_t bits(double v) {
   return std::bit_cast<std::uint64_t>(v);
+}
+
+// Version 8's ground and contact options, last before the checksum: a byte and 10 doubles.
+constexpr size_t kContactBytes = 1 + 10 * 8;
+
+// A version 8 checkpoint as version 7 wrote it: without the contact settings.
+std::string as_version7(std::string bytes) {
+  bytes.erase(bytes.size() - 8 - kContactBytes, kContactBytes);
+  std::uint64_t payload = 0;
+  for (size_t i = 0; i < 8; ++i)
+    payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[28 + i])) << (8 * i);
+  return forged(forged(bytes, 8, 7, 4), 28, payload - kContactBytes);
 }
 
 // The payload after the 36-byte header: time, step count, dt, solver (1 byte), the iterations,
@@ -588,7 +602,7 @@ constexpr size_t kAccountBytes = 24;
 TEST(Checkpoint, VersionThreeIsStillRead) {
   Simulation a = busy_simulation(5);
   a.step(4);
-  std::string bytes = checkpoint_bytes(a);
+  std::string bytes = as_version7(checkpoint_bytes(a));
   const size_t delays = 8 * static_cast<size_t>(a.model().nv);
   // Version 5's revolute wrap (a byte per dof) and mimic joints (their count), then version 7's
   // guard account, come last.
@@ -612,15 +626,15 @@ TEST(Checkpoint, VersionThreeIsStillRead) {
   expect_same_state(a, b);
   EXPECT_EQ(checkpoint_bytes(b), checkpoint_bytes(a));
   // A forged delay is refused naming the dof.
-  const std::string bad = forged(checkpoint_bytes(a),
-                                 checkpoint_bytes(a).size() - 8 - coupling - delays, ~0ULL);
+  const std::string v7 = as_version7(checkpoint_bytes(a));
+  const std::string bad = forged(v7, v7.size() - 8 - coupling - delays, ~0ULL);
   EXPECT_EQ(error_of(bad, b),
             "state.ckpt: corrupt checkpoint: drive delay -1 of dof 0 is outside [0, 100000]");
   // A forged push count that a later push would overflow.
   Simulation c = busy_simulation(5);
   c.set_drive_delay(driven, 1);
   c.step();
-  const std::string with_delay = checkpoint_bytes(c);
+  const std::string with_delay = as_version7(checkpoint_bytes(c));
   // The delays: 8 bytes per dof, and for `driven` its push count and 2 targets after them.
   const size_t delays_at = with_delay.size() - 8 - coupling - (delays + 8 + 32);
   const size_t pushes_at = delays_at + 8 * static_cast<size_t>(driven) + 8;
@@ -678,7 +692,7 @@ TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
   a.set_actuator(1, pd);
   a.set_drive_target(1, 0.2, 0.0);
   a.step(3);
-  const std::string bytes = checkpoint_bytes(a);
+  const std::string bytes = as_version7(checkpoint_bytes(a));
   const size_t nv = 2;
   // From the end: checksum, mimic count, wrap bytes, drive delays, actuator forces; before them
   // each actuator: kind, integration, 5 settings, delay, table size, feed-forward, pushes and a
@@ -703,7 +717,7 @@ TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
   restore_checkpoint(v5, b, "old.ckpt");
   expect_same_state(a, b);
   EXPECT_EQ(b.actuator(0).integration, ActuatorIntegration::explicit_law);
-  EXPECT_EQ(checkpoint_bytes(b), bytes);
+  EXPECT_EQ(checkpoint_bytes(b), checkpoint_bytes(a));
   // A forged integration is refused naming the dof.
   EXPECT_EQ(error_of(forged(bytes, first + 1, 7, 1), b),
             "state.ckpt: corrupt checkpoint: actuator integration 7 of dof 0");
@@ -740,7 +754,7 @@ TEST(Checkpoint, GuardedRunResumesBitForBit) {
   EXPECT_EQ(bits(a.dissipated), bits(b.dissipated));
   EXPECT_EQ(bits(a.scale), bits(b.scale));
   // Version 6: the same bytes without the account.
-  std::string v6 = bytes;
+  std::string v6 = as_version7(bytes);
   v6.erase(v6.size() - 8 - kAccountBytes, kAccountBytes);
   std::uint64_t payload = 0;
   for (size_t i = 0; i < 8; ++i)
@@ -753,11 +767,76 @@ TEST(Checkpoint, GuardedRunResumesBitForBit) {
   EXPECT_EQ(old.guard_account().dissipated, 0.0);
   EXPECT_EQ(old.guard_account().scale, 0.0);
   // A negative dissipation is refused in one line.
-  const std::string bad =
-      forged(bytes, bytes.size() - 8 - 16, std::bit_cast<std::uint64_t>(-1.0));
+  const std::string v7 = as_version7(bytes);
+  const std::string bad = forged(v7, v7.size() - 8 - 16, std::bit_cast<std::uint64_t>(-1.0));
   EXPECT_EQ(error_of(bad, old),
             "state.ckpt: bad value in the checkpoint: guard account: dissipated = -1 must be "
             "finite and >= 0");
+}
+
+// The ground and the contact options are in the checkpoint (version 8): a resumed simulation
+// has them, and its checkpoint is the same bytes; a version 7 file keeps the simulation's own.
+TEST(Checkpoint, GroundAndContactOptionsAreKept) {
+  auto model = test::make_planar_chain(2, 1.0, 0.5);
+  Simulation a(model);
+  Ground ground;
+  ground.enabled = true;
+  ground.height = -0.25;
+  ground.normal = Vec3(0.0, 0.6, 0.8);
+  ground.material = Material{0.9, 0.7, 0.1};
+  a.set_ground(ground);
+  a.set_contact_options(ContactOptions{0.03, 0.001, 1.5});
+  a.step(3);
+  const std::string bytes = checkpoint_bytes(a);
+  Simulation b(model);
+  restore_checkpoint(bytes, b, "state.ckpt");
+  EXPECT_EQ(checkpoint_bytes(b), bytes);
+  EXPECT_TRUE(b.ground().enabled);
+  EXPECT_EQ(bits(b.ground().height), bits(-0.25));
+  EXPECT_EQ(bits(b.ground().normal.y()), bits(a.ground().normal.y()));
+  EXPECT_EQ(b.ground().material.dynamic_friction, 0.7);
+  EXPECT_EQ(b.ground().material.restitution, 0.1);
+  EXPECT_EQ(b.contact_options().contact_offset, 0.03);
+  EXPECT_EQ(b.contact_options().rest_offset, 0.001);
+  EXPECT_EQ(b.contact_options().bounce_threshold, 1.5);
+  // Version 7: the simulation keeps its own ground and options.
+  Simulation c(model);
+  Ground other;
+  other.enabled = true;
+  other.height = 3.0;
+  c.set_ground(other);
+  restore_checkpoint(as_version7(bytes), c, "old.ckpt");
+  EXPECT_EQ(c.ground().height, 3.0);
+  EXPECT_EQ(c.contact_options().contact_offset, ContactOptions{}.contact_offset);
+  expect_same_state(a, c);
+  // A forged ground is refused in one line.
+  const size_t height_at = bytes.size() - 8 - kContactBytes + 1;
+  EXPECT_EQ(error_of(forged(bytes, height_at, bits(std::numeric_limits<double>::infinity())), b),
+            "state.ckpt: bad value in the checkpoint: ground.height = inf is not finite");
+  const size_t offset_at = bytes.size() - 8 - 24;
+  EXPECT_EQ(error_of(forged(bytes, offset_at, bits(-1.0)), b),
+            "state.ckpt: bad value in the checkpoint: contact.contact_offset = -1, rest_offset = "
+            "0.001: need 0 <= rest_offset < contact_offset");
+}
+
+// Shapes make the model: a checkpoint of a model with other shapes is refused; a model without
+// shapes keeps the fingerprint it had before shapes existed (older checkpoints still load).
+TEST(Checkpoint, ShapesArePartOfTheModelFingerprint) {
+  const auto plain = test::make_pendulum(1.0, 0.5);
+  CollisionShape ball;
+  ball.type = ShapeType::sphere;
+  ball.size = Vec3(0.1, 0.0, 0.0);
+  const std::string link = plain->links.back().name;
+  const auto a = std::make_shared<const Model>(with_shapes(*plain, {{link, ball}}));
+  ball.size.x() = std::nextafter(0.1, 1.0);
+  const auto b = std::make_shared<const Model>(with_shapes(*plain, {{link, ball}}));
+  EXPECT_NE(model_fingerprint(*a), model_fingerprint(*plain));
+  EXPECT_NE(model_fingerprint(*a), model_fingerprint(*b));
+  Simulation sa(a), sb(b);
+  EXPECT_NE(error_of(checkpoint_bytes(sa), sb).find("the checkpoint is of a different model"),
+            std::string::npos);
+  Simulation same(std::make_shared<const Model>(*a));
+  restore_checkpoint(checkpoint_bytes(sa), same, "state.ckpt");
 }
 
 }  // namespace

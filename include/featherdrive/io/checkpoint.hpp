@@ -17,7 +17,10 @@
 //                 implicit drive's delay (if > 0: pushes and its ring of delay + 1 targets),
 //                 then per dof its revolute wrap and the mimic joints (count, then each one's
 //                 dofs, gear ratio, offset, natural frequency and damping ratio), then the
-//                 step guard's account (created, dissipated, scale; version 7)
+//                 step guard's account (created, dissipated, scale; version 7), then the
+//                 ground (enabled u8, height, normal, static and dynamic friction,
+//                 restitution) and the contact options (contact offset, rest offset, bounce
+//                 threshold; version 8)
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
@@ -40,7 +43,9 @@ namespace featherdrive {
 /// 6: an actuator's integration (explicit or implicit). Versions 3 to 5 read as explicit.
 /// 7: the step guard's account (docs/math/step_guard.md, test (iii)). Versions 3 to 6 read with
 /// an empty account.
-inline constexpr std::uint32_t kCheckpointVersion = 7;
+/// 8: the ground and the contact options (issue 34; contacts keep no state between steps).
+/// Versions 3 to 7 read with the simulation's own.
+inline constexpr std::uint32_t kCheckpointVersion = 8;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file
@@ -52,6 +57,8 @@ class CheckpointError : public InputError {
 
 /// A hash of what makes a model: per link its name, parent, joint name and type, mass, centre of
 /// mass, inertia, joint frame and axis, and the model's nq, nv, gravity, armature and joint limits.
+/// With collision shapes, also each shape's link, type, size, pose and material (a model without
+/// shapes keeps the fingerprint it had before shapes existed).
 /// Computed from the bits of the doubles, so it is the same on every run and machine.
 std::uint64_t model_fingerprint(const Model& model);
 

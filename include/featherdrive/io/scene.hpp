@@ -95,6 +95,14 @@ struct Scene {
   ControlStep control;
   /// fit: what `featherdrive fit` identifies (fit_spec.hpp); absent without the key.
   std::optional<FitSpec> fit;
+  /// ground: the scene's key; without it the robot file's own floor (an MJCF plane on the world
+  /// body, UrdfRobot::ground) where the model's shapes allow one (else a warning in
+  /// robot.warnings); disabled when neither has one, or with `ground: false`.
+  Ground ground;
+  /// contact: PhysX's contact and rest offsets and bounce threshold (docs/math/contact.md).
+  ContactOptions contact;
+  /// shapes: added to the robot's own (robot.shapes and robot.model->shapes), in file order.
+  std::vector<std::pair<std::string, CollisionShape>> shapes;
 
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };

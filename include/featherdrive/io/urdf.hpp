@@ -6,9 +6,12 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "featherdrive/constraint/contact.hpp"
 #include "featherdrive/constraint/mimic_row.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/model/model_builder.hpp"
@@ -55,6 +58,7 @@ struct MergedLink {
 struct UrdfGeometry {
   enum class Shape { box, cylinder, sphere, mesh };
   std::string link;  ///< the URDF link that has it
+  std::string name;  ///< the element's name attribute, or ""
   std::string body;  ///< the model link it moves with: link, or the one link was merged into
   bool collision = false;  ///< <collision>; else <visual>
   int index = 0;           ///< its place among link's visuals (or collisions)
@@ -92,6 +96,17 @@ struct UrdfRobot {
   std::map<std::string, MergedLink> merged;  ///< merged link name -> where it went
   /// Every link's visuals, then its collisions, links in document order (merged ones included).
   std::vector<UrdfGeometry> geometry;
+  /// Collision shapes by model link (or frame) name, poses in its frame: URDF <collision> box
+  /// and sphere, MJCF sphere, capsule and box geoms; rebuild() gives them to the model (a scene's
+  /// `shapes:` are added to this list too).
+  std::vector<std::pair<std::string, CollisionShape>> shapes;
+  /// Collision geometry contacts cannot use yet (URDF cylinder and mesh; MJCF ellipsoid,
+  /// cylinder, mesh, height field): Model::unsupported_shapes.
+  std::vector<std::string> unsupported_shapes;
+  /// The file's own floor: an MJCF plane geom on the world body (enabled, its height along its
+  /// normal, friction[0] as static and dynamic friction). A scene of the file takes it unless
+  /// the scene says `ground:` itself. URDF has none.
+  std::optional<Ground> ground;
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
   /// The URDF effort limit of each moving joint (informative; drives need their own max_force).
   std::map<std::string, double> effort_limits;

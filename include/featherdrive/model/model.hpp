@@ -78,6 +78,10 @@ struct Model {
   std::vector<NamedFrame> frames;      ///< merged links' frames (names unlike any link's)
   /// Collision shapes, grouped by link in link order (a merged link's shapes are its parent's).
   std::vector<CollisionShape> shapes;
+  /// Collision geometry the importer read that contacts cannot use yet (cylinder, mesh,
+  /// ellipsoid, ...), one description each, e.g. "link 'l_foot': mesh collision 'foot.dae'". A
+  /// ground is refused while there is any (check_ground_supported, sim/settings.hpp).
+  std::vector<std::string> unsupported_shapes;
 
   bool floating_base() const { return !links.empty() && links[0].joint_type == JointType::floating; }
   int num_links() const { return static_cast<int>(links.size()); }

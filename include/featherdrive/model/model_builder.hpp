@@ -66,6 +66,13 @@ JointSpec floating_joint(std::string name);
 void set_link_inertial(Link& link, double mass, const Vec3& com, const Mat3& inertia,
                        bool can_move);
 
+/// A shape's sizes (finite, > 0, as its type reads them), pose (finite position, a rotation
+/// matrix) and material (frictions finite and >= 0, restitution in [0, 1]); throws ModelError
+/// "model: <who>: <field> = <value> ...". `who` names the shape and its link.
+void check_shape(const std::string& who, const CollisionShape& shape);
+/// "shape 'foot' (sphere) of link 'shin'", or "shape #3 ..." when the shape has no name.
+std::string shape_label(const CollisionShape& shape, size_t index, const std::string& link);
+
 /// A link description in one call.
 LinkSpec make_link(std::string name, std::string parent, double mass, const Vec3& com,
                    const Mat3& inertia, JointSpec joint);
@@ -80,7 +87,10 @@ class ModelBuilder {
                           const Mat3& rotation);
   /// A collision shape on `link` (shape.link is set by build()); build() checks the link, the
   /// sizes (finite, > 0), the pose and the material (friction >= 0, restitution in [0, 1]).
+  /// `link` may name a frame (add_frame): the shape goes to its link, its pose composed.
   ModelBuilder& add_shape(std::string link, CollisionShape shape);
+  /// Geometry the importer saw that contacts cannot use yet (Model::unsupported_shapes).
+  ModelBuilder& add_unsupported_shape(std::string description);
   /// Validates everything and returns the model; throws ModelError naming the offending link or
   /// joint, field and value.
   Model build() const;
@@ -90,6 +100,7 @@ class ModelBuilder {
   std::vector<LinkSpec> links_;
   std::vector<std::pair<NamedFrame, std::string>> frames_;  // the frame and its link's name
   std::vector<std::pair<CollisionShape, std::string>> shapes_;  // the shape and its link's name
+  std::vector<std::string> unsupported_shapes_;
 };
 
 }  // namespace featherdrive

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "featherdrive/model/model.hpp"
 
@@ -18,6 +20,13 @@ std::string topology_difference(const Model& a, const Model& b);
 /// naming the link, field and value, std::invalid_argument for a link index out of range.
 Model with_link_inertial(const Model& model, int link, double mass, const Vec3& com,
                          const Mat3& inertia_com);
+
+/// model with these collision shapes added (link name, shape), checked as ModelBuilder::add_shape
+/// checks them: a name may be a link's or a frame's (a merged link: the shape goes to its link,
+/// its pose composed). Model::shapes stays grouped by link in link order, the model's own shapes
+/// first within a link. Throws ModelError naming the shape, link, field and value.
+Model with_shapes(const Model& model,
+                  const std::vector<std::pair<std::string, CollisionShape>>& shapes);
 
 /// model with this armature (nv values, each finite and >= 0); throws ModelError naming the
 /// joint and value, or the size.

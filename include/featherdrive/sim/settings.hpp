@@ -141,6 +141,9 @@ void check_actuator_feedforward(const Model& model, int dof, double effort,
                                 ActuatorKind actuator_kind);
 /// The ground: finite height, a normal of finite non-zero length, a valid material.
 void check_ground(const Ground& ground);
+/// An enabled ground needs every shape of the model to be one contacts support: throws
+/// std::invalid_argument naming the first of Model::unsupported_shapes.
+void check_ground_supported(const Model& model, const Ground& ground);
 /// Offsets finite, 0 <= rest_offset < contact_offset; bounce_threshold finite and >= 0.
 void check_contact_options(const ContactOptions& options);
 void check_link_parameters_of(const Model& model, int link, const LinkParameters& parameters);

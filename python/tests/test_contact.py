@@ -1,0 +1,117 @@
+"""Collision geometry and the ground from Python (issue 34): Model.shapes from URDF and MJCF,
+fd.Ground / fd.ContactOptions on a Simulation with their checks, a scene's ground, contact and
+shapes keys, contacts() and link_contact_force(). Expectations come from the files themselves."""
+import gzip
+import math
+import pathlib
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+import featherdrive as fd
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+COLLISIONS = ROOT / "tests" / "data" / "collisions.urdf"
+CHAIN = ROOT / "examples" / "chain3.urdf"
+ANT = pathlib.Path("/usr/share/doc/dart/data/mjcf/openai/ant.xml.gz")
+
+
+def test_urdf_collisions_are_shapes_on_their_links():
+    robot = fd.load_urdf(str(COLLISIONS))
+    shapes = robot.model.shapes
+    assert [s.name for s in shapes] == ["body", "", "lens", "arm_box", "palm"]
+    assert [robot.model.links[s.link].name for s in shapes] == ["base"] * 3 + ["arm"] * 2
+    assert shapes[0].type == fd.ShapeType.box
+    np.testing.assert_array_equal(shapes[0].size, [0.2, 0.1, 0.05])  # half the <box size>
+    assert shapes[1].type == fd.ShapeType.sphere
+    np.testing.assert_allclose(shapes[2].position, [0.18, 0.01, 0.13], atol=1e-15)
+    assert shapes[0].material.static_friction == 0.5
+    assert robot.model.unsupported_shapes == [
+        "link 'base': cylinder collision 'wheel'",
+        "link 'arm': mesh collision 'package://collisions/arm.stl'"]
+    assert robot.ground is None
+
+
+def test_a_ground_is_refused_beside_unsupported_geometry():
+    sim = fd.Simulation(fd.load_urdf(str(COLLISIONS)).model)
+    with pytest.raises(ValueError, match=r"^ground: link 'base': cylinder collision 'wheel': "
+                                         r"contacts do not support this shape yet"):
+        sim.set_ground(fd.Ground())
+    assert not sim.ground().enabled
+    sim.set_ground(fd.Ground(enabled=False, height=2.0))
+    assert sim.ground().height == 2.0
+
+
+def test_ground_and_contact_options_round_trip_and_are_checked():
+    sim = fd.Simulation(fd.load_urdf(str(CHAIN)).model)
+    assert not sim.ground().enabled
+    sim.set_ground(fd.Ground(height=-0.1, normal=[0, 0, 2],
+                             material=fd.Material(0.9, 0.8, 0.2)))
+    g = sim.ground()
+    assert g.enabled and g.height == -0.1
+    np.testing.assert_array_equal(g.normal, [0, 0, 1])  # normalised
+    assert (g.material.static_friction, g.material.dynamic_friction,
+            g.material.restitution) == (0.9, 0.8, 0.2)
+    with pytest.raises(ValueError, match=r"ground.normal = \[0, 0, 0\]"):
+        sim.set_ground(fd.Ground(normal=[0, 0, 0]))
+    with pytest.raises(ValueError, match=r"ground.restitution = 2 must be in \[0, 1\]"):
+        sim.set_ground(fd.Ground(material=fd.Material(restitution=2.0)))
+    assert sim.ground().height == -0.1  # unchanged by the refused ones
+    sim.set_contact_options(fd.ContactOptions(contact_offset=0.05, rest_offset=0.01,
+                                              bounce_threshold=1.0))
+    o = sim.contact_options()
+    assert (o.contact_offset, o.rest_offset, o.bounce_threshold) == (0.05, 0.01, 1.0)
+    with pytest.raises(ValueError, match="need 0 <= rest_offset < contact_offset"):
+        sim.set_contact_options(fd.ContactOptions(contact_offset=0.01, rest_offset=0.02))
+    sim.step()
+    assert isinstance(sim.contacts(), list)
+    force = sim.link_contact_force()
+    assert force.shape == (sim.model.num_links(), 3)
+    assert np.all(np.isfinite(force))
+
+
+def test_the_ants_geoms_and_floor(tmp_path):
+    xml = tmp_path / "ant.xml"
+    xml.write_bytes(gzip.decompress(ANT.read_bytes()))
+    robot = fd.load_mjcf(str(xml), fixed_base=False)
+    root = ET.parse(xml).getroot()
+    geoms = [g for g in root.find("worldbody").iter("geom") if g.get("type") != "plane"]
+    assert len(robot.model.shapes) == len(geoms) == 13
+    by_name = {s.name: s for s in robot.model.shapes}
+    for g in geoms:
+        s = by_name[g.get("name")]
+        assert s.type == (fd.ShapeType.capsule if g.get("type") == "capsule"
+                          else fd.ShapeType.sphere)
+        assert s.size[0] == float(g.get("size"))
+        if g.get("fromto"):
+            a = np.array([float(x) for x in g.get("fromto").split()])
+            assert s.size[1] == pytest.approx(0.5 * np.linalg.norm(a[3:] - a[:3]), abs=1e-12)
+        assert s.material.static_friction == 1.0  # <default><geom friction="1 0.5 0.5">
+    assert robot.ground is not None and robot.ground.enabled
+    assert robot.ground.height == 0.0
+    np.testing.assert_allclose(robot.ground.normal, [0, 0, 1])
+    # A scene of it takes the floor; `ground: false` leaves it off.
+    scene_text = f"model: {xml}\nfixed_base: false\ndt: 0.01\nsteps: 1\n"
+    scene = fd.parse_scene(scene_text, str(tmp_path / "s.yaml"))
+    assert scene.ground.enabled
+    assert fd.make_simulation(scene).ground().enabled
+    off = fd.parse_scene(scene_text + "ground: false\n", str(tmp_path / "s.yaml"))
+    assert not fd.make_simulation(off).ground().enabled
+
+
+def test_scene_keys(tmp_path):
+    text = (f"model: {CHAIN}\ndt: 0.01\nsteps: 1\n"
+            "ground: {height: 0.25, static_friction: 1.0}\n"
+            "contact: {contact_offset: 0.03}\n"
+            "shapes:\n  - {link: link3, type: sphere, radius: 0.04, name: tip}\n")
+    scene = fd.parse_scene(text, str(tmp_path / "s.yaml"))
+    assert scene.ground.height == 0.25 and scene.ground.material.static_friction == 1.0
+    assert scene.contact.contact_offset == 0.03
+    tip = scene.model.shapes[-1]
+    assert tip.name == "tip" and scene.model.links[tip.link].name == "link3"
+    sim = fd.make_simulation(scene)
+    assert sim.ground().height == 0.25
+    assert sim.contact_options().contact_offset == 0.03
+    with pytest.raises(fd.InputError, match=r"s.yaml: shapes\[0\].radius = -1: must be finite"):
+        fd.parse_scene(text.replace("radius: 0.04", "radius: -1"), str(tmp_path / "s.yaml"))

@@ -1,0 +1,224 @@
+// A scene's ground, contact and shapes keys (issue 34, CONTACT_SPEC's syntax): the values reach
+// the Simulation's settings and the model; an MJCF file's floor is the scene's ground unless the
+// scene says `ground:` itself; bad values are refused naming the file, key and value.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+
+#include "featherdrive/core/format.hpp"
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/trajectory.hpp"
+
+namespace featherdrive {
+namespace {
+
+const std::string kContactSource = FEATHERDRIVE_SOURCE_DIR;
+const std::string kChain =
+    "model: " + kContactSource + "/examples/chain3.urdf\ndt: 0.01\nsteps: 5\n";
+const std::string kHumanoidScene =
+    "model: /usr/share/mujoco/model/humanoid/humanoid.xml\nfixed_base: false\ndt: 0.005\n"
+    "steps: 2\n";
+
+std::string contact_scene_error(const std::string& text) {
+  try {
+    (void)parse_scene(text, "s.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(SceneContact, GroundContactAndShapesReachTheSimulation) {
+  const Scene scene = parse_scene(kChain + R"(
+ground:
+  height: 0.5
+  normal: [0, 3, 4]
+  static_friction: 0.9
+  dynamic_friction: 0.8
+  restitution: 0.25
+contact: {contact_offset: 0.04, rest_offset: 0.005, bounce_threshold: 0.5}
+shapes:
+  - link: link3
+    type: capsule
+    radius: 0.025
+    half_length: 0.1
+    xyz: [0, 0, -0.1]
+    rpy: [0, 1.5707963267948966, 0]
+    name: tip
+    static_friction: 1.0
+    dynamic_friction: 0.75
+  - {link: link1, type: box, half_extents: [0.1, 0.2, 0.3]}
+  - {link: link2, type: sphere, radius: 0.05, restitution: 0.5}
+)",
+                                  "s.yaml");
+  const Model& m = *scene.model();
+  ASSERT_EQ(m.shapes.size(), 3u);
+  EXPECT_EQ(m.links[static_cast<size_t>(m.shapes[0].link)].name, "link1");  // by link order
+  EXPECT_EQ(m.links[static_cast<size_t>(m.shapes[2].link)].name, "link3");
+  const CollisionShape& tip = m.shapes[2];
+  EXPECT_EQ(tip.name, "tip");
+  EXPECT_EQ(tip.type, ShapeType::capsule);
+  EXPECT_EQ(tip.size, Vec3(0.025, 0.1, 0.0));
+  EXPECT_EQ(tip.position, Vec3(0, 0, -0.1));
+  // Ry(pi/2) takes the capsule's z to the link's x.
+  EXPECT_LT((tip.rotation.col(2) - Vec3::UnitX()).norm(), 1e-15);
+  EXPECT_EQ(tip.material.static_friction, 1.0);
+  EXPECT_EQ(tip.material.dynamic_friction, 0.75);
+  EXPECT_EQ(tip.material.restitution, 0.0);
+  EXPECT_EQ(m.shapes[1].material.restitution, 0.5);
+  EXPECT_EQ(m.shapes[0].size, Vec3(0.1, 0.2, 0.3));
+  EXPECT_EQ(scene.robot.shapes.size(), 3u);  // a later rebuild keeps them
+
+  const Simulation sim = make_simulation(scene);
+  const Ground& g = sim.ground();
+  EXPECT_TRUE(g.enabled);
+  EXPECT_EQ(g.height, 0.5);
+  EXPECT_LT((g.normal - Vec3(0, 0.6, 0.8)).norm(), 1e-15);
+  EXPECT_EQ(g.material.static_friction, 0.9);
+  EXPECT_EQ(g.material.dynamic_friction, 0.8);
+  EXPECT_EQ(g.material.restitution, 0.25);
+  EXPECT_EQ(sim.contact_options().contact_offset, 0.04);
+  EXPECT_EQ(sim.contact_options().rest_offset, 0.005);
+  EXPECT_EQ(sim.contact_options().bounce_threshold, 0.5);
+
+  // Without the keys: no ground, PhysX's default options, the URDF's shapes (none).
+  const Scene plain = parse_scene(kChain, "s.yaml");
+  const Simulation bare = make_simulation(plain);
+  EXPECT_FALSE(bare.ground().enabled);
+  EXPECT_EQ(bare.contact_options().contact_offset, 0.02);
+  EXPECT_TRUE(plain.model()->shapes.empty());
+  // ground: true is the default plane; ground: {} too.
+  EXPECT_TRUE(make_simulation(parse_scene(kChain + "ground: true\n", "s.yaml")).ground().enabled);
+  EXPECT_TRUE(make_simulation(parse_scene(kChain + "ground: {}\n", "s.yaml")).ground().enabled);
+}
+
+TEST(SceneContact, AnMjcfFloorIsTheGroundUnlessTheSceneSaysOtherwise) {
+  const Simulation floor = make_simulation(parse_scene(kHumanoidScene, "s.yaml"));
+  EXPECT_TRUE(floor.ground().enabled);
+  EXPECT_EQ(floor.ground().height, 0.0);
+  EXPECT_EQ(floor.ground().material.static_friction, 1.0);
+  EXPECT_EQ(floor.model().shapes.size(), 19u);
+  const Simulation own =
+      make_simulation(parse_scene(kHumanoidScene + "ground: {height: -0.5}\n", "s.yaml"));
+  EXPECT_EQ(own.ground().height, -0.5);
+  EXPECT_EQ(own.ground().material.static_friction, 0.5);  // the scene's defaults, not the file's
+  const Simulation none =
+      make_simulation(parse_scene(kHumanoidScene + "ground: false\n", "s.yaml"));
+  EXPECT_FALSE(none.ground().enabled);
+  // A floor beside a geom contacts cannot use: the scene loads without a ground, and says why.
+  const std::filesystem::path xml = std::filesystem::temp_directory_path() /
+                                    ("featherdrive-egg-" + std::to_string(::getpid()) + ".xml");
+  std::ofstream(xml) << R"(<mujoco><worldbody><geom type="plane" size="1 1 1"/>
+      <body name="b" pos="0 0 1"><freejoint/><geom name="egg" type="ellipsoid" size="0.1 0.2 0.3"/>
+      </body></worldbody></mujoco>)";
+  const Scene egg =
+      parse_scene("model: " + xml.string() + "\nfixed_base: false\nsteps: 1\n", "s.yaml");
+  std::filesystem::remove(xml);
+  EXPECT_TRUE(egg.robot.ground.has_value());
+  EXPECT_FALSE(egg.ground.enabled);
+  EXPECT_FALSE(make_simulation(egg).ground().enabled);
+  ASSERT_FALSE(egg.robot.warnings.empty());
+  EXPECT_EQ(egg.robot.warnings.back(),
+            "the file's floor is not used as the ground: link 'b': ellipsoid geom 'egg' is a shape "
+            "contacts do not support yet (sphere, capsule, box)");
+}
+
+TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"ground: {normal: [0, 0, 0]}\n",
+       "s.yaml: ground.normal = [0, 0, 0]: must be of finite non-zero length"},
+      {"ground: {height: .nan}\n",
+       "s.yaml: ground.height = .nan: must be finite"},
+      {"ground: {dynamic_friction: -0.5}\n",
+       "s.yaml: ground.dynamic_friction = -0.5: must be finite and >= 0"},
+      {"ground: [1, 2]\n",
+       "s.yaml: ground = [1, 2]: must be a map (key: value, ...)"},
+      {"ground: maybe\n",
+       "s.yaml: ground = maybe: must be true or false"},
+      {"contact: {rest_offset: 0.02}\n",
+       "s.yaml: contact = {rest_offset: 0.02}: the contact offset must be above the rest offset "
+       "(0.02)"},
+      {"contact: {contact_offset: .inf}\n",
+       "s.yaml: contact.contact_offset = .inf: must be finite"},
+      {"shapes:\n  - {link: link3, type: sphere}\n",
+       "s.yaml: shapes[0].radius: missing (a sphere needs it)"},
+      {"shapes:\n  - {type: sphere, radius: 1}\n",
+       "s.yaml: shapes[0].link: missing"},
+      {"shapes:\n  - {link: link3, type: sphere, radius: 1, half_length: 2}\n",
+       "s.yaml: shapes[0].half_length = 2: is not a size of a sphere"},
+      {"shapes:\n  - {link: link3, type: capsule, radius: 1, half_length: .inf}\n",
+       "s.yaml: shapes[0].half_length = .inf: must be finite and > 0"},
+      {"shapes:\n  - {link: link3, type: box, half_extents: [1, 2]}\n",
+       "s.yaml: shapes[0].half_extents = [1, 2]: must be a list of 3 numbers"},
+      {"shapes:\n  - {link: link3, type: box, half_extents: [1, 1, 1], xyz: [0, .nan, 0]}\n",
+       "s.yaml: shapes[0].xyz[1] = .nan: must be finite"},
+      {"shapes:\n  - {link: link3, type: sphere, radius: 1, static_friction: -1}\n",
+       "s.yaml: shapes[0].static_friction = -1: must be finite and >= 0"},
+  };
+  for (const auto& [text, message] : cases)
+    EXPECT_EQ(contact_scene_error(kChain + text), message);
+  EXPECT_EQ(contact_scene_error(kChain + "shapes:\n  - {link: link3, type: sphere, radius: 1, "
+                                         "colour: red}\n")
+                .rfind("s.yaml: shapes[0].colour: unknown key", 0),
+            0u);
+
+  // A robot whose geometry contacts cannot use yet: the ground is refused in one line.
+  const std::string collisions =
+      "model: " + kContactSource + "/tests/data/collisions.urdf\ndt: 0.01\nsteps: 1\n";
+  EXPECT_EQ(contact_scene_error(collisions + "ground: {}\n"),
+            "s.yaml: ground: link 'base': cylinder collision 'wheel': contacts do not support this "
+            "shape yet (sphere, capsule, box) (2 such shapes in all); leave the ground off or "
+            "replace the geometry");
+  EXPECT_EQ(contact_scene_error(collisions + "ground: false\n"), "no error");
+}
+
+TEST(SceneContact, TheCsvHasContactColumnsForLinksWithShapesWithTheGroundOn) {
+  const Scene scene = parse_scene(kChain + R"(
+ground: {height: -5}
+shapes:
+  - {link: link3, type: sphere, radius: 0.05}
+  - {link: link1, type: sphere, radius: 0.05}
+  - {link: link3, type: box, half_extents: [0.1, 0.1, 0.1]}
+)",
+                                  "s.yaml");
+  EXPECT_EQ(shape_links(*scene.model()),
+            (std::vector<int>{scene.model()->link_index("link1"),
+                              scene.model()->link_index("link3")}));
+  Simulation sim = make_simulation(scene);
+  std::ostringstream out;
+  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled);
+  writer.write(0, sim, true);
+  sim.step();
+  writer.write(1, sim);
+  std::istringstream in(out.str());
+  std::string header, initial, row;
+  std::getline(in, header);
+  std::getline(in, initial);
+  std::getline(in, row);
+  const std::string columns =
+      ",contact:link1:fx,contact:link1:fy,contact:link1:fz,contact:link3:fx,contact:link3:fy,"
+      "contact:link3:fz";
+  ASSERT_GE(header.size(), columns.size());
+  EXPECT_EQ(header.substr(header.size() - columns.size()), columns);
+  EXPECT_EQ(initial.substr(initial.size() - 12), ",0,0,0,0,0,0");
+  std::string values;
+  for (const char* link : {"link1", "link3"}) {
+    const Vec3 f = sim.link_contact_force()[static_cast<size_t>(scene.model()->link_index(link))];
+    for (int k = 0; k < 3; ++k) values += "," + format_double(f[k]);
+  }
+  EXPECT_EQ(row.substr(row.size() - values.size()), values);
+  // Without the ground, no contact columns.
+  std::ostringstream plain;
+  TrajectoryWriter(plain, scene.robot).write(0, sim, true);
+  EXPECT_EQ(plain.str().find("contact:"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace featherdrive
