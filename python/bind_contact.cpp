@@ -144,7 +144,12 @@ void featherdrive::python::bind_contact(py::module_& m) {
           "The ContactOptions (a copy).")
       .def(
           "contacts",
-          [](const Simulation& s) { return locked(s, [&] { return s.contacts(); }); },
+          [](const Simulation& s) {
+            return locked(s, [&] {
+              const auto c = s.contacts();
+              return std::vector<ContactReport>(c.begin(), c.end());
+            });
+          },
           "The contact points of the last step (list of ContactReport; empty without a ground).")
       .def(
           "link_contact_force",

@@ -115,3 +115,31 @@ def test_scene_keys(tmp_path):
     assert sim.contact_options().contact_offset == 0.03
     with pytest.raises(fd.InputError, match=r"s.yaml: shapes\[0\].radius = -1: must be finite"):
         fd.parse_scene(text.replace("radius: 0.04", "radius: -1"), str(tmp_path / "s.yaml"))
+
+
+BALL = """<robot name="ball"><link name="ball">
+  <inertial><mass value="2"/><inertia ixx="0.008" iyy="0.008" izz="0.008" ixy="0" ixz="0" iyz="0"/>
+  </inertial>
+  <collision><geometry><sphere radius="0.1"/></geometry></collision></link></robot>"""
+
+
+def test_a_ball_lands_rests_and_rolls_on_the_ground():
+    """Dropped, it comes to rest at z = r carrying its weight (linear momentum of a resting
+    step); pushed while slipping, it ends rolling at 5/7 of its speed (angular momentum about the
+    contact line; docs/math/contact.md, section 13)."""
+    robot = fd.parse_urdf(BALL, "ball.urdf", fd.UrdfOptions(fixed_base=False))
+    sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=0.01, position_iterations=50))
+    sim.set_ground(fd.Ground(material=fd.Material(0.5, 0.5, 0.0)))
+    sim.set_base_state(position=[0.0, 0.0, 0.3])
+    for _ in range(200):
+        sim.step()
+    assert sim.base_state()["position"][2] == pytest.approx(0.1, abs=1e-9)
+    reports = sim.contacts()
+    assert len(reports) == 1
+    assert sim.link_contact_force()[0][2] == pytest.approx(2 * 9.81, rel=1e-9)
+    sim.set_base_state(position=[0.0, 0.0, 0.1], linear_velocity=[1.0, 0.0, 0.0])
+    for _ in range(300):
+        sim.step()
+    state = sim.base_state()
+    assert state["linear_velocity"][0] == pytest.approx(5.0 / 7.0, abs=1e-9)
+    assert state["angular_velocity"][1] * 0.1 == pytest.approx(5.0 / 7.0, abs=1e-9)

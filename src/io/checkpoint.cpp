@@ -200,8 +200,9 @@ void read_drive_delays(Reader& r, Settings& settings, State& state, const std::s
   }
 }
 
-// Version 8: the ground (enabled, height, normal, material) and the contact options. Contacts
-// keep no state between steps (docs/math/contact.md), so nothing else is needed to resume.
+// Version 8: the ground (enabled, height, normal, material), the contact options, and per shape
+// the friction anchors kept from the last step (docs/math/contact.md, C9): the contacts' only
+// state between steps.
 void write_contact_settings(Writer& p, const Settings& settings) {
   const Ground& g = settings.ground;
   p.u8(g.enabled ? 1 : 0);
@@ -210,6 +211,23 @@ void write_contact_settings(Writer& p, const Settings& settings) {
     p.f64(v);
   const ContactOptions& c = settings.contact;
   for (double v : {c.contact_offset, c.rest_offset, c.bounce_threshold}) p.f64(v);
+}
+
+void write_friction_anchors(Writer& p, const State& state) {
+  for (const FrictionAnchors& a : state.friction_anchors) {
+    p.u8(static_cast<std::uint8_t>(a.count));
+    for (const Vec3* v : {&a.normal, &a.body[0], &a.body[1], &a.ground[0], &a.ground[1]})
+      for (int i = 0; i < 3; ++i) p.f64((*v)[i]);
+  }
+}
+
+void read_friction_anchors(Reader& r, const Model& model, State& state) {
+  state.friction_anchors.resize(model.shapes.size());
+  for (FrictionAnchors& a : state.friction_anchors) {
+    a.count = r.u8();
+    for (Vec3* v : {&a.normal, &a.body[0], &a.body[1], &a.ground[0], &a.ground[1]})
+      for (int i = 0; i < 3; ++i) (*v)[i] = r.f64();
+  }
 }
 
 void read_contact_settings(Reader& r, Settings& settings) {
@@ -353,6 +371,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   const GuardAccount& account = sim.guard_account();  // version 7
   for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
   write_contact_settings(p, settings);  // version 8
+  write_friction_anchors(p, state);
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -556,7 +575,10 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       account.dissipated = r.f64();
       account.scale = r.f64();
     }
-    if (version >= 8) read_contact_settings(r, settings);  // before, the simulation's own
+    if (version >= 8) {  // before, the simulation's own settings and no kept anchors
+      read_contact_settings(r, settings);
+      read_friction_anchors(r, model, state);
+    }
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

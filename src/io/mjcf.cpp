@@ -435,8 +435,9 @@ void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions&
   for (int g = 0; g < m->ngeom; ++g)
     colliding += (m->geom_contype[g] | m->geom_conaffinity[g]) != 0;
   if (colliding > 0 && !(m->opt.disableflags & mjDSBL_CONTACT))
-    warnings.push_back("contacts are not simulated (" + std::to_string(colliding) +
-                       " geoms collide in MuJoCo)");
+    warnings.push_back("contacts between the robot's own geoms are not simulated (" +
+                       std::to_string(colliding) +
+                       " geoms collide in MuJoCo); those with the ground are");
   if (!c.springs.empty())
     warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on joints " +
                        joined(c.springs));

@@ -14,6 +14,7 @@
 
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/model/model_variant.hpp"
+#include "support/contact_models.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
 #include "support/source_tree.hpp"
@@ -726,6 +727,36 @@ TEST(Checkpoint, VersionFiveActuatorsReadAsExplicit) {
 // A guarded run: the guard's account (test (iii), docs/math/step_guard.md) is in the checkpoint
 // (version 7), so the resumed run redoes the same steps and equals the uninterrupted one bit for
 // bit; a version 6 file reads with an empty account; a forged account is refused.
+// Contacts keep their friction anchors from step to step (docs/math/contact.md, C9): the
+// quadruped standing on the ground resumes bit for bit, PGS and TGS, and a version 7 file (no
+// anchors) resumes with none kept.
+TEST(Checkpoint, ContactRunResumesBitForBit) {
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    Simulation run = test::quadruped_simulation(solver, 0.0);
+    run.step(30);
+    int kept = 0;
+    for (const FrictionAnchors& a : run.state().friction_anchors) kept += a.count;
+    ASSERT_GT(kept, 0);
+    const std::string bytes = checkpoint_bytes(run);
+    Simulation resumed = test::quadruped_simulation(solver, 0.0);
+    restore_checkpoint(bytes, resumed, "state.ckpt");
+    EXPECT_EQ(checkpoint_bytes(resumed), bytes);
+    for (int k = 0; k < 40; ++k) run.step(), resumed.step();
+    expect_same_state(run, resumed);
+    ASSERT_EQ(run.contacts().size(), resumed.contacts().size());
+    for (size_t c = 0; c < run.contacts().size(); ++c)
+      EXPECT_EQ(bits(run.contacts()[c].normal_impulse), bits(resumed.contacts()[c].normal_impulse));
+    // Without the anchors (as a version 7 file resumes) the run differs.
+    Simulation fresh = test::quadruped_simulation(solver, 0.0);
+    restore_checkpoint(bytes, fresh, "state.ckpt");
+    State s = fresh.state();
+    s.friction_anchors.clear();
+    fresh.set_state(s);
+    fresh.step(40);
+    EXPECT_NE(bits(fresh.q()[2]), bits(run.q()[2]));
+  }
+}
+
 TEST(Checkpoint, GuardedRunResumesBitForBit) {
   auto model = test::make_planar_chain(4, 1.0, 0.5);
   SimulationOptions o;

@@ -2,7 +2,8 @@
 // build's ASan, UBSan and fuzzing coverage): passive motion over 100 000 steps (a pendulum's
 // period, a chain's energy drift), the stability check's verdict (docs/stability_check.md,
 // "Accuracy") against actual runs of random robots, gains, steps and solvers, its robot fix
-// against a long run, and the step guard on issue 35's diverging chain.
+// against a long run, the step guard on issue 35's diverging chain, and a box resting on the
+// ground for 10 000 converged steps.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,6 +18,8 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/stability_check.hpp"
+#include "featherdrive/algorithm/floating_base.hpp"
+#include "support/contact_models.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
 
@@ -283,6 +286,44 @@ double measured_period(Simulation& sim, int steps) {
     prev = now;
   }
   return (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
+}
+
+// A 1 kg box resting on the ground, 50 (PGS) or 100 (TGS) position iterations that converge its
+// four corners' rows: its velocity does not change, so over each step the normal impulses carry
+// exactly its weight (linear momentum), and over 10 000 steps it neither sinks nor rises
+// (docs/math/contact.md, section 13).
+TEST(Contact, RestingBoxCarriesItsWeightWithoutDrift) {
+  const double m = 1.0, half = 0.1, dt = 0.01, g = 9.81;
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o;
+    o.dt = dt;
+    o.solver = solver;
+    o.position_iterations = solver == SolverType::pgs ? 50 : 100;
+    Simulation sim(test::make_ground_box(0.5), o);
+    VecX q = sim.q(), qd = sim.qd();
+    BaseState base;
+    base.position = Vec3(0, 0, half);
+    set_base_state(sim.model(), base, q, qd);
+    sim.set_q(q);
+    sim.set_qd(qd);
+    Ground ground;
+    ground.enabled = true;
+    sim.set_ground(ground);
+    sim.step(10);
+    ASSERT_EQ(sim.contacts().size(), 4u);
+    const double z0 = base_state(sim.model(), sim.q(), sim.qd()).position.z();
+    double worst = 0.0;
+    for (int k = 0; k < 10000; ++k) {
+      sim.step();
+      double sum = 0.0;
+      for (const ContactReport& c : sim.contacts()) sum += c.normal_impulse;
+      worst = std::max(worst, std::abs(sum / (dt * m * g) - 1.0));
+    }
+    const double z1 = base_state(sim.model(), sim.q(), sim.qd()).position.z();
+    EXPECT_LT(worst, 1e-9) << to_string(solver);
+    EXPECT_LT(std::abs(z1 - z0), 1e-9) << to_string(solver);
+    EXPECT_LT(std::abs(z1 - half), 1e-9) << to_string(solver);
+  }
 }
 
 TEST(Passive, SmallAnglePendulumPeriod) {

@@ -269,7 +269,8 @@ TEST(MjcfImport, HumanoidLoadsWithItsWarnings) {
   // One line each: contacts (20 colliding geoms, the floor among them), the springs (every joint
   // but the elbows, stiffness="0"), damping.
   ASSERT_EQ(robot.warnings.size(), 3u);
-  EXPECT_EQ(robot.warnings[0], "contacts are not simulated (20 geoms collide in MuJoCo)");
+  EXPECT_EQ(robot.warnings[0], "contacts between the robot's own geoms are not simulated (20 geoms collide in "
+            "MuJoCo); those with the ground are");
   EXPECT_NE(robot.warnings[1].find("stiffness"), std::string::npos);
   EXPECT_NE(robot.warnings[1].find("'left_ankle_x'"), std::string::npos);
   EXPECT_EQ(robot.warnings[1].find("elbow"), std::string::npos);

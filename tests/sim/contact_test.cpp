@@ -65,52 +65,30 @@ double normal_sum(const Simulation& sim) {
 class Contact : public ::testing::TestWithParam<SolverType> {};
 
 // Iterations that converge the rows of a box's four corners: the closed forms are those of the
-// converged step. PhysX's default 4/1 leaves the corners unconverged (the *AtPhysxDefaults tests).
+// converged step (the resting box over 10 000 steps is a long run: tests/peers/long_runs_test.cpp).
+// PhysX's default 4/1 leaves the corners unconverged (the *AtPhysxDefaults test).
 int converged(SolverType solver) { return solver == SolverType::pgs ? 50 : 100; }
 
-// A box at rest: its velocity does not change, so over each step the normal impulses carry exactly
-// its weight (linear momentum), and it does not sink or rise.
-TEST_P(Contact, RestingBoxCarriesItsWeightWithoutDrift) {
-  const double m = 1.0, half = 0.1, dt = 0.01;
-  BaseState base;
-  base.position = Vec3(0, 0, half);
-  Simulation sim = on_ground(box(m, half, {}), GetParam(), base, {}, dt, converged(GetParam()));
-  sim.step(10);
-  EXPECT_EQ(sim.contacts().size(), 4u);
-  const double z0 = base_state(sim.model(), sim.q(), sim.qd()).position.z();
-  double worst = 0.0;
-  for (int k = 0; k < 10000; ++k) {
-    sim.step();
-    worst = std::max(worst, std::abs(normal_sum(sim) / (dt * m * kG) - 1.0));
-  }
-  const double z1 = base_state(sim.model(), sim.q(), sim.qd()).position.z();
-  EXPECT_LT(worst, 1e-9);
-  EXPECT_LT(std::abs(z1 - z0), 1e-9);
-  EXPECT_LT(std::abs(z1 - half), 1e-9);
-}
-
-// At 4/1 the corners' rows do not converge and the box rocks by micro-radians from step to step
-// (as in PhysX, docs/math/contact.md section 11), but on average the impulses still carry its
-// weight: the mean over N steps differs from m g dt by m (v_N - v_0) / N, and the box stays put.
-TEST_P(Contact, RestingBoxAtPhysxDefaultsCarriesItsWeightOnAverage) {
+// At PhysX's default 4/1 the corners' rows do not converge within a step, but with the friction
+// anchors kept (C9) the box settles within 100 steps into a steady tilt of micro-radians (as in
+// PhysX: docs/math/contact.md, sections 11 and 13), in which each step's impulses again carry its
+// weight exactly (its velocity repeats) and it stays put.
+TEST_P(Contact, RestingBoxAtPhysxDefaultsSettlesAndCarriesItsWeight) {
   const double m = 1.0, half = 0.1, dt = 0.01;
   BaseState base;
   base.position = Vec3(0, 0, half);
   Simulation sim = on_ground(box(m, half, {}), GetParam(), base, {}, dt);
   sim.step(100);
   const BaseState start = base_state(sim.model(), sim.q(), sim.qd());
-  double sum = 0.0;
-  const int n = 10000;
-  for (int k = 0; k < n; ++k) {
+  double worst = 0.0;
+  for (int k = 0; k < 2000; ++k) {
     sim.step();
-    sum += normal_sum(sim);
+    worst = std::max(worst, std::abs(normal_sum(sim) / (dt * m * kG) - 1.0));
   }
   const BaseState end = base_state(sim.model(), sim.q(), sim.qd());
-  const double dv = end.linear_velocity.z() - start.linear_velocity.z();
-  EXPECT_NEAR(sum / (n * dt * m * kG), 1.0 + m * dv / (n * dt * m * kG), 1e-12);
-  EXPECT_LT(std::abs(sum / (n * dt * m * kG) - 1.0), 1e-6);
+  EXPECT_LT(worst, 1e-9);
   EXPECT_LT(std::abs(end.position.z() - half), 1e-5);
-  EXPECT_LT(std::abs(end.position.z() - start.position.z()), 1e-6);
+  EXPECT_LT((end.position - start.position).norm(), 1e-9);
 }
 
 // Semi-implicit Euler with Coulomb friction: v_k = v0 - k mu g dt while positive, x += dt v_k, so

@@ -19,8 +19,9 @@
 //                 dofs, gear ratio, offset, natural frequency and damping ratio), then the
 //                 step guard's account (created, dissipated, scale; version 7), then the
 //                 ground (enabled u8, height, normal, static and dynamic friction,
-//                 restitution) and the contact options (contact offset, rest offset, bounce
-//                 threshold; version 8)
+//                 restitution), the contact options (contact offset, rest offset, bounce
+//                 threshold) and per shape its kept friction anchors (count u8, normal, two body
+//                 points, two ground points; version 8)
 //   u64           FNV-1a 64 checksum of everything before it
 // docs/testing.md lists the errors a bad file gets.
 #pragma once
