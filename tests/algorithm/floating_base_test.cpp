@@ -97,8 +97,14 @@ TEST_P(FreeBody, FliesTheDiscreteBallisticArc) {
   }
 }
 
+std::string spin_name(const ::testing::TestParamInfo<Vec3>& info) {
+  const char* names[] = {"still", "tumbling", "spinning_10rad_s"};
+  return names[info.index];
+}
+
 INSTANTIATE_TEST_SUITE_P(Spins, FreeBody,
-                         ::testing::Values(Vec3::Zero(), Vec3(0.3, -2.0, 5.0), Vec3(0.0, 10.0, 0.0)));
+                         ::testing::Values(Vec3::Zero(), Vec3(0.3, -2.0, 5.0), Vec3(0.0, 10.0, 0.0)),
+                         spin_name);
 
 TEST(FloatingBase, BadInputIsRefusedInOneLine) {
   const auto fixed = test::make_pendulum(1.0, 0.5);
