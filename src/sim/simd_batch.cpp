@@ -171,6 +171,9 @@ void check_supported(const Simulation& s) {
     if (s.drive_delay(d) != 0)
       unsupported("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
   }
+  // Nor contact rows: the robot would pass through the ground.
+  if (s.ground().enabled && !m.shapes.empty())
+    unsupported("simulation", "settings", "a ground with the model's collision shapes");
   // The lane step has no mimic rows: a prototype with one would run uncoupled.
   for (const MimicJoint& mimic : s.mimic_joints())
     unsupported("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,

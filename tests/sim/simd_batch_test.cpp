@@ -266,6 +266,21 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   mimic.set_mimic_joints({{2, 1, 1.5, 0.0}});
   const std::string follower = s.model().links[s.model().dof_link[2]].joint_name;
   expect_refused(mimic, "joint '" + follower + "' has a mimic row");
+  // A ground with the model's shapes (the lane step has no contact rows): a fixed arm that can
+  // touch the floor would otherwise pass through it.
+  Model shaped = s.model();
+  CollisionShape ball;
+  ball.link = shaped.num_links() - 1;
+  ball.size = Vec3(0.1, 0.0, 0.0);
+  shaped.shapes.push_back(ball);
+  Simulation grounded(std::make_shared<const Model>(shaped), s.options());
+  Ground ground;
+  ground.enabled = true;
+  grounded.set_ground(ground);
+  expect_refused(grounded, "simulation 'settings' has a ground with the model's collision shapes");
+  ground.enabled = false;
+  grounded.set_ground(ground);
+  EXPECT_NO_THROW(SimdBatch(grounded, 2));  // shapes alone do nothing
   // An actuator of either integration (the lane step has no actuator rows).
   for (ActuatorIntegration integration :
        {ActuatorIntegration::explicit_law, ActuatorIntegration::implicit_law}) {
