@@ -185,6 +185,7 @@ int compare_mujoco(const CompareMujocoArgs& args) {
           "' is spherical: compare-mujoco compares revolute and prismatic joints (MuJoCo's ball "
           "joint takes no actuator per axis and its qpos is a quaternion)");
   Simulation start = make_simulation(scene);
+  refuse_ground(args.scene, start, "compare-mujoco");
   // MuJoCo's frictionloss is another law and it has no joint velocity limits: both sides run
   // without them, and the output says so.
   std::string friction_off, velocity_limits_off;

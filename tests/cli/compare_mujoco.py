@@ -386,6 +386,18 @@ def main():
     one_line_error(run(cli, "compare-mujoco", wrist),
                    ["spherical_wrist.yaml", "joint 'wrist' is spherical"], "a spherical wrist")
 
+    # A ground beside collision shapes: MuJoCo's side would run without it, so both refuse.
+    grounded = os.path.join(out_dir, "slider_ground.yaml")
+    with open(grounded, "w") as f:
+        f.write(f"model: {os.path.join(source, 'examples', 'slider.urdf')}\nfixed_base: true\n"
+                "steps: 10\nground: {height: -1.0}\n"
+                "shapes: [{link: carriage, type: sphere, radius: 0.05}]\n")
+    for command in (["compare-mujoco", grounded],
+                    ["translate", grounded, "--to", "mujoco",
+                     "--out", os.path.join(out_dir, "grounded.xml")]):
+        one_line_error(run(cli, *command), ["slider_ground.yaml", "ground:", "ground: false"],
+                       f"{command[0]} with a ground")
+
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", scene)
