@@ -22,7 +22,12 @@ void featherdrive::python::bind_contact(py::module_& m) {
       .value("sphere", ShapeType::sphere, "size = (radius, 0, 0)")
       .value("capsule", ShapeType::capsule,
              "size = (radius, half length, 0); the segment along the shape's z")
-      .value("box", ShapeType::box, "size = half extents along the shape's x, y, z");
+      .value("box", ShapeType::box, "size = half extents along the shape's x, y, z")
+      .value("ellipsoid", ShapeType::ellipsoid, "size = the semi-axes along the shape's x, y, z")
+      .value("cylinder", ShapeType::cylinder,
+             "size = (radius, half length, 0); the axis along the shape's z")
+      .value("convex", ShapeType::convex,
+             "a convex hull (of a mesh): CollisionShape.vertices in the shape frame; size unused");
 
   py::class_<Material>(m, "Material",
                        "Friction and restitution of a surface; a contact uses the average of its "
@@ -45,6 +50,16 @@ void featherdrive::python::bind_contact(py::module_& m) {
       .def_readonly("position", &CollisionShape::position, "origin in the link frame (3,)")
       .def_readonly("rotation", &CollisionShape::rotation, "axes in the link frame (3, 3)")
       .def_readonly("material", &CollisionShape::material, "Material")
+      .def_property_readonly(
+          "vertices",
+          [](const CollisionShape& s) {
+            py::array_t<double> out({static_cast<py::ssize_t>(s.vertices.size()), py::ssize_t{3}});
+            auto w = out.mutable_unchecked<2>();
+            for (size_t i = 0; i < s.vertices.size(); ++i)
+              for (int k = 0; k < 3; ++k) w(static_cast<py::ssize_t>(i), k) = s.vertices[i][k];
+            return out;
+          },
+          "convex: the hull's vertices in the shape frame, a new array (n, 3); else (0, 3)")
       .def("__repr__", [](const CollisionShape& s) {
         return std::string("CollisionShape('") + s.name + "', " + to_string(s.type) +
                ", link=" + std::to_string(s.link) + ")";

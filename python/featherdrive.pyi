@@ -269,6 +269,9 @@ class ShapeType(enum.Enum):
     sphere = 0
     capsule = 1
     box = 2
+    ellipsoid = 3
+    cylinder = 4
+    convex = 5
 
 class Material:
     """Friction and restitution of a surface (a contact averages its two surfaces')."""
@@ -280,7 +283,8 @@ class Material:
 
 class CollisionShape:
     """A collision shape of a Model (read-only). size: sphere (r, 0, 0), capsule (r, half length,
-    0) along the shape's z, box half extents."""
+    0) along the shape's z, box half extents, ellipsoid semi-axes, cylinder (r, half length, 0) along
+    the shape's z; convex: unused (vertices holds the hull)."""
     @property
     def name(self) -> str: ...
     @property
@@ -295,6 +299,9 @@ class CollisionShape:
     def rotation(self) -> Vector: ...
     @property
     def material(self) -> Material: ...
+    @property
+    def vertices(self) -> Vector:
+        """convex: the hull's vertices in the shape frame (n, 3); else (0, 3)."""
 
 class Ground:
     """The plane normal . x = height with a material; contacts when enabled."""

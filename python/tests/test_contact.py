@@ -20,22 +20,24 @@ ANT = pathlib.Path("/usr/share/doc/dart/data/mjcf/openai/ant.xml.gz")
 def test_urdf_collisions_are_shapes_on_their_links():
     robot = fd.load_urdf(str(COLLISIONS))
     shapes = robot.model.shapes
-    assert [s.name for s in shapes] == ["body", "", "lens", "arm_box", "palm"]
-    assert [robot.model.links[s.link].name for s in shapes] == ["base"] * 3 + ["arm"] * 2
+    assert [s.name for s in shapes] == ["body", "", "wheel", "lens", "arm_box", "palm"]
+    assert [robot.model.links[s.link].name for s in shapes] == ["base"] * 4 + ["arm"] * 2
     assert shapes[0].type == fd.ShapeType.box
     np.testing.assert_array_equal(shapes[0].size, [0.2, 0.1, 0.05])  # half the <box size>
     assert shapes[1].type == fd.ShapeType.sphere
-    np.testing.assert_allclose(shapes[2].position, [0.18, 0.01, 0.13], atol=1e-15)
+    assert shapes[2].type == fd.ShapeType.cylinder
+    np.testing.assert_array_equal(shapes[2].size, [0.1, 0.025, 0])  # half the <cylinder length>
+    np.testing.assert_allclose(shapes[3].position, [0.18, 0.01, 0.13], atol=1e-15)
     assert shapes[0].material.static_friction == 0.5
     assert robot.model.unsupported_shapes == [
-        "link 'base': cylinder collision 'wheel'",
-        "link 'arm': mesh collision 'package://collisions/arm.stl'"]
+        "link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo 2.2.2 reads STL, OBJ, MSH)"]
     assert robot.ground is None
 
 
 def test_a_ground_is_refused_beside_unsupported_geometry():
     sim = fd.Simulation(fd.load_urdf(str(COLLISIONS)).model)
-    with pytest.raises(ValueError, match=r"^ground: link 'base': cylinder collision 'wheel': "
+    with pytest.raises(ValueError, match=r"^ground: link 'arm': mesh collision "
+                                         r"'package://collisions/arm.dae' \(MuJoCo 2.2.2 reads STL, OBJ, MSH\): "
                                          r"contacts do not support this shape yet"):
         sim.set_ground(fd.Ground())
     assert not sim.ground().enabled

@@ -16,13 +16,94 @@ constexpr double kMinNormalShare = 0.25;          // C12
 constexpr double kCorrelationDistance = 0.025;    // m: a kept anchor's drift along n (C9)
 constexpr double kSameNormal = 0.999;              // PXC_SAME_NORMAL: cos of about 2.6 degrees
 
-int shape_points(ShapeType type) {
-  switch (type) {
+// PhysX keeps at most four points of a convex mesh on a plane (GU_MANIFOLD_CACHE_SIZE; G3).
+constexpr int kConvexPoints = 4;
+
+// The points the narrow phase may consider for a shape, and the most it keeps.
+int shape_candidates(const CollisionShape& s) {
+  switch (s.type) {
     case ShapeType::sphere: return 1;
     case ShapeType::capsule: return 2;
     case ShapeType::box: return 8;
+    case ShapeType::ellipsoid: return 1;
+    case ShapeType::cylinder: return 8;
+    case ShapeType::convex: return static_cast<int>(s.vertices.size());
   }
   return 0;
+}
+int shape_points(const CollisionShape& s) {
+  return s.type == ShapeType::convex ? std::min(shape_candidates(s), kConvexPoints)
+                                     : shape_candidates(s);
+}
+
+// Keeps four of count > 4 points in the first four places, as PhysX's reduction of a convex
+// mesh's points does (docs/math/contact.md, G3): the deepest, the one farthest from it, the ones
+// farthest on either side of the line through the two (the farthest on that side again when all
+// lie on one side), then points shallower than 0.02 m swapped for deeper unchosen ones while the
+// deepest is within it and some chosen one is not.
+void reduce_points(Vec3* points, double* separations, char* taken, int count, const Vec3& n) {
+  int chosen[kConvexPoints];
+  std::fill(taken, taken + count, 0);
+  auto pick = [&](auto score) {
+    int best = -1;
+    double best_score = 0.0;
+    for (int i = 0; i < count; ++i) {
+      if (taken[i]) continue;
+      const double v = score(i);
+      if (best < 0 || v > best_score) {
+        best = i;
+        best_score = v;
+      }
+    }
+    taken[best] = 1;
+    return best;
+  };
+  chosen[0] = pick([&](int i) { return -separations[i]; });
+  const Vec3 p0 = points[chosen[0]];
+  chosen[1] = pick([&](int i) { return (points[i] - p0).squaredNorm(); });
+  Vec3 side = (points[chosen[1]] - p0).cross(n);
+  side = side.squaredNorm() > 0.0 ? Vec3(side.normalized()) : n;
+  double lowest = 0.0;
+  int low = -1;
+  for (int i = 0; i < count; ++i) {
+    const double d = (points[i] - p0).dot(side);
+    if (!taken[i] && (low < 0 || d < lowest)) {
+      low = i;
+      lowest = d;
+    }
+  }
+  chosen[2] = pick([&](int i) { return (points[i] - p0).dot(side); });
+  const double highest = (points[chosen[2]] - p0).dot(side);
+  if (lowest * highest > 0.0 || low == chosen[2])
+    chosen[3] = pick([&](int i) { return (points[i] - p0).dot(side); });
+  else
+    taken[chosen[3] = low] = 1;
+  constexpr double kShallow = 0.02;  // m: 0.02 of PhysX's tolerance length 1
+  double deepest = separations[0], shallowest = separations[0];
+  for (int i = 1; i < count; ++i) {
+    deepest = std::min(deepest, separations[i]);
+    shallowest = std::max(shallowest, separations[i]);
+  }
+  if (deepest < kShallow && shallowest > kShallow)
+    for (int& c : chosen) {
+      if (!(separations[c] > kShallow)) continue;
+      int better = -1;
+      for (int i = 0; i < count; ++i)
+        if (!taken[i] && separations[i] < separations[c] && separations[i] < kShallow &&
+            (better < 0 || separations[i] < separations[better]))
+          better = i;
+      if (better >= 0) taken[c = better] = 1;
+    }
+  Vec3 kept[kConvexPoints];
+  double kept_d[kConvexPoints];
+  for (int k = 0; k < kConvexPoints; ++k) {
+    kept[k] = points[chosen[k]];
+    kept_d[k] = separations[chosen[k]];
+  }
+  for (int k = 0; k < kConvexPoints; ++k) {
+    points[k] = kept[k];
+    separations[k] = kept_d[k];
+  }
 }
 
 // A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
@@ -56,11 +137,15 @@ ContactRows::ContactRows(const Model& model) {
   has_shapes_.assign(n, 0);
   link_first_patch_.assign(n, 0);
   link_end_patch_.assign(n, 0);
-  int points = 0;
+  int points = 0, candidates = 0;
   for (const CollisionShape& s : model.shapes) {
     has_shapes_[static_cast<size_t>(s.link)] = 1;
-    points += shape_points(s.type);
+    points += shape_points(s);
+    candidates = std::max(candidates, shape_candidates(s));
   }
+  points_.resize(static_cast<size_t>(candidates));
+  separations_.resize(static_cast<size_t>(candidates));
+  taken_.resize(static_cast<size_t>(candidates));
   normals_.resize(static_cast<size_t>(points));
   frictions_.resize(4 * model.shapes.size());
   patches_.resize(model.shapes.size());
@@ -116,8 +201,8 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
   const Vec3& origin = data.frame_origin;
   // TGS's share of a penetration corrected per sub-step (C6).
   const double tgs_share = std::min(kPgsBias, 2.0 * std::sqrt(1.0 / position_iterations));
-  Vec3 points[8];
-  double separations[8];
+  Vec3* points = points_.data();
+  double* separations = separations_.data();
   for (int k = 0; k < static_cast<int>(model.shapes.size()); ++k) {
     const CollisionShape& shape = model.shapes[static_cast<size_t>(k)];
     const int L = shape.link;
@@ -149,6 +234,40 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
                             v & 4 ? shape.size.z() : -shape.size.z());
           const Vec3 x = c + R * corner;
           add(x, n.dot(x) - ground.height);
+        }
+        break;
+      case ShapeType::ellipsoid: {
+        // The support point along -n, the deepest one (docs/math/contact.md, G1).
+        const Vec3 a2m = shape.size.cwiseProduct(shape.size).cwiseProduct(R.transpose() * n);
+        const Vec3 x = c - R * a2m / shape.size.cwiseProduct(R.transpose() * n).norm();
+        add(x, n.dot(x) - ground.height);
+        break;
+      }
+      case ShapeType::cylinder: {
+        // Per cap four rim points a quarter turn apart, the first the deepest (G2).
+        const Vec3 axis = R.col(2);
+        Vec3 u = axis * axis.dot(n) - n;  // -n projected onto the caps' plane
+        u = u.squaredNorm() > 1e-12 ? Vec3(u.normalized()) : Vec3(R.col(0));
+        const Vec3 w = axis.cross(u);
+        const Vec3 rim[4] = {u, w, -u, -w};
+        for (const double side : {-1.0, 1.0}) {
+          const Vec3 cap = c + side * shape.size.y() * axis;
+          for (const Vec3& e : rim) {
+            const Vec3 x = cap + shape.size.x() * e;
+            add(x, n.dot(x) - ground.height);
+          }
+        }
+        break;
+      }
+      case ShapeType::convex:
+        // Every hull vertex within the contact distance (PhysX's plane-convex points; G3).
+        for (const Vec3& v : shape.vertices) {
+          const Vec3 x = c + R * v;
+          add(x, n.dot(x) - ground.height);
+        }
+        if (count > kConvexPoints) {
+          reduce_points(points, separations, taken_.data(), count, n);
+          count = kConvexPoints;
         }
         break;
     }

@@ -319,6 +319,8 @@ std::uint64_t model_fingerprint(const Model& model) {
     for (double v : {s.material.static_friction, s.material.dynamic_friction,
                      s.material.restitution})
       hash_double(w, v);
+    for (const Vec3& v : s.vertices)  // convex hulls only: other shapes keep their fingerprint
+      for (int i = 0; i < 3; ++i) hash_double(w, v[i]);
   }
   return fnv1a(w.str().data(), w.str().size());
 }

@@ -98,7 +98,11 @@ std::string shape_text(const CollisionShape& s) {
   if (!s.name.empty()) out += " '" + s.name + "'";
   if (s.type == ShapeType::box)
     out += " (half extents " + vec(s.size) + ")";
-  else if (s.type == ShapeType::capsule)
+  else if (s.type == ShapeType::ellipsoid)
+    out += " (semi-axes " + vec(s.size) + ")";
+  else if (s.type == ShapeType::convex)
+    out += " (" + std::to_string(s.vertices.size()) + " hull vertices)";
+  else if (s.type == ShapeType::capsule || s.type == ShapeType::cylinder)
     out += " (r " + num(s.size.x()) + ", half length " + num(s.size.y()) + ")";
   else
     out += " (r " + num(s.size.x()) + ")";

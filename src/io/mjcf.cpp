@@ -19,6 +19,7 @@
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "mjcf_document.hpp"
+#include "mesh_hull.hpp"
 #include "mujoco_calls.hpp"
 
 namespace featherdrive {
@@ -362,7 +363,8 @@ const char* geom_type_name(int type) {
 }
 
 // The geoms that collide (contype or conaffinity set; the others are visual) as contact shapes
-// on their bodies' links: sphere, capsule (fromto is already size and pose in mjModel) and box,
+// on their bodies' links: sphere, capsule and cylinder (fromto is already size and pose in
+// mjModel), box, ellipsoid and mesh (its convex hull),
 // friction[0] as static and dynamic friction (MuJoCo's sliding friction; restitution 0). The
 // first plane on the world body is the robot's ground (none where the file disables contacts);
 // other world geoms are warned about, and
@@ -413,6 +415,19 @@ std::string convert_geoms(const mjModel* m, const Converter& c, MjcfRobot& robot
         break;
       case mjGEOM_BOX:
         shape.type = ShapeType::box;
+        shape.size = vec3(size);
+        break;
+      case mjGEOM_CYLINDER:  // size: radius, half length (fromto is resolved as for capsules)
+        shape.type = ShapeType::cylinder;
+        shape.size = Vec3(size[0], size[1], 0.0);
+        break;
+      case mjGEOM_MESH:  // its convex hull, in the geom's frame (docs/math/contact.md, G3)
+        shape.type = ShapeType::convex;
+        shape.vertices = mesh_hull::vertices(m, m->geom_dataid[g]);
+        mesh_hull::sort_vertices(shape.vertices);
+        break;
+      case mjGEOM_ELLIPSOID:
+        shape.type = ShapeType::ellipsoid;
         shape.size = vec3(size);
         break;
       default:

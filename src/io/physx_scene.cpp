@@ -139,6 +139,14 @@ std::string shapes_field(const Model& model, int link) {
   bool first = true;
   for (const CollisionShape& shape : model.shapes) {
     if (shape.link != link) continue;
+    // The harness builds PhysX's sphere, capsule and box geometries only.
+    if (shape.type != ShapeType::sphere && shape.type != ShapeType::capsule &&
+        shape.type != ShapeType::box)
+      throw std::invalid_argument("physx export: shape " +
+                                  (shape.name.empty() ? std::string("#") : "'" + shape.name + "'") +
+                                  " of link '" + model.links[static_cast<size_t>(link)].name +
+                                  "' is a " + to_string(shape.type) +
+                                  ": the PhysX harness builds spheres, capsules and boxes only");
     js << (first ? "\"shapes\": [\n       {" : ",\n       {") << "\"name\": " << str(shape.name)
        << ", \"type\": " << str(to_string(shape.type));
     if (shape.type == ShapeType::box)

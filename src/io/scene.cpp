@@ -385,19 +385,20 @@ ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
   return c;
 }
 
-// shapes: [{link, type, radius, half_length, half_extents, xyz, rpy, name, static_friction,
+// shapes: [{link, type, radius, half_length, half_extents, radii, xyz, rpy, name, static_friction,
 // dynamic_friction, restitution}]: each shape's keys are those of its type.
 std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
                                                                 const YAML::Node& node,
                                                                 const Model& model) {
   if (!node.IsSequence())
-    r.fail("shapes", node, "must be a list of {link, type, ...} (sphere, capsule or box)");
+    r.fail("shapes", node,
+           "must be a list of {link, type, ...} (sphere, capsule, box, ellipsoid or cylinder)");
   std::vector<std::pair<std::string, CollisionShape>> shapes;
   for (size_t i = 0; i < node.size(); ++i) {
     const std::string p = "shapes[" + std::to_string(i) + "]";
     const YAML::Node e = node[i];
     const auto at = [&](const char* key) { return Reader::join(p, key); };
-    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "xyz", "rpy", "name",
+    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "xyz", "rpy", "name",
                  "static_friction", "dynamic_friction", "restitution"});
     for (const char* key : {"link", "type"})
       if (!e[key]) r.fail(at(key), "missing");
@@ -409,20 +410,24 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
       r.fail(at("link"), e["link"], error.what());
     }
     const std::string type = r.text(e["type"], at("type"));
-    std::vector<const char*> sizes;  // the size keys of the type, in size's order
-    if (type == "sphere") {
-      shape.type = ShapeType::sphere;
-      sizes = {"radius"};
-    } else if (type == "capsule") {
-      shape.type = ShapeType::capsule;
-      sizes = {"radius", "half_length"};
-    } else if (type == "box") {
-      shape.type = ShapeType::box;
-      sizes = {"half_extents"};
-    } else {
-      r.fail(at("type"), e["type"], "must be sphere, capsule or box");
-    }
-    for (const char* key : {"radius", "half_length", "half_extents"}) {
+    // The size keys of each type, in size's order; half_extents and radii (3 numbers) fill size.
+    struct Kind {
+      const char* name;
+      ShapeType type;
+      std::vector<const char*> sizes;
+    };
+    static const Kind kinds[] = {{"sphere", ShapeType::sphere, {"radius"}},
+                                 {"capsule", ShapeType::capsule, {"radius", "half_length"}},
+                                 {"box", ShapeType::box, {"half_extents"}},
+                                 {"ellipsoid", ShapeType::ellipsoid, {"radii"}},
+                                 {"cylinder", ShapeType::cylinder, {"radius", "half_length"}}};
+    const Kind* kind = nullptr;
+    for (const Kind& k : kinds)
+      if (type == k.name) kind = &k;
+    if (!kind) r.fail(at("type"), e["type"], "must be sphere, capsule, box, ellipsoid or cylinder");
+    shape.type = kind->type;
+    const std::vector<const char*>& sizes = kind->sizes;
+    for (const char* key : {"radius", "half_length", "half_extents", "radii"}) {
       const bool wanted =
           std::find(sizes.begin(), sizes.end(), std::string_view(key)) != sizes.end();
       if (!wanted && e[key]) r.fail(at(key), e[key], "is not a size of a " + type);
@@ -433,16 +438,16 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
       if (!(std::isfinite(x) && x > 0.0)) r.fail(where, v, "must be finite and > 0");
       return x;
     };
-    if (shape.type == ShapeType::box) {
-      const YAML::Node h = e["half_extents"];
-      if (!h.IsSequence() || h.size() != 3)
-        r.fail(at("half_extents"), h, "must be a list of 3 numbers");
-      for (int k = 0; k < 3; ++k)
-        shape.size[k] = positive(h[k], at("half_extents") + "[" + std::to_string(k) + "]");
-    } else {
-      shape.size.x() = positive(e["radius"], at("radius"));
-      if (shape.type == ShapeType::capsule)
-        shape.size.y() = positive(e["half_length"], at("half_length"));
+    for (size_t k = 0; k < sizes.size(); ++k) {
+      const YAML::Node v = e[sizes[k]];
+      const std::string_view key = sizes[k];
+      if (key != "half_extents" && key != "radii") {
+        shape.size[static_cast<int>(k)] = positive(v, at(sizes[k]));
+        continue;
+      }
+      if (!v.IsSequence() || v.size() != 3) r.fail(at(sizes[k]), v, "must be a list of 3 numbers");
+      for (int j = 0; j < 3; ++j)
+        shape.size[j] = positive(v[j], at(sizes[k]) + "[" + std::to_string(j) + "]");
     }
     if (e["xyz"]) shape.position = r.vec3(e["xyz"], at("xyz"));
     if (e["rpy"]) shape.rotation = rotation_from_rpy(r.vec3(e["rpy"], at("rpy")));
@@ -758,7 +763,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   } else if (scene.robot.ground) {
     scene.robot.warnings.push_back(
         "the file's floor is not used as the ground: " + m->unsupported_shapes.front() +
-        " is a shape contacts do not support yet (sphere, capsule, box)");
+        " is a shape contacts do not support yet (sphere, capsule, box, ellipsoid, cylinder, convex mesh)");
   }
 
   if (const YAML::Node jd = root["joint_defaults"]) {

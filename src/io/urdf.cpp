@@ -15,6 +15,7 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "mesh_hull.hpp"
 
 namespace featherdrive {
 namespace {
@@ -333,6 +334,30 @@ void collect_geometry(UrdfRobot& robot, const urdf::ModelInterface& urdf_model,
   }
 }
 
+// A mesh's file: package://NAME/REST in the nearest folder NAME above the URDF (else REST in the
+// URDF's folder, the package's root as DART's files have it), file://PATH, or relative to the
+// URDF's folder.
+std::filesystem::path mesh_path(const std::string& file, const std::string& name,
+                                const std::string& what) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::absolute(fs::path(file)).parent_path();
+  if (name.rfind("package://", 0) == 0) {
+    const std::string rest = name.substr(10);
+    const size_t slash = rest.find('/');
+    const std::string package = rest.substr(0, slash);
+    const fs::path inside = slash == std::string::npos ? fs::path() : fs::path(rest.substr(slash + 1));
+    for (fs::path f = folder; !f.empty(); f = f.parent_path()) {
+      if (f.filename() == package) return f / inside;
+      if (f == f.parent_path()) break;
+    }
+    return folder / inside;
+  }
+  if (name.rfind("file://", 0) == 0) return name.substr(7);
+  if (name.find("://") != std::string::npos)
+    fail(file, what + ": only package:// and file:// addresses are read");
+  return folder / name;
+}
+
 // The collisions as contact shapes on their model links (boxes: half the URDF's full extents);
 // what contacts cannot use yet is listed (docs/math/contact.md, section 10).
 void collision_shapes(UrdfRobot& robot, const std::string& file) {
@@ -360,14 +385,35 @@ void collision_shapes(UrdfRobot& robot, const std::string& file) {
         shape.size = g.size;
         break;
       case UrdfGeometry::Shape::cylinder:
-        robot.unsupported_shapes.push_back(
-            "link '" + g.link + "': cylinder collision " +
-            (g.name.empty() ? "#" + std::to_string(g.index) : "'" + g.name + "'"));
-        continue;
-      case UrdfGeometry::Shape::mesh:
-        robot.unsupported_shapes.push_back("link '" + g.link + "': mesh collision '" +
-                                           g.filename + "'");
-        continue;
+        // <cylinder radius length>: the full length along z; the shape keeps half of it.
+        if (!(std::isfinite(g.size.x()) && g.size.x() > 0.0))
+          fail(file, who + " <cylinder radius> = " + format_double(g.size.x()) +
+                         ": must be finite and > 0");
+        if (!(std::isfinite(g.size.y()) && g.size.y() > 0.0))
+          fail(file, who + " <cylinder length> = " + format_double(g.size.y()) +
+                         ": must be finite and > 0");
+        shape.type = ShapeType::cylinder;
+        shape.size = Vec3(g.size.x(), 0.5 * g.size.y(), 0.0);
+        break;
+      case UrdfGeometry::Shape::mesh: {
+        // The mesh's convex hull (docs/math/contact.md, G3), its vertices in the geometry frame.
+        const std::string mesh = who + " <mesh filename> = '" + g.filename + "'";
+        if (!(g.scale.allFinite() && g.scale.minCoeff() > 0.0))
+          fail(file, who + " <mesh scale> = " + format_vec3(g.scale) + ": must be finite and > 0");
+        const std::filesystem::path path = mesh_path(file, g.filename, mesh);
+        if (!mesh_hull::readable_extension(path)) {
+          robot.unsupported_shapes.push_back("link '" + g.link + "': mesh collision '" +
+                                             g.filename + "' (MuJoCo 2.2.2 reads STL, OBJ, MSH)");
+          continue;
+        }
+        try {
+          shape.vertices = mesh_hull::load(path, g.scale);
+        } catch (const std::runtime_error& e) {
+          fail(file, mesh + ": " + e.what());
+        }
+        shape.type = ShapeType::convex;
+        break;
+      }
     }
     robot.shapes.emplace_back(g.body, std::move(shape));
   }

@@ -22,6 +22,9 @@ const char* to_string(ShapeType type) {
     case ShapeType::sphere: return "sphere";
     case ShapeType::capsule: return "capsule";
     case ShapeType::box: return "box";
+    case ShapeType::ellipsoid: return "ellipsoid";
+    case ShapeType::cylinder: return "cylinder";
+    case ShapeType::convex: return "convex";
   }
   return "unknown";
 }

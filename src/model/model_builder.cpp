@@ -185,12 +185,19 @@ ModelBuilder& ModelBuilder::add_shape(std::string link, CollisionShape shape) {
 void check_shape(const std::string& who, const CollisionShape& s) {
   const char* names[3] = {"radius", "half_length", ""};
   int count = 1;
-  if (s.type == ShapeType::capsule) count = 2;
-  if (s.type == ShapeType::box) {
-    names[0] = "half_extent.x";
-    names[1] = "half_extent.y";
-    names[2] = "half_extent.z";
+  if (s.type == ShapeType::capsule || s.type == ShapeType::cylinder) count = 2;
+  if (s.type == ShapeType::box || s.type == ShapeType::ellipsoid) {
+    const bool box = s.type == ShapeType::box;
+    names[0] = box ? "half_extent.x" : "semi_axis.x";
+    names[1] = box ? "half_extent.y" : "semi_axis.y";
+    names[2] = box ? "half_extent.z" : "semi_axis.z";
     count = 3;
+  }
+  if (s.type == ShapeType::convex) {
+    count = 0;
+    if (s.vertices.empty()) fail(who + ": vertices: a convex shape needs at least one");
+    for (size_t k = 0; k < s.vertices.size(); ++k)
+      check_finite(who, ("vertices[" + std::to_string(k) + "]").c_str(), s.vertices[k]);
   }
   for (int k = 0; k < count; ++k)
     if (!(std::isfinite(s.size[k]) && s.size[k] > 0.0))

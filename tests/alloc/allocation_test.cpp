@@ -372,7 +372,7 @@ TEST(ExplicitActuatorAllocations, NoneInTheStep) {
   }
 }
 
-// Ground contact (docs/math/contact.md): a sphere on every link of a floating tree that starts
+// Ground contact (docs/math/contact.md): a shape of each kind in turn on every link of a floating tree that starts
 // half sunk into the ground, under PGS and TGS, and a copy of such a simulation: the contact rows
 // and reports are sized with the model's shapes.
 TEST(ContactAllocations, NoneInTheStep) {
@@ -380,8 +380,14 @@ TEST(ContactAllocations, NoneInTheStep) {
   for (int i = 0; i < m.num_links(); ++i) {
     CollisionShape s;
     s.link = i;
-    s.type = i % 3 == 0 ? ShapeType::sphere : i % 3 == 1 ? ShapeType::capsule : ShapeType::box;
+    constexpr ShapeType kinds[] = {ShapeType::sphere, ShapeType::capsule,   ShapeType::box,
+                                   ShapeType::ellipsoid, ShapeType::cylinder, ShapeType::convex};
+    s.type = kinds[i % 6];
     s.size = Vec3(0.2, 0.15, 0.1);
+    if (s.type == ShapeType::convex)  // a grid of 25 points below and one above: reduced to 4
+      for (int k = 0; k < 26; ++k)
+        s.vertices.emplace_back(k < 25 ? Vec3(0.05 * (k % 5), 0.05 * (k / 5), -0.1)
+                                       : Vec3(0, 0, 0.1));
     m.shapes.push_back(s);
   }
   auto model = std::make_shared<const Model>(m);

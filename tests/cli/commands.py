@@ -36,11 +36,11 @@ def contact(cli, source, out_dir):
 
     r = run(cli, "info", collisions)
     check(r.returncode == 0, "info collisions.urdf", r)
-    for text in ("collision shapes (5, poses in the link frame):",
+    for text in ("collision shapes (6, poses in the link frame):",
                  "  base: box 'body' (half extents [0.2, 0.1, 0.05]) at [0, 0, 0.05] m, sphere (r 0.05)",
+                 "cylinder 'wheel' (r 0.1, half length 0.025) at [0, 0, 0] m",
                  "  arm: box 'arm_box'",
-                 "not usable by contacts yet: link 'base': cylinder collision 'wheel'",
-                 "not usable by contacts yet: link 'arm': mesh collision 'package://collisions/arm.stl'"):
+                 "not usable by contacts yet: " + "link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo 2.2.2 reads STL, OBJ, MSH)"):
         check(text in r.stdout, f"info collisions.urdf shows {text!r}", r)
     r = run(cli, "info", "/usr/share/mujoco/model/humanoid/humanoid.xml")
     check("ground (the file's floor): height 0 m, normal [0, 0, 1], friction 1 / 1, restitution 0"

@@ -147,13 +147,15 @@ TEST(MjcfShapes, VisualGeomsAreSkippedAndOtherKindsListed) {
       </body></worldbody></mujoco>)";
   const MjcfRobot robot = parse_mjcf(xml, "m.xml", UrdfOptions{.fixed_base = false});
   const Model& m = *robot.model;
-  ASSERT_EQ(m.shapes.size(), 1u);
+  ASSERT_EQ(m.shapes.size(), 3u);
   EXPECT_EQ(m.shapes[0].name, "shell");
   EXPECT_TRUE(m.shapes[0].size.isApprox(Vec3(0.1, 0.2, 0.3)));
   EXPECT_TRUE(m.shapes[0].position.isApprox(Vec3(0.1, 0, 0)));
-  EXPECT_EQ(m.unsupported_shapes,
-            (std::vector<std::string>{"link 'b': ellipsoid geom 'egg'",
-                                      "link 'b': cylinder geom #5"}));
+  EXPECT_EQ(m.shapes[1].type, ShapeType::ellipsoid);
+  EXPECT_EQ(m.shapes[1].size, Vec3(0.1, 0.2, 0.3));  // the semi-axes, as MuJoCo's size
+  EXPECT_EQ(m.shapes[2].type, ShapeType::cylinder);
+  EXPECT_EQ(m.shapes[2].size, Vec3(0.1, 0.2, 0));  // radius, half length, as MuJoCo's size
+  EXPECT_TRUE(m.unsupported_shapes.empty());
   // The tilted plane: normal (0, 1, 1)/sqrt 2 through (0, 0, 0.3): height 0.3/sqrt 2.
   ASSERT_TRUE(robot.ground.has_value());
   EXPECT_TRUE(robot.ground->normal.isApprox(Vec3(0, 1, 1).normalized(), 1e-12));
@@ -164,6 +166,19 @@ TEST(MjcfShapes, VisualGeomsAreSkippedAndOtherKindsListed) {
     warned = warned || w == "geoms of the world body other than its first plane (the ground) are "
                             "not simulated: box 'rock'";
   EXPECT_TRUE(warned);
+}
+
+// A plane on a link (MuJoCo allows planes and height fields on bodies welded to the world) is
+// geometry contacts cannot use: listed.
+TEST(MjcfShapes, APlaneOnALinkIsListed) {
+  const std::string xml = R"(<mujoco><worldbody>
+      <body name="base" pos="0 0 1"><geom name="pad" type="plane" size="1 1 1"/>
+        <body name="arm"><joint type="hinge"/><geom type="sphere" size="0.1"/></body>
+      </body></worldbody></mujoco>)";
+  const MjcfRobot robot = parse_mjcf(xml, "m.xml");
+  EXPECT_EQ(robot.model->shapes.size(), 1u);
+  EXPECT_EQ(robot.model->unsupported_shapes,
+            (std::vector<std::string>{"link 'base': plane geom 'pad'"}));
 }
 
 TEST(MjcfShapes, AFileWithContactsDisabledHasNoFloor) {

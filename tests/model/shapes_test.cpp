@@ -129,6 +129,13 @@ TEST(ModelShapes, EveryBadSizePoseAndMaterialIsRefusedNamingShapeLinkFieldAndVal
       {ShapeType::box, [](CollisionShape& s) { s.size.x() = -2.0; }, "half_extent.x = -2 must"},
       {ShapeType::box, [](CollisionShape& s) { s.size.y() = 0.0; }, "half_extent.y = 0 must"},
       {ShapeType::box, [](CollisionShape& s) { s.size.z() = kNaN; }, "half_extent.z = nan must"},
+      {ShapeType::ellipsoid, [](CollisionShape& s) { s.size.y() = -1.0; }, "semi_axis.y = -1 must"},
+      {ShapeType::cylinder, [](CollisionShape& s) { s.size.y() = 0.0; }, "half_length = 0 must"},
+      {ShapeType::cylinder, [](CollisionShape& s) { s.size.x() = kNaN; }, "radius = nan must"},
+      {ShapeType::convex, [](CollisionShape& s) { s.vertices.clear(); },
+       "vertices: a convex shape needs at least one"},
+      {ShapeType::convex, [](CollisionShape& s) { s.vertices[1].z() = kInf; },
+       "vertices[1] = [0, 0, inf] is not finite"},
       {ShapeType::box, [](CollisionShape& s) { s.position.y() = kInf; },
        "position = [0, inf, 0] is not finite"},
       {ShapeType::box, [](CollisionShape& s) { s.rotation(0, 0) = 2.0; },
@@ -148,6 +155,7 @@ TEST(ModelShapes, EveryBadSizePoseAndMaterialIsRefusedNamingShapeLinkFieldAndVal
   };
   for (const Case& c : cases) {
     CollisionShape s = make_shape("pad", c.type, Vec3(0.1, 0.2, 0.3));
+    if (c.type == ShapeType::convex) s.vertices = {Vec3(0.1, 0, 0), Vec3(0, 0, 0.1)};
     c.edit(s);
     const std::string expected =
         std::string("model: shape 'pad' (") + to_string(c.type) + ") of link 'lower': " + c.message;
@@ -182,7 +190,7 @@ TEST(ModelShapes, AGroundIsRefusedWhileTheModelHasGeometryContactsCannotUse) {
   ground.enabled = true;
   const std::string expected =
       "ground: link 'lower': mesh collision 'foot.dae': contacts do not support this shape yet "
-      "(sphere, capsule, box) (2 such shapes in all)";
+      "(sphere, capsule, box, ellipsoid, cylinder, convex mesh) (2 such shapes in all)";
   try {
     sim.set_ground(ground);
     ADD_FAILURE() << "set_ground did not throw";

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/model/model_builder.hpp"
@@ -157,6 +158,124 @@ TEST_P(Contact, ABounceLeavesAtRestitutionTimesTheImpactSpeed) {
     }
   }
   EXPECT_NEAR(-rebound / impact, e, 1e-9);
+}
+
+// An ellipsoid touches the plane at one point, the support point along -n (docs/math/contact.md,
+// G1): dropped 1 cm onto its shortest and (turned so that it stands) onto its longest semi-axis,
+// its centre ends at that semi-axis above the ground and the one row carries its weight.
+TEST_P(Contact, EllipsoidRestsOnItsShortestAndLongestSemiAxis) {
+  const double m = 2.0, dt = 0.01;
+  const Vec3 axes(0.3, 0.2, 0.1);
+  const Mat3 inertia = Vec3(axes.y() * axes.y() + axes.z() * axes.z(),
+                            axes.x() * axes.x() + axes.z() * axes.z(),
+                            axes.x() * axes.x() + axes.y() * axes.y())
+                           .asDiagonal() * (m / 5.0);
+  for (const bool standing : {false, true}) {
+    CollisionShape s;
+    s.type = ShapeType::ellipsoid;
+    s.size = axes;
+    // Standing: the shape's x (the longest semi-axis) along the link's z.
+    if (standing) s.rotation = Eigen::AngleAxisd(-std::numbers::pi / 2, Vec3::UnitY()).toRotationMatrix();
+    const double height = standing ? axes.x() : axes.z();
+    BaseState base;
+    base.position = Vec3(0, 0, height + 0.01);
+    Simulation sim = on_ground(body(s, m, s.rotation * inertia * s.rotation.transpose()),
+                               GetParam(), base, {}, dt);
+    sim.step(200);
+    const BaseState end = base_state(sim.model(), sim.q(), sim.qd());
+    EXPECT_NEAR(end.position.z(), height, 1e-9) << (standing ? "standing" : "lying");
+    EXPECT_EQ(sim.contacts().size(), 1u);
+    EXPECT_NEAR(normal_sum(sim) / (dt * m * kG), 1.0, 1e-9);
+  }
+}
+
+// The normal impulses of `steps` steps after `settle` over m g dt steps: the share of the weight
+// they carry. Four or more points under a flat face leave the rows' split indeterminate, and the
+// body settles into a cycle of a few steps in which it rocks by micro-radians; over whole cycles
+// its velocity repeats (checked), so the impulses carry its weight exactly (linear momentum).
+double carried_share(Simulation& sim, int settle, int steps) {
+  sim.step(settle);
+  const VecX qd0 = sim.qd();
+  double sum = 0.0;
+  for (int k = 0; k < steps; ++k) {
+    sim.step();
+    sum += normal_sum(sim);
+  }
+  EXPECT_LT((sim.qd() - qd0).cwiseAbs().maxCoeff(), 1e-12) << "not periodic over the window";
+  double mass = 0.0;
+  for (const Link& l : sim.model().links) mass += l.mass;
+  return sum / (steps * sim.options().dt * mass * kG);
+}
+
+// A solid cylinder of radius r, half length h along the shape's z, turned by `turn` in its link.
+std::shared_ptr<const Model> cylinder(double m, double r, double h, const Mat3& turn,
+                                      const Material& material) {
+  CollisionShape s;
+  s.type = ShapeType::cylinder;
+  s.size = Vec3(r, h, 0);
+  s.rotation = turn;
+  s.material = material;
+  const double across = m * (3 * r * r + 4 * h * h) / 12;
+  const Mat3 inertia = Vec3(across, across, m * r * r / 2).asDiagonal();
+  return body(s, m, turn * inertia * turn.transpose());
+}
+
+const Mat3 kAlongY = Eigen::AngleAxisd(std::numbers::pi / 2, Vec3::UnitX()).toRotationMatrix();
+
+// G2: standing, the cylinder rests on four rim points of its lower cap at its half length; lying
+// (its axis along y), on the deepest rim point of each cap at its radius. Either carries its
+// weight (iterations that converge the rows, as for the box's closed forms).
+TEST_P(Contact, CylinderRestsStandingAndLyingAndCarriesItsWeight) {
+  const double m = 2.0, r = 0.1, h = 0.2, dt = 0.01;
+  for (const bool lying : {false, true}) {
+    const double height = lying ? r : h;
+    BaseState base;
+    base.position = Vec3(0, 0, height + 0.01);
+    Simulation sim = on_ground(cylinder(m, r, h, lying ? kAlongY : Mat3::Identity(), {}),
+                               GetParam(), base, {}, dt, converged(GetParam()));
+    EXPECT_NEAR(carried_share(sim, 400, 100), 1.0, 1e-9) << (lying ? "lying" : "standing");
+    const BaseState end = base_state(sim.model(), sim.q(), sim.qd());
+    EXPECT_NEAR(end.position.z(), height, 1e-9) << (lying ? "lying" : "standing");
+    EXPECT_EQ(sim.contacts().size(), lying ? 2u : 4u);
+  }
+}
+
+// A lying solid cylinder sent sliding at v0 ends rolling at v0 / (1 + I / (m r^2)) = 2/3 v0
+// (angular momentum about the contact line is kept: friction acts through it).
+TEST_P(Contact, SlippingCylinderRollsAtTwoThirdsOfItsSpeed) {
+  const double m = 1.0, r = 0.1, h = 0.15, v0 = 1.0;
+  const Material material{0.5, 0.5, 0.0};
+  BaseState base;
+  base.position = Vec3(0, 0, r);
+  base.linear_velocity = Vec3(v0, 0, 0);
+  Simulation sim = on_ground(cylinder(m, r, h, kAlongY, material), GetParam(), base, material,
+                             0.01, converged(GetParam()));
+  sim.step(300);
+  const BaseState s = base_state(sim.model(), sim.q(), sim.qd());
+  EXPECT_NEAR(s.linear_velocity.x(), 2.0 / 3.0 * v0, 1e-9);
+  EXPECT_NEAR(s.angular_velocity.y() * r, s.linear_velocity.x(), 1e-9);
+  EXPECT_NEAR(s.position.z(), r, 1e-9);
+}
+
+// G3: a hull with nine vertices on its lower face (a 3 x 3 grid) and one above keeps four points
+// on the ground, the grid's corners (deepest, farthest, the two sides), and they carry its weight.
+TEST_P(Contact, ConvexHullKeepsFourPointsAndCarriesItsWeight) {
+  const double m = 1.0, dt = 0.01, half = 0.1;
+  CollisionShape s;
+  s.type = ShapeType::convex;
+  for (int i = -1; i <= 1; ++i)
+    for (int j = -1; j <= 1; ++j) s.vertices.emplace_back(i * half, j * half, -half);
+  s.vertices.emplace_back(0, 0, half);
+  BaseState base;
+  base.position = Vec3(0, 0, half + 0.01);
+  Simulation sim = on_ground(body(s, m, Mat3::Identity() * m * half * half / 3), GetParam(), base,
+                             {}, dt, converged(GetParam()));
+  EXPECT_NEAR(carried_share(sim, 400, 100), 1.0, 1e-9);
+  EXPECT_NEAR(base_state(sim.model(), sim.q(), sim.qd()).position.z(), half, 1e-9);
+  ASSERT_EQ(sim.contacts().size(), 4u);
+  for (const ContactReport& c : sim.contacts())
+    EXPECT_NEAR(std::abs(c.position.x()) + std::abs(c.position.y()), 2 * half, 1e-9)
+        << c.position.transpose();
 }
 
 INSTANTIATE_TEST_SUITE_P(Solvers, Contact, ::testing::Values(SolverType::pgs, SolverType::tgs),

@@ -116,6 +116,9 @@ class ContactRows {
   std::vector<FrictionAnchors> anchors_;       ///< kept from the last step, per shape
   std::vector<FrictionAnchors> next_anchors_;  ///< this step's, per shape
   std::vector<int> shape_patch_;               ///< this step's patch of each shape, or -1
+  std::vector<Vec3> points_;                   ///< the narrow phase's points of one shape
+  std::vector<double> separations_;
+  std::vector<char> taken_;                    ///< the reduction's chosen points (G3)
   int num_normals_ = 0, num_frictions_ = 0, num_patches_ = 0;
   Vec3 normal_ = Vec3::UnitZ();
 };

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "featherdrive/spatial/spatial.hpp"
 
@@ -12,6 +13,9 @@ enum class ShapeType {
   sphere,   ///< size = (radius, 0, 0)
   capsule,  ///< size = (radius, half length of the segment, 0); the segment along the shape's z
   box,      ///< size = half extents along the shape's x, y, z
+  ellipsoid,  ///< size = the semi-axes along the shape's x, y, z
+  cylinder,   ///< size = (radius, half length, 0); the axis along the shape's z
+  convex,     ///< size unused (0); CollisionShape::vertices, a convex hull's, in the shape frame
 };
 
 const char* to_string(ShapeType type);
@@ -32,6 +36,7 @@ struct CollisionShape {
   Vec3 position = Vec3::Zero();        ///< the shape frame's origin in the link frame
   Mat3 rotation = Mat3::Identity();    ///< the shape frame's axes in the link frame
   Material material;
+  std::vector<Vec3> vertices;          ///< convex: the hull's vertices in the shape frame
 };
 
 }  // namespace featherdrive
