@@ -34,6 +34,20 @@ def test_urdf_collisions_are_shapes_on_their_links():
     assert robot.ground is None
 
 
+def test_mesh_collisions_are_convex_hulls():
+    # DART's KR5: every <collision> is an STL mesh, whose hull MuJoCo's compiler computes.
+    robot = fd.load_urdf("/usr/share/doc/dart/data/urdf/KR5/KR5 sixx R650.urdf")
+    shapes = robot.model.shapes
+    assert len(shapes) == 7 and robot.model.unsupported_shapes == []
+    for s in shapes:
+        assert s.type == fd.ShapeType.convex
+        assert s.vertices.shape[1] == 3 and s.vertices.shape[0] >= 4
+        assert np.isfinite(s.vertices).all()
+    first = shapes[0]
+    assert first.vertices is not first.vertices  # a new array each time
+    assert fd.load_urdf(str(COLLISIONS)).model.shapes[0].vertices.shape == (0, 3)  # a box
+
+
 def test_a_ground_is_refused_beside_unsupported_geometry():
     sim = fd.Simulation(fd.load_urdf(str(COLLISIONS)).model)
     with pytest.raises(ValueError, match=r"^ground: link 'arm': mesh collision "

@@ -144,9 +144,9 @@ std::string shapes_field(const Model& model, int link) {
         shape.type != ShapeType::box)
       throw std::invalid_argument("physx export: shape " +
                                   (shape.name.empty() ? std::string("#") : "'" + shape.name + "'") +
-                                  " of link '" + model.links[static_cast<size_t>(link)].name +
-                                  "' is a " + to_string(shape.type) +
-                                  ": the PhysX harness builds spheres, capsules and boxes only");
+                                  " (" + to_string(shape.type) + ") of link '" +
+                                  model.links[static_cast<size_t>(link)].name +
+                                  "': the PhysX harness builds spheres, capsules and boxes only");
     js << (first ? "\"shapes\": [\n       {" : ",\n       {") << "\"name\": " << str(shape.name)
        << ", \"type\": " << str(to_string(shape.type));
     if (shape.type == ShapeType::box)
