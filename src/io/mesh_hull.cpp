@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "featherdrive/io/files.hpp"
 #include "mujoco_calls.hpp"
 
 namespace featherdrive::mesh_hull {
@@ -66,7 +67,13 @@ std::vector<Vec3> load(const std::filesystem::path& path, const Vec3& scale) {
   std::error_code code;
   if (!std::filesystem::is_regular_file(path, code))
     throw std::runtime_error(path.string() + " not found");
+  const std::uintmax_t size = std::filesystem::file_size(path, code);
+  if (code) throw std::runtime_error(path.string() + " cannot be read");
+  if (size > kMaxInputBytes)
+    throw std::runtime_error(path.string() + " is larger than " +
+                             std::to_string(kMaxInputBytes >> 20) + " MiB");
   std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path.string() + " cannot be opened");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) throw std::runtime_error(path.string() + " cannot be read");
   if (bytes.empty()) throw std::runtime_error(path.string() + " is empty");
