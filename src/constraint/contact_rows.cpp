@@ -143,6 +143,9 @@ ContactRows::ContactRows(const Model& model) {
     points += shape_points(s);
     candidates = std::max(candidates, shape_candidates(s));
   }
+  reach_.assign(model.shapes.size(), 0.0);
+  for (size_t k = 0; k < model.shapes.size(); ++k)
+    for (const Vec3& v : model.shapes[k].vertices) reach_[k] = std::max(reach_[k], v.norm());
   points_.resize(static_cast<size_t>(candidates));
   separations_.resize(static_cast<size_t>(candidates));
   taken_.resize(static_cast<size_t>(candidates));
@@ -260,7 +263,9 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
         break;
       }
       case ShapeType::convex:
-        // Every hull vertex within the contact distance (PhysX's plane-convex points; G3).
+        // Every hull vertex within the contact distance (PhysX's plane-convex points; G3); none
+        // when the ball about the shape's origin through its farthest vertex is beyond it.
+        if (n.dot(c) - ground.height - reach_[static_cast<size_t>(k)] > contact_distance) break;
         for (const Vec3& v : shape.vertices) {
           const Vec3 x = c + R * v;
           add(x, n.dot(x) - ground.height);

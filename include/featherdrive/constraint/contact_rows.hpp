@@ -119,6 +119,7 @@ class ContactRows {
   std::vector<Vec3> points_;                   ///< the narrow phase's points of one shape
   std::vector<double> separations_;
   std::vector<char> taken_;                    ///< the reduction's chosen points (G3)
+  std::vector<double> reach_;                  ///< per shape: its farthest hull vertex's distance
   int num_normals_ = 0, num_frictions_ = 0, num_patches_ = 0;
   Vec3 normal_ = Vec3::UnitZ();
 };
