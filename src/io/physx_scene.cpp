@@ -134,19 +134,23 @@ std::string material_fields(const Material& m) {
 
 // The link's collision shapes as `"shapes": [...],` (empty for none), in the link frame with the
 // shape's own conventions (a capsule along its z: the harness turns it onto PhysX's x).
-std::string shapes_field(const Model& model, int link) {
+std::string shapes_field(const Model& model, int link, bool ground) {
   std::ostringstream js;
   bool first = true;
   for (const CollisionShape& shape : model.shapes) {
     if (shape.link != link) continue;
-    // The harness builds PhysX's sphere, capsule and box geometries only.
-    if (shape.type != ShapeType::sphere && shape.type != ShapeType::capsule &&
-        shape.type != ShapeType::box)
+    // The harness builds PhysX's sphere, capsule and box geometries only. Without the ground
+    // the others touch nothing (links do not collide with each other) and are left out.
+    const bool buildable = shape.type == ShapeType::sphere || shape.type == ShapeType::capsule ||
+                           shape.type == ShapeType::box;
+    if (!buildable && !ground) continue;
+    if (!buildable)
       throw std::invalid_argument("physx export: shape " +
                                   (shape.name.empty() ? std::string("#") : "'" + shape.name + "'") +
                                   " (" + to_string(shape.type) + ") of link '" +
                                   model.links[static_cast<size_t>(link)].name +
-                                  "': the PhysX harness builds spheres, capsules and boxes only");
+                                  "': the PhysX harness builds spheres, capsules and boxes only "
+                                  "(leave the ground off to compare without them)");
     js << (first ? "\"shapes\": [\n       {" : ",\n       {") << "\"name\": " << str(shape.name)
        << ", \"type\": " << str(to_string(shape.type));
     if (shape.type == ShapeType::box)
@@ -244,7 +248,7 @@ std::string physx_scene_json(const Simulation& sim, int steps,
        << num(lp.linear_damping) << ", \"angular_damping\": " << num(lp.angular_damping)
        << ", \"max_linear_velocity\": " << num(lp.max_linear_velocity)
        << ", \"max_angular_velocity\": " << num(lp.max_angular_velocity) << ",\n     ";
-    js << shapes_field(model, i) << "\"joint\": ";
+    js << shapes_field(model, i, sim.ground().enabled) << "\"joint\": ";
     if (i == 0) {
       js << "null}";
     } else {
