@@ -168,6 +168,22 @@ TEST(MjcfShapes, VisualGeomsAreSkippedAndOtherKindsListed) {
   EXPECT_TRUE(warned);
 }
 
+// A cylinder's fromto is its axis, as a capsule's: MuJoCo's compiler turns it into size and pose.
+TEST(MjcfShapes, ACylinderFromtoIsItsAxis) {
+  const std::string xml = R"(<mujoco><worldbody><body name="b"><freejoint/>
+      <geom name="can" type="cylinder" fromto="0.1 0 0 0.1 0.3 0.4" size="0.05"/>
+      </body></worldbody></mujoco>)";
+  const MjcfRobot robot = parse_mjcf(xml, "m.xml", UrdfOptions{.fixed_base = false});
+  ASSERT_EQ(robot.model->shapes.size(), 1u);
+  const CollisionShape& can = robot.model->shapes[0];
+  EXPECT_EQ(can.type, ShapeType::cylinder);
+  EXPECT_NEAR(can.size.x(), 0.05, 1e-15);
+  EXPECT_NEAR(can.size.y(), 0.25, 1e-12);  // half of |(0, 0.3, 0.4)|
+  // The shape's z is the segment's direction (up to its sign).
+  const Vec3 axis = can.rotation.col(2);
+  EXPECT_LT((axis.cwiseAbs() - Vec3(0, 0.6, 0.8)).norm(), 1e-12);
+}
+
 // A plane on a link (MuJoCo allows planes and height fields on bodies welded to the world) is
 // geometry contacts cannot use: listed.
 TEST(MjcfShapes, APlaneOnALinkIsListed) {
