@@ -30,7 +30,8 @@ def test_urdf_collisions_are_shapes_on_their_links():
     np.testing.assert_allclose(shapes[3].position, [0.18, 0.01, 0.13], atol=1e-15)
     assert shapes[0].material.static_friction == 0.5
     assert robot.model.unsupported_shapes == [
-        "link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo 2.2.2 reads STL, OBJ, MSH)"]
+        "link 'arm': mesh collision 'package://collisions/arm.dae' "
+        "(MuJoCo 2.2.2 reads STL, OBJ, MSH)"]
     assert robot.ground is None
 
 
@@ -51,7 +52,8 @@ def test_mesh_collisions_are_convex_hulls():
 def test_a_ground_is_refused_beside_unsupported_geometry():
     sim = fd.Simulation(fd.load_urdf(str(COLLISIONS)).model)
     with pytest.raises(ValueError, match=r"^ground: link 'arm': mesh collision "
-                                         r"'package://collisions/arm.dae' \(MuJoCo 2.2.2 reads STL, OBJ, MSH\): "
+                                         r"'package://collisions/arm.dae' "
+                                         r"\(MuJoCo 2.2.2 reads STL, OBJ, MSH\): "
                                          r"contacts do not support this shape yet"):
         sim.set_ground(fd.Ground())
     assert not sim.ground().enabled

@@ -398,7 +398,8 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
     const std::string p = "shapes[" + std::to_string(i) + "]";
     const YAML::Node e = node[i];
     const auto at = [&](const char* key) { return Reader::join(p, key); };
-    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "xyz", "rpy", "name",
+    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "xyz", "rpy",
+                 "name",
                  "static_friction", "dynamic_friction", "restitution"});
     for (const char* key : {"link", "type"})
       if (!e[key]) r.fail(at(key), "missing");
@@ -763,7 +764,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   } else if (scene.robot.ground) {
     scene.robot.warnings.push_back(
         "the file's floor is not used as the ground: " + m->unsupported_shapes.front() +
-        " is a shape contacts do not support yet (sphere, capsule, box, ellipsoid, cylinder, convex mesh)");
+        " is a shape contacts do not support yet (sphere, capsule, box, ellipsoid, cylinder, "
+        "convex mesh)");
   }
 
   if (const YAML::Node jd = root["joint_defaults"]) {

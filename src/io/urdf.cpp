@@ -345,7 +345,8 @@ std::filesystem::path mesh_path(const std::string& file, const std::string& name
     const std::string rest = name.substr(10);
     const size_t slash = rest.find('/');
     const std::string package = rest.substr(0, slash);
-    const fs::path inside = slash == std::string::npos ? fs::path() : fs::path(rest.substr(slash + 1));
+    const fs::path inside =
+        slash == std::string::npos ? fs::path() : fs::path(rest.substr(slash + 1));
     for (fs::path f = folder; !f.empty(); f = f.parent_path()) {
       if (f.filename() == package) return f / inside;
       if (f == f.parent_path()) break;

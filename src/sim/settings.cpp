@@ -339,7 +339,8 @@ void check_ground_supported(const Model& model, const Ground& ground) {
   const size_t n = model.unsupported_shapes.size();
   throw std::invalid_argument(
       "ground: " + model.unsupported_shapes.front() +
-      ": contacts do not support this shape yet (sphere, capsule, box, ellipsoid, cylinder, convex mesh)" +
+      ": contacts do not support this shape yet (sphere, capsule, box, ellipsoid, cylinder, "
+      "convex mesh)" +
       (n > 1 ? " (" + std::to_string(n) + " such shapes in all)" : std::string()) +
       "; leave the ground off or replace the geometry");
 }

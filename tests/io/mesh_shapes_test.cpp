@@ -122,9 +122,9 @@ TEST(ConvexShapes, BoxMeshRestsAsTheBoxPrimitive) {
       // The same points with the same impulses, in another order.
       ASSERT_EQ(a.contacts().size(), b.contacts().size()) << step;
       for (const ContactReport& c : a.contacts()) {
-        const auto same = std::find_if(b.contacts().begin(), b.contacts().end(), [&](const auto& d) {
-          return (d.position - c.position).norm() < 1e-12;
-        });
+        const auto same =
+            std::find_if(b.contacts().begin(), b.contacts().end(),
+                         [&](const auto& d) { return (d.position - c.position).norm() < 1e-12; });
         ASSERT_NE(same, b.contacts().end()) << step;
         worst_impulse = std::max(worst_impulse, std::abs(same->normal_impulse - c.normal_impulse));
       }
@@ -143,7 +143,8 @@ TEST(ConvexShapes, BadMeshesAreRefusedNamingTheFileLinkAndValue) {
     out.write(header, 80);
     const std::uint32_t count = 2;
     out.write(reinterpret_cast<const char*>(&count), 4);
-    const float tris[2][12] = {{0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
+    const float tris[2][12] = {{0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0},
+                               {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
     for (const auto& t : tris) {
       out.write(reinterpret_cast<const char*>(t), 48);
       out.write("\0\0", 2);
@@ -242,8 +243,8 @@ TEST(ConvexShapes, AtlasStandsOnItsFeetHullsUnderPdDrives) {
   double lowest = 1e9;
   for (const CollisionShape& s : model.shapes)
     for (const Vec3& v : s.vertices) {
-      const Vec3 x = data.world_position[static_cast<size_t>(s.link)] +
-                     data.world_rotation[static_cast<size_t>(s.link)] * (s.position + s.rotation * v);
+      const auto L = static_cast<size_t>(s.link);
+      const Vec3 x = data.world_position[L] + data.world_rotation[L] * (s.position + s.rotation * v);
       lowest = std::min(lowest, x.z());
     }
   Ground ground;

@@ -157,7 +157,8 @@ TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {
        "s.yaml: shapes[0].radii[1] = 0: must be finite and > 0"},
       {"shapes:\n  - {link: link3, type: cylinder, radius: 0.1}\n",
        "s.yaml: shapes[0].half_length: missing (a cylinder needs it)"},
-      {"shapes:\n  - {link: link3, type: cylinder, radius: 0.1, half_length: 1, radii: [1, 1, 1]}\n",
+      {"shapes:\n  - {link: link3, type: cylinder, radius: 0.1, half_length: 1, "
+       "radii: [1, 1, 1]}\n",
        "s.yaml: shapes[0].radii = [1, 1, 1]: is not a size of a cylinder"},
       {"shapes:\n  - {link: link3, type: box, half_extents: [1, 1, 1], xyz: [0, .nan, 0]}\n",
        "s.yaml: shapes[0].xyz[1] = .nan: must be finite"},

@@ -65,7 +65,8 @@ TEST(UrdfShapes, BoxesAndSpheresWithTheirPosesComposedThroughMergedLinks) {
                axis_rotation(Vec3::UnitX(), h) * axis_rotation(Vec3::UnitZ(), 0.5) *
                    axis_rotation(Vec3::UnitY(), 0.4));
   EXPECT_EQ(m.unsupported_shapes,
-            (std::vector<std::string>{"link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo 2.2.2 reads STL, OBJ, MSH)"}));
+            (std::vector<std::string>{"link 'arm': mesh collision 'package://collisions/arm.dae' "
+                                      "(MuJoCo 2.2.2 reads STL, OBJ, MSH)"}));
   // rebuild() (armature from a scene) keeps them.
   UrdfRobot copy = robot;
   copy.links[1].joint.armature = {0.1};

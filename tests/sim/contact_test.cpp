@@ -175,7 +175,8 @@ TEST_P(Contact, EllipsoidRestsOnItsShortestAndLongestSemiAxis) {
     s.type = ShapeType::ellipsoid;
     s.size = axes;
     // Standing: the shape's x (the longest semi-axis) along the link's z.
-    if (standing) s.rotation = Eigen::AngleAxisd(-std::numbers::pi / 2, Vec3::UnitY()).toRotationMatrix();
+    if (standing)
+      s.rotation = Eigen::AngleAxisd(-std::numbers::pi / 2, Vec3::UnitY()).toRotationMatrix();
     const double height = standing ? axes.x() : axes.z();
     BaseState base;
     base.position = Vec3(0, 0, height + 0.01);
