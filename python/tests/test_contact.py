@@ -143,3 +143,33 @@ def test_a_ball_lands_rests_and_rolls_on_the_ground():
     state = sim.base_state()
     assert state["linear_velocity"][0] == pytest.approx(5.0 / 7.0, abs=1e-9)
     assert state["angular_velocity"][1] * 0.1 == pytest.approx(5.0 / 7.0, abs=1e-9)
+
+
+def test_a_batch_carries_each_environments_contacts():
+    """Balls of masses m_i resting on the ground in one Batch: environment i's ground carries
+    m_i g (linear momentum of a resting step), bit for bit what a ball of that mass gives
+    alone."""
+    def resting(mass):
+        robot = fd.parse_urdf(BALL.replace('mass value="2"', f'mass value="{mass!r}"'),
+                              "ball.urdf", fd.UrdfOptions(fixed_base=False))
+        sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=0.01, position_iterations=50))
+        sim.set_ground(fd.Ground(material=fd.Material(0.5, 0.5, 0.0)))
+        sim.set_base_state(position=[0.0, 0.0, 0.1])
+        return sim
+    masses = np.array([0.5, 2.0, 3.5])
+    batch = fd.Batch(resting(2.0), len(masses))
+    batch.set_link_mass("ball", masses, scale_inertia=False)
+    batch.step(100)
+    f = batch.link_contact_force
+    assert f.shape == (3, 1, 3)
+    np.testing.assert_allclose(f[:, 0, 2], masses * 9.81, rtol=1e-9)
+    np.testing.assert_allclose(f[:, 0, :2], 0.0, atol=1e-12)
+    for i, m in enumerate(masses):
+        reports = batch.contacts(i)
+        assert len(reports) == 1 and reports[0].link == 0
+        alone = resting(m)
+        alone.step(100)
+        assert np.array_equal(alone.link_contact_force(), f[i])
+        assert alone.contacts()[0].normal_impulse == reports[0].normal_impulse
+    with pytest.raises(ValueError, match=r"environment index 3 is out of range \[0, 3\)"):
+        batch.contacts(3)

@@ -574,6 +574,17 @@ RowMatrix Batch::link_com(int link) const {
   return m;
 }
 
+RowMatrix Batch::link_contact_force() const {
+  const int links = model().num_links();
+  RowMatrix out(size(), 3 * links);
+  for (int i = 0; i < size(); ++i) {
+    const std::vector<Vec3>& f = sims_[static_cast<size_t>(i)].link_contact_force();
+    for (int l = 0; l < links; ++l)
+      out.row(i).segment<3>(3 * l) = f[static_cast<size_t>(l)].transpose();
+  }
+  return out;
+}
+
 RowMatrix Batch::observe(std::span<const Observation> fields) const {
   const Model& m = model();
   Eigen::Index width = 0;
