@@ -449,6 +449,8 @@ class Simulation:
         """The contact points of the last step."""
     def link_contact_force(self) -> Vector:
         """The ground's force on each link over the last step (num_links, 3), world axes, N."""
+    def foot_contact_force(self, links: Union[str, Int, Sequence[Union[str, Int]]]) -> Vector:
+        """The sum of link_contact_force over links (a foot's), world axes, N (3,)."""
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
@@ -828,6 +830,9 @@ class Scene:
         """The scene's ground (key ground, or the robot file's floor)."""
     @property
     def contact(self) -> ContactOptions: ...
+    @property
+    def feet(self) -> dict[str, list[str]]:
+        """The scene's feet (key feet): {name: [link names]}."""
 
 def load_scene(path: PathLike) -> Scene:
     """Raises InputError (a ValueError) naming the file, key and value."""

@@ -238,7 +238,7 @@ int simulate(const SimulateArgs& args) {
   std::optional<TargetWriter> targets;
   if (csv_stream)
     csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled,
-                sim.ground().enabled);
+                sim.ground().enabled, scene.feet);
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {

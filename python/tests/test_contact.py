@@ -173,3 +173,28 @@ def test_a_batch_carries_each_environments_contacts():
         assert alone.contacts()[0].normal_impulse == reports[0].normal_impulse
     with pytest.raises(ValueError, match=r"environment index 3 is out of range \[0, 3\)"):
         batch.contacts(3)
+
+
+def test_feet_sum_their_links_and_carry_the_weight():
+    """tests/data/quadruped_ground.yaml's feet (one per leg: thigh and shin): at rest the four
+    feet's normal forces carry m g; each foot's force is the sum of its links'."""
+    scene = fd.load_scene(ROOT / "tests" / "data" / "quadruped_ground.yaml")
+    assert list(scene.feet) == ["fl", "fr", "hl", "hr"]
+    assert scene.feet["hl"] == ["hl_thigh", "hl_shin"]
+    sim = fd.make_simulation(scene)
+    sim.step(1000)
+    forces = sim.link_contact_force()
+    names = sim.model.link_names
+    total = 0.0
+    for foot, links in scene.feet.items():
+        f = sim.foot_contact_force(links)
+        assert f.shape == (3,)
+        assert np.array_equal(f, forces[names.index(links[0])] + forces[names.index(links[1])])
+        total += f[2]
+    mass = sum(link.mass for link in sim.model.links)
+    assert total == pytest.approx(mass * 9.81, abs=1e-6)
+    assert np.array_equal(sim.foot_contact_force("fl_shin"), forces[names.index("fl_shin")])
+    assert np.array_equal(sim.foot_contact_force([names.index("fl_shin"), "fl_shin"]),
+                          forces[names.index("fl_shin")])  # each link once
+    with pytest.raises(ValueError, match="no link or frame named 'fl_shn'"):
+        sim.foot_contact_force(["fl_shn"])
