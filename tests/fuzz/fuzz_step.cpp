@@ -256,7 +256,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // and a ground (height, normal, materials, contact options), so that the steps reach the contact
   // rows (docs/math/contact.md; read last, so that older inputs decode as they did).
   if (in.flag()) {
-    std::vector<std::pair<std::string, CollisionShape>> shapes(static_cast<size_t>(1 + in.small(4)));
+    using Shapes = std::vector<std::pair<std::string, CollisionShape>>;
+    Shapes shapes(static_cast<size_t>(1 + in.small(4)));
     auto material = [&] {
       return in.flag() ? Material{} : Material{in.number(), in.number(), in.number()};
     };
