@@ -198,3 +198,19 @@ def test_feet_sum_their_links_and_carry_the_weight():
                           forces[names.index("fl_shin")])  # each link once
     with pytest.raises(ValueError, match="no link or frame named 'fl_shn'"):
         sim.foot_contact_force(["fl_shn"])
+
+
+def test_a_contact_force_that_overflows_is_a_divergence():
+    """dt = 1e-100 and an impact at 1e210 m/s: the impulse is finite, impulse / dt is not. The
+    step throws DivergenceError naming the link and leaves the state as it was, with no contacts
+    reported (found by fuzz_step)."""
+    robot = fd.parse_urdf(BALL, "ball.urdf", fd.UrdfOptions(fixed_base=False))
+    sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=1e-100))
+    sim.set_ground(fd.Ground())
+    sim.set_base_state(position=[0.0, 0.0, 0.1], linear_velocity=[0.0, 0.0, -1e210])
+    q, qd = np.array(sim.q), np.array(sim.qd)
+    with pytest.raises(fd.DivergenceError, match=r"^simulation diverged at step 1 \(t = 0 s\): "
+                       r"link 'ball' contact force fz = inf; the state is left as it was"):
+        sim.step()
+    assert np.array_equal(sim.q, q) and np.array_equal(sim.qd, qd) and sim.step_count == 0
+    assert sim.contacts() == [] and not np.any(sim.link_contact_force())
