@@ -114,11 +114,9 @@ void featherdrive::python::bind_batch(py::module_& m) {
           "link_contact_force",
           [](const Batch& b) {
             return locked(b, [&] {
-              const RowMatrix f = b.link_contact_force();
-              py::array_t<double> out({static_cast<py::ssize_t>(f.rows()),
-                                       static_cast<py::ssize_t>(f.cols() / 3), py::ssize_t{3}});
-              std::copy(f.data(), f.data() + f.size(), out.mutable_data());
-              return out;
+              const RowMatrix f = b.link_contact_force();  // row-major: (N, links, 3) as it is
+              const std::vector<py::ssize_t> shape{f.rows(), f.cols() / 3, 3};
+              return py::array_t<double>(shape, f.data());  // a copy
             });
           },
           "The ground's force on each link of every environment over the last step, world axes, "

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,21 @@ std::string contact_scene_error(const std::string& text) {
     return e.what();
   }
   return "no error";
+}
+
+// A scene's CSV with the ground's columns (and `feet`'s): its header, its initial row and the row
+// after `steps` steps of sim.
+std::array<std::string, 3> csv_after(const Scene& scene, Simulation& sim, int steps,
+                                     const std::vector<Foot>& feet) {
+  std::ostringstream out;
+  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled, feet);
+  writer.write(0, sim, true);
+  sim.step(steps);
+  writer.write(steps, sim);
+  std::istringstream in(out.str());
+  std::array<std::string, 3> lines;
+  for (std::string& line : lines) std::getline(in, line);
+  return lines;
 }
 
 TEST(SceneContact, GroundContactAndShapesReachTheSimulation) {
@@ -194,16 +210,7 @@ shapes:
             (std::vector<int>{scene.model()->link_index("link1"),
                               scene.model()->link_index("link3")}));
   Simulation sim = make_simulation(scene);
-  std::ostringstream out;
-  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled);
-  writer.write(0, sim, true);
-  sim.step();
-  writer.write(1, sim);
-  std::istringstream in(out.str());
-  std::string header, initial, row;
-  std::getline(in, header);
-  std::getline(in, initial);
-  std::getline(in, row);
+  const auto [header, initial, row] = csv_after(scene, sim, 1, {});
   const std::string columns =
       ",contact:link1:fx,contact:link1:fy,contact:link1:fz,contact:link3:fx,contact:link3:fy,"
       "contact:link3:fz";
@@ -231,16 +238,7 @@ TEST(SceneContact, FeetColumnsSumTheirLinksAndCarryTheWeightAtRest) {
   EXPECT_EQ(scene.feet[1].name, "fr");
   EXPECT_EQ(scene.feet[1].link_names, (std::vector<std::string>{"fr_thigh", "fr_shin"}));
   Simulation sim = make_simulation(scene);
-  std::ostringstream out;
-  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled, scene.feet);
-  writer.write(0, sim, true);
-  sim.step(1000);  // 10 s: settled
-  writer.write(1000, sim);
-  std::istringstream in(out.str());
-  std::string header, initial, row;
-  std::getline(in, header);
-  std::getline(in, initial);
-  std::getline(in, row);
+  const auto [header, initial, row] = csv_after(scene, sim, 1000, scene.feet);  // 10 s: settled
   auto split = [](const std::string& line) {
     std::vector<std::string> fields;
     std::istringstream s(line);
