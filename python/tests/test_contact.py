@@ -173,6 +173,9 @@ def test_a_batch_carries_each_environments_contacts():
         assert alone.contacts()[0].normal_impulse == reports[0].normal_impulse
     with pytest.raises(ValueError, match=r"environment index 3 is out of range \[0, 3\)"):
         batch.contacts(3)
+    batch.reset([1])  # its contacts start over; the others keep theirs
+    assert batch.contacts(1) == [] and not np.any(batch.link_contact_force[1])
+    assert len(batch.contacts(2)) == 1 and np.array_equal(batch.link_contact_force[2], f[2])
 
 
 def test_feet_sum_their_links_and_carry_the_weight():

@@ -548,5 +548,26 @@ TEST(Batch, ContactForcesPerEnvironmentCarryEachBoxsWeight) {
   EXPECT_THROW(Batch(prototype, 2).contacts(2), std::invalid_argument);
 }
 
+// A reset environment starts its contacts over: right after the reset it reports none, and from
+// then on it steps as a fresh copy of the prototype, bit for bit (the friction anchors its box
+// kept while resting are gone).
+TEST(Batch, ResetStartsTheContactsOver) {
+  Simulation prototype = test::ground_box_simulation(SolverType::pgs, 0.0);
+  Batch batch(prototype, 2), fresh(prototype, 1);
+  RowMatrix qd = RowMatrix::Zero(1, prototype.model().nv);
+  qd(0, 0) = 0.3;  // env 1 slides off: other anchors, another place
+  batch.set_qd(std::vector<int>{1}, qd);
+  batch.step(60);
+  ASSERT_FALSE(batch.contacts(1).empty());
+  batch.reset(std::vector<int>{1});
+  EXPECT_TRUE(batch.contacts(1).empty());
+  EXPECT_EQ(batch.link_contact_force().row(1), RowMatrix::Zero(1, 3));
+  batch.step(40);
+  fresh.step(40);
+  EXPECT_TRUE(same_bits(batch.sim(1).q(), fresh.sim(0).q()));
+  EXPECT_TRUE(same_bits(batch.sim(1).qd(), fresh.sim(0).qd()));
+  EXPECT_EQ(batch.link_contact_force().row(1), fresh.link_contact_force().row(0));
+}
+
 }  // namespace
 }  // namespace featherdrive

@@ -116,8 +116,9 @@ class Batch {
   void set_drive(const std::string& joint, const Drive& drive);
 
   /// Puts environments env_ids back at the start: q (default: the configuration the batch was
-  /// made with, initial_q()), qd (default 0), applied force, output forces and clock 0. Drives,
-  /// targets and every other setting stay; other environments are untouched.
+  /// made with, initial_q()), qd (default 0), applied force, output forces and clock 0, no
+  /// friction anchors kept and no contacts reported. Drives, targets and every other setting
+  /// stay; other environments are untouched.
   void reset(std::span<const int> env_ids, const std::optional<RowMatrix>& q = std::nullopt,
              const std::optional<RowMatrix>& qd = std::nullopt);
   const VecX& initial_q() const { return initial_q_; }
