@@ -3,8 +3,9 @@
 One self-contained HTML file plays a run on the robot: the URDF's visuals (meshes inlined), links
 without visuals as their equivalent-inertia boxes, every link posed at every frame by the world
 poses featherdrive computes (fd.link_world_poses), the ground's force on each link as arrows
-(with a ground), a timeline and per-joint curves of q, target and drive force. The page's JavaScript (viewer/src/page.js with three.js and urdf-loader) is
-bundled at build time into build/viewer/viewer.js and inlined here, so the page needs no network.
+(with a ground), a timeline and per-joint curves of q, target and drive force. The page's
+JavaScript (viewer/src/page.js with three.js and urdf-loader) is bundled at build time into
+build/viewer/viewer.js and inlined here, so the page needs no network.
 """
 import argparse
 import base64
