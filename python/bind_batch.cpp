@@ -5,6 +5,17 @@ namespace py = pybind11;
 using namespace featherdrive;
 using namespace featherdrive::python;
 
+namespace {
+
+/// Environment i of b (a Python int; negative counts from the end).
+int env_index(const Batch& b, py::handle i) {
+  constexpr auto lo = std::numeric_limits<long long>::min();
+  constexpr auto hi = std::numeric_limits<long long>::max();
+  return index_in(to_int64(i, "environment index", lo, hi), b.size(), "environment index");
+}
+
+}  // namespace
+
 void featherdrive::python::bind_batch(py::module_& m) {
   // ---- batch ----------------------------------------------------------------------------------
   // States are read-only (N, n) views of the batch's arrays (reference_internal keeps the batch
@@ -57,10 +68,7 @@ void featherdrive::python::bind_batch(py::module_& m) {
       .def(
           "sim",
           [](Batch& b, py::handle i) -> Simulation& {
-            constexpr auto lo = std::numeric_limits<long long>::min();
-            constexpr auto hi = std::numeric_limits<long long>::max();
-            const long long index = to_int64(i, "environment index", lo, hi);
-            Simulation& s = b.sim(index_in(index, b.size(), "environment index"));
+            Simulation& s = b.sim(env_index(b, i));
             auto lock = lock_for(&b);
             lock_table()[&s] = std::move(lock);  // the environment shares the batch's lock
             return s;
@@ -102,6 +110,27 @@ void featherdrive::python::bind_batch(py::module_& m) {
                              "Joint-friction forces of the last step (N, nv), a read-only view.")
       .def_property_readonly("velocity_limit_force", &Batch::velocity_limit_force, ref,
                              "Velocity-limit forces of the last step (N, nv), a read-only view.")
+      .def_property_readonly(
+          "link_contact_force",
+          [](const Batch& b) {
+            return locked(b, [&] {
+              const RowMatrix f = b.link_contact_force();  // row-major: (N, links, 3) as it is
+              const std::vector<py::ssize_t> shape{f.rows(), f.cols() / 3, 3};
+              return py::array_t<double>(shape, f.data());  // a copy
+            });
+          },
+          "The ground's force on each link of every environment over the last step, world axes, "
+          "N: a new array (N, num_links, 3).")
+      .def(
+          "contacts",
+          [](const Batch& b, py::handle i) {
+            return locked(b, [&] {
+              const auto c = b.contacts(env_index(b, i));
+              return std::vector<ContactReport>(c.begin(), c.end());
+            });
+          },
+          py::arg("i"),
+          "Environment i's contact points of the last step (list of ContactReport).")
       .def(
           "set_q",
           [](Batch& b, py::handle values, py::handle env_ids) {

@@ -2,6 +2,7 @@
 // Model.shapes), Ground, ContactOptions, ContactReport; Simulation.set_ground / ground /
 // set_contact_options / contact_options / contacts / link_contact_force; UrdfRobot.ground.
 #include "bindings.hpp"
+#include "featherdrive/io/trajectory.hpp"
 
 namespace py = pybind11;
 using namespace featherdrive;
@@ -180,7 +181,23 @@ void featherdrive::python::bind_contact(py::module_& m) {
             });
           },
           "The ground's force on each link over the last step, world axes, N: a new array "
-          "(num_links, 3).");
+          "(num_links, 3).")
+      .def(
+          "foot_contact_force",
+          [](const Simulation& s, py::handle links) {
+            Foot foot;
+            const bool one = py::isinstance<py::str>(links) || py::isinstance<py::int_>(links);
+            const auto arg = py::reinterpret_borrow<py::object>(links);
+            for (py::handle link : one ? py::list(py::make_tuple(arg)) : py::list(arg)) {
+              const int l = frame_of(s.model(), link_arg(link)).link;
+              if (std::find(foot.links.begin(), foot.links.end(), l) == foot.links.end())
+                foot.links.push_back(l);
+            }
+            return locked(s, [&] { return foot_contact_force(s, foot); });
+          },
+          py::arg("links"),
+          "The sum of link_contact_force over links (a foot's: names, merged links' names or "
+          "indices, each counted once; one link alone is fine), world axes, N (3,).");
 
   auto robot = py::reinterpret_borrow<py::class_<UrdfRobot>>(m.attr("UrdfRobot"));
   robot.def_readonly("ground", &UrdfRobot::ground,
@@ -190,5 +207,13 @@ void featherdrive::python::bind_contact(py::module_& m) {
                     "collision geometry contacts cannot use yet (as Model.unsupported_shapes)");
   auto scene = py::reinterpret_borrow<py::class_<Scene>>(m.attr("Scene"));
   scene.def_readonly("ground", &Scene::ground, "the scene's Ground (key ground, or the file's)")
-      .def_readonly("contact", &Scene::contact, "the scene's ContactOptions (key contact)");
+      .def_readonly("contact", &Scene::contact, "the scene's ContactOptions (key contact)")
+      .def_property_readonly(
+          "feet",
+          [](const Scene& sc) {
+            py::dict feet;  // in file order (dicts keep insertion order)
+            for (const Foot& f : sc.feet) feet[py::str(f.name)] = f.link_names;
+            return feet;
+          },
+          "the scene's feet (key feet): {name: [link names]}");
 }

@@ -456,6 +456,8 @@ class Simulation:
         """The contact points of the last step."""
     def link_contact_force(self) -> Vector:
         """The ground's force on each link over the last step (num_links, 3), world axes, N."""
+    def foot_contact_force(self, links: Union[str, Int, Sequence[Union[str, Int]]]) -> Vector:
+        """The sum of link_contact_force over links (a foot's), world axes, N (3,)."""
     def max_joint_velocity(self, joint: Joint) -> float: ...
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
@@ -632,6 +634,11 @@ class Batch:
     def friction_force(self) -> Vector: ...
     @property
     def velocity_limit_force(self) -> Vector: ...
+    @property
+    def link_contact_force(self) -> Vector:
+        """(N, num_links, 3): each environment's ground force on each link, last step (a copy)."""
+    def contacts(self, i: Int) -> list[ContactReport]:
+        """Environment i's contact points of the last step."""
     def set_q(self, values: ArrayLike, env_ids: EnvIds = None) -> None: ...
     def set_qd(self, values: ArrayLike, env_ids: EnvIds = None) -> None: ...
     def set_applied_force(self, values: ArrayLike, env_ids: EnvIds = None) -> None: ...
@@ -830,6 +837,9 @@ class Scene:
         """The scene's ground (key ground, or the robot file's floor)."""
     @property
     def contact(self) -> ContactOptions: ...
+    @property
+    def feet(self) -> dict[str, list[str]]:
+        """The scene's feet (key feet): {name: [link names]}."""
 
 def load_scene(path: PathLike) -> Scene:
     """Raises InputError (a ValueError) naming the file, key and value."""

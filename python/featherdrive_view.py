@@ -2,9 +2,10 @@
 
 One self-contained HTML file plays a run on the robot: the URDF's visuals (meshes inlined), links
 without visuals as their equivalent-inertia boxes, every link posed at every frame by the world
-poses featherdrive computes (fd.link_world_poses), a timeline and per-joint curves of q, target
-and drive force. The page's JavaScript (viewer/src/page.js with three.js and urdf-loader) is
-bundled at build time into build/viewer/viewer.js and inlined here, so the page needs no network.
+poses featherdrive computes (fd.link_world_poses), the ground's force on each link as arrows
+(with a ground), a timeline and per-joint curves of q, target and drive force. The page's
+JavaScript (viewer/src/page.js with three.js and urdf-loader) is bundled at build time into
+build/viewer/viewer.js and inlined here, so the page needs no network.
 """
 import argparse
 import base64
@@ -78,13 +79,28 @@ class ViewerPage:
 # ---- the run: times, q rows and per-joint series ----------------------------------------------
 
 class _Run:
-    def __init__(self, model, times, q, forces=None, targets=None, max_force=None):
+    def __init__(self, model, times, q, forces=None, targets=None, max_force=None,
+                 contacts=None):
         self.model = model
         self.times = np.asarray(times, dtype=float)
         self.q = np.asarray(q, dtype=float)
         self.forces = forces    # (T, nv) or None
         self.targets = targets  # {dof: (T,) array}
         self.max_force = max_force or {}  # {dof: finite limit}
+        # Per row, the contact arrows [(link, origin (3,) or None: the link's origin, force (3,))]
+        # of the step that reached it; None without a ground.
+        self.contacts = contacts
+
+
+def _contact_arrows(sim):
+    """The arrows of sim's last step: each link the ground pushed, from the average of its
+    contact points, along its force (world axes, N)."""
+    points = {}
+    for c in sim.contacts():
+        points.setdefault(c.link, []).append(np.asarray(c.position, dtype=float))
+    forces = np.asarray(sim.link_contact_force())
+    return [(link, np.mean(p, axis=0), forces[link]) for link, p in sorted(points.items())
+            if np.any(forces[link])]
 
 
 def _drive_limit(fd, sim, dof):
@@ -120,6 +136,7 @@ def _run_scene(fd, scene, steps, notes):
     sim = fd.make_simulation(scene)
     nv = scene.model.nv
     q, f, t = [np.array(sim.q)], [np.zeros(nv)], [float(sim.time)]
+    contacts = [[]] if sim.ground().enabled else None
     for k in range(steps):
         fd.apply_targets(scene, sim, k)
         try:
@@ -131,8 +148,10 @@ def _run_scene(fd, scene, steps, notes):
         q.append(np.array(sim.q))
         f.append(np.array(sim.drive_force) + np.array(sim.actuator_force))
         t.append(float(sim.time))
+        if contacts is not None:
+            contacts.append(_contact_arrows(sim))
     targets, limits = _scene_targets(fd, scene, len(q))
-    return _Run(scene.model, t, q, np.array(f), targets, limits)
+    return _Run(scene.model, t, q, np.array(f), targets, limits, contacts)
 
 
 def _number(text, where):
@@ -167,6 +186,12 @@ def _read_csv(fd, scene, path):
         if name not in index:
             raise ValueError(f"{path}: no column '{name}' (the model of {scene.path} needs it)")
     f_columns = {d: index.get(f"f:{model.dof_names[d]}") for d in range(model.nv)}
+    # contact:<link>:fx,fy,fz (with the ground on): the CSV has no contact points, so these
+    # arrows start at the link's origin.
+    contact_columns = [(i, [index[f"contact:{link.name}:{a}"] for a in ("fx", "fy", "fz")])
+                       for i, link in enumerate(links)
+                       if all(f"contact:{link.name}:{a}" in index for a in ("fx", "fy", "fz"))]
+    contacts = [] if contact_columns else None
     body = rows[1:]
     if not body:
         raise ValueError(f"{path}: no rows after the header")
@@ -189,9 +214,14 @@ def _read_csv(fd, scene, path):
         for d, c in f_columns.items():
             if c is not None:
                 forces[r, d] = _number(row[c], f"{path}: row {r + 1}, column {header[c]}")
+        if contacts is not None:
+            arrows = [(i, None, np.array([_number(row[c], f"{path}: row {r + 1}, column "
+                                                  f"{header[c]}") for c in columns]))
+                      for i, columns in contact_columns]
+            contacts.append([a for a in arrows if np.any(a[2])])
     q = fd.set_dof_positions(model, q, dofs, positions)
     targets, limits = _scene_targets(fd, scene, len(body))
-    return _Run(model, times, q, forces, targets, limits)
+    return _Run(model, times, q, forces, targets, limits, contacts)
 
 
 def _run_simulation(fd, sim, steps):
@@ -200,14 +230,18 @@ def _run_simulation(fd, sim, steps):
     model = s.model
     driven = [d for d in range(model.nv) if s.drive(d).type != fd.DriveType.none]
     q, f, t = [np.array(s.q)], [np.zeros(model.nv)], [float(s.time)]
+    contacts = [[]] if s.ground().enabled else None
     for _ in range(steps):
         s.step()
         q.append(np.array(s.q))
         f.append(np.array(s.drive_force) + np.array(s.actuator_force))
         t.append(float(s.time))
+        if contacts is not None:
+            contacts.append(_contact_arrows(s))
     targets = {d: np.full(len(q), s.drive(d).target_position) for d in driven}
     limits = {d: _drive_limit(fd, s, d) for d in driven}
-    return _Run(model, t, q, np.array(f), targets, {d: v for d, v in limits.items() if v})
+    return _Run(model, t, q, np.array(f), targets, {d: v for d, v in limits.items() if v},
+                contacts)
 
 
 # ---- geometry ---------------------------------------------------------------------------------
@@ -312,12 +346,36 @@ def _page_data(fd, run, robot, urdf_text, meshes, title, marker):
                 joint["largest_force"] = float(np.abs(run.forces[:, d]).max())
         joints.append(joint)
     return {
+        "contacts": _page_contacts(run, names, poses),
         "title": title, "dt": float(run.times[1] - run.times[0]) if len(run.times) > 1 else 0.0,
         "times": np.round(run.times, 9).tolist(), "links": list(names),
         "poses": np.round(poses, 7).flatten().tolist(),
         "urdf": urdf_text, "meshes": meshes, "boxes": _inertia_boxes(model),
         "merged_into": merged_into, "joints": joints, "marker": marker,
     }
+
+
+def _page_contacts(run, names, poses):
+    """The contact arrows of each frame, flat [link, x, y, z, fx, fy, fz, ...] (link: index into
+    the page's links), and their scale in m/N: 1 m for the robot's weight m |g| (else for the
+    run's largest force); None without a ground."""
+    if run.contacts is None:
+        return None
+    model = run.model
+    weight = sum(float(link.mass) for link in model.links) * float(np.linalg.norm(model.gravity))
+    largest = max((float(np.linalg.norm(f)) for row in run.contacts for _, _, f in row),
+                  default=0.0)
+    per_newton = 1.0 / weight if weight > 0 else 1.0 / largest if largest > 0 else 0.0
+    poses = np.asarray(poses).reshape(len(run.times), len(names), 7)
+    frames = []
+    for k, row in enumerate(run.contacts):
+        flat = []
+        for link, origin, force in row:
+            i = names.index(model.links[link].name)
+            at = poses[k, i, :3] if origin is None else origin
+            flat += [i, *np.round(at, 7).tolist(), *np.round(force, 6).tolist()]
+        frames.append(flat)
+    return {"per_newton": per_newton, "frames": frames}
 
 
 def _html(data, bundle):

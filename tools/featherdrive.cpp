@@ -238,7 +238,7 @@ int simulate(const SimulateArgs& args) {
   std::optional<TargetWriter> targets;
   if (csv_stream)
     csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled,
-                sim.ground().enabled);
+                sim.ground().enabled, scene.feet);
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {
@@ -320,6 +320,28 @@ int simulate(const SimulateArgs& args) {
   if (!model.shapes.empty())
     std::printf("  collision shapes (%zu):\n%s", model.shapes.size(),
                 describe_shapes(model, "    ").c_str());
+  if (sim.ground().enabled && !scene.feet.empty()) {
+    // The last step's ground force on each foot (the CSV's foot:<name> columns), and their sum
+    // against the robot's weight, which a robot at rest on its feet carries.
+    std::printf("  feet: the last step's ground force, world axes, N\n");
+    auto vec = [](const Vec3& v) {
+      char text[96];
+      std::snprintf(text, sizeof text, "[%.6g, %.6g, %.6g]", v.x(), v.y(), v.z());
+      return std::string(text);
+    };
+    Vec3 total = Vec3::Zero();
+    for (const Foot& foot : scene.feet) {
+      std::string links;
+      for (const std::string& l : foot.link_names) links += (links.empty() ? "" : " + ") + l;
+      const Vec3 f = foot_contact_force(sim, foot);
+      total += f;
+      std::printf("    %-12s %s (%s)\n", foot.name.c_str(), vec(f).c_str(), links.c_str());
+    }
+    double mass = 0.0;
+    for (const Link& link : model.links) mass += link.mass;
+    std::printf("    %-12s %s (the robot's weight m |g| = %.6g N)\n", "sum",
+                vec(total).c_str(), mass * model.gravity.norm());
+  }
   if (scene.control.substeps > 1)
     std::printf("  control step: %d physics steps, targets %s\n", scene.control.substeps,
                 to_string(scene.control.targets));

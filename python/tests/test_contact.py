@@ -161,3 +161,77 @@ def test_a_ball_lands_rests_and_rolls_on_the_ground():
     state = sim.base_state()
     assert state["linear_velocity"][0] == pytest.approx(5.0 / 7.0, abs=1e-9)
     assert state["angular_velocity"][1] * 0.1 == pytest.approx(5.0 / 7.0, abs=1e-9)
+
+
+def test_a_batch_carries_each_environments_contacts():
+    """Balls of masses m_i resting on the ground in one Batch: environment i's ground carries
+    m_i g (linear momentum of a resting step), bit for bit what a ball of that mass gives
+    alone."""
+    def resting(mass):
+        robot = fd.parse_urdf(BALL.replace('mass value="2"', f'mass value="{mass!r}"'),
+                              "ball.urdf", fd.UrdfOptions(fixed_base=False))
+        sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=0.01, position_iterations=50))
+        sim.set_ground(fd.Ground(material=fd.Material(0.5, 0.5, 0.0)))
+        sim.set_base_state(position=[0.0, 0.0, 0.1])
+        return sim
+    masses = np.array([0.5, 2.0, 3.5])
+    batch = fd.Batch(resting(2.0), len(masses))
+    batch.set_link_mass("ball", masses, scale_inertia=False)
+    batch.step(100)
+    f = batch.link_contact_force
+    assert f.shape == (3, 1, 3)
+    np.testing.assert_allclose(f[:, 0, 2], masses * 9.81, rtol=1e-9)
+    np.testing.assert_allclose(f[:, 0, :2], 0.0, atol=1e-12)
+    for i, m in enumerate(masses):
+        reports = batch.contacts(i)
+        assert len(reports) == 1 and reports[0].link == 0
+        alone = resting(m)
+        alone.step(100)
+        assert np.array_equal(alone.link_contact_force(), f[i])
+        assert alone.contacts()[0].normal_impulse == reports[0].normal_impulse
+    with pytest.raises(ValueError, match=r"environment index 3 is out of range \[0, 3\)"):
+        batch.contacts(3)
+    batch.reset([1])  # its contacts start over; the others keep theirs
+    assert batch.contacts(1) == [] and not np.any(batch.link_contact_force[1])
+    assert len(batch.contacts(2)) == 1 and np.array_equal(batch.link_contact_force[2], f[2])
+
+
+def test_feet_sum_their_links_and_carry_the_weight():
+    """tests/data/quadruped_ground.yaml's feet (one per leg: thigh and shin): at rest the four
+    feet's normal forces carry m g; each foot's force is the sum of its links'."""
+    scene = fd.load_scene(ROOT / "tests" / "data" / "quadruped_ground.yaml")
+    assert list(scene.feet) == ["fl", "fr", "hl", "hr"]
+    assert scene.feet["hl"] == ["hl_thigh", "hl_shin"]
+    sim = fd.make_simulation(scene)
+    sim.step(1000)
+    forces = sim.link_contact_force()
+    names = sim.model.link_names
+    total = 0.0
+    for foot, links in scene.feet.items():
+        f = sim.foot_contact_force(links)
+        assert f.shape == (3,)
+        assert np.array_equal(f, forces[names.index(links[0])] + forces[names.index(links[1])])
+        total += f[2]
+    mass = sum(link.mass for link in sim.model.links)
+    assert total == pytest.approx(mass * 9.81, abs=1e-6)
+    assert np.array_equal(sim.foot_contact_force("fl_shin"), forces[names.index("fl_shin")])
+    assert np.array_equal(sim.foot_contact_force([names.index("fl_shin"), "fl_shin"]),
+                          forces[names.index("fl_shin")])  # each link once
+    with pytest.raises(ValueError, match="no link or frame named 'fl_shn'"):
+        sim.foot_contact_force(["fl_shn"])
+
+
+def test_a_contact_force_that_overflows_is_a_divergence():
+    """dt = 1e-100 and an impact at 1e210 m/s: the impulse is finite, impulse / dt is not. The
+    step throws DivergenceError naming the link and leaves the state as it was, with no contacts
+    reported (found by fuzz_step)."""
+    robot = fd.parse_urdf(BALL, "ball.urdf", fd.UrdfOptions(fixed_base=False))
+    sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=1e-100))
+    sim.set_ground(fd.Ground())
+    sim.set_base_state(position=[0.0, 0.0, 0.1], linear_velocity=[0.0, 0.0, -1e210])
+    q, qd = np.array(sim.q), np.array(sim.qd)
+    with pytest.raises(fd.DivergenceError, match=r"^simulation diverged at step 1 \(t = 0 s\): "
+                       r"link 'ball' contact force fz = inf; the state is left as it was"):
+        sim.step()
+    assert np.array_equal(sim.q, q) and np.array_equal(sim.qd, qd) and sim.step_count == 0
+    assert sim.contacts() == [] and not np.any(sim.link_contact_force())

@@ -114,6 +114,29 @@ def test_page_of_a_scene(tmp_path):
 
 
 @needs_bundle
+def test_contact_arrows_of_a_simulation(tmp_path):
+    """A 2 kg ball resting on the ground: one arrow per stepped frame, from its contact point
+    (0, 0, 0) along its force, (0, 0, m g); 1 m per the robot's weight m g (docs/viewer.md, (2));
+    none in the first frame and none without a ground."""
+    robot = fd.parse_urdf('<robot name="ball"><link name="ball"><inertial><mass value="2"/>'
+                          '<inertia ixx="0.008" iyy="0.008" izz="0.008" ixy="0" ixz="0" iyz="0"/>'
+                          '</inertial><collision><geometry><sphere radius="0.1"/></geometry>'
+                          '</collision></link></robot>', "ball.urdf",
+                          fd.UrdfOptions(fixed_base=False))
+    sim = fd.Simulation(robot.model, fd.SimulationOptions(dt=0.01, position_iterations=50))
+    sim.set_ground(fd.Ground())
+    sim.set_base_state(position=[0.0, 0.0, 0.1])
+    contacts = page_data(fd.view(sim, tmp_path / "ball.html", steps=3))["contacts"]
+    assert contacts["per_newton"] == pytest.approx(1 / (2 * 9.81), rel=1e-15)
+    frames = contacts["frames"]
+    assert len(frames) == 4 and frames[0] == []
+    for arrow in frames[1:]:
+        np.testing.assert_allclose(arrow, [0, 0, 0, 0, 0, 0, 2 * 9.81], atol=1e-6)
+    sim.set_ground(fd.Ground(enabled=False))
+    assert page_data(fd.view(sim, tmp_path / "air.html", steps=1))["contacts"] is None
+
+
+@needs_bundle
 def test_mjcf_robots_are_drawn_from_their_inertia(tmp_path):
     scene = ROOT / "examples" / "humanoid_hold.yaml"
     model = fd.load_scene(str(scene)).model

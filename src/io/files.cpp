@@ -121,6 +121,10 @@ std::string read_input_file(const fs::path& path, const char* what) {
     if (bytes.size() > kMaxInputBytes)  // grew while being read
       fail("is larger than " + std::to_string(kMaxInputBytes >> 20) + " MiB");
   }
+  // gzip's magic (RFC 1952): featherdrive reads no compressed files (no zlib), so say what it is
+  // rather than fail on its bytes later.
+  if (bytes.size() >= 2 && bytes[0] == '\x1f' && bytes[1] == '\x8b')
+    fail("is gzip-compressed: decompress it first (gunzip -k " + path.string() + ")");
   return bytes;
 }
 

@@ -367,6 +367,45 @@ Ground read_ground(const Reader& r, const YAML::Node& node) {
   return ground;
 }
 
+// feet: {name: [link, ...]}: a link by its name or the name of a link merged into it; each link
+// must carry shapes (else its force is always 0) and appear once in its foot.
+std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model& model) {
+  if (!node.IsMap()) r.fail("feet", node, "must be a map {name: [link, ...], ...}");
+  r.map(node, "feet", {});
+  std::vector<Foot> feet;
+  for (const auto& kv : node) {
+    Foot foot;
+    foot.name = kv.first.Scalar();
+    const std::string p = "feet." + foot.name;
+    const YAML::Node& list = kv.second;
+    if (!list.IsSequence() || list.size() == 0)
+      r.fail(p, list, "must be a non-empty list of link names");
+    for (size_t i = 0; i < list.size(); ++i) {
+      const std::string at = p + "[" + std::to_string(i) + "]";
+      const std::string name = r.text(list[i], at);
+      if (std::find(foot.link_names.begin(), foot.link_names.end(), name) !=
+          foot.link_names.end())
+        r.fail(at, list[i], "appears twice in the foot");
+      int link = 0;
+      try {
+        link = model.frame(name).link;
+      } catch (const std::invalid_argument& error) {
+        r.fail(at, list[i], error.what());
+      }
+      const bool has_shape = std::any_of(model.shapes.begin(), model.shapes.end(),
+                                         [&](const CollisionShape& s) { return s.link == link; });
+      if (!has_shape)
+        r.fail(at, list[i], "link '" + model.links[static_cast<size_t>(link)].name +
+                                "' has no collision shapes, so its contact force is always 0");
+      foot.link_names.push_back(name);
+      if (std::find(foot.links.begin(), foot.links.end(), link) == foot.links.end())
+        foot.links.push_back(link);
+    }
+    feet.push_back(std::move(foot));
+  }
+  return feet;
+}
+
 // contact: {contact_offset, rest_offset, bounce_threshold}.
 ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
   r.map(node, "contact", {"contact_offset", "rest_offset", "bounce_threshold"});
@@ -566,7 +605,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
          "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
          "control", "urdf_effort", "fit", "applied_force", "mimic", "guard", "ground", "contact",
-         "shapes"});
+         "shapes", "feet"});
 
   Scene scene;
   scene.path = path;
@@ -756,6 +795,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     scene.robot.shapes.insert(scene.robot.shapes.end(), scene.shapes.begin(), scene.shapes.end());
     m = scene.robot.model.get();
   }
+  if (root["feet"]) scene.feet = read_feet(r, root["feet"], *m);
   if (root["contact"]) scene.contact = read_contact(r, root["contact"]);
   if (root["ground"]) {
     scene.ground = read_ground(r, root["ground"]);

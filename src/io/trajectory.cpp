@@ -44,7 +44,8 @@ std::vector<int> shape_links(const Model& model) {
 
 std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
                                             const std::vector<int>& target_dofs,
-                                            const std::vector<int>& contact_links) {
+                                            const std::vector<int>& contact_links,
+                                            const std::vector<Foot>& feet) {
   const Model& model = *robot.model;
   std::vector<std::string> columns;
   if (model.floating_base())
@@ -59,17 +60,25 @@ std::vector<std::string> trajectory_columns(const UrdfRobot& robot,
   for (int link : contact_links)
     for (const char* axis : {":fx", ":fy", ":fz"})
       columns.push_back("contact:" + model.links[static_cast<size_t>(link)].name + axis);
+  for (const Foot& foot : feet)
+    for (const char* axis : {":fx", ":fy", ":fz"}) columns.push_back("foot:" + foot.name + axis);
   return columns;
+}
+
+Vec3 foot_contact_force(const Simulation& sim, const Foot& foot) {
+  Vec3 sum = Vec3::Zero();
+  for (int link : foot.links) sum += sim.link_contact_force().at(static_cast<size_t>(link));
+  return sum;
 }
 
 TrajectoryWriter::TrajectoryWriter(std::ostream& out, const UrdfRobot& robot,
                                    const std::vector<int>& target_dofs, bool guard_substeps,
-                                   bool contact_forces)
+                                   bool contact_forces, const std::vector<Foot>& feet)
     : out_(out), q_order_(q_order(robot)), v_order_(robot.dof_order), target_order_(target_dofs),
       contact_links_(contact_forces ? shape_links(*robot.model) : std::vector<int>{}),
-      guard_substeps_(guard_substeps) {
+      feet_(contact_forces ? feet : std::vector<Foot>{}), guard_substeps_(guard_substeps) {
   out_ << "step,t";
-  for (const std::string& c : trajectory_columns(robot, target_dofs, contact_links_))
+  for (const std::string& c : trajectory_columns(robot, target_dofs, contact_links_, feet_))
     out_ << ',' << csv_field(c);
   if (guard_substeps_) out_ << ",guard_substeps";
   out_ << '\n';
@@ -85,10 +94,11 @@ void TrajectoryWriter::write(long step, const Simulation& sim, bool initial) {
     out_ << ',' << format_double(initial ? 0.0 : sim.drive_force()[d] + sim.actuator_force()[d]);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_position);
   for (int d : target_order_) out_ << ',' << format_double(sim.drive(d).target_velocity);
-  for (int link : contact_links_) {
-    const Vec3 f = initial ? Vec3::Zero() : sim.link_contact_force()[static_cast<size_t>(link)];
-    for (int k = 0; k < 3; ++k) out_ << ',' << format_double(f[k]);
-  }
+  auto force = [&](const Vec3& f) {
+    for (int k = 0; k < 3; ++k) out_ << ',' << format_double(initial ? 0.0 : f[k]);
+  };
+  for (int link : contact_links_) force(sim.link_contact_force()[static_cast<size_t>(link)]);
+  for (const Foot& foot : feet_) force(foot_contact_force(sim, foot));
   if (guard_substeps_) out_ << ',' << (initial ? 1 : sim.guard_substeps());
   out_ << '\n';
 }

@@ -327,6 +327,15 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
     sims_[static_cast<size_t>(i)].reset_actuator_history();  // as Isaac Lab's delay buffers
     sims_[static_cast<size_t>(i)].reset_drive_delay_history();
     sims_[static_cast<size_t>(i)].set_guard_account({});  // a new episode, a new account
+    // Contacts start over too: no friction anchors kept from the episode before, no contact
+    // outputs. A ground switched off forgets both; switched on again it is as it was.
+    if (Simulation& s = sims_[static_cast<size_t>(i)]; s.ground().enabled) {
+      const Ground ground = s.ground();
+      Ground off = ground;
+      off.enabled = false;
+      s.set_ground(off);
+      s.set_ground(ground);
+    }
   }
 }
 
@@ -572,6 +581,17 @@ RowMatrix Batch::link_com(int link) const {
     m.row(i) =
         sims_[static_cast<size_t>(i)].model().links[static_cast<size_t>(link)].com.transpose();
   return m;
+}
+
+RowMatrix Batch::link_contact_force() const {
+  const int links = model().num_links();
+  RowMatrix out(size(), 3 * links);
+  for (int i = 0; i < size(); ++i) {
+    const std::vector<Vec3>& f = sims_[static_cast<size_t>(i)].link_contact_force();
+    for (int l = 0; l < links; ++l)
+      out.row(i).segment<3>(3 * l) = f[static_cast<size_t>(l)].transpose();
+  }
+  return out;
 }
 
 RowMatrix Batch::observe(std::span<const Observation> fields) const {

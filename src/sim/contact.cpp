@@ -39,6 +39,10 @@ void Simulation::track_contacts(double h) {
 void Simulation::contact_forces() {
   if (!contacts_active_) return;
   contact_rows_.report(settings_.options.dt, contacts_, link_contact_force_);
+  // The anchors are kept only from a step that ends: one that diverges throws here and leaves
+  // them as they were, as it leaves the state (found by fuzz_step: NaN anchors then made the
+  // simulation's checkpoint unreadable).
+  check_finite_or_throw();
   contact_rows_.conclude();
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -15,6 +16,14 @@ namespace featherdrive {
 namespace {
 
 std::string fmt(double v) { return format_double(v); }
+
+// The ground's normal made unit length, leaving one that already is (within rounding) as it is:
+// normalising is not idempotent in floating point (a normalised vector normalised again can move
+// by an ulp), and a checkpoint's normal, normalised when it was set, must restore bit for bit.
+Vec3 unit_normal(const Vec3& n) {
+  constexpr double kTolerance = 8 * std::numeric_limits<double>::epsilon();
+  return std::abs(n.squaredNorm() - 1.0) <= kTolerance ? n : Vec3(n.normalized());
+}
 
 }  // namespace
 
@@ -115,7 +124,7 @@ void Simulation::set_settings(const Settings& settings) {
   // Everything that may throw or allocate is made before anything changes.
   MimicSolver mimic(*model_, settings.mimic_joints);
   Settings next = settings;
-  next.ground.normal.normalize();
+  next.ground.normal = unit_normal(next.ground.normal);
   for (int d = 0; d < model_->nv; ++d) {
     const auto k = static_cast<size_t>(d);
     if (!(settings.actuators[k] == settings_.actuators[k]))
@@ -352,7 +361,7 @@ void Simulation::set_ground(const Ground& ground) {
   check_ground(ground);
   check_ground_supported(*model_, ground);
   settings_.ground = ground;
-  settings_.ground.normal.normalize();
+  settings_.ground.normal = unit_normal(settings_.ground.normal);
   contact_rows_.clear_anchors();
   update_contacts_active();
 }
@@ -504,23 +513,30 @@ void Simulation::commit_state() {
 
 void Simulation::check_finite_or_throw() {
   const Model& model = *model_;
-  auto fail = [&](const char* quantity, int dof, double value) {
-    const std::string joint = model.links[model.dof_link[dof]].joint_name;
+  // A diverged step reports no contacts (its forces may be the culprit).
+  auto diverged = [&](const std::string& what, double value) {
     const long step = step_count_ + 1;
     const double t = time_;
     undo_actuators();
+    num_contacts_ = 0;
+    std::fill(link_contact_force_.begin(), link_contact_force_.end(), Vec3::Zero());
     std::ostringstream s;
     s.precision(6);
-    s << "simulation diverged at step " << step << " (t = " << t << " s): joint '" << joint
-      << "' " << quantity << " = " << value
-      << "; the state is left as it was before this step (lower dt or the gains)";
+    s << "simulation diverged at step " << step << " (t = " << t << " s): " << what << " = "
+      << value << "; the state is left as it was before this step (lower dt or the gains)";
     throw DivergenceError(s.str());
   };
+  auto fail = [&](const char* quantity, int dof, double value) {
+    diverged("joint '" + model.links[model.dof_link[dof]].joint_name + "' " + quantity, value);
+  };
   // x * 0 is 0 for a finite x and NaN otherwise, so one sum tells whether all are finite; the
-  // search for the culprit runs only when one is not.
-  const double zero = (qd_.array() * 0.0).sum() + (drive_force_.array() * 0.0).sum() +
-                      (limit_force_.array() * 0.0).sum() + (friction_force_.array() * 0.0).sum() +
-                      (velocity_limit_force_.array() * 0.0).sum() + (q_.array() * 0.0).sum();
+  // search for the culprit runs only when one is not. The contact forces too: impulse / dt can
+  // overflow where the state stays finite (found by fuzzing: dt = 1e-100).
+  double zero = (qd_.array() * 0.0).sum() + (drive_force_.array() * 0.0).sum() +
+                (limit_force_.array() * 0.0).sum() + (friction_force_.array() * 0.0).sum() +
+                (velocity_limit_force_.array() * 0.0).sum() + (q_.array() * 0.0).sum();
+  if (contacts_active_)
+    for (const Vec3& f : link_contact_force_) zero += (f.array() * 0.0).sum();
   if (zero == 0.0 && std::isfinite(time_ + settings_.options.dt)) return;
   // Velocities and forces first: a non-finite velocity also makes the position non-finite, and
   // the velocity is the nearer cause.
@@ -537,6 +553,11 @@ void Simulation::check_finite_or_throw() {
       if (!std::isfinite(q_[link.q_index + k])) {
         if (link.nv > 0) fail("position q", link.v_index + std::min(k, link.nv - 1), q_[link.q_index + k]);
       }
+  for (size_t l = 0; l < link_contact_force_.size(); ++l)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(link_contact_force_[l][k]))
+        diverged("link '" + model.links[l].name + "' contact force f" + "xyz"[k],
+                 link_contact_force_[l][k]);
   // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
   if (!std::isfinite(time_ + settings_.options.dt)) {
     undo_actuators();

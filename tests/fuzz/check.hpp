@@ -4,6 +4,7 @@
 #pragma once
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -31,6 +32,12 @@ inline void check_finite(const Simulation& sim) {
       !sim.friction_force().allFinite() || !sim.velocity_limit_force().allFinite())
     bug("non-finite reported force without an error");
   if (!std::isfinite(sim.time())) bug("non-finite time");
+  for (const Vec3& f : sim.link_contact_force())
+    if (!f.allFinite()) bug("non-finite contact force without an error");
+  for (const ContactReport& c : sim.contacts())
+    if (!std::isfinite(c.normal_impulse) || !c.friction_impulse.allFinite() ||
+        !c.position.allFinite())
+      bug("non-finite contact report without an error");
 }
 
 /// One step: either it succeeds with a finite state, or it throws DivergenceError and leaves the

@@ -2,10 +2,10 @@
 // tree (1 to 5 links, every joint type, extreme masses, inertias, frames and axes), solver
 // settings (dt, PGS/TGS, iterations), drives (type, gains, limits, targets), joint limits,
 // friction, velocity limits, envelopes, applied forces, the initial state, actuators, delays, a
-// floating root's world pose and the step guard. Refused parameters
-// (std::invalid_argument, ModelError) and DivergenceError are fine; a crash, undefined behaviour,
-// a non-finite state without an error, a diverging step that changes the state, or a checkpoint
-// that does not restore bit for bit are bugs.
+// floating root's world pose, the step guard, and collision shapes with a ground. Refused
+// parameters (std::invalid_argument, ModelError) and DivergenceError are fine; a crash, undefined
+// behaviour, a non-finite state or contact force without an error, a diverging step that changes
+// the state, or a checkpoint that does not restore bit for bit are bugs.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -20,6 +20,7 @@
 #include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/model/model_variant.hpp"
 
 using namespace featherdrive;
 
@@ -248,6 +249,49 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try_set([&] { sim.set_options(o); });
     fuzz::check_finite(sim);
     for (int k = std::min(in.small(6), 3); k > 0; --k)
+      if (!fuzz::checked_step(sim)) break;
+  }
+
+  // Then collision shapes (sphere, capsule, box: sizes and poses sane or fuzzed) on random links
+  // and a ground (height, normal, materials, contact options), so that the steps reach the contact
+  // rows (docs/math/contact.md; read last, so that older inputs decode as they did).
+  if (in.flag()) {
+    using Shapes = std::vector<std::pair<std::string, CollisionShape>>;
+    Shapes shapes(static_cast<size_t>(1 + in.small(4)));
+    auto material = [&] {
+      return in.flag() ? Material{} : Material{in.number(), in.number(), in.number()};
+    };
+    for (auto& [link, shape] : shapes) {
+      link = model->links[static_cast<size_t>(in.small(model->num_links()))].name;
+      shape.type = static_cast<ShapeType>(in.small(3));
+      if (in.flag()) {
+        shape.size = Vec3(0.05 * (1 + in.small(4)), 0.05 * (1 + in.small(4)), 0.05 * in.small(4));
+        shape.position = Vec3(0.0, 0.0, -0.1 * in.small(3));
+      } else {
+        shape.size = in.vec3();
+        shape.position = in.vec3();
+        shape.rotation = Eigen::AngleAxisd(in.number(), Vec3::Unit(in.small(3))).toRotationMatrix();
+      }
+      shape.material = material();
+    }
+    try {
+      auto shaped = std::make_shared<const Model>(with_shapes(*model, shapes));
+      sim.set_model(shaped);
+      model = std::move(shaped);
+    } catch (const ModelError&) {
+    }
+    Ground ground;
+    ground.enabled = true;
+    ground.height = in.flag() ? in.number() : -0.1 * in.small(8);
+    if (in.flag()) ground.normal = in.vec3();
+    ground.material = material();
+    try_set([&] { sim.set_ground(ground); });
+    if (in.flag()) {
+      const ContactOptions c{in.number(), in.number(), in.number()};
+      try_set([&] { sim.set_contact_options(c); });
+    }
+    fuzz::check_finite(sim);
+    for (int k = 1 + in.small(4); k > 0; --k)
       if (!fuzz::checked_step(sim)) break;
   }
 

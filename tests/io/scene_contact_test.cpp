@@ -5,12 +5,15 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/scene.hpp"
@@ -33,6 +36,21 @@ std::string contact_scene_error(const std::string& text) {
     return e.what();
   }
   return "no error";
+}
+
+// A scene's CSV with the ground's columns (and `feet`'s): its header, its initial row and the row
+// after `steps` steps of sim.
+std::array<std::string, 3> csv_after(const Scene& scene, Simulation& sim, int steps,
+                                     const std::vector<Foot>& feet) {
+  std::ostringstream out;
+  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled, feet);
+  writer.write(0, sim, true);
+  sim.step(steps);
+  writer.write(steps, sim);
+  std::istringstream in(out.str());
+  std::array<std::string, 3> lines;
+  for (std::string& line : lines) std::getline(in, line);
+  return lines;
 }
 
 TEST(SceneContact, GroundContactAndShapesReachTheSimulation) {
@@ -195,16 +213,7 @@ shapes:
             (std::vector<int>{scene.model()->link_index("link1"),
                               scene.model()->link_index("link3")}));
   Simulation sim = make_simulation(scene);
-  std::ostringstream out;
-  TrajectoryWriter writer(out, scene.robot, {}, false, sim.ground().enabled);
-  writer.write(0, sim, true);
-  sim.step();
-  writer.write(1, sim);
-  std::istringstream in(out.str());
-  std::string header, initial, row;
-  std::getline(in, header);
-  std::getline(in, initial);
-  std::getline(in, row);
+  const auto [header, initial, row] = csv_after(scene, sim, 1, {});
   const std::string columns =
       ",contact:link1:fx,contact:link1:fy,contact:link1:fz,contact:link3:fx,contact:link3:fy,"
       "contact:link3:fz";
@@ -221,6 +230,69 @@ shapes:
   std::ostringstream plain;
   TrajectoryWriter(plain, scene.robot).write(0, sim, true);
   EXPECT_EQ(plain.str().find("contact:"), std::string::npos);
+}
+
+// The quadruped standing (tests/data/quadruped_ground.yaml, its feet the four legs): at rest the
+// four feet's normal forces carry its weight m g (linear momentum of a steady state), and each
+// foot's columns are the sums of its links' contact columns.
+TEST(SceneContact, FeetColumnsSumTheirLinksAndCarryTheWeightAtRest) {
+  const Scene scene = load_scene(kContactSource + "/tests/data/quadruped_ground.yaml");
+  ASSERT_EQ(scene.feet.size(), 4u);
+  EXPECT_EQ(scene.feet[1].name, "fr");
+  EXPECT_EQ(scene.feet[1].link_names, (std::vector<std::string>{"fr_thigh", "fr_shin"}));
+  Simulation sim = make_simulation(scene);
+  const auto [header, initial, row] = csv_after(scene, sim, 1000, scene.feet);  // 10 s: settled
+  auto split = [](const std::string& line) {
+    std::vector<std::string> fields;
+    std::istringstream s(line);
+    for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
+    return fields;
+  };
+  const std::vector<std::string> names = split(header), values = split(row);
+  ASSERT_EQ(names.size(), values.size());
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) ADD_FAILURE() << "no column " << name;
+    return it == names.end() ? 0.0 : std::stod(values[static_cast<size_t>(it - names.begin())]);
+  };
+  // The foot columns follow the contact columns.
+  EXPECT_EQ(names.back(), "foot:hr:fz");
+  EXPECT_EQ(names[names.size() - 12], "foot:fl:fx");
+  EXPECT_EQ(names[names.size() - 13], "contact:hr_shin:fz");
+  double mass = 0.0;
+  for (const Link& link : scene.model()->links) mass += link.mass;
+  double normal = 0.0;
+  for (const char* leg : {"fl", "fr", "hl", "hr"}) {
+    for (const char* axis : {":fx", ":fy", ":fz"}) {
+      const double thigh = column(std::string("contact:") + leg + "_thigh" + axis);
+      const double shin = column(std::string("contact:") + leg + "_shin" + axis);
+      EXPECT_EQ(column(std::string("foot:") + leg + axis), thigh + shin) << leg << axis;
+    }
+    normal += column(std::string("foot:") + leg + ":fz");
+  }
+  EXPECT_NEAR(normal, mass * 9.81, 1e-6);
+  EXPECT_NE(initial.find(",0,0,0,0,0,0,0,0,0,0,0,0"), std::string::npos);
+}
+
+TEST(SceneContact, FeetAreChecked) {
+  const std::string scene =
+      "model: " + kContactSource + "/tests/data/quadruped.urdf\nfixed_base: false\ndt: 0.01\n"
+      "steps: 1\nshapes:\n  - {link: fl_shin, type: sphere, radius: 0.05}\n";
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: [fl_shin]}\n"), "no error");
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: [fl_shn]}\n"),
+            "s.yaml: feet.fl[0] = fl_shn: no link or frame named 'fl_shn'; nearest: 'fl_shin', "
+            "'fr_shin', 'hl_shin'");
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: []}\n"),
+            "s.yaml: feet.fl = []: must be a non-empty list of link names");
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: [fl_shin], fl: [fl_shin]}\n"),
+            "s.yaml: feet.fl: the key appears twice");
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: [fl_shin, fl_shin]}\n"),
+            "s.yaml: feet.fl[1] = fl_shin: appears twice in the foot");
+  EXPECT_EQ(contact_scene_error(scene + "feet: {fl: [fl_thigh]}\n"),
+            "s.yaml: feet.fl[0] = fl_thigh: link 'fl_thigh' has no collision shapes, so its "
+            "contact force is always 0");
+  EXPECT_EQ(contact_scene_error(scene + "feet: [fl_shin]\n"),
+            "s.yaml: feet = [fl_shin]: must be a map {name: [link, ...], ...}");
 }
 
 }  // namespace

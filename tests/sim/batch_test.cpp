@@ -9,11 +9,13 @@
 #include <random>
 #include <vector>
 
+#include "featherdrive/algorithm/floating_base.hpp"
 #include "featherdrive/model/model_variant.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
+#include "support/contact_models.hpp"
 
 namespace featherdrive {
 namespace {
@@ -497,6 +499,74 @@ TEST(Batch, ObserveAndFramePositions) {
       EXPECT_LT((tip.row(i).transpose() - expected).norm(), 1e-14) << i;
     }
   }
+}
+
+// Boxes of masses m_i resting on the ground (set_link_mass): each environment's ground carries its
+// own weight, m_i g along z (a steady state's linear momentum balance), and its contact outputs
+// are, bit for bit, those of the same box stepped alone, for 1 and 2 threads.
+TEST(Batch, ContactForcesPerEnvironmentCarryEachBoxsWeight) {
+  const std::vector<double> masses{0.5, 1.0, 2.0, 3.7};
+  const int n = static_cast<int>(masses.size());
+  Simulation prototype = test::ground_box_simulation(SolverType::pgs, 0.0);
+  SimulationOptions options = prototype.options();
+  options.position_iterations = 50;  // converges the four corners' rows within each step
+  prototype.set_options(options);
+  const Link& box = prototype.model().links[0];
+  std::vector<Simulation> alone;
+  for (double m : masses) {
+    alone.push_back(prototype);
+    alone.back().set_model(std::make_shared<const Model>(with_link_inertial(
+        prototype.model(), 0, m, box.com, Mat3(box.inertia_com * (m / box.mass)))));
+    alone.back().step(200);
+  }
+  for (int threads : {1, 2}) {
+    Batch batch(prototype, n);
+    batch.set_num_threads(threads);
+    batch.set_link_mass(std::vector<int>{0, 1, 2, 3}, 0, Eigen::Map<const VecX>(masses.data(), n));
+    EXPECT_EQ(batch.link_contact_force(), RowMatrix::Zero(n, 3));
+    batch.step(200);
+    const RowMatrix f = batch.link_contact_force();
+    ASSERT_EQ(f.rows(), n);
+    ASSERT_EQ(f.cols(), 3);
+    for (int i = 0; i < n; ++i) {
+      const double weight = masses[static_cast<size_t>(i)] * test::kContactGravity;
+      EXPECT_LT(std::abs(f(i, 2) / weight - 1.0), 1e-9) << i << ", threads " << threads;
+      EXPECT_LT(std::hypot(f(i, 0), f(i, 1)), 1e-9 * weight) << i;
+      const Simulation& lone = alone[static_cast<size_t>(i)];
+      EXPECT_TRUE(same_bits(batch.sim(i).q(), lone.q())) << i;
+      EXPECT_EQ(f.row(i).transpose(), lone.link_contact_force()[0]) << i;
+      const auto c = batch.contacts(i), expected = lone.contacts();
+      ASSERT_EQ(c.size(), expected.size()) << i;
+      ASSERT_EQ(c.size(), 4u) << i;  // the box's four bottom corners
+      for (size_t k = 0; k < c.size(); ++k) {
+        EXPECT_EQ(c[k].normal_impulse, expected[k].normal_impulse) << i << ", point " << k;
+        EXPECT_EQ(c[k].friction_impulse, expected[k].friction_impulse) << i << ", point " << k;
+        EXPECT_EQ(c[k].position, expected[k].position) << i << ", point " << k;
+      }
+    }
+  }
+  EXPECT_THROW(Batch(prototype, 2).contacts(2), std::invalid_argument);
+}
+
+// A reset environment starts its contacts over: right after the reset it reports none, and from
+// then on it steps as a fresh copy of the prototype, bit for bit (the friction anchors its box
+// kept while resting are gone).
+TEST(Batch, ResetStartsTheContactsOver) {
+  Simulation prototype = test::ground_box_simulation(SolverType::pgs, 0.0);
+  Batch batch(prototype, 2), fresh(prototype, 1);
+  RowMatrix qd = RowMatrix::Zero(1, prototype.model().nv);
+  qd(0, 0) = 0.3;  // env 1 slides off: other anchors, another place
+  batch.set_qd(std::vector<int>{1}, qd);
+  batch.step(60);
+  ASSERT_FALSE(batch.contacts(1).empty());
+  batch.reset(std::vector<int>{1});
+  EXPECT_TRUE(batch.contacts(1).empty());
+  EXPECT_EQ(batch.link_contact_force().row(1), RowMatrix::Zero(1, 3));
+  batch.step(40);
+  fresh.step(40);
+  EXPECT_TRUE(same_bits(batch.sim(1).q(), fresh.sim(0).q()));
+  EXPECT_TRUE(same_bits(batch.sim(1).qd(), fresh.sim(0).qd()));
+  EXPECT_EQ(batch.link_contact_force().row(1), fresh.link_contact_force().row(0));
 }
 
 }  // namespace

@@ -11,7 +11,8 @@ const data = JSON.parse(document.getElementById('fd-data').textContent);
 const frames = data.times.length;
 const linkCount = data.links.length;
 // What tests and users may read (docs/viewer.md, "Page state").
-const state = { ready: false, frame: 0, time: 0, meshCount: 0, boxCount: 0, playing: false };
+const state = { ready: false, frame: 0, time: 0, meshCount: 0, boxCount: 0, playing: false,
+                contactArrows: 0 };
 window.featherdrive = state;
 
 // ---- layout -----------------------------------------------------------------------------------
@@ -33,7 +34,9 @@ controlsBar.innerHTML = `<button id="fd-play">play</button>
 <span id="fd-clock"></span>
 <label>speed <select id="fd-speed"><option>0.25</option><option>0.5</option>
 <option selected>1</option><option>2</option><option>4</option></select></label>
-<label><input id="fd-frames" type="checkbox"> joint frames and axes</label>`;
+<label><input id="fd-frames" type="checkbox"> joint frames and axes</label>
+<label id="fd-contacts-label"><input id="fd-contacts" type="checkbox" checked> contact forces
+</label>`;
 const legend = document.createElement('div');
 legend.id = 'fd-legend';
 const curves = document.createElement('canvas');
@@ -44,6 +47,8 @@ const slider = document.getElementById('fd-time');
 const clock = document.getElementById('fd-clock');
 const speed = document.getElementById('fd-speed');
 const framesBox = document.getElementById('fd-frames');
+const contactsBox = document.getElementById('fd-contacts');
+if (!data.contacts) document.getElementById('fd-contacts-label').style.display = 'none';
 
 // ---- the 3D scene -----------------------------------------------------------------------------
 // Some headless and remote browsers have no WebGL: the page then keeps the timeline and the
@@ -210,6 +215,43 @@ if (data.marker) {
   linkObjects[data.marker].add(m);
 }
 
+// Contact forces: per frame an arrow for each link the ground pushed, from the average of its
+// contact points along the force, |f| * per_newton long (1 m for the robot's weight), drawn over
+// the links; one arrow per link, reused from frame to frame.
+const contactArrows = new Map();
+function contactArrow(link) {
+  if (!contactArrows.has(link)) {
+    const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1,
+                                        0xff5500);
+    for (const part of [arrow.line, arrow.cone]) {
+      part.material.depthTest = false;
+      part.renderOrder = 950;
+    }
+    scene.add(arrow);
+    contactArrows.set(link, arrow);
+  }
+  return contactArrows.get(link);
+}
+
+function showContacts(frame) {
+  for (const arrow of contactArrows.values()) arrow.visible = false;
+  state.contactArrows = 0;
+  if (!data.contacts || !contactsBox.checked) return;
+  const flat = data.contacts.frames[frame];
+  for (let k = 0; k + 6 < flat.length; k += 7) {
+    const force = new THREE.Vector3(flat[k + 4], flat[k + 5], flat[k + 6]);
+    const length = force.length() * data.contacts.per_newton;
+    if (!(length > 0)) continue;
+    const arrow = contactArrow(flat[k]);
+    arrow.position.set(flat[k + 1], flat[k + 2], flat[k + 3]);
+    arrow.setDirection(force.normalize());
+    const head = Math.min(0.3 * length, 0.05 * size);
+    arrow.setLength(length, head, 0.6 * head);
+    arrow.visible = true;
+    state.contactArrows += 1;
+  }
+}
+
 function forceRatio(joint, frame) {
   if (!joint.force) return 0;
   const scale = joint.max_force || joint.largest_force;
@@ -304,6 +346,7 @@ function setFrame(frame) {
     ratios.set(marker, Math.max(ratios.get(marker) || 0, forceRatio(joint, state.frame)));
   });
   ratios.forEach((ratio, marker) => marker.material.color.setRGB(ratio, 0.67 * (1 - ratio), 0));
+  showContacts(state.frame);
   slider.value = String(state.frame);
   clock.textContent = `t = ${state.time.toFixed(3)} s (step ${state.frame} of ${frames - 1})`;
   drawCursor();
@@ -366,11 +409,17 @@ framesBox.addEventListener('change', () => {
   for (const h of frameHelpers) h.visible = framesBox.checked;
   render();
 });
+contactsBox.addEventListener('change', () => setFrame(state.frame));
 window.addEventListener('resize', () => { resize(); setFrame(state.frame); });
 
+function contactLegend() {
+  if (!data.contacts || !(data.contacts.per_newton > 0)) return '';
+  const newtons = Number((1 / data.contacts.per_newton).toPrecision(4));
+  return `Orange arrows: the ground's force on each link, 1 m per ${newtons} N. `;
+}
 legend.textContent = `${data.title}: ${frames} frames, dt ${Number(data.dt.toPrecision(6))} s. Joint spheres: |drive ` +
   'force| / max_force from green (0) to red (1; the run\'s largest |force| where a drive has no ' +
-  'max_force). Drag to orbit, scroll to zoom.';
+  'max_force). ' + contactLegend() + 'Drag to orbit, scroll to zoom.';
 state.setFrame = setFrame;
 state.setPlaying = setPlaying;
 state.linkNames = data.links;

@@ -72,6 +72,13 @@ struct LinkSettings {
   void apply_to(LinkParameters& parameters) const;
 };
 
+/// A foot of a legged robot: the links whose contact forces sum to its force (scene key feet).
+struct Foot {
+  std::string name;
+  std::vector<std::string> link_names;  ///< as the scene names them
+  std::vector<int> links;  ///< their model links (merged links resolved), each once, in order
+};
+
 struct Scene {
   std::filesystem::path path;        ///< the scene file
   std::filesystem::path model_path;  ///< the URDF, resolved against the scene's folder
@@ -103,6 +110,9 @@ struct Scene {
   ContactOptions contact;
   /// shapes: added to the robot's own (robot.shapes and robot.model->shapes), in file order.
   std::vector<std::pair<std::string, CollisionShape>> shapes;
+  /// feet: {name: [link, ...]}: each foot's contact force is the sum of its links' (the CSV's
+  /// foot:<name> columns), in file order.
+  std::vector<Foot> feet;
 
   const std::shared_ptr<const Model>& model() const { return robot.model; }
 };

@@ -86,6 +86,14 @@ class Batch {
     return rows_[StateStorage::velocity_limit_force];
   }
 
+  /// The ground's force on each link of every environment over the last step (world axes, N):
+  /// (N, 3 num_links), row i environment i's Simulation::link_contact_force() as fx, fy, fz of
+  /// link 0, then link 1, ...; a copy (0 without a ground or before a step).
+  RowMatrix link_contact_force() const;
+  /// Environment i's contact points of the last step (Simulation::contacts), valid until it
+  /// steps again; throws std::invalid_argument for i out of [0, size()).
+  std::span<const ContactReport> contacts(int i) const { return sim(i).contacts(); }
+
   // Setters for every environment, or for the environments env_ids (distinct, in [0, size());
   // std::invalid_argument naming the entry otherwise). Values have one row per environment given
   // (N or k = env_ids.size() rows), or one row for all of them. Each is checked by the
@@ -108,8 +116,9 @@ class Batch {
   void set_drive(const std::string& joint, const Drive& drive);
 
   /// Puts environments env_ids back at the start: q (default: the configuration the batch was
-  /// made with, initial_q()), qd (default 0), applied force, output forces and clock 0. Drives,
-  /// targets and every other setting stay; other environments are untouched.
+  /// made with, initial_q()), qd (default 0), applied force, output forces and clock 0, no
+  /// friction anchors kept and no contacts reported. Drives, targets and every other setting
+  /// stay; other environments are untouched.
   void reset(std::span<const int> env_ids, const std::optional<RowMatrix>& q = std::nullopt,
              const std::optional<RowMatrix>& qd = std::nullopt);
   const VecX& initial_q() const { return initial_q_; }

@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""`featherdrive view` of the quadruped standing on the ground (tests/data/quadruped_ground.yaml,
+40 steps) in headless Chromium with the network off: the page's data carries, per frame, one
+contact arrow per shin (the legs touch the ground with their shins only), each the CSV's contact
+columns of `featherdrive simulate` for that link and starting at or above the ground; at the last
+frame the page shows 4 arrows (featherdrive.contactArrows), at frame 0 none (no step has run), and
+none once the "contact forces" box is unchecked; a page of the same run read back from the CSV
+(--csv) shows the same 4 arrows; the arrows are drawn (the view changes near the feet). Skipped
+(exit 77) where Chromium is not installed.
+
+usage: view_contacts.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
+"""
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+
+import numpy as np
+
+from view_browser import Browser, chromium_or_skip
+
+STEPS = 40
+LEGS = ("fl", "fr", "hl", "hr")
+
+
+def fail(message):
+    sys.exit(f"FAIL: {message}")
+
+
+def run(args):
+    done = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    if done.returncode != 0:
+        fail(f"{' '.join(args[1:3])}: exit {done.returncode}: {done.stderr}")
+    return done
+
+
+def page_data(page):
+    with open(page, encoding="utf-8") as f:
+        text = f.read()
+    found = re.search(r'<script type="application/json" id="fd-data">(.*?)</script>', text, re.S)
+    return json.loads(found.group(1))
+
+
+def no_network_nor_error(browser):
+    problem = browser.offline_problem()
+    if problem:
+        fail(problem)
+
+
+def set_frame(browser, frame):
+    browser.evaluate(f"(() => {{ const s = document.getElementById('fd-time'); "
+                     f"s.value = '{frame}'; s.dispatchEvent(new Event('input')); }})()")
+    return browser.evaluate("featherdrive.contactArrows")
+
+
+def main():
+    cli, source, out_dir, python_dir = sys.argv[1:5]
+    chromium_or_skip()
+    sys.path.insert(0, python_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    scene = os.path.join(source, "tests", "data", "quadruped_ground.yaml")
+    run_csv = os.path.join(out_dir, "view_contacts.csv")
+    page = os.path.join(out_dir, "view_contacts.html")
+    csv_page = os.path.join(out_dir, "view_contacts_csv.html")
+    run([cli, "simulate", scene, "--steps", str(STEPS), "--out", run_csv])
+    run([cli, "view", scene, "--steps", str(STEPS), "--out", page])
+    run([cli, "view", scene, "--csv", run_csv, "--out", csv_page])
+    with open(run_csv, newline="") as f:
+        rows = list(csv.DictReader(f))
+
+    # The page's arrows are the CSV's contact forces, per shin, from points on the ground.
+    data = page_data(page)
+    contacts = data["contacts"]
+    mass = 4.0 + 4 * (0.5 + 0.3)  # tests/data/quadruped.urdf
+    if abs(contacts["per_newton"] * mass * 9.81 - 1.0) > 1e-12:
+        fail(f"scale {contacts['per_newton']} m/N is not 1 m per the robot's weight")
+    frames = contacts["frames"]
+    if len(frames) != STEPS + 1 or frames[0]:
+        fail(f"{len(frames)} frames of arrows, the first {frames[0]}")
+    for k in (1, STEPS):
+        arrows = np.array(frames[k]).reshape(-1, 7)
+        names = sorted(data["links"][int(i)] for i in arrows[:, 0])
+        if names != sorted(f"{leg}_shin" for leg in LEGS):
+            fail(f"frame {k}: arrows on {names}")
+        for a in arrows:
+            name = data["links"][int(a[0])]
+            expected = [float(rows[k][f"contact:{name}:{c}"]) for c in ("fx", "fy", "fz")]
+            if np.abs(a[4:] - expected).max() > 1e-5 or not -0.03 < a[3] < 0.03:
+                fail(f"frame {k}: {name}'s arrow {a.tolist()}, the CSV's force {expected}")
+    print(f"the page's arrows are the CSV's forces at the shins' contact points "
+          f"(frame {STEPS}: total fz {np.array(frames[STEPS]).reshape(-1, 7)[:, 6].sum():.4f} N)")
+
+    browser = Browser(1000, 1200)
+    try:
+        browser.open(page)
+        counts = [set_frame(browser, 0)]
+        left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
+        counts.append(set_frame(browser, STEPS))
+        browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
+                         "false; b.dispatchEvent(new Event('change')); })()")
+        counts.append(browser.evaluate("featherdrive.contactArrows"))
+        hidden = browser.screenshot()[top:top + height, left:left + width].astype(int)
+        browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
+                         "true; b.dispatchEvent(new Event('change')); })()")
+        counts.append(browser.evaluate("featherdrive.contactArrows"))
+        drawn = np.any(np.abs(browser.screenshot()[top:top + height, left:left + width]
+                              .astype(int) - hidden) > 16, axis=2).sum()
+        print(f"arrows at frame 0, frame {STEPS}, unchecked, checked again: {counts}; "
+              f"{drawn} pixels drawn by them")
+        if counts != [0, 4, 0, 4]:
+            fail(f"the page's arrow counts are {counts}, expected [0, 4, 0, 4]")
+        if browser.evaluate("featherdrive.webgl") and drawn < 50:
+            fail("the arrows draw nothing")
+        no_network_nor_error(browser)
+    finally:
+        browser.close()
+    browser = Browser(1000, 1200)
+    try:
+        browser.open(csv_page)
+        from_csv = set_frame(browser, STEPS)
+        print(f"from the CSV: {from_csv} arrows at frame {STEPS}")
+        if from_csv != 4:
+            fail(f"the page of the CSV shows {from_csv} arrows")
+        no_network_nor_error(browser)
+    finally:
+        browser.close()
+
+
+if __name__ == "__main__":
+    main()
