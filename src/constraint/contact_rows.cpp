@@ -25,6 +25,10 @@ int shape_points(ShapeType type) {
   return 0;
 }
 
+// scale / u, or 0 for a direction the link cannot move in (u = 0 without a cfm: a slider's
+// sideways friction rows), which then applies nothing (C22).
+double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
+
 // A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
 Vec3 fallback_tangent(const Vec3& n) {
   const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
@@ -180,7 +184,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
       report.separation = separations[p];
       row.J = spatial_force(points[p] - origin, n);
       row.response = lambda * row.J;
-      row.mass = 1.0 / (row.J.dot(row.response) + cfm);  // C20
+      row.mass = row_mass(1.0, row.J.dot(row.response) + cfm);  // C20, C22
       row.impulse = 0.0;
       row.dx = 0.0;
       const double p0 = separations[p] - rest_distance;  // C2
@@ -264,7 +268,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
         row.J = spatial_force(anchor_at[j] - origin, *t);
         row.error = t->dot(drift);
         row.response = lambda * row.J;
-        row.mass = kFrictionMassScale / (row.J.dot(row.response) + cfm);  // C11
+        row.mass = row_mass(kFrictionMassScale, row.J.dot(row.response) + cfm);  // C11, C22
         row.dx = 0.0;
         row.impulse = 0.0;
       }
