@@ -56,15 +56,29 @@ Posed posed(const Data& data, const CollisionShape& s, double margin) {
 }  // namespace
 
 std::vector<ShapePair> self_collision_pairs(const Model& model) {
+  // A link's body: itself, or, for a massless link without shapes that carries one child (the
+  // links an MJCF body with several joints, or a URDF chain of massless links, becomes), the
+  // body of that child. Parent and child are compared body to body (C29).
+  const int links = model.num_links();
+  std::vector<char> has_shapes(static_cast<size_t>(links), 0);
+  for (const CollisionShape& s : model.shapes) has_shapes[static_cast<size_t>(s.link)] = 1;
+  auto connector = [&](int i) {
+    const Link& l = model.links[static_cast<size_t>(i)];
+    return l.mass == 0.0 && !has_shapes[static_cast<size_t>(i)] && l.children.size() == 1;
+  };
+  // The body above a link's body: the first ancestor that is not a connector.
+  auto body_parent = [&](int i) {
+    int p = model.links[static_cast<size_t>(i)].parent;
+    while (p >= 0 && connector(p)) p = model.links[static_cast<size_t>(p)].parent;
+    return p;
+  };
   std::vector<ShapePair> pairs;
   const int n = static_cast<int>(model.shapes.size());
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
       const int la = model.shapes[static_cast<size_t>(a)].link;
       const int lb = model.shapes[static_cast<size_t>(b)].link;
-      if (la == lb || model.links[static_cast<size_t>(la)].parent == lb ||
-          model.links[static_cast<size_t>(lb)].parent == la)
-        continue;
+      if (la == lb || body_parent(la) == lb || body_parent(lb) == la) continue;
       pairs.push_back({a, b});
     }
   return pairs;

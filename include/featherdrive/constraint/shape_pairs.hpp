@@ -15,7 +15,9 @@ struct ShapePair {
 };
 
 /// Every pair of shapes on two links that are neither the same link nor parent and child (PhysX's
-/// and Isaac Lab's filter), a < b.
+/// and Isaac Lab's filter), a < b. Massless links without shapes that carry one child (what an
+/// MJCF body with several joints becomes) are part of their child: the parent of a link is the
+/// first ancestor that is not such a connector.
 std::vector<ShapePair> self_collision_pairs(const Model& model);
 
 /// A sphere about the shape frame's origin that holds the shape.
