@@ -213,6 +213,7 @@ void register_all() {
                                  [arm, threads](benchmark::State& s) { featherdrive_batch(s, *arm, threads); })
         ->UseRealTime();
   register_simd_batch();
+  register_contact();
 }
 
 }  // namespace

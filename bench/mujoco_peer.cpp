@@ -209,4 +209,44 @@ void mujoco_batch(benchmark::State& state, const BenchRobot& robot, const std::s
       static_cast<double>(count), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+void mujoco_batch_from(benchmark::State& state, const std::string& xml, const VecX& qpos0,
+                       const VecX& ctrl, int count, int threads) {
+  std::unique_ptr<mjModel, MjModelDeleter> m;
+  try {
+    m = load_mjcf(xml);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  if (qpos0.size() != m->nq || ctrl.size() != m->nu) {
+    state.SkipWithError("mujoco_batch_from: qpos0 or ctrl does not fit the model");
+    return;
+  }
+  std::vector<std::unique_ptr<mjData, MjDataDeleter>> data;
+  auto reset = [&](mjData* d) {
+    mj_resetData(m.get(), d);
+    std::copy(qpos0.data(), qpos0.data() + m->nq, d->qpos);
+    std::copy(ctrl.data(), ctrl.data() + m->nu, d->ctrl);
+  };
+  for (int i = 0; i < count; ++i) {
+    data.emplace_back(mj_makeData(m.get()));
+    reset(data.back().get());
+  }
+  tbb::task_arena arena(threads);
+  long steps = 0;
+  for (auto _ : state) {
+    arena.execute([&] {
+      tbb::parallel_for(0, count,
+                        [&](int i) { mj_step(m.get(), data[static_cast<size_t>(i)].get()); });
+    });
+    if (++steps % kResetInterval == 0) {
+      state.PauseTiming();
+      for (auto& d : data) reset(d.get());
+      state.ResumeTiming();
+    }
+  }
+  state.counters["env_steps_per_second"] = benchmark::Counter(
+      static_cast<double>(count), benchmark::Counter::kIsIterationInvariantRate);
+}
+
 }  // namespace featherdrive::bench

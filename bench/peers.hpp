@@ -22,6 +22,14 @@ void mujoco_step(benchmark::State& state, const BenchRobot& robot, MujocoIntegra
 void mujoco_batch(benchmark::State& state, const BenchRobot& robot, const std::string& xml,
                   int count, int threads);
 
+/// `count` copies of an MJCF (contacts as the file says), each from qpos0 with a constant ctrl,
+/// one mj_step per iteration on `threads` threads, reset every kResetInterval steps.
+void mujoco_batch_from(benchmark::State& state, const std::string& xml, const VecX& qpos0,
+                       const VecX& ctrl, int count, int threads);
+
+/// contact_bench.cpp: registers contact/ant/... (the standing Ant with and without its ground).
+void register_contact();
+
 /// simd_batch.cpp: registers simd_batch/<robot>/<engine>/envs:<N>/threads:<T>.
 void register_simd_batch();
 

@@ -97,26 +97,36 @@ void featherdrive::python::bind_contact(py::module_& m) {
   py::class_<ContactOptions>(m, "ContactOptions",
                              "PhysX 5.6.1's contact parameters, the same for every shape and the "
                              "ground (docs/math/contact.md, section 8).")
-      .def(py::init([](double c, double r, double b) { return ContactOptions{c, r, b}; }),
+      .def(py::init([](double c, double r, double b, bool self) {
+             return ContactOptions{c, r, b, self};
+           }),
            py::arg("contact_offset") = 0.02, py::arg("rest_offset") = 0.0,
-           py::arg("bounce_threshold") = 2.0,
+           py::arg("bounce_threshold") = 2.0, py::arg("self_collision") = false,
            "Contact options; checked by Simulation.set_contact_options.")
       .def_readwrite("contact_offset", &ContactOptions::contact_offset, "m, > rest_offset")
       .def_readwrite("rest_offset", &ContactOptions::rest_offset, "m, >= 0")
       .def_readwrite("bounce_threshold", &ContactOptions::bounce_threshold,
                      "m/s: slower impacts do not bounce")
+      .def_readwrite("self_collision", &ContactOptions::self_collision,
+                     "contacts between the robot's own shapes (links not parent and child)")
       .def("__repr__", [](const ContactOptions& c) {
         return "ContactOptions(contact_offset=" + fmt(c.contact_offset) +
                ", rest_offset=" + fmt(c.rest_offset) +
-               ", bounce_threshold=" + fmt(c.bounce_threshold) + ")";
+               ", bounce_threshold=" + fmt(c.bounce_threshold) +
+               ", self_collision=" + (c.self_collision ? "True" : "False") + ")";
       });
 
   py::class_<ContactReport>(m, "ContactReport", "One contact point of the last step (read-only).")
       .def_readonly("link", &ContactReport::link, "index of the link")
       .def_readonly("shape", &ContactReport::shape, "index into Model.shapes")
+      .def_readonly("other_link", &ContactReport::other_link,
+                    "-1: the ground; else the link of the other shape (self-collision)")
+      .def_readonly("other_shape", &ContactReport::other_shape,
+                    "-1: the ground; else the other shape's index into Model.shapes")
       .def_readonly("position", &ContactReport::position,
-                    "on the shape's surface, world frame, at the step's start (3,)")
-      .def_readonly("normal", &ContactReport::normal, "the ground's normal, into the body (3,)")
+                    "world frame, at the step's start (3,)")
+      .def_readonly("normal", &ContactReport::normal,
+                    "into the link: the ground's normal, or from the other shape (3,)")
       .def_readonly("separation", &ContactReport::separation,
                     "m at the step's start; < 0 penetrating")
       .def_readonly("normal_impulse", &ContactReport::normal_impulse, "N s along the normal")

@@ -313,12 +313,14 @@ class Ground:
                  normal: ArrayLike = (0.0, 0.0, 1.0), material: Material = ...) -> None: ...
 
 class ContactOptions:
-    """PhysX 5.6.1's contact offset, rest offset (m) and bounce threshold (m/s)."""
+    """PhysX 5.6.1's contact offset, rest offset (m) and bounce threshold (m/s), and whether the
+    robot's own shapes collide."""
     contact_offset: float
     rest_offset: float
     bounce_threshold: float
+    self_collision: bool
     def __init__(self, contact_offset: float = 0.02, rest_offset: float = 0.0,
-                 bounce_threshold: float = 2.0) -> None: ...
+                 bounce_threshold: float = 2.0, self_collision: bool = False) -> None: ...
 
 class ContactReport:
     """One contact point of the last step (read-only)."""
@@ -326,6 +328,10 @@ class ContactReport:
     def link(self) -> int: ...
     @property
     def shape(self) -> int: ...
+    @property
+    def other_link(self) -> int: ...
+    @property
+    def other_shape(self) -> int: ...
     @property
     def position(self) -> Vector: ...
     @property

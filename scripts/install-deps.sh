@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake make pkg-config
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libyaml-cpp-dev liburdfdom-dev libcli11-dev libtbb-dev libxsimd-dev
+  libyaml-cpp-dev liburdfdom-dev libcli11-dev libtbb-dev libxsimd-dev libccd-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
   python3-scipy python3-distributed
   libmujoco-dev libbullet-dev

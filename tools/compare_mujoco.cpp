@@ -185,7 +185,6 @@ int compare_mujoco(const CompareMujocoArgs& args) {
           "' is spherical: compare-mujoco compares revolute and prismatic joints (MuJoCo's ball "
           "joint takes no actuator per axis and its qpos is a quaternion)");
   Simulation start = make_simulation(scene);
-  refuse_ground(args.scene, start, "compare-mujoco");
   // MuJoCo's frictionloss is another law and it has no joint velocity limits: both sides run
   // without them, and the output says so.
   std::string friction_off, velocity_limits_off;
@@ -225,8 +224,10 @@ int compare_mujoco(const CompareMujocoArgs& args) {
               args.scene.c_str(), scene.robot.name.c_str(), count_of(model.nv, "dof").c_str(),
               o.dt, count_of(scene.steps, "step").c_str(), scene.steps * o.dt,
               to_string(o.solver), o.position_iterations, o.velocity_iterations);
-  std::printf("  featherdrive against MuJoCo %s (exported MJCF, contacts off, integrator %s)\n",
-              mujoco_version().c_str(), to_string(integrator));
+  const bool contacts = start.ground().enabled && !model.shapes.empty();
+  std::printf("  featherdrive against MuJoCo %s (exported MJCF, %s, integrator %s)\n",
+              mujoco_version().c_str(),
+              contacts ? "contacts with the ground on" : "contacts off", to_string(integrator));
   if (!friction_off.empty())
     std::printf("  joint friction off on both sides (MuJoCo's frictionloss is another law):%s\n",
                 friction_off.c_str());
@@ -273,7 +274,8 @@ int compare_mujoco(const CompareMujocoArgs& args) {
 MujocoCommands::MujocoCommands(CLI::App& app) {
   compare_ = app.add_subcommand(
       "compare-mujoco",
-      "Run a scene in featherdrive and in MuJoCo 2.2.2 (exported MJCF, contacts off) and show "
+      "Run a scene in featherdrive and in MuJoCo 2.2.2 (exported MJCF; contacts only with the scene's "
+      "ground) and show "
       "the largest differences per joint, with translated and with literal drive gains");
   compare_->add_option("scene", compare_args_.scene, "Scene file (YAML or JSON)")->required();
   compare_->add_option("--plot", compare_args_.plot, "PNG of the differences over time per joint");

@@ -317,6 +317,8 @@ int simulate(const SimulateArgs& args) {
                 describe_ground(sim.ground()).c_str(), c.contact_offset, c.rest_offset,
                 c.bounce_threshold);
   }
+  if (sim.contact_options().self_collision)
+    std::printf("  self-collision: on (shapes on links that are not parent and child)\n");
   if (!model.shapes.empty())
     std::printf("  collision shapes (%zu):\n%s", model.shapes.size(),
                 describe_shapes(model, "    ").c_str());

@@ -13,16 +13,6 @@
 #include "featherdrive/sim/simulation.hpp"
 #include "scene_overrides.hpp"
 
-/// MuJoCo's side has no ground or collision shapes: a scene whose robot can touch a ground is
-/// refused in one line rather than compared or translated without it.
-inline void refuse_ground(const std::string& scene, const featherdrive::Simulation& sim,
-                          const char* command) {
-  if (sim.ground().enabled && !sim.model().shapes.empty())
-    throw std::invalid_argument(scene + ": ground: " + command +
-                                " does not carry the ground and the collision shapes to MuJoCo "
-                                "yet (ground: false runs without them)");
-}
-
 struct CompareMujocoArgs {
   std::string scene;
   std::string plot;

@@ -88,7 +88,6 @@ int translate(const TranslateArgs& args) {
                 {{"the scene", args.scene}, {"the scene's model", scene.robot.path}},
                 scene.robot.input_files);
   const Simulation sim = make_simulation(scene);
-  refuse_ground(args.scene, sim, "translate --to mujoco");
   MjcfExportOptions options;
   options.integrator =
       args.integrator == "implicit" ? MujocoIntegrator::implicit : MujocoIntegrator::euler;

@@ -31,7 +31,10 @@ def test_humanoid_loads_as_a_urdf_robot():
         assert model.lower_limit[dof] == pytest.approx(math.radians(lower), abs=1e-15)
         assert model.upper_limit[dof] == pytest.approx(math.radians(upper), abs=1e-15)
     np.testing.assert_array_equal(model.armature, np.full(21, 0.01))  # class "body"
-    assert robot.warnings[0] == "contacts between the robot's own geoms are not simulated (20 geoms collide in MuJoCo); those with the ground are"
+    assert robot.warnings[0] == ("142 pairs of the robot's own geoms collide in MuJoCo; featherdrive's "
+                                 "shapes collide with each other only with contact: "
+                                 "{self_collision: true} (off by default; parent and child links "
+                                 "never)")
     actuators = ET.parse(HUMANOID).getroot().find("actuator")
     gears = {m.get("joint"): float(m.get("gear")) for m in actuators.iter("motor")}
     assert {a.joint: a.gear for a in robot.actuators} == gears

@@ -106,6 +106,10 @@ void reduce_points(Vec3* points, double* separations, char* taken, int count, co
   }
 }
 
+// scale / u, or 0 for a direction the link cannot move in (u = 0 without a cfm: a slider's
+// sideways friction rows), which then applies nothing (C22).
+double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
+
 // A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
 Vec3 fallback_tangent(const Vec3& n) {
   const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
@@ -121,6 +125,41 @@ Vec6 spatial_force(const Vec3& r, const Vec3& u) {
 }
 
 }  // namespace
+
+double tgs_penetration_share(int position_iterations) {
+  return std::min(kPgsBias, 2.0 * std::sqrt(1.0 / position_iterations));
+}
+
+void setup_normal_law(ContactNormalRow& row, double d, double vn, double restitution,
+                      const ContactOptions& options, const ContactPhase& phase, double tgs_share) {
+  const double dt = phase.dt;
+  const double p0 = d - 2.0 * options.rest_offset;  // C1, C2
+  row.impulse = 0.0;
+  row.dx = 0.0;
+  // C8: an impact faster than the threshold that closes the gap within the step bounces.
+  const bool bounce = restitution > 0.0 && vn < -options.bounce_threshold && -vn > p0 / dt;
+  row.target = bounce ? -restitution * vn : 0.0;
+  if (!phase.tgs) {
+    row.separation = p0;
+    row.bias = bounce ? 0.0 : (p0 >= 0.0 ? p0 / dt : kPgsBias * p0 / dt);  // C3
+  } else {
+    // C6, C7: the bounce leaves from where the body meets the ground.
+    row.separation = bounce ? p0 + row.target * (dt + p0 / vn) : p0;
+    row.bias = p0 > 0.0 ? -1.0 / phase.h : -tgs_share / phase.h;
+  }
+}
+
+double normal_row_delta(const ContactNormalRow& row, double vn, const ContactPhase& phase) {
+  if (!phase.tgs) {
+    // C4; C5 in the velocity iterations: the push-out goes, a gap still limits the approach.
+    const double b = phase.velocity_iteration ? std::max(row.bias, 0.0) : row.bias;
+    return std::max(row.mass * (row.target - b - vn), -row.impulse);
+  }
+  // C7: the separation tracked through the sub-steps.
+  double sigma = row.separation + row.dx - row.target * phase.elapsed;
+  if (phase.velocity_iteration) sigma = std::max(sigma, 0.0);
+  return std::max(row.mass * (row.bias * sigma + row.target - vn), -row.impulse);
+}
 
 void link_velocities0(const Model& model, const Data& data, const VecX& qd, std::vector<Vec6>& V) {
   for (int i = 0; i < model.num_links(); ++i) {
@@ -202,8 +241,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
   const double rest_distance = 2.0 * options.rest_offset;
   const double dt = phase.dt;
   const Vec3& origin = data.frame_origin;
-  // TGS's share of a penetration corrected per sub-step (C6).
-  const double tgs_share = std::min(kPgsBias, 2.0 * std::sqrt(1.0 / position_iterations));
+  const double tgs_share = tgs_penetration_share(position_iterations);
   Vec3* points = points_.data();
   double* separations = separations_.data();
   for (int k = 0; k < static_cast<int>(model.shapes.size()); ++k) {
@@ -299,28 +337,16 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
       ContactNormalRow& row = normals_[static_cast<size_t>(num_normals_++)];
       report.link = L;
       report.shape = k;
+      report.other_link = report.other_shape = -1;  // the ground
       report.position = points[p];
       report.normal = n;
       report.separation = separations[p];
       row.J = spatial_force(points[p] - origin, n);
       row.response = lambda * row.J;
-      row.mass = 1.0 / (row.J.dot(row.response) + cfm);  // C20
-      row.impulse = 0.0;
-      row.dx = 0.0;
-      const double p0 = separations[p] - rest_distance;  // C2
+      row.mass = row_mass(1.0, row.J.dot(row.response) + cfm);  // C20, C22
       const double vn = row.J.dot(V);
-      // C8: an impact faster than the threshold that closes the gap within the step bounces.
-      const bool bounce =
-          restitution > 0.0 && vn < -options.bounce_threshold && -vn > p0 / dt;
-      row.target = bounce ? -restitution * vn : 0.0;
-      if (!phase.tgs) {
-        row.separation = p0;
-        row.bias = bounce ? 0.0 : (p0 >= 0.0 ? p0 / dt : kPgsBias * p0 / dt);  // C3
-      } else {
-        // C6, C7: the bounce leaves from where the body meets the ground.
-        row.separation = bounce ? p0 + row.target * (dt + p0 / vn) : p0;
-        row.bias = p0 > 0.0 ? -1.0 / phase.h : -tgs_share / phase.h;
-      }
+      setup_normal_law(row, separations[p], vn, restitution, options, phase, tgs_share);
+      const double p0 = separations[p] - rest_distance;  // C2
       min_normal += std::max(row.mass * (row.target - vn - std::max(p0 / dt, 0.0)), 0.0);
     }
     patch.min_normal_impulse = kMinNormalShare * min_normal / count;  // C12
@@ -388,7 +414,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
         row.J = spatial_force(anchor_at[j] - origin, *t);
         row.error = t->dot(drift);
         row.response = lambda * row.J;
-        row.mass = kFrictionMassScale / (row.J.dot(row.response) + cfm);  // C11
+        row.mass = row_mass(kFrictionMassScale, row.J.dot(row.response) + cfm);  // C11, C22
         row.dx = 0.0;
         row.impulse = 0.0;
       }
@@ -411,18 +437,7 @@ Vec6 ContactRows::solve_link(int link, const Vec6& v, Vec6& dv, const ContactPha
     double normal_sum = 0.0;
     for (int r = patch.first_normal; r < patch.first_normal + patch.num_normals; ++r) {
       ContactNormalRow& row = normals_[static_cast<size_t>(r)];
-      const double vn = row.J.dot(V);
-      double delta;
-      if (!phase.tgs) {
-        // C4; C5 in the velocity iterations: the push-out goes, a gap still limits the approach.
-        const double b = phase.velocity_iteration ? std::max(row.bias, 0.0) : row.bias;
-        delta = std::max(row.mass * (row.target - b - vn), -row.impulse);
-      } else {
-        // C7: the separation tracked through the sub-steps.
-        double sigma = row.separation + row.dx - row.target * phase.elapsed;
-        if (phase.velocity_iteration) sigma = std::max(sigma, 0.0);
-        delta = std::max(row.mass * (row.bias * sigma + row.target - vn), -row.impulse);
-      }
+      const double delta = normal_row_delta(row, row.J.dot(V), phase);
       row.impulse += delta;
       apply(row.J, row.response, delta);
       normal_sum += row.impulse;

@@ -374,6 +374,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
   write_contact_settings(p, settings);  // version 8
   write_friction_anchors(p, state);
+  p.u8(settings.contact.self_collision ? 1 : 0);  // version 9
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -581,6 +582,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       read_contact_settings(r, settings);
       read_friction_anchors(r, model, state);
     }
+    if (version >= 9) settings.contact.self_collision = r.u8() != 0;  // before, off
     if (r.pos() != bytes.size() - 8)
       fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                      " bytes left over after the payload");

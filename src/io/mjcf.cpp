@@ -446,13 +446,24 @@ std::string convert_geoms(const mjModel* m, const Converter& c, MjcfRobot& robot
 
 void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions& options,
                         std::vector<std::string>& warnings) {
-  int colliding = 0;
-  for (int g = 0; g < m->ngeom; ++g)
-    colliding += (m->geom_contype[g] | m->geom_conaffinity[g]) != 0;
-  if (colliding > 0 && !(m->opt.disableflags & mjDSBL_CONTACT))
-    warnings.push_back("contacts between the robot's own geoms are not simulated (" +
-                       std::to_string(colliding) +
-                       " geoms collide in MuJoCo); those with the ground are");
+  // The pairs of the robot's own geoms MuJoCo lets collide: contype / conaffinity match, on
+  // bodies that are not welded together nor (filterparent) parent and child.
+  int pairs = 0;
+  const bool filter_parent = !(m->opt.disableflags & mjDSBL_FILTERPARENT);
+  for (int g1 = 0; g1 < m->ngeom; ++g1)
+    for (int g2 = g1 + 1; g2 < m->ngeom; ++g2) {
+      const int w1 = m->body_weldid[m->geom_bodyid[g1]], w2 = m->body_weldid[m->geom_bodyid[g2]];
+      if (w1 == 0 || w2 == 0 || w1 == w2) continue;  // the world's geoms are the ground's
+      if (filter_parent && (m->body_weldid[m->body_parentid[w1]] == w2 ||
+                            m->body_weldid[m->body_parentid[w2]] == w1))
+        continue;
+      pairs += (m->geom_contype[g1] & m->geom_conaffinity[g2]) ||
+               (m->geom_contype[g2] & m->geom_conaffinity[g1]);
+    }
+  if (pairs > 0 && !(m->opt.disableflags & mjDSBL_CONTACT))
+    warnings.push_back(std::to_string(pairs) + " pairs of the robot's own geoms collide in " +
+                       "MuJoCo; featherdrive's shapes collide with each other only with contact: " +
+                       "{self_collision: true} (off by default; parent and child links never)");
   if (!c.springs.empty())
     warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on joints " +
                        joined(c.springs));

@@ -406,10 +406,12 @@ std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model
   return feet;
 }
 
-// contact: {contact_offset, rest_offset, bounce_threshold}.
+// contact: {contact_offset, rest_offset, bounce_threshold, self_collision}.
 ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
-  r.map(node, "contact", {"contact_offset", "rest_offset", "bounce_threshold"});
+  r.map(node, "contact", {"contact_offset", "rest_offset", "bounce_threshold", "self_collision"});
   ContactOptions c;
+  if (node["self_collision"])
+    c.self_collision = r.boolean(node["self_collision"], "contact.self_collision");
   if (node["contact_offset"])
     c.contact_offset = r.finite(node["contact_offset"], "contact.contact_offset");
   if (node["rest_offset"])

@@ -3,16 +3,19 @@
 // sub-steps (C16) and reported.
 #include "featherdrive/sim/simulation.hpp"
 
+#include <algorithm>
+
 namespace featherdrive {
 
 void Simulation::update_contacts_active() {
   contacts_active_ = settings_.ground.enabled && contact_rows_.any_shapes();
+  self_contacts_active_ = settings_.contact.self_collision && self_contacts_.any_pairs();
   if (contacts_active_) {
     sweep_.set_contact_links(contact_rows_.links_with_shapes());
   } else if (sweep_.any_contacts) {
     sweep_.set_contact_links(std::vector<char>(static_cast<size_t>(model_->num_links()), 0));
   }
-  if (!contacts_active_) {
+  if (!contacts_active_ && !self_contacts_active_) {
     num_contacts_ = 0;
     std::fill(link_contact_force_.begin(), link_contact_force_.end(), Vec3::Zero());
   }
@@ -24,26 +27,40 @@ void Simulation::setup_contacts(const RowPhase& phase) {
   contact_phase.dt = phase.dt;
   contact_phase.h = phase.h;
   contact_phase.tgs = phase.tgs;
-  num_contacts_ = contact_rows_.setup(*model_, data_, settings_.ground, settings_.contact,
-                                      contact_link_velocity_, link_cfm_,
-                                      settings_.options.position_iterations, contact_phase,
-                                      contacts_);
+  const int iterations = settings_.options.position_iterations;
+  num_ground_contacts_ =
+      contacts_active_ ? contact_rows_.setup(*model_, data_, settings_.ground, settings_.contact,
+                                             contact_link_velocity_, link_cfm_, iterations,
+                                             contact_phase, contacts_)
+                       : 0;
+  num_contacts_ = num_ground_contacts_;
+  if (self_contacts_active_)  // docs/math/contact.md, section 14
+    num_contacts_ += self_contacts_.setup(*model_, data_, settings_.contact, contact_link_velocity_,
+                                          link_cfm_, iterations, contact_phase, contacts_,
+                                          num_ground_contacts_);
 }
 
 // TGS: the points move with the sub-step's velocities (C7's displacement).
 void Simulation::track_contacts(double h) {
   link_velocities0(*model_, data_, qd_, contact_link_velocity_);
-  contact_rows_.track(contact_link_velocity_, h);
+  if (contacts_active_) contact_rows_.track(contact_link_velocity_, h);
+  if (self_contacts_active_) self_contacts_.track(contact_link_velocity_, h);
 }
 
 void Simulation::contact_forces() {
-  if (!contacts_active_) return;
-  contact_rows_.report(settings_.options.dt, contacts_, link_contact_force_);
+  if (!contacts_active_ && !self_contacts_active_) return;
+  if (contacts_active_)
+    contact_rows_.report(settings_.options.dt, contacts_, link_contact_force_);
+  else
+    std::fill(link_contact_force_.begin(), link_contact_force_.end(), Vec3::Zero());
+  if (self_contacts_active_)
+    self_contacts_.report(settings_.options.dt, contacts_, num_ground_contacts_,
+                          link_contact_force_);
   // The anchors are kept only from a step that ends: one that diverges throws here and leaves
   // them as they were, as it leaves the state (found by fuzz_step: NaN anchors then made the
   // simulation's checkpoint unreadable).
   check_finite_or_throw();
-  contact_rows_.conclude();
+  if (contacts_active_) contact_rows_.conclude();
 }
 
 }  // namespace featherdrive

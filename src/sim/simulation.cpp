@@ -95,7 +95,9 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   link_cfm_ = VecX::Zero(model_->num_links());
   link_contact_force_.assign(n, Vec3::Zero());
   contact_rows_ = ContactRows(*model_);
-  contacts_.assign(static_cast<size_t>(contact_rows_.max_points()), ContactReport{});
+  self_contacts_ = SelfContacts(*model_);
+  contacts_.assign(static_cast<size_t>(contact_rows_.max_points() + self_contacts_.max_points()),
+                   ContactReport{});
   contact_link_velocity_.assign(n, Vec6::Zero());
   update_link_damping_active();
   dt_ = settings_.options.dt;
@@ -156,7 +158,9 @@ void Simulation::set_model(std::shared_ptr<const Model> model) {
   departures_ = PhysxDepartures(*model);
   model_ = std::move(model);
   contact_rows_ = ContactRows(*model_);  // the shapes may differ
-  contacts_.assign(static_cast<size_t>(contact_rows_.max_points()), ContactReport{});
+  self_contacts_ = SelfContacts(*model_);
+  contacts_.assign(static_cast<size_t>(contact_rows_.max_points() + self_contacts_.max_points()),
+                   ContactReport{});
   update_contacts_active();
   if (guard_data_) size_guard();  // the guard's energies read the masses too
 }
@@ -369,6 +373,7 @@ void Simulation::set_ground(const Ground& ground) {
 void Simulation::set_contact_options(const ContactOptions& options) {
   check_contact_options(options);
   settings_.contact = options;
+  update_contacts_active();
 }
 
 void Simulation::update_link_damping_active() {

@@ -280,12 +280,26 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   sweep_.has_rows[d] = rows.active() ? 1 : 0;
 }
 
+// Where a contact solve stands: TGS's elapsed time is the sub-step's start; the velocity
+// iterations run at dt (docs/math/contact.md, C7).
+static ContactPhase contact_phase(const RowPhase& phase) {
+  ContactPhase c;
+  c.dt = phase.dt;
+  c.h = phase.h;
+  c.tgs = phase.tgs;
+  c.velocity_iteration = phase.velocity_iteration;
+  c.elapsed = phase.velocity_iteration ? phase.dt : phase.dt - phase.time_to_step_end - phase.h;
+  return c;
+}
+
 // The phase is updated in place with each dof's delta_x (a copy per row solve was a fifth of the
 // row solves' cost).
 void Simulation::sweep(RowPhase& phase) {
   // PhysX solves the mimic rows first in every iteration (solveInternalConstraints).
   if (!mimic_.empty())
     mimic_.solve(*model_, data_, q_, departures_.row_bias.data(), phase.velocity_iteration, qd_);
+  // Self-collision rows too, as PhysX's constraints outside the sweep (contact.md, C31).
+  if (self_contacts_active_) self_contacts_.solve(*model_, data_, contact_phase(phase), qd_);
   if (!any_rows_ && !contacts_active_) return;
   // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
   DofRows* const rows = rows_.data();
@@ -299,17 +313,10 @@ void Simulation::sweep(RowPhase& phase) {
     // Each link's contact rows right after its joint's rows (docs/math/contact.md, C15), at
     // the link's velocity of the sweep's start plus the sweep's change.
     link_velocities0(*model_, data_, qd_, contact_link_velocity_);
-    ContactPhase contact_phase;
-    contact_phase.dt = phase.dt;
-    contact_phase.h = phase.h;
-    contact_phase.tgs = phase.tgs;
-    contact_phase.velocity_iteration = phase.velocity_iteration;
-    // TGS: the time at the sub-step's start; the velocity iterations run at dt (C7).
-    contact_phase.elapsed = phase.velocity_iteration ? phase.dt
-                                                     : phase.dt - phase.time_to_step_end - phase.h;
+    const ContactPhase contacts = contact_phase(phase);
     gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row, [&](int link, Vec6& dv) {
       return contact_rows_.solve_link(link, contact_link_velocity_[static_cast<size_t>(link)], dv,
-                                      contact_phase);
+                                      contacts);
     });
     return;
   }
@@ -331,7 +338,7 @@ void Simulation::solve_pgs() {
   phase.dt = dt;
   phase.h = dt;
   phase.limit_erp = limit_erp(SolverType::pgs, settings_.options.position_iterations);
-  if (contacts_active_) setup_contacts(phase);
+  if (contacts_active_ || self_contacts_active_) setup_contacts(phase);
   const int last = settings_.options.position_iterations - 1;
   for (int it = 0; it < last; ++it) sweep(phase);
   if (track_convergence_)  // the impulses before the last iteration, then its change
@@ -368,7 +375,7 @@ void Simulation::solve_tgs() {
   phase.h = rho;
   phase.tgs = true;
   phase.limit_erp = limit_erp(SolverType::tgs, n);
-  if (contacts_active_) setup_contacts(phase);
+  if (contacts_active_ || self_contacts_active_) setup_contacts(phase);
   departures_.qd_position.setZero();
   for (int i = 1; i <= n; ++i) {
     phase.time_to_step_end = dt - i * rho;
@@ -380,7 +387,7 @@ void Simulation::solve_tgs() {
     if (physx())
       clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
     delta_x_ += rho * qd_;
-    if (contacts_active_) track_contacts(rho);
+    if (contacts_active_ || self_contacts_active_) track_contacts(rho);
     if (physx()) {
       // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
       // a prismatic row's is measured again below.
@@ -392,7 +399,7 @@ void Simulation::solve_tgs() {
   }
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.
-  if (!any_undriven_rows_ && mimic_.empty() && !contacts_active_) return;
+  if (!any_undriven_rows_ && mimic_.empty() && !contacts_active_ && !self_contacts_active_) return;
   for (int it = 0; it < settings_.options.velocity_iterations; ++it) sweep(phase);
 }
 

@@ -372,9 +372,10 @@ TEST(ExplicitActuatorAllocations, NoneInTheStep) {
   }
 }
 
-// Ground contact (docs/math/contact.md): a shape of each kind in turn on every link of a floating tree that starts
-// half sunk into the ground, under PGS and TGS, and a copy of such a simulation: the contact rows
-// and reports are sized with the model's shapes.
+// Ground contact and self-collision (docs/math/contact.md): a shape of each kind in turn on every
+// link of a floating tree that starts half sunk into the ground, its links' shapes overlapping,
+// under PGS and TGS, and a copy of such a simulation: the contact rows and reports are sized with
+// the model's shapes.
 TEST(ContactAllocations, NoneInTheStep) {
   Model m = *test::make_random_tree(11, 12, true, true, 0.01);
   for (int i = 0; i < m.num_links(); ++i) {
@@ -403,6 +404,9 @@ TEST(ContactAllocations, NoneInTheStep) {
     ground.enabled = true;
     ground.height = low + 0.1;
     sim.set_ground(ground);
+    ContactOptions contact;
+    contact.self_collision = true;  // the links' shapes overlap too (contact.md, section 14)
+    sim.set_contact_options(contact);
     sim.step();
     Simulation copy = sim;
     EXPECT_EQ(allocations_in([&] {
@@ -411,6 +415,9 @@ TEST(ContactAllocations, NoneInTheStep) {
               }),
               0);
     EXPECT_GT(sim.contacts().size(), 0u);
+    int self = 0;
+    for (const ContactReport& c : sim.contacts()) self += c.other_link >= 0 ? 1 : 0;
+    EXPECT_GT(self, 0);
   }
 }
 

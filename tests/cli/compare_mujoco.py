@@ -386,17 +386,31 @@ def main():
     one_line_error(run(cli, "compare-mujoco", wrist),
                    ["spherical_wrist.yaml", "joint 'wrist' is spherical"], "a spherical wrist")
 
-    # A ground beside collision shapes: MuJoCo's side would run without it, so both refuse.
+    # A ground beside collision shapes travels to MuJoCo: the plane and the shape as geoms that
+    # collide with each other only, contacts on.
     grounded = os.path.join(out_dir, "slider_ground.yaml")
     with open(grounded, "w") as f:
         f.write(f"model: {os.path.join(source, 'examples', 'slider.urdf')}\nfixed_base: true\n"
-                "steps: 10\nground: {height: -1.0}\n"
-                "shapes: [{link: carriage, type: sphere, radius: 0.05}]\n")
-    for command in (["compare-mujoco", grounded],
-                    ["translate", grounded, "--to", "mujoco",
-                     "--out", os.path.join(out_dir, "grounded.xml")]):
-        one_line_error(run(cli, *command), ["slider_ground.yaml", "ground:", "ground: false"],
-                       f"{command[0]} with a ground")
+                "dt: 0.016666666666666666\nsteps: 60\n"
+                "drives: {slide: {type: force, stiffness: 400, damping: 40, "
+                "target_position: -0.3}}\n"  # below the ground: the pad lands and stays
+                "ground: {height: -0.2, static_friction: 0.7}\n"
+                "shapes: [{link: carriage, name: pad, type: sphere, radius: 0.05, "
+                "static_friction: 0.3}]\n")
+    r = run(cli, "compare-mujoco", grounded, "--translate")
+    check(r.returncode == 0 and "contacts with the ground on" in r.stdout
+          and "note: ground contacts as MuJoCo's soft contacts" in r.stdout,
+          "compare-mujoco carries the ground", r)
+    grounded_xml = os.path.join(out_dir, "grounded.xml")
+    r = run(cli, "translate", grounded, "--to", "mujoco", "--out", grounded_xml)
+    check(r.returncode == 0, "translate --to mujoco with a ground", r)
+    with open(grounded_xml) as f:
+        xml = f.read()
+    check('<flag contact="disable"/>' not in xml
+          and '<geom name="featherdrive_ground" type="plane" size="0 0 1" pos="0 0 -0.2"' in xml
+          and '<geom name="shape:0:pad" type="sphere" size="0.05"' in xml
+          and 'friction="0.5 0 0"' in xml,  # the pair's average, 0.5 (0.3 + 0.7)
+          "the MJCF has the plane and the shape, contacts on:\n" + xml)
 
     r = run(cli, "compare-mujoco", scene, "--translate", "--literal")
     one_line_error(r, ["--translate and --literal"], "both mappings chosen")

@@ -280,7 +280,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 8)");
+            "to 9)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -348,16 +348,21 @@ std::uint64_t bits(double v) {
   return std::bit_cast<std::uint64_t>(v);
 }
 
-// Version 8's ground and contact options, last before the checksum: a byte and 10 doubles.
+// Version 8's ground and contact options (a byte and 10 doubles), then (the model has no shapes)
+// version 9's self_collision byte, last before the checksum.
 constexpr size_t kContactBytes = 1 + 10 * 8;
+constexpr size_t kSelfCollisionBytes = 1;
 
-// A version 8 checkpoint as version 7 wrote it: without the contact settings.
-std::string as_version7(std::string bytes) {
-  bytes.erase(bytes.size() - 8 - kContactBytes, kContactBytes);
+// The checkpoint as an older version wrote it: the last `tail` bytes of the payload dropped.
+std::string as_version(std::string bytes, std::uint64_t version, size_t tail) {
+  bytes.erase(bytes.size() - 8 - tail, tail);
   std::uint64_t payload = 0;
   for (size_t i = 0; i < 8; ++i)
     payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[28 + i])) << (8 * i);
-  return forged(forged(bytes, 8, 7, 4), 28, payload - kContactBytes);
+  return forged(forged(bytes, 8, version, 4), 28, payload - tail);
+}
+std::string as_version7(const std::string& bytes) {
+  return as_version(bytes, 7, kContactBytes + kSelfCollisionBytes);
 }
 
 // The payload after the 36-byte header: time, step count, dt, solver (1 byte), the iterations,
@@ -816,7 +821,7 @@ TEST(Checkpoint, GroundAndContactOptionsAreKept) {
   ground.normal = Vec3(0.0, 0.6, 0.8);
   ground.material = Material{0.9, 0.7, 0.1};
   a.set_ground(ground);
-  a.set_contact_options(ContactOptions{0.03, 0.001, 1.5});
+  a.set_contact_options(ContactOptions{0.03, 0.001, 1.5, true});
   a.step(3);
   const std::string bytes = checkpoint_bytes(a);
   Simulation b(model);
@@ -830,6 +835,12 @@ TEST(Checkpoint, GroundAndContactOptionsAreKept) {
   EXPECT_EQ(b.contact_options().contact_offset, 0.03);
   EXPECT_EQ(b.contact_options().rest_offset, 0.001);
   EXPECT_EQ(b.contact_options().bounce_threshold, 1.5);
+  EXPECT_TRUE(b.contact_options().self_collision);
+  // Version 8: self-collision off, the rest kept.
+  Simulation d(model);
+  restore_checkpoint(as_version(bytes, 8, kSelfCollisionBytes), d, "v8.ckpt");
+  EXPECT_FALSE(d.contact_options().self_collision);
+  EXPECT_EQ(d.contact_options().bounce_threshold, 1.5);
   // Version 7: the simulation keeps its own ground and options.
   Simulation c(model);
   Ground other;
@@ -841,10 +852,10 @@ TEST(Checkpoint, GroundAndContactOptionsAreKept) {
   EXPECT_EQ(c.contact_options().contact_offset, ContactOptions{}.contact_offset);
   expect_same_state(a, c);
   // A forged ground is refused in one line.
-  const size_t height_at = bytes.size() - 8 - kContactBytes + 1;
+  const size_t height_at = bytes.size() - 8 - kSelfCollisionBytes - kContactBytes + 1;
   EXPECT_EQ(error_of(forged(bytes, height_at, bits(std::numeric_limits<double>::infinity())), b),
             "state.ckpt: bad value in the checkpoint: ground.height = inf is not finite");
-  const size_t offset_at = bytes.size() - 8 - 24;
+  const size_t offset_at = bytes.size() - 8 - kSelfCollisionBytes - 24;
   EXPECT_EQ(error_of(forged(bytes, offset_at, bits(-1.0)), b),
             "state.ckpt: bad value in the checkpoint: contact.contact_offset = -1, rest_offset = "
             "0.001: need 0 <= rest_offset < contact_offset");

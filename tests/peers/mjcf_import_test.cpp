@@ -266,11 +266,26 @@ TEST(MjcfImport, HumanoidLoadsWithItsWarnings) {
   EXPECT_EQ(model.dof_names[static_cast<size_t>(hip.dof)], "right_hip_y");
   // armature=".01" for every joint (class "body").
   EXPECT_EQ(model.armature[hip.dof], 0.01);
-  // One line each: contacts (20 colliding geoms, the floor among them), the springs (every joint
+  // One line each: self-collision (MuJoCo's pairs of the robot's geoms, all contype and
+  // conaffinity 1, by MuJoCo's filter: not on one welded body, nor on a welded body and its
+  // parent's: the hands have no joint and move with the lower arms), the springs (every joint
   // but the elbows, stiffness="0"), damping.
   ASSERT_EQ(robot.warnings.size(), 3u);
-  EXPECT_EQ(robot.warnings[0], "contacts between the robot's own geoms are not simulated (20 geoms collide in "
-            "MuJoCo); those with the ground are");
+  int pairs = 0;
+  {
+    std::vector<int> welds;  // the welded body of each robot geom
+    for (int g = 0; g < m->ngeom; ++g)
+      if (m->geom_bodyid[g] != 0) welds.push_back(m->body_weldid[m->geom_bodyid[g]]);
+    auto parent = [&](int w) { return m->body_weldid[m->body_parentid[w]]; };
+    for (size_t i = 0; i < welds.size(); ++i)
+      for (size_t j = i + 1; j < welds.size(); ++j)
+        pairs += welds[i] != welds[j] && parent(welds[i]) != welds[j] &&
+                 parent(welds[j]) != welds[i];
+  }
+  EXPECT_EQ(pairs, 142);
+  EXPECT_EQ(robot.warnings[0], std::to_string(pairs) + " pairs of the robot's own geoms collide in "
+            "MuJoCo; featherdrive's shapes collide with each other only with contact: "
+            "{self_collision: true} (off by default; parent and child links never)");
   EXPECT_NE(robot.warnings[1].find("stiffness"), std::string::npos);
   EXPECT_NE(robot.warnings[1].find("'left_ankle_x'"), std::string::npos);
   EXPECT_EQ(robot.warnings[1].find("elbow"), std::string::npos);

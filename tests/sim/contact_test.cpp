@@ -284,3 +284,35 @@ INSTANTIATE_TEST_SUITE_P(Solvers, Contact, ::testing::Values(SolverType::pgs, So
 
 }  // namespace
 }  // namespace featherdrive
+
+namespace featherdrive {
+namespace {
+
+// A sphere on a vertical slider (one prismatic dof on a fixed base): its contact rows' tangent
+// directions have no response at all, yet the slider comes to rest on the ground at z = r and
+// carries its weight (a dropped slider once turned the first contact step into NaN).
+TEST_P(Contact, SliderDropsOntoTheGroundAndCarriesItsWeight) {
+  const double m = 2.5, r = 0.05, dt = 1.0 / 60.0;
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  JointSpec slide = prismatic_joint("slide", Vec3::UnitZ());
+  b.add_link(make_link("carriage", "base", m, Vec3::Zero(), Mat3::Identity() * 0.004, slide));
+  CollisionShape s;
+  s.type = ShapeType::sphere;
+  s.size = Vec3(r, 0, 0);
+  b.add_shape("carriage", s);
+  SimulationOptions o;
+  o.dt = dt;
+  o.solver = GetParam();
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  Ground g;
+  g.enabled = true;
+  g.height = -0.2;
+  sim.set_ground(g);
+  for (int k = 0; k < 300; ++k) sim.step();
+  EXPECT_NEAR(sim.q()[0] - r, g.height, 1e-5);
+  EXPECT_NEAR(normal_sum(sim) / (dt * m * kG), 1.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace featherdrive

@@ -22,15 +22,21 @@ struct ContactOptions {
   double contact_offset = 0.02;    ///< m, > rest_offset
   double rest_offset = 0.0;        ///< m
   double bounce_threshold = 2.0;   ///< m/s: slower impacts do not bounce (C8)
+  /// Contacts between the robot's own shapes (docs/math/contact.md, section 14): every pair of
+  /// shapes on two links that are not parent and child. Off by default, as in Isaac Lab.
+  bool self_collision = false;
 };
 
-/// One contact point of the last step (docs/math/contact.md, section 1): a point of a shape
-/// within the contact distance of the ground, and the impulses its rows applied over the step.
+/// One contact point of the last step (docs/math/contact.md, sections 1 and 14): a point of a
+/// shape within the contact distance of the ground or of another link's shape, and the impulses
+/// its rows applied over the step (on `link`; the other link takes the opposite).
 struct ContactReport {
   int link = 0;
   int shape = 0;                      ///< index into Model::shapes
-  Vec3 position = Vec3::Zero();       ///< on the shape's surface, world frame, at the step's start
-  Vec3 normal = Vec3::UnitZ();        ///< the ground's normal, into the body
+  int other_link = -1;                ///< -1: the ground; else the link of the other shape
+  int other_shape = -1;               ///< -1: the ground; else its index into Model::shapes
+  Vec3 position = Vec3::Zero();       ///< world frame, at the step's start (ground: on the shape)
+  Vec3 normal = Vec3::UnitZ();        ///< into `link`: the ground's normal, or from the other shape
   double separation = 0.0;            ///< at the step's start; < 0 penetrating
   double normal_impulse = 0.0;        ///< N s, along the normal
   Vec3 friction_impulse = Vec3::Zero();  ///< N s, world frame, tangential (the point's share)

@@ -124,6 +124,16 @@ class ContactRows {
   Vec3 normal_ = Vec3::UnitZ();
 };
 
+/// A normal row's law from its separation d at set-up and its normal velocity vn then (C2-C8):
+/// separation, bias and target; impulse and dx start at 0. tgs_share is s of C6.
+void setup_normal_law(ContactNormalRow& row, double d, double vn, double restitution,
+                      const ContactOptions& options, const ContactPhase& phase, double tgs_share);
+/// The impulse change of a normal row at normal velocity vn (C4, C5; TGS C7), not below
+/// -row.impulse.
+double normal_row_delta(const ContactNormalRow& row, double vn, const ContactPhase& phase);
+/// TGS's share s of a penetration corrected per sub-step (C6).
+double tgs_penetration_share(int position_iterations);
+
 /// Every link's spatial velocity in frame 0 for joint velocities qd, with the step-start
 /// subspaces the sweep uses (data's S_i): V_i = V_parent + S_i qd_i. O(n).
 void link_velocities0(const Model& model, const Data& data, const VecX& qd, std::vector<Vec6>& V);

@@ -45,8 +45,10 @@ namespace featherdrive {
 /// 7: the step guard's account (docs/math/step_guard.md, test (iii)). Versions 3 to 6 read with
 /// an empty account.
 /// 8: the ground and the contact options (issue 34; contacts keep no state between steps).
-/// Versions 3 to 7 read with the simulation's own.
-inline constexpr std::uint32_t kCheckpointVersion = 8;
+/// Versions 3 to 7 read with the simulation's own. (The comment "keep no state" predates the kept
+/// friction anchors, which follow the settings.)
+/// 9: the contact options's self_collision. Versions 3 to 8 read with it off.
+inline constexpr std::uint32_t kCheckpointVersion = 9;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file

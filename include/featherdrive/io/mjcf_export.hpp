@@ -1,5 +1,5 @@
 // MJCF export: a featherdrive model, or a simulation with its drives, as a MuJoCo 2.2.2 file
-// (contacts off), and a MuJoCo run of it beside featherdrive's. docs/mujoco_bridge.md.
+// (contacts only between its shapes and its ground), and a MuJoCo run of it beside featherdrive's. docs/mujoco_bridge.md.
 //
 // Mapping: one <body> per link, nested as in the tree and written in link order, so MuJoCo's
 // joint, qpos and qvel order is ours; a massless moving link whose only child moves and hangs at an
@@ -98,8 +98,9 @@ struct MjcfExport {
 /// The simulation as MJCF at its current state's configuration (for the effective inertias):
 /// gravity, timestep, integrator, joint limits -> range, armature, drives -> actuators (position,
 /// plus velocity when kv > 0; max_force / max_impulse -> forcerange) and joint damping as the
-/// mapping says. Joint friction, velocity limits, link parameters and actuator envelopes are not
-/// carried (notes says so). Throws InputError (one line naming the joint and the value) for what
+/// mapping says; a ground beside collision shapes -> a plane and shape geoms, contacts on
+/// (docs/mujoco_bridge.md, "Ground contact"). Joint friction, velocity limits, link parameters
+/// and actuator envelopes are not carried (notes says so). Throws InputError (one line naming the joint and the value) for what
 /// MuJoCo cannot take: explicit actuators, a drive with neither stiffness nor damping.
 MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options = {});
 

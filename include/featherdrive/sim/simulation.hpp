@@ -13,6 +13,7 @@
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/constraint/contact_rows.hpp"
+#include "featherdrive/solver/self_contacts.hpp"
 #include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/sim/drive_delay.hpp"
 #include "featherdrive/sim/explicit_actuator.hpp"
@@ -377,9 +378,12 @@ class Simulation {
   // contacts_, sized for the shapes' most points at construction) and per-link forces.
   ContactRows contact_rows_;
   bool contacts_active_ = false;  ///< the ground is on and the model has shapes
+  SelfContacts self_contacts_;    ///< contacts between the robot's own shapes, after the ground's
+  bool self_contacts_active_ = false;  ///< self_collision is on and some pair can touch
   std::vector<Vec6> contact_link_velocity_;  ///< frame 0, at a sweep's start
   std::vector<ContactReport> contacts_;
   int num_contacts_ = 0;
+  int num_ground_contacts_ = 0;  ///< the first of contacts_; the self contacts follow
   std::vector<Vec3> link_contact_force_;
 
   // The step guard: the time the advance covers (options().dt, or dt / n in a guard sub-step),

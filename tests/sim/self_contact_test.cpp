@@ -1,0 +1,138 @@
+// Self-collision (docs/math/contact.md, section 14) against closed forms: a sphere on a slider
+// comes to rest on a sphere of the robot's own fixed base and carries its weight, a dropped one
+// rebounds at e times its impact speed; parent and child never collide, and self-collision is off
+// unless asked for.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/sim/simulation.hpp"
+
+namespace featherdrive {
+namespace {
+
+constexpr double kG = 9.81;
+constexpr double kR1 = 0.1, kR2 = 0.05, kM2 = 2.0;
+
+CollisionShape sphere(double radius, const Material& material = {}) {
+  CollisionShape s;
+  s.type = ShapeType::sphere;
+  s.size = Vec3(radius, 0, 0);
+  s.material = material;
+  return s;
+}
+
+// A fixed base with a sphere of radius kR1 at its origin; a carriage on a horizontal slider
+// (no shape); on it a vertical slider carrying a sphere of radius kR2 and mass kM2, starting at
+// height z above the base's centre. The base and the ball are not parent and child.
+Simulation stacked_spheres(double z, SolverType solver, int iterations,
+                           const Material& material = {}) {
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  b.add_link(make_link("carriage", "base", 0.5, Vec3::Zero(), Mat3::Identity() * 0.01,
+                       prismatic_joint("across", Vec3::UnitX())));
+  b.add_link(make_link("ball", "carriage", kM2, Vec3::Zero(),
+                       Mat3::Identity() * 0.4 * kM2 * kR2 * kR2,
+                       prismatic_joint("drop", Vec3::UnitZ())));
+  b.add_shape("base", sphere(kR1, material));
+  b.add_shape("ball", sphere(kR2, material));
+  SimulationOptions o;
+  o.dt = 0.01;
+  o.solver = solver;
+  o.position_iterations = iterations;
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  VecX q = sim.q();
+  q[1] = z;
+  sim.set_q(q);
+  ContactOptions c;
+  c.self_collision = true;
+  sim.set_contact_options(c);
+  return sim;
+}
+
+double normal_sum(const Simulation& sim) {
+  double s = 0.0;
+  for (const ContactReport& c : sim.contacts()) s += c.normal_impulse;
+  return s;
+}
+
+class SelfContact : public ::testing::TestWithParam<SolverType> {};
+
+int converged(SolverType solver) { return solver == SolverType::pgs ? 50 : 100; }
+
+TEST_P(SelfContact, BallRestsOnTheBasesSphereAndCarriesItsWeight) {
+  Simulation sim = stacked_spheres(kR1 + kR2 + 0.01, GetParam(), converged(GetParam()));
+  for (int k = 0; k < 300; ++k) sim.step();
+  ASSERT_EQ(sim.contacts().size(), 1u);
+  const ContactReport& c = sim.contacts()[0];
+  EXPECT_EQ(c.link, 0);  // the base's shape comes first in the pair
+  EXPECT_EQ(c.other_link, 2);
+  EXPECT_NEAR(c.normal.z(), -1.0, 1e-12);  // from the ball into the base
+  EXPECT_NEAR(sim.q()[1], kR1 + kR2, 1e-9);
+  EXPECT_NEAR(sim.q()[0], 0.0, 1e-12);  // straight above: nothing pushes the carriage
+  EXPECT_NEAR(normal_sum(sim) / (sim.options().dt * kM2 * kG), 1.0, 1e-9);
+  // The base carries the ball's weight down, the ball is held up.
+  EXPECT_NEAR(sim.link_contact_force()[2].z(), kM2 * kG, 1e-7);
+  EXPECT_NEAR(sim.link_contact_force()[0].z(), -kM2 * kG, 1e-7);
+}
+
+TEST_P(SelfContact, ADroppedBallReboundsAtRestitutionTimesItsImpactSpeed) {
+  const double e = 0.5;
+  Simulation sim = stacked_spheres(kR1 + kR2 + 0.2, GetParam(), converged(GetParam()),
+                                   Material{0.5, 0.5, e});
+  ContactOptions c = sim.contact_options();
+  c.bounce_threshold = 0.5;
+  sim.set_contact_options(c);
+  double impact = 0.0, rebound = 0.0;
+  for (int k = 0; k < 100 && rebound == 0.0; ++k) {
+    const double v0 = sim.qd()[1];
+    sim.step();
+    if (normal_sum(sim) > 0.0) {
+      impact = v0 - kG * sim.options().dt;  // the pre-solve velocity: the step's gravity in it
+      rebound = sim.qd()[1];
+    }
+  }
+  ASSERT_LT(impact, -0.5);
+  EXPECT_NEAR(-rebound / impact, e, 1e-9);
+}
+
+// Off by default: the ball falls through the base's sphere.
+TEST_P(SelfContact, IsOffUnlessAskedFor) {
+  Simulation sim = stacked_spheres(kR1 + kR2 + 0.01, GetParam(), 4);
+  sim.set_contact_options(ContactOptions{});
+  for (int k = 0; k < 100; ++k) sim.step();
+  EXPECT_TRUE(sim.contacts().empty());
+  EXPECT_LT(sim.q()[1], 0.0);
+}
+
+// Parent and child never collide, though their spheres overlap: the run is the run without
+// self-collision, bit for bit.
+TEST_P(SelfContact, ParentAndChildAreFiltered) {
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  b.add_link(make_link("arm", "base", 1.0, Vec3(0.1, 0, 0), Mat3::Identity() * 0.01,
+                       revolute_joint("hinge", Vec3::UnitY())));
+  b.add_shape("base", sphere(0.2));
+  b.add_shape("arm", sphere(0.2));
+  SimulationOptions o;
+  o.solver = GetParam();
+  const auto model = std::make_shared<const Model>(b.build());
+  Simulation with(model, o), without(model, o);
+  ContactOptions c;
+  c.self_collision = true;
+  with.set_contact_options(c);
+  for (int k = 0; k < 50; ++k) {
+    with.step();
+    without.step();
+  }
+  EXPECT_TRUE(with.contacts().empty());
+  EXPECT_EQ(with.q(), without.q());
+  EXPECT_EQ(with.qd(), without.qd());
+}
+
+INSTANTIATE_TEST_SUITE_P(Solvers, SelfContact, ::testing::Values(SolverType::pgs, SolverType::tgs),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+}  // namespace
+}  // namespace featherdrive
