@@ -18,6 +18,21 @@ Vec6 spatial_force(const Vec3& r, const Vec3& u) {
   return f;
 }
 
+// PhysX's default cfm of a link (C19, cfmScale 0.025): 0.025 times the largest linear response of
+// an impulse at its centre of mass.
+double default_cfm(const Model& model, const Data& data, int link) {
+  constexpr double kCfmScale = 0.025;
+  const Vec3 com = data.world_position[link] +
+                   data.world_rotation[link] * model.links[static_cast<size_t>(link)].com -
+                   data.frame_origin;
+  double largest = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec6 J = spatial_force(com, Vec3::Unit(k));
+    largest = std::max(largest, J.dot(data.response[link] * J));
+  }
+  return kCfmScale * largest;
+}
+
 Vec3 perpendicular(const Vec3& n) {
   const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
   return (a - n * n.dot(a)).normalized();
@@ -141,10 +156,12 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     for (size_t j = 0; j < R; ++j) W_[j * R + i] = row_velocity(rows_[j], link_velocity_);
   }
   for (int c = 0; c < num_contacts_; ++c) {
-    double cfm = 0.0;
     for (int k = 0; k < 3; ++k) {
       Row& row = rows_[static_cast<size_t>(3 * c + k)];
-      cfm = std::max(link_cfm[row.link_a], link_cfm[row.link_b]);
+      // C32: at least PhysX's default cfm, whatever the compat mode.
+      const double cfm = std::max({link_cfm[row.link_a], link_cfm[row.link_b],
+                                   default_cfm(model, data, row.link_a),
+                                   default_cfm(model, data, row.link_b)});
       const double u = W_[static_cast<size_t>(3 * c + k) * (R + 1)] + cfm;
       row.mass = u > 0.0 ? (k == 0 ? 1.0 : kFrictionMassScale) / u : 0.0;  // C20, C22
     }
