@@ -9,7 +9,9 @@ none once the "contact forces" box is unchecked; a page of the same run read bac
 Ant walking (examples/ant_walk.yaml, an MJCF robot without visuals, 20 steps): the page draws one
 shape per geom of the Ant's bodies in examples/ant.xml (counted here from the file: a sphere and
 12 capsules) and no inertia box, and draws the ground (featherdrive.ground; its plane covers the
-bottom of the view, which is white without it). Skipped (exit 77) where Chromium is not installed.
+bottom of the view, which is white without it). Last, one link with a shape of every type
+(tests/data/every_shape.xml, a convex hull among them) over a tilted ground: one of each drawn,
+the page's ground plane the scene's. Skipped (exit 77) where Chromium is not installed.
 
 usage: view_contacts.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
 """
@@ -131,6 +133,41 @@ def main():
     finally:
         browser.close()
     ant_page(cli, source, out_dir)
+    every_shape_page(cli, source, out_dir)
+
+
+def body_geoms(mjcf):
+    """The count of each shape type among the geoms of an MJCF file's bodies (the world's own,
+    such as a floor, are not a link's; a mesh is drawn as its convex hull)."""
+    root = ElementTree.parse(mjcf).getroot()
+    counts = {}
+    for geom in (g for body in root.iter("body") for g in body.findall("geom")):
+        kind = geom.get("type", "sphere").replace("mesh", "convex")
+        counts[kind] = counts.get(kind, 0) + 1
+    return counts
+
+
+def every_shape_page(cli, source, out_dir):
+    """One shape of each type (tests/data/every_shape.xml) drawn over a tilted ground."""
+    page = os.path.join(out_dir, "view_every_shape.html")
+    run([cli, "view", os.path.join(source, "tests", "data", "every_shape.yaml"), "--out", page])
+    expected = body_geoms(os.path.join(source, "tests", "data", "every_shape.xml"))
+    normal = np.array([0.1, 0, 1]) / np.linalg.norm([0.1, 0, 1])  # every_shape.yaml's ground
+    ground = page_data(page)["ground"]
+    if np.abs(np.array(ground["normal"]) - normal).max() > 1e-12 or ground["height"] != -0.1:
+        fail(f"the page's ground {ground}, every_shape.yaml's normal {normal.tolist()}, -0.1")
+    browser = Browser(1000, 900)
+    try:
+        browser.open(page)
+        drawn = browser.evaluate("[featherdrive.shapeTypes, featherdrive.boxCount, "
+                                 "featherdrive.ground]")
+        print(f"every shape type: {drawn[0]} (every_shape.xml: {expected}), {drawn[1]} boxes, "
+              f"ground {drawn[2]}")
+        if len(expected) != 6 or drawn != [expected, 0, True]:
+            fail(f"the page draws {drawn}, every_shape.xml has {expected}")
+        no_network_nor_error(browser)
+    finally:
+        browser.close()
 
 
 def ant_page(cli, source, out_dir):
@@ -138,12 +175,7 @@ def ant_page(cli, source, out_dir):
     page = os.path.join(out_dir, "view_ant.html")
     run([cli, "view", os.path.join(source, "examples", "ant_walk.yaml"), "--steps", "20",
          "--out", page])
-    # Every geom of a body is a collision shape (the floor is the world's: the scene's ground).
-    root = ElementTree.parse(os.path.join(source, "examples", "ant.xml")).getroot()
-    expected = {}
-    for geom in (g for body in root.iter("body") for g in body.findall("geom")):
-        kind = geom.get("type", "sphere")
-        expected[kind] = expected.get(kind, 0) + 1
+    expected = body_geoms(os.path.join(source, "examples", "ant.xml"))
     browser = Browser(1000, 1200)
     try:
         browser.open(page)
