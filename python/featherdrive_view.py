@@ -1,11 +1,12 @@
 """The 3D viewer page (docs/viewer.md): `featherdrive view SCENE [--csv RUN.csv]` and fd.view.
 
 One self-contained HTML file plays a run on the robot: the URDF's visuals (meshes inlined), links
-without visuals as their equivalent-inertia boxes, every link posed at every frame by the world
-poses featherdrive computes (fd.link_world_poses), the ground's force on each link as arrows
-(with a ground), a timeline and per-joint curves of q, target and drive force. The page's
-JavaScript (viewer/src/page.js with three.js and urdf-loader) is bundled at build time into
-build/viewer/viewer.js and inlined here, so the page needs no network.
+without visuals as their collision shapes, else as their equivalent-inertia boxes, every link
+posed at every frame by the world poses featherdrive computes (fd.link_world_poses), the ground
+plane and its force on each link as arrows (with a ground), a timeline and per-joint curves of
+q, target and drive force. The page's JavaScript (viewer/src/page.js with three.js and
+urdf-loader) is bundled at build time into build/viewer/viewer.js and inlined here, so the page
+needs no network.
 """
 import argparse
 import base64
@@ -80,7 +81,7 @@ class ViewerPage:
 
 class _Run:
     def __init__(self, model, times, q, forces=None, targets=None, max_force=None,
-                 contacts=None):
+                 contacts=None, ground=None):
         self.model = model
         self.times = np.asarray(times, dtype=float)
         self.q = np.asarray(q, dtype=float)
@@ -90,6 +91,7 @@ class _Run:
         # Per row, the contact arrows [(link, origin (3,) or None: the link's origin, force (3,))]
         # of the step that reached it; None without a ground.
         self.contacts = contacts
+        self.ground = ground if ground is not None and ground.enabled else None  # fd.Ground
 
 
 def _contact_arrows(sim):
@@ -151,7 +153,7 @@ def _run_scene(fd, scene, steps, notes):
         if contacts is not None:
             contacts.append(_contact_arrows(sim))
     targets, limits = _scene_targets(fd, scene, len(q))
-    return _Run(scene.model, t, q, np.array(f), targets, limits, contacts)
+    return _Run(scene.model, t, q, np.array(f), targets, limits, contacts, sim.ground())
 
 
 def _number(text, where):
@@ -221,7 +223,7 @@ def _read_csv(fd, scene, path):
             contacts.append([a for a in arrows if np.any(a[2])])
     q = fd.set_dof_positions(model, q, dofs, positions)
     targets, limits = _scene_targets(fd, scene, len(body))
-    return _Run(model, times, q, forces, targets, limits, contacts)
+    return _Run(model, times, q, forces, targets, limits, contacts, scene.ground)
 
 
 def _run_simulation(fd, sim, steps):
@@ -241,7 +243,7 @@ def _run_simulation(fd, sim, steps):
     targets = {d: np.full(len(q), s.drive(d).target_position) for d in driven}
     limits = {d: _drive_limit(fd, s, d) for d in driven}
     return _Run(model, t, q, np.array(f), targets, {d: v for d, v in limits.items() if v},
-                contacts)
+                contacts, s.ground())
 
 
 # ---- geometry ---------------------------------------------------------------------------------
@@ -268,6 +270,29 @@ def _inertia_boxes(model):
     return boxes
 
 
+def _link_shapes(model):
+    """Each link's collision shapes (drawn where the link has no visual): {link: [{type, size,
+    position, axes (the shape's x, y, z in the link frame, one after the other), vertices
+    (convex only, flat, in the shape frame)}]}; sizes as ShapeType says."""
+    shapes = {}
+    for shape in model.shapes:
+        entry = {"type": str(shape.type.name), "size": [float(v) for v in shape.size],
+                 "position": [float(v) for v in shape.position],
+                 "axes": [float(a) for a in np.asarray(shape.rotation, dtype=float).T.flatten()]}
+        if shape.type.name == "convex":
+            vertices = np.asarray(shape.vertices, dtype=float)
+            entry["vertices"] = np.round(vertices, 7).flatten().tolist()
+        shapes.setdefault(model.links[shape.link].name, []).append(entry)
+    return shapes
+
+
+def _page_ground(ground):
+    """The run's ground plane n . x = height as {normal (unit), height}, or None."""
+    if ground is None:
+        return None
+    return {"normal": [float(v) for v in ground.normal], "height": float(ground.height)}
+
+
 def _resolve_mesh(filename, urdf_dir, packages):
     """The file a mesh filename names, or (None, why)."""
     if filename.startswith("package://"):
@@ -291,7 +316,7 @@ def _urdf_geometry(urdf_path, packages):
     except ElementTree.ParseError as exc:
         raise ValueError(f"{urdf_path}: cannot read its visuals: {exc}") from None
     meshes, notes, inputs = {}, [], []
-    if root.tag != "robot":  # MJCF: drawn from the inertia boxes
+    if root.tag != "robot":  # MJCF: drawn from the shapes and inertia boxes
         return None, meshes, notes, inputs
     for link in root.iter("link"):
         for mesh in link.findall("./visual/geometry/mesh"):
@@ -351,6 +376,7 @@ def _page_data(fd, run, robot, urdf_text, meshes, title, marker):
         "times": np.round(run.times, 9).tolist(), "links": list(names),
         "poses": np.round(poses, 7).flatten().tolist(),
         "urdf": urdf_text, "meshes": meshes, "boxes": _inertia_boxes(model),
+        "shapes": _link_shapes(model), "ground": _page_ground(run.ground),
         "merged_into": merged_into, "joints": joints, "marker": marker,
     }
 
@@ -412,8 +438,8 @@ def view(source, out=None, *, scene=None, robot=None, steps=None, packages=None,
 
     source: a scene file (runs it), a trajectory CSV with scene= its scene (poses from its q
     columns), a Scene, or a Simulation (a copy stepped `steps` times, default 0: its state now;
-    robot= its UrdfRobot or URDF file for the visuals, else inertia boxes). out: the .html
-    (default out/<name>_view.html); steps: overrides the scene's; packages: {name: folder} for
+    robot= its UrdfRobot or URDF file for the visuals, else shapes and inertia boxes). out: the
+    .html (default out/<name>_view.html); steps: overrides the scene's; packages: {name: folder} for
     package:// meshes; marker: a link whose origin gets a magenta dot."""
     import featherdrive as fd
     # Every argument is checked before a file is read or a step run.

@@ -146,6 +146,28 @@ def test_mjcf_robots_are_drawn_from_their_inertia(tmp_path):
 
 
 @needs_bundle
+def test_page_carries_the_collision_shapes_and_the_ground(tmp_path):
+    # The Ant (examples/ant.xml): a torso sphere of radius 0.25 and 12 capsules of radius 0.08,
+    # 8 from fromto vectors of length 0.2 sqrt(2) (half 0.1 sqrt(2)) and 4 (the ankles) of
+    # 0.4 sqrt(2); the floor is the scene's ground z = 0.
+    data = page_data(fd.view(str(ROOT / "examples" / "ant_walk.yaml"), tmp_path / "a.html",
+                             steps=1))
+    shapes = [s for link in data["shapes"].values() for s in link]
+    spheres = [s["size"][0] for s in shapes if s["type"] == "sphere"]
+    capsules = sorted(round(s["size"][1] / math.sqrt(2), 9) for s in shapes
+                      if s["type"] == "capsule")
+    assert spheres == [pytest.approx(0.25)] and len(shapes) == 13
+    assert capsules == [0.1] * 8 + [0.2] * 4
+    assert all(s["size"][0] == pytest.approx(0.08) for s in shapes if s["type"] == "capsule")
+    for s in shapes:  # the shape's axes are a rotation
+        axes = np.reshape(s["axes"], (3, 3))
+        np.testing.assert_allclose(axes @ axes.T, np.eye(3), atol=1e-12)
+    assert data["ground"] == {"normal": [0.0, 0.0, 1.0], "height": 0.0}
+    arm = page_data(fd.view(str(SCENE), tmp_path / "arm.html", steps=1))
+    assert arm["ground"] is None
+
+
+@needs_bundle
 def test_page_of_a_csv_needs_the_csv_columns(tmp_path):
     good = tmp_path / "run.csv"
     good.write_text("step,t," + ",".join(f"q:joint{k}" for k in range(1, 8)) + "\n"

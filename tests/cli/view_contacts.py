@@ -5,8 +5,13 @@ contact arrow per shin (the legs touch the ground with their shins only), each t
 columns of `featherdrive simulate` for that link and starting at or above the ground; at the last
 frame the page shows 4 arrows (featherdrive.contactArrows), at frame 0 none (no step has run), and
 none once the "contact forces" box is unchecked; a page of the same run read back from the CSV
-(--csv) shows the same 4 arrows; the arrows are drawn (the view changes near the feet). Skipped
-(exit 77) where Chromium is not installed.
+(--csv) shows the same 4 arrows; the arrows are drawn (the view changes near the feet). Then the
+Ant walking (examples/ant_walk.yaml, an MJCF robot without visuals, 20 steps): the page draws one
+shape per geom of the Ant's bodies in examples/ant.xml (counted here from the file: a sphere and
+12 capsules) and no inertia box, and draws the ground (featherdrive.ground; its plane covers the
+bottom of the view, which is white without it). Last, one link with a shape of every type
+(tests/data/every_shape.xml, a convex hull among them) over a tilted ground: one of each drawn,
+the page's ground plane the scene's. Skipped (exit 77) where Chromium is not installed.
 
 usage: view_contacts.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
 """
@@ -16,6 +21,7 @@ import os
 import re
 import subprocess
 import sys
+import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
@@ -123,6 +129,72 @@ def main():
         print(f"from the CSV: {from_csv} arrows at frame {STEPS}")
         if from_csv != 4:
             fail(f"the page of the CSV shows {from_csv} arrows")
+        no_network_nor_error(browser)
+    finally:
+        browser.close()
+    ant_page(cli, source, out_dir)
+    every_shape_page(cli, source, out_dir)
+
+
+def body_geoms(mjcf):
+    """The count of each shape type among the geoms of an MJCF file's bodies (the world's own,
+    such as a floor, are not a link's; a mesh is drawn as its convex hull)."""
+    root = ElementTree.parse(mjcf).getroot()
+    counts = {}
+    for geom in (g for body in root.iter("body") for g in body.findall("geom")):
+        kind = geom.get("type", "sphere").replace("mesh", "convex")
+        counts[kind] = counts.get(kind, 0) + 1
+    return counts
+
+
+def every_shape_page(cli, source, out_dir):
+    """One shape of each type (tests/data/every_shape.xml) drawn over a tilted ground."""
+    page = os.path.join(out_dir, "view_every_shape.html")
+    run([cli, "view", os.path.join(source, "tests", "data", "every_shape.yaml"), "--out", page])
+    expected = body_geoms(os.path.join(source, "tests", "data", "every_shape.xml"))
+    normal = np.array([0.1, 0, 1]) / np.linalg.norm([0.1, 0, 1])  # every_shape.yaml's ground
+    ground = page_data(page)["ground"]
+    if np.abs(np.array(ground["normal"]) - normal).max() > 1e-12 or ground["height"] != -0.1:
+        fail(f"the page's ground {ground}, every_shape.yaml's normal {normal.tolist()}, -0.1")
+    browser = Browser(1000, 900)
+    try:
+        browser.open(page)
+        drawn = browser.evaluate("[featherdrive.shapeTypes, featherdrive.boxCount, "
+                                 "featherdrive.ground]")
+        print(f"every shape type: {drawn[0]} (every_shape.xml: {expected}), {drawn[1]} boxes, "
+              f"ground {drawn[2]}")
+        if len(expected) != 6 or drawn != [expected, 0, True]:
+            fail(f"the page draws {drawn}, every_shape.xml has {expected}")
+        no_network_nor_error(browser)
+    finally:
+        browser.close()
+
+
+def ant_page(cli, source, out_dir):
+    """The Ant's shapes and the ground in the page of examples/ant_walk.yaml."""
+    page = os.path.join(out_dir, "view_ant.html")
+    run([cli, "view", os.path.join(source, "examples", "ant_walk.yaml"), "--steps", "20",
+         "--out", page])
+    expected = body_geoms(os.path.join(source, "examples", "ant.xml"))
+    browser = Browser(1000, 1200)
+    try:
+        browser.open(page)
+        browser.evaluate("featherdrive.setFrame(20)")
+        drawn = browser.evaluate("[featherdrive.shapeCount, featherdrive.shapeTypes, "
+                                 "featherdrive.boxCount, featherdrive.ground]")
+        left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
+        bottom = browser.screenshot()[top + 3 * height // 4:top + height, left:left + width]
+        white = np.all(bottom >= 250, axis=2).mean()
+        print(f"the Ant: {drawn[0]} shapes {drawn[1]} (ant.xml: {expected}), {drawn[2]} "
+              f"boxes, ground {drawn[3]}; {white:.1%} of the view's bottom quarter white")
+        if expected != {"sphere": 1, "capsule": 12}:  # the parse above found the Ant's geoms
+            fail(f"ant.xml's bodies have the geoms {expected}")
+        if drawn[:3] != [sum(expected.values()), expected, 0]:
+            fail(f"the page draws {drawn[:3]}, ant.xml has {expected} (and no box)")
+        if drawn[3] is not True:
+            fail("the page draws no ground")
+        if browser.evaluate("featherdrive.webgl") and white > 0.2:
+            fail(f"{white:.1%} of the view's bottom quarter is white: the ground is not drawn")
         no_network_nor_error(browser)
     finally:
         browser.close()

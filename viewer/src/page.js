@@ -5,14 +5,15 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { STLLoader } from 'three/examples/jsm/loaders/STLLoader.js';
 import { ColladaLoader } from 'three/examples/jsm/loaders/ColladaLoader.js';
+import { ConvexGeometry } from 'three/examples/jsm/geometries/ConvexGeometry.js';
 import URDFLoader from 'urdf-loader';
 
 const data = JSON.parse(document.getElementById('fd-data').textContent);
 const frames = data.times.length;
 const linkCount = data.links.length;
 // What tests and users may read (docs/viewer.md, "Page state").
-const state = { ready: false, frame: 0, time: 0, meshCount: 0, boxCount: 0, playing: false,
-                contactArrows: 0 };
+const state = { ready: false, frame: 0, time: 0, meshCount: 0, boxCount: 0, shapeCount: 0,
+                shapeTypes: {}, ground: false, playing: false, contactArrows: 0 };
 window.featherdrive = state;
 
 // ---- layout -----------------------------------------------------------------------------------
@@ -136,18 +137,66 @@ for (const name of data.links) {
   }
 }
 
-// A link with no visual (nor any link merged into it) is drawn as its equivalent-inertia box.
+// A link with no visual (nor any link merged into it) is drawn as its collision shapes, or as its
+// equivalent-inertia box where it has none.
 const boxMaterial = new THREE.MeshPhongMaterial({ color: 0x8899aa });
-for (const [name, box] of Object.entries(data.boxes)) {
+const shapeMaterial = new THREE.MeshPhongMaterial({ color: 0xb08a5a });
+
+function basis(a) {  // axes in the link frame, one after the other, as a rotation
+  return new THREE.Quaternion().setFromRotationMatrix(new THREE.Matrix4().makeBasis(
+    new THREE.Vector3(a[0], a[1], a[2]), new THREE.Vector3(a[3], a[4], a[5]),
+    new THREE.Vector3(a[6], a[7], a[8])));
+}
+
+// A shape's geometry in its own frame (docs/viewer.md): three.js builds capsules and cylinders
+// along y, featherdrive's lie along z.
+function shapeGeometry(shape) {
+  const s = shape.size;
+  switch (shape.type) {
+    case 'sphere': return new THREE.SphereGeometry(s[0], 24, 16);
+    case 'capsule': return new THREE.CapsuleGeometry(s[0], 2 * s[1], 8, 24).rotateX(Math.PI / 2);
+    case 'cylinder':
+      return new THREE.CylinderGeometry(s[0], s[0], 2 * s[1], 24).rotateX(Math.PI / 2);
+    case 'box': return new THREE.BoxGeometry(2 * s[0], 2 * s[1], 2 * s[2]);
+    case 'ellipsoid': return new THREE.SphereGeometry(1, 24, 16).scale(s[0], s[1], s[2]);
+    case 'convex': {
+      const v = shape.vertices;
+      const points = [];
+      for (let k = 0; k + 2 < v.length; k += 3) {
+        points.push(new THREE.Vector3(v[k], v[k + 1], v[k + 2]));
+      }
+      return new ConvexGeometry(points);
+    }
+    default: return null;
+  }
+}
+
+function hasVisualOrMerged(name) {
   const merged = Object.keys(data.merged_into).filter((m) => data.merged_into[m] === name);
-  if (hasVisual[name] || merged.some((m) => hasVisual[m])) continue;
+  return hasVisual[name] || merged.some((m) => hasVisual[m]);
+}
+
+for (const name of data.links) {
+  if (hasVisualOrMerged(name)) continue;
+  if (data.shapes[name]) {
+    for (const shape of data.shapes[name]) {
+      const geometry = shapeGeometry(shape);
+      if (!geometry) continue;
+      const mesh = new THREE.Mesh(geometry, shapeMaterial);
+      mesh.position.fromArray(shape.position);
+      mesh.quaternion.copy(basis(shape.axes));
+      linkObjects[name].add(mesh);
+      state.shapeCount += 1;
+      state.shapeTypes[shape.type] = (state.shapeTypes[shape.type] || 0) + 1;
+    }
+    continue;
+  }
+  const box = data.boxes[name];
+  if (!box) continue;
   const mesh = new THREE.Mesh(new THREE.BoxGeometry(box.size[0], box.size[1], box.size[2]),
                               boxMaterial);
   mesh.position.fromArray(box.center);
-  const a = box.axes;  // the box's axes in the link frame, one after the other
-  mesh.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(
-    new THREE.Vector3(a[0], a[1], a[2]), new THREE.Vector3(a[3], a[4], a[5]),
-    new THREE.Vector3(a[6], a[7], a[8])));
+  mesh.quaternion.copy(basis(box.axes));  // the box's sides along the principal axes
   linkObjects[name].add(mesh);
   state.boxCount += 1;
 }
@@ -177,10 +226,31 @@ camera.near = size / 500;
 camera.far = size * 50;
 orbit.target.copy(center);
 orbit.update();
-const grid = new THREE.GridHelper(size * 1.5, 15, 0xbbbbbb, 0xdddddd);
-grid.rotation.x = Math.PI / 2;
-grid.position.set(center.x, center.y, bounds.min.z);
-scene.add(grid);
+// The run's ground, n . x = height: a plane with a grid, centred under the robot (the point of the
+// plane nearest the run's centre) and much larger than it; else a grid under the robot.
+if (data.ground) {
+  const n = new THREE.Vector3(...data.ground.normal).normalize();
+  const at = center.clone().addScaledVector(n, data.ground.height - n.dot(center));
+  const extent = Math.max(size * 6, 10);
+  // The plane's depth is pushed back (polygon offset) so that the grid on it always shows.
+  const plane = new THREE.Mesh(new THREE.PlaneGeometry(extent, extent),
+                               new THREE.MeshPhongMaterial({
+                                 color: 0xd8e4d0, side: THREE.DoubleSide, polygonOffset: true,
+                                 polygonOffsetFactor: 1, polygonOffsetUnits: 1 }));
+  // PlaneGeometry faces +z, GridHelper lies in the x-z plane (normal +y).
+  plane.quaternion.setFromUnitVectors(new THREE.Vector3(0, 0, 1), n);
+  plane.position.copy(at);
+  const groundGrid = new THREE.GridHelper(extent, 40, 0x99aa99, 0xb8c4b0);
+  groundGrid.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), n);
+  groundGrid.position.copy(at);
+  scene.add(plane, groundGrid);
+  state.ground = true;
+} else {
+  const grid = new THREE.GridHelper(size * 1.5, 15, 0xbbbbbb, 0xdddddd);
+  grid.rotation.x = Math.PI / 2;
+  grid.position.set(center.x, center.y, bounds.min.z);
+  scene.add(grid);
+}
 
 // Joint markers coloured by |force| / max_force (green 0 to red 1), frames and axes on demand.
 // The three axes of a spherical joint share their link's marker, coloured by the largest ratio.
