@@ -137,7 +137,7 @@ def test_contact_arrows_of_a_simulation(tmp_path):
 
 
 @needs_bundle
-def test_mjcf_robots_are_drawn_from_their_inertia(tmp_path):
+def test_mjcf_robots_carry_their_inertia_boxes(tmp_path):
     scene = ROOT / "examples" / "humanoid_hold.yaml"
     model = fd.load_scene(str(scene)).model
     data = page_data(fd.view(str(scene), tmp_path / "h.html", steps=1))
