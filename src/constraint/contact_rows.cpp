@@ -5,14 +5,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "featherdrive/constraint/contact_laws.hpp"
+
 namespace featherdrive {
+using namespace contact_laws;  // constants, row_mass, fallback_tangent, spatial_force
 namespace {
 
 // PhysX 5.6.1's constants (docs/math/contact.md, section 8).
-constexpr double kPgsBias = 0.8;                  // C3
-constexpr double kFrictionMassScale = 0.8;        // C11
 constexpr double kFrictionOffsetThreshold = 0.04;  // m: anchors lie closer (section 4)
-constexpr double kMinNormalShare = 0.25;          // C12
 constexpr double kCorrelationDistance = 0.025;    // m: a kept anchor's drift along n (C9)
 constexpr double kSameNormal = 0.999;              // PXC_SAME_NORMAL: cos of about 2.6 degrees
 
@@ -106,23 +106,6 @@ void reduce_points(Vec3* points, double* separations, char* taken, int count, co
   }
 }
 
-// scale / u, or 0 for a direction the link cannot move in (u = 0 without a cfm: a slider's
-// sideways friction rows), which then applies nothing (C22).
-double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
-
-// A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
-Vec3 fallback_tangent(const Vec3& n) {
-  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  return (a - n * n.dot(a)).normalized();
-}
-
-// A unit impulse along u at the point r (relative to frame 0's origin) as a spatial force.
-Vec6 spatial_force(const Vec3& r, const Vec3& u) {
-  Vec6 f;
-  f.head<3>() = r.cross(u);
-  f.tail<3>() = u;
-  return f;
-}
 
 }  // namespace
 

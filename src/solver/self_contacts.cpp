@@ -3,20 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "featherdrive/constraint/contact_laws.hpp"
+
 namespace featherdrive {
+using namespace contact_laws;  // constants, row_mass, fallback_tangent, spatial_force
 namespace {
 
-constexpr double kFrictionMassScale = 0.8;  // C11
-constexpr double kMinNormalShare = 0.25;    // C12
-constexpr double kTgsFrictionBias = 0.8;    // C14
-
-// A unit impulse along u at the point r (relative to frame 0's origin) as a spatial force.
-Vec6 spatial_force(const Vec3& r, const Vec3& u) {
-  Vec6 f;
-  f.head<3>() = r.cross(u);
-  f.tail<3>() = u;
-  return f;
-}
+constexpr double kTgsFrictionBias = 0.8;  // C14
 
 // PhysX's default cfm of a link (C19, cfmScale 0.025): 0.025 times the largest linear response of
 // an impulse at its centre of mass.
@@ -33,11 +26,6 @@ double default_cfm(const Model& model, const Data& data, int link) {
   return kCfmScale * largest;
 }
 
-Vec3 perpendicular(const Vec3& n) {
-  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  return (a - n * n.dot(a)).normalized();
-}
-
 }  // namespace
 
 SelfContacts::SelfContacts(const Model& model) : pairs_(self_collision_pairs(model)) {
@@ -46,7 +34,6 @@ SelfContacts::SelfContacts(const Model& model) : pairs_(self_collision_pairs(mod
   const auto c = static_cast<size_t>(capacity_);
   found_.resize(pairs_.size());
   order_.resize(pairs_.size());
-  pair_of_.resize(c);
   laws_.resize(c);
   static_limit_.resize(c);
   dynamic_limit_.resize(c);
@@ -97,7 +84,6 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
   const double share = tgs_penetration_share(position_iterations);
   for (int c = 0; c < num_contacts_; ++c) {
     const int p = order_[static_cast<size_t>(c)];
-    pair_of_[static_cast<size_t>(c)] = p;
     const PairContact& contact = found_[static_cast<size_t>(p)];
     const CollisionShape& a = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].a)];
     const CollisionShape& b = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].b)];
@@ -109,7 +95,7 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     const Vec3 v = dV.tail<3>() + dV.head<3>().cross(r);
     const Vec3 v_t = v - n * n.dot(v);
     Vec3& t0 = t0_[static_cast<size_t>(c)];
-    t0 = v_t.squaredNorm() > 1e-4 ? Vec3(v_t.normalized()) : perpendicular(n);
+    t0 = v_t.squaredNorm() > 1e-4 ? Vec3(v_t.normalized()) : fallback_tangent(n);
     t1_[static_cast<size_t>(c)] = n.cross(t0);
     const Vec3* directions[3] = {&n, &t0, &t1_[static_cast<size_t>(c)]};
     for (int k = 0; k < 3; ++k) {
@@ -156,14 +142,14 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     for (size_t j = 0; j < R; ++j) W_[j * R + i] = row_velocity(rows_[j], link_velocity_);
   }
   for (int c = 0; c < num_contacts_; ++c) {
+    const int a = rows_[static_cast<size_t>(3 * c)].link_a, b = rows_[static_cast<size_t>(3 * c)].link_b;
+    // C32: at least PhysX's default cfm, whatever the compat mode.
+    const double cfm = std::max({link_cfm[a], link_cfm[b], default_cfm(model, data, a),
+                                 default_cfm(model, data, b)});
     for (int k = 0; k < 3; ++k) {
       Row& row = rows_[static_cast<size_t>(3 * c + k)];
-      // C32: at least PhysX's default cfm, whatever the compat mode.
-      const double cfm = std::max({link_cfm[row.link_a], link_cfm[row.link_b],
-                                   default_cfm(model, data, row.link_a),
-                                   default_cfm(model, data, row.link_b)});
       const double u = W_[static_cast<size_t>(3 * c + k) * (R + 1)] + cfm;
-      row.mass = u > 0.0 ? (k == 0 ? 1.0 : kFrictionMassScale) / u : 0.0;  // C20, C22
+      row.mass = row_mass(k == 0 ? 1.0 : kFrictionMassScale, u);  // C20, C22
     }
     ContactNormalRow& law = laws_[static_cast<size_t>(c)];
     law.mass = rows_[static_cast<size_t>(3 * c)].mass;

@@ -57,8 +57,7 @@ class SelfContacts {
   std::vector<ShapePair> pairs_;
   int capacity_ = 0;
   std::vector<PairContact> found_;     ///< per pair: this step's contact
-  std::vector<int> order_;             ///< pairs in contact, deepest first
-  std::vector<int> pair_of_;           ///< per contact: its pair
+  std::vector<int> order_;             ///< pairs in contact; the first num_contacts_ are the step's
   std::vector<ContactNormalRow> laws_; ///< per contact: the normal row's law (C2-C8)
   std::vector<double> static_limit_, dynamic_limit_, min_normal_;  ///< per contact
   std::vector<Vec3> t0_, t1_;          ///< per contact

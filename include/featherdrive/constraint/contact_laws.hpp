@@ -1,0 +1,33 @@
+// What the ground's contact rows and the self-collision rows share (docs/math/contact.md): PhysX
+// 5.6.1's constants and the small laws both row kinds set up with.
+#pragma once
+
+#include <cmath>
+
+#include "featherdrive/spatial/spatial.hpp"
+
+namespace featherdrive::contact_laws {
+
+inline constexpr double kPgsBias = 0.8;            // C3
+inline constexpr double kFrictionMassScale = 0.8;  // C11
+inline constexpr double kMinNormalShare = 0.25;    // C12
+
+/// scale / u, or 0 for a direction the link cannot move in (u = 0 without a cfm: a slider's
+/// sideways friction rows), which then applies nothing (C22).
+inline double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
+
+/// A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
+inline Vec3 fallback_tangent(const Vec3& n) {
+  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  return (a - n * n.dot(a)).normalized();
+}
+
+/// A unit impulse along u at the point r (relative to frame 0's origin) as a spatial force (C21).
+inline Vec6 spatial_force(const Vec3& r, const Vec3& u) {
+  Vec6 f;
+  f.head<3>() = r.cross(u);
+  f.tail<3>() = u;
+  return f;
+}
+
+}  // namespace featherdrive::contact_laws
