@@ -138,7 +138,7 @@ def _run_scene(fd, scene, steps, notes):
     sim = fd.make_simulation(scene)
     nv = scene.model.nv
     q, f, t = [np.array(sim.q)], [np.zeros(nv)], [float(sim.time)]
-    contacts = [[]] if sim.ground().enabled else None
+    contacts = [[]] if sim.ground().enabled or sim.contact_options().self_collision else None
     for k in range(steps):
         fd.apply_targets(scene, sim, k)
         try:
@@ -232,7 +232,7 @@ def _run_simulation(fd, sim, steps):
     model = s.model
     driven = [d for d in range(model.nv) if s.drive(d).type != fd.DriveType.none]
     q, f, t = [np.array(s.q)], [np.zeros(model.nv)], [float(s.time)]
-    contacts = [[]] if s.ground().enabled else None
+    contacts = [[]] if s.ground().enabled or s.contact_options().self_collision else None
     for _ in range(steps):
         s.step()
         q.append(np.array(s.q))

@@ -224,10 +224,15 @@ int compare_mujoco(const CompareMujocoArgs& args) {
               args.scene.c_str(), scene.robot.name.c_str(), count_of(model.nv, "dof").c_str(),
               o.dt, count_of(scene.steps, "step").c_str(), scene.steps * o.dt,
               to_string(o.solver), o.position_iterations, o.velocity_iterations);
-  const bool contacts = start.ground().enabled && !model.shapes.empty();
+  const bool ground = start.ground().enabled && !model.shapes.empty();
+  const bool self = start.contact_options().self_collision && model.shapes.size() > 1;
   std::printf("  featherdrive against MuJoCo %s (exported MJCF, %s, integrator %s)\n",
               mujoco_version().c_str(),
-              contacts ? "contacts with the ground on" : "contacts off", to_string(integrator));
+              ground && self ? "contacts with the ground and between shapes on"
+              : ground       ? "contacts with the ground on"
+              : self         ? "contacts between shapes on"
+                             : "contacts off",
+              to_string(integrator));
   if (!friction_off.empty())
     std::printf("  joint friction off on both sides (MuJoCo's frictionloss is another law):%s\n",
                 friction_off.c_str());

@@ -238,7 +238,7 @@ int simulate(const SimulateArgs& args) {
   std::optional<TargetWriter> targets;
   if (csv_stream)
     csv.emplace(*csv_stream, scene.robot, target_dofs(scene), options.guard.enabled,
-                sim.ground().enabled, scene.feet);
+                sim.ground().enabled || sim.contact_options().self_collision, scene.feet);
   if (targets_file) targets.emplace(*targets_file, scene);
   // Every temporary is closed and written, or the run fails here.
   auto finish_temporaries = [&] {
@@ -322,7 +322,7 @@ int simulate(const SimulateArgs& args) {
   if (!model.shapes.empty())
     std::printf("  collision shapes (%zu):\n%s", model.shapes.size(),
                 describe_shapes(model, "    ").c_str());
-  if (sim.ground().enabled && !scene.feet.empty()) {
+  if ((sim.ground().enabled || sim.contact_options().self_collision) && !scene.feet.empty()) {
     // The last step's ground force on each foot (the CSV's foot:<name> columns), and their sum
     // against the robot's weight, which a robot at rest on its feet carries.
     std::printf("  feet: the last step's ground force, world axes, N\n");

@@ -134,16 +134,24 @@ std::string geom_text(const UrdfGeometry& g, const std::string& mesh, const Vec3
   return text + "/>\n";
 }
 
-// A collision shape as a <geom> that touches only the ground (contype 1, the plane's conaffinity
-// 1): featherdrive has no self-collision. Frictionless pairs are condim 1 (MuJoCo's pyramid of a
-// zero friction is degenerate). MuJoCo combines two geoms' friction by their maximum and
-// the plane has none, so the pair's friction is the shape's: the average of the two static
-// frictions (PhysX's combine, docs/math/contact.md section 1). offset as for geom_text.
+// The shapes exported as geoms: beside the ground (the plane, or none), and touching each other
+// with self-collision.
+struct ShapeExport {
+  const Ground* ground = nullptr;
+  bool self = false;
+};
+
+// A collision shape as a <geom>: contype 1 touches the plane (conaffinity 1); conaffinity 1 as well
+// with self-collision, where MuJoCo then filters parent and child bodies as featherdrive does.
+// Frictionless pairs are condim 1 (MuJoCo's pyramid of a zero friction is degenerate). MuJoCo
+// combines two geoms' friction by their maximum and the plane has none, so the pair's friction
+// is the shape's: the average of the two static frictions (PhysX's combine, docs/math/contact.md
+// section 1), or the shape's own without a ground. offset as for geom_text.
 std::string shape_name(const CollisionShape& s, size_t index) {
   return "shape:" + std::to_string(index) + (s.name.empty() ? "" : ":" + s.name);
 }
 
-std::string shape_geom_text(const CollisionShape& s, size_t index, const Ground& ground,
+std::string shape_geom_text(const CollisionShape& s, size_t index, const ShapeExport& e,
                             const Vec3& offset, const std::string& indent) {
   const Vec3 p = offset + s.position;
   const Quat q(s.rotation);
@@ -168,9 +176,12 @@ std::string shape_geom_text(const CollisionShape& s, size_t index, const Ground&
       text += "mesh\" mesh=\"" + attr(shape_name(s, index));
       break;
   }
-  const double mu = 0.5 * (s.material.static_friction + ground.material.static_friction);
+  const double mu = e.ground ? 0.5 * (s.material.static_friction +
+                                      e.ground->material.static_friction)
+                             : s.material.static_friction;
   return text + "\" pos=\"" + nums({p.x(), p.y(), p.z()}) + "\" quat=\"" +
-         nums({q.w(), q.x(), q.y(), q.z()}) + "\" contype=\"1\" conaffinity=\"0\" condim=\"" +
+         nums({q.w(), q.x(), q.y(), q.z()}) + "\" contype=\"1\" conaffinity=\"" +
+         (e.self ? "1" : "0") + "\" condim=\"" +
          (mu > 0.0 ? "3" : "1") + "\" friction=\"" + nums({mu, 0.0, 0.0}) + "\" group=\"2\"/>\n";
 }
 
@@ -192,7 +203,7 @@ bool joins_child(const Model& model, int i) {
 // with the axis in body coordinates: the chain's frames differ by translations only).
 Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& shift, int depth,
                const JointExtras* extras, const GeomTable* geoms,
-               const std::vector<UrdfGeometry>* geometry, const Ground* ground,
+               const std::vector<UrdfGeometry>* geometry, const ShapeExport* shapes,
                std::ostringstream& xml) {
   const Link& first = model.links[static_cast<size_t>(chain.front())];
   const std::string indent(2 * static_cast<size_t>(depth), ' ');
@@ -246,10 +257,10 @@ Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& sh
     for (const UrdfGeometry* g : geoms->of_link[static_cast<size_t>(chain[k])])
       xml << geom_text(*g, geoms->mesh_of[static_cast<size_t>(g - geometry->data())], anchors[k],
                        indent + "  ");
-  for (size_t k = 0; ground && k < chain.size(); ++k)
+  for (size_t k = 0; shapes && k < chain.size(); ++k)
     for (const CollisionShape& s : model.shapes)
       if (s.link == chain[k])
-        xml << shape_geom_text(s, static_cast<size_t>(&s - model.shapes.data()), *ground,
+        xml << shape_geom_text(s, static_cast<size_t>(&s - model.shapes.data()), *shapes,
                                anchors[k], indent + "  ");
   return offset;
 }
@@ -259,7 +270,7 @@ Vec3 open_body(const Model& model, const std::vector<int>& chain, const Vec3& sh
 // qvel order is ours.
 void write_bodies(const Model& model, int depth, const JointExtras* extras,
                   const GeomTable* geoms, const std::vector<UrdfGeometry>* geometry,
-                  const Ground* ground, std::ostringstream& xml) {
+                  const ShapeExport* shapes, std::ostringstream& xml) {
   struct Item {
     int link, depth;
     bool close;
@@ -277,7 +288,7 @@ void write_bodies(const Model& model, int depth, const JointExtras* extras,
     chain.assign(1, item.link);
     while (joins_child(model, chain.back()))
       chain.push_back(model.links[static_cast<size_t>(chain.back())].children[0]);
-    const Vec3 shift = open_body(model, chain, item.shift, item.depth, extras, geoms, geometry, ground, xml);
+    const Vec3 shift = open_body(model, chain, item.shift, item.depth, extras, geoms, geometry, shapes, xml);
     stack.push_back({item.link, item.depth, true, Vec3::Zero()});
     const std::vector<int>& children = model.links[static_cast<size_t>(chain.back())].children;
     for (auto c = children.rbegin(); c != children.rend(); ++c)
@@ -288,7 +299,7 @@ void write_bodies(const Model& model, int depth, const JointExtras* extras,
 std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator integrator,
                       const JointExtras* extras, const std::string& actuators,
                       const MjcfExportOptions& options = {}, const std::string& equality = "",
-                      const Ground* ground = nullptr) {
+                      const ShapeExport* shapes = nullptr) {
   std::ostringstream xml;
   const Vec3& g = model.gravity;
   const GeomTable geoms = geom_table(model, options.geometry);
@@ -298,10 +309,10 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
       << "  <option timestep=\"" << format_double(timestep) << "\" gravity=\""
       << nums({g.x(), g.y(), g.z()}) << "\" integrator=\""
       << (integrator == MujocoIntegrator::euler ? "Euler" : "implicit") << "\">\n";
-  if (!ground) xml << "    <flag contact=\"disable\"/>\n";
+  if (!shapes) xml << "    <flag contact=\"disable\"/>\n";
   xml << "  </option>\n";
   std::string assets = geoms.assets;
-  for (size_t k = 0; ground && k < model.shapes.size(); ++k) {
+  for (size_t k = 0; shapes && k < model.shapes.size(); ++k) {
     const CollisionShape& s = model.shapes[k];
     if (s.type != ShapeType::convex) continue;
     std::string vertices;  // MuJoCo takes the hull of these
@@ -311,7 +322,7 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
   }
   if (!assets.empty()) xml << "  <asset>\n" << assets << "  </asset>\n";
   xml << "  <worldbody>\n";
-  if (ground) {
+  if (const Ground* ground = shapes ? shapes->ground : nullptr) {
     // The plane n . x = height; a zero size is MuJoCo's infinite plane.
     const Vec3 p = (ground->height * ground->normal).array() + 0.0;  // no -0 in the file
     const Vec3& n = ground->normal;
@@ -319,7 +330,7 @@ std::string mjcf_text(const Model& model, double timestep, MujocoIntegrator inte
         << nums({p.x(), p.y(), p.z()}) << "\" zaxis=\"" << nums({n.x(), n.y(), n.z()})
         << "\" contype=\"0\" conaffinity=\"1\" condim=\"1\" friction=\"0 0 0\"/>\n";
   }
-  write_bodies(model, 2, extras, &geoms, &options.geometry, ground, xml);
+  write_bodies(model, 2, extras, &geoms, &options.geometry, shapes, xml);
   xml << "  </worldbody>\n";
   if (!equality.empty()) xml << "  <equality>\n" << equality << "  </equality>\n";
   if (!actuators.empty()) xml << "  <actuator>\n" << actuators << "  </actuator>\n";
@@ -469,15 +480,22 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   // Every translated drive of a TGS scene has the same sub-steps (the position iterations).
   out.timestep = o.dt / out.substeps;
   const std::string equality = mimic_equalities(model, sim.mimic_joints(), out.timestep, out.notes);
-  // The ground and the shapes go together: either alone touches nothing.
-  const Ground* ground = sim.ground().enabled && !model.shapes.empty() ? &sim.ground() : nullptr;
+  // The shapes go with the ground or with self-collision: alone they touch nothing.
+  ShapeExport shapes;
+  shapes.ground = sim.ground().enabled ? &sim.ground() : nullptr;
+  shapes.self = sim.contact_options().self_collision && model.shapes.size() > 1;
+  const bool contacts = !model.shapes.empty() && (shapes.ground || shapes.self);
   out.xml = mjcf_text(model, out.timestep, options.integrator, &extras, actuators.str(), options,
-                      equality, ground);
-  if (ground)
+                      equality, contacts ? &shapes : nullptr);
+  if (contacts && shapes.ground)
     out.notes.push_back(
         "ground contacts as MuJoCo's soft contacts (solref and solimp at MuJoCo's defaults, "
         "friction the pair's static friction, no restitution): MuJoCo lets the shapes sink "
         "into the ground and creep where PhysX's rows hold them");
+  if (contacts && shapes.self)
+    out.notes.push_back(
+        "self-collision as MuJoCo's: its filter of parent and child bodies, a manifold per pair, "
+        "soft contacts, the larger of two shapes' frictions where featherdrive averages them");
   if (!friction.empty())
     out.notes.push_back("joint friction not exported (MuJoCo's frictionloss is another law):" +
                         friction);

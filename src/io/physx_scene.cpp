@@ -199,6 +199,10 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   if (!sim.mimic_joints().empty())
     throw std::invalid_argument("physx export: " + describe(model, sim.mimic_joints()[0]) +
                                 ": the WebAssembly PhysX has no mimic joints");
+  if (sim.contact_options().self_collision)
+    throw std::invalid_argument(
+        "physx export: contact.self_collision: the harness builds no self-collision (remove it "
+        "to compare)");
   Data data(model);
   forward_kinematics(model, data, sim.q(), sim.qd());
 

@@ -328,13 +328,20 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
     sims_[static_cast<size_t>(i)].reset_drive_delay_history();
     sims_[static_cast<size_t>(i)].set_guard_account({});  // a new episode, a new account
     // Contacts start over too: no friction anchors kept from the episode before, no contact
-    // outputs. A ground switched off forgets both; switched on again it is as it was.
-    if (Simulation& s = sims_[static_cast<size_t>(i)]; s.ground().enabled) {
+    // outputs. A ground and self-collision switched off forget both; switched on again they are
+    // as they were.
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    if (s.ground().enabled || s.contact_options().self_collision) {
       const Ground ground = s.ground();
-      Ground off = ground;
-      off.enabled = false;
-      s.set_ground(off);
+      const ContactOptions options = s.contact_options();
+      Ground no_ground = ground;
+      no_ground.enabled = false;
+      ContactOptions no_self = options;
+      no_self.self_collision = false;
+      s.set_ground(no_ground);
+      s.set_contact_options(no_self);
       s.set_ground(ground);
+      s.set_contact_options(options);
     }
   }
 }

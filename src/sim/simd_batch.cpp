@@ -174,6 +174,8 @@ void check_supported(const Simulation& s) {
   // Nor contact rows: the robot would pass through the ground.
   if (s.ground().enabled && !m.shapes.empty())
     unsupported("simulation", "settings", "a ground with the model's collision shapes");
+  if (s.contact_options().self_collision && m.shapes.size() > 1)
+    unsupported("simulation", "settings", "self-collision between the model's shapes");
   // The lane step has no mimic rows: a prototype with one would run uncoupled.
   for (const MimicJoint& mimic : s.mimic_joints())
     unsupported("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,

@@ -11,6 +11,7 @@ import sys
 failures = []
 
 
+
 def run(*args):
     return subprocess.run(list(args), capture_output=True, text=True, timeout=120)
 
@@ -76,6 +77,21 @@ def contact(cli, source, out_dir):
         check(header[-6:] == wanted, f"the CSV ends with {wanted}, not {header[-6:]}")
         check(len(rows) == 5 and all(len(row) == len(header) for row in rows), "5 whole rows")
         check(rows[1][-6:] == ["0"] * 6, "the initial row's contact forces are 0")
+    # Self-collision without a ground: the CSV has the contact columns and simulate says so.
+    stack = os.path.join(source, "tests", "data", "stack.urdf")  # a ball above its base's sphere
+    selfish = os.path.join(out_dir, "self_collision.yaml")
+    with open(selfish, "w") as f:
+        f.write(f"model: {stack}\ndt: 0.01\nsteps: 300\nsolver: {{position_iterations: 50}}\n"
+                "initial: {q: {drop: 0.16}}\ncontact: {self_collision: true}\n")
+    self_csv = os.path.join(out_dir, "self_collision.csv")
+    r = run(cli, "simulate", selfish, "--out", self_csv)
+    check(r.returncode == 0 and "  self-collision: on" in r.stdout, "simulate with self-collision", r)
+    if os.path.exists(self_csv):
+        with open(self_csv) as f:
+            rows = list(csv.reader(f))
+        fz = rows[0].index("contact:ball:fz")
+        # The ball (2 kg) rests on the base's sphere: the base holds it up with m g.
+        check(abs(float(rows[-1][fz]) - 2 * 9.81) < 1e-6, f"the ball's contact force {rows[-1][fz]}")
     # The checkpoint keeps the ground: resuming in a scene without one gives the file's.
     plain = scene_file("contact_plain.yaml", "steps: 1\n" + shapes)
     r = run(cli, "simulate", plain, "--load-state", state)

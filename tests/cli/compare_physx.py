@@ -168,6 +168,14 @@ def messages(cli, source, out_dir):
                    [f"{egg}: physx export: shape 'egg' (ellipsoid) of link 'link3': the PhysX "
                     "harness builds spheres, capsules and boxes only (leave the ground off"],
                    "an ellipsoid")
+    # Self-collision: the harness builds none, so the comparison is refused.
+    selfish = os.path.join(out_dir, "self_collision.yaml")
+    with open(selfish, "w") as f:
+        f.write(f"model: {os.path.join(source, 'examples', 'chain3.urdf')}\nsteps: 3\n"
+                "contact: {self_collision: true}\n")
+    one_line_error(run(cli, "compare-physx", selfish, env=environment(PATH=empty)), 2,
+                   [f"{selfish}: physx export: contact.self_collision: the harness builds no "
+                    "self-collision"], "self-collision")
 
 
 def main():

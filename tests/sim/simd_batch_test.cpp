@@ -281,6 +281,16 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   ground.enabled = false;
   grounded.set_ground(ground);
   EXPECT_NO_THROW(SimdBatch(grounded, 2));  // shapes alone do nothing
+  // Nor self-collision rows: two shapes on links that are not parent and child.
+  Model paired = shaped;
+  CollisionShape base_ball = ball;
+  base_ball.link = 0;
+  paired.shapes.insert(paired.shapes.begin(), base_ball);
+  Simulation self(std::make_shared<const Model>(paired), s.options());
+  ContactOptions contact;
+  contact.self_collision = true;
+  self.set_contact_options(contact);
+  expect_refused(self, "simulation 'settings' has self-collision between the model's shapes");
   // An actuator of either integration (the lane step has no actuator rows).
   for (ActuatorIntegration integration :
        {ActuatorIntegration::explicit_law, ActuatorIntegration::implicit_law}) {
