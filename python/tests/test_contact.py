@@ -30,8 +30,8 @@ def test_urdf_collisions_are_shapes_on_their_links():
     np.testing.assert_allclose(shapes[3].position, [0.18, 0.01, 0.13], atol=1e-15)
     assert shapes[0].material.static_friction == 0.5
     assert robot.model.unsupported_shapes == [
-        "link 'arm': mesh collision 'package://collisions/arm.dae' "
-        "(MuJoCo 2.2.2 reads STL, OBJ, MSH)"]
+        "link 'arm': mesh collision 'package://collisions/arm.ply' "
+        "(meshes are read from STL, OBJ, MSH, DAE)"]
     assert robot.ground is None
 
 
@@ -49,11 +49,26 @@ def test_mesh_collisions_are_convex_hulls():
     assert fd.load_urdf(str(COLLISIONS)).model.shapes[0].vertices.shape == (0, 3)  # a box
 
 
+def test_a_collada_collision_is_a_convex_hull():
+    # tests/data/collada/box.urdf: a .dae box of 25 x 25 x 50 cm once its nodes place it (units of
+    # 1 cm, <translate>, <rotate>, <scale>); the corners' heights are the file's, +-25 cm about 3 cm.
+    robot = fd.load_urdf(str(ROOT / "tests" / "data" / "collada" / "box.urdf"))
+    assert robot.model.unsupported_shapes == []
+    (shape,) = robot.model.shapes
+    assert shape.type == fd.ShapeType.convex
+    assert shape.vertices.shape == (8, 3)
+    np.testing.assert_allclose(sorted(set(np.round(shape.vertices[:, 2], 12))), [-0.22, 0.28],
+                               atol=1e-12)
+    sim = fd.Simulation(robot.model)
+    sim.set_ground(fd.Ground(height=-1.0))  # a .dae hull is no obstacle to a ground
+    assert sim.ground().enabled
+
+
 def test_a_ground_is_refused_beside_unsupported_geometry():
     sim = fd.Simulation(fd.load_urdf(str(COLLISIONS)).model)
     with pytest.raises(ValueError, match=r"^ground: link 'arm': mesh collision "
-                                         r"'package://collisions/arm.dae' "
-                                         r"\(MuJoCo 2.2.2 reads STL, OBJ, MSH\): "
+                                         r"'package://collisions/arm.ply' "
+                                         r"\(meshes are read from STL, OBJ, MSH, DAE\): "
                                          r"contacts do not support this shape yet"):
         sim.set_ground(fd.Ground())
     assert not sim.ground().enabled

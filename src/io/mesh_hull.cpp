@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "collada_mesh.hpp"
+#include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "mujoco_calls.hpp"
 
@@ -37,7 +39,7 @@ void add_file(mjVFS* vfs, const char* name, const std::string& bytes) {
 
 bool readable_extension(const std::filesystem::path& path) {
   const std::string e = lower_extension(path);
-  return e == ".stl" || e == ".obj" || e == ".msh";
+  return e == ".stl" || e == ".obj" || e == ".msh" || e == ".dae";
 }
 
 std::vector<Vec3> vertices(const mjModel* m, int id) {
@@ -63,7 +65,9 @@ void sort_vertices(std::vector<Vec3>& v) {
   });
 }
 
-std::vector<Vec3> load(const std::filesystem::path& path, const Vec3& scale) {
+namespace {
+
+std::string read_mesh_file(const std::filesystem::path& path) {
   std::error_code code;
   if (!std::filesystem::is_regular_file(path, code))
     throw std::runtime_error(path.string() + " not found");
@@ -74,9 +78,111 @@ std::vector<Vec3> load(const std::filesystem::path& path, const Vec3& scale) {
                              std::to_string(kMaxInputBytes >> 20) + " MiB");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path.string() + " cannot be opened");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) throw std::runtime_error(path.string() + " cannot be read");
   if (bytes.empty()) throw std::runtime_error(path.string() + " is empty");
+  return bytes;
+}
+
+// Compiles the MJCF texts `steps` in turn (each must load) with `files` in the VFS; the last
+// model, or std::runtime_error "MuJoCo cannot use it: <first clause>" with the mesh's VFS name
+// `vfs_name` shown as `shown`.
+mujoco_calls::ModelPtr compile_steps(const std::vector<std::string>& steps,
+                                     const std::string& vfs_name, const std::string& bytes,
+                                     const std::string& shown) {
+  mujoco_calls::route_warnings();
+  const auto vfs = std::make_unique<mjVFS>();  // ~2 MB: not on the stack
+  mj_defaultVFS(vfs.get());
+  std::string error;
+  std::vector<std::string> warnings;
+  mujoco_calls::ModelPtr m;
+  try {
+    for (size_t k = 0; k < steps.size(); ++k)
+      add_file(vfs.get(), ("step" + std::to_string(k) + ".xml").c_str(), steps[k]);
+    if (!vfs_name.empty()) add_file(vfs.get(), vfs_name.c_str(), bytes);
+    for (size_t k = 0; k < steps.size() && (k == 0 || m); ++k)
+      m = mujoco_calls::load_xml(("step" + std::to_string(k) + ".xml").c_str(), vfs.get(), error,
+                                 warnings);
+  } catch (...) {
+    mj_deleteVFS(vfs.get());
+    throw;
+  }
+  mj_deleteVFS(vfs.get());
+  if (!m) {
+    // "Error: ...; Object name = m, id = 0, ...": the first clause names the problem.
+    if (error.rfind("Error: ", 0) == 0) error = error.substr(7);
+    error = error.substr(0, error.find(';'));
+    if (error.size() > 3 && error.compare(error.size() - 3, 3, ": m") == 0)
+      error.resize(error.size() - 3);  // the mesh's name in our XML
+    for (size_t at; !vfs_name.empty() && (at = error.find(vfs_name)) != std::string::npos;)
+      error.replace(at, vfs_name.size(), shown);
+    throw std::runtime_error("MuJoCo cannot use it: " + error);
+  }
+  return m;
+}
+
+// Throws where the points span no volume: qhull (inside MuJoCo's compiler) would print its
+// report on stderr before MuJoCo refuses them, and MuJoCo holds the points as float32, so
+// anything thinner than a few float roundings of the points' size is flat to it.
+void check_volume(const std::vector<Vec3>& points) {
+  if (points.size() < 4)
+    throw std::runtime_error(std::to_string(points.size()) +
+                             " vertices: a hull needs 4 that span a volume");
+  double size = 0.0;
+  for (const Vec3& p : points) {
+    if (!p.allFinite()) throw std::runtime_error("a vertex is not finite: " + format_vec3(p));
+    size = std::max(size, p.cwiseAbs().maxCoeff());
+  }
+  // The largest tetrahedron of four extreme points: the farthest from the first point, the
+  // farthest from their line, the farthest from their plane.
+  const Vec3& a = points[0];
+  auto farthest = [&](auto&& distance) {
+    const Vec3* best = &a;
+    double d = -1.0;
+    for (const Vec3& p : points)
+      if (const double e = distance(p); e > d) d = e, best = &p;
+    return std::pair{*best, d};
+  };
+  const auto [b, ab] = farthest([&](const Vec3& p) { return (p - a).norm(); });
+  const Vec3 u = (b - a).normalized();
+  const auto [c, line] = farthest([&](const Vec3& p) { return (p - a).cross(u).norm(); });
+  const Vec3 n = u.cross(c - a).normalized();
+  const double plane = farthest([&](const Vec3& p) { return std::abs(n.dot(p - a)); }).second;
+  const double tolerance = 1e-6 * size;
+  if (!(ab > tolerance && line > tolerance && plane > tolerance))
+    throw std::runtime_error("its vertices span no volume (all within " + format_double(tolerance) +
+                             " m of a plane)");
+}
+
+}  // namespace
+
+std::vector<Vec3> hull_of_points(const std::vector<Vec3>& points) {
+  check_volume(points);
+  // An inline vertex mesh: MuJoCo takes its hull and keeps the vertices in the given order, so the
+  // hull's vertex ids index `points` and the hull is the given doubles, not MuJoCo's floats.
+  std::ostringstream xml;
+  xml.precision(17);
+  xml << "<mujoco><asset><mesh name='m' vertex='";
+  for (const Vec3& p : points) xml << p.x() << ' ' << p.y() << ' ' << p.z() << ' ';
+  xml << "'/></asset><worldbody><geom type='mesh' mesh='m'/></worldbody></mujoco>";
+  const mujoco_calls::ModelPtr m = compile_steps({xml.str()}, "", "", "");
+  if (m->mesh_vertnum[0] != static_cast<int>(points.size()) || m->mesh_graphadr[0] < 0)
+    throw std::runtime_error("MuJoCo did not keep the vertices as given");
+  const int* graph = m->mesh_graph + m->mesh_graphadr[0];
+  std::vector<Vec3> out;
+  for (int v = 0; v < graph[0]; ++v)
+    out.push_back(points[static_cast<size_t>(graph[2 + graph[0] + v])]);
+  sort_vertices(out);
+  return out;
+}
+
+std::vector<Vec3> load(const std::filesystem::path& path, const Vec3& scale) {
+  const std::string bytes = read_mesh_file(path);
+  if (lower_extension(path) == ".dae") {
+    std::vector<Vec3> points = collada::vertices(bytes);
+    for (Vec3& p : points) p = p.cwiseProduct(scale);
+    return hull_of_points(points);
+  }
   // The mesh by a fixed name, so that its path needs no escaping in the XML.
   const std::string mesh_name = "featherdrive_mesh" + lower_extension(path);
   std::ostringstream asset;
@@ -91,33 +197,8 @@ std::vector<Vec3> load(const std::filesystem::path& path, const Vec3& scale) {
                             "</worldbody></mujoco>";
   const std::string hull =
       "<mujoco>" + asset.str() + "<worldbody><geom type='mesh' mesh='m'/></worldbody></mujoco>";
-  mujoco_calls::route_warnings();
-  const auto vfs = std::make_unique<mjVFS>();  // ~2 MB: not on the stack
-  mj_defaultVFS(vfs.get());
-  std::string error;
-  std::vector<std::string> warnings;
-  mujoco_calls::ModelPtr m;
-  try {
-    add_file(vfs.get(), "check.xml", check);
-    add_file(vfs.get(), "hull.xml", hull);
-    add_file(vfs.get(), mesh_name.c_str(), bytes);
-    m = mujoco_calls::load_xml("check.xml", vfs.get(), error, warnings);
-    if (m) m = mujoco_calls::load_xml("hull.xml", vfs.get(), error, warnings);
-  } catch (...) {
-    mj_deleteVFS(vfs.get());
-    throw;
-  }
-  mj_deleteVFS(vfs.get());
-  if (!m) {
-    // "Error: ...; Object name = m, id = 0, ...": the first clause names the problem.
-    if (error.rfind("Error: ", 0) == 0) error = error.substr(7);
-    error = error.substr(0, error.find(';'));
-    if (error.size() > 3 && error.compare(error.size() - 3, 3, ": m") == 0)
-      error.resize(error.size() - 3);  // the mesh's name in our XML
-    for (size_t at; (at = error.find(mesh_name)) != std::string::npos;)
-      error.replace(at, mesh_name.size(), path.filename().string());
-    throw std::runtime_error("MuJoCo cannot use it: " + error);
-  }
+  const mujoco_calls::ModelPtr m =
+      compile_steps({check, hull}, mesh_name, bytes, path.filename().string());
   const Vec3 p(m->geom_pos[0], m->geom_pos[1], m->geom_pos[2]);
   const Mat3 R = rotation_of(m->geom_quat);
   std::vector<Vec3> out = vertices(m.get(), m->geom_dataid[0]);

@@ -16,6 +16,7 @@
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "mesh_hull.hpp"
+#include "xml_text.hpp"
 
 namespace featherdrive {
 namespace {
@@ -65,96 +66,6 @@ urdf::ModelInterfaceSharedPtr parse_with_urdfdom(const std::string& xml, const s
     fail(file, "invalid URDF: " + why);
   }
   return model;
-}
-
-// TinyXML 2.6 trusts a UTF-8 lead byte's length and steps over the text's terminating NUL when the
-// sequence is cut short (fuzz_urdf found it reading past the buffer), and it stops silently at an
-// embedded NUL. Refuse both before any XML reader sees the text.
-void check_utf8(const std::string& text, const std::string& file) {
-  int line = 1, column = 1;
-  for (std::size_t i = 0; i < text.size();) {
-    const auto byte = static_cast<unsigned char>(text[i]);
-    int length = 1;
-    if (byte >= 0xF0 && byte <= 0xF4) length = 4;
-    else if (byte >= 0xE0) length = byte <= 0xEF ? 3 : 0;
-    else if (byte >= 0xC2) length = 2;
-    else if (byte >= 0x80) length = 0;
-    bool valid = length > 0 && i + length <= text.size() && byte != 0;
-    for (int k = 1; valid && k < length; ++k)
-      valid = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
-    if (!valid) {
-      std::ostringstream what;
-      what << "line " << line << ", column " << column << " (byte " << i << "): ";
-      if (byte == 0)
-        what << "a NUL character";
-      else
-        what << "not valid UTF-8 (byte 0x" << std::hex << static_cast<int>(byte) << ")";
-      fail(file, what.str());
-    }
-    if (byte == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-    i += length;
-  }
-}
-
-// TinyXML (used by urdfdom too) parses and frees elements recursively, so a document nested
-// tens of thousands deep overflows the stack. Count the nesting as TinyXML would read it: comments
-// and CDATA end at "-->" and "]]>", "<!DOCTYPE ...>" and other "<!" at the first '>', "<?...?>" and
-// tags at the first '>' outside quotes, "<a/>" opens nothing.
-void check_nesting(const std::string& text, const std::string& file) {
-  int depth = 0, line = 1;
-  const size_t n = text.size();
-  // Moves i past the first `end` at or after it, counting lines; to the end if there is none.
-  auto skip_to = [&](size_t& i, const char* end) {
-    const size_t at = text.find(end, i);
-    const size_t stop = at == std::string::npos ? n : at + std::strlen(end);
-    for (; i < stop; ++i) line += text[i] == '\n';
-  };
-  // Moves i past the first '>' outside quoted values; true when the tag ends in "/>".
-  auto skip_tag = [&](size_t& i) {
-    char quote = 0, last = 0;
-    for (; i < n; ++i) {
-      const char c = text[i];
-      line += c == '\n';
-      if (quote) {
-        if (c == quote) quote = 0;
-      } else if (c == '"' || c == '\'') {
-        quote = c;
-      } else if (c == '>') {
-        ++i;
-        return last == '/';
-      }
-      if (!quote && c != ' ' && c != '\t' && c != '\n' && c != '\r') last = c;
-    }
-    return false;
-  };
-  for (size_t i = 0; i < n;) {
-    if (text[i] != '<') {
-      line += text[i] == '\n';
-      ++i;
-      continue;
-    }
-    if (text.compare(i, 4, "<!--") == 0) {
-      skip_to(i, "-->");
-    } else if (text.compare(i, 9, "<![CDATA[") == 0) {
-      skip_to(i, "]]>");
-    } else if (text.compare(i, 2, "<!") == 0) {
-      skip_to(i, ">");
-    } else if (text.compare(i, 2, "<?") == 0 || text.compare(i, 2, "</") == 0) {
-      const bool close = text[i + 1] == '/';
-      skip_tag(i);
-      if (close && depth > 0) --depth;
-    } else {
-      const int at = line;
-      if (!skip_tag(i) && ++depth > kMaxUrdfDepth)
-        fail(file, "line " + std::to_string(at) + ": elements nested deeper than " +
-                       std::to_string(kMaxUrdfDepth) + " (the bound)");
-    }
-  }
 }
 
 struct Pose {
@@ -404,7 +315,8 @@ void collision_shapes(UrdfRobot& robot, const std::string& file) {
         const std::filesystem::path path = mesh_path(file, g.filename, mesh);
         if (!mesh_hull::readable_extension(path)) {
           robot.unsupported_shapes.push_back("link '" + g.link + "': mesh collision '" +
-                                             g.filename + "' (MuJoCo 2.2.2 reads STL, OBJ, MSH)");
+                                             g.filename + "' (meshes are read from STL, OBJ, " +
+                                             "MSH, DAE)");
           continue;
         }
         try {
@@ -464,8 +376,12 @@ UrdfRobot parse_urdf(const std::string& xml, const std::string& file, const Urdf
 
   // TinyXML (urdfdom's own XML reader) for the XML error position and the document order that
   // urdfdom's maps do not keep.
-  check_utf8(xml, file);
-  check_nesting(xml, file);
+  try {
+    xml_text::check_utf8(xml);
+    xml_text::check_nesting(xml, kMaxUrdfDepth);
+  } catch (const std::runtime_error& e) {
+    fail(file, e.what());
+  }
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   if (doc.Error())

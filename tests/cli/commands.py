@@ -41,7 +41,7 @@ def contact(cli, source, out_dir):
                  "  base: box 'body' (half extents [0.2, 0.1, 0.05]) at [0, 0, 0.05] m, sphere (r 0.05)",
                  "cylinder 'wheel' (r 0.1, half length 0.025) at [0, 0, 0] m",
                  "  arm: box 'arm_box'",
-                 "not usable by contacts yet: " + "link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo 2.2.2 reads STL, OBJ, MSH)"):
+                 "not usable by contacts yet: " + "link 'arm': mesh collision 'package://collisions/arm.ply' (meshes are read from STL, OBJ, MSH, DAE)"):
         check(text in r.stdout, f"info collisions.urdf shows {text!r}", r)
     r = run(cli, "info", "/usr/share/mujoco/model/humanoid/humanoid.xml")
     check("ground (the file's floor): height 0 m, normal [0, 0, 1], friction 1 / 1, restitution 0"

@@ -232,6 +232,20 @@ def urdf_geometry(cli, source, out_dir):
         check(len(files) == 8 and all(f.endswith("_collision.STL") and os.path.isfile(f)
                                       for f in files), f"WAM: its 8 STL collisions: {files}")
 
+    # The WAM with its COLLADA visuals as collisions, over a ground: the hulls reach MuJoCo as
+    # inline vertex meshes (MuJoCo 2.2.2 reads no .dae) and compare-mujoco runs on it.
+    scene = os.path.join(source, "tests", "data", "collada", "wam_dae_ground.yaml")
+    xml = os.path.join(out_dir, "wam_dae.xml")
+    r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml)
+    check(r.returncode == 0, "WAM with .dae collisions: translated", r)
+    if r.returncode == 0:
+        root = ElementTree.parse(xml).getroot()
+        inline = [m for m in root.iter("mesh") if m.get("vertex") and not m.get("file")]
+        check(len(inline) == 8, f"WAM with .dae collisions: 8 inline hulls ({len(inline)})")
+    r = run(cli, "compare-mujoco", scene, "--steps", "20")
+    check(r.returncode == 0 and "translated" in r.stdout,
+          "WAM with .dae collisions: compare-mujoco runs", r)
+
 
 def main():
     cli, source, out_dir = sys.argv[1:4]

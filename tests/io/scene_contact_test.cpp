@@ -194,8 +194,8 @@ TEST(SceneContact, BadValuesAreRefusedNamingFileKeyAndValue) {
   const std::string collisions =
       "model: " + kContactSource + "/tests/data/collisions.urdf\ndt: 0.01\nsteps: 1\n";
   EXPECT_EQ(contact_scene_error(collisions + "ground: {}\n"),
-            "s.yaml: ground: link 'arm': mesh collision 'package://collisions/arm.dae' (MuJoCo "
-            "2.2.2 reads STL, OBJ, MSH): contacts do not support this shape yet (sphere, capsule, "
+            "s.yaml: ground: link 'arm': mesh collision 'package://collisions/arm.ply' (meshes "
+            "are read from STL, OBJ, MSH, DAE): contacts do not support this shape yet (sphere, capsule, "
             "box, ellipsoid, cylinder, convex mesh); leave the ground off or replace the geometry");
   EXPECT_EQ(contact_scene_error(collisions + "ground: false\n"), "no error");
 }

@@ -1,6 +1,6 @@
 // URDF <collision> as contact shapes (issue 34): box, sphere and cylinder (half its length) become
 // shapes on their model link with the pose composed through merged fixed joints (checked against
-// the composition written out by hand), a COLLADA mesh is listed as unsupported, bad sizes are
+// the composition written out by hand), a PLY mesh is listed as unsupported, bad sizes are
 // refused naming the file, link and value; DART's URDFs load with their STL meshes as hulls.
 #include <gtest/gtest.h>
 
@@ -65,8 +65,8 @@ TEST(UrdfShapes, BoxesAndSpheresWithTheirPosesComposedThroughMergedLinks) {
                axis_rotation(Vec3::UnitX(), h) * axis_rotation(Vec3::UnitZ(), 0.5) *
                    axis_rotation(Vec3::UnitY(), 0.4));
   EXPECT_EQ(m.unsupported_shapes,
-            (std::vector<std::string>{"link 'arm': mesh collision 'package://collisions/arm.dae' "
-                                      "(MuJoCo 2.2.2 reads STL, OBJ, MSH)"}));
+            (std::vector<std::string>{"link 'arm': mesh collision 'package://collisions/arm.ply' "
+                                      "(meshes are read from STL, OBJ, MSH, DAE)"}));
   // rebuild() (armature from a scene) keeps them.
   UrdfRobot copy = robot;
   copy.links[1].joint.armature = {0.1};
@@ -82,8 +82,8 @@ TEST(UrdfShapes, BoxesAndSpheresWithTheirPosesComposedThroughMergedLinks) {
     ADD_FAILURE() << "no throw";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()).rfind("ground: link 'arm': mesh collision "
-                                          "'package://collisions/arm.dae' (MuJoCo 2.2.2 reads "
-                                          "STL, OBJ, MSH): "
+                                          "'package://collisions/arm.ply' (meshes are read "
+                                          "from STL, OBJ, MSH, DAE): "
                                           "contacts do not support this shape yet", 0),
               0u) << e.what();
   }

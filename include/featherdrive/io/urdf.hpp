@@ -100,8 +100,8 @@ struct UrdfRobot {
   /// and sphere, MJCF sphere, capsule and box geoms; rebuild() gives them to the model (a scene's
   /// `shapes:` are added to this list too).
   std::vector<std::pair<std::string, CollisionShape>> shapes;
-  /// Collision geometry contacts cannot use yet (URDF cylinder and mesh; MJCF ellipsoid,
-  /// cylinder, mesh, height field): Model::unsupported_shapes.
+  /// Collision geometry contacts cannot use yet (URDF meshes other than STL, OBJ, MSH and DAE;
+  /// MJCF planes and height fields on links): Model::unsupported_shapes.
   std::vector<std::string> unsupported_shapes;
   /// The file's own floor: an MJCF plane geom on the world body (enabled, its height along its
   /// normal, friction[0] as static and dynamic friction). A scene of the file takes it unless

@@ -78,8 +78,8 @@ struct Model {
   std::vector<NamedFrame> frames;      ///< merged links' frames (names unlike any link's)
   /// Collision shapes, grouped by link in link order (a merged link's shapes are its parent's).
   std::vector<CollisionShape> shapes;
-  /// Collision geometry the importer read that contacts cannot use yet (cylinder, mesh,
-  /// ellipsoid, ...), one description each, e.g. "link 'l_foot': mesh collision 'foot.dae'". A
+  /// Collision geometry the importer read that contacts cannot use yet (a mesh of a format not
+  /// read, a plane, ...), one description each, e.g. "link 'l_foot': mesh collision 'foot.ply'". A
   /// ground is refused while there is any (check_ground_supported, sim/settings.hpp).
   std::vector<std::string> unsupported_shapes;
 
