@@ -2,8 +2,9 @@
 // tests/data/collada/box.dae becomes the hull its nodes, unit and URDF scale give in closed form,
 // and rests on the ground as the URDF <box> of the same size and pose; DART's WAM with its .dae
 // visuals as collisions gets hulls whose bounds are the files' own vertex bounds (read here with a
-// regular expression, not the reader) and lie within its _collision.STL hulls; bad files are
-// refused in one line naming the file, link and reason.
+// regular expression, not the reader) and lie within its _collision.STL hulls; DART's Atlas with
+// its .dae meshes as collisions gets the hulls of its STL collisions; bad files are refused in
+// one line naming the file, link and reason.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -202,6 +203,35 @@ TEST(ColladaMeshes, WamWithItsColladaVisualsAsCollisions) {
   ASSERT_NO_THROW(sim.set_ground(ground));
   sim.step(50);
   EXPECT_TRUE(sim.q().allFinite());
+}
+
+// DART's Atlas with every collision's .stl replaced by the .dae of the same name (its visuals;
+// Z_UP, <unit name="centimeter" meter="1">: the meter attribute counts): each of the 29 hulls has
+// the bounds of the STL's hull within 1e-6 m, the STL path's float32 rounding (the file's
+// float32 vertices, MuJoCo's float32 copy in principal axes) on extents below 1 m.
+TEST(ColladaMeshes, AtlasColladaHullsMatchItsStlHulls) {
+  const std::string atlas = "/usr/share/doc/dart/data/sdf/atlas/";
+  std::ifstream in(atlas + "atlas_v3_no_head.urdf");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string dae = std::regex_replace(text.str(), std::regex("\\.stl\""), ".dae\"");
+  dae = std::regex_replace(dae, std::regex("filename=\""), "filename=\"" + atlas);
+  const UrdfRobot with_dae = parse_urdf(dae, "atlas_dae.urdf");
+  const UrdfRobot with_stl = load_urdf(atlas + "atlas_v3_no_head.urdf");
+  ASSERT_EQ(with_dae.model->shapes.size(), 29u);
+  ASSERT_EQ(with_stl.model->shapes.size(), 29u);
+  EXPECT_TRUE(with_dae.model->unsupported_shapes.empty());
+  for (size_t k = 0; k < 29; ++k) {
+    const CollisionShape& a = with_dae.model->shapes[k];
+    const CollisionShape& b = with_stl.model->shapes[k];
+    ASSERT_EQ(a.type, b.type) << k;
+    if (a.type != ShapeType::convex) continue;
+    const auto [lo, hi] = hull_bounds(a);
+    const auto [stl_lo, stl_hi] = hull_bounds(b);
+    EXPECT_LT(std::max((lo - stl_lo).cwiseAbs().maxCoeff(), (hi - stl_hi).cwiseAbs().maxCoeff()),
+              1e-6)
+        << with_dae.model->links[static_cast<size_t>(a.link)].name;
+  }
 }
 
 // Each bad file is refused in one line: the URDF, the link, the mesh and the reason.
