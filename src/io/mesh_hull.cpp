@@ -121,6 +121,8 @@ mujoco_calls::ModelPtr compile_steps(const std::vector<std::string>& steps,
   return m;
 }
 
+constexpr double kMaxVertexCoordinate = 1e6;  // m: far beyond any robot, well inside float32
+
 // Throws where the points span no volume: qhull (inside MuJoCo's compiler) would print its
 // report on stderr before MuJoCo refuses them, and MuJoCo holds the points as float32, so
 // anything thinner than a few float roundings of the points' size is flat to it.
@@ -130,7 +132,10 @@ void check_volume(const std::vector<Vec3>& points) {
                              " vertices: a hull needs 4 that span a volume");
   double size = 0.0;
   for (const Vec3& p : points) {
-    if (!p.allFinite()) throw std::runtime_error("a vertex is not finite: " + format_vec3(p));
+    // MuJoCo holds vertices in float32 and computes the hull's volume and inertia from them.
+    if (!(p.cwiseAbs().maxCoeff() <= kMaxVertexCoordinate))
+      throw std::runtime_error("a vertex " + format_vec3(p) + " is not finite or beyond " +
+                               format_double(kMaxVertexCoordinate) + " m");
     size = std::max(size, p.cwiseAbs().maxCoeff());
   }
   // The largest tetrahedron of four extreme points: the farthest from the first point, the

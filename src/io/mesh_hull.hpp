@@ -26,7 +26,8 @@ void sort_vertices(std::vector<Vec3>& vertices);
 
 /// The hull's vertices of `points`, a subset of them (the doubles given, not MuJoCo's float32
 /// copy), sorted. Throws std::runtime_error with a one-line reason where there are fewer than 4,
-/// one is not finite, they span no volume (within 1e-6 of their size) or MuJoCo refuses them.
+/// one is not finite or beyond 1e6 (m), they span no volume (within 1e-6 of their size) or
+/// MuJoCo refuses them.
 std::vector<Vec3> hull_of_points(const std::vector<Vec3>& points);
 
 /// The hull's vertices of the mesh file at `path` scaled by `scale` (each > 0), in the file's

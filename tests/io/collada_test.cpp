@@ -269,8 +269,8 @@ std::string dae_text(const std::string& positions, int count, const std::string&
          scene + "</COLLADA>";
 }
 
-// What the reader and the hull refuse beyond the malformed corpus: flat and too few points,
-// references out of the file, a node that instantiates itself.
+// What the reader and the hull refuse beyond the malformed corpus: flat, too few and too distant
+// points (MuJoCo's float32 copy), references out of the file, a node that instantiates itself.
 TEST(ColladaMeshes, FlatSparseAndSelfReferencingFilesAreRefused) {
   const fs::path dir =
       fs::temp_directory_path() / ("featherdrive-dae-bad-" + std::to_string(::getpid()));
@@ -282,6 +282,7 @@ TEST(ColladaMeshes, FlatSparseAndSelfReferencingFilesAreRefused) {
   };
   std::ofstream(dir / "flat.dae") << dae_text("0 0 0 1 0 0 0 1 0 1 1 1e-9", 4, "");
   std::ofstream(dir / "three.dae") << dae_text("0 0 0 1 0 0 0 1 0", 3, "");
+  std::ofstream(dir / "far.dae") << dae_text("0 0 0 1 0 0 0 1 0 0 0 2e6", 4, "");
   std::ofstream(dir / "other_file.dae")
       << dae_text(tetra, 4, scene("<node><instance_geometry url='parts.dae#g'/></node>"));
   std::ofstream(dir / "cycle.dae")
@@ -300,6 +301,7 @@ TEST(ColladaMeshes, FlatSparseAndSelfReferencingFilesAreRefused) {
   };
   EXPECT_EQ(error("flat.dae"), "its vertices span no volume (all within 1e-06 m of a plane)");
   EXPECT_EQ(error("three.dae"), "3 vertices: a hull needs 4 that span a volume");
+  EXPECT_EQ(error("far.dae"), "a vertex [0, 0, 2e+06] is not finite or beyond 1e+06 m");
   EXPECT_EQ(error("other_file.dae"),
             "<instance_geometry> (line 1): url = 'parts.dae#g': only references to this file's "
             "elements (#id) are read");
