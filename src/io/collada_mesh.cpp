@@ -8,7 +8,6 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "featherdrive/core/format.hpp"
 #include "xml_text.hpp"
 
 namespace featherdrive::collada {
@@ -30,7 +29,7 @@ std::string attribute(const TiXmlElement* e, const char* name) {
   return a ? a : "";
 }
 
-// "<float_array id='positions'>" (line N)": how messages name an element.
+// "<float_array id='positions'> (line N)": how messages name an element.
 std::string label(const TiXmlElement* e) {
   const std::string id = attribute(e, "id");
   return "<" + std::string(e->Value()) + (id.empty() ? "" : " id='" + id + "'") + "> (line " +
@@ -236,7 +235,9 @@ std::vector<Vec3> vertices(const std::string& xml) {
   // Gazebo) skip the rotation assimp puts on the root for it, and files marked Y_UP with z-up
   // data (DART's WAM) rely on that (docs/math/contact.md, G3).
   if (const TiXmlElement* up = asset ? asset->FirstChildElement("up_axis") : nullptr) {
-    const std::string axis = text_of(up);
+    std::string axis = text_of(up);
+    axis.erase(0, axis.find_first_not_of(" \t\r\n"));
+    axis.erase(axis.find_last_not_of(" \t\r\n") + 1);
     if (axis != "X_UP" && axis != "Y_UP" && axis != "Z_UP")
       fail("<asset><up_axis> = '" + axis + "': must be X_UP, Y_UP or Z_UP");
   }
@@ -245,8 +246,11 @@ std::vector<Vec3> vertices(const std::string& xml) {
   // The scene: <scene><instance_visual_scene url>, else the first <visual_scene>.
   const TiXmlElement* scene = nullptr;
   const TiXmlElement* which = root->FirstChildElement("scene");
-  if (const TiXmlElement* i = which ? which->FirstChildElement("instance_visual_scene") : nullptr)
+  if (const TiXmlElement* i = which ? which->FirstChildElement("instance_visual_scene") : nullptr) {
     scene = find(reader.ids, i, "url");
+    if (std::string(scene->Value()) != "visual_scene")
+      fail(label(i) + ": url names " + label(scene));
+  }
   const TiXmlElement* library = root->FirstChildElement("library_visual_scenes");
   if (!scene && library) scene = library->FirstChildElement("visual_scene");
   const Affine metres(Eigen::Scaling(metre));
