@@ -84,9 +84,9 @@ std::string read_mesh_file(const std::filesystem::path& path) {
   return bytes;
 }
 
-// Compiles the MJCF texts `steps` in turn (each must load) with `files` in the VFS; the last
-// model, or std::runtime_error "MuJoCo cannot use it: <first clause>" with the mesh's VFS name
-// `vfs_name` shown as `shown`.
+// Compiles the MJCF texts `steps` in turn (each must load), the mesh file's `bytes` in the VFS as
+// `vfs_name` (none where it is empty); the last model, or std::runtime_error "MuJoCo cannot use
+// it: <first clause>" with `vfs_name` shown as `shown`.
 mujoco_calls::ModelPtr compile_steps(const std::vector<std::string>& steps,
                                      const std::string& vfs_name, const std::string& bytes,
                                      const std::string& shown) {
