@@ -79,6 +79,7 @@ void featherdrive::python::bind_simd(py::module_& m) {
       .def_property_readonly("drive_force", &SimdBatch::drive_force, ref)
       .def_property_readonly("limit_force", &SimdBatch::limit_force, ref)
       .def_property_readonly("friction_force", &SimdBatch::friction_force, ref)
+      .def_property_readonly("velocity_limit_force", &SimdBatch::velocity_limit_force, ref)
       .def_property_readonly("step_count", [](const SimdBatch& b) { return b.step_count(); })
       .def(
           "set_q",

@@ -9,12 +9,10 @@ N = 11  # not a multiple of any width
 
 
 def arm_prototype():
+    """examples/arm7.urdf as loaded: its URDF velocity limits stay on."""
     model = fd.load_urdf(fd.example_path("arm7.urdf")).model
-    sim = fd.Simulation(model, dt=1 / 240, solver="tgs", position_iterations=4,
-                        stiffness=2e4, damping=100.0)
-    for j in range(model.nv):  # the SIMD Batch refuses velocity limits
-        sim.set_max_joint_velocity(j, np.inf)
-    return sim
+    return fd.Simulation(model, dt=1 / 240, solver="tgs", position_iterations=4,
+                         stiffness=2e4, damping=100.0)
 
 
 def randomise(batch, rng, nv):
@@ -32,7 +30,11 @@ def test_lanes_equal_the_scalar_batch_and_every_width_the_same_bits():
     nv = proto.model.nv
     scalar = fd.Batch(proto, N)
     randomise(scalar, np.random.default_rng(4), nv)
-    scalar.step(200)
+    limited = 0.0
+    for _ in range(200):
+        scalar.step()
+        limited = max(limited, np.max(np.abs(scalar.velocity_limit_force)))
+    assert limited > 1.0  # the targets pull the joints past their URDF velocity limits
     results = []
     for isa in fd.available_simd_isas():
         simd = fd.SimdBatch(proto, N, isa=isa)
@@ -41,7 +43,8 @@ def test_lanes_equal_the_scalar_batch_and_every_width_the_same_bits():
         simd.step(200)
         for a, b in ((simd.q, scalar.q), (simd.qd, scalar.qd),
                      (simd.drive_force, scalar.drive_force),
-                     (simd.friction_force, scalar.friction_force)):
+                     (simd.friction_force, scalar.friction_force),
+                     (simd.velocity_limit_force, scalar.velocity_limit_force)):
             assert np.max(np.abs(a - b) / np.maximum(1.0, np.abs(b))) <= 1e-12
         results.append(np.array(simd.qd))
         assert not simd.qd.flags.writeable
@@ -58,8 +61,8 @@ def test_bad_input_and_unsupported_settings():
         batch.set_qd(0.0, env_ids=[0, 7])
     with pytest.raises(ValueError, match="isa = 'avx9'"):
         fd.SimdBatch(proto, 3, isa="avx9")
-    proto.set_max_joint_velocity(2, 3.0)
-    with pytest.raises(ValueError, match="joint 'joint3' has max_velocity 3"):
+    proto.set_friction_coefficient(2, 0.05)
+    with pytest.raises(ValueError, match="joint 'joint3' has friction_coefficient 0.05"):
         fd.SimdBatch(proto, 3)
 
 
@@ -87,7 +90,10 @@ def test_indices_and_sizes_are_checked():
 
 
 def test_divergence_names_the_environment():
-    batch = fd.SimdBatch(arm_prototype(), 4)
+    proto = arm_prototype()
+    for j in range(proto.model.nv):  # a velocity limit would scale 1e200 rad/s back to it
+        proto.set_max_joint_velocity(j, np.inf)
+    batch = fd.SimdBatch(proto, 4)
     batch.set_qd(1e200, env_ids=[2])
     with pytest.raises(RuntimeError, match="environment 2 \\(1 of 4"):
         batch.step(3)

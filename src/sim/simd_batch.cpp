@@ -45,11 +45,11 @@ Layout make_layout(const Plan& p) {
   l.S = take(6 * L), l.U = take(6 * L), l.D_inv = take(L), l.inverse_mass = take(L);
   l.q = take(p.nq), l.qd = take(n);
   l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
-  l.old_lf = take(n), l.old_ff = take(n), l.df = take(n), l.lf = take(n), l.ff = take(n),
-  l.row = take(Layout::kRowFields * n);
+  l.old_lf = take(n), l.old_ff = take(n), l.old_vf = take(n), l.df = take(n), l.lf = take(n),
+  l.ff = take(n), l.vf = take(n), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
-  l.flags = take(n);  // three doubles a dof (a vector holds at least four)
+  l.flags = take(n);  // four doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
 }
@@ -162,8 +162,6 @@ void check_supported(const Simulation& s) {
     if (s.friction_coefficient(d) != 0.0)
       unsupported("joint", joint,
                   "friction_coefficient " + format_double(s.friction_coefficient(d)));
-    if (std::isfinite(s.max_joint_velocity(d)))
-      unsupported("joint", joint, "max_velocity " + format_double(s.max_joint_velocity(d)));
     if (s.actuator_envelope(d).active()) unsupported("joint", joint, "an actuator envelope");
     if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
       unsupported("joint", joint,
@@ -296,6 +294,8 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
     x[simd::static_friction] = f.static_effort;
     x[simd::dynamic_friction] = f.dynamic_effort;
     x[simd::viscous_friction] = f.viscous;
+    x[simd::max_velocity] = prototype.max_joint_velocity(d);
+    p.any_velocity_limit = p.any_velocity_limit || x[simd::max_velocity] < DofRows::kNoVelocityLimit;
   }
   for (int i = 0; i < L; ++i) {
     const Link& link = m.links[static_cast<size_t>(i)];
@@ -322,6 +322,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   drive_force_ = rows(prototype.drive_force());
   limit_force_ = rows(prototype.limit_force());
   friction_force_ = rows(prototype.friction_force());
+  velocity_limit_force_ = rows(prototype.velocity_limit_force());
   initial_q_ = prototype.q();
   step_count_.assign(static_cast<size_t>(count), prototype.step_count());
   time_.assign(static_cast<size_t>(count), prototype.time());
@@ -648,6 +649,7 @@ void SimdBatch::reset(std::span<const int> env_ids, const std::optional<RowMatri
     drive_force_.row(e).setZero();
     limit_force_.row(e).setZero();
     friction_force_.row(e).setZero();
+    velocity_limit_force_.row(e).setZero();
     step_count_[static_cast<size_t>(e)] = 0;
     time_[static_cast<size_t>(e)] = 0.0;
     diverged_[static_cast<size_t>(e)].reset();
@@ -711,9 +713,9 @@ Simulation SimdBatch::simulation(int i) const {
                                             parameter(i, dof_index(d, simd::dynamic_friction)),
                                             parameter(i, dof_index(d, simd::viscous_friction))});
   }
-  const VecX zero = VecX::Zero(m.nv);
   sim.restore_state(q_.row(i).transpose(), drive_force_.row(i).transpose(),
-                    limit_force_.row(i).transpose(), friction_force_.row(i).transpose(), zero);
+                    limit_force_.row(i).transpose(), friction_force_.row(i).transpose(),
+                    velocity_limit_force_.row(i).transpose());
   sim.set_qd(qd_.row(i).transpose());
   sim.set_applied_force(applied_force_.row(i).transpose());
   sim.set_clock(time_[static_cast<size_t>(i)], step_count_[static_cast<size_t>(i)]);
@@ -744,6 +746,7 @@ void SimdBatch::step(int count) {
     b.q = q_.data(), b.qd = qd_.data(), b.applied = applied_force_.data();
     b.drive_force = drive_force_.data(), b.limit_force = limit_force_.data();
     b.friction_force = friction_force_.data();
+    b.velocity_limit_force = velocity_limit_force_.data();
     b.parameters = im.parameters.data();
     b.step_count = step_count_.data(), b.time = time_.data();
     b.stop = im.stops.data(), b.stopped_now = im.stopped_now.get();
@@ -779,7 +782,8 @@ void SimdBatch::step(int count) {
     if (!im.stopped_now[static_cast<size_t>(e)]) continue;
     const simd::Stop& s = im.stops[static_cast<size_t>(e)];
     static const char* const kQuantity[] = {
-        "", "velocity qd", "drive force", "limit force", "friction force", "position q"};
+        "",           "velocity qd",          "drive force", "limit force",
+        "friction force", "velocity limit force", "position q"};
     std::ostringstream m;
     m.precision(6);
     m << "simulation diverged at step " << step_count_[static_cast<size_t>(e)] + 1

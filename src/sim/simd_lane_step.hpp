@@ -170,13 +170,15 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f, j);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
-  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 3 * d; }
+  // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit.
+  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 4 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
 
   // The stages of a step.
   void step();
+  void scale_to_velocity_limits();
   void kinematics_and_bias();
   void link_pose(int i);
   void link_velocity_and_bias(int i);
@@ -659,14 +661,17 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     rw[Layout::fdyn] = fd * dt;
     rw[Layout::fvisc] = fv * dt;
     rw[Layout::driven] = select_zero(driven, V(1.0));
-    // Whether some lane has a friction or limit row, whether every lane has a drive: a sweep skips
-    // what no lane has and selects nothing where every lane has it.
+    rw[Layout::vmax] = dof_parameter(d, max_velocity);
+    const M speed_limited = rw[Layout::vmax] < inf;
+    // Whether some lane has a friction, limit or velocity limit row, whether every lane has a
+    // drive: a sweep skips what no lane has and selects nothing where every lane has it.
     double* has = any_row(d);
     has[0] = any(rubbing) ? 1.0 : 0.0;
     has[1] = any(limited) ? 1.0 : 0.0;
     has[2] = all(driven) ? 1.0 : 0.0;
-    undriven_ = undriven_ | limited | rubbing;
-    rows_any = rows_any | limited | rubbing | driven;
+    has[3] = any(speed_limited) ? 1.0 : 0.0;
+    undriven_ = undriven_ | limited | rubbing | speed_limited;
+    rows_any = rows_any | limited | rubbing | driven | speed_limited;
   }
   rowless_ = !rows_any;
 }
@@ -697,6 +702,7 @@ template <class A, int K>
   rw[Layout::err_low] = x0 - dof_parameter(d, lower);
   rw[Layout::err_high] = dof_parameter(d, upper) - x0;
   rw[Layout::fimp] = V(0.0);
+  rw[Layout::vlimp] = V(0.0);
   rw[Layout::recip] = recip;
   rw[Layout::delta_x] = V(0.0);
   rw[Layout::response] = r;
@@ -791,6 +797,14 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     rw[Layout::low] = select(on_low, low + d_low, low);
     rw[Layout::high] = select(on_high, high + d_high, high);
     apply(limited, select(on_low, d_low, d_high));
+  }
+  if (any_row(d)[3] != 0.0) {  // the velocity limit: back to the limit when beyond it
+    const V vmax = rw[Layout::vmax];
+    const M beyond = (v > vmax) | (v < -vmax);
+    const V at_limit = select(v > vmax, vmax, -vmax);
+    const V delta = (at_limit - v) * rw[Layout::recip];
+    rw[Layout::vlimp] = select(beyond, rw[Layout::vlimp] + delta, rw[Layout::vlimp]);
+    apply(beyond, delta);
   }
   return total;
 }
@@ -1006,7 +1020,7 @@ void LaneStep<A, K>::sweep() {
     const double* has = any_row(k.v_index);
     // A lone drive: one vector at a time. With friction or a limit row in the block the whole
     // pack measured faster (the welded humanoid).
-    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0)
+    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0)
       for (int j = 0; j < K; ++j) enter_link(OneVector{j}, i, dvp, dv);
     else
       enter_link(WholePack{}, i, dvp, dv);
@@ -1034,8 +1048,27 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
   }
 }
 
+// qd scaled down, all joints by one ratio, until none exceeds its velocity limit (step.cpp's
+// scale_to_velocity_limits, dof by dof in the same order).
+template <class A, int K>
+void LaneStep<A, K>::scale_to_velocity_limits() {
+  const V one(1.0);
+  V ratio = one;
+  for (int d = 0; d < p_.nv; ++d) {
+    if (any_row(d)[3] == 0.0) continue;
+    const V qd = at(l_.qd)[d], vmax = row(d)[Layout::vmax];
+    const V speed = select(qd < V(0.0), -qd, qd);
+    const V candidate = vmax / speed;  // only read where speed > vmax >= 0
+    ratio = select((speed > vmax) & (candidate < ratio), candidate, ratio);
+  }
+  const M scaled = ratio < one;
+  if (!any(scaled)) return;
+  for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(scaled, at(l_.qd)[d] * ratio, at(l_.qd)[d]);
+}
+
 template <class A, int K>
 void LaneStep<A, K>::step() {
+  if (p_.any_velocity_limit) scale_to_velocity_limits();
   kinematics_and_bias();
   articulated_pass();
   forward_pass();
@@ -1077,6 +1110,7 @@ void LaneStep<A, K>::step() {
     at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
     at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
     at(l_.ff)[d] = (rw[Layout::fimp] + V(0.0)) * inv_dt;  // + the (absent) transmission friction
+    at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
   }
 }
 
@@ -1087,7 +1121,8 @@ void LaneStep<A, K>::finish_step() {
   const V zero(0.0);
   V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
   for (int d = 0; d < p_.nv; ++d)
-    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero + at(l_.ff)[d] * zero);
+    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
+             at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   // Not z != 0: xsimd 8's != is unordered with SSE2 and ordered with AVX (false for a NaN).
   const M bad = !(z == zero);
@@ -1111,10 +1146,11 @@ void LaneStep<A, K>::finish_step() {
         check(2, d, lane(at(l_.df)[d]));
         check(3, d, lane(at(l_.lf)[d]));
         check(4, d, lane(at(l_.ff)[d]));
+        check(5, d, lane(at(l_.vf)[d]));
       }
       for (int i = 0; i < p_.num_links; ++i)
         if (p_.links[i].type != 0)
-          check(5, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
+          check(6, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
       b_.stop[b_.env0 + l] = stop;
       b_.stopped_now[b_.env0 + l] = true;
     }
@@ -1127,6 +1163,7 @@ void LaneStep<A, K>::finish_step() {
       at(l_.df)[d] = select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
       at(l_.lf)[d] = select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
       at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
+      at(l_.vf)[d] = select(stopped_, at(l_.old_vf)[d], at(l_.vf)[d]);
     }
   }
   alignas(64) double stopped_lanes[kW];
@@ -1152,6 +1189,7 @@ void LaneStep<A, K>::run(int steps) {
     at(l_.df)[d] = gather(b_.drive_force, nv, d);
     at(l_.lf)[d] = gather(b_.limit_force, nv, d);
     at(l_.ff)[d] = gather(b_.friction_force, nv, d);
+    at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
   }
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
@@ -1164,6 +1202,7 @@ void LaneStep<A, K>::run(int steps) {
       at(l_.old_df)[d] = at(l_.df)[d];
       at(l_.old_lf)[d] = at(l_.lf)[d];
       at(l_.old_ff)[d] = at(l_.ff)[d];
+      at(l_.old_vf)[d] = at(l_.vf)[d];
     }
     step();
     finish_step();
@@ -1174,6 +1213,7 @@ void LaneStep<A, K>::run(int steps) {
     scatter(at(l_.df)[d], b_.drive_force, nv, d);
     scatter(at(l_.lf)[d], b_.limit_force, nv, d);
     scatter(at(l_.ff)[d], b_.friction_force, nv, d);
+    scatter(at(l_.vf)[d], b_.velocity_limit_force, nv, d);
   }
 }
 

@@ -34,6 +34,7 @@ enum DofParameter : int {
   static_friction,
   dynamic_friction,
   viscous_friction,
+  max_velocity,  ///< the joint's velocity limit, +inf for none
   kDofParameters
 };
 enum LinkParameter : int {
@@ -97,6 +98,8 @@ struct Layout {
     fdyn,
     fvisc,
     fimp,
+    vmax,   ///< the velocity limit (+inf: none)
+    vlimp,  ///< the velocity limit row's accumulated impulse
     // Set once a call (setup_row_constants): h (h kp + kd), h kd target velocity, h kp, the
     // acceleration drive's mask and its 1 / (h (h kp + kd) + 1).
     gain,
@@ -108,8 +111,8 @@ struct Layout {
   };
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
-      tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, df = 0, lf = 0,
-      ff = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
+      tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
+      lf = 0, ff = 0, vf = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
 };
 
 struct Plan {
@@ -121,6 +124,8 @@ struct Plan {
   double gravity[3] = {};
   double dt = 0.0;
   bool tgs = false;
+  /// Some environment has a finite joint velocity limit: steps start by scaling qd to them.
+  bool any_velocity_limit = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;
@@ -128,7 +133,8 @@ struct Plan {
 
 /// Why a lane stopped: the first non-finite quantity in Simulation's order.
 struct Stop {
-  /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 position q
+  /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 velocity limit
+  /// force, 6 position q
   int quantity = 0;
   int dof = -1;
   double value = 0.0;
@@ -145,6 +151,7 @@ struct Block {
   double* drive_force = nullptr;
   double* limit_force = nullptr;
   double* friction_force = nullptr;
+  double* velocity_limit_force = nullptr;
   const double* parameters = nullptr;  ///< the whole packed array
   long* step_count = nullptr;
   double* time = nullptr;

@@ -41,8 +41,9 @@ class SimdBatch {
   /// model (std::invalid_argument outside; the padding to whole blocks stays within int). Throws
   /// std::invalid_argument with one line naming the setting and the joint (or link) for what the
   /// SIMD step does not simulate: joints other than fixed, revolute and prismatic, compat physx,
-  /// friction coefficients, velocity limits, actuator envelopes, explicit actuators, drive delays
-  /// and link parameters (damping, cfm, velocity limits).
+  /// friction coefficients, actuator envelopes, explicit actuators, drive delays, mimic rows,
+  /// contacts and link parameters (damping, cfm, link velocity limits). Joint velocity limits
+  /// (max_velocity) are simulated as Simulation does.
   /// Without isa, default_simd_isa(), narrowed (when FEATHERDRIVE_SIMD is not set) while a block
   /// of 2 W lanes would exceed count.
   SimdBatch(const Simulation& prototype, int count, std::optional<SimdIsa> isa = std::nullopt);
@@ -72,6 +73,7 @@ class SimdBatch {
   const RowMatrix& drive_force() const { return drive_force_; }
   const RowMatrix& limit_force() const { return limit_force_; }
   const RowMatrix& friction_force() const { return friction_force_; }
+  const RowMatrix& velocity_limit_force() const { return velocity_limit_force_; }
   const std::vector<long>& step_count() const { return step_count_; }
   const std::vector<double>& time() const { return time_; }
 
@@ -147,7 +149,8 @@ class SimdBatch {
   int count_ = 0;
   SimdIsa isa_ = SimdIsa::sse2;
   int threads_ = 0;
-  RowMatrix q_, qd_, applied_force_, drive_force_, limit_force_, friction_force_;
+  RowMatrix q_, qd_, applied_force_, drive_force_, limit_force_, friction_force_,
+      velocity_limit_force_;
   std::vector<long> step_count_;
   std::vector<double> time_;
   std::vector<std::optional<SimdDivergence>> diverged_;
