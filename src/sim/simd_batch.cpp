@@ -49,7 +49,7 @@ Layout make_layout(const Plan& p) {
   l.ff = take(n), l.vf = take(n), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
-  l.flags = take(n);  // four doubles a dof (a vector holds at least four)
+  l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
 }
@@ -295,6 +295,8 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
     x[simd::dynamic_friction] = f.dynamic_effort;
     x[simd::viscous_friction] = f.viscous;
     x[simd::max_velocity] = prototype.max_joint_velocity(d);
+    x[simd::wrapped] = prototype.settings().revolute_wrap[static_cast<size_t>(d)] ==
+                       RevoluteWrap::wrapped;
     p.any_velocity_limit = p.any_velocity_limit || x[simd::max_velocity] < DofRows::kNoVelocityLimit;
   }
   for (int i = 0; i < L; ++i) {

@@ -170,8 +170,9 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f, j);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
-  // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit.
-  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 4 * d; }
+  // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit,
+  // some a wrapped position.
+  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 8 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
@@ -201,6 +202,7 @@ class LaneStep {
   int leave_chain_run(int k, int stop, bool correct);
   void finish_link(int i);
   void integrate(double h, bool track);
+  void wrap_positions();
   void finish_step();
 
   static void sincos(V x, V& s, V& c);
@@ -670,6 +672,7 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     has[1] = any(limited) ? 1.0 : 0.0;
     has[2] = all(driven) ? 1.0 : 0.0;
     has[3] = any(speed_limited) ? 1.0 : 0.0;
+    has[4] = any(dof_parameter(d, wrapped) != V(0.0)) ? 1.0 : 0.0;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
     rows_any = rows_any | limited | rubbing | driven | speed_limited;
   }
@@ -1066,6 +1069,21 @@ void LaneStep<A, K>::scale_to_velocity_limits() {
   for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(scaled, at(l_.qd)[d] * ratio, at(l_.qd)[d]);
 }
 
+// A wrapped revolute joint's position back into [-2 pi, 2 pi] by one turn of 4 pi, then clamped
+// to [-4 pi, 4 pi] (revolute_wrap.cpp, docs/math/revolute_wrap.md eq. 1).
+template <class A, int K>
+void LaneStep<A, K>::wrap_positions() {
+  const V two_pi(2.0 * 3.14159265358979323846), four_pi = V(2.0) * two_pi;
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 1 || any_row(k.v_index)[4] == 0.0) continue;
+    V& q = at(l_.q)[k.q_index];
+    V x = select(q > two_pi, q - four_pi, select(q < -two_pi, q + four_pi, q));
+    x = select(x < -four_pi, -four_pi, select(four_pi < x, four_pi, x));
+    q = select(dof_parameter(k.v_index, wrapped) != V(0.0), x, q);
+  }
+}
+
 template <class A, int K>
 void LaneStep<A, K>::step() {
   if (p_.any_velocity_limit) scale_to_velocity_limits();
@@ -1104,6 +1122,7 @@ void LaneStep<A, K>::step() {
       for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
     }
   }
+  wrap_positions();
   const V inv_dt(1.0 / dt);
   for (int d = 0; d < p_.nv; ++d) {
     const V* rw = row(d);

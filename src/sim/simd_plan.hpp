@@ -35,6 +35,7 @@ enum DofParameter : int {
   dynamic_friction,
   viscous_friction,
   max_velocity,  ///< the joint's velocity limit, +inf for none
+  wrapped,       ///< 1: a revolute joint whose position wraps at the step's end (revolute_wrap.hpp)
   kDofParameters
 };
 enum LinkParameter : int {
