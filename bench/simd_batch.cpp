@@ -13,6 +13,7 @@
 
 #include "bench_models.hpp"
 #include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/simd_batch.hpp"
 #include "peers.hpp"
 
@@ -46,7 +47,53 @@ void run(benchmark::State& state, B& batch, const VecX& q0, int count) {
 void scalar_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads) {
   Batch batch(bench_simulation(robot), count);
   batch.set_num_threads(threads);
+  batch.set_lanes(false);  // a vector of Simulations
   run(state, batch, robot.q0, count);
+}
+
+// A robot as loaded from its URDF: its joint limits, friction and velocity limits on, force
+// drives of kStiffness / kDamping with the URDF's efforts (where > 0) as max_force, targets 0.3
+// rad from q0 alternating in sign.
+Simulation as_loaded(const std::string& urdf) {
+  const UrdfRobot robot = load_urdf(urdf);
+  SimulationOptions o;
+  o.dt = kDt;
+  Simulation sim(robot.model, o);
+  for (int d = 0; d < robot.model->nv; ++d) {
+    const double effort = robot.model->effort_limit[d];
+    sim.set_drive(d, Drive{DriveType::force, kStiffness, kDamping,
+                           effort > 0.0 ? effort : std::numeric_limits<double>::infinity(),
+                           d % 2 ? 0.3 : -0.3, 0.0});
+  }
+  return sim;
+}
+
+// One Simulation stepping alone, and Batch(sim, N) as it comes (lanes when the settings allow;
+// FEATHERDRIVE_SIMD picks the width), on robots as loaded. Names:
+// batch_as_loaded/<robot>/<simulation|batch>/envs:<N>/threads:<T>.
+void as_loaded_simulation(benchmark::State& state, const Simulation& prototype) {
+  Simulation sim = prototype;
+  const VecX q0 = sim.q();
+  long steps = 0;
+  for (auto _ : state) {
+    sim.step(kStepsPerIteration);
+    if ((steps += kStepsPerIteration) % kResetInterval == 0) {
+      state.PauseTiming();
+      sim.set_q(q0);
+      sim.set_qd(VecX::Zero(sim.model().nv));
+      state.ResumeTiming();
+    }
+  }
+  state.counters["env_steps_per_second"] = benchmark::Counter(
+      kStepsPerIteration, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void as_loaded_batch(benchmark::State& state, const Simulation& prototype, int count,
+                     int threads) {
+  Batch batch(prototype, count);
+  batch.set_num_threads(threads);
+  state.SetLabel(batch.step_path());
+  run(state, batch, prototype.q(), count);
 }
 
 void simd_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads,
@@ -81,6 +128,22 @@ BenchRobot humanoid_hold() {
 }  // namespace
 
 void register_simd_batch() {
+  const std::string dart = "/usr/share/doc/dart/data/urdf/";
+  static const std::vector<std::pair<std::string, Simulation>> loaded = {
+      {"arm7", as_loaded(FEATHERDRIVE_SOURCE_DIR "/examples/arm7.urdf")},
+      {"kr5", as_loaded(dart + "KR5/KR5 sixx R650.urdf")},
+      {"wam", as_loaded(dart + "wam/wam.urdf")}};
+  for (const auto& [name, sim] : loaded) {
+    const Simulation* prototype = &sim;
+    benchmark::RegisterBenchmark(("batch_as_loaded/" + name + "/simulation").c_str(),
+                                 [=](benchmark::State& s) { as_loaded_simulation(s, *prototype); })
+        ->UseRealTime();
+    for (int t : kThreads)
+      benchmark::RegisterBenchmark(
+          ("batch_as_loaded/" + name + "/batch/envs:1024/threads:" + std::to_string(t)).c_str(),
+          [=](benchmark::State& s) { as_loaded_batch(s, *prototype, 1024, t); })
+          ->UseRealTime();
+  }
   static std::vector<BenchRobot> robots = {make_arm7(), make_chain(16), humanoid_hold()};
   robots[1].name = "chain16";
   static const std::string humanoid_xml = welded_humanoid_xml();

@@ -94,6 +94,16 @@ void featherdrive::python::bind_batch(py::module_& m) {
           "effective_num_threads",
           [](const Batch& b) { return locked(b, [&] { return b.effective_num_threads(); }); },
           "The threads step() will use.")
+      .def_property(
+          "lanes", [](const Batch& b) { return locked(b, [&] { return b.lanes(); }); },
+          [](Batch& b, bool allowed) { locked(b, [&] { b.set_lanes(allowed); }); },
+          "Whether step() may step the environments in SIMD lanes (default True): then each "
+          "gives the same bits whatever its lane, the width, the batch size and the threads, "
+          "within 1e-12 of its Simulation stepped alone; False: each is its Simulation, bit for "
+          "bit.")
+      .def_property_readonly(
+          "step_path", [](Batch& b) { return locked(b, [&] { return b.step_path(); }); },
+          "How the next step() runs: 'avx2 lanes', or 'scalar: ' and why.")
       .def(
           "set_options",
           [](Batch& b, const SimulationOptions& o) { locked(b, [&] { b.set_options(o); }); },

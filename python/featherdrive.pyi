@@ -601,11 +601,17 @@ def center_of_mass_jacobian(model: Model, q: ArrayLike) -> Vector: ...
 EnvIds = Union[None, Int, Sequence[Int], npt.NDArray[np.integer]]
 
 class Batch:
-    """N environments of one robot stepped together on all cores, bit-identical to stepping each
-    alone for any num_threads. States are read-only (N, n) views of the batch's arrays. Setters
-    take env_ids (None: all; distinct indices in [0, N)) and values as a scalar, one row for
-    every environment named or (k, n), one row each."""
+    """N environments of one robot stepped together on all cores: in SIMD lanes where every
+    environment's settings allow (the same bits for any lane, width, batch size and threads,
+    within 1e-12 of each stepped alone), else each bit-identical to stepping it alone.
+    States are read-only (N, n) views of the batch's arrays. Setters take env_ids (None: all;
+    distinct indices in [0, N)) and values as a scalar, one row for every environment named or
+    (k, n), one row each."""
     num_threads: int
+    lanes: bool
+    @property
+    def step_path(self) -> str:
+        """How the next step() runs: 'avx2 lanes', or 'scalar: ' and why."""
     @overload
     def __init__(self, model: Model, count: Int, dt: float = 1.0 / 60.0,
                  solver: Union[str, SolverType] = "pgs", position_iterations: Int = 4,

@@ -43,14 +43,20 @@ def bits(a):
 
 
 @pytest.mark.parametrize("solver", ["pgs", "tgs"])
-def test_batch_equals_separate_simulations_for_any_thread_count(arm, solver):
+@pytest.mark.parametrize("lanes", [False, True])
+def test_batch_equals_separate_simulations_for_any_thread_count(arm, solver, lanes):
+    """Without lanes each copy is its Simulation bit for bit; in SIMD lanes (arm7 as loaded,
+    velocity limits included) within 1e-12, and the same bits for any thread count."""
     pos, vel = targets(N, arm.nv)
     kp, kd = gains(N, arm.nv)
     expected = separate(arm, solver, pos, vel, kp, kd)
+    first = None
     for threads in (1, 0, 3):
         batch = fd.Batch(arm, N, dt=1.0 / 60.0, solver=solver, position_iterations=4,
                          velocity_iterations=1)
         batch.num_threads = threads
+        batch.lanes = lanes
+        assert batch.step_path.endswith(" lanes") == lanes, batch.step_path
         assert batch.effective_num_threads() >= 1
         batch.set_q(arm.neutral_configuration()[None, :] + 0.01 * np.arange(N)[:, None])
         batch.set_drive_gains(kp, kd)
@@ -59,13 +65,20 @@ def test_batch_equals_separate_simulations_for_any_thread_count(arm, solver):
         assert batch.q.shape == (N, arm.nq) and batch.qd.shape == (N, arm.nv)
         assert batch.drive_force.shape == (N, arm.nv) and batch.limit_force.shape == (N, arm.nv)
         for got, want in zip((batch.q, batch.qd, batch.drive_force), expected):
-            np.testing.assert_array_equal(bits(got), bits(want), err_msg=f"threads={threads}")
+            if lanes:
+                assert np.max(np.abs(got - want)) <= 1e-12 * max(1.0, np.max(np.abs(want)))
+            else:
+                np.testing.assert_array_equal(bits(got), bits(want), err_msg=f"threads={threads}")
+        if first is None:
+            first = bits(batch.qd).copy()
+        np.testing.assert_array_equal(bits(batch.qd), first, err_msg=f"threads={threads}")
         assert all(batch.sim(i).step_count == STEPS for i in range(N))
     # The copies really differ.
     assert len({row.tobytes() for row in expected[0]}) == N
 
 
-def test_batch_from_prototype_and_per_copy_access(arm):
+def test_batch_from_prototype_and_per_copy_access(arm, monkeypatch):
+    monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")  # each copy bit for bit as its Simulation
     proto = fd.Simulation(arm, solver="tgs")
     proto.set_drive_gains(800.0, 30.0)
     proto.set_drive_targets(np.full(arm.nv, 0.4), np.zeros(arm.nv))

@@ -55,7 +55,8 @@ def test_batch_broadcasts_and_equals_separate_simulations(arm):
         for i in range(n):
             alone = driven(arm)
             alone.step_control(per_copy(i), np.full(arm.nv, 0.1), substeps=3, targets="linear")
-            assert hexes(batch.q[i]) == hexes(alone.q), i
+            # SIMD lanes: within 1e-12 of the lone step (another operation order).
+            assert np.max(np.abs(batch.q[i] - alone.q)) <= 1e-12, i
             assert batch.sim(i).step_count == 3
 
 

@@ -181,7 +181,7 @@ def test_batch_constructor_gains_equal_single_simulations(arm):
     batch.step(30)
     lone.step(30)
     for i in range(3):
-        assert batch.q[i].tobytes() == lone.q.tobytes()
+        assert np.max(np.abs(batch.q[i] - lone.q)) <= 1e-12  # SIMD lanes: another order
     with pytest.raises(ValueError, match="stiffness = -1"):
         fd.Batch(arm, 2, stiffness=-1.0)
     with pytest.raises(ValueError, match="has no drive"):

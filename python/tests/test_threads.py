@@ -67,6 +67,7 @@ def test_a_batch_copy_and_its_batch_share_one_lock(arm):
     steps of both, the others those of the batch."""
     batch = fd.Batch(driven(arm), 3)
     batch.num_threads = 2
+    batch.lanes = False  # copy 1 steps alone too: bit for bit only as its own Simulation
     copy = batch.sim(1)
     run_threads(lambda: [batch.step(2) for _ in range(25)],
                 lambda: [copy.step(1) for _ in range(40)],

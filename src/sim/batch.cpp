@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <map>
 #include <string>
@@ -19,9 +20,22 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/model/model_variant.hpp"
 #include "featherdrive/sim/state.hpp"
+#include "lane_engine.hpp"
 
 namespace featherdrive {
 namespace {
+
+// The lanes' instruction set for n environments: the CPU's widest (or FEATHERDRIVE_SIMD's),
+// narrowed while a block of two vectors would hold more lanes than environments (fewer padding
+// lanes; every width gives the same bits).
+SimdIsa lane_isa(int n) {
+  SimdIsa isa = default_simd_isa();
+  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
+  if (!(forced && *forced))
+    while (isa != SimdIsa::sse2 && simd_width(isa) * 2 > n)
+      isa = isa == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
+  return isa;
+}
 
 void check_size(const VecX& x, int expected, const char* function, const char* what) {
   if (x.size() != expected)
@@ -170,12 +184,18 @@ Batch::Batch(const Simulation& prototype, int count) {
 }
 
 Batch::Batch(const Batch& other)
-    : sims_(other.sims_), initial_q_(other.initial_q_), threads_(other.threads_) {
+    : sims_(other.sims_),
+      initial_q_(other.initial_q_),
+      threads_(other.threads_),
+      lanes_allowed_(other.lanes_allowed_) {
   lend_rows();
 }
 
 // Row i of every array becomes environment i's storage (its values copied there).
 void Batch::lend_rows() {
+  repack_.assign(sims_.size(), repack_all);
+  handed_out_.assign(sims_.size(), 0);
+  refusal_.assign(sims_.size(), std::string());
   for (int f = 0; f < StateStorage::kFields; ++f)
     rows_[static_cast<size_t>(f)].resize(size(), sims_.front().state_.size(StateStorage::Field(f)));
   for (int i = 0; i < size(); ++i) {
@@ -190,10 +210,17 @@ Simulation& Batch::sim(int i) {
   if (i < 0 || i >= size())
     throw std::invalid_argument("Batch: environment index " + std::to_string(i) +
                                 " is out of range [0, " + std::to_string(size()) + ")");
+  // Whatever the caller changes through it, the lanes read again at every step.
+  handed_out_[static_cast<size_t>(i)] = 1;
   return sims_[static_cast<size_t>(i)];
 }
 
-const Simulation& Batch::sim(int i) const { return const_cast<Batch*>(this)->sim(i); }
+const Simulation& Batch::sim(int i) const {
+  if (i < 0 || i >= size())
+    throw std::invalid_argument("Batch: environment index " + std::to_string(i) +
+                                " is out of range [0, " + std::to_string(size()) + ")");
+  return sims_[static_cast<size_t>(i)];
+}
 
 void Batch::set_num_threads(int threads) {
   // TBB's arena crashes for some hundred thousand threads; no machine needs more than this.
@@ -211,6 +238,8 @@ int Batch::effective_num_threads() const {
 void Batch::set_options(const SimulationOptions& options) {
   validate_options(options);
   for (Simulation& s : sims_) s.set_options(options);
+  lanes_.reset();  // a plan of other options
+  mark_all(repack_all);
 }
 
 std::vector<int> Batch::check_env_ids(std::span<const int> env_ids) const {
@@ -279,6 +308,7 @@ void Batch::set_drive_targets(std::span<const int> env_ids, const RowMatrix& pos
     return drives_with_targets(s, row_of(positions, j).transpose(),
                                row_of(velocities, j).transpose());
   });
+  mark(envs, repack_drives);
 }
 
 void Batch::set_drive_gains(const RowMatrix& stiffness, const RowMatrix& damping, DriveType type) {
@@ -293,12 +323,14 @@ void Batch::set_drive_gains(std::span<const int> env_ids, const RowMatrix& stiff
     return drives_with_gains(s, row_of(stiffness, j).transpose(), row_of(damping, j).transpose(),
                              type);
   });
+  mark(envs, repack_drives);
 }
 
 void Batch::set_drive(const std::string& joint, const Drive& drive) {
   // The check on environment 0 is the check for all: the joint and the drive are the same.
   sims_.front().set_drive(joint, drive);
   for (Simulation& s : sims_) s.set_drive(joint, drive);
+  mark_all(repack_drives);
 }
 
 void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& q,
@@ -384,6 +416,7 @@ void Batch::set_per_dof(const std::vector<int>& envs,
   for (size_t j = 0; j < envs.size(); ++j)
     for (int d = 0; d < model.nv; ++d)
       if (dof_has_rows(model, d)) apply(sims_[static_cast<size_t>(envs[j])], d, at(j, d));
+  mark(envs, repack_joints);
 }
 
 void Batch::set_joint_limits(std::span<const int> env_ids, const RowMatrix& lower,
@@ -481,6 +514,7 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
       sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.drive_delays_.delay(d);
     sim.row_kinds_changed_ = true;
   }
+  mark(envs, repack_joints);  // a delay takes the environment off the lanes
 }
 
 // Each environment envs[j] gets the model make(its model, j); with broadcast values, one new
@@ -504,6 +538,7 @@ void Batch::vary_models(const std::vector<int>& envs, bool broadcast, Make make)
   }
   for (size_t j = 0; j < envs.size(); ++j)
     sims_[static_cast<size_t>(envs[j])].set_model(std::move(models[j]));
+  mark(envs, repack_model);
 }
 
 void Batch::set_armature(std::span<const int> env_ids, const RowMatrix& armature) {
@@ -711,9 +746,106 @@ void Batch::parallel(int n, int grain, F f) const {
   });
 }
 
+void Batch::mark(const std::vector<int>& envs, unsigned char what) {
+  for (int e : envs) repack_[static_cast<size_t>(e)] |= what;
+}
+
+void Batch::mark_all(unsigned char what) {
+  for (unsigned char& r : repack_) r |= what;
+}
+
+// Why the lanes cannot step every environment (empty: they can), after packing what changed
+// since the last step into the lanes' parameters.
+std::string Batch::lane_refusal() {
+  if (!lanes_allowed_) return "lanes off (set_lanes)";
+  if (simd_forced_scalar()) return "FEATHERDRIVE_SIMD=scalar";
+  const int n = size();
+  const SimulationOptions& o = sims_.front().options();
+  const Vec3& gravity = sims_.front().model().gravity;
+  for (int i = 0; i < n; ++i) {
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    std::string& why = refusal_[static_cast<size_t>(i)];
+    if (repack_[static_cast<size_t>(i)] || handed_out_[static_cast<size_t>(i)]) {
+      why = simd::lane_refusal(s);
+      // The lanes keep no per-iteration drive impulses (Simulation::last_drive_change).
+      if (why.empty() && s.track_convergence()) why = "convergence tracking on";
+    }
+    if (!why.empty()) return "environment " + std::to_string(i) + ": " + why;
+    const SimulationOptions& oi = s.options();
+    if (oi.dt != o.dt || oi.solver != o.solver ||
+        oi.position_iterations != o.position_iterations ||
+        oi.velocity_iterations != o.velocity_iterations || s.model().gravity != gravity)
+      return "environment " + std::to_string(i) + ": options or gravity other than environment 0's";
+  }
+  const simd::Plan* plan = lanes_ ? &lanes_->plan() : nullptr;
+  if (!plan || plan->dt != o.dt || plan->tgs != (o.solver == SolverType::tgs) ||
+      plan->position_iterations != o.position_iterations ||
+      plan->velocity_iterations != o.velocity_iterations) {
+    lanes_ = std::make_shared<simd::LaneEngine>(sims_.front(), n);
+    mark_all(repack_all);
+  }
+  for (int i = 0; i < n; ++i) {
+    unsigned char& what = repack_[static_cast<size_t>(i)];
+    if (handed_out_[static_cast<size_t>(i)]) what = repack_all;
+    const Simulation& s = sims_[static_cast<size_t>(i)];
+    if (what & repack_drives) lanes_->pack_drives(i, s);
+    if (what & repack_joints) lanes_->pack_joints(i, s);
+    if (what & repack_model) lanes_->pack_model(i, s.model());
+    what = 0;
+  }
+  return {};
+}
+
+std::string Batch::step_path() {
+  const std::string why = lane_refusal();
+  if (!why.empty()) return "scalar: " + why;
+  return std::string(to_string(lane_isa(size()))) + " lanes";
+}
+
+// Every environment through the lanes, its clock and divergence as its Simulation keeps them.
+void Batch::step_lanes(int count) {
+  const int n = size();
+  lane_steps_.resize(static_cast<size_t>(n));
+  lane_time_.resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    lane_steps_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].step_count_;
+    lane_time_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].time_;
+    lanes_->clear_stop(i);  // a diverged environment steps again, as its Simulation would
+  }
+  simd::Block a;
+  a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
+  a.applied = rows_[StateStorage::applied_force].data();
+  a.drive_force = rows_[StateStorage::drive_force].data();
+  a.limit_force = rows_[StateStorage::limit_force].data();
+  a.friction_force = rows_[StateStorage::friction_force].data();
+  a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
+  a.step_count = lane_steps_.data(), a.time = lane_time_.data();
+  lanes_->run(a, count, lane_isa(n), effective_num_threads());
+  int first = -1, diverged = 0;
+  for (int i = 0; i < n; ++i) {
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    s.step_count_ = lane_steps_[static_cast<size_t>(i)];
+    s.time_ = lane_time_[static_cast<size_t>(i)];
+    if (!lanes_->stopped_now(i)) continue;
+    if (first < 0) first = i;
+    ++diverged;
+  }
+  if (first >= 0) {
+    const Simulation& s = sims_[static_cast<size_t>(first)];
+    throw DivergenceError("batch copy " + std::to_string(first) + " (" + std::to_string(diverged) +
+                          " of " + std::to_string(n) + " copies diverged): " +
+                          lanes_->divergence_message(first, s.model(), s.step_count(), s.time()));
+  }
+}
+
 void Batch::step(int count) {
   if (count < 0)
     throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
+  if (count == 0) return;
+  if (lane_refusal().empty()) {
+    step_lanes(count);
+    return;
+  }
   const int n = size();
   // One slot per environment: environments never share anything a step writes.
   std::vector<std::string> diverged(static_cast<size_t>(n));

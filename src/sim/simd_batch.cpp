@@ -2,10 +2,7 @@
 // docs/simd_batch.md.
 #include "featherdrive/sim/simd_batch.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/info.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <xsimd/config/xsimd_arch.hpp>
 
@@ -17,48 +14,11 @@
 
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/model/model_variant.hpp"
-#include "simd_plan.hpp"
+#include "lane_engine.hpp"
 
 namespace featherdrive {
 
-using simd::kGroup;
 
-namespace simd {
-
-Layout make_layout(const Plan& p) {
-  const int L = p.num_links, n = p.nv;
-  Layout l;
-  int at = 0;
-  auto take = [&at](int count) {
-    const int o = at;
-    at += count;
-    return o;
-  };
-  // Arrays whose lives do not overlap share room, so that a block's scratch stays in the core's
-  // L2 cache (docs/simd_batch.md, "Scratch"): the response's W and G take the poses' place, the
-  // whole-articulation response Lambda the articulated inertias', the sweeps' arrays those of
-  // the velocities, bias forces and accelerations.
-  l.R = take(9 * L), l.pos = take(3 * L), l.W = l.R, l.G = l.R + 6 * L;
-  l.IA = take(21 * L), l.Lambda = l.IA;
-  l.vel = take(6 * L), l.pA = take(6 * L), l.c = take(6 * L), l.acc = take(6 * L);
-  l.dv = l.vel, l.subtree = l.pA, l.after = l.c, l.later = l.acc;
-  l.S = take(6 * L), l.U = take(6 * L), l.D_inv = take(L), l.inverse_mass = take(L);
-  l.q = take(p.nq), l.qd = take(n);
-  l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
-  l.old_lf = take(n), l.old_ff = take(n), l.old_vf = take(n), l.df = take(n), l.lf = take(n),
-  l.ff = take(n), l.vf = take(n), l.row = take(Layout::kRowFields * n);
-  l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
-  l.zero = take(21);
-  l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
-  l.size = at;
-  return l;
-}
-
-std::size_t scratch_doubles(const Plan& p) {
-  return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
-}
-
-}  // namespace simd
 
 const char* to_string(SimdIsa isa) {
   switch (isa) {
@@ -97,88 +57,32 @@ void check_isa(SimdIsa isa, const std::string& where) {
 
 SimdIsa default_simd_isa() {
   const char* forced = std::getenv("FEATHERDRIVE_SIMD");
-  if (!forced || !*forced) return available_simd_isas().back();
+  if (!forced || !*forced) {  // the widest, without a vector (Batch::step allocates nothing)
+    const auto cpu = xsimd::available_architectures();
+    return cpu.avx512f ? SimdIsa::avx512 : cpu.avx2 ? SimdIsa::avx2 : SimdIsa::sse2;
+  }
+  if (std::string(forced) == "scalar") return SimdIsa::sse2;  // SimdBatch's narrowest
   for (SimdIsa isa : {SimdIsa::sse2, SimdIsa::avx2, SimdIsa::avx512})
     if (std::string(forced) == to_string(isa)) {
       check_isa(isa, "FEATHERDRIVE_SIMD");
       return isa;
     }
   throw std::invalid_argument(std::string("FEATHERDRIVE_SIMD = '") + forced +
-                              "': expected sse2, avx2 or avx512");
+                              "': expected scalar, sse2, avx2 or avx512");
+}
+
+bool simd_forced_scalar() {
+  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
+  return forced && std::string(forced) == "scalar";
 }
 
 struct SimdBatch::Impl {
-  std::vector<simd::LinkConstants> links;
-  std::vector<int> finish_after;
-  simd::Plan plan;
-  std::vector<double> parameters;  // packed in groups of kGroup environments
-  std::vector<simd::Stop> stops;
-  std::unique_ptr<bool[]> stopped_now;
-  std::vector<std::vector<double>> scratch;  // one per thread, 64 bytes of slack for alignment
-  std::unique_ptr<Simulation> prototype;     // settings shared by all (for simulation(i))
-  // Kept between calls: a fresh arena makes its workers join again each call, and with a few
-  // blocks a call is over before they do.
-  std::unique_ptr<tbb::task_arena> arena;
-  int arena_threads = 0;
-  double* scratch_of(int thread) {
-    auto address = reinterpret_cast<std::uintptr_t>(scratch[static_cast<size_t>(thread)].data());
-    return reinterpret_cast<double*>((address + 63) & ~std::uintptr_t{63});
-  }
+  Impl(const Simulation& prototype, int count) : engine(prototype, count), prototype(prototype) {}
+  simd::LaneEngine engine;
+  Simulation prototype;  // settings shared by all (for simulation(i))
 };
 
 namespace {
-
-[[noreturn]] void unsupported(const std::string& what, const std::string& name,
-                              const std::string& value) {
-  throw std::invalid_argument("SimdBatch: " + what + " '" + name + "' has " + value +
-                              ": not supported by the SIMD Batch (docs/simd_batch.md)");
-}
-
-// What the lane step does not simulate, refused with the setting and the joint or link.
-void check_supported(const Simulation& s) {
-  const Model& m = s.model();
-  if (s.options().compat != Compat::none) unsupported("simulation", "options", "compat: physx");
-  // The lanes step in lockstep: one lane's redone step would hold up every other.
-  if (s.options().guard.enabled) unsupported("simulation", "options", "the step guard");
-  for (const Link& link : m.links) {
-    const bool one_dof =
-        link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic;
-    if (!one_dof && link.joint_type != JointType::fixed)
-      unsupported("joint", link.joint_name,
-                  link.joint_type == JointType::floating ? "a floating base" : "a spherical joint");
-  }
-  for (int i = 0; i < m.num_links(); ++i) {
-    const LinkParameters& lp = s.link_parameters(i);
-    const LinkParameters none;
-    if (lp.cfm_scale != none.cfm_scale || lp.linear_damping != none.linear_damping ||
-        lp.angular_damping != none.angular_damping ||
-        lp.max_linear_velocity != none.max_linear_velocity ||
-        lp.max_angular_velocity != none.max_angular_velocity)
-      unsupported("link", m.links[static_cast<size_t>(i)].name,
-                  "link parameters (cfm_scale, damping or velocity limits)");
-  }
-  for (int d = 0; d < m.nv; ++d) {
-    const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    if (s.friction_coefficient(d) != 0.0)
-      unsupported("joint", joint,
-                  "friction_coefficient " + format_double(s.friction_coefficient(d)));
-    if (s.actuator_envelope(d).active()) unsupported("joint", joint, "an actuator envelope");
-    if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
-      unsupported("joint", joint,
-                  std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
-    if (s.drive_delay(d) != 0)
-      unsupported("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
-  }
-  // Nor contact rows: the robot would pass through the ground.
-  if (s.ground().enabled && !m.shapes.empty())
-    unsupported("simulation", "settings", "a ground with the model's collision shapes");
-  if (s.contact_options().self_collision && m.shapes.size() > 1)
-    unsupported("simulation", "settings", "self-collision between the model's shapes");
-  // The lane step has no mimic rows: a prototype with one would run uncoupled.
-  for (const MimicJoint& mimic : s.mimic_joints())
-    unsupported("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,
-                "a mimic row (" + describe(m, mimic) + ")");
-}
 
 auto row_of(const RowMatrix& m, size_t j) {
   return m.row(m.rows() == 1 ? 0 : static_cast<Eigen::Index>(j));
@@ -203,14 +107,13 @@ int dof_index(int d, int field) {
 }  // namespace
 
 SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdIsa> isa)
-    : model_(prototype.model_ptr()),
-      options_(prototype.options()),
-      count_(count),
-      impl_(std::make_unique<Impl>()) {
+    : model_(prototype.model_ptr()), options_(prototype.options()), count_(count) {
   if (count < 1 || count > Batch::kMaxSize)
     throw std::invalid_argument("SimdBatch: count = " + std::to_string(count) + " must be in [1, " +
                                 std::to_string(Batch::kMaxSize) + "]");
-  check_supported(prototype);
+  if (const std::string refused = simd::lane_refusal(prototype); !refused.empty())
+    throw std::invalid_argument("SimdBatch: " + refused +
+                                ": not supported by the SIMD Batch (docs/simd_batch.md)");
   isa_ = isa ? *isa : default_simd_isa();
   // Without a choice (argument or FEATHERDRIVE_SIMD), a batch smaller than a block of the widest
   // width takes a narrower one: fewer padding lanes, the same bits.
@@ -219,100 +122,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
     while (isa_ != SimdIsa::sse2 && simd_width(isa_) * 2 > count)
       isa_ = isa_ == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
   check_isa(isa_, "SimdBatch: isa");
-  const Model& m = *model_;
-  const int L = m.num_links(), nv = m.nv, nq = m.nq;
-  // The topology and joint constants.
-  Impl& im = *impl_;
-  im.links.resize(static_cast<size_t>(L));
-  std::vector<char> later(static_cast<size_t>(L), 0);
-  for (int i = 0; i < L; ++i) {
-    const Link& link = m.links[static_cast<size_t>(i)];
-    simd::LinkConstants& k = im.links[static_cast<size_t>(i)];
-    k.parent = link.parent;
-    k.type = link.joint_type == JointType::revolute    ? 1
-             : link.joint_type == JointType::prismatic ? 2
-                                                       : 0;
-    k.v_index = link.v_index;
-    k.q_index = link.q_index;
-    for (int a = 0; a < 3; ++a) {
-      k.axis[a] = link.axis[a];
-      k.r[a] = link.tree_transform.r[a];
-      for (int b = 0; b < 3; ++b) k.E[3 * a + b] = link.tree_transform.E(a, b);
-      if (std::abs(link.axis[a]) == 1.0) {
-        k.unit_axis = a;
-        k.axis_sign = link.axis[a];
-      }
-    }
-    k.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
-    const Mat3& Ic = link.inertia_com;
-    k.diagonal_inertia = Ic(0, 1) == 0.0 && Ic(0, 2) == 0.0 && Ic(1, 2) == 0.0;
-    if (link.parent >= 0) {
-      const Link& parent = m.links[static_cast<size_t>(link.parent)];
-      k.first_child = parent.children.front() == i;
-      k.last_child = parent.children.back() == i;
-      later[static_cast<size_t>(i)] = !k.last_child || later[static_cast<size_t>(link.parent)];
-    }
-    k.later = later[static_cast<size_t>(i)];
-    k.leaf = link.children.empty();
-    k.finish_on_leave = k.type != 0 && !k.later;
-    if (!k.finish_on_leave && (k.type != 0 || k.later)) im.finish_after.push_back(i);
-  }
-  simd::Plan& p = im.plan;
-  p.num_links = L, p.nq = nq, p.nv = nv;
-  p.links = im.links.data();
-  p.finish_after = im.finish_after.data();
-  p.num_finish_after = static_cast<int>(im.finish_after.size());
-  p.entries = nv * simd::kDofParameters + L * simd::kLinkParameters;
-  for (int a = 0; a < 3; ++a) p.gravity[a] = m.gravity[a];
-  p.dt = options_.dt;
-  p.tgs = options_.solver == SolverType::tgs;
-  p.position_iterations = options_.position_iterations;
-  p.velocity_iterations = options_.velocity_iterations;
-  p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
-  p.layout = simd::make_layout(p);
-  // Parameters, every environment (and the padding up to a whole group) the prototype's.
-  // Whole blocks of the widest width and interleave: simd::kMaxInterleave groups each.
-  constexpr int kBlockGroups = simd::kMaxInterleave;
-  const int groups = (count + kGroup * kBlockGroups - 1) / (kGroup * kBlockGroups) * kBlockGroups;
-  im.parameters.assign(static_cast<size_t>(groups) * p.entries * kGroup, 0.0);
-  std::vector<double> one(static_cast<size_t>(p.entries));
-  for (int d = 0; d < nv; ++d) {
-    const Drive& drive = prototype.drive(d);
-    double* x = &one[static_cast<size_t>(dof_index(d, 0))];
-    x[simd::has_drive] = drive.type != DriveType::none;
-    x[simd::acceleration] = drive.type == DriveType::acceleration;
-    x[simd::stiffness] = drive.stiffness;
-    x[simd::damping] = drive.damping;
-    x[simd::max_force] = drive.max_force;
-    x[simd::max_impulse] = drive.max_impulse;
-    x[simd::target_position] = drive.target_position;
-    x[simd::target_velocity] = drive.target_velocity;
-    x[simd::lower] = prototype.lower_limit(d);
-    x[simd::upper] = prototype.upper_limit(d);
-    x[simd::armature] = m.armature[d];
-    const JointFriction& f = prototype.joint_friction(d);
-    x[simd::static_friction] = f.static_effort;
-    x[simd::dynamic_friction] = f.dynamic_effort;
-    x[simd::viscous_friction] = f.viscous;
-    x[simd::max_velocity] = prototype.max_joint_velocity(d);
-    x[simd::wrapped] = prototype.settings().revolute_wrap[static_cast<size_t>(d)] ==
-                       RevoluteWrap::wrapped;
-    p.any_velocity_limit = p.any_velocity_limit || x[simd::max_velocity] < DofRows::kNoVelocityLimit;
-  }
-  for (int i = 0; i < L; ++i) {
-    const Link& link = m.links[static_cast<size_t>(i)];
-    double* x = &one[static_cast<size_t>(nv * simd::kDofParameters + i * simd::kLinkParameters)];
-    x[simd::mass] = link.mass;
-    for (int a = 0; a < 3; ++a) x[simd::com_x + a] = link.com[a];
-    const Mat3& I = link.inertia_com;
-    x[simd::inertia_xx] = I(0, 0), x[simd::inertia_yy] = I(1, 1), x[simd::inertia_zz] = I(2, 2);
-    x[simd::inertia_xy] = I(0, 1), x[simd::inertia_xz] = I(0, 2), x[simd::inertia_yz] = I(1, 2);
-  }
-  for (int e = 0; e < groups * kGroup; ++e)
-    for (int k = 0; k < p.entries; ++k)
-      im.parameters[static_cast<size_t>(((e / kGroup) * p.entries + k) * kGroup + e % kGroup)] =
-          one[static_cast<size_t>(k)];
-  // States.
+  impl_ = std::make_unique<Impl>(prototype, count);
   auto rows = [count](const VecView& v) {
     RowMatrix r(count, v.size());
     for (int e = 0; e < count; ++e) r.row(e) = v.transpose();
@@ -329,9 +139,6 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   step_count_.assign(static_cast<size_t>(count), prototype.step_count());
   time_.assign(static_cast<size_t>(count), prototype.time());
   diverged_.resize(static_cast<size_t>(count));
-  im.stops.resize(static_cast<size_t>(count));
-  im.stopped_now = std::make_unique<bool[]>(static_cast<size_t>(count));
-  im.prototype = std::make_unique<Simulation>(prototype);
 }
 
 SimdBatch::~SimdBatch() = default;
@@ -369,15 +176,11 @@ std::vector<int> SimdBatch::envs(std::span<const int> env_ids) const {
 }
 
 double SimdBatch::parameter(int env, int index) const {
-  const int entries = impl_->plan.entries;
-  return impl_
-      ->parameters[static_cast<size_t>(((env / kGroup) * entries + index) * kGroup + env % kGroup)];
+  return impl_->engine.parameter(env, index);
 }
 
 void SimdBatch::set_parameter(int env, int index, double value) {
-  const int entries = impl_->plan.entries;
-  impl_->parameters[static_cast<size_t>(((env / kGroup) * entries + index) * kGroup +
-                                        env % kGroup)] = value;
+  impl_->engine.set_parameter(env, index, value);
 }
 
 RowMatrix SimdBatch::dof_parameter(int field) const {
@@ -407,7 +210,7 @@ static Drive packed_drive(const SimdBatch& b, int e, int d,
 void SimdBatch::set_q(std::span<const int> env_ids, const RowMatrix& q) {
   const std::vector<int> es = envs(env_ids);
   check_shape(q, es.size(), model_->nq, "q");
-  Simulation& check = *impl_->prototype;
+  Simulation& check = impl_->prototype;
   const VecX keep = check.q();
   for (size_t j = 0; j < es.size(); ++j) {
     try {
@@ -655,7 +458,7 @@ void SimdBatch::reset(std::span<const int> env_ids, const std::optional<RowMatri
     step_count_[static_cast<size_t>(e)] = 0;
     time_[static_cast<size_t>(e)] = 0.0;
     diverged_[static_cast<size_t>(e)].reset();
-    impl_->stops[static_cast<size_t>(e)] = simd::Stop{};
+    impl_->engine.clear_stop(e);
   }
 }
 
@@ -705,7 +508,7 @@ Simulation SimdBatch::simulation(int i) const {
     const Inertial x = packed_inertial(*this, i, link, m.nv, &SimdBatch::parameter);
     variant = with_link_inertial(variant, link, x.mass, x.com, x.inertia);
   }
-  Simulation sim = *impl_->prototype;
+  Simulation sim = impl_->prototype;
   sim.set_model(std::make_shared<const Model>(std::move(variant)));
   for (int d = 0; d < m.nv; ++d) {
     sim.set_drive(d, packed_drive(*this, i, d, &SimdBatch::parameter));
@@ -729,72 +532,21 @@ void SimdBatch::step(int count) {
     throw std::invalid_argument("SimdBatch: step count = " + std::to_string(count) +
                                 " must be >= 0");
   if (count == 0) return;
-  Impl& im = *impl_;
-  const int K = simd::interleave(width(), count_, effective_num_threads());
-  const int W = width() * K;  // lanes of a block
-  const int blocks = (count_ + W - 1) / W;
-  const int threads = std::min(effective_num_threads(), blocks);
-  const std::size_t doubles = simd::scratch_doubles(im.plan) + 8;
-  if (static_cast<int>(im.scratch.size()) < threads)
-    im.scratch.resize(static_cast<size_t>(threads));
-  for (auto& s : im.scratch)
-    if (s.size() < doubles) s.assign(doubles, 0.0);
-  std::fill(im.stopped_now.get(), im.stopped_now.get() + count_, false);
-  auto run = [&](int block, double* scratch) {
-    simd::Block b;
-    b.env0 = block * W;
-    b.interleave = K;
-    b.valid = std::min(W, count_ - b.env0);
-    b.q = q_.data(), b.qd = qd_.data(), b.applied = applied_force_.data();
-    b.drive_force = drive_force_.data(), b.limit_force = limit_force_.data();
-    b.friction_force = friction_force_.data();
-    b.velocity_limit_force = velocity_limit_force_.data();
-    b.parameters = im.parameters.data();
-    b.step_count = step_count_.data(), b.time = time_.data();
-    b.stop = im.stops.data(), b.stopped_now = im.stopped_now.get();
-    switch (isa_) {
-      case SimdIsa::sse2:
-        simd::run_block_sse2(im.plan, b, scratch, count);
-        break;
-      case SimdIsa::avx2:
-        simd::run_block_avx2(im.plan, b, scratch, count);
-        break;
-      case SimdIsa::avx512:
-        simd::run_block_avx512(im.plan, b, scratch, count);
-        break;
-    }
-  };
-  if (threads <= 1) {
-    for (int block = 0; block < blocks; ++block) run(block, im.scratch_of(0));
-  } else {
-    if (!im.arena || im.arena_threads != threads) {
-      im.arena = std::make_unique<tbb::task_arena>(threads);
-      im.arena_threads = threads;
-    }
-    im.arena->execute([&] {
-      tbb::parallel_for(tbb::blocked_range<int>(0, blocks), [&](const tbb::blocked_range<int>& r) {
-        double* scratch = im.scratch_of(tbb::this_task_arena::current_thread_index());
-        for (int block = r.begin(); block < r.end(); ++block) run(block, scratch);
-      });
-    });
-  }
+  simd::LaneEngine& engine = impl_->engine;
+  simd::Block arrays;
+  arrays.q = q_.data(), arrays.qd = qd_.data(), arrays.applied = applied_force_.data();
+  arrays.drive_force = drive_force_.data(), arrays.limit_force = limit_force_.data();
+  arrays.friction_force = friction_force_.data();
+  arrays.velocity_limit_force = velocity_limit_force_.data();
+  arrays.step_count = step_count_.data(), arrays.time = time_.data();
+  engine.run(arrays, count, isa_, effective_num_threads());
   // Messages for the environments that stopped in this call, as Simulation words them.
   int first = -1, stopped = 0;
   for (int e = 0; e < count_; ++e) {
-    if (!im.stopped_now[static_cast<size_t>(e)]) continue;
-    const simd::Stop& s = im.stops[static_cast<size_t>(e)];
-    static const char* const kQuantity[] = {
-        "",           "velocity qd",          "drive force", "limit force",
-        "friction force", "velocity limit force", "position q"};
-    std::ostringstream m;
-    m.precision(6);
-    m << "simulation diverged at step " << step_count_[static_cast<size_t>(e)] + 1
-      << " (t = " << time_[static_cast<size_t>(e)] << " s): joint '"
-      << model_->links[static_cast<size_t>(model_->dof_link[s.dof])].joint_name << "' "
-      << kQuantity[s.quantity] << " = " << s.value
-      << "; the state is left as it was before this step (lower dt or the gains)";
-    diverged_[static_cast<size_t>(e)] =
-        SimdDivergence{step_count_[static_cast<size_t>(e)] + 1, m.str()};
+    if (!engine.stopped_now(e)) continue;
+    const long steps = step_count_[static_cast<size_t>(e)];
+    diverged_[static_cast<size_t>(e)] = SimdDivergence{
+        steps + 1, engine.divergence_message(e, *model_, steps, time_[static_cast<size_t>(e)])};
     if (first < 0) first = e;
     ++stopped;
   }

@@ -246,6 +246,30 @@ TEST(BatchAllocations, PerCallNotPerStep) {
   }
 }
 
+// The same through the SIMD lanes (a fixed base): the lanes' scratch and the clocks are made by
+// the first call; on one thread a call allocates nothing, on two TBB's arena per call.
+TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
+  auto model = test::make_random_tree(7, 10, false, false, 0.01);
+  for (int threads : {1, 2}) {
+    Simulation prototype(model, SimulationOptions{});
+    for (int d = 0; d < model->nv; ++d) {  // every row kind the lanes solve
+      prototype.set_drive(d, Drive{DriveType::force, 400.0, 20.0, 50.0, 0.3, 0.0});
+      prototype.set_joint_limits(d, -0.2, 0.2);
+      prototype.set_joint_friction(d, JointFriction{0.1, 0.05, 0.01});
+      prototype.set_max_joint_velocity(d, 0.5);
+    }
+    Batch batch(prototype, 19);
+    batch.set_num_threads(threads);
+    batch.step();
+    ASSERT_NE(batch.step_path().find("lanes"), std::string::npos) << batch.step_path();
+    const long one = allocations_in([&] { batch.step(1); });
+    const long many = allocations_in([&] { batch.step(40); });
+    if (threads == 1) EXPECT_EQ(one, 0);
+    EXPECT_LE(many, one + 8) << threads << " threads";
+    EXPECT_EQ(batch.sim(0).step_count(), 42);
+  }
+}
+
 // The SIMD Batch's step allocates nothing on one thread (its scratch is made by the first call),
 // and per call, not per step, on two (TBB's arena), at every width, with drives and limits.
 TEST(SimdBatchAllocations, NoneOnOneThreadPerCallOnTwo) {

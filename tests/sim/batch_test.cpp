@@ -338,11 +338,13 @@ TEST(Batch, RandomisedEnvironmentsEqualSimulationsBuiltWithTheirParameters) {
   SimulationOptions options;
   options.dt = 0.005;
   options.solver = SolverType::tgs;
-  for (int threads : {1, 2}) {
+  // Without lanes, bit for bit; in lanes (every setting here is per lane) within 1e-12.
+  for (const auto& [threads, lanes] : {std::pair{1, false}, {2, false}, {1, true}, {2, true}}) {
     Simulation prototype(chain(nominal), options);
     drive_chain(prototype);
     Batch batch(prototype, 4);
     batch.set_num_threads(threads);
+    batch.set_lanes(lanes);
     const std::vector<int> one{1}, three{3}, both{1, 3};
     batch.set_link_mass(one, 3, VecX::Constant(1, 0.9));
     batch.set_link_mass(three, 2, VecX::Constant(1, 2.5), /*scale_inertia=*/false);
@@ -376,11 +378,28 @@ TEST(Batch, RandomisedEnvironmentsEqualSimulationsBuiltWithTheirParameters) {
     for (Simulation* s : {&plain, &env1, &env3}) s->step(300);
     const Simulation* expected[4] = {&plain, &env1, &plain, &env3};
     for (int i = 0; i < 4; ++i) {
-      EXPECT_TRUE(same_bits(batch.sim(i).q(), expected[i]->q())) << i << ", threads " << threads;
-      EXPECT_TRUE(same_bits(batch.sim(i).qd(), expected[i]->qd())) << i;
-      EXPECT_TRUE(same_bits(batch.sim(i).drive_force(), expected[i]->drive_force())) << i;
-      EXPECT_TRUE(same_bits(batch.sim(i).limit_force(), expected[i]->limit_force())) << i;
-      EXPECT_TRUE(same_bits(batch.sim(i).friction_force(), expected[i]->friction_force())) << i;
+      const Simulation& b = batch.sim(i);
+      const Simulation& e = *expected[i];
+      if (!lanes) {
+        EXPECT_TRUE(same_bits(b.q(), e.q())) << i << ", threads " << threads;
+        EXPECT_TRUE(same_bits(b.qd(), e.qd())) << i;
+        EXPECT_TRUE(same_bits(b.drive_force(), e.drive_force())) << i;
+        EXPECT_TRUE(same_bits(b.limit_force(), e.limit_force())) << i;
+        EXPECT_TRUE(same_bits(b.friction_force(), e.friction_force())) << i;
+      }
+      for (const auto& [x, y] : {std::pair{b.q(), e.q()}, {b.qd(), e.qd()},
+                                 {b.drive_force(), e.drive_force()},
+                                 {b.limit_force(), e.limit_force()},
+                                 {b.friction_force(), e.friction_force()},
+                                 {b.velocity_limit_force(), e.velocity_limit_force()}})
+        // Environment 1's last joint comes to rest on its lower limit with q exactly on it,
+        // where the limit row's law changes with the sign of a 1e-16 velocity (the speculative
+        // branch or the release: joint_constraints.md), and the lanes' other operation order
+        // flips that sign at some steps: its velocities part by up to 2e-4 at those steps, its
+        // positions stay within 1e-9.
+        EXPECT_LE(test::relative_difference(x, y), i == 1 && lanes ? 1e-3 : 1e-12)
+            << i << (lanes ? ", lanes" : "");
+      if (lanes && i == 1) EXPECT_LE(test::relative_difference(b.q(), e.q()), 1e-9);
     }
     // The randomisations really change the motion.
     EXPECT_FALSE(same_bits(env1.q(), plain.q()));
@@ -567,6 +586,89 @@ TEST(Batch, ResetStartsTheContactsOver) {
   EXPECT_TRUE(same_bits(batch.sim(1).q(), fresh.sim(0).q()));
   EXPECT_TRUE(same_bits(batch.sim(1).qd(), fresh.sim(0).qd()));
   EXPECT_EQ(batch.link_contact_force().row(1), fresh.link_contact_force().row(0));
+}
+
+}  // namespace
+}  // namespace featherdrive
+
+namespace featherdrive {
+namespace {
+
+// Batch through the SIMD lanes (docs/simd_batch.md, "Batch through the lanes"): every setter and
+// every change made through a handed-out sim(i) reaches the lanes before the next step, each
+// environment stays within 1e-12 of a Simulation given the same changes, and a setting the lanes
+// do not simulate sends the whole batch to the scalar step, named in step_path().
+TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
+  const auto model = test::make_random_tree(13, 7, /*floating=*/false, /*spherical=*/false);
+  SimulationOptions options;
+  options.dt = 0.005;
+  options.solver = SolverType::tgs;
+  Simulation proto(model, options);
+  std::mt19937 rng(13);
+  test::drive_every_joint(proto, rng, 300.0, 20.0);
+  const int n = 9, nv = model->nv;
+  std::vector<Simulation> alone(static_cast<size_t>(n), proto);
+  Batch batch(proto, n);
+  ASSERT_EQ(batch.step_path().find("lanes"), batch.step_path().size() - 5) << batch.step_path();
+  auto step_all = [&](int steps) {
+    batch.step(steps);
+    for (Simulation& s : alone) s.step(steps);
+  };
+  auto expect_within = [&](const char* when) {
+    for (int i = 0; i < n; ++i) {
+      const Simulation& b = batch.sim(i);
+      const Simulation& a = alone[static_cast<size_t>(i)];
+      EXPECT_LE(test::relative_difference(b.q(), a.q()), 1e-12) << when << ", env " << i;
+      EXPECT_LE(test::relative_difference(b.qd(), a.qd()), 1e-12) << when << ", env " << i;
+      EXPECT_LE(test::relative_difference(b.drive_force(), a.drive_force()), 1e-12) << when;
+      EXPECT_LE(test::relative_difference(b.velocity_limit_force(), a.velocity_limit_force()),
+                1e-12) << when;
+      EXPECT_EQ(b.step_count(), a.step_count());
+      EXPECT_EQ(b.time(), a.time());
+    }
+  };
+  step_all(10);
+  expect_within("as made");
+  // Batch setters on some environments.
+  const std::vector<int> some{1, 5};
+  RowMatrix targets = RowMatrix::Constant(1, nv, 0.4);
+  batch.set_drive_targets(some, targets, RowMatrix::Zero(1, nv));
+  RowMatrix vmax = RowMatrix::Constant(1, nv, 0.35);
+  const std::vector<int> limited{5, 7};
+  batch.set_max_joint_velocity(limited, vmax);
+  batch.set_link_mass(std::vector<int>{2}, 3, VecX::Constant(1, 2.0));
+  for (int i : some)
+    for (int d = 0; d < nv; ++d)
+      alone[static_cast<size_t>(i)].set_drive_target(d, 0.4, 0.0);
+  for (int i : limited)
+    for (int d = 0; d < nv; ++d) alone[static_cast<size_t>(i)].set_max_joint_velocity(d, 0.35);
+  alone[2].set_model(std::make_shared<const Model>(batch.sim(2).model()));
+  // A change made through a handed-out environment.
+  Simulation& handed = batch.sim(4);
+  step_all(5);
+  Drive stiff = handed.drive(1);
+  stiff.stiffness = 900.0;
+  handed.set_drive(1, stiff);
+  alone[4].set_drive(1, stiff);
+  step_all(30);
+  expect_within("after the setters");
+  EXPECT_GT(alone[5].velocity_limit_force().cwiseAbs().maxCoeff() +
+                alone[7].velocity_limit_force().cwiseAbs().maxCoeff(),
+            0.0);
+  // A setting the lanes do not simulate: the batch steps as Simulations, then lanes again.
+  handed.set_friction_coefficient(0, 0.05);
+  const std::string joint = model->links[static_cast<size_t>(model->dof_link[0])].joint_name;
+  EXPECT_EQ(batch.step_path(),
+            "scalar: environment 4: joint '" + joint + "' has friction_coefficient 0.05");
+  handed.set_friction_coefficient(0, 0.0);
+  EXPECT_EQ(batch.step_path().find("scalar"), std::string::npos);
+  // A floating base: scalar, saying why.
+  Batch floating(test::make_random_tree(13, 4, /*floating=*/true), 3);
+  EXPECT_NE(floating.step_path().find("scalar: environment 0: joint"), std::string::npos)
+      << floating.step_path();
+  EXPECT_NE(floating.step_path().find("has a floating base"), std::string::npos);
+  floating.set_lanes(false);
+  EXPECT_EQ(floating.step_path(), "scalar: lanes off (set_lanes)");
 }
 
 }  // namespace

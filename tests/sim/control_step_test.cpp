@@ -137,19 +137,29 @@ TEST(ControlStep, BatchEqualsEachCopyAloneForAnyThreadCount) {
       p.row(i) = pi.transpose(), v.row(i) = vi.transpose();
     }
     const ControlStep control{3, mode};
-    for (int threads : {1, 0}) {
-      Batch batch(model, n, options);
-      batch.set_num_threads(threads);
-      for (int i = 0; i < n; ++i) batch.sim(i) = alone[static_cast<size_t>(i)];
-      step_control(batch, p, v, control);
-      step_control(batch, 0.5 * p, -v, control);
-      for (int i = 0; i < n; ++i) {
-        Simulation s = alone[static_cast<size_t>(i)];
-        step_control(s, p.row(i).transpose(), v.row(i).transpose(), control);
-        step_control(s, 0.5 * p.row(i).transpose(), -v.row(i).transpose(), control);
-        EXPECT_TRUE(same_state(batch.sim(i), s)) << to_string(mode) << " copy " << i;
+    // Without lanes each copy is its Simulation bit for bit; in lanes within 1e-12 (another
+    // operation order).
+    for (bool lanes : {false, true})
+      for (int threads : {1, 0}) {
+        Batch batch(model, n, options);
+        batch.set_num_threads(threads);
+        batch.set_lanes(lanes);
+        for (int i = 0; i < n; ++i) batch.sim(i) = alone[static_cast<size_t>(i)];
+        EXPECT_EQ(batch.step_path().find("scalar"), lanes ? std::string::npos : 0u);
+        step_control(batch, p, v, control);
+        step_control(batch, 0.5 * p, -v, control);
+        for (int i = 0; i < n; ++i) {
+          Simulation s = alone[static_cast<size_t>(i)];
+          step_control(s, p.row(i).transpose(), v.row(i).transpose(), control);
+          step_control(s, 0.5 * p.row(i).transpose(), -v.row(i).transpose(), control);
+          if (!lanes) EXPECT_TRUE(same_state(batch.sim(i), s)) << to_string(mode) << " copy " << i;
+          EXPECT_LE(test::relative_difference(batch.sim(i).q(), s.q()), 1e-12) << i;
+          EXPECT_LE(test::relative_difference(batch.sim(i).qd(), s.qd()), 1e-12) << i;
+          EXPECT_LE(test::relative_difference(batch.sim(i).drive_force(), s.drive_force()), 1e-12);
+          EXPECT_EQ(batch.sim(i).step_count(), s.step_count());
+          EXPECT_EQ(batch.sim(i).time(), s.time());
+        }
       }
-    }
   }
 }
 

@@ -45,14 +45,9 @@ Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
   return sim;
 }
 
-// |a - b| <= tol max(1, |b|) everywhere; returns the largest relative difference.
 double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
                                 const Eigen::Ref<const RowMatrix>& b) {
-  double worst = 0.0;
-  for (Eigen::Index i = 0; i < a.size(); ++i)
-    worst =
-        std::max(worst, std::abs(a.data()[i] - b.data()[i]) / std::max(1.0, std::abs(b.data()[i])));
-  return worst;
+  return test::relative_difference(a, b);
 }
 
 // Per-environment gains, targets, limits, friction, armature and link inertias of the

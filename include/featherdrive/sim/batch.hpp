@@ -1,6 +1,8 @@
-// N environments of one robot stepped together on all cores (TBB): independent Simulations that
-// share nothing a step writes, so each environment's result is bit-identical to stepping it alone,
-// whatever the number of threads. Their states lie in (N, n) row-major arrays, one row per
+// N environments of one robot stepped together on all cores (TBB): in SIMD lanes where every
+// environment's settings are within the lane step's (the same bits whatever the lane, width,
+// batch size and threads, within 1e-12 of each stepped alone), else as independent Simulations
+// that share nothing a step writes, each bit-identical to stepping it alone whatever the number
+// of threads. Their states lie in (N, n) row-major arrays, one row per
 // environment (each Simulation's storage is its row), and each may have its own model parameters
 // (masses, centres of mass, armature) over one topology. Also whole-vector drive setters for one
 // Simulation. docs/conventions.md, "Batch".
@@ -16,9 +18,14 @@
 #include <vector>
 
 #include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/sim/simd_isa.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
 namespace featherdrive {
+
+namespace simd {
+class LaneEngine;
+}
 
 /// One row per environment: (N, nq) or (N, nv), row-major like numpy's default.
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -74,6 +81,20 @@ class Batch {
 
   /// Sets every environment's options.
   void set_options(const SimulationOptions& options);
+
+  /// Whether step() may step the environments in SIMD lanes (the default). It does when every
+  /// environment's settings are within what the lane step simulates (docs/simd_batch.md: fixed
+  /// bases of revolute and prismatic joints, drives, limits, friction, velocity limits, wrap,
+  /// PGS and TGS, compat none) and the options are the same in all, with the CPU's widest
+  /// instruction set (FEATHERDRIVE_SIMD names a narrower one, or `scalar` for none). Each
+  /// environment then gives the same bits whatever its lane, the width, the batch size and the
+  /// threads, within 1e-12 of its Simulation stepped alone (the operation order differs);
+  /// otherwise, and with lanes off, each environment is its Simulation stepped alone, bit for bit.
+  void set_lanes(bool allowed) { lanes_allowed_ = allowed; }
+  bool lanes() const { return lanes_allowed_; }
+  /// How the next step() runs: "avx2 lanes", or "scalar: " and why (the first environment's
+  /// setting the lanes do not simulate, lanes off, FEATHERDRIVE_SIMD=scalar).
+  std::string step_path();
 
   // States and outputs, (N, nq) / (N, nv): the environments' storage itself (no copy).
   const RowMatrix& q() const { return rows_[StateStorage::q]; }
@@ -196,11 +217,25 @@ class Batch {
                    const char* what, Check check, Apply apply, Same same);
   template <class Make>
   void vary_models(const std::vector<int>& envs, bool broadcast, Make make);
+  // The lanes: what of each environment to pack again before the next step (what a setter
+  // changed), and the step through them.
+  enum Repack : unsigned char { repack_drives = 1, repack_joints = 2, repack_model = 4, repack_all = 7 };
+  void mark(const std::vector<int>& envs, unsigned char what);
+  void mark_all(unsigned char what);
+  std::string lane_refusal();  ///< packs what changed; empty when the lanes step every environment
+  void step_lanes(int count);
 
   std::vector<Simulation> sims_;
   std::array<RowMatrix, StateStorage::kFields> rows_;
   VecX initial_q_;
   int threads_ = 0;
+  bool lanes_allowed_ = true;
+  std::shared_ptr<simd::LaneEngine> lanes_;  // made at the first step through lanes
+  std::vector<unsigned char> repack_;        // per environment, Repack bits
+  std::vector<char> handed_out_;             // sim(i) handed out writable: packed at every step
+  std::vector<std::string> refusal_;         // per environment: why its settings need the scalar step
+  std::vector<long> lane_steps_;             // the environments' clocks during a lane step
+  std::vector<double> lane_time_;
 };
 
 }  // namespace featherdrive

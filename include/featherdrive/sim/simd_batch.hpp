@@ -13,20 +13,9 @@
 #include <vector>
 
 #include "featherdrive/sim/batch.hpp"
+#include "featherdrive/sim/simd_isa.hpp"
 
 namespace featherdrive {
-
-/// The instruction sets the SIMD Batch is compiled for, narrowest first.
-enum class SimdIsa { sse2, avx2, avx512 };
-const char* to_string(SimdIsa isa);
-/// Lanes (doubles) of one vector of the instruction set: 2, 4, 8.
-int simd_width(SimdIsa isa);
-/// The widest one this CPU runs, or the environment variable FEATHERDRIVE_SIMD (sse2, avx2,
-/// avx512) where it names one the CPU has; throws std::invalid_argument naming the value
-/// otherwise.
-SimdIsa default_simd_isa();
-/// The instruction sets this CPU runs, narrowest first.
-std::vector<SimdIsa> available_simd_isas();
 
 /// Where and why an environment stopped: the step (1-based, its step_count + 1), the joint, the
 /// quantity and its value, in Simulation's DivergenceError message.

@@ -1,0 +1,279 @@
+#include "lane_engine.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+
+#include "featherdrive/core/format.hpp"
+
+namespace featherdrive::simd {
+
+Layout make_layout(const Plan& p) {
+  const int L = p.num_links, n = p.nv;
+  Layout l;
+  int at = 0;
+  auto take = [&at](int count) {
+    const int o = at;
+    at += count;
+    return o;
+  };
+  // Arrays whose lives do not overlap share room, so that a block's scratch stays in the core's
+  // L2 cache (docs/simd_batch.md, "Scratch"): the response's W and G take the poses' place, the
+  // whole-articulation response Lambda the articulated inertias', the sweeps' arrays those of
+  // the velocities, bias forces and accelerations.
+  l.R = take(9 * L), l.pos = take(3 * L), l.W = l.R, l.G = l.R + 6 * L;
+  l.IA = take(21 * L), l.Lambda = l.IA;
+  l.vel = take(6 * L), l.pA = take(6 * L), l.c = take(6 * L), l.acc = take(6 * L);
+  l.dv = l.vel, l.subtree = l.pA, l.after = l.c, l.later = l.acc;
+  l.S = take(6 * L), l.U = take(6 * L), l.D_inv = take(L), l.inverse_mass = take(L);
+  l.q = take(p.nq), l.qd = take(n);
+  l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
+  l.old_lf = take(n), l.old_ff = take(n), l.old_vf = take(n), l.df = take(n), l.lf = take(n);
+  l.ff = take(n), l.vf = take(n), l.row = take(Layout::kRowFields * n);
+  l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
+  l.zero = take(21);
+  l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
+  l.size = at;
+  return l;
+}
+
+std::size_t scratch_doubles(const Plan& p) {
+  return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
+}
+
+std::string lane_refusal(const Simulation& s) {
+  auto has = [](const std::string& what, const std::string& name, const std::string& value) {
+    return what + " '" + name + "' has " + value;
+  };
+  const Model& m = s.model();
+  if (s.options().compat != Compat::none) return has("simulation", "options", "compat: physx");
+  // The lanes step in lockstep: one lane's redone step would hold up every other.
+  if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
+  for (const Link& link : m.links) {
+    const bool one_dof =
+        link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic;
+    if (!one_dof && link.joint_type != JointType::fixed)
+      return has("joint", link.joint_name,
+                 link.joint_type == JointType::floating ? "a floating base" : "a spherical joint");
+  }
+  for (int i = 0; i < m.num_links(); ++i) {
+    const LinkParameters& lp = s.link_parameters(i);
+    const LinkParameters none;
+    if (lp.cfm_scale != none.cfm_scale || lp.linear_damping != none.linear_damping ||
+        lp.angular_damping != none.angular_damping ||
+        lp.max_linear_velocity != none.max_linear_velocity ||
+        lp.max_angular_velocity != none.max_angular_velocity)
+      return has("link", m.links[static_cast<size_t>(i)].name,
+                 "link parameters (cfm_scale, damping or velocity limits)");
+  }
+  for (int d = 0; d < m.nv; ++d) {
+    const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
+    if (s.friction_coefficient(d) != 0.0)
+      return has("joint", joint, "friction_coefficient " + format_double(s.friction_coefficient(d)));
+    if (s.actuator_envelope(d).active()) return has("joint", joint, "an actuator envelope");
+    if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
+      return has("joint", joint,
+                 std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
+    if (s.drive_delay(d) != 0)
+      return has("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
+  }
+  // Nor contact rows: the robot would pass through the ground.
+  if (s.ground().enabled && !m.shapes.empty())
+    return has("simulation", "settings", "a ground with the model's collision shapes");
+  if (s.contact_options().self_collision && m.shapes.size() > 1)
+    return has("simulation", "settings", "self-collision between the model's shapes");
+  // The lane step has no mimic rows: a prototype with one would run uncoupled.
+  for (const MimicJoint& mimic : s.mimic_joints())
+    return has("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,
+               "a mimic row (" + describe(m, mimic) + ")");
+  return {};
+}
+
+LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
+  const Model& m = prototype.model();
+  const int L = m.num_links(), nv = m.nv;
+  // The topology and joint constants.
+  links_.resize(static_cast<size_t>(L));
+  std::vector<char> later(static_cast<size_t>(L), 0);
+  for (int i = 0; i < L; ++i) {
+    const Link& link = m.links[static_cast<size_t>(i)];
+    LinkConstants& k = links_[static_cast<size_t>(i)];
+    k.parent = link.parent;
+    k.type = link.joint_type == JointType::revolute    ? 1
+             : link.joint_type == JointType::prismatic ? 2
+                                                       : 0;
+    k.v_index = link.v_index;
+    k.q_index = link.q_index;
+    for (int a = 0; a < 3; ++a) {
+      k.axis[a] = link.axis[a];
+      k.r[a] = link.tree_transform.r[a];
+      for (int b = 0; b < 3; ++b) k.E[3 * a + b] = link.tree_transform.E(a, b);
+      if (std::abs(link.axis[a]) == 1.0) {
+        k.unit_axis = a;
+        k.axis_sign = link.axis[a];
+      }
+    }
+    k.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
+    const Mat3& Ic = link.inertia_com;
+    k.diagonal_inertia = Ic(0, 1) == 0.0 && Ic(0, 2) == 0.0 && Ic(1, 2) == 0.0;
+    if (link.parent >= 0) {
+      const Link& parent = m.links[static_cast<size_t>(link.parent)];
+      k.first_child = parent.children.front() == i;
+      k.last_child = parent.children.back() == i;
+      later[static_cast<size_t>(i)] = !k.last_child || later[static_cast<size_t>(link.parent)];
+    }
+    k.later = later[static_cast<size_t>(i)];
+    k.leaf = link.children.empty();
+    k.finish_on_leave = k.type != 0 && !k.later;
+    if (!k.finish_on_leave && (k.type != 0 || k.later)) finish_after_.push_back(i);
+  }
+  const SimulationOptions& o = prototype.options();
+  Plan& p = plan_;
+  p.num_links = L, p.nq = m.nq, p.nv = nv;
+  p.links = links_.data();
+  p.finish_after = finish_after_.data();
+  p.num_finish_after = static_cast<int>(finish_after_.size());
+  p.entries = nv * kDofParameters + L * kLinkParameters;
+  for (int a = 0; a < 3; ++a) p.gravity[a] = m.gravity[a];
+  p.dt = o.dt;
+  p.tgs = o.solver == SolverType::tgs;
+  p.position_iterations = o.position_iterations;
+  p.velocity_iterations = o.velocity_iterations;
+  p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
+  p.layout = make_layout(p);
+  // Every environment (and the padding up to whole blocks of the widest width and interleave,
+  // kMaxInterleave groups each) starts with the prototype's parameters.
+  const int groups = (count + kGroup * kMaxInterleave - 1) / (kGroup * kMaxInterleave) *
+                     kMaxInterleave;
+  parameters_.assign(static_cast<size_t>(groups) * p.entries * kGroup, 0.0);
+  for (int e = 0; e < groups * kGroup; ++e) {
+    pack_drives(e, prototype);
+    pack_joints(e, prototype);
+    pack_model(e, m);
+  }
+  stops_.resize(static_cast<size_t>(count));
+  stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
+}
+
+void LaneEngine::pack_drives(int env, const Simulation& sim) {
+  for (int d = 0; d < plan_.nv; ++d) {
+    const Drive& drive = sim.drive(d);
+    const int x = d * kDofParameters;
+    set_parameter(env, x + has_drive, drive.type != DriveType::none);
+    set_parameter(env, x + acceleration, drive.type == DriveType::acceleration);
+    set_parameter(env, x + stiffness, drive.stiffness);
+    set_parameter(env, x + damping, drive.damping);
+    set_parameter(env, x + max_force, drive.max_force);
+    set_parameter(env, x + max_impulse, drive.max_impulse);
+    set_parameter(env, x + target_position, drive.target_position);
+    set_parameter(env, x + target_velocity, drive.target_velocity);
+  }
+}
+
+void LaneEngine::pack_joints(int env, const Simulation& sim) {
+  for (int d = 0; d < plan_.nv; ++d) {
+    const int x = d * kDofParameters;
+    set_parameter(env, x + lower, sim.lower_limit(d));
+    set_parameter(env, x + upper, sim.upper_limit(d));
+    const JointFriction& f = sim.joint_friction(d);
+    set_parameter(env, x + static_friction, f.static_effort);
+    set_parameter(env, x + dynamic_friction, f.dynamic_effort);
+    set_parameter(env, x + viscous_friction, f.viscous);
+    const double vmax = sim.max_joint_velocity(d);
+    set_parameter(env, x + max_velocity, vmax);
+    // Set, never cleared: with no velocity over its limit the scaling changes no bit.
+    plan_.any_velocity_limit = plan_.any_velocity_limit || vmax < DofRows::kNoVelocityLimit;
+    set_parameter(env, x + wrapped,
+                  sim.settings().revolute_wrap[static_cast<size_t>(d)] == RevoluteWrap::wrapped);
+  }
+}
+
+void LaneEngine::pack_model(int env, const Model& m) {
+  for (int d = 0; d < plan_.nv; ++d) set_parameter(env, d * kDofParameters + armature, m.armature[d]);
+  for (int i = 0; i < plan_.num_links; ++i) {
+    const Link& link = m.links[static_cast<size_t>(i)];
+    const int x = plan_.nv * kDofParameters + i * kLinkParameters;
+    set_parameter(env, x + mass, link.mass);
+    for (int a = 0; a < 3; ++a) set_parameter(env, x + com_x + a, link.com[a]);
+    const Mat3& I = link.inertia_com;
+    set_parameter(env, x + inertia_xx, I(0, 0));
+    set_parameter(env, x + inertia_yy, I(1, 1));
+    set_parameter(env, x + inertia_zz, I(2, 2));
+    set_parameter(env, x + inertia_xy, I(0, 1));
+    set_parameter(env, x + inertia_xz, I(0, 2));
+    set_parameter(env, x + inertia_yz, I(1, 2));
+    if (I(0, 1) != 0.0 || I(0, 2) != 0.0 || I(1, 2) != 0.0)
+      links_[static_cast<size_t>(i)].diagonal_inertia = false;
+  }
+}
+
+double* LaneEngine::scratch_of(int thread) {
+  auto address = reinterpret_cast<std::uintptr_t>(scratch_[static_cast<size_t>(thread)].data());
+  return reinterpret_cast<double*>((address + 63) & ~std::uintptr_t{63});
+}
+
+void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wanted) {
+  const int K = interleave(simd_width(isa), count_, threads_wanted);
+  const int W = simd_width(isa) * K;  // lanes of a block
+  const int blocks = (count_ + W - 1) / W;
+  const int threads = std::max(1, std::min(threads_wanted, blocks));
+  const std::size_t doubles = scratch_doubles(plan_) + 8;
+  if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(static_cast<size_t>(threads));
+  for (auto& s : scratch_)
+    if (s.size() < doubles) s.assign(doubles, 0.0);
+  std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
+  auto run_one = [&](int block, double* scratch) {
+    Block b = arrays;
+    b.env0 = block * W;
+    b.interleave = K;
+    b.valid = std::min(W, count_ - b.env0);
+    b.parameters = parameters_.data();
+    b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
+    switch (isa) {
+      case SimdIsa::sse2:
+        run_block_sse2(plan_, b, scratch, steps);
+        break;
+      case SimdIsa::avx2:
+        run_block_avx2(plan_, b, scratch, steps);
+        break;
+      case SimdIsa::avx512:
+        run_block_avx512(plan_, b, scratch, steps);
+        break;
+    }
+  };
+  if (threads <= 1) {
+    for (int block = 0; block < blocks; ++block) run_one(block, scratch_of(0));
+    return;
+  }
+  if (!arena_ || arena_threads_ != threads) {
+    arena_ = std::make_unique<tbb::task_arena>(threads);
+    arena_threads_ = threads;
+  }
+  arena_->execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, blocks), [&](const tbb::blocked_range<int>& r) {
+      double* scratch = scratch_of(tbb::this_task_arena::current_thread_index());
+      for (int block = r.begin(); block < r.end(); ++block) run_one(block, scratch);
+    });
+  });
+}
+
+std::string LaneEngine::divergence_message(int e, const Model& model, long step_count,
+                                           double time) const {
+  const Stop& s = stop(e);
+  static const char* const kQuantity[] = {
+      "",           "velocity qd",          "drive force", "limit force",
+      "friction force", "velocity limit force", "position q"};
+  std::ostringstream m;
+  m.precision(6);
+  m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): joint '"
+    << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
+    << kQuantity[s.quantity] << " = " << s.value
+    << "; the state is left as it was before this step (lower dt or the gains)";
+  return m.str();
+}
+
+}  // namespace featherdrive::simd

@@ -1,0 +1,77 @@
+// The lanes' engine shared by Batch and SimdBatch: what the lane step supports, the per-lane
+// parameters packed from Simulations, and the blocks run on threads (simd_lane_step.hpp).
+// docs/simd_batch.md.
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "featherdrive/sim/simd_batch.hpp"
+#include "simd_plan.hpp"
+
+namespace featherdrive::simd {
+
+/// What of `s` the lane step does not simulate, as "joint 'j' has a floating base" (the setting
+/// and the joint or link named); empty when the lanes step it as Simulation does.
+std::string lane_refusal(const Simulation& s);
+
+class LaneEngine {
+ public:
+  /// `count` environments of the prototype's topology and options, each with its parameters.
+  LaneEngine(const Simulation& prototype, int count);
+
+  int size() const { return count_; }
+  const Plan& plan() const { return plan_; }
+
+  /// Environment env's per-lane parameters from `sim` (same topology and options): drives
+  /// (with targets), joint limits, friction, velocity limits and wrap; its model's armature and
+  /// link inertials. A link whose inertia is not diagonal makes the lanes use the general
+  /// rotation for it from then on.
+  void pack_drives(int env, const Simulation& sim);
+  void pack_joints(int env, const Simulation& sim);
+  void pack_model(int env, const Model& model);
+  void pack(int env, const Simulation& sim) {
+    pack_drives(env, sim);
+    pack_joints(env, sim);
+    pack_model(env, sim.model());
+  }
+
+  /// Entry `index` of environment env's parameters (simd_plan.hpp's DofParameter, LinkParameter).
+  double parameter(int env, int index) const { return parameters_[at(env, index)]; }
+  void set_parameter(int env, int index, double value) { parameters_[at(env, index)] = value; }
+
+  /// `steps` steps of every environment, W lanes a block (W: the isa's width times the
+  /// interleave), blocks on `threads` threads, on the state arrays and clocks `arrays` points at
+  /// (its other fields are the engine's to set). An environment stopped earlier (stop(e)) stays.
+  void run(const Block& arrays, int steps, SimdIsa isa, int threads);
+  /// Why environment e stopped (quantity 0: it did not), and whether in the last run.
+  const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
+  bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }
+  void clear_stop(int e) { stops_[static_cast<size_t>(e)] = Stop{}; }
+  /// A stopped environment's reason worded as Simulation's DivergenceError, at the clock it kept.
+  std::string divergence_message(int e, const Model& model, long step_count, double time) const;
+
+ private:
+  size_t at(int env, int index) const {
+    return static_cast<size_t>(((env / kGroup) * plan_.entries + index) * kGroup + env % kGroup);
+  }
+  double* scratch_of(int thread);
+
+  int count_ = 0;
+  std::vector<LinkConstants> links_;
+  std::vector<int> finish_after_;
+  Plan plan_;
+  std::vector<double> parameters_;  // packed in groups of kGroup environments
+  std::vector<Stop> stops_;
+  std::unique_ptr<bool[]> stopped_now_;
+  std::vector<std::vector<double>> scratch_;  // one per thread, 64 bytes of slack for alignment
+  // Kept between calls: a fresh arena makes its workers join again each call, and with a few
+  // blocks a call is over before they do.
+  std::unique_ptr<tbb::task_arena> arena_;
+  int arena_threads_ = 0;
+};
+
+}  // namespace featherdrive::simd
