@@ -15,6 +15,7 @@ namespace {
 constexpr double kFrictionOffsetThreshold = 0.04;  // m: anchors lie closer (section 4)
 constexpr double kCorrelationDistance = 0.025;    // m: a kept anchor's drift along n (C9)
 constexpr double kSameNormal = 0.999;              // PXC_SAME_NORMAL: cos of about 2.6 degrees
+constexpr double kAnchorSeparation2 = 1e-8;       // m^2: a second anchor lies farther (C9a)
 
 // PhysX keeps at most four points of a convex mesh on a plane (GU_MANIFOLD_CACHE_SIZE; G3).
 constexpr int kConvexPoints = 4;
@@ -334,39 +335,55 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     }
     patch.min_normal_impulse = kMinNormalShare * min_normal / count;  // C12
     // Anchors (section 4, C9): last step's, while they stuck and stay within the correlation
-    // distance of the ground along n; then, up to two, the first point near enough, the next one
-    // apart from it, and (fresh anchors only) later points that spread the pair wider.
+    // distance of the ground along the normal they were made with; a kept pair clustered in less
+    // than half the points' bounding diagonal is made afresh. Then, up to two, the first point
+    // near enough, the next one more than 1e-4 m from it, and later points that spread the pair
+    // wider (C9a); a kept anchor stays where it is.
     const FrictionAnchors& kept = anchors_[static_cast<size_t>(k)];
     Vec3 anchor_at[2], anchor_ground[2];
-    int num_anchors = 0;
+    int num_kept = 0;
     // The normal is kept in the link's frame: a link that turned (a rolling ball) drops them.
-    if (kept.count > 0 && (data.world_rotation[L] * kept.normal).dot(n) > kSameNormal) {
+    const Vec3 kept_normal = data.world_rotation[L] * kept.normal;
+    if (kept.count > 0 && kept_normal.dot(n) > kSameNormal) {
       bool correlated = true;
       for (int j = 0; j < kept.count; ++j) {
         anchor_at[j] = data.world_position[L] + data.world_rotation[L] * kept.body[j];
         anchor_ground[j] = kept.ground[j];
-        correlated = correlated &&
-                     std::abs(n.dot(anchor_at[j] - anchor_ground[j])) <= kCorrelationDistance;
+        correlated = correlated && std::abs(kept_normal.dot(anchor_at[j] - anchor_ground[j])) <
+                                       kCorrelationDistance;
       }
-      if (correlated) num_anchors = kept.count;
+      if (correlated) num_kept = kept.count;
     }
-    const bool fresh = num_anchors == 0;
-    const double anchor_distance = kFrictionOffsetThreshold + rest_distance;
-    for (int p = 0; p < count; ++p) {
-      if (!(separations[p] < anchor_distance)) continue;
-      const Vec3& x = points[p];
-      if (num_anchors < 2) {
-        if (num_anchors == 0 || (x - anchor_at[0]).squaredNorm() > 1e-12) {
-          anchor_at[num_anchors] = x;
-          anchor_ground[num_anchors++] = x;
-        }
-      } else if (fresh) {
-        const double spread = (anchor_at[1] - anchor_at[0]).squaredNorm();
-        const int replace = (x - anchor_at[0]).squaredNorm() > spread   ? 1
-                            : (x - anchor_at[1]).squaredNorm() > spread ? 0
-                                                                        : -1;
-        if (replace >= 0) anchor_at[replace] = anchor_ground[replace] = x;
+    if (num_kept == 2) {
+      Vec3 low = points[0], high = points[0];
+      for (int p = 1; p < count; ++p) {
+        low = low.cwiseMin(points[p]);
+        high = high.cwiseMax(points[p]);
       }
+      if (4.0 * (anchor_at[1] - anchor_at[0]).squaredNorm() < (high - low).squaredNorm()) num_kept = 0;
+    }
+    int num_anchors = num_kept;
+    if (num_kept < 2) {
+      Vec3 chosen[2] = {anchor_at[0], anchor_at[1]};
+      double spread = 0.0;
+      const double anchor_distance = kFrictionOffsetThreshold + rest_distance;
+      for (int p = 0; p < count; ++p) {
+        if (!(separations[p] < anchor_distance)) continue;
+        const Vec3& x = points[p];
+        if (num_anchors == 0) {
+          chosen[num_anchors++] = x;
+        } else if (num_anchors == 1) {
+          spread = (x - chosen[0]).squaredNorm();
+          if (spread > kAnchorSeparation2) chosen[num_anchors++] = x;
+        } else {
+          const double d0 = (x - chosen[0]).squaredNorm(), d1 = (x - chosen[1]).squaredNorm();
+          if (d0 > d1 ? d0 > spread : d1 > spread) {
+            chosen[d0 > d1 ? 1 : 0] = x;
+            spread = std::max(d0, d1);
+          }
+        }
+      }
+      for (int j = num_kept; j < num_anchors; ++j) anchor_at[j] = anchor_ground[j] = chosen[j];
     }
     // C10: along the link's centre-of-mass velocity, relative to the ground.
     const Vec3 com = data.world_position[L] + data.world_rotation[L] * data.constants[L].com;
