@@ -447,6 +447,8 @@ Vec6 ContactRows::solve_link(int link, const Vec6& v, Vec6& dv, const ContactPha
     const double N = std::max(normal_sum, patch.min_normal_impulse);
     const double static_limit = patch.static_friction * N;
     const double dynamic_limit = patch.dynamic_friction * N;
+    // The patch slipped when the last iteration clamped a row (C13a): earlier ones do not count.
+    patch.broken = false;
     for (int j = 0; j < patch.num_anchors; ++j) {
       ContactFrictionRow* rows = &frictions_[static_cast<size_t>(patch.first_friction + 2 * j)];
       if (!phase.tgs) {

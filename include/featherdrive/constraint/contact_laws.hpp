@@ -16,10 +16,11 @@ inline constexpr double kMinNormalShare = 0.25;    // C12
 /// sideways friction rows), which then applies nothing (C22).
 inline double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
 
-/// A unit vector perpendicular to n, the friction direction of a patch at rest (C10).
+/// The friction direction of a patch at rest, PhysX's (C10a): x cross n, or z cross n when n lies
+/// within 45 degrees of x. It fixes which of the two rows comes first in the solve.
 inline Vec3 fallback_tangent(const Vec3& n) {
-  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  return (a - n * n.dot(a)).normalized();
+  const Vec3 t = std::abs(n.x()) < 0.70710678 ? Vec3(0, -n.z(), n.y()) : Vec3(-n.y(), n.x(), 0);
+  return t.normalized();
 }
 
 /// A unit impulse along u at the point r (relative to frame 0's origin) as a spatial force (C21).
