@@ -253,10 +253,12 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
         }
         break;
       case ShapeType::box:
+        // PhysX's order (contactPlaneBox): z turns fastest, then y, then x, + before - (C1a); the
+        // rows are solved in it.
         for (int v = 0; v < 8; ++v) {
-          const Vec3 corner(v & 1 ? shape.size.x() : -shape.size.x(),
-                            v & 2 ? shape.size.y() : -shape.size.y(),
-                            v & 4 ? shape.size.z() : -shape.size.z());
+          const Vec3 corner(v & 4 ? -shape.size.x() : shape.size.x(),
+                            v & 2 ? -shape.size.y() : shape.size.y(),
+                            v & 1 ? -shape.size.z() : shape.size.z());
           const Vec3 x = c + R * corner;
           add(x, n.dot(x) - ground.height);
         }

@@ -58,10 +58,11 @@ std::vector<Vec3> vertices(const mjModel* m, int id) {
 }
 
 void sort_vertices(std::vector<Vec3>& v) {
-  // By z, then y, then x: a box's hull lists its corners in the box path's order (x fastest),
-  // so the narrow phase meets them, and the solver their rows, in the same order.
+  // By x, then y, then z, each descending: a box's hull lists its corners in the box path's
+  // order (PhysX's, z fastest, + first: docs/math/contact.md, C1a), so the narrow phase meets
+  // them, and the solver their rows, in the same order.
   std::sort(v.begin(), v.end(), [](const Vec3& a, const Vec3& b) {
-    return std::tie(a.z(), a.y(), a.x()) < std::tie(b.z(), b.y(), b.x());
+    return std::tie(b.x(), b.y(), b.z()) < std::tie(a.x(), a.y(), a.z());
   });
 }
 

@@ -71,7 +71,8 @@ TEST(PhysxContactParity, RestingBox) {
   }
 }
 
-// (b) The box sliding at 2 m/s, mu 0.5: it stops within 1e-3 (relative) of PhysX's distance.
+// (b) The box sliding at 2 m/s, mu 0.5: it stops within 2e-6 (relative) of PhysX's distance
+// (measured 3.3e-7 PGS, 4.2e-7 TGS, with the corners' rows in PhysX's order, C1a).
 TEST(PhysxContactParity, SlidingBox) {
   for (const SolverType solver : kSolvers) {
     Simulation sim = test::ground_box_simulation(solver, 2.0);
@@ -91,7 +92,7 @@ TEST(PhysxContactParity, SlidingBox) {
     }
     std::printf("b %s: %.9f m (PhysX %.9f m), relative %.2e\n", to_string(solver), d, d_px,
                 (d - d_px) / d_px);
-    EXPECT_NEAR(d, d_px, 1e-3 * d_px);
+    EXPECT_NEAR(d, d_px, 2e-6 * d_px);
   }
 }
 
