@@ -21,8 +21,26 @@ void Simulation::update_contacts_active() {
   }
 }
 
-void Simulation::setup_contacts(const RowPhase& phase) {
+// The links' velocities the contact rows read: with compat physx, PhysX's link velocities, which
+// carry the bias B of the free update (departure 1; docs/math/contact.md, C23a).
+void Simulation::contact_link_velocities() {
   link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+  if (!physx()) return;
+  for (size_t i = 0; i < contact_link_velocity_.size(); ++i)
+    contact_link_velocity_[i] += contact_link_bias_[i];
+}
+
+void Simulation::setup_contacts(const RowPhase& phase) {
+  if (physx()) {
+    // B is at the centre of mass, world axes; frame 0's origin is o.
+    for (int i = 0; i < model_->num_links(); ++i) {
+      const auto k = static_cast<size_t>(i);
+      const Vec3 com = data_.world_position[i] + data_.world_rotation[i] * model_->links[k].com;
+      const Vec3& bw = departures_.bias_w[k];
+      contact_link_bias_[k] << bw, departures_.bias_v[k] - bw.cross(com - data_.frame_origin);
+    }
+  }
+  contact_link_velocities();
   ContactPhase contact_phase;
   contact_phase.dt = phase.dt;
   contact_phase.h = phase.h;
@@ -42,7 +60,7 @@ void Simulation::setup_contacts(const RowPhase& phase) {
 
 // TGS: the points move with the sub-step's velocities (C7's displacement).
 void Simulation::track_contacts(double h) {
-  link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+  contact_link_velocities();
   if (contacts_active_) contact_rows_.track(contact_link_velocity_, h);
   if (self_contacts_active_) self_contacts_.track(contact_link_velocity_, h);
 }

@@ -99,6 +99,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   contacts_.assign(static_cast<size_t>(contact_rows_.max_points() + self_contacts_.max_points()),
                    ContactReport{});
   contact_link_velocity_.assign(n, Vec6::Zero());
+  contact_link_bias_.assign(n, Vec6::Zero());
   update_link_damping_active();
   dt_ = settings_.options.dt;
   if (settings_.options.guard.enabled) size_guard();

@@ -312,7 +312,7 @@ void Simulation::sweep(RowPhase& phase) {
   if (contacts_active_) {
     // Each link's contact rows right after its joint's rows (docs/math/contact.md, C15), at
     // the link's velocity of the sweep's start plus the sweep's change.
-    link_velocities0(*model_, data_, qd_, contact_link_velocity_);
+    contact_link_velocities();
     const ContactPhase contacts = contact_phase(phase);
     gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row, [&](int link, Vec6& dv) {
       return contact_rows_.solve_link(link, contact_link_velocity_[static_cast<size_t>(link)], dv,

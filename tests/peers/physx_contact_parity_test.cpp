@@ -246,16 +246,16 @@ void expect_quadruped_as_physx(double lift, const QuadrupedBounds& pgs, const Qu
   }
 }
 
-// Measured (shares of PhysX's largest |q|, |f| at 2 s and of the weight): PGS q 4.8e-4, f 2.9e-2,
-// feet 1.4e-3; TGS 2.5, 2.0, 2.0 times PhysX's spread (q 2.7e-4, f 1.8e-2, feet 1.6e-3).
+// Measured (shares of PhysX's largest |q|, |f| at 2 s and of the weight): PGS q 4.8e-4, f 3.0e-2,
+// feet 1.5e-3; TGS 3.3, 2.1, 2.3 times PhysX's spread (q 3.6e-4, f 1.9e-2, feet 2.0e-3).
 TEST(PhysxContactParity, QuadrupedStanding) {
   expect_quadruped_as_physx(0.0, {1e-3, 6e-2, 3e-3}, {5, 4, 4});
 }
 
-// Measured: PGS q 2.6e-3, f 3.9e-2, feet 3.1e-3; TGS 2.9, 3.9, 3.8 times PhysX's spread (q 2.3e-3,
-// f 5.1e-2, feet 9.8e-3).
+// Measured: PGS q 2.1e-3, f 3.0e-2, feet 2.2e-3; TGS 1.4, 1.0, 1.6 times PhysX's spread (q 1.1e-3,
+// f 1.3e-2, feet 4.0e-3).
 TEST(PhysxContactParity, QuadrupedDroppedFrom20cm) {
-  expect_quadruped_as_physx(0.2, {5e-3, 8e-2, 6e-3}, {6, 8, 8});
+  expect_quadruped_as_physx(0.2, {4e-3, 6e-2, 5e-3}, {4, 4, 4});
 }
 
 // (f) OpenAI Gym's Ant standing on its floor (examples/ant_standing.yaml, friction 1, its feet on

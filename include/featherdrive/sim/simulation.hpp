@@ -290,6 +290,7 @@ class Simulation {
   void update_contacts_active();
   void setup_contacts(const RowPhase& phase);
   void track_contacts(double h);
+  void contact_link_velocities();
   void contact_forces();
   void solve_pgs();
   void solve_tgs();
@@ -381,6 +382,9 @@ class Simulation {
   SelfContacts self_contacts_;    ///< contacts between the robot's own shapes, after the ground's
   bool self_contacts_active_ = false;  ///< self_collision is on and some pair can touch
   std::vector<Vec6> contact_link_velocity_;  ///< frame 0, at a sweep's start
+  /// compat physx: each link's bias B (departure 1) in frame 0, which PhysX's contact rows see on
+  /// the link's velocity (docs/math/contact.md, C23a).
+  std::vector<Vec6> contact_link_bias_;
   std::vector<ContactReport> contacts_;
   int num_contacts_ = 0;
   int num_ground_contacts_ = 0;  ///< the first of contacts_; the self contacts follow
