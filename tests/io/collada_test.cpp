@@ -114,7 +114,10 @@ TEST(ColladaMeshes, BoxRestsAsTheUrdfBoxOfTheSameSizeAndPose) {
       b.step();
       worst = std::max(worst, (a.q() - b.q()).cwiseAbs().maxCoeff());
     }
-    EXPECT_LT(worst, 1e-9) << to_string(solver);
+    // The file's own node rotation puts the hull's corners in another order than the box's
+    // (contact.md C1a), so Gauss-Seidel visits the four contact rows in another order: what the
+    // iterations leave unconverged differs (measured 1.2e-7 PGS, 1.2e-9 TGS); both rest at 0.22.
+    EXPECT_LT(worst, 1e-6) << to_string(solver);
     EXPECT_NEAR(base_state(a.model(), a.q(), a.qd()).position.z(), 0.22, 1e-9) << to_string(solver);
     EXPECT_EQ(a.contacts().size(), 4u) << to_string(solver);
   }
