@@ -22,8 +22,10 @@ void featherdrive::python::bind_batch(py::module_& m) {
   // alive); setters take env_ids (None: all) and values as a scalar, one row for every
   // environment named, or one row each.
   py::class_<Batch, BatchHolder>(m, "Batch",
-                                 "N environments of one robot stepped together on all cores, "
-                                 "each bit-identical to stepping it alone, for any num_threads. "
+                                 "N environments of one robot stepped together on all cores: in "
+                                 "SIMD lanes where the settings allow (the same bits for any "
+                                 "lane, width, batch size and threads; within 1e-12 of each "
+                                 "stepped alone), else each bit-identical to stepping it alone. "
                                  "States are read-only (N, nq) / (N, nv) views of the batch's "
                                  "arrays; sim(i) is environment i, live.")
       .def("__repr__",

@@ -13,8 +13,8 @@ the objective that best() and the plot use.
 Locally the whole grid is one Batch on all cores; with a Dask client the grid is cut into chunks
 of rows, each shipped to a worker as (scene path, scene text, rows) and run there as a Batch, and
 the results are gathered in grid order (featherdrive_distributed.map_ordered). Each environment
-is bit-identical to a lone Simulation and the errors are reduced per point, so the numbers do not
-depend on threads, chunks or workers. docs/fitting.md, "Sweeps and Dask".
+gives the same bits whatever the threads and the batch size (docs/conventions.md, "Batch") and
+the errors are reduced per point, so the numbers do not depend on threads, chunks or workers. docs/fitting.md, "Sweeps and Dask".
 
 Grid syntax: ``NAME=SPEC[,NAME=SPEC...]`` with NAME ``stiffness`` or ``damping`` and SPEC
 ``VALUE`` (one point), ``LO:HI:N`` (N points spaced linearly) or ``LO:HI:N:log`` (N points

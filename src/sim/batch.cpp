@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <exception>
 #include <map>
 #include <string>
@@ -24,18 +23,6 @@
 
 namespace featherdrive {
 namespace {
-
-// The lanes' instruction set for n environments: the CPU's widest (or FEATHERDRIVE_SIMD's),
-// narrowed while a block of two vectors would hold more lanes than environments (fewer padding
-// lanes; every width gives the same bits).
-SimdIsa lane_isa(int n) {
-  SimdIsa isa = default_simd_isa();
-  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
-  if (!(forced && *forced))
-    while (isa != SimdIsa::sse2 && simd_width(isa) * 2 > n)
-      isa = isa == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
-  return isa;
-}
 
 void check_size(const VecX& x, int expected, const char* function, const char* what) {
   if (x.size() != expected)
@@ -799,7 +786,7 @@ std::string Batch::lane_refusal() {
 std::string Batch::step_path() {
   const std::string why = lane_refusal();
   if (!why.empty()) return "scalar: " + why;
-  return std::string(to_string(lane_isa(size()))) + " lanes";
+  return std::string(to_string(simd::lane_isa(size()))) + " lanes";
 }
 
 // Every environment through the lanes, its clock and divergence as its Simulation keeps them.
@@ -820,7 +807,7 @@ void Batch::step_lanes(int count) {
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
-  lanes_->run(a, count, lane_isa(n), effective_num_threads());
+  lanes_->run(a, count, simd::lane_isa(n), effective_num_threads());
   int first = -1, diverged = 0;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <sstream>
 
 #include "featherdrive/core/format.hpp"
@@ -43,6 +44,15 @@ Layout make_layout(const Plan& p) {
 
 std::size_t scratch_doubles(const Plan& p) {
   return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
+}
+
+SimdIsa lane_isa(int count) {
+  SimdIsa isa = default_simd_isa();
+  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
+  if (!(forced && *forced))
+    while (isa != SimdIsa::sse2 && simd_width(isa) * 2 > count)
+      isa = isa == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
+  return isa;
 }
 
 std::string lane_refusal(const Simulation& s) {

@@ -14,6 +14,11 @@
 
 namespace featherdrive::simd {
 
+/// The lanes' instruction set for `count` environments: default_simd_isa(), and without
+/// FEATHERDRIVE_SIMD narrowed while a block of two vectors would hold more lanes than
+/// environments (fewer padding lanes; every width gives the same bits).
+SimdIsa lane_isa(int count);
+
 /// What of `s` the lane step does not simulate, as "joint 'j' has a floating base" (the setting
 /// and the joint or link named); empty when the lanes step it as Simulation does.
 std::string lane_refusal(const Simulation& s);

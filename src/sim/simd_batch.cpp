@@ -114,13 +114,7 @@ SimdBatch::SimdBatch(const Simulation& prototype, int count, std::optional<SimdI
   if (const std::string refused = simd::lane_refusal(prototype); !refused.empty())
     throw std::invalid_argument("SimdBatch: " + refused +
                                 ": not supported by the SIMD Batch (docs/simd_batch.md)");
-  isa_ = isa ? *isa : default_simd_isa();
-  // Without a choice (argument or FEATHERDRIVE_SIMD), a batch smaller than a block of the widest
-  // width takes a narrower one: fewer padding lanes, the same bits.
-  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
-  if (!isa && !(forced && *forced))
-    while (isa_ != SimdIsa::sse2 && simd_width(isa_) * 2 > count)
-      isa_ = isa_ == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
+  isa_ = isa ? *isa : simd::lane_isa(count);
   check_isa(isa_, "SimdBatch: isa");
   impl_ = std::make_unique<Impl>(prototype, count);
   auto rows = [count](const VecView& v) {
