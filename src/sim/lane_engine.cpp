@@ -84,7 +84,6 @@ std::string lane_refusal(const Simulation& s) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
     if (s.friction_coefficient(d) != 0.0)
       return has("joint", joint, "friction_coefficient " + format_double(s.friction_coefficient(d)));
-    if (s.actuator_envelope(d).active()) return has("joint", joint, "an actuator envelope");
     if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
       return has("joint", joint,
                  std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
@@ -199,6 +198,11 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
     plan_.any_velocity_limit = plan_.any_velocity_limit || vmax < DofRows::kNoVelocityLimit;
     set_parameter(env, x + wrapped,
                   sim.settings().revolute_wrap[static_cast<size_t>(d)] == RevoluteWrap::wrapped);
+    const ActuatorEnvelope& e = sim.actuator_envelope(d);
+    set_parameter(env, x + envelope_max_effort, e.max_effort);
+    set_parameter(env, x + envelope_max_velocity, e.max_actuator_velocity);
+    set_parameter(env, x + envelope_gradient, e.speed_effort_gradient);
+    set_parameter(env, x + envelope_resistance, e.velocity_dependent_resistance);
   }
 }
 

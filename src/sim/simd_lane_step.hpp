@@ -16,6 +16,8 @@
 
 #include <xsimd/xsimd.hpp>
 
+#include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/constraint/row_laws.hpp"
 #include "simd_plan.hpp"
 
 namespace featherdrive::simd {
@@ -191,7 +193,7 @@ class LaneStep {
   void setup_link_rows(int i);
   V solve_row(int d, V v, const V& dx);
   template <class T, class Fields>
-  void drive_row(const Fields& rw, bool all_driven, const T& r, const T& dx, T& total, T& v);
+  void drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v);
   template <class L>
   void enter_link(const L& lane, int i, const V* dvp, V* dv);
   template <class L>
@@ -266,6 +268,7 @@ class LaneStep {
   const double* parameters_[K];  // per vector of the pack
   // Where in the step a sweep runs (RowPhase).
   double h_ = 0.0, time_to_step_end_ = 0.0;
+  double h_solve_ = 0.0;  // the step of one solve, for the rows' set-up
   bool velocity_iteration_ = false;
   M stopped_ = none();
   M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
@@ -629,7 +632,8 @@ template <class A, int K>
 // call, since parameters change only between calls.
 template <class A, int K>
 void LaneStep<A, K>::setup_row_constants(double h_step) {
-  const V h(h_step), dt(p_.dt);
+  h_solve_ = h_step;
+  const V dt(p_.dt);
   M rows_any = none();
   undriven_ = none();
   for (int i = 0; i < p_.num_links; ++i) {
@@ -637,19 +641,7 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     if (k.type == 0) continue;
     const int d = k.v_index;
     V* rw = row(d);
-    const V kp = dof_parameter(d, stiffness), kd = dof_parameter(d, damping);
-    const V tv = dof_parameter(d, target_velocity);
-    const M accel = dof_parameter(d, acceleration) != V(0.0);
     const M driven = dof_parameter(d, has_drive) != V(0.0);
-    const V a = h * (h * kp + kd);
-    rw[Layout::gain] = a;
-    rw[Layout::gain_velocity] = h * kd * tv;
-    rw[Layout::gain_position] = h * kp;
-    rw[Layout::accel] = select_zero(accel, V(1.0));
-    rw[Layout::accel_x] = V(1.0) / (a + V(1.0));
-    const V limit_force = dof_parameter(d, max_force) * dt;
-    const V limit_impulse = dof_parameter(d, max_impulse);
-    rw[Layout::maxi] = select(limit_impulse < limit_force, limit_impulse, limit_force);
     const V lower_limit = dof_parameter(d, lower), upper_limit = dof_parameter(d, upper);
     const V inf(__builtin_inf());
     const M limited = (lower_limit > -inf) | (upper_limit < inf);
@@ -673,6 +665,9 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     has[2] = all(driven) ? 1.0 : 0.0;
     has[3] = any(speed_limited) ? 1.0 : 0.0;
     has[4] = any(dof_parameter(d, wrapped) != V(0.0)) ? 1.0 : 0.0;
+    const M enveloped = driven & (V(0.0) < dof_parameter(d, envelope_max_effort));
+    rw[Layout::has_envelope] = select_zero(enveloped, V(1.0));
+    has[5] = any(enveloped) ? 1.0 : 0.0;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
     rows_any = rows_any | limited | rubbing | driven | speed_limited;
   }
@@ -688,17 +683,17 @@ template <class A, int K>
   V* rw = row(d);
   const V r = at(l_.inverse_mass)[i];
   const V x0 = at(l_.q)[k.q_index];
-  const M accel = rw[Layout::accel] != V(0.0);
-  const V a = rw[Layout::gain], hkp = rw[Layout::gain_position];
-  const V recip = V(1.0) / r;
-  const V x = select(accel, rw[Layout::accel_x], V(1.0) / (a * r + V(1.0)));
-  const V scale = select(accel, x * recip, x);
-  rw[Layout::tvb] =
-      scale * (rw[Layout::gain_velocity] + hkp * (dof_parameter(d, target_position) - x0));
-  rw[Layout::velm] = -scale * a;
-  rw[Layout::impm] = p_.tgs ? V(1.0) : V(1.0) - x;
-  rw[Layout::biasc] = scale * hkp;
-  rw[Layout::tpb] = p_.tgs ? scale * hkp * dof_parameter(d, target_velocity) : V(0.0);
+  const DriveTermsOf<V> terms{dof_parameter(d, stiffness),       dof_parameter(d, damping),
+                              dof_parameter(d, target_position), dof_parameter(d, target_velocity),
+                              dof_parameter(d, max_force),       dof_parameter(d, max_impulse)};
+  const M accel = dof_parameter(d, acceleration) != V(0.0);
+  const DriveRowOf<V> drive = drive_law::setup(terms, accel, r, x0, h_solve_, p_.dt, p_.tgs);
+  rw[Layout::tvb] = drive.target_vel_plus_initial_bias;
+  rw[Layout::velm] = drive.vel_multiplier;
+  rw[Layout::impm] = drive.impulse_multiplier;
+  rw[Layout::biasc] = drive.bias_coefficient;
+  rw[Layout::tpb] = drive.target_pos_bias;
+  rw[Layout::maxi] = drive.max_impulse;
   rw[Layout::dimp] = V(0.0);
   rw[Layout::low] = V(0.0);
   rw[Layout::high] = V(0.0);
@@ -706,7 +701,8 @@ template <class A, int K>
   rw[Layout::err_high] = dof_parameter(d, upper) - x0;
   rw[Layout::fimp] = V(0.0);
   rw[Layout::vlimp] = V(0.0);
-  rw[Layout::recip] = recip;
+  rw[Layout::external] = at(l_.tau)[d] * V(p_.dt);
+  rw[Layout::recip] = V(1.0) / r;
   rw[Layout::delta_x] = V(0.0);
   rw[Layout::response] = r;
 }
@@ -715,19 +711,24 @@ template <class A, int K>
 // impulse's change to total and its effect to v.
 template <class A, int K>
 template <class T, class Fields>
-void LaneStep<A, K>::drive_row(const Fields& rw, bool all_driven, const T& r, const T& dx, T& total,
-                               T& v) {
+void LaneStep<A, K>::drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v) {
   if (p_.tgs && velocity_iteration_) return;  // TGS freezes the drive in velocity iterations
   const T dimp = rw[Layout::dimp];
-  // PGS: dx and tpb are 0 and biasc >= 0, so the last two terms subtract +0, which leaves every
-  // value as it is (step.cpp's solve_lone_drive_pgs).
-  const T rest = p_.tgs ? rw[Layout::tvb] + rw[Layout::impm] * dimp - rw[Layout::biasc] * dx -
-                              rw[Layout::tpb] * T(time_to_step_end_)
-                        : rw[Layout::tvb] + rw[Layout::impm] * dimp;
-  T lambda = rest + rw[Layout::velm] * v;
-  const T m = rw[Layout::maxi];
-  lambda = select(lambda > m, m, lambda);
-  lambda = select(lambda < -m, -m, lambda);
+  const DriveRowOf<T> row{rw[Layout::tvb],   rw[Layout::velm], rw[Layout::impm],
+                          rw[Layout::biasc], rw[Layout::tpb],  rw[Layout::maxi]};
+  T lambda = p_.tgs ? drive_law::impulse(row, v, dimp, dx, T(time_to_step_end_))
+                    : drive_law::impulse_pgs(row, v, dimp);
+  if constexpr (std::is_same_v<T, V>) {  // one vector at a time serves only dofs without one
+    if (any_row(d)[5] != 0.0) {
+      const row_law::EnvelopeOf<V> e{
+          dof_parameter(d, envelope_max_effort), dof_parameter(d, envelope_max_velocity),
+          dof_parameter(d, envelope_gradient), dof_parameter(d, envelope_resistance)};
+      lambda = select(rw[Layout::has_envelope] != V(0.0),
+                      row_law::envelope(e, lambda, dimp, v, r, rw[Layout::external], p_.dt),
+                      lambda);
+    }
+  }
+  const bool all_driven = any_row(d)[2] != 0.0;
   if (all_driven) {  // every lane driven: the selects below would keep each result
     rw[Layout::dimp] = lambda;
     const T delta = lambda - dimp;
@@ -755,59 +756,30 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     total = select(present, total + delta, total);
     v = select(present, v + r * delta, v);
   };
-  drive_row(rw, any_row(d)[2] != 0.0, r, dx, total, v);
+  drive_row(d, rw, r, dx, total, v);
+  const V recip = rw[Layout::recip];
   if (any_row(d)[0] != 0.0) {
     const M rubbing = rw[Layout::has_friction] != zero;
-    // The impulse that stops the joint, whole within the static threshold, else clamped to
-    // dynamic + viscous |v|.
-    const V fi = rw[Layout::fimp];
-    const V stopping = fi - v * rw[Layout::recip];
-    const V abs_stopping = select(stopping < zero, -stopping, stopping);
-    const V bound = rw[Layout::fdyn] + rw[Layout::fvisc] * select(v < zero, -v, v);
-    V clamped = select(stopping < -bound, -bound, stopping);
-    clamped = select(bound < stopping, bound, clamped);
-    const V next = select(abs_stopping > rw[Layout::fstat], clamped, stopping);
-    rw[Layout::fimp] = select(rubbing, next, fi);
-    apply(rubbing, next - fi);
+    V fi = rw[Layout::fimp];
+    const V delta = row_law::friction(fi, v, recip, rw[Layout::fstat], rw[Layout::fdyn],
+                                      rw[Layout::fvisc]);
+    rw[Layout::fimp] = select(rubbing, fi, rw[Layout::fimp]);
+    apply(rubbing, delta);
   }
   if (any_row(d)[1] != 0.0) {
     const M limited = rw[Layout::has_limit] != zero;
-    const V h(h_), erp(p_.limit_erp), recip = rw[Layout::recip];
-    const V low = rw[Layout::low], high = rw[Layout::high];
-    const V future = dx + v * h;
-    const V low_now = rw[Layout::err_low] + dx, low_next = rw[Layout::err_low] + future;
-    const V high_now = rw[Layout::err_high] - dx, high_next = rw[Layout::err_high] - future;
-    const M low_case = (low_now < zero) | (low_next < zero);
-    const M high_case = (!low_case) & ((high_now < zero) | (high_next < zero));
-    // Below the lower limit or about to cross it.
-    const V keep_low = velocity_iteration_ ? v : -low_now / h * erp;
-    const V target_low = select(low_now < zero, keep_low, -low_now / h);
-    const V push_low = low + (target_low - v) * recip;
-    const V delta_low = select(push_low < zero, zero, push_low) - low;
-    const V keep_high = velocity_iteration_ ? v : high_now / h * erp;
-    const V target_high = select(high_now < zero, keep_high, high_now / h);
-    const V push_high = high + (target_high - v) * recip;
-    const V delta_high = select(push_high > zero, zero, push_high) - high;
-    // Inside both: give back what an earlier push overshot.
-    const V to_rest = -v * recip;
-    const V back_low = select(to_rest < -low, -low, to_rest);
-    const V back_high = select(-high < to_rest, -high, to_rest);
-    const M positive = v > zero;
-    const M on_low = limited & (low_case | ((!low_case) & (!high_case) & positive));
-    const M on_high = limited & (!on_low);
-    const V d_low = select(low_case, delta_low, back_low);
-    const V d_high = select(high_case, delta_high, back_high);
-    rw[Layout::low] = select(on_low, low + d_low, low);
-    rw[Layout::high] = select(on_high, high + d_high, high);
-    apply(limited, select(on_low, d_low, d_high));
+    V low = rw[Layout::low], high = rw[Layout::high];
+    const V delta = row_law::limit(low, high, v, recip, rw[Layout::err_low], rw[Layout::err_high],
+                                   dx, {h_, p_.limit_erp, velocity_iteration_});
+    rw[Layout::low] = select(limited, low, rw[Layout::low]);
+    rw[Layout::high] = select(limited, high, rw[Layout::high]);
+    apply(limited, delta);
   }
-  if (any_row(d)[3] != 0.0) {  // the velocity limit: back to the limit when beyond it
-    const V vmax = rw[Layout::vmax];
-    const M beyond = (v > vmax) | (v < -vmax);
-    const V at_limit = select(v > vmax, vmax, -vmax);
-    const V delta = (at_limit - v) * rw[Layout::recip];
-    rw[Layout::vlimp] = select(beyond, rw[Layout::vlimp] + delta, rw[Layout::vlimp]);
-    apply(beyond, delta);
+  if (any_row(d)[3] != 0.0) {  // the velocity limit
+    V vl = rw[Layout::vlimp];
+    const M beyond = row_law::beyond(v, rw[Layout::vmax]);
+    apply(beyond, row_law::velocity_limit(vl, v, recip, rw[Layout::vmax]));
+    rw[Layout::vlimp] = vl;
   }
   return total;
 }
@@ -991,7 +963,7 @@ template <class L>
     impulse = solve_row(d, at(l_.qd)[d] + base, rw[Layout::delta_x]);
   } else {
     T total(0.0), v = lane(at(l_.qd)[d]) + base;
-    drive_row(RowOf<L>{rw, lane}, any_row(d)[2] != 0.0, lane(rw[Layout::response]),
+    drive_row(d, RowOf<L>{rw, lane}, lane(rw[Layout::response]),
               lane(rw[Layout::delta_x]), total, v);
     impulse = total;
   }
@@ -1023,7 +995,7 @@ void LaneStep<A, K>::sweep() {
     const double* has = any_row(k.v_index);
     // A lone drive: one vector at a time. With friction or a limit row in the block the whole
     // pack measured faster (the welded humanoid).
-    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0)
+    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0)
       for (int j = 0; j < K; ++j) enter_link(OneVector{j}, i, dvp, dv);
     else
       enter_link(WholePack{}, i, dvp, dv);

@@ -36,6 +36,11 @@ enum DofParameter : int {
   viscous_friction,
   max_velocity,  ///< the joint's velocity limit, +inf for none
   wrapped,       ///< 1: a revolute joint whose position wraps at the step's end (revolute_wrap.hpp)
+  // The actuator envelope (ActuatorEnvelope; max_effort 0: none).
+  envelope_max_effort,
+  envelope_max_velocity,
+  envelope_gradient,
+  envelope_resistance,
   kDofParameters
 };
 enum LinkParameter : int {
@@ -101,13 +106,8 @@ struct Layout {
     fimp,
     vmax,   ///< the velocity limit (+inf: none)
     vlimp,  ///< the velocity limit row's accumulated impulse
-    // Set once a call (setup_row_constants): h (h kp + kd), h kd target velocity, h kp, the
-    // acceleration drive's mask and its 1 / (h (h kp + kd) + 1).
-    gain,
-    gain_velocity,
-    gain_position,
-    accel,
-    accel_x,
+    has_envelope,  ///< an actuator envelope bounds the drive
+    external,      ///< the applied joint force times dt (part of the actuator's effort)
     kRowFields
   };
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,

@@ -96,11 +96,7 @@ inline double solve_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
 /// solve_dof_rows for a lone drive (drive_only) in PGS without a row bias: delta_x and the time
 /// to the step's end are 0 there, so drive_impulse's terms in them vanish (the same value).
 inline double solve_lone_drive_pgs(DofRows& rows, double v) {
-  const DriveRow& row = rows.drive;
-  double lambda = row.target_vel_plus_initial_bias + row.impulse_multiplier * rows.drive_impulse +
-                  row.vel_multiplier * v;
-  if (lambda > row.max_impulse) lambda = row.max_impulse;
-  if (lambda < -row.max_impulse) lambda = -row.max_impulse;
+  const double lambda = drive_law::impulse_pgs(rows.drive, v, rows.drive_impulse);
   const double delta = lambda - rows.drive_impulse;
   rows.drive_impulse = lambda;
   return delta;

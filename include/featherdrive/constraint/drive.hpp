@@ -7,6 +7,8 @@
 #include <limits>
 #include <string>
 
+#include "featherdrive/core/select.hpp"
+
 namespace featherdrive {
 
 enum class DriveType {
@@ -37,56 +39,97 @@ struct Drive {
 /// non-finite gains, max_force or max_impulse <= 0, both of them set, or non-finite targets.
 void validate_drive(const Drive& drive, const std::string& joint);
 
-/// One step's drive row: the members of PhysX's ArticulationInternalConstraint, named after the
-/// spec. lambda_new = target_vel_plus_initial_bias + vel_multiplier * v
-///                    + impulse_multiplier * lambda - bias_coefficient * delta_x
-///                    - target_pos_bias * time_to_step_end, clamped to +-max_impulse.
-struct DriveRow {
-  double target_vel_plus_initial_bias = 0.0;  ///< eq. (20)/(35) [Ns]
-  double vel_multiplier = 0.0;                ///< eq. (21)/(36) [kg]
-  double impulse_multiplier = 1.0;            ///< eq. (22)/(37); 1 in TGS
-  double bias_coefficient = 0.0;              ///< eq. (23)/(38) [Ns/m]
-  double target_pos_bias = 0.0;               ///< eq. (24)/(39) [N], TGS only
-  double max_impulse = std::numeric_limits<double>::infinity();  ///< ERRATA 8
+/// One step's drive row over a number type T (double, or a SIMD pack of environments: the lanes
+/// of sim/simd_lane_step.hpp): the members of PhysX's ArticulationInternalConstraint, named after
+/// the spec. lambda_new = target_vel_plus_initial_bias + vel_multiplier * v
+///                        + impulse_multiplier * lambda - bias_coefficient * delta_x
+///                        - target_pos_bias * time_to_step_end, clamped to +-max_impulse.
+template <class T>
+struct DriveRowOf {
+  T target_vel_plus_initial_bias = T(0.0);  ///< eq. (20)/(35) [Ns]
+  T vel_multiplier = T(0.0);                ///< eq. (21)/(36) [kg]
+  T impulse_multiplier = T(1.0);            ///< eq. (22)/(37); 1 in TGS
+  T bias_coefficient = T(0.0);              ///< eq. (23)/(38) [Ns/m]
+  T target_pos_bias = T(0.0);               ///< eq. (24)/(39) [N], TGS only
+  T max_impulse = T(std::numeric_limits<double>::infinity());  ///< ERRATA 8
+};
+using DriveRow = DriveRowOf<double>;
+
+/// A drive's gains, targets and bounds over a number type T (Drive's fields but its type).
+template <class T>
+struct DriveTermsOf {
+  T stiffness, damping, target_position, target_velocity, max_force, max_impulse;
 };
 
-/// Row coefficients for a drive on a dof with unit response r = (M^-1)_jj at start-of-step
-/// position x0. h is the time step of one solve: tau for PGS, rho = tau / n for TGS
-/// (ERRATA 4); tgs selects driveImpulseMultiplier = 1 and the target interpolation.
-/// step_dt is the whole step tau (the impulse limit is max_force * tau for the whole step).
-inline DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h,
-                                double step_dt, bool tgs) {
-  DriveRow row;
-  row.impulse_multiplier = 1.0;
-  if (drive.type == DriveType::none) return row;
-  const double kp = drive.stiffness;
-  const double kd = drive.damping;
-  const double a = h * (h * kp + kd);                   // eq. (13) / (30)
-  const double b = h * kd * drive.target_velocity;      // eq. (14) / (31)
+namespace drive_law {
+
+/// Row coefficients of a drive whose type is acceleration where `acceleration` holds, force
+/// elsewhere, on a dof with unit response r = (M^-1)_jj at start-of-step position x0. h is the
+/// time step of one solve: tau for PGS, rho = tau / n for TGS (ERRATA 4); tgs selects
+/// driveImpulseMultiplier = 1 and the target interpolation. step_dt is the whole step tau (the
+/// impulse limit is max_force * tau for the whole step).
+template <class T, class Mask>
+DriveRowOf<T> setup(const DriveTermsOf<T>& drive, const Mask& acceleration, const T& r, const T& x0,
+                    double h_solve, double step_dt, bool tgs) {
+  const T h(h_solve), one(1.0);
+  const T kp = drive.stiffness, kd = drive.damping;
+  const T a = h * (h * kp + kd);               // eq. (13) / (30)
+  const T b = h * kd * drive.target_velocity;  // eq. (14) / (31)
   // Force drive: x = 1 / (a r + 1), eq. (15); acceleration drive: x = 1 / (a + 1) and every
   // coefficient carries r^-1, eq. (32)-(39) with ERRATA 1-2.
-  const bool accel = drive.type == DriveType::acceleration;
-  const double x = accel ? 1.0 / (a + 1.0) : 1.0 / (a * r + 1.0);
-  const double scale = accel ? x / r : x;
+  const T x = select(acceleration, one / (a + one), one / (a * r + one));
+  const T scale = select(acceleration, x / r, x);
+  DriveRowOf<T> row;
   row.target_vel_plus_initial_bias = scale * (b + h * kp * (drive.target_position - x0));
   row.vel_multiplier = -scale * a;
-  row.impulse_multiplier = tgs ? 1.0 : 1.0 - x;
+  row.impulse_multiplier = tgs ? one : one - x;
   row.bias_coefficient = scale * h * kp;
-  row.target_pos_bias = tgs ? scale * h * kp * drive.target_velocity : 0.0;
-  row.max_impulse = std::min(drive.max_force * step_dt, drive.max_impulse);
+  row.target_pos_bias = tgs ? scale * h * kp * drive.target_velocity : T(0.0);
+  const T by_force = drive.max_force * T(step_dt);
+  row.max_impulse = select(drive.max_impulse < by_force, drive.max_impulse, by_force);  // std::min
   return row;
+}
+
+/// lambda clamped to +-row.max_impulse.
+template <class T>
+T clamp_to_max(const DriveRowOf<T>& row, T lambda) {
+  lambda = select(row.max_impulse < lambda, row.max_impulse, lambda);
+  return select(lambda < -row.max_impulse, -row.max_impulse, lambda);
+}
+
+/// The new accumulated impulse after one update at joint velocity v (eq. 18/34, TGS eq. 44/45).
+template <class T>
+T impulse(const DriveRowOf<T>& row, const T& v, const T& accumulated, const T& delta_x,
+          const T& time_to_step_end) {
+  // The velocity term last: in a sweep, v is the one input that waits on the previous row.
+  const T rest = row.target_vel_plus_initial_bias + row.impulse_multiplier * accumulated -
+                 row.bias_coefficient * delta_x - row.target_pos_bias * time_to_step_end;
+  return clamp_to_max(row, rest + row.vel_multiplier * v);
+}
+
+/// impulse() in PGS without a row bias: delta_x, target_pos_bias and the time to the step's end
+/// are 0 there (and bias_coefficient >= 0), so the terms in them subtract +0: the same value.
+template <class T>
+T impulse_pgs(const DriveRowOf<T>& row, const T& v, const T& accumulated) {
+  return clamp_to_max(row, row.target_vel_plus_initial_bias + row.impulse_multiplier * accumulated +
+                               row.vel_multiplier * v);
+}
+
+}  // namespace drive_law
+
+/// drive_law::setup for one drive (a drive of type none gives the empty row).
+inline DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h,
+                                double step_dt, bool tgs) {
+  if (drive.type == DriveType::none) return DriveRow{};
+  const DriveTermsOf<double> terms{drive.stiffness,       drive.damping,   drive.target_position,
+                                   drive.target_velocity, drive.max_force, drive.max_impulse};
+  return drive_law::setup(terms, drive.type == DriveType::acceleration, r, x0, h, step_dt, tgs);
 }
 
 /// The new accumulated impulse of the step after one update at joint velocity v.
 inline double drive_impulse(const DriveRow& row, double v, double accumulated, double delta_x,
                             double time_to_step_end) {
-  // The velocity term last: in a sweep, v is the one input that waits on the previous row.
-  const double rest = row.target_vel_plus_initial_bias + row.impulse_multiplier * accumulated -
-                      row.bias_coefficient * delta_x - row.target_pos_bias * time_to_step_end;
-  double lambda = rest + row.vel_multiplier * v;
-  if (lambda > row.max_impulse) lambda = row.max_impulse;
-  if (lambda < -row.max_impulse) lambda = -row.max_impulse;
-  return lambda;
+  return drive_law::impulse(row, v, accumulated, delta_x, time_to_step_end);
 }
 
 }  // namespace featherdrive
