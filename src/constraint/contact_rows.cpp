@@ -346,6 +346,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     int num_kept = 0;
     // The normal is kept in the link's frame: a link that turned (a rolling ball) drops them.
     const Vec3 kept_normal = data.world_rotation[L] * kept.normal;
+    bool patch_kept = false;  // the patch goes on, with the normal it was made with (C9b)
     if (kept.count > 0 && kept_normal.dot(n) > kSameNormal) {
       bool correlated = true;
       for (int j = 0; j < kept.count; ++j) {
@@ -355,6 +356,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
                                        kCorrelationDistance;
       }
       if (correlated) num_kept = kept.count;
+      patch_kept = correlated;
     }
     if (num_kept == 2) {
       Vec3 low = points[0], high = points[0];
@@ -400,7 +402,9 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     patch.num_anchors = num_anchors;
     FrictionAnchors& next = next_anchors_[static_cast<size_t>(k)];
     next.count = num_anchors;
-    next.normal = data.world_rotation[L].transpose() * n;
+    // C9b: a patch that goes on keeps the normal it was made with, so the turn is measured from
+    // there, not from the last step (a foot rolling 0.3 rad/s drops its anchors after 0.15 s).
+    next.normal = patch_kept ? kept.normal : Vec3(data.world_rotation[L].transpose() * n);
     for (int j = 0; j < num_anchors; ++j) {
       next.body[j] = data.world_rotation[L].transpose() * (anchor_at[j] - data.world_position[L]);
       next.ground[j] = anchor_ground[j];

@@ -195,8 +195,9 @@ double float_ulp_of_height(const Simulation& sim) {
 // (d, e) The quadruped after 2 s, against PhysX and against PhysX's own spread: PhysX run again
 // with the base one float32 ulp higher and one lower (docs/math/contact.md, section 13, "How
 // close PhysX can be matched"). The friction between the feet is statically indeterminate; PGS
-// follows its inputs smoothly (PhysX against itself: q 7e-7, f 7e-5 of the scale), TGS in float32
-// does not (q 1e-4 to 8e-4, f 9e-3 to 1.3e-2), so TGS is held to a multiple of that spread.
+// follows its inputs smoothly (PhysX against itself: q 9e-7 to 6e-6, f 7e-5 to 9e-5 of the scale)
+// and featherdrive sits at that spread since the patches keep their first normal (C9b); TGS in
+// float32 does not (q 1e-4 to 8e-4, f 9e-3 to 1.3e-2), so TGS is held to a multiple of that spread.
 // The standing case starts its feet exactly touching, where TGS's bias changes (C6: 1/h apart,
 // 0.8/h touching); PhysX's float32 kinematics puts them 1.1e-7 / 1.5e-7 m deep, featherdrive's
 // 1e-17 m apart, so both engines start it 1e-6 m deep here.
@@ -246,16 +247,18 @@ void expect_quadruped_as_physx(double lift, const QuadrupedBounds& pgs, const Qu
   }
 }
 
-// Measured (shares of PhysX's largest |q|, |f| at 2 s and of the weight): PGS q 4.8e-4, f 3.0e-2,
-// feet 1.5e-3; TGS 3.3, 2.1, 2.3 times PhysX's spread (q 3.6e-4, f 1.9e-2, feet 2.0e-3).
+// Measured (shares of PhysX's largest |q|, |f| at 2 s and of the weight): PGS q 1.2e-6, f 5.6e-5,
+// feet 7.3e-6 (PhysX's own spread 8.8e-7, 6.7e-5, 1.9e-5); TGS 2.4, 1.1, 0.49 times PhysX's spread
+// (q 2.7e-4, f 1.0e-2, feet 4.3e-4).
 TEST(PhysxContactParity, QuadrupedStanding) {
-  expect_quadruped_as_physx(0.0, {1e-3, 6e-2, 3e-3}, {5, 4, 4});
+  expect_quadruped_as_physx(0.0, {5e-6, 2.5e-4, 3e-5}, {5, 4, 4});
 }
 
-// Measured: PGS q 2.1e-3, f 3.0e-2, feet 2.2e-3; TGS 1.4, 1.0, 1.6 times PhysX's spread (q 1.1e-3,
-// f 1.3e-2, feet 4.0e-3).
+// Measured: PGS q 3.5e-6, f 7.1e-5, feet 6.7e-6 (PhysX's own spread 5.8e-6, 9.3e-5, 9.0e-6); TGS
+// 2.2, 3.0, 3.0 times PhysX's spread (q 1.8e-3, f 4.0e-2, feet 7.7e-3; featherdrive's own TGS
+// spreads as far under a one-ulp change, 1.7e-3, 2.8e-2, 5.6e-3).
 TEST(PhysxContactParity, QuadrupedDroppedFrom20cm) {
-  expect_quadruped_as_physx(0.2, {4e-3, 6e-2, 5e-3}, {4, 4, 4});
+  expect_quadruped_as_physx(0.2, {1.5e-5, 3e-4, 3e-5}, {4, 4, 4});
 }
 
 // (f) OpenAI Gym's Ant standing on its floor (examples/ant_standing.yaml, friction 1, its feet on
