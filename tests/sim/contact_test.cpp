@@ -139,6 +139,38 @@ TEST_P(Contact, RollingSphereKeepsVEqualsOmegaR) {
   EXPECT_NEAR(s.position.z(), r, 1e-9);
 }
 
+// A patch keeps the normal it was made with (C9b) and is made afresh once its link has turned
+// from it by more than PXC_SAME_NORMAL, acos(0.999) = 0.0447 rad: a ball rolling at 1 rad/s turns
+// 0.01 rad a step, so each patch lasts 5 steps (turned 0.04 after 4, 0.05 after 5), and the normal
+// stored in the ball's frame is the ground's normal in the ball's frame at the patch's first step.
+TEST_P(Contact, RollingPatchLastsUntilItsLinkHasTurnedPastTheSameNormalBound) {
+  const double r = 0.1, omega = 1.0, dt = 0.01;
+  BaseState base;
+  base.position = Vec3(0, 0, r);
+  base.linear_velocity = Vec3(omega * r, 0, 0);
+  base.angular_velocity = Vec3(0, omega, 0);
+  Simulation sim = on_ground(ball(1.0, r, {}), GetParam(), base, {}, dt);
+  Vec3 normal = Vec3::Zero();
+  int run = 0, patches = 0;
+  for (int step = 1; step <= 41; ++step) {
+    const Mat3 R = base_state(sim.model(), sim.q(), sim.qd()).orientation.toRotationMatrix();
+    sim.step();
+    const FrictionAnchors a = sim.state().friction_anchors[0];
+    ASSERT_GT(a.count, 0);
+    if (a.normal == normal) {
+      ++run;
+      continue;
+    }
+    if (patches > 0) EXPECT_EQ(run, 5) << "patch " << patches << " ending before step " << step;
+    // A new patch: the ground's normal in the ball's frame at this step's start.
+    EXPECT_LT((a.normal - R.transpose() * Vec3::UnitZ()).norm(), 1e-12);
+    normal = a.normal;
+    run = 1;
+    ++patches;
+  }
+  EXPECT_EQ(patches, 9);  // steps 1, 6, ..., 41
+}
+
 TEST_P(Contact, ABounceLeavesAtRestitutionTimesTheImpactSpeed) {
   const double m = 1.0, r = 0.1, e = 0.5;
   const Material material{0.5, 0.5, e};
