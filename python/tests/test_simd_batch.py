@@ -61,8 +61,8 @@ def test_bad_input_and_unsupported_settings():
         batch.set_qd(0.0, env_ids=[0, 7])
     with pytest.raises(ValueError, match="isa = 'avx9'"):
         fd.SimdBatch(proto, 3, isa="avx9")
-    proto.set_friction_coefficient(2, 0.05)
-    with pytest.raises(ValueError, match="joint 'joint3' has friction_coefficient 0.05"):
+    proto.set_drive_delay(2, 2)
+    with pytest.raises(ValueError, match="joint 'joint3' has drive delay 2"):
         fd.SimdBatch(proto, 3)
 
 

@@ -34,7 +34,7 @@ Layout make_layout(const Plan& p) {
   l.q = take(p.nq), l.qd = take(n);
   l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
   l.old_lf = take(n), l.old_ff = take(n), l.old_vf = take(n), l.df = take(n), l.lf = take(n);
-  l.ff = take(n), l.vf = take(n), l.row = take(Layout::kRowFields * n);
+  l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
@@ -82,8 +82,6 @@ std::string lane_refusal(const Simulation& s) {
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    if (s.friction_coefficient(d) != 0.0)
-      return has("joint", joint, "friction_coefficient " + format_double(s.friction_coefficient(d)));
     if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
       return has("joint", joint,
                  std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
@@ -203,6 +201,9 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
     set_parameter(env, x + envelope_max_velocity, e.max_actuator_velocity);
     set_parameter(env, x + envelope_gradient, e.speed_effort_gradient);
     set_parameter(env, x + envelope_resistance, e.velocity_dependent_resistance);
+    const double coefficient = sim.friction_coefficient(d);
+    set_parameter(env, x + friction_coefficient, coefficient);
+    plan_.any_transmission_friction = plan_.any_transmission_friction || coefficient > 0.0;
   }
 }
 

@@ -189,6 +189,7 @@ class LaneStep {
   void forward_pass();
   void link_acceleration(int i, const V* g, const V& dt);
   void link_response(int i);
+  void transmitted_force(int i);
   void setup_row_constants(double h);
   void setup_link_rows(int i);
   V solve_row(int d, V v, const V& dx);
@@ -445,6 +446,8 @@ template <class A, int K>
       cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
       mc[r] = m * cg[r];
     }
+    if (p_.any_transmission_friction)  // the poses' room goes to the response
+      for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
     B RI[9];  // R Ic
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
             zz = link_parameter(i, inertia_zz, j);
@@ -567,6 +570,7 @@ void LaneStep<A, K>::forward_pass() {
   const V dt(p_.dt);
   for (int i = 0; i < p_.num_links; ++i) {
     link_acceleration(i, g, dt);
+    if (p_.any_transmission_friction && p_.links[i].type != 0) transmitted_force(i);
     link_response(i);
     if (p_.links[i].type != 0) setup_link_rows(i);
   }
@@ -590,6 +594,29 @@ template <class A, int K>
   for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;
+}
+
+// The bound of link i's transmitted-force friction row (joint_constraints.md J6): the spatial
+// force its joint transmits, IA_i a_i + pA_i (the articulated-body equation: the subtree's
+// Newton-Euler forces summed, as transmitted_force.cpp sums them), as |torque about the link's
+// centre of mass| + |force|. Read before the response takes IA_i's room.
+template <class A, int K>
+void LaneStep<A, K>::transmitted_force(int i) {
+  V F[6];
+  sym_times(at(l_.IA + 21 * i), at(l_.acc + 6 * i), F);
+  const V* pA = at(l_.pA + 6 * i);
+  for (int r = 0; r < 6; ++r) F[r] = F[r] + pA[r];
+  const V* c = at(l_.cg + 3 * i);
+  V cf[3];
+  cross(c, F + 3, cf);
+  const V tx = F[0] - cf[0], ty = F[1] - cf[1], tz = F[2] - cf[2];
+  const V torque2 = tx * tx + ty * ty + tz * tz;
+  const V force2 = F[3] * F[3] + F[4] * F[4] + F[5] * F[5];
+  V magnitude;
+  for (int k = 0; k < K; ++k)  // sqrt is correctly rounded: the same bits at every width
+    magnitude.b[k] = xsimd::sqrt(torque2.b[k]) + xsimd::sqrt(force2.b[k]);
+  const int d = p_.links[i].v_index;
+  row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;
 }
 
 // Link i's whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
@@ -668,6 +695,13 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     const M enveloped = driven & (V(0.0) < dof_parameter(d, envelope_max_effort));
     rw[Layout::has_envelope] = select_zero(enveloped, V(1.0));
     has[5] = any(enveloped) ? 1.0 : 0.0;
+    // Transmitted-force friction only where no static or viscous friction is set (like PhysX).
+    const M transmitting = (V(0.0) < dof_parameter(d, friction_coefficient)) & (fs == V(0.0)) &
+                           (fv == V(0.0));
+    rw[Layout::has_tf] = select_zero(transmitting, V(1.0));
+    has[6] = any(transmitting) ? 1.0 : 0.0;
+    undriven_ = undriven_ | transmitting;
+    rows_any = rows_any | transmitting;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
     rows_any = rows_any | limited | rubbing | driven | speed_limited;
   }
@@ -702,6 +736,8 @@ template <class A, int K>
   rw[Layout::fimp] = V(0.0);
   rw[Layout::vlimp] = V(0.0);
   rw[Layout::external] = at(l_.tau)[d] * V(p_.dt);
+  rw[Layout::tf_imp] = V(0.0);
+  rw[Layout::tf_applied] = V(0.0);
   rw[Layout::recip] = V(1.0) / r;
   rw[Layout::delta_x] = V(0.0);
   rw[Layout::response] = r;
@@ -756,8 +792,18 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     total = select(present, total + delta, total);
     v = select(present, v + r * delta, v);
   };
-  drive_row(d, rw, r, dx, total, v);
   const V recip = rw[Layout::recip];
+  if (any_row(d)[6] != 0.0) {  // transmitted-force friction, before the drive
+    const M transmitting = rw[Layout::has_tf] != zero;
+    // PhysX re-applies it whole in every TGS solve (dof_rows.cpp).
+    const V applied = p_.tgs ? zero : rw[Layout::tf_imp];
+    const V next = row_law::transmission_friction(applied, v, recip, rw[Layout::tf_bound]);
+    rw[Layout::tf_imp] = select(transmitting, next, rw[Layout::tf_imp]);
+    rw[Layout::tf_applied] =
+        select(transmitting, rw[Layout::tf_applied] + (next - applied), rw[Layout::tf_applied]);
+    apply(transmitting, next - applied);
+  }
+  drive_row(d, rw, r, dx, total, v);
   if (any_row(d)[0] != 0.0) {
     const M rubbing = rw[Layout::has_friction] != zero;
     V fi = rw[Layout::fimp];
@@ -995,7 +1041,8 @@ void LaneStep<A, K>::sweep() {
     const double* has = any_row(k.v_index);
     // A lone drive: one vector at a time. With friction or a limit row in the block the whole
     // pack measured faster (the welded humanoid).
-    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0)
+    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0 &&
+        has[6] == 0.0)
       for (int j = 0; j < K; ++j) enter_link(OneVector{j}, i, dvp, dv);
     else
       enter_link(WholePack{}, i, dvp, dv);
@@ -1100,7 +1147,7 @@ void LaneStep<A, K>::step() {
     const V* rw = row(d);
     at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
     at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
-    at(l_.ff)[d] = (rw[Layout::fimp] + V(0.0)) * inv_dt;  // + the (absent) transmission friction
+    at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
     at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
   }
 }

@@ -41,6 +41,7 @@ enum DofParameter : int {
   envelope_max_velocity,
   envelope_gradient,
   envelope_resistance,
+  friction_coefficient,  ///< PhysX's transmitted-force friction (joint_constraints.md J6)
   kDofParameters
 };
 enum LinkParameter : int {
@@ -108,12 +109,16 @@ struct Layout {
     vlimp,  ///< the velocity limit row's accumulated impulse
     has_envelope,  ///< an actuator envelope bounds the drive
     external,      ///< the applied joint force times dt (part of the actuator's effort)
+    has_tf,        ///< transmitted-force friction (friction coefficient, no static or viscous)
+    tf_bound,      ///< its bound coefficient h |F| [N s]
+    tf_imp,        ///< PGS: its accumulated impulse
+    tf_applied,    ///< all its impulse changes of the step
     kRowFields
   };
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
-      lf = 0, ff = 0, vf = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
+      lf = 0, ff = 0, vf = 0, cg = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
 };
 
 struct Plan {
@@ -127,6 +132,8 @@ struct Plan {
   bool tgs = false;
   /// Some environment has a finite joint velocity limit: steps start by scaling qd to them.
   bool any_velocity_limit = false;
+  /// Some environment has a friction coefficient: steps form the joints' transmitted forces.
+  bool any_transmission_friction = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;

@@ -211,6 +211,34 @@ TEST(SimdBatch, ActuatorEnvelopesAsSimulation) {
   }
 }
 
+// PhysX's transmitted-force friction (docs/math/joint_constraints.md J6) on every joint: the
+// lanes form each joint's transmitted force from the articulated-body equation, Simulation by
+// summing the subtree's Newton-Euler forces; joints with static or viscous friction keep theirs.
+TEST(SimdBatch, FrictionCoefficientAsSimulation) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    Simulation sim = simd_prototype(29, solver, 10);
+    const int nv = sim.model().nv;
+    for (int d = 0; d < nv; ++d) sim.set_friction_coefficient(d, 0.1 + 0.05 * d);
+    SimdBatch simd(sim, 3);
+    simd.step(20);
+    sim.step(20);
+    double transmitted = 0.0;  // on the joints without static or viscous friction
+    for (int d = 0; d < nv; ++d)
+      if (sim.joint_friction(d).static_effort == 0.0)
+        transmitted = std::max(transmitted, std::abs(sim.friction_force()[d]));
+    EXPECT_GT(transmitted, 0.1) << to_string(solver);
+    simd.step(980);
+    sim.step(980);
+    for (int e = 0; e < 3; ++e)
+      EXPECT_LE(simd_relative_difference(simd.friction_force().row(e),
+                                         sim.friction_force().transpose()),
+                1e-12);
+    expect_lanes_near(simd, sim, 1e-12,
+                      (std::string("random tree with friction coefficients, ") + to_string(solver))
+                          .c_str());
+  }
+}
+
 // The same environments, given the same parameters, give the same bits at any lane, in a batch
 // of any size, at every width this CPU has and on any number of threads.
 TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
@@ -360,8 +388,8 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   Simulation s = simd_prototype(9, SolverType::pgs, 5);
   const std::string joint = s.model().links[s.model().dof_link[1]].joint_name;
   Simulation f = s;
-  f.set_friction_coefficient(1, 0.05);
-  expect_refused(f, "joint '" + joint + "' has friction_coefficient 0.05");
+  f.set_drive_delay(1, 2);
+  expect_refused(f, "joint '" + joint + "' has drive delay 2");
   Simulation mimic = s;
   mimic.set_mimic_joints({{2, 1, 1.5, 0.0}});
   const std::string follower = s.model().links[s.model().dof_link[2]].joint_name;
