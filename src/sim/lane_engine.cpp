@@ -34,7 +34,7 @@ Layout make_layout(const Plan& p) {
   l.q = take(p.nq), l.qd = take(n);
   l.tau = take(n), l.u = take(n), l.old_q = take(p.nq), l.old_qd = take(n), l.old_df = take(n);
   l.old_lf = take(n), l.old_ff = take(n), l.old_vf = take(n), l.df = take(n), l.lf = take(n);
-  l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.row = take(Layout::kRowFields * n);
+  l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.cfm = take(L), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
@@ -69,16 +69,6 @@ std::string lane_refusal(const Simulation& s) {
     if (!one_dof && link.joint_type != JointType::fixed)
       return has("joint", link.joint_name,
                  link.joint_type == JointType::floating ? "a floating base" : "a spherical joint");
-  }
-  for (int i = 0; i < m.num_links(); ++i) {
-    const LinkParameters& lp = s.link_parameters(i);
-    const LinkParameters none;
-    if (lp.cfm_scale != none.cfm_scale || lp.linear_damping != none.linear_damping ||
-        lp.angular_damping != none.angular_damping ||
-        lp.max_linear_velocity != none.max_linear_velocity ||
-        lp.max_angular_velocity != none.max_angular_velocity)
-      return has("link", m.links[static_cast<size_t>(i)].name,
-                 "link parameters (cfm_scale, damping or velocity limits)");
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
@@ -204,6 +194,20 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
     const double coefficient = sim.friction_coefficient(d);
     set_parameter(env, x + friction_coefficient, coefficient);
     plan_.any_transmission_friction = plan_.any_transmission_friction || coefficient > 0.0;
+  }
+  for (int i = 0; i < plan_.num_links; ++i) {
+    const LinkParameters& lp = sim.link_parameters(i);
+    const int x = plan_.nv * kDofParameters + i * kLinkParameters;
+    set_parameter(env, x + link_cfm_scale, lp.cfm_scale);
+    set_parameter(env, x + link_linear_damping, lp.linear_damping);
+    set_parameter(env, x + link_angular_damping, lp.angular_damping);
+    set_parameter(env, x + link_max_linear_velocity, lp.max_linear_velocity);
+    set_parameter(env, x + link_max_angular_velocity, lp.max_angular_velocity);
+    // Set, never cleared, as any_velocity_limit: zero damping and no limit change no bit.
+    plan_.any_link_damping = plan_.any_link_damping || lp.linear_damping > 0.0 ||
+                             lp.angular_damping > 0.0 || std::isfinite(lp.max_linear_velocity) ||
+                             std::isfinite(lp.max_angular_velocity);
+    plan_.any_cfm = plan_.any_cfm || lp.cfm_scale > 0.0;
   }
 }
 

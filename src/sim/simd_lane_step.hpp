@@ -171,6 +171,9 @@ class LaneStep {
   B link_parameter(int i, int f, int j) const {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f, j);
   }
+  V link_parameter_pack(int i, int f) const {
+    return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
+  }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
   // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit,
   // some a wrapped position.
@@ -190,6 +193,9 @@ class LaneStep {
   void link_acceleration(int i, const V* g, const V& dt);
   void link_response(int i);
   void transmitted_force(int i);
+  void link_damping(int i, int j, const B* R, const B* RI, const B* cg, const B& m, const B* v,
+                    B* F) const;
+  void link_cfm(int i);
   void setup_row_constants(double h);
   void setup_link_rows(int i);
   V solve_row(int d, V v, const V& dx);
@@ -446,7 +452,7 @@ template <class A, int K>
       cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
       mc[r] = m * cg[r];
     }
-    if (p_.any_transmission_friction)  // the poses' room goes to the response
+    if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
       for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
     B RI[9];  // R Ic
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
@@ -512,6 +518,11 @@ template <class A, int K>
     B pl[3];
     cross(v, h + 3, pl);
     for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
+    if (p_.any_link_damping) {  // an external force: the bias less it
+      B F[6];
+      link_damping(i, j, R, RI, cg, m, v, F);
+      for (int r = 0; r < 6; ++r) pAv[r].b[j] = pAv[r].b[j] - F[r];
+    }
   }
 }
 
@@ -572,6 +583,7 @@ void LaneStep<A, K>::forward_pass() {
     link_acceleration(i, g, dt);
     if (p_.any_transmission_friction && p_.links[i].type != 0) transmitted_force(i);
     link_response(i);
+    if (p_.any_cfm) link_cfm(i);
     if (p_.links[i].type != 0) setup_link_rows(i);
   }
 }
@@ -594,6 +606,71 @@ template <class A, int K>
   for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;
+}
+
+// PhysX's link damping and link velocity limits on link i, vector j (link_damping.cpp): from
+// the start-of-step velocity, a force on the free velocity as gravity's, [torque about frame 0's
+// origin; force]. c = min(damping, 1 / dt); s = 1 - v_max / |v| beyond the limit, else 0.
+template <class A, int K>
+[[gnu::always_inline]] inline void LaneStep<A, K>::link_damping(int i, int j, const B* R,
+                                                                const B* RI, const B* cg,
+                                                                const B& m, const B* v,
+                                                                B* F) const {
+  const B zero(0.0), dt(p_.dt), inv_dt(1.0 / p_.dt);
+  auto rate = [&](const B& damping) {
+    return xsimd::select(zero < damping, xsimd::select(inv_dt < damping, inv_dt, damping), zero);
+  };
+  auto excess = [&](const B& speed, const B& limit) {
+    return xsimd::select(limit < speed, B(1.0) - limit / speed, zero);
+  };
+  const B lin = rate(link_parameter(i, link_linear_damping, j));
+  const B ang = rate(link_parameter(i, link_angular_damping, j));
+  B v_com[3];
+  cross(v, cg, v_com);  // omega x c
+  for (int r = 0; r < 3; ++r) v_com[r] = v[3 + r] + v_com[r];
+  const B speed = xsimd::sqrt(v_com[0] * v_com[0] + v_com[1] * v_com[1] + v_com[2] * v_com[2]);
+  const B spin = xsimd::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const B lin_scale = excess(speed, link_parameter(i, link_max_linear_velocity, j));
+  const B ang_scale = excess(spin, link_parameter(i, link_max_angular_velocity, j));
+  const B fc = -m * (lin + lin_scale / dt), gc = m * lin * dt;
+  B f[3];
+  for (int r = 0; r < 3; ++r) f[r] = fc * v_com[r] - gc * B(p_.gravity[r]);
+  B local[3], Iw[3];  // I_w omega = (R Ic) (R^T omega)
+  for (int r = 0; r < 3; ++r) local[r] = R[r] * v[0] + R[3 + r] * v[1] + R[6 + r] * v[2];
+  for (int r = 0; r < 3; ++r)
+    Iw[r] = RI[3 * r] * local[0] + RI[3 * r + 1] * local[1] + RI[3 * r + 2] * local[2];
+  const B tc = -(ang + ang_scale / dt);
+  B cf[3];
+  cross(cg, f, cf);
+  for (int r = 0; r < 3; ++r) {
+    F[r] = tc * Iw[r] + cf[r];
+    F[3 + r] = f[r];
+  }
+}
+
+// PhysX's constraint force mixing of link i (link_cfm.cpp): cfm_scale times the largest of
+// b_j^T Lambda_i b_j, b_j = [c x e_j; e_j] for the world axes e_j; 0 for the fixed root.
+template <class A, int K>
+void LaneStep<A, K>::link_cfm(int i) {
+  V& out = at(l_.cfm)[i];
+  if (p_.links[i].parent < 0) {
+    out = V(0.0);
+    return;
+  }
+  const V* L = at(l_.Lambda + 21 * i);
+  const V* c = at(l_.cg + 3 * i);
+  V largest(0.0);
+  for (int j = 0; j < 3; ++j) {
+    V b[6], y[6];
+    const V e[3] = {V(j == 0 ? 1.0 : 0.0), V(j == 1 ? 1.0 : 0.0), V(j == 2 ? 1.0 : 0.0)};
+    cross(c, e, b);
+    for (int r = 0; r < 3; ++r) b[3 + r] = e[r];
+    sym_times(L, b, y);
+    const V x = dot6(b, y);
+    largest = select(largest < x, x, largest);  // std::max
+  }
+  const V scale = link_parameter_pack(i, link_cfm_scale);
+  out = select(scale == V(0.0), V(0.0), scale * largest);
 }
 
 // The bound of link i's transmitted-force friction row (joint_constraints.md J6): the spatial
@@ -721,7 +798,16 @@ template <class A, int K>
                               dof_parameter(d, target_position), dof_parameter(d, target_velocity),
                               dof_parameter(d, max_force),       dof_parameter(d, max_impulse)};
   const M accel = dof_parameter(d, acceleration) != V(0.0);
-  const DriveRowOf<V> drive = drive_law::setup(terms, accel, r, x0, h_solve_, p_.dt, p_.tgs);
+  // PhysX's cfm: the larger of the child's and the parent's; an acceleration drive and every
+  // row but a force drive's read 1 / (r + cfm) (joint_constraints.md, cfm).
+  V cfm(0.0);
+  if (p_.any_cfm) {
+    const V child = at(l_.cfm)[i], parent = at(l_.cfm)[k.parent];
+    cfm = select(child < parent, parent, child);
+  }
+  const V r_drive = p_.any_cfm ? select(accel, r + cfm, r) : r;
+  const DriveRowOf<V> drive =
+      drive_law::setup(terms, accel, r_drive, x0, h_solve_, p_.dt, p_.tgs);
   rw[Layout::tvb] = drive.target_vel_plus_initial_bias;
   rw[Layout::velm] = drive.vel_multiplier;
   rw[Layout::impm] = drive.impulse_multiplier;
@@ -738,7 +824,7 @@ template <class A, int K>
   rw[Layout::external] = at(l_.tau)[d] * V(p_.dt);
   rw[Layout::tf_imp] = V(0.0);
   rw[Layout::tf_applied] = V(0.0);
-  rw[Layout::recip] = V(1.0) / r;
+  rw[Layout::recip] = V(1.0) / (p_.any_cfm ? r + cfm : r);
   rw[Layout::delta_x] = V(0.0);
   rw[Layout::response] = r;
 }

@@ -55,6 +55,12 @@ enum LinkParameter : int {
   inertia_xy,
   inertia_xz,
   inertia_yz,
+  // PhysX's per-link parameters (LinkParameters; docs/math/joint_constraints.md).
+  link_cfm_scale,
+  link_linear_damping,
+  link_angular_damping,
+  link_max_linear_velocity,
+  link_max_angular_velocity,
   kLinkParameters
 };
 
@@ -118,7 +124,7 @@ struct Layout {
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
-      lf = 0, ff = 0, vf = 0, cg = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
+      lf = 0, ff = 0, vf = 0, cg = 0, cfm = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
 };
 
 struct Plan {
@@ -134,6 +140,9 @@ struct Plan {
   bool any_velocity_limit = false;
   /// Some environment has a friction coefficient: steps form the joints' transmitted forces.
   bool any_transmission_friction = false;
+  /// Some environment has link damping or a link velocity limit (forces on the free velocity),
+  /// some a cfm_scale (the rows' 1 / (r + cfm)).
+  bool any_link_damping = false, any_cfm = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;

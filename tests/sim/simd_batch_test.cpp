@@ -51,18 +51,29 @@ double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
   return test::relative_difference(a, b);
 }
 
-// Every environment's q, qd and drive force against the lone Simulation's, after a long run;
-// prints environment 0's q, qd difference for docs/simd_batch.md.
-void expect_lanes_near(const SimdBatch& simd, const Simulation& sim, double force_tol,
-                       const char* what) {
+// Steps both, then every environment's q, qd (1e-12) and drive, friction and velocity limit
+// forces (force_tol) against the lone Simulation's; prints environment 0's q, qd difference for
+// docs/simd_batch.md.
+void step_and_expect_near(SimdBatch& simd, Simulation& sim, int steps, double force_tol,
+                          const std::string& what) {
+  simd.step(steps);
+  sim.step(steps);
   for (int e = 0; e < simd.size(); ++e) {
     EXPECT_LE(simd_relative_difference(simd.q().row(e), sim.q().transpose()), 1e-12) << what;
     EXPECT_LE(simd_relative_difference(simd.qd().row(e), sim.qd().transpose()), 1e-12) << what;
     EXPECT_LE(simd_relative_difference(simd.drive_force().row(e), sim.drive_force().transpose()),
               force_tol)
         << what;
+    EXPECT_LE(
+        simd_relative_difference(simd.friction_force().row(e), sim.friction_force().transpose()),
+        force_tol)
+        << what;
+    EXPECT_LE(simd_relative_difference(simd.velocity_limit_force().row(e),
+                                       sim.velocity_limit_force().transpose()),
+              force_tol)
+        << what;
   }
-  std::printf("%s: q, qd %.1e (docs/simd_batch.md)\n", what,
+  std::printf("%s: q, qd %.1e (docs/simd_batch.md)\n", what.c_str(),
               std::max(simd_relative_difference(simd.q().row(0), sim.q().transpose()),
                        simd_relative_difference(simd.qd().row(0), sim.qd().transpose())));
 }
@@ -157,14 +168,7 @@ TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
     EXPECT_LE(simd_relative_difference(simd.velocity_limit_force().row(1),
                                        sim.velocity_limit_force().transpose()),
               1e-12);
-    simd.step(980);
-    sim.step(980);
-    for (int e = 0; e < 3; ++e)
-      EXPECT_LE(simd_relative_difference(simd.velocity_limit_force().row(e),
-                                         sim.velocity_limit_force().transpose()),
-                1e-12);
-    expect_lanes_near(simd, sim, 1e-12,
-                      (std::string("random tree, ") + to_string(solver)).c_str());
+    step_and_expect_near(simd, sim, 980, 1e-12, std::string("random tree, ") + to_string(solver));
   }
 }
 
@@ -202,12 +206,10 @@ TEST(SimdBatch, ActuatorEnvelopesAsSimulation) {
     for (int e = 0; e < 3; ++e)
       EXPECT_LE(simd_relative_difference(simd.drive_force().row(e), sim.drive_force().transpose()),
                 1e-12);
-    simd.step(980);
-    sim.step(980);
     // A bound drive's force follows the envelope's bound, which follows v through
     // r (lambda - accumulated): 5.7e-12 measured (PGS) where q and qd keep 6.3e-13.
-    expect_lanes_near(simd, sim, 2e-11,
-                      (std::string("random tree with envelopes, ") + to_string(solver)).c_str());
+    step_and_expect_near(simd, sim, 980, 2e-11,
+                         std::string("random tree with envelopes, ") + to_string(solver));
   }
 }
 
@@ -227,15 +229,32 @@ TEST(SimdBatch, FrictionCoefficientAsSimulation) {
       if (sim.joint_friction(d).static_effort == 0.0)
         transmitted = std::max(transmitted, std::abs(sim.friction_force()[d]));
     EXPECT_GT(transmitted, 0.1) << to_string(solver);
-    simd.step(980);
-    sim.step(980);
-    for (int e = 0; e < 3; ++e)
-      EXPECT_LE(simd_relative_difference(simd.friction_force().row(e),
-                                         sim.friction_force().transpose()),
-                1e-12);
-    expect_lanes_near(simd, sim, 1e-12,
-                      (std::string("random tree with friction coefficients, ") + to_string(solver))
-                          .c_str());
+    step_and_expect_near(simd, sim, 980, 1e-12,
+                         std::string("random tree with friction coefficients, ") + to_string(solver));
+  }
+}
+
+// PhysX's per-link parameters: cfm (the rows' 1 / (r + cfm)), link damping and link velocity
+// limits (forces on the free velocity) on some links each, in the lanes as in Simulation.
+TEST(SimdBatch, LinkParametersAsSimulation) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    Simulation sim = simd_prototype(31, solver, 10);
+    Simulation plain = sim;
+    for (int i = 1; i < sim.model().num_links(); ++i) {
+      LinkParameters p;
+      if (i % 2 == 1) p.cfm_scale = 0.025 * i;
+      if (i % 3 == 0) p.linear_damping = 0.5, p.angular_damping = 2.0;
+      if (i % 3 == 1) p.max_linear_velocity = 0.3, p.max_angular_velocity = 0.6;
+      sim.set_link_parameters(i, p);
+    }
+    SimdBatch simd(sim, 3);
+    simd.step(20);
+    sim.step(20);
+    plain.step(20);
+    // The parameters act: the drive forces differ from the same start without them.
+    EXPECT_GT((plain.drive_force() - sim.drive_force()).cwiseAbs().maxCoeff(), 0.1);
+    step_and_expect_near(simd, sim, 980, 1e-12,
+                         std::string("random tree with link parameters, ") + to_string(solver));
   }
 }
 

@@ -30,9 +30,9 @@ class SimdBatch {
   /// model (std::invalid_argument outside; the padding to whole blocks stays within int). Throws
   /// std::invalid_argument with one line naming the setting and the joint (or link) for what the
   /// SIMD step does not simulate: joints other than fixed, revolute and prismatic, compat physx,
-  /// explicit actuators, drive delays, mimic rows, contacts and link parameters (damping, cfm,
-  /// link velocity limits). Joint velocity limits (max_velocity), friction coefficients and
-  /// actuator envelopes are simulated as Simulation does.
+  /// explicit actuators, drive delays, mimic rows and contacts. Joint velocity limits
+  /// (max_velocity), friction coefficients, actuator envelopes and link parameters (cfm, link
+  /// damping, link velocity limits) are simulated as Simulation does.
   /// Without isa, default_simd_isa(), narrowed (when FEATHERDRIVE_SIMD is not set) while a block
   /// of 2 W lanes would exceed count.
   SimdBatch(const Simulation& prototype, int count, std::optional<SimdIsa> isa = std::nullopt);
