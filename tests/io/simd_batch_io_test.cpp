@@ -6,6 +6,7 @@
 
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/simd_batch.hpp"
 #include "support/source_tree.hpp"
 
@@ -96,6 +97,26 @@ TEST(SimdBatchRobots, DartArmsAsLoadedWithinTolOfSimulation) {
       const double limited = expect_within_1e12(sim, 1000, file + " " + to_string(solver));
       std::printf("%s %s: largest velocity limit force %.3g\n", file.c_str(), to_string(solver),
                   limited);
+    }
+  }
+}
+
+// The same arms with PhysX 5.6.1's defaults for what a URDF does not say (physx_default: every
+// link's cfm_scale, damping and velocity limits, every joint's friction coefficient), the values
+// an Isaac Lab robot carries, without compat physx's departures: the lanes as Simulation.
+TEST(SimdBatchRobots, DartArmsWithPhysxDefaultsWithinTolOfSimulation) {
+  const std::string dart = "/usr/share/doc/dart/data/urdf/";
+  for (const std::string file : {"KR5/KR5 sixx R650.urdf", "wam/wam.urdf"}) {
+    const UrdfRobot robot = load_urdf(dart + file);
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Simulation sim = at_240_hz(robot, solver);
+      for (int i = 0; i < robot.model->num_links(); ++i)
+        sim.set_link_parameters(i, physx_default::link());
+      for (int d = 0; d < robot.model->nv; ++d) {
+        sim.set_friction_coefficient(d, physx_default::friction_coefficient);
+        sim.set_drive(d, Drive{DriveType::force, 2e3, 100.0, test::kInf, d % 2 ? 0.5 : -0.5, 0.0});
+      }
+      expect_within_1e12(sim, 1000, file + " with PhysX's defaults " + to_string(solver));
     }
   }
 }
