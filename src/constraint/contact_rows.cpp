@@ -17,8 +17,7 @@ constexpr double kCorrelationDistance = 0.025;    // m: a kept anchor's drift al
 constexpr double kSameNormal = 0.999;              // PXC_SAME_NORMAL: cos of about 2.6 degrees
 constexpr double kAnchorSeparation2 = 1e-8;       // m^2: a second anchor lies farther (C9a)
 
-// PhysX keeps at most four points of a convex mesh on a plane (GU_MANIFOLD_CACHE_SIZE; G3).
-constexpr int kConvexPoints = 4;
+constexpr int kConvexPoints = kManifoldPoints;  // G3
 
 // The points the narrow phase may consider for a shape, and the most it keeps.
 int shape_candidates(const CollisionShape& s) {
@@ -37,75 +36,6 @@ int shape_points(const CollisionShape& s) {
                                      : shape_candidates(s);
 }
 
-// Keeps four of count > 4 points in the first four places, as PhysX's reduction of a convex
-// mesh's points does (docs/math/contact.md, G3): the deepest, the one farthest from it, the ones
-// farthest on either side of the line through the two (the farthest on that side again when all
-// lie on one side), then points shallower than 0.02 m swapped for deeper unchosen ones while the
-// deepest is within it and some chosen one is not.
-void reduce_points(Vec3* points, double* separations, char* taken, int count, const Vec3& n) {
-  int chosen[kConvexPoints];
-  std::fill(taken, taken + count, 0);
-  auto pick = [&](auto score) {
-    int best = -1;
-    double best_score = 0.0;
-    for (int i = 0; i < count; ++i) {
-      if (taken[i]) continue;
-      const double v = score(i);
-      if (best < 0 || v > best_score) {
-        best = i;
-        best_score = v;
-      }
-    }
-    taken[best] = 1;
-    return best;
-  };
-  chosen[0] = pick([&](int i) { return -separations[i]; });
-  const Vec3 p0 = points[chosen[0]];
-  chosen[1] = pick([&](int i) { return (points[i] - p0).squaredNorm(); });
-  Vec3 side = (points[chosen[1]] - p0).cross(n);
-  side = side.squaredNorm() > 0.0 ? Vec3(side.normalized()) : n;
-  double lowest = 0.0;
-  int low = -1;
-  for (int i = 0; i < count; ++i) {
-    const double d = (points[i] - p0).dot(side);
-    if (!taken[i] && (low < 0 || d < lowest)) {
-      low = i;
-      lowest = d;
-    }
-  }
-  chosen[2] = pick([&](int i) { return (points[i] - p0).dot(side); });
-  const double highest = (points[chosen[2]] - p0).dot(side);
-  if (lowest * highest > 0.0 || low == chosen[2])
-    chosen[3] = pick([&](int i) { return (points[i] - p0).dot(side); });
-  else
-    taken[chosen[3] = low] = 1;
-  constexpr double kShallow = 0.02;  // m: 0.02 of PhysX's tolerance length 1
-  double deepest = separations[0], shallowest = separations[0];
-  for (int i = 1; i < count; ++i) {
-    deepest = std::min(deepest, separations[i]);
-    shallowest = std::max(shallowest, separations[i]);
-  }
-  if (deepest < kShallow && shallowest > kShallow)
-    for (int& c : chosen) {
-      if (!(separations[c] > kShallow)) continue;
-      int better = -1;
-      for (int i = 0; i < count; ++i)
-        if (!taken[i] && separations[i] < separations[c] && separations[i] < kShallow &&
-            (better < 0 || separations[i] < separations[better]))
-          better = i;
-      if (better >= 0) taken[c = better] = 1;
-    }
-  Vec3 kept[kConvexPoints];
-  double kept_d[kConvexPoints];
-  for (int k = 0; k < kConvexPoints; ++k) {
-    kept[k] = points[chosen[k]];
-    kept_d[k] = separations[chosen[k]];
-  }
-  for (int k = 0; k < kConvexPoints; ++k) {
-    points[k] = kept[k];
-    separations[k] = kept_d[k];
-  }
-}
 
 
 }  // namespace
@@ -531,4 +461,77 @@ void ContactRows::report(double dt, std::vector<ContactReport>& reports,
   }
 }
 
+namespace contact_laws {
+
+// Keeps four of count > 4 points in the first four places, as PhysX's reduction of a convex
+// mesh's points does (docs/math/contact.md, G3): the deepest, the one farthest from it, the ones
+// farthest on either side of the line through the two (the farthest on that side again when all
+// lie on one side), then points shallower than 0.02 m swapped for deeper unchosen ones while the
+// deepest is within it and some chosen one is not.
+void reduce_points(Vec3* points, double* separations, char* taken, int count, const Vec3& n) {
+  int chosen[kManifoldPoints];
+  std::fill(taken, taken + count, 0);
+  auto pick = [&](auto score) {
+    int best = -1;
+    double best_score = 0.0;
+    for (int i = 0; i < count; ++i) {
+      if (taken[i]) continue;
+      const double v = score(i);
+      if (best < 0 || v > best_score) {
+        best = i;
+        best_score = v;
+      }
+    }
+    taken[best] = 1;
+    return best;
+  };
+  chosen[0] = pick([&](int i) { return -separations[i]; });
+  const Vec3 p0 = points[chosen[0]];
+  chosen[1] = pick([&](int i) { return (points[i] - p0).squaredNorm(); });
+  Vec3 side = (points[chosen[1]] - p0).cross(n);
+  side = side.squaredNorm() > 0.0 ? Vec3(side.normalized()) : n;
+  double lowest = 0.0;
+  int low = -1;
+  for (int i = 0; i < count; ++i) {
+    const double d = (points[i] - p0).dot(side);
+    if (!taken[i] && (low < 0 || d < lowest)) {
+      low = i;
+      lowest = d;
+    }
+  }
+  chosen[2] = pick([&](int i) { return (points[i] - p0).dot(side); });
+  const double highest = (points[chosen[2]] - p0).dot(side);
+  if (lowest * highest > 0.0 || low == chosen[2])
+    chosen[3] = pick([&](int i) { return (points[i] - p0).dot(side); });
+  else
+    taken[chosen[3] = low] = 1;
+  constexpr double kShallow = 0.02;  // m: 0.02 of PhysX's tolerance length 1
+  double deepest = separations[0], shallowest = separations[0];
+  for (int i = 1; i < count; ++i) {
+    deepest = std::min(deepest, separations[i]);
+    shallowest = std::max(shallowest, separations[i]);
+  }
+  if (deepest < kShallow && shallowest > kShallow)
+    for (int& c : chosen) {
+      if (!(separations[c] > kShallow)) continue;
+      int better = -1;
+      for (int i = 0; i < count; ++i)
+        if (!taken[i] && separations[i] < separations[c] && separations[i] < kShallow &&
+            (better < 0 || separations[i] < separations[better]))
+          better = i;
+      if (better >= 0) taken[c = better] = 1;
+    }
+  Vec3 kept[kManifoldPoints];
+  double kept_d[kManifoldPoints];
+  for (int k = 0; k < kManifoldPoints; ++k) {
+    kept[k] = points[chosen[k]];
+    kept_d[k] = separations[chosen[k]];
+  }
+  for (int k = 0; k < kManifoldPoints; ++k) {
+    points[k] = kept[k];
+    separations[k] = kept_d[k];
+  }
+}
+
+}  // namespace contact_laws
 }  // namespace featherdrive

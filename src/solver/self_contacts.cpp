@@ -30,7 +30,14 @@ double default_cfm(const Model& model, const Data& data, int link) {
 
 SelfContacts::SelfContacts(const Model& model) : pairs_(self_collision_pairs(model)) {
   if (pairs_.empty()) return;
-  capacity_ = std::min(static_cast<int>(pairs_.size()), kMaxContacts);
+  int most = 0;  // C29a: a manifold between two shapes with corners, else one point
+  for (const ShapePair& p : pairs_)
+    most += has_vertices(model.shapes[static_cast<size_t>(p.a)]) &&
+                    has_vertices(model.shapes[static_cast<size_t>(p.b)])
+                ? kManifoldPoints
+                : 1;
+  capacity_ = std::min(most, kMaxContacts);
+  manifold_ = ManifoldWorkspace(model.shapes);
   const auto c = static_cast<size_t>(capacity_);
   found_.resize(pairs_.size());
   order_.resize(pairs_.size());
@@ -62,67 +69,80 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
                         std::vector<ContactReport>& reports, int first) {
   tgs_ = phase.tgs;
   const double contact_distance = 2.0 * options.contact_offset;  // C1
-  // The narrow phase (C29), then the kMaxContacts deepest.
+  // The narrow phase (C29, C29a), then the deepest pairs whose points fit, whole.
   int found = 0;
   for (size_t p = 0; p < pairs_.size(); ++p) {
     const CollisionShape& a = model.shapes[static_cast<size_t>(pairs_[p].a)];
     const CollisionShape& b = model.shapes[static_cast<size_t>(pairs_[p].b)];
-    if (shape_pair_contact(data, a, b, contact_distance, found_[p]))
+    if (shape_pair_manifold(data, a, b, contact_distance, manifold_, found_[p]))
       order_[static_cast<size_t>(found++)] = static_cast<int>(p);
   }
   auto deeper = [this](int x, int y) {
-    const double sx = found_[static_cast<size_t>(x)].separation;
-    const double sy = found_[static_cast<size_t>(y)].separation;
+    const double sx = found_[static_cast<size_t>(x)].deepest;
+    const double sy = found_[static_cast<size_t>(y)].deepest;
     return sx < sy || (sx == sy && x < y);
   };
-  if (found > capacity_)
-    std::nth_element(order_.begin(), order_.begin() + capacity_, order_.begin() + found, deeper);
-  num_contacts_ = std::min(found, capacity_);
-  std::sort(order_.begin(), order_.begin() + num_contacts_);  // pair order: deterministic
+  int points = 0;
+  num_pairs_ = 0;
+  if (found > 0) {
+    std::sort(order_.begin(), order_.begin() + found, deeper);
+    for (int k = 0; k < found; ++k) {
+      const int p = order_[static_cast<size_t>(k)];
+      const int count = found_[static_cast<size_t>(p)].count;
+      if (points + count > capacity_) continue;
+      points += count;
+      order_[static_cast<size_t>(num_pairs_++)] = p;
+    }
+  }
+  std::sort(order_.begin(), order_.begin() + num_pairs_);  // pair order: deterministic
+  num_contacts_ = points;
   num_rows_ = 3 * num_contacts_;
   const Vec3& origin = data.frame_origin;
   const double share = tgs_penetration_share(position_iterations);
-  for (int c = 0; c < num_contacts_; ++c) {
-    const int p = order_[static_cast<size_t>(c)];
-    const PairContact& contact = found_[static_cast<size_t>(p)];
-    const CollisionShape& a = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].a)];
-    const CollisionShape& b = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].b)];
-    const Vec3& n = contact.normal;
-    const Vec3 r = contact.point - origin;
-    // C10: along the points' relative sliding velocity, else any direction across n.
-    const Vec6 dV = link_velocity[static_cast<size_t>(a.link)] -
-                    link_velocity[static_cast<size_t>(b.link)];
-    const Vec3 v = dV.tail<3>() + dV.head<3>().cross(r);
-    const Vec3 v_t = v - n * n.dot(v);
-    Vec3& t0 = t0_[static_cast<size_t>(c)];
-    t0 = v_t.squaredNorm() > 1e-4 ? Vec3(v_t.normalized()) : fallback_tangent(n);
-    t1_[static_cast<size_t>(c)] = n.cross(t0);
-    const Vec3* directions[3] = {&n, &t0, &t1_[static_cast<size_t>(c)]};
-    for (int k = 0; k < 3; ++k) {
-      Row& row = rows_[static_cast<size_t>(3 * c + k)];
-      row.link_a = a.link;
-      row.link_b = b.link;
-      row.J = spatial_force(r, *directions[k]);
-      row.impulse = row.dx = 0.0;
+  int c = 0;
+  for (int q = 0; q < num_pairs_; ++q)
+    for (int i = 0; i < found_[static_cast<size_t>(order_[static_cast<size_t>(q)])].count;
+         ++i, ++c) {
+      const int p = order_[static_cast<size_t>(q)];
+      const PairManifold& contact = found_[static_cast<size_t>(p)];
+      const CollisionShape& a = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].a)];
+      const CollisionShape& b = model.shapes[static_cast<size_t>(pairs_[static_cast<size_t>(p)].b)];
+      const Vec3& n = contact.normal;
+      const Vec3 r = contact.points[i] - origin;
+      // C10: along the points' relative sliding velocity, else any direction across n.
+      const Vec6 dV =
+          link_velocity[static_cast<size_t>(a.link)] - link_velocity[static_cast<size_t>(b.link)];
+      const Vec3 v = dV.tail<3>() + dV.head<3>().cross(r);
+      const Vec3 v_t = v - n * n.dot(v);
+      Vec3& t0 = t0_[static_cast<size_t>(c)];
+      t0 = v_t.squaredNorm() > 1e-4 ? Vec3(v_t.normalized()) : fallback_tangent(n);
+      t1_[static_cast<size_t>(c)] = n.cross(t0);
+      const Vec3* directions[3] = {&n, &t0, &t1_[static_cast<size_t>(c)]};
+      for (int k = 0; k < 3; ++k) {
+        Row& row = rows_[static_cast<size_t>(3 * c + k)];
+        row.link_a = a.link;
+        row.link_b = b.link;
+        row.J = spatial_force(r, *directions[k]);
+        row.impulse = row.dx = 0.0;
+      }
+      const double mu_s = 0.5 * (a.material.static_friction + b.material.static_friction);
+      const double mu_d = 0.5 * (a.material.dynamic_friction + b.material.dynamic_friction);
+      static_limit_[static_cast<size_t>(c)] = mu_s;
+      dynamic_limit_[static_cast<size_t>(c)] = mu_d;
+      ContactReport& report = reports[static_cast<size_t>(first + c)];
+      report.link = a.link;
+      report.shape = pairs_[static_cast<size_t>(p)].a;
+      report.other_link = b.link;
+      report.other_shape = pairs_[static_cast<size_t>(p)].b;
+      report.position = contact.points[i];
+      report.normal = n;
+      report.separation = contact.separations[i];
+      ContactNormalRow& law = laws_[static_cast<size_t>(c)];
+      setup_normal_law(law, contact.separations[i],
+                       row_velocity(rows_[static_cast<size_t>(3 * c)], link_velocity),
+                       0.5 * (a.material.restitution + b.material.restitution), options, phase,
+                       share);
     }
-    const double mu_s = 0.5 * (a.material.static_friction + b.material.static_friction);
-    const double mu_d = 0.5 * (a.material.dynamic_friction + b.material.dynamic_friction);
-    static_limit_[static_cast<size_t>(c)] = mu_s;
-    dynamic_limit_[static_cast<size_t>(c)] = mu_d;
-    ContactReport& report = reports[static_cast<size_t>(first + c)];
-    report.link = a.link;
-    report.shape = pairs_[static_cast<size_t>(p)].a;
-    report.other_link = b.link;
-    report.other_shape = pairs_[static_cast<size_t>(p)].b;
-    report.position = contact.point;
-    report.normal = n;
-    report.separation = contact.separation;
-    ContactNormalRow& law = laws_[static_cast<size_t>(c)];
-    setup_normal_law(law, contact.separation, row_velocity(rows_[static_cast<size_t>(3 * c)],
-                                                           link_velocity),
-                     0.5 * (a.material.restitution + b.material.restitution), options, phase,
-                     share);
-  }
   // W = J M^-1 J^T, column by column: a unit impulse of row i through one sweep from rest (C30).
   const auto R = static_cast<size_t>(num_rows_);
   for (size_t i = 0; i < R; ++i) {
@@ -130,22 +150,24 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     link_impulse_[static_cast<size_t>(row.link_a)] += row.J;
     link_impulse_[static_cast<size_t>(row.link_b)] -= row.J;
     scratch_.setZero();
-    gauss_seidel_sweep(model, data, *sweep_, scratch_, [](int, double) { return 0.0; },
-                       [&](int link, Vec6& dv) {
-                         const Vec6& F = link_impulse_[static_cast<size_t>(link)];
-                         dv += data.response[link] * F;
-                         return F;
-                       });
+    gauss_seidel_sweep(
+        model, data, *sweep_, scratch_, [](int, double) { return 0.0; },
+        [&](int link, Vec6& dv) {
+          const Vec6& F = link_impulse_[static_cast<size_t>(link)];
+          dv += data.response[link] * F;
+          return F;
+        });
     link_impulse_[static_cast<size_t>(row.link_a)].setZero();
     link_impulse_[static_cast<size_t>(row.link_b)].setZero();
     link_velocities0(model, data, scratch_, link_velocity_);
     for (size_t j = 0; j < R; ++j) W_[j * R + i] = row_velocity(rows_[j], link_velocity_);
   }
   for (int c = 0; c < num_contacts_; ++c) {
-    const int a = rows_[static_cast<size_t>(3 * c)].link_a, b = rows_[static_cast<size_t>(3 * c)].link_b;
+    const int a = rows_[static_cast<size_t>(3 * c)].link_a,
+              b = rows_[static_cast<size_t>(3 * c)].link_b;
     // C32: at least PhysX's default cfm, whatever the compat mode.
-    const double cfm = std::max({link_cfm[a], link_cfm[b], default_cfm(model, data, a),
-                                 default_cfm(model, data, b)});
+    const double cfm = std::max(
+        {link_cfm[a], link_cfm[b], default_cfm(model, data, a), default_cfm(model, data, b)});
     for (int k = 0; k < 3; ++k) {
       Row& row = rows_[static_cast<size_t>(3 * c + k)];
       const double u = W_[static_cast<size_t>(3 * c + k) * (R + 1)] + cfm;
@@ -156,7 +178,8 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     const double vn = row_velocity(rows_[static_cast<size_t>(3 * c)], link_velocity);
     const double p0 = law.separation;
     min_normal_[static_cast<size_t>(c)] =  // C12, one point
-        kMinNormalShare * std::max(law.mass * (law.target - vn - std::max(p0 / phase.dt, 0.0)), 0.0);
+        kMinNormalShare *
+        std::max(law.mass * (law.target - vn - std::max(p0 / phase.dt, 0.0)), 0.0);
   }
   return num_contacts_;
 }
@@ -169,7 +192,8 @@ void SelfContacts::apply(int r, double delta) {
   rows_[static_cast<size_t>(r)].impulse += delta;
 }
 
-void SelfContacts::solve(const Model& model, const Data& data, const ContactPhase& phase, VecX& qd) {
+void SelfContacts::solve(const Model& model, const Data& data, const ContactPhase& phase,
+                         VecX& qd) {
   if (num_contacts_ == 0) return;
   link_velocities0(model, data, qd, link_velocity_);
   for (int r = 0; r < num_rows_; ++r) {
@@ -183,7 +207,8 @@ void SelfContacts::solve(const Model& model, const Data& data, const ContactPhas
     law.dx = rows_[static_cast<size_t>(rn)].dx;
     apply(rn, normal_row_delta(law, velocity_[static_cast<size_t>(rn)], phase));
     // C12-C14 with one anchor at the point and no kept error.
-    const double N = std::max(rows_[static_cast<size_t>(rn)].impulse, min_normal_[static_cast<size_t>(c)]);
+    const double N =
+        std::max(rows_[static_cast<size_t>(rn)].impulse, min_normal_[static_cast<size_t>(c)]);
     const double static_limit = static_limit_[static_cast<size_t>(c)] * N;
     const double dynamic_limit = dynamic_limit_[static_cast<size_t>(c)] * N;
     if (!tgs_) {
@@ -217,18 +242,20 @@ void SelfContacts::solve(const Model& model, const Data& data, const ContactPhas
     link_impulse_[static_cast<size_t>(row.link_a)] += p * row.J;
     link_impulse_[static_cast<size_t>(row.link_b)] -= p * row.J;
   }
-  gauss_seidel_sweep(model, data, *sweep_, qd, [](int, double) { return 0.0; },
-                     [&](int link, Vec6& dv) {
-                       const Vec6 F = link_impulse_[static_cast<size_t>(link)];
-                       link_impulse_[static_cast<size_t>(link)].setZero();
-                       dv += data.response[link] * F;
-                       return F;
-                     });
+  gauss_seidel_sweep(
+      model, data, *sweep_, qd, [](int, double) { return 0.0; },
+      [&](int link, Vec6& dv) {
+        const Vec6 F = link_impulse_[static_cast<size_t>(link)];
+        link_impulse_[static_cast<size_t>(link)].setZero();
+        dv += data.response[link] * F;
+        return F;
+      });
 }
 
 void SelfContacts::track(const std::vector<Vec6>& link_velocity, double h) {
   for (int r = 0; r < num_rows_; ++r)
-    rows_[static_cast<size_t>(r)].dx += h * row_velocity(rows_[static_cast<size_t>(r)], link_velocity);
+    rows_[static_cast<size_t>(r)].dx +=
+        h * row_velocity(rows_[static_cast<size_t>(r)], link_velocity);
 }
 
 void SelfContacts::report(double dt, std::vector<ContactReport>& reports, int first,

@@ -4,6 +4,7 @@
 // unless asked for.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "featherdrive/algorithm/energy.hpp"
@@ -173,6 +174,94 @@ TEST_P(SelfContact, InternalContactsKeepTheMomentumOfAFloatingTree) {
   EXPECT_TRUE(sim.contacts().empty() || sim.contacts()[0].separation > -0.045);
   for (int k = 0; k < 200; ++k) sim.step();
   EXPECT_LT(sim.qd().cwiseAbs().maxCoeff(), 100.0);
+}
+
+// A box link (half extents kHalf, kBoxMass) on a hinge about x above a lifting slider (kLiftMass)
+// of a fixed base that carries a plate (half extents 0.5, 0.5, 0.05, its top at z = 0.05)
+// centred at y = plate_y. The box starts with its lower face 1 mm above the plate's top.
+constexpr double kBoxMass = 2.0, kLiftMass = 0.5;
+const Vec3 kHalf(0.1, 0.1, 0.05);
+
+CollisionShape box(const Vec3& half, const Vec3& position = Vec3::Zero()) {
+  CollisionShape s;
+  s.type = ShapeType::box;
+  s.size = half;
+  s.position = position;
+  return s;
+}
+
+Simulation box_on_plate(double plate_y, SolverType solver) {
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  b.add_link(make_link("lift", "base", kLiftMass, Vec3::Zero(), Mat3::Identity() * 0.01,
+                       prismatic_joint("up", Vec3::UnitZ())));
+  const Vec3 s = kHalf.cwiseProduct(kHalf);
+  const Mat3 inertia = Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * kBoxMass / 3;
+  b.add_link(make_link("box", "lift", kBoxMass, Vec3::Zero(), inertia,
+                       revolute_joint("tilt", Vec3::UnitX())));
+  b.add_shape("base", box(Vec3(0.5, 0.5, 0.05), Vec3(0, plate_y, 0)));
+  b.add_shape("box", box(kHalf));
+  SimulationOptions o;
+  o.dt = 0.01;
+  o.solver = solver;
+  o.position_iterations = converged(solver);
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  VecX q = sim.q();
+  q[0] = 0.05 + kHalf.z() + 1e-3;
+  sim.set_q(q);
+  ContactOptions c;
+  c.self_collision = true;
+  sim.set_contact_options(c);
+  return sim;
+}
+
+// Runs 2000 steps; returns the largest tilt. The points and impulses are the last step's.
+double settle(Simulation& sim) {
+  double tilt = 0.0;
+  for (int k = 0; k < 2000; ++k) {
+    sim.step();
+    tilt = std::max(tilt, std::abs(sim.q()[1]));
+  }
+  return tilt;
+}
+
+// C29a: a box lying flat on a larger plate is carried at its lower face's four corners, so it
+// stays level (one point at the middle would leave it balancing on a pivot), and the four normal
+// impulses carry the weight of the box and the slider.
+TEST_P(SelfContact, ABoxLyingOnAPlateRestsOnItsFourCorners) {
+  Simulation sim = box_on_plate(0.0, GetParam());
+  EXPECT_LT(settle(sim), 1e-9);
+  ASSERT_EQ(sim.contacts().size(), 4u);
+  EXPECT_NEAR(sim.q()[0], 0.05 + kHalf.z(), 1e-9);
+  EXPECT_NEAR(normal_sum(sim) / (sim.options().dt * (kBoxMass + kLiftMass) * kG), 1.0, 1e-9);
+  int corners = 0;
+  for (const ContactReport& c : sim.contacts()) {
+    EXPECT_NEAR(c.normal.z(), -1.0, 1e-12);  // from the box into the plate
+    EXPECT_NEAR(std::abs(c.position.x()), kHalf.x(), 1e-9);
+    EXPECT_NEAR(std::abs(c.position.y()), kHalf.y(), 1e-9);
+    EXPECT_NEAR(c.position.z(), 0.05, 1e-9);
+    corners |= 1 << ((c.position.x() > 0) * 2 + (c.position.y() > 0));
+  }
+  EXPECT_EQ(corners, 15);  // each corner once
+}
+
+// The box overhangs the plate's edge at y = 0.05 by half its width less 0.05 m; its centre of mass
+// (y = 0) is over the plate. The points are the overlap's corners: the box's two corners at
+// y = -0.1 and where its sides cross the plate's edge. It stays level.
+TEST_P(SelfContact, ABoxOverhangingThePlatesEdgeRestsOnTheOverlap) {
+  Simulation sim = box_on_plate(-0.45, GetParam());
+  EXPECT_LT(settle(sim), 1e-9);
+  ASSERT_EQ(sim.contacts().size(), 4u);
+  EXPECT_NEAR(normal_sum(sim) / (sim.options().dt * (kBoxMass + kLiftMass) * kG), 1.0, 1e-9);
+  int corners = 0;
+  for (const ContactReport& c : sim.contacts()) {
+    EXPECT_NEAR(std::abs(c.position.x()), kHalf.x(), 1e-9);
+    const bool edge = c.position.y() > 0;
+    EXPECT_NEAR(c.position.y(), edge ? 0.05 : -kHalf.y(), 1e-9);
+    EXPECT_NEAR(c.position.z(), 0.05, 1e-9);
+    corners |= 1 << ((c.position.x() > 0) * 2 + edge);
+  }
+  EXPECT_EQ(corners, 15);
 }
 
 INSTANTIATE_TEST_SUITE_P(Solvers, SelfContact, ::testing::Values(SolverType::pgs, SolverType::tgs),

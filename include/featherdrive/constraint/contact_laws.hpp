@@ -11,10 +11,14 @@ namespace featherdrive::contact_laws {
 inline constexpr double kPgsBias = 0.8;            // C3
 inline constexpr double kFrictionMassScale = 0.8;  // C11
 inline constexpr double kMinNormalShare = 0.25;    // C12
+/// PhysX keeps at most four points of a manifold (GU_MANIFOLD_CACHE_SIZE; G3).
+inline constexpr int kManifoldPoints = 4;
 
 /// scale / u, or 0 for a direction the link cannot move in (u = 0 without a cfm: a slider's
 /// sideways friction rows), which then applies nothing (C22).
-inline double row_mass(double scale, double u) { return u > 0.0 ? scale / u : 0.0; }
+inline double row_mass(double scale, double u) {
+  return u > 0.0 ? scale / u : 0.0;
+}
 
 /// The friction direction of a patch at rest, PhysX's (C10a): x cross n, or z cross n when n lies
 /// within 45 degrees of x. It fixes which of the two rows comes first in the solve.
@@ -30,5 +34,9 @@ inline Vec6 spatial_force(const Vec3& r, const Vec3& u) {
   f.tail<3>() = u;
   return f;
 }
+
+/// Keeps kManifoldPoints of count > kManifoldPoints points (and their separations) in the first
+/// places, as PhysX's reduction of a manifold does (G3); taken: count scratch flags.
+void reduce_points(Vec3* points, double* separations, char* taken, int count, const Vec3& n);
 
 }  // namespace featherdrive::contact_laws

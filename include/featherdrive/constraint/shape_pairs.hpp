@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/constraint/contact_laws.hpp"
 #include "featherdrive/model/shape.hpp"
 
 namespace featherdrive {
@@ -25,9 +26,9 @@ double bounding_radius(const CollisionShape& shape);
 
 /// One point of contact between two posed shapes.
 struct PairContact {
-  Vec3 point = Vec3::Zero();   ///< world frame: midway through the overlap of the grown shapes
-  Vec3 normal = Vec3::UnitZ(); ///< unit, from b into a
-  double separation = 0.0;     ///< < 0 penetrating
+  Vec3 point = Vec3::Zero();    ///< world frame: midway through the overlap of the grown shapes
+  Vec3 normal = Vec3::UnitZ();  ///< unit, from b into a
+  double separation = 0.0;      ///< < 0 penetrating
 };
 
 /// Whether shapes a and b at their links' poses in data (world) come within contact_distance,
@@ -35,5 +36,43 @@ struct PairContact {
 /// pair (MPR) gives separation = contact_distance - depth. Allocates nothing.
 bool shape_pair_contact(const Data& data, const CollisionShape& a, const CollisionShape& b,
                         double contact_distance, PairContact& out);
+
+/// The points of contact between two posed shapes: one patch, one normal (C29a).
+struct PairManifold {
+  Vec3 normal = Vec3::UnitZ();  ///< unit, from b into a
+  int count = 0;
+  Vec3 points[contact_laws::kManifoldPoints];  ///< world frame
+  double separations[contact_laws::kManifoldPoints] = {};
+  double deepest = 0.0;  ///< the least of the separations
+};
+
+/// Whether a shape has corners the manifold is gathered from (box, convex hull; C29a).
+bool has_vertices(const CollisionShape& shape);
+
+/// The scratch of shape_pair_manifold, sized once for a model's shapes so that a step
+/// allocates nothing.
+class ManifoldWorkspace {
+ public:
+  ManifoldWorkspace() = default;
+  explicit ManifoldWorkspace(const std::vector<CollisionShape>& shapes);
+
+ private:
+  friend bool shape_pair_manifold(const Data&, const CollisionShape&, const CollisionShape&, double,
+                                  ManifoldWorkspace&, PairManifold&);
+  std::vector<Vec3> world_;  ///< both shapes' corners in the world
+  std::vector<Eigen::Vector2d>
+      face_[2];                    ///< the two facing sides' corners across n, then their outlines
+  std::vector<double> height_[2];  ///< those corners along n
+  std::vector<Eigen::Vector2d> clipped_, next_;
+  std::vector<Vec3> points_;
+  std::vector<double> separations_;
+  std::vector<char> taken_;
+};
+
+/// shape_pair_contact, then, for two shapes with corners, up to four points over the patch where
+/// their facing sides overlap across the contact's normal (C29a); one point (C29) otherwise.
+/// Allocates nothing.
+bool shape_pair_manifold(const Data& data, const CollisionShape& a, const CollisionShape& b,
+                         double contact_distance, ManifoldWorkspace& work, PairManifold& out);
 
 }  // namespace featherdrive

@@ -17,7 +17,7 @@ namespace featherdrive {
 
 class SelfContacts {
  public:
-  /// The most contacts a step keeps (the deepest; one point per pair, C29).
+  /// The most contact points a step keeps (the deepest pairs' manifolds, whole; C29, C29a).
   static constexpr int kMaxContacts = 32;
 
   SelfContacts() = default;
@@ -56,8 +56,9 @@ class SelfContacts {
 
   std::vector<ShapePair> pairs_;
   int capacity_ = 0;
-  std::vector<PairContact> found_;     ///< per pair: this step's contact
-  std::vector<int> order_;             ///< pairs in contact; the first num_contacts_ are the step's
+  std::vector<PairManifold> found_;    ///< per pair: this step's points
+  std::vector<int> order_;             ///< pairs in contact; the first num_pairs_ are the step's
+  ManifoldWorkspace manifold_;
   std::vector<ContactNormalRow> laws_; ///< per contact: the normal row's law (C2-C8)
   std::vector<double> static_limit_, dynamic_limit_, min_normal_;  ///< per contact
   std::vector<Vec3> t0_, t1_;          ///< per contact
@@ -68,7 +69,7 @@ class SelfContacts {
   VecX scratch_;
   std::vector<char> marked_;           ///< links with shapes in a pair
   std::optional<SweepWorkspace> sweep_;
-  int num_contacts_ = 0, num_rows_ = 0;
+  int num_pairs_ = 0, num_contacts_ = 0, num_rows_ = 0;
   bool tgs_ = false;
 };
 
