@@ -423,6 +423,18 @@ TEST(ContactAllocations, NoneInTheStep) {
     s.size = Vec3(0.3, 0, 0);
     m.shapes.push_back(s);
   }
+  {  // and world-aligned cubes there, whose faces meet: a manifold of several points (C29a)
+    Data posed(m);
+    forward_kinematics(m, posed, m.neutral_configuration());
+    for (const int link : {2, 8}) {
+      CollisionShape s;
+      s.link = link;
+      s.type = ShapeType::box;
+      s.size = Vec3(0.3, 0.3, 0.3);
+      s.rotation = posed.world_rotation[link].transpose();
+      m.shapes.push_back(s);
+    }
+  }
   std::stable_sort(m.shapes.begin(), m.shapes.end(),
                    [](const CollisionShape& a, const CollisionShape& b) { return a.link < b.link; });
   auto model = std::make_shared<const Model>(m);
@@ -442,9 +454,17 @@ TEST(ContactAllocations, NoneInTheStep) {
     contact.self_collision = true;  // the links' shapes overlap too (contact.md, section 14)
     sim.set_contact_options(contact);
     sim.step();
-    int self = 0;  // the first step's: the overlapping links then push apart
-    for (const ContactReport& c : sim.contacts()) self += c.other_link >= 0 ? 1 : 0;
+    int self = 0, most = 0;  // the first step's: the overlapping links then push apart
+    for (const ContactReport& c : sim.contacts()) {
+      if (c.other_link < 0) continue;
+      ++self;
+      int same = 0;  // the points of c's pair: a manifold (C29a) has several
+      for (const ContactReport& d : sim.contacts())
+        same += d.shape == c.shape && d.other_shape == c.other_shape ? 1 : 0;
+      most = std::max(most, same);
+    }
     EXPECT_GT(self, 0);
+    EXPECT_GT(most, 1);
     Simulation copy = sim;
     EXPECT_EQ(allocations_in([&] {
                 for (int k = 0; k < 30; ++k) sim.step();

@@ -196,7 +196,8 @@ Simulation box_on_plate(double plate_y, SolverType solver) {
   b.add_link(make_link("lift", "base", kLiftMass, Vec3::Zero(), Mat3::Identity() * 0.01,
                        prismatic_joint("up", Vec3::UnitZ())));
   const Vec3 s = kHalf.cwiseProduct(kHalf);
-  const Mat3 inertia = Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * kBoxMass / 3;
+  const Mat3 inertia =
+      Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * kBoxMass / 3;
   b.add_link(make_link("box", "lift", kBoxMass, Vec3::Zero(), inertia,
                        revolute_joint("tilt", Vec3::UnitX())));
   b.add_shape("base", box(Vec3(0.5, 0.5, 0.05), Vec3(0, plate_y, 0)));
