@@ -23,6 +23,7 @@
 #include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/model/model_variant.hpp"
 #include "fit_spec_reader.hpp"
+#include "mesh_hull.hpp"
 #include "yaml_reader.hpp"
 
 namespace featherdrive {
@@ -433,14 +434,15 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
                                                                 const Model& model) {
   if (!node.IsSequence())
     r.fail("shapes", node,
-           "must be a list of {link, type, ...} (sphere, capsule, box, ellipsoid or cylinder)");
+           "must be a list of {link, type, ...} (sphere, capsule, box, ellipsoid, cylinder or "
+           "convex)");
   std::vector<std::pair<std::string, CollisionShape>> shapes;
   for (size_t i = 0; i < node.size(); ++i) {
     const std::string p = "shapes[" + std::to_string(i) + "]";
     const YAML::Node e = node[i];
     const auto at = [&](const char* key) { return Reader::join(p, key); };
-    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "xyz", "rpy",
-                 "name",
+    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "vertices",
+                 "xyz", "rpy", "name",
                  "static_friction", "dynamic_friction", "restitution"});
     for (const char* key : {"link", "type"})
       if (!e[key]) r.fail(at(key), "missing");
@@ -462,14 +464,16 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
                                  {"capsule", ShapeType::capsule, {"radius", "half_length"}},
                                  {"box", ShapeType::box, {"half_extents"}},
                                  {"ellipsoid", ShapeType::ellipsoid, {"radii"}},
-                                 {"cylinder", ShapeType::cylinder, {"radius", "half_length"}}};
+                                 {"cylinder", ShapeType::cylinder, {"radius", "half_length"}},
+                                 {"convex", ShapeType::convex, {"vertices"}}};
     const Kind* kind = nullptr;
     for (const Kind& k : kinds)
       if (type == k.name) kind = &k;
-    if (!kind) r.fail(at("type"), e["type"], "must be sphere, capsule, box, ellipsoid or cylinder");
+    if (!kind)
+      r.fail(at("type"), e["type"], "must be sphere, capsule, box, ellipsoid, cylinder or convex");
     shape.type = kind->type;
     const std::vector<const char*>& sizes = kind->sizes;
-    for (const char* key : {"radius", "half_length", "half_extents", "radii"}) {
+    for (const char* key : {"radius", "half_length", "half_extents", "radii", "vertices"}) {
       const bool wanted =
           std::find(sizes.begin(), sizes.end(), std::string_view(key)) != sizes.end();
       if (!wanted && e[key]) r.fail(at(key), e[key], "is not a size of a " + type);
@@ -483,6 +487,23 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
     for (size_t k = 0; k < sizes.size(); ++k) {
       const YAML::Node v = e[sizes[k]];
       const std::string_view key = sizes[k];
+      if (key == "vertices") {  // the hull of the points, as a URDF mesh's (G3)
+        // Each step visits a hull's vertices; MuJoCo's compiler takes the hull.
+        constexpr size_t kMostVertices = 1000;
+        if (!v.IsSequence()) r.fail(at("vertices"), v, "must be a list of [x, y, z]");
+        if (v.size() > kMostVertices)
+          r.fail(at("vertices"), std::to_string(v.size()) + " points: at most " +
+                                     std::to_string(kMostVertices) + " (the bound)");
+        std::vector<Vec3> points;
+        for (size_t j = 0; j < v.size(); ++j)
+          points.push_back(r.vec3(v[j], at("vertices") + "[" + std::to_string(j) + "]"));
+        try {
+          shape.vertices = mesh_hull::hull_of_points(points);
+        } catch (const std::runtime_error& error) {
+          r.fail(at("vertices"), v, error.what());
+        }
+        continue;
+      }
       if (key != "half_extents" && key != "radii") {
         shape.size[static_cast<int>(k)] = positive(v, at(sizes[k]));
         continue;

@@ -20,6 +20,7 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/io/mjcf.hpp"
+#include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/simulation.hpp"
 
@@ -131,6 +132,43 @@ TEST(ConvexShapes, BoxMeshRestsAsTheBoxPrimitive) {
     }
     EXPECT_LT(worst_height, 1e-12) << to_string(solver);
     EXPECT_LT(worst_impulse, 1e-12) << to_string(solver);
+  }
+}
+
+// A scene's `type: convex` shape: the hull of the given points (the corners of the box of half
+// extents h and its centre, which the hull leaves out) rests as the scene's box primitive does.
+TEST(ConvexShapes, ASceneConvexShapeRestsAsTheBoxPrimitive) {
+  const Vec3 h(0.125, 0.25, 0.0625);
+  const fs::path urdf = temp_folder() / "bare.urdf";
+  std::ofstream(urdf) << "<robot name='r'><link name='body'><inertial><mass value='2'/><inertia "
+                         "ixx='0.02' ixy='0' ixz='0' iyy='0.03' iyz='0' izz='0.04'/></inertial>"
+                         "</link></robot>";
+  const std::string scene =
+      "model: " + urdf.string() + "\nfixed_base: false\nsteps: 1\nshapes:\n";
+  const std::string pose = ", xyz: [0.01, 0, 0], rpy: [0, 0, 0.2]}\n";
+  std::string corners = "[0, 0, 0]";
+  for (int v = 0; v < 8; ++v)
+    corners += ", [" + std::to_string(v & 4 ? -h.x() : h.x()) + ", " +
+               std::to_string(v & 2 ? -h.y() : h.y()) + ", " +
+               std::to_string(v & 1 ? -h.z() : h.z()) + "]";
+  const Scene hull = parse_scene(
+      scene + "  - {link: body, type: convex, vertices: [" + corners + "]" + pose, "s.yaml");
+  const Scene box = parse_scene(
+      scene + "  - {link: body, type: box, half_extents: [0.125, 0.25, 0.0625]" + pose, "s.yaml");
+  ASSERT_EQ(hull.robot.model->shapes.size(), 1u);
+  const CollisionShape& shape = hull.robot.model->shapes[0];
+  EXPECT_EQ(shape.type, ShapeType::convex);
+  ASSERT_EQ(shape.vertices.size(), 8u);
+  for (const Vec3& v : shape.vertices) EXPECT_EQ(v.cwiseAbs(), h) << v.transpose();
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    Simulation a = dropped(hull.robot.model, solver), b = dropped(box.robot.model, solver);
+    double worst = 0.0;
+    for (int step = 0; step < 200; ++step) {
+      a.step();
+      b.step();
+      worst = std::max(worst, std::abs(a.q()[2] - b.q()[2]));
+    }
+    EXPECT_LT(worst, 1e-12) << to_string(solver);
   }
 }
 
