@@ -579,7 +579,7 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
   const fs::path folder = fs::absolute(robot.path).parent_path();
   std::vector<UrdfGeometry> out;
   std::string collada;  // the .dae meshes: one line for all
-  int collada_count = 0;
+  int collada_count = 0, collada_collisions = 0;
   std::map<std::string, int> unmapped;  // package -> meshes left out: one line per package
   for (const UrdfGeometry& g : robot.geometry) {
     const std::string where = file + ": link '" + g.link + "' " +
@@ -623,6 +623,7 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
     if (extension == ".dae") {
       collada += (collada.empty() ? " link '" : ", '") + g.link + "' " + name;
       ++collada_count;
+      collada_collisions += g.collision ? 1 : 0;
       continue;
     }
     if (extension != ".stl") {
@@ -646,10 +647,20 @@ std::vector<UrdfGeometry> mjcf_geometry(const UrdfRobot& robot,
     warnings.push_back(file + ": " + std::to_string(count) + " mesh" + (count == 1 ? "" : "es") +
                        " of package '" + package + "' left out of the MJCF: it is not mapped "
                        "(--package " + package + "=DIR)");
-  if (collada_count > 0)
-    warnings.push_back(file + ": " + std::to_string(collada_count) +
-                       " COLLADA (.dae) mesh" + (collada_count == 1 ? "" : "es") +
-                       " left out of the MJCF (MuJoCo 2.2.2 cannot load them):" + collada);
+  // What is left out is the drawn geom (geom_text: contype 0); a collision mesh's hull is a
+  // model shape, which goes in as an inline vertex mesh where the MJCF has contacts.
+  if (collada_count > 0) {
+    const int visual = collada_count - collada_collisions;
+    std::string kinds = std::to_string(visual) + " visual";
+    if (collada_collisions > 0)
+      kinds += ", " + std::to_string(collada_collisions) +
+               " collision (their contact hulls go in as inline meshes with a ground or "
+               "self-collision)";
+    warnings.push_back(file + ": " + std::to_string(collada_count) + " COLLADA (.dae) mesh" +
+                       (collada_count == 1 ? "" : "es") +
+                       " left out of the MJCF's drawn geoms (MuJoCo 2.2.2 cannot load them; " +
+                       kinds + "):" + collada);
+  }
   return out;
 }
 

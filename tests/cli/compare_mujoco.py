@@ -224,7 +224,8 @@ def urdf_geometry(cli, source, out_dir):
           "WAM without --package: one warning line for the package", r)
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml,
             "--package", "herb_description=" + os.path.dirname(wam))
-    check(r.returncode == 0 and "8 COLLADA (.dae) meshes left out" in r.stdout,
+    check(r.returncode == 0 and "8 COLLADA (.dae) meshes left out of the MJCF's drawn geoms "
+          "(MuJoCo 2.2.2 cannot load them; 8 visual):" in r.stdout,
           "WAM: the COLLADA visuals are left out on one warning line", r)
     if r.returncode == 0:
         root = ElementTree.parse(xml).getroot()
@@ -238,6 +239,10 @@ def urdf_geometry(cli, source, out_dir):
     xml = os.path.join(out_dir, "wam_dae.xml")
     r = run(cli, "translate", scene, "--to", "mujoco", "--out", xml)
     check(r.returncode == 0, "WAM with .dae collisions: translated", r)
+    # The warning says what is left out: the drawn geoms; the collisions' hulls go in.
+    check(" collision (their contact hulls go in as inline meshes with a ground or "
+          "self-collision)):" in r.stdout and "left out of the MJCF's drawn geoms" in r.stdout,
+          "WAM with .dae collisions: the warning names the drawn geoms as what is left out", r)
     if r.returncode == 0:
         root = ElementTree.parse(xml).getroot()
         inline = [m for m in root.iter("mesh") if m.get("vertex") and not m.get("file")]
