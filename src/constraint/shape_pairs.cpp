@@ -84,8 +84,14 @@ using Vec2 = Eigen::Vector2d;
 
 double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-// The corners of a shape with vertices, in the world; a box's in PhysX's order (C1a).
+// The corners of a shape with vertices, in the world, a box's in PhysX's order (C1a); a capsule's
+// segment ends (its surface lies its radius beyond them).
 int world_corners(const Posed& p, Vec3* out) {
+  if (p.shape->type == ShapeType::capsule) {
+    out[0] = p.centre + p.shape->size.y() * p.rotation.col(2);
+    out[1] = p.centre - p.shape->size.y() * p.rotation.col(2);
+    return 2;
+  }
   if (p.shape->type == ShapeType::box) {
     const Vec3& e = p.shape->size;
     for (int v = 0; v < 8; ++v)
@@ -264,8 +270,15 @@ bool has_vertices(const CollisionShape& s) {
   return s.type == ShapeType::box || s.type == ShapeType::convex;
 }
 
+bool pair_manifold(const CollisionShape& a, const CollisionShape& b) {
+  auto flat = [](const CollisionShape& s) {
+    return has_vertices(s) || s.type == ShapeType::capsule;
+  };
+  return flat(a) && flat(b) && (has_vertices(a) || has_vertices(b));
+}
+
 ManifoldWorkspace::ManifoldWorkspace(const std::vector<CollisionShape>& shapes) {
-  size_t most = 0;
+  size_t most = 2;  // a capsule's segment ends
   for (const CollisionShape& s : shapes)
     if (has_vertices(s)) most = std::max(most, s.type == ShapeType::box ? 8 : s.vertices.size());
   world_.resize(2 * most);
@@ -291,7 +304,7 @@ bool shape_pair_manifold(const Data& data, const CollisionShape& a, const Collis
     out.separations[0] = out.deepest = contact.separation;
     return true;
   };
-  if (!has_vertices(a) || !has_vertices(b)) return single();
+  if (!pair_manifold(a, b)) return single();
   // The patch's normal: MPR's, or a box's face normal along which the pair penetrates less (MPR's
   // depth is along the portal it converges on, which for two boxes side by side can lean far
   // from the face they rest on); depth(d) = max_b d . y - min_a d . x (C29a).
@@ -300,11 +313,13 @@ bool shape_pair_manifold(const Data& data, const CollisionShape& a, const Collis
   counts[0] = world_corners(posed(data, a, 0.0), corners[0]);
   corners[1] = corners[0] + counts[0];
   counts[1] = world_corners(posed(data, b, 0.0), corners[1]);
+  const double radius[2] = {a.type == ShapeType::capsule ? a.size.x() : 0.0,
+                            b.type == ShapeType::capsule ? b.size.x() : 0.0};
   auto depth = [&](const Vec3& d) {
     double low = std::numeric_limits<double>::infinity(), high = -low;
     for (int i = 0; i < counts[0]; ++i) low = std::min(low, d.dot(corners[0][i]));
     for (int i = 0; i < counts[1]; ++i) high = std::max(high, d.dot(corners[1][i]));
-    return high - low;
+    return high + radius[1] - (low - radius[0]);
   };
   Vec3 n = contact.normal;
   double least = depth(n);
@@ -330,7 +345,8 @@ bool shape_pair_manifold(const Data& data, const CollisionShape& a, const Collis
   Height height[2];
   int sizes[2];
   for (int k = 0; k < 2; ++k) {
-    const double toward = k == 0 ? -1.0 : 1.0;  // a's lowest side along n, b's highest
+    // a's lowest side along n, b's highest; a capsule's side its radius beyond its segment.
+    const double toward = k == 0 ? -1.0 : 1.0, beyond = toward * radius[k];
     double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
     for (int i = 0; i < counts[k]; ++i) {
       const double h = toward * n.dot(corners[k][i]);
@@ -339,13 +355,18 @@ bool shape_pair_manifold(const Data& data, const CollisionShape& a, const Collis
     }
     // The facing side: corners within a quarter of the shape's extent along n of its extreme,
     // and within the contact distance.
-    const double within = std::min(contact_distance, 0.25 * (highest - lowest));
+    double within = std::min(contact_distance, 0.25 * (highest - lowest));
+    if (radius[k] > 0.0) {  // a capsule: both ends (the ground's rule) unless it leans past 45 deg
+      const Vec3 axis = corners[k][0] - corners[k][1];
+      const double along = std::abs(n.dot(axis)), across = (axis - n * n.dot(axis)).norm();
+      within = along <= across ? contact_distance : 0.0;
+    }
     int m = 0;
     for (int i = 0; i < counts[k]; ++i) {
       const Vec3& x = corners[k][i];
       if (toward * n.dot(x) >= highest - within) {
         w.face_[k][static_cast<size_t>(m)] = Vec2(u.dot(x), v.dot(x));
-        w.height_[k][static_cast<size_t>(m++)] = n.dot(x);
+        w.height_[k][static_cast<size_t>(m++)] = n.dot(x) + beyond;
       }
     }
     height[k] = fit(w.face_[k].data(), w.height_[k].data(), m);

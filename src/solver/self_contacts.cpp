@@ -30,10 +30,10 @@ double default_cfm(const Model& model, const Data& data, int link) {
 
 SelfContacts::SelfContacts(const Model& model) : pairs_(self_collision_pairs(model)) {
   if (pairs_.empty()) return;
-  int most = 0;  // C29a: a manifold between two shapes with corners, else one point
+  int most = 0;  // C29a: a manifold for a pair_manifold pair, else one point
   for (const ShapePair& p : pairs_)
-    most += has_vertices(model.shapes[static_cast<size_t>(p.a)]) &&
-                    has_vertices(model.shapes[static_cast<size_t>(p.b)])
+    most += pair_manifold(model.shapes[static_cast<size_t>(p.a)],
+                          model.shapes[static_cast<size_t>(p.b)])
                 ? kManifoldPoints
                 : 1;
   capacity_ = std::min(most, kMaxContacts);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "featherdrive/algorithm/energy.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
@@ -190,7 +191,8 @@ CollisionShape box(const Vec3& half, const Vec3& position = Vec3::Zero()) {
   return s;
 }
 
-Simulation box_on_plate(double plate_y, SolverType solver) {
+Simulation box_on_plate(double plate_y, SolverType solver, const CollisionShape& shape = box(kHalf),
+                        const Vec3& hinge = Vec3::UnitX()) {
   ModelBuilder b;
   b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
   b.add_link(make_link("lift", "base", kLiftMass, Vec3::Zero(), Mat3::Identity() * 0.01,
@@ -199,16 +201,16 @@ Simulation box_on_plate(double plate_y, SolverType solver) {
   const Mat3 inertia =
       Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * kBoxMass / 3;
   b.add_link(make_link("box", "lift", kBoxMass, Vec3::Zero(), inertia,
-                       revolute_joint("tilt", Vec3::UnitX())));
+                       revolute_joint("tilt", hinge)));
   b.add_shape("base", box(Vec3(0.5, 0.5, 0.05), Vec3(0, plate_y, 0)));
-  b.add_shape("box", box(kHalf));
+  b.add_shape("box", shape);
   SimulationOptions o;
   o.dt = 0.01;
   o.solver = solver;
   o.position_iterations = converged(solver);
   Simulation sim(std::make_shared<const Model>(b.build()), o);
   VecX q = sim.q();
-  q[0] = 0.05 + kHalf.z() + 1e-3;
+  q[0] = 0.05 + (shape.type == ShapeType::box ? shape.size.z() : shape.size.x()) + 1e-3;
   sim.set_q(q);
   ContactOptions c;
   c.self_collision = true;
@@ -263,6 +265,28 @@ TEST_P(SelfContact, ABoxOverhangingThePlatesEdgeRestsOnTheOverlap) {
     corners |= 1 << ((c.position.x() > 0) * 2 + edge);
   }
   EXPECT_EQ(corners, 15);
+}
+
+// A capsule (radius 0.05 m, half length 0.1 m) lying along x on the plate, on a hinge about y:
+// carried at its segment's two ends (C29a), it stays level.
+TEST_P(SelfContact, ACapsuleLyingOnAPlateRestsOnItsSegmentsEnds) {
+  CollisionShape capsule;
+  capsule.type = ShapeType::capsule;
+  capsule.size = Vec3(0.05, 0.1, 0);
+  capsule.rotation = Eigen::AngleAxisd(0.5 * std::numbers::pi, Vec3::UnitY()).toRotationMatrix();
+  Simulation sim = box_on_plate(0.0, GetParam(), capsule, Vec3::UnitY());
+  EXPECT_LT(settle(sim), 1e-9);
+  ASSERT_EQ(sim.contacts().size(), 2u);
+  EXPECT_NEAR(sim.q()[0], 0.05 + 0.05, 1e-9);
+  EXPECT_NEAR(normal_sum(sim) / (sim.options().dt * (kBoxMass + kLiftMass) * kG), 1.0, 1e-9);
+  double x = 0.0;
+  for (const ContactReport& c : sim.contacts()) {
+    EXPECT_NEAR(std::abs(c.position.x()), 0.1, 1e-9);
+    EXPECT_NEAR(c.position.y(), 0.0, 1e-9);
+    EXPECT_NEAR(c.position.z(), 0.05, 1e-9);
+    x += c.position.x();
+  }
+  EXPECT_NEAR(x, 0.0, 1e-9);  // one at each end
 }
 
 INSTANTIATE_TEST_SUITE_P(Solvers, SelfContact, ::testing::Values(SolverType::pgs, SolverType::tgs),

@@ -49,6 +49,10 @@ struct PairManifold {
 /// Whether a shape has corners the manifold is gathered from (box, convex hull; C29a).
 bool has_vertices(const CollisionShape& shape);
 
+/// Whether shape_pair_manifold gathers more than one point for the pair: a box or hull with a
+/// box, a hull or a capsule (its segment's ends; C29a).
+bool pair_manifold(const CollisionShape& a, const CollisionShape& b);
+
 /// The scratch of shape_pair_manifold, sized once for a model's shapes so that a step
 /// allocates nothing.
 class ManifoldWorkspace {
@@ -69,7 +73,7 @@ class ManifoldWorkspace {
   std::vector<char> taken_;
 };
 
-/// shape_pair_contact, then, for two shapes with corners, up to four points over the patch where
+/// shape_pair_contact, then, for a pair_manifold pair, up to four points over the patch where
 /// their facing sides overlap across the contact's normal (C29a); one point (C29) otherwise.
 /// Allocates nothing.
 bool shape_pair_manifold(const Data& data, const CollisionShape& a, const CollisionShape& b,
