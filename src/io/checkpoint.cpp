@@ -65,9 +65,9 @@ class Writer {
 
 // Little-endian reader over a payload whose size has already been checked; reading past the end
 // still throws rather than reading out of bounds.
-class Reader {
+class ByteReader {
  public:
-  Reader(const std::string& data, size_t begin, size_t end, const std::string& name)
+  ByteReader(const std::string& data, size_t begin, size_t end, const std::string& name)
       : data_(data), pos_(begin), end_(end), name_(name) {}
   std::uint8_t u8() {
     need(1);
@@ -105,7 +105,7 @@ class Reader {
 
 void hash_double(Writer& w, double v) { w.f64(v); }
 
-[[noreturn]] void fail(const std::string& name, const std::string& why) {
+[[noreturn]] void fail_checkpoint(const std::string& name, const std::string& why) {
   throw CheckpointError(name + ": " + why);
 }
 
@@ -129,22 +129,22 @@ void write_actuators(Writer& p, const Settings& settings, const State& state) {
   p.vec(state.actuator_force);
 }
 
-void read_actuators(Reader& r, Settings& settings, State& state, const std::string& name,
+void read_actuators(ByteReader& r, Settings& settings, State& state, const std::string& name,
                     std::uint32_t version) {
   const int nv = static_cast<int>(settings.actuators.size());
   for (int d = 0; d < nv; ++d) {
     ExplicitActuator a;
     const std::uint8_t kind = r.u8();
     if (kind > static_cast<std::uint8_t>(ActuatorKind::remotized_pd))
-      fail(name, "corrupt checkpoint: actuator kind " + std::to_string(kind) + " of dof " +
-                     std::to_string(d));
+      fail_checkpoint(name, "corrupt checkpoint: actuator kind " + std::to_string(kind) +
+                                " of dof " + std::to_string(d));
     a.kind = static_cast<ActuatorKind>(kind);
     if (a.kind == ActuatorKind::none) continue;  // cleared before the settings were read
     if (version >= 6) {  // before it, every actuator was explicit
       const std::uint8_t integration = r.u8();
       if (integration > static_cast<std::uint8_t>(ActuatorIntegration::implicit_law))
-        fail(name, "corrupt checkpoint: actuator integration " + std::to_string(integration) +
-                       " of dof " + std::to_string(d));
+        fail_checkpoint(name, "corrupt checkpoint: actuator integration " +
+                                  std::to_string(integration) + " of dof " + std::to_string(d));
       a.integration = static_cast<ActuatorIntegration>(integration);
     }
     a.stiffness = r.f64();
@@ -154,9 +154,9 @@ void read_actuators(Reader& r, Settings& settings, State& state, const std::stri
     a.velocity_limit = r.f64();
     const std::int64_t delay = r.i64();
     if (delay < 0 || delay > kMaxActuatorDelay)
-      fail(name, "corrupt checkpoint: actuator delay " + std::to_string(delay) + " of dof " +
-                     std::to_string(d) + " is outside [0, " + std::to_string(kMaxActuatorDelay) +
-                     "]");
+      fail_checkpoint(name, "corrupt checkpoint: actuator delay " + std::to_string(delay) +
+                                " of dof " + std::to_string(d) + " is outside [0, " +
+                                std::to_string(kMaxActuatorDelay) + "]");
     a.delay = static_cast<int>(delay);
     // Read pair by pair: a forged size runs into the payload's end, not into a huge allocation.
     for (std::uint64_t i = 0, n = r.u64(); i < n; ++i) {
@@ -185,12 +185,13 @@ void write_drive_delays(Writer& p, const Settings& settings, const State& state)
   }
 }
 
-void read_drive_delays(Reader& r, Settings& settings, State& state, const std::string& name) {
+void read_drive_delays(ByteReader& r, Settings& settings, State& state, const std::string& name) {
   for (size_t d = 0; d < settings.drive_delay.size(); ++d) {
     const std::int64_t delay = r.i64();
     if (delay < 0 || delay > kMaxDelay)
-      fail(name, "corrupt checkpoint: drive delay " + std::to_string(delay) + " of dof " +
-                     std::to_string(d) + " is outside [0, " + std::to_string(kMaxDelay) + "]");
+      fail_checkpoint(name, "corrupt checkpoint: drive delay " + std::to_string(delay) +
+                                " of dof " + std::to_string(d) + " is outside [0, " +
+                                std::to_string(kMaxDelay) + "]");
     if (delay == 0) continue;  // cleared before the settings were read
     settings.drive_delay[d] = static_cast<int>(delay);
     DelayHistory<DriveTarget>& history = state.drive_delay_history[d];
@@ -221,7 +222,7 @@ void write_friction_anchors(Writer& p, const State& state) {
   }
 }
 
-void read_friction_anchors(Reader& r, const Model& model, State& state) {
+void read_friction_anchors(ByteReader& r, const Model& model, State& state) {
   state.friction_anchors.resize(model.shapes.size());
   for (FrictionAnchors& a : state.friction_anchors) {
     a.count = r.u8();
@@ -230,7 +231,7 @@ void read_friction_anchors(Reader& r, const Model& model, State& state) {
   }
 }
 
-void read_contact_settings(Reader& r, Settings& settings) {
+void read_contact_settings(ByteReader& r, Settings& settings) {
   Ground& g = settings.ground;
   g.enabled = r.u8() != 0;
   g.height = r.f64();
@@ -256,27 +257,27 @@ void write_joint_coupling(Writer& p, const Settings& settings) {
   }
 }
 
-void read_joint_coupling(Reader& r, const Model& model, Settings& settings,
+void read_joint_coupling(ByteReader& r, const Model& model, Settings& settings,
                          const std::string& name) {
   for (int d = 0; d < model.nv; ++d) {
     const std::uint8_t wrapped = r.u8();
     if (wrapped > 1)
-      fail(name, "corrupt checkpoint: revolute wrap " + std::to_string(wrapped) + " of dof " +
-                     std::to_string(d) + " is neither 0 nor 1");
+      fail_checkpoint(name, "corrupt checkpoint: revolute wrap " + std::to_string(wrapped) +
+                                " of dof " + std::to_string(d) + " is neither 0 nor 1");
     if (wrapped || model.links[model.dof_link[d]].joint_type == JointType::revolute)
       settings.revolute_wrap[static_cast<size_t>(d)] =
           wrapped ? RevoluteWrap::wrapped : RevoluteWrap::unwrapped;
   }
   const std::int64_t count = r.i64();
   if (count < 0 || count > model.nv)
-    fail(name, "corrupt checkpoint: " + count_of(count, "mimic joint") + " for " +
-                   count_of(model.nv, "dof"));
+    fail_checkpoint(name, "corrupt checkpoint: " + count_of(count, "mimic joint") + " for " +
+                              count_of(model.nv, "dof"));
   std::vector<MimicJoint> rows(static_cast<size_t>(count));
   for (MimicJoint& m : rows) {
     const std::int64_t a = r.i64(), b = r.i64();
     if (a < 0 || a >= model.nv || b < 0 || b >= model.nv)
-      fail(name, "corrupt checkpoint: a mimic joint couples dofs " + std::to_string(a) + " and " +
-                     std::to_string(b) + " of " + std::to_string(model.nv));
+      fail_checkpoint(name, "corrupt checkpoint: a mimic joint couples dofs " + std::to_string(a) +
+                                " and " + std::to_string(b) + " of " + std::to_string(model.nv));
     m = {static_cast<int>(a), static_cast<int>(b), r.f64(), r.f64(), r.f64(), r.f64()};
   }
   settings.mimic_joints = std::move(rows);
@@ -390,45 +391,46 @@ std::string checkpoint_bytes(const Simulation& sim) {
 
 void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::string& name) {
   if (std::memcmp(bytes.data(), kMagic, std::min(bytes.size(), sizeof(kMagic))) != 0)
-    fail(name, "not a featherdrive checkpoint (the file does not start with the checkpoint magic)");
+    fail_checkpoint(
+        name, "not a featherdrive checkpoint (the file does not start with the checkpoint magic)");
   if (bytes.size() < kHeaderSize + 8)
-    fail(name, "truncated checkpoint: " + std::to_string(bytes.size()) +
-                   " bytes, shorter than the header");
-  Reader h(bytes, sizeof(kMagic), kHeaderSize, name);
+    fail_checkpoint(name, "truncated checkpoint: " + std::to_string(bytes.size()) +
+                              " bytes, shorter than the header");
+  ByteReader h(bytes, sizeof(kMagic), kHeaderSize, name);
   const std::uint32_t version = h.u32();
   if (version < kOldestCheckpointVersion || version > kCheckpointVersion)
-    fail(name, "checkpoint format version " + std::to_string(version) +
-                   " is not supported (this build reads versions " +
-                   std::to_string(kOldestCheckpointVersion) + " to " +
-                   std::to_string(kCheckpointVersion) + ")");
+    fail_checkpoint(name, "checkpoint format version " + std::to_string(version) +
+                              " is not supported (this build reads versions " +
+                              std::to_string(kOldestCheckpointVersion) + " to " +
+                              std::to_string(kCheckpointVersion) + ")");
   const std::uint64_t fingerprint = h.u64();
   const std::uint32_t nq = h.u32();
   const std::uint32_t nv = h.u32();
   const std::uint64_t payload = h.u64();
   if (payload > bytes.size())
-    fail(name, "truncated checkpoint: the header announces a payload of " +
-                   std::to_string(payload) + " bytes, the file has " +
-                   std::to_string(bytes.size()));
+    fail_checkpoint(name, "truncated checkpoint: the header announces a payload of " +
+                              std::to_string(payload) + " bytes, the file has " +
+                              std::to_string(bytes.size()));
   const std::uint64_t expected = kHeaderSize + payload + 8;
   if (bytes.size() != expected)
-    fail(name, std::string(bytes.size() < expected ? "truncated" : "corrupt") +
-                   " checkpoint: the header announces " + std::to_string(expected) +
-                   " bytes, the file has " + std::to_string(bytes.size()));
-  Reader tail(bytes, bytes.size() - 8, bytes.size(), name);
+    fail_checkpoint(name, std::string(bytes.size() < expected ? "truncated" : "corrupt") +
+                              " checkpoint: the header announces " + std::to_string(expected) +
+                              " bytes, the file has " + std::to_string(bytes.size()));
+  ByteReader tail(bytes, bytes.size() - 8, bytes.size(), name);
   const std::uint64_t stored = tail.u64();
   const std::uint64_t computed = fnv1a(bytes.data(), bytes.size() - 8);
   if (stored != computed)
-    fail(name, "corrupt checkpoint: checksum " + hex(computed) + " does not match the stored " +
-                   hex(stored));
+    fail_checkpoint(name, "corrupt checkpoint: checksum " + hex(computed) +
+                              " does not match the stored " + hex(stored));
 
   const Model& model = sim.model();
   const std::uint64_t ours = model_fingerprint(model);
   if (fingerprint != ours || nq != static_cast<std::uint32_t>(model.nq) ||
       nv != static_cast<std::uint32_t>(model.nv))
-    fail(name, "the checkpoint is of a different model (nq " + std::to_string(nq) + ", nv " +
-                   std::to_string(nv) + ", fingerprint " + hex(fingerprint) +
-                   "; this model: nq " + std::to_string(model.nq) + ", nv " +
-                   std::to_string(model.nv) + ", fingerprint " + hex(ours) + ")");
+    fail_checkpoint(name, "the checkpoint is of a different model (nq " + std::to_string(nq) +
+                              ", nv " + std::to_string(nv) + ", fingerprint " + hex(fingerprint) +
+                              "; this model: nq " + std::to_string(model.nq) + ", nv " +
+                              std::to_string(model.nv) + ", fingerprint " + hex(ours) + ")");
 
   // The checkpoint's settings and state as values; the simulation's where the version has none
   // (drive delays before 4, wrap and mimic joints before 5). Actuators and delays are the
@@ -441,7 +443,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
   State state;
   state.actuator_history.resize(static_cast<size_t>(model.nv));
   state.drive_delay_history.resize(static_cast<size_t>(model.nv));
-  Reader r(bytes, kHeaderSize, bytes.size() - 8, name);
+  ByteReader r(bytes, kHeaderSize, bytes.size() - 8, name);
   // Restored into a copy, so that sim stays as it was if any value is refused.
   Simulation next = sim;
   try {
@@ -449,15 +451,15 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     const std::int64_t step_count = r.i64();
     // The clock must be one a run reaches (check_clock's rule), or resuming overflows.
     if (step_count < 0 || step_count > kMaxStepCount)
-      fail(name, "corrupt checkpoint: step count " + std::to_string(step_count) +
-                     " is outside [0, " + std::to_string(kMaxStepCount) + "]");
+      fail_checkpoint(name, "corrupt checkpoint: step count " + std::to_string(step_count) +
+                                " is outside [0, " + std::to_string(kMaxStepCount) + "]");
     const double time = state.time;
     if (!std::isfinite(time) || time < 0.0 || time > 2.0 * static_cast<double>(step_count) * kMaxDt)
-      fail(name, "corrupt checkpoint: time " + format_double(time) + " s after " +
-                     std::to_string(step_count) +
-                     " steps is not one a run reaches (finite, >= 0, "
-                     "at most 2 * steps * " +
-                     format_double(kMaxDt) + " s)");
+      fail_checkpoint(name, "corrupt checkpoint: time " + format_double(time) + " s after " +
+                                std::to_string(step_count) +
+                                " steps is not one a run reaches (finite, >= 0, "
+                                "at most 2 * steps * " +
+                                format_double(kMaxDt) + " s)");
     state.step_count = static_cast<long>(step_count);
     SimulationOptions& o = settings.options;
     o = SimulationOptions{};
@@ -465,25 +467,26 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     o.dt = r.f64();
     const std::uint8_t solver = r.u8();
     if (solver > static_cast<std::uint8_t>(SolverType::tgs))
-      fail(name, "corrupt checkpoint: solver = " + std::to_string(solver));
+      fail_checkpoint(name, "corrupt checkpoint: solver = " + std::to_string(solver));
     o.solver = static_cast<SolverType>(solver);
     const std::int64_t pos = r.i64(), vel = r.i64();
     if (pos < 1 || pos > kMaxIterations)
-      fail(name, "corrupt checkpoint: position_iterations " + std::to_string(pos) +
-                     " is outside [1, " + std::to_string(kMaxIterations) + "]");
+      fail_checkpoint(name, "corrupt checkpoint: position_iterations " + std::to_string(pos) +
+                                " is outside [1, " + std::to_string(kMaxIterations) + "]");
     if (vel < 0 || vel > kMaxIterations)
-      fail(name, "corrupt checkpoint: velocity_iterations " + std::to_string(vel) +
-                     " is outside [0, " + std::to_string(kMaxIterations) + "]");
+      fail_checkpoint(name, "corrupt checkpoint: velocity_iterations " + std::to_string(vel) +
+                                " is outside [0, " + std::to_string(kMaxIterations) + "]");
     o.position_iterations = static_cast<int>(pos);
     o.velocity_iterations = static_cast<int>(vel);
     const std::uint8_t compat = r.u8();
     if (compat > static_cast<std::uint8_t>(Compat::physx))
-      fail(name, "corrupt checkpoint: compat = " + std::to_string(compat));
+      fail_checkpoint(name, "corrupt checkpoint: compat = " + std::to_string(compat));
     o.compat = static_cast<Compat>(compat);
     if (o.compat != held.options.compat)
-      fail(name, std::string("the checkpoint is of a compat ") + to_string(o.compat) +
-                     " simulation, this simulation is compat " + to_string(held.options.compat) +
-                     " (compat is chosen when a simulation is made)");
+      fail_checkpoint(name, std::string("the checkpoint is of a compat ") + to_string(o.compat) +
+                                " simulation, this simulation is compat " +
+                                to_string(held.options.compat) +
+                                " (compat is chosen when a simulation is made)");
     state.q = r.vec(model.nq);
     state.qd = r.vec(model.nv);
     state.applied_force = r.vec(model.nv);
@@ -492,8 +495,8 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       Drive& drive = settings.drives[k];
       const std::uint8_t type = r.u8();
       if (type > static_cast<std::uint8_t>(DriveType::acceleration))
-        fail(name, "corrupt checkpoint: drive type " + std::to_string(type) + " of dof " +
-                       std::to_string(d));
+        fail_checkpoint(name, "corrupt checkpoint: drive type " + std::to_string(type) +
+                                  " of dof " + std::to_string(d));
       drive.type = static_cast<DriveType>(type);
       drive.stiffness = r.f64();
       drive.damping = r.f64();
@@ -544,11 +547,12 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                                held.friction_coefficient[d]};
         for (int i = 0; i < 11; ++i)
           if (std::bit_cast<std::uint64_t>(saved[i]) != std::bit_cast<std::uint64_t>(kept[i]))
-            fail(name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
-                           " joint '" + model.links[model.dof_link[d]].joint_name +
-                           "' has joint setting #" + std::to_string(i) + " = " +
-                           format_double(saved[i]) +
-                           ", which only a revolute, prismatic or spherical joint can change");
+            fail_checkpoint(
+                name, "corrupt checkpoint: dof " + std::to_string(d) + " of " + to_string(jt) +
+                          " joint '" + model.links[model.dof_link[d]].joint_name +
+                          "' has joint setting #" + std::to_string(i) + " = " +
+                          format_double(saved[i]) +
+                          ", which only a revolute, prismatic or spherical joint can change");
         continue;
       }
       settings.lower_limit[d] = lower;
@@ -584,15 +588,15 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     }
     if (version >= 9) settings.contact.self_collision = r.u8() != 0;  // before, off
     if (r.pos() != bytes.size() - 8)
-      fail(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
-                     " bytes left over after the payload");
+      fail_checkpoint(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
+                                " bytes left over after the payload");
     next.set_settings(settings);
     next.set_state(state);
     next.set_guard_account(account);
   } catch (const CheckpointError&) {
     throw;
   } catch (const std::invalid_argument& e) {
-    fail(name, std::string("bad value in the checkpoint: ") + e.what());
+    fail_checkpoint(name, std::string("bad value in the checkpoint: ") + e.what());
   }
   // Copied, not moved: same sizes, so every buffer stays where it is and views of sim stay valid.
   sim = next;

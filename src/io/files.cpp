@@ -53,6 +53,12 @@ mode_t current_umask() {
   return 022;
 }
 
+}  // namespace
+
+// Not in the anonymous namespace: AtomicFile::Impl (external linkage) holds one, which gcc
+// refuses (-Wsubobject-linkage) where this file is compiled inside the library's unity unit.
+namespace files_detail {
+
 // A stream buffer over a file descriptor; the first failed write keeps its errno.
 class FdBuf : public std::streambuf {
  public:
@@ -90,7 +96,7 @@ class FdBuf : public std::streambuf {
   int error_ = 0;
 };
 
-}  // namespace
+}  // namespace files_detail
 
 std::string read_input_file(const fs::path& path, const char* what) {
   auto fail = [&](const std::string& why) { throw InputError(path.string() + ": " + why); };
@@ -148,7 +154,7 @@ struct AtomicFile::Impl {
   fs::path target, temp;
   std::string what;
   int fd = -1;
-  std::unique_ptr<FdBuf> buf;
+  std::unique_ptr<files_detail::FdBuf> buf;
   std::unique_ptr<std::ostream> stream;
   bool committed = false;
 
@@ -182,7 +188,7 @@ AtomicFile::AtomicFile(const fs::path& target, const std::string& what)
   const mode_t mode =
       ::stat(m.target.c_str(), &st) == 0 ? (st.st_mode & 07777) : (0666 & ~current_umask());
   (void)::fchmod(m.fd, mode);
-  m.buf = std::make_unique<FdBuf>(m.fd);
+  m.buf = std::make_unique<files_detail::FdBuf>(m.fd);
   m.stream = std::make_unique<std::ostream>(m.buf.get());
 }
 

@@ -14,22 +14,20 @@
 
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
-#include "featherdrive/spatial/spatial.hpp"
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
-#include "mjcf_document.hpp"
+#include "featherdrive/spatial/spatial.hpp"
+#include "input_error.hpp"
 #include "mesh_hull.hpp"
+#include "mjcf_document.hpp"
 #include "mujoco_calls.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  throw InputError(file + ": " + what);
-}
+using io_detail::fail;
+using io_detail::kInf;
 
 using mujoco_calls::one_line;
 

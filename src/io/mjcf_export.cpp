@@ -370,10 +370,6 @@ std::string mimic_equalities(const Model& model, const std::vector<MimicJoint>& 
   return xml;
 }
 
-struct MjDataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-
 // Compiles XML text through MuJoCo's virtual file system (no file on disk).
 mujoco_calls::ModelPtr compile(const std::string& xml, std::string& error) {
   auto vfs = std::make_unique<mjVFS>();  // ~2 MB: not on the stack
@@ -676,7 +672,7 @@ std::string mujoco_compile_error(const std::string& xml) {
 
 struct MujocoRun::Impl {
   mujoco_calls::ModelPtr m;
-  std::unique_ptr<mjData, MjDataDeleter> d;
+  mujoco_calls::DataPtr d;
 };
 
 MujocoRun::MujocoRun(const MjcfExport& mjcf) : impl_(std::make_unique<Impl>()), mjcf_(mjcf) {

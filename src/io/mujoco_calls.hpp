@@ -25,6 +25,10 @@ struct ModelDeleter {
   void operator()(mjModel* m) const { mj_deleteModel(m); }
 };
 using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
+struct DataDeleter {
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+using DataPtr = std::unique_ptr<mjData, DataDeleter>;
 
 /// MuJoCo's multi-line messages as one line ("Error: ...; Element 'body', line 3").
 std::string one_line(const std::string& text);

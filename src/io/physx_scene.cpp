@@ -17,18 +17,19 @@ namespace featherdrive {
 namespace {
 
 // JSON has no infinity: the harness reads 1e30 as "none".
-std::string num(double v) {
+std::string json_num(double v) {
   if (std::isinf(v)) v = v > 0 ? 1e30 : -1e30;
   return format_double(v);
 }
 
-std::string vec(const Vec3& v) {
-  return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+std::string json_vec(const Vec3& v) {
+  return "[" + json_num(v.x()) + ", " + json_num(v.y()) + ", " + json_num(v.z()) + "]";
 }
 
 std::string quat(const Mat3& R) {
   const Quat q(R);
-  return "[" + num(q.w()) + ", " + num(q.x()) + ", " + num(q.y()) + ", " + num(q.z()) + "]";
+  return "[" + json_num(q.w()) + ", " + json_num(q.x()) + ", " + json_num(q.y()) + ", " +
+         json_num(q.z()) + "]";
 }
 
 // A JSON string: quote and backslash escaped, control characters as \u00XX (names come from
@@ -69,19 +70,20 @@ std::string dof_fields(const Simulation& sim, int d, const std::string& name) {
                                 to_string(sim.actuator(d).kind) +
                                 " actuator, which the harness cannot set (give it a drive)");
   std::ostringstream js;
-  js << "\"armature\": " << num(sim.model().armature[d]);
-  if (sim.applied_force()[d] != 0.0) js << ", \"applied_force\": " << num(sim.applied_force()[d]);
+  js << "\"armature\": " << json_num(sim.model().armature[d]);
+  if (sim.applied_force()[d] != 0.0)
+    js << ", \"applied_force\": " << json_num(sim.applied_force()[d]);
   if (std::isfinite(sim.lower_limit(d)) || std::isfinite(sim.upper_limit(d)))
-    js << ", \"limits\": {\"lower\": " << num(sim.lower_limit(d))
-       << ", \"upper\": " << num(sim.upper_limit(d)) << "}";
+    js << ", \"limits\": {\"lower\": " << json_num(sim.lower_limit(d))
+       << ", \"upper\": " << json_num(sim.upper_limit(d)) << "}";
   const Drive& drive = sim.drive(d);
   if (drive.type != DriveType::none)
     js << ", \"drive\": {\"type\": " << str(to_string(drive.type))
-       << ", \"stiffness\": " << num(drive.stiffness) << ", \"damping\": " << num(drive.damping)
-       << ", \"max_force\": "
-       << num(std::isfinite(drive.max_impulse) ? drive.max_impulse : drive.max_force)
-       << ", \"target_position\": " << num(drive.target_position)
-       << ", \"target_velocity\": " << num(drive.target_velocity) << "}";
+       << ", \"stiffness\": " << json_num(drive.stiffness)
+       << ", \"damping\": " << json_num(drive.damping) << ", \"max_force\": "
+       << json_num(std::isfinite(drive.max_impulse) ? drive.max_impulse : drive.max_force)
+       << ", \"target_position\": " << json_num(drive.target_position)
+       << ", \"target_velocity\": " << json_num(drive.target_velocity) << "}";
   return js.str();
 }
 
@@ -94,14 +96,14 @@ std::string spherical_fields(const Simulation& sim, const Link& l) {
          {std::pair{"max_velocity", &Simulation::max_joint_velocity},
           std::pair{"friction_coefficient", &Simulation::friction_coefficient}})
       if ((sim.*value)(d + k) != (sim.*value)(d))
-        throw std::invalid_argument("physx export: joint '" + l.joint_name + "' has " + what +
-                                    " " + num((sim.*value)(d + k)) + " on axis " +
+        throw std::invalid_argument("physx export: joint '" + l.joint_name + "' has " + what + " " +
+                                    json_num((sim.*value)(d + k)) + " on axis " +
                                     sim.model().dof_names[d + k] + " but " +
-                                    num((sim.*value)(d)) + " on " + sim.model().dof_names[d] +
+                                    json_num((sim.*value)(d)) + " on " + sim.model().dof_names[d] +
                                     "; PhysX has one per spherical joint");
   std::ostringstream js;
-  js << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
-     << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d))
+  js << ", \"max_velocity\": " << json_num(sim.max_joint_velocity(d))
+     << ", \"friction_coefficient\": " << json_num(sim.friction_coefficient(d))
      << ",\n       \"axes\": [";
   for (int k = 0; k < 3; ++k)
     js << (k ? ",\n                {" : "{") << dof_fields(sim, d + k, sim.model().dof_names[d + k])
@@ -128,8 +130,9 @@ void helper_inertial(const Model& model, int i, double& mass, Mat3& inertia) {
 
 // A material's fields, each as `, "key": value`.
 std::string material_fields(const Material& m) {
-  return ", \"static_friction\": " + num(m.static_friction) + ", \"dynamic_friction\": " +
-         num(m.dynamic_friction) + ", \"restitution\": " + num(m.restitution);
+  return ", \"static_friction\": " + json_num(m.static_friction) +
+         ", \"dynamic_friction\": " + json_num(m.dynamic_friction) +
+         ", \"restitution\": " + json_num(m.restitution);
 }
 
 // The link's collision shapes as `"shapes": [...],` (empty for none), in the link frame with the
@@ -154,11 +157,11 @@ std::string shapes_field(const Model& model, int link, bool ground) {
     js << (first ? "\"shapes\": [\n       {" : ",\n       {") << "\"name\": " << str(shape.name)
        << ", \"type\": " << str(to_string(shape.type));
     if (shape.type == ShapeType::box)
-      js << ", \"half_extents\": " << vec(shape.size);
+      js << ", \"half_extents\": " << json_vec(shape.size);
     else
-      js << ", \"radius\": " << num(shape.size.x());
-    if (shape.type == ShapeType::capsule) js << ", \"half_length\": " << num(shape.size.y());
-    js << ", \"xyz\": " << vec(shape.position) << ", \"quat\": " << quat(shape.rotation)
+      js << ", \"radius\": " << json_num(shape.size.x());
+    if (shape.type == ShapeType::capsule) js << ", \"half_length\": " << json_num(shape.size.y());
+    js << ", \"xyz\": " << json_vec(shape.position) << ", \"quat\": " << quat(shape.rotation)
        << material_fields(shape.material) << "}";
     first = false;
   }
@@ -171,12 +174,12 @@ std::string contact_fields(const Simulation& sim) {
   std::ostringstream js;
   const Ground& g = sim.ground();
   if (g.enabled)
-    js << "  \"ground\": {\"height\": " << num(g.height) << ", \"normal\": " << vec(g.normal)
-       << material_fields(g.material) << "},\n";
+    js << "  \"ground\": {\"height\": " << json_num(g.height)
+       << ", \"normal\": " << json_vec(g.normal) << material_fields(g.material) << "},\n";
   const ContactOptions& c = sim.contact_options();
-  js << "  \"contact\": {\"contact_offset\": " << num(c.contact_offset)
-     << ", \"rest_offset\": " << num(c.rest_offset)
-     << ", \"bounce_threshold\": " << num(c.bounce_threshold) << "},\n";
+  js << "  \"contact\": {\"contact_offset\": " << json_num(c.contact_offset)
+     << ", \"rest_offset\": " << json_num(c.rest_offset)
+     << ", \"bounce_threshold\": " << json_num(c.bounce_threshold) << "},\n";
   return js.str();
 }
 
@@ -208,8 +211,8 @@ std::string physx_scene_json(const Simulation& sim, int steps,
 
   std::ostringstream js;
   js << "{\n  \"format\": \"featherdrive-physx/2\",\n";
-  js << "  \"dt\": " << num(o.dt) << ",\n  \"steps\": " << steps << ",\n";
-  js << "  \"gravity\": " << vec(model.gravity) << ",\n";
+  js << "  \"dt\": " << json_num(o.dt) << ",\n  \"steps\": " << steps << ",\n";
+  js << "  \"gravity\": " << json_vec(model.gravity) << ",\n";
   js << "  \"solver\": {\"type\": " << str(to_string(o.solver))
      << ", \"position_iterations\": " << o.position_iterations
      << ", \"velocity_iterations\": " << o.velocity_iterations << "},\n";
@@ -227,9 +230,9 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   {
     const Mat3& R = data.world_rotation[0];
     const Vec6& v = data.velocity[0];  // body frame
-    js << "  \"root\": {\"position\": " << vec(data.world_position[0]) << ", \"quat\": " << quat(R)
-       << ", \"angular_velocity\": " << vec(R * v.head<3>())
-       << ", \"linear_velocity\": " << vec(R * v.tail<3>()) << "},\n";
+    js << "  \"root\": {\"position\": " << json_vec(data.world_position[0])
+       << ", \"quat\": " << quat(R) << ", \"angular_velocity\": " << json_vec(R * v.head<3>())
+       << ", \"linear_velocity\": " << json_vec(R * v.tail<3>()) << "},\n";
   }
   js << contact_fields(sim) << "  \"links\": [\n";
   for (int i = 0; i < model.num_links(); ++i) {
@@ -242,16 +245,17 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     double mass = stand_in ? 1.0 : l.mass;
     if (i > 0 && l.mass == 0.0) helper_inertial(model, i, mass, I);
     js << "    {\"name\": " << str(l.name) << ", \"parent\": " << l.parent
-       << ", \"mass\": " << num(mass) << ", \"com\": " << vec(l.com)
-       << ", \"inertia\": ["
-       << num(I(0, 0)) << ", " << num(I(1, 1)) << ", " << num(I(2, 2)) << ", " << num(I(0, 1))
-       << ", " << num(I(0, 2)) << ", " << num(I(1, 2)) << "],\n     ";
+       << ", \"mass\": " << json_num(mass) << ", \"com\": " << json_vec(l.com) << ", \"inertia\": ["
+       << json_num(I(0, 0)) << ", " << json_num(I(1, 1)) << ", " << json_num(I(2, 2)) << ", "
+       << json_num(I(0, 1)) << ", " << json_num(I(0, 2)) << ", " << json_num(I(1, 2))
+       << "],\n     ";
     // PhysX's link parameters, as featherdrive has them (so Compat::physx gives PhysX's defaults).
     const LinkParameters& lp = sim.link_parameters(i);
-    js << "\"cfm_scale\": " << num(lp.cfm_scale) << ", \"linear_damping\": "
-       << num(lp.linear_damping) << ", \"angular_damping\": " << num(lp.angular_damping)
-       << ", \"max_linear_velocity\": " << num(lp.max_linear_velocity)
-       << ", \"max_angular_velocity\": " << num(lp.max_angular_velocity) << ",\n     ";
+    js << "\"cfm_scale\": " << json_num(lp.cfm_scale)
+       << ", \"linear_damping\": " << json_num(lp.linear_damping)
+       << ", \"angular_damping\": " << json_num(lp.angular_damping)
+       << ", \"max_linear_velocity\": " << json_num(lp.max_linear_velocity)
+       << ", \"max_angular_velocity\": " << json_num(lp.max_angular_velocity) << ",\n     ";
     js << shapes_field(model, i, sim.ground().enabled) << "\"joint\": ";
     if (i == 0) {
       js << "null}";
@@ -261,14 +265,14 @@ std::string physx_scene_json(const Simulation& sim, int steps,
                          : l.joint_type == JointType::spherical ? "spherical"
                                                                 : "fixed";
       js << "{\"name\": " << str(l.joint_name) << ", \"type\": " << str(type)
-         << ", \"origin\": {\"xyz\": " << vec(l.tree_transform.r)
+         << ", \"origin\": {\"xyz\": " << json_vec(l.tree_transform.r)
          << ", \"quat\": " << quat(l.tree_transform.E.transpose())
-         << "}, \"axis\": " << vec(l.axis);
+         << "}, \"axis\": " << json_vec(l.axis);
       if (l.nv == 1) {
         const int d = l.v_index;
         js << ", " << dof_fields(sim, d, l.joint_name)
-           << ", \"max_velocity\": " << num(sim.max_joint_velocity(d))
-           << ", \"friction_coefficient\": " << num(sim.friction_coefficient(d));
+           << ", \"max_velocity\": " << json_num(sim.max_joint_velocity(d))
+           << ", \"friction_coefficient\": " << json_num(sim.friction_coefficient(d));
         if (l.joint_type == JointType::revolute && sim.revolute_wrap(d) == RevoluteWrap::wrapped)
           js << ", \"wrapped\": true";
       }
@@ -282,14 +286,15 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   bool first = true;
   for (const Link& l : model.links) {
     if (l.nv == 1) {
-      js << (first ? "" : ", ") << str(l.joint_name) << ": " << num(sim.q()[l.q_index]);
+      js << (first ? "" : ", ") << str(l.joint_name) << ": " << json_num(sim.q()[l.q_index]);
       first = false;
     }
     if (l.joint_type != JointType::spherical) continue;
     const double* x = sim.q().data() + l.q_index;
     const Vec3 position = spherical_joint_positions(Quat(x[0], x[1], x[2], x[3]));
     for (int k = 0; k < 3; ++k) {
-      js << (first ? "" : ", ") << str(model.dof_names[l.v_index + k]) << ": " << num(position[k]);
+      js << (first ? "" : ", ") << str(model.dof_names[l.v_index + k]) << ": "
+         << json_num(position[k]);
       first = false;
     }
   }
@@ -298,7 +303,7 @@ std::string physx_scene_json(const Simulation& sim, int steps,
   for (const Link& l : model.links) {
     if (l.nv != 1 && l.joint_type != JointType::spherical) continue;
     for (int d = l.v_index; d < l.v_index + l.nv; ++d) {
-      js << (first ? "" : ", ") << str(model.dof_names[d]) << ": " << num(sim.qd()[d]);
+      js << (first ? "" : ", ") << str(model.dof_names[d]) << ": " << json_num(sim.qd()[d]);
       first = false;
     }
   }
@@ -307,8 +312,8 @@ std::string physx_scene_json(const Simulation& sim, int steps,
     js << (k ? ",\n    {" : "\n    {");
     first = true;
     for (const auto& [joint, target] : targets[k]) {
-      js << (first ? "" : ", ") << str(joint) << ": [" << num(target.first) << ", "
-         << num(target.second) << "]";
+      js << (first ? "" : ", ") << str(joint) << ": [" << json_num(target.first) << ", "
+         << json_num(target.second) << "]";
       first = false;
     }
     js << "}";
@@ -320,7 +325,7 @@ std::string physx_scene_json(const Simulation& sim, int steps,
       js << (k ? ",\n    {" : "\n    {");
       first = true;
       for (const auto& [joint, force] : forces[k]) {
-        js << (first ? "" : ", ") << str(joint) << ": " << num(force);
+        js << (first ? "" : ", ") << str(joint) << ": " << json_num(force);
         first = false;
       }
       js << "}";

@@ -23,13 +23,14 @@
 #include "featherdrive/io/mjcf.hpp"
 #include "featherdrive/model/model_variant.hpp"
 #include "fit_spec_reader.hpp"
+#include "input_error.hpp"
 #include "mesh_hull.hpp"
 #include "yaml_reader.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using io_detail::kInf;
 using scene_yaml::joint_dof;
 using scene_yaml::Reader;
 

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <limits>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -15,17 +14,15 @@
 #include "featherdrive/core/format.hpp"
 #include "featherdrive/io/files.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "input_error.hpp"
 #include "mesh_hull.hpp"
 #include "xml_text.hpp"
 
 namespace featherdrive {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  throw InputError(file + ": " + what);
-}
+using io_detail::fail;
+using io_detail::kInf;
 
 // urdfdom reports why a parse failed through console_bridge only; collect those messages so the
 // error we throw carries them. console_bridge's handler is global, hence the lock.
