@@ -5,6 +5,8 @@
 
 #include <algorithm>
 
+#include "featherdrive/algorithm/kinematics.hpp"
+
 namespace featherdrive {
 
 void Simulation::update_contacts_active() {
@@ -41,6 +43,7 @@ void Simulation::setup_contacts(const RowPhase& phase) {
     }
   }
   contact_link_velocities();
+  std::fill(contact_link_motion_.begin(), contact_link_motion_.end(), Vec6::Zero());
   ContactPhase contact_phase;
   contact_phase.dt = phase.dt;
   contact_phase.h = phase.h;
@@ -61,6 +64,31 @@ void Simulation::setup_contacts(const RowPhase& phase) {
 // TGS: the points move with the sub-step's velocities (C7's displacement).
 void Simulation::track_contacts(double h) {
   contact_link_velocities();
+  if (physx()) {
+    // PhysX (recordDeltaMotion): a child link's linear motion is its centre of mass's move
+    // between the posed sub-steps, its angular motion the sum of h omega (C25a).
+    forward_kinematics(*model_, *contact_track_data_, q_);
+    const Data& now = *contact_track_data_;
+    for (int i = 0; i < model_->num_links(); ++i) {
+      const auto k = static_cast<size_t>(i);
+      const Vec6& V = contact_link_velocity_[k];
+      Vec6& M = contact_link_motion_[k];
+      Vec6 next;
+      if (model_->links[k].parent < 0) {
+        next = M + h * V;
+      } else {
+        const Vec3 c0 = data_.world_position[i] + data_.world_rotation[i] * model_->links[k].com;
+        const Vec3 c1 = now.world_position[i] + now.world_rotation[i] * model_->links[k].com;
+        const Vec3 theta = M.head<3>() + h * V.head<3>();
+        next << theta, (c1 - c0) - theta.cross(c0 - data_.frame_origin);
+      }
+      contact_link_motion_step_[k] = next - M;
+      M = next;
+    }
+    if (contacts_active_) contact_rows_.track(contact_link_motion_step_, 1.0);
+    if (self_contacts_active_) self_contacts_.track(contact_link_motion_step_, 1.0);
+    return;
+  }
   if (contacts_active_) contact_rows_.track(contact_link_velocity_, h);
   if (self_contacts_active_) self_contacts_.track(contact_link_velocity_, h);
 }
