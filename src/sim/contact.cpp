@@ -5,8 +5,6 @@
 
 #include <algorithm>
 
-#include "featherdrive/algorithm/kinematics.hpp"
-
 namespace featherdrive {
 
 void Simulation::update_contacts_active() {
@@ -65,22 +63,19 @@ void Simulation::setup_contacts(const RowPhase& phase) {
 void Simulation::track_contacts(double h) {
   contact_link_velocities();
   if (physx()) {
-    // PhysX (recordDeltaMotion): a child link's linear motion is its centre of mass's move
-    // between the posed sub-steps, its angular motion the sum of h omega (C25a).
-    forward_kinematics(*model_, *contact_track_data_, q_);
-    const Data& now = *contact_track_data_;
+    // PhysX (recordDeltaMotion): a child link's linear motion is its centre of mass's move to the
+    // posed sub-step, its angular motion the sum of h (omega + B_w); the root's is the sum of h V
+    // (C25a). The poses and turns are the prismatic rows' (track_prismatic_position_change).
+    const WorldPose &start = departures_.start, &now = departures_.now;
     for (int i = 0; i < model_->num_links(); ++i) {
       const auto k = static_cast<size_t>(i);
-      const Vec6& V = contact_link_velocity_[k];
       Vec6& M = contact_link_motion_[k];
       Vec6 next;
       if (model_->links[k].parent < 0) {
-        next = M + h * V;
+        next = M + h * contact_link_velocity_[k];
       } else {
-        const Vec3 c0 = data_.world_position[i] + data_.world_rotation[i] * model_->links[k].com;
-        const Vec3 c1 = now.world_position[i] + now.world_rotation[i] * model_->links[k].com;
-        const Vec3 theta = M.head<3>() + h * V.head<3>();
-        next << theta, (c1 - c0) - theta.cross(c0 - data_.frame_origin);
+        const Vec3& theta = departures_.turn[k];
+        next << theta, (now.com[k] - start.com[k]) - theta.cross(start.com[k] - data_.frame_origin);
       }
       contact_link_motion_step_[k] = next - M;
       M = next;

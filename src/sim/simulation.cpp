@@ -102,7 +102,6 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   contact_link_bias_.assign(n, Vec6::Zero());
   contact_link_motion_.assign(n, Vec6::Zero());
   contact_link_motion_step_.assign(n, Vec6::Zero());
-  contact_track_data_.emplace(*model_);
   update_link_damping_active();
   dt_ = settings_.options.dt;
   if (settings_.options.guard.enabled) size_guard();

@@ -387,15 +387,16 @@ void Simulation::solve_tgs() {
     if (physx())
       clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
     delta_x_ += rho * qd_;
-    if (contacts_active_ || self_contacts_active_) track_contacts(rho);
     if (physx()) {
       // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
       // a prismatic row's is measured again below.
       delta_x_ += rho * departures_.row_bias;
-      // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1).
+      // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1);
+      // the sub-step's poses and turns it leaves are the contacts' too (contact.md, C25a).
       track_prismatic_position_change(*model_, q_, qd_, rho, departures_, delta_x_);
       departures_.qd_position += (1.0 / n) * qd_;
     }
+    if (contacts_active_ || self_contacts_active_) track_contacts(rho);
   }
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.

@@ -386,9 +386,8 @@ class Simulation {
   /// the link's velocity (docs/math/contact.md, C23a).
   std::vector<Vec6> contact_link_bias_;
   /// compat physx, TGS: each link's motion since the step's start as PhysX tracks it for its
-  /// contact rows (C25a), frame 0; its increment over a sub-step; and the sub-step's poses.
+  /// contact rows (C25a), frame 0, and its increment over a sub-step.
   std::vector<Vec6> contact_link_motion_, contact_link_motion_step_;
-  std::optional<Data> contact_track_data_;
   std::vector<ContactReport> contacts_;
   int num_contacts_ = 0;
   int num_ground_contacts_ = 0;  ///< the first of contacts_; the self contacts follow
