@@ -58,21 +58,4 @@ void validate_mimic_joints(const Model& model, const std::vector<MimicJoint>& mi
   }
 }
 
-// eq. (3)-(4): a soft row is PhysX's implicit spring-damper with k_p = omega^2 / r and
-// k_d = 2 omega zeta / r on the effective mass 1 / r.
-MimicRow setup_mimic_row(const MimicJoint& m, double r, double h, double bias_coefficient) {
-  MimicRow row;
-  row.response = r;
-  double erp = bias_coefficient, cfm = 0.0;
-  if (m.natural_frequency > 0.0 && m.damping_ratio > 0.0) {
-    const double kp = m.natural_frequency * m.natural_frequency / r;
-    const double kd = 2.0 * m.natural_frequency * m.damping_ratio / r;
-    cfm = 1.0 / (h * (h * kp + kd));
-    erp = h * kp / (h * kp + kd);
-  }
-  row.bias_per_error = erp / h;
-  row.effective_mass = 1.0 / (r + cfm);
-  return row;
-}
-
 }  // namespace featherdrive

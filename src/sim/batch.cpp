@@ -763,11 +763,14 @@ std::string Batch::lane_refusal() {
         oi.position_iterations != o.position_iterations ||
         oi.velocity_iterations != o.velocity_iterations || s.model().gravity != gravity)
       return "environment " + std::to_string(i) + ": options or gravity other than environment 0's";
+    if (!simd::same_mimic_dofs(s.mimic_joints(), sims_.front().mimic_joints()))
+      return "environment " + std::to_string(i) + ": mimic rows on other dofs than environment 0's";
   }
   const simd::Plan* plan = lanes_ ? &lanes_->plan() : nullptr;
   if (!plan || plan->dt != o.dt || plan->tgs != (o.solver == SolverType::tgs) ||
       plan->position_iterations != o.position_iterations ||
-      plan->velocity_iterations != o.velocity_iterations) {
+      plan->velocity_iterations != o.velocity_iterations ||
+      !lanes_->same_mimic_dofs(sims_.front())) {
     lanes_ = std::make_shared<simd::LaneEngine>(sims_.front(), n);
     mark_all(repack_all);
   }

@@ -37,6 +37,8 @@ Layout make_layout(const Plan& p) {
   l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.cfm = take(L), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
+  l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
+  l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -83,10 +85,6 @@ std::string lane_refusal(const Simulation& s) {
     return has("simulation", "settings", "a ground with the model's collision shapes");
   if (s.contact_options().self_collision && m.shapes.size() > 1)
     return has("simulation", "settings", "self-collision between the model's shapes");
-  // The lane step has no mimic rows: a prototype with one would run uncoupled.
-  for (const MimicJoint& mimic : s.mimic_joints())
-    return has("joint", m.links[static_cast<size_t>(m.dof_link[mimic.dof_a])].joint_name,
-               "a mimic row (" + describe(m, mimic) + ")");
   return {};
 }
 
@@ -128,13 +126,34 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     k.finish_on_leave = k.type != 0 && !k.later;
     if (!k.finish_on_leave && (k.type != 0 || k.later)) finish_after_.push_back(i);
   }
+  // The mimic rows and the dofs they couple, in MimicSolver's order.
+  mimic_joints_ = prototype.mimic_joints();
+  for (const MimicJoint& mj : mimic_joints_) {
+    auto slot = [&](int dof) {
+      const auto it = std::find(mimic_dofs_.begin(), mimic_dofs_.end(), dof);
+      if (it != mimic_dofs_.end()) return static_cast<int>(it - mimic_dofs_.begin());
+      mimic_dofs_.push_back(dof);
+      return static_cast<int>(mimic_dofs_.size()) - 1;
+    };
+    MimicConstants c;
+    c.dof_a = mj.dof_a, c.dof_b = mj.dof_b;
+    c.q_a = m.links[static_cast<size_t>(m.dof_link[mj.dof_a])].q_index;
+    c.q_b = m.links[static_cast<size_t>(m.dof_link[mj.dof_b])].q_index;
+    c.slot_a = slot(mj.dof_a);
+    c.slot_b = slot(mj.dof_b);
+    mimic_.push_back(c);
+  }
   const SimulationOptions& o = prototype.options();
   Plan& p = plan_;
+  p.num_mimic = static_cast<int>(mimic_.size());
+  p.num_mimic_dofs = static_cast<int>(mimic_dofs_.size());
+  p.mimic = mimic_.data();
+  p.mimic_dofs = mimic_dofs_.data();
   p.num_links = L, p.nq = m.nq, p.nv = nv;
   p.links = links_.data();
   p.finish_after = finish_after_.data();
   p.num_finish_after = static_cast<int>(finish_after_.size());
-  p.entries = nv * kDofParameters + L * kLinkParameters;
+  p.entries = nv * kDofParameters + L * kLinkParameters + p.num_mimic * kMimicParameters;
   for (int a = 0; a < 3; ++a) p.gravity[a] = m.gravity[a];
   p.dt = o.dt;
   p.tgs = o.solver == SolverType::tgs;
@@ -209,6 +228,24 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
                              std::isfinite(lp.max_angular_velocity);
     plan_.any_cfm = plan_.any_cfm || lp.cfm_scale > 0.0;
   }
+  // The mimic rows' dofs are the plan's (same_mimic_dofs); their parameters are the lane's.
+  const std::vector<MimicJoint>& mimic = sim.mimic_joints();
+  for (int j = 0; j < std::min(plan_.num_mimic, static_cast<int>(mimic.size())); ++j) {
+    const MimicJoint& mj = mimic[static_cast<size_t>(j)];
+    const int x = plan_.nv * kDofParameters + plan_.num_links * kLinkParameters +
+                  j * kMimicParameters;
+    set_parameter(env, x + mimic_gear_ratio, mj.gear_ratio);
+    set_parameter(env, x + mimic_offset, mj.offset);
+    set_parameter(env, x + mimic_natural_frequency, mj.natural_frequency);
+    set_parameter(env, x + mimic_damping_ratio, mj.damping_ratio);
+  }
+}
+
+bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t j = 0; j < a.size(); ++j)
+    if (a[j].dof_a != b[j].dof_a || a[j].dof_b != b[j].dof_b) return false;
+  return true;
 }
 
 void LaneEngine::pack_model(int env, const Model& m) {

@@ -23,6 +23,9 @@ SimdIsa lane_isa(int count);
 /// and the joint or link named); empty when the lanes step it as Simulation does.
 std::string lane_refusal(const Simulation& s);
 
+/// Whether two sets of mimic rows couple the same dofs in the same order.
+bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b);
+
 class LaneEngine {
  public:
   /// `count` environments of the prototype's topology and options, each with its parameters.
@@ -32,7 +35,8 @@ class LaneEngine {
   const Plan& plan() const { return plan_; }
 
   /// Environment env's per-lane parameters from `sim` (same topology and options): drives
-  /// (with targets), joint limits, friction, velocity limits and wrap; its model's armature and
+  /// (with targets), joint limits, friction, velocity limits, wrap and mimic rows (whose dofs
+  /// must be the plan's: same_mimic_dofs); its model's armature and
   /// link inertials. A link whose inertia is not diagonal makes the lanes use the general
   /// rotation for it from then on.
   void pack_drives(int env, const Simulation& sim);
@@ -42,6 +46,12 @@ class LaneEngine {
     pack_drives(env, sim);
     pack_joints(env, sim);
     pack_model(env, sim.model());
+  }
+
+  /// Whether sim's mimic rows couple the dofs the plan's do, in the same order (their gear
+  /// ratios, offsets and softness may differ from lane to lane; their dofs may not).
+  bool same_mimic_dofs(const Simulation& sim) const {
+    return simd::same_mimic_dofs(sim.mimic_joints(), mimic_joints_);
   }
 
   /// Entry `index` of environment env's parameters (simd_plan.hpp's DofParameter, LinkParameter).
@@ -68,6 +78,9 @@ class LaneEngine {
   int count_ = 0;
   std::vector<LinkConstants> links_;
   std::vector<int> finish_after_;
+  std::vector<MimicJoint> mimic_joints_;  // the prototype's
+  std::vector<MimicConstants> mimic_;
+  std::vector<int> mimic_dofs_;
   Plan plan_;
   std::vector<double> parameters_;  // packed in groups of kGroup environments
   std::vector<Stop> stops_;

@@ -17,6 +17,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
 #include "simd_plan.hpp"
 
@@ -201,11 +202,19 @@ class LaneStep {
   V solve_row(int d, V v, const V& dx);
   template <class T, class Fields>
   void drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v);
-  template <class L>
+  template <bool kGiven, class L>
   void enter_link(const L& lane, int i, const V* dvp, V* dv);
   template <class L>
   void leave_chain_link(const L& lane, int k, bool to_parent, V& beta);
   void sweep();
+  template <bool kGiven>
+  void sweep_links();
+  void setup_mimic();
+  void solve_mimic();
+  V mimic_parameter(int j, int f) const {
+    return parameter(p_.nv * kDofParameters + p_.num_links * kLinkParameters +
+                     j * kMimicParameters + f);
+  }
   void leave_links(int k, int stop, bool correct);
   bool in_chain_run(int i, int stop, bool correct) const;
   int leave_chain_run(int k, int stop, bool correct);
@@ -1077,9 +1086,10 @@ void LaneStep<A, K>::finish_link(int i) {
 }
 
 // Link i entered (the lanes lane picks): its joint's velocity from outside its subtree, its
-// rows (a lone drive's alone when lane is one vector), its velocity change dv for its children.
+// rows (a lone drive's alone when lane is one vector) or, kGiven, the impulse given at its dof,
+// its velocity change dv for its children.
 template <class A, int K>
-template <class L>
+template <bool kGiven, class L>
 [[gnu::always_inline]] inline void LaneStep<A, K>::enter_link(const L& lane, int i, const V* dvp,
                                                               V* dv) {
   const int d = p_.links[i].v_index;
@@ -1091,7 +1101,9 @@ template <class L>
   using T = std::remove_cv_t<decltype(D_inv)>;
   const T base = -D_inv * dot6(lane, U, dvp);
   T impulse;
-  if constexpr (std::is_same_v<T, V>) {
+  if constexpr (kGiven) {
+    impulse = lane(at(l_.given)[d]);
+  } else if constexpr (std::is_same_v<T, V>) {
     impulse = solve_row(d, at(l_.qd)[d] + base, rw[Layout::delta_x]);
   } else {
     T total(0.0), v = lane(at(l_.qd)[d]) + base;
@@ -1106,13 +1118,24 @@ template <class L>
   for (int r = 0; r < 6; ++r) lane(dv[r]) = (lane(dvp[r]) - h * lane(W[r])) + dqd * lane(S[r]);
 }
 
-// One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n).
+// One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows
+// first, as PhysX solves them (mimic_solve.hpp), then the dofs' rows.
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
+  if (p_.num_mimic > 0) solve_mimic();
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
   if (keep)
     for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
+  sweep_links<false>();
+  if (keep)
+    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
+}
+
+// The sweep's passes over the links: the rows' impulses, or (kGiven) the impulses given.
+template <class A, int K>
+template <bool kGiven>
+void LaneStep<A, K>::sweep_links() {
   int previous = -1;
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
@@ -1127,16 +1150,73 @@ void LaneStep<A, K>::sweep() {
     const double* has = any_row(k.v_index);
     // A lone drive: one vector at a time. With friction or a limit row in the block the whole
     // pack measured faster (the welded humanoid).
-    if (kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0 &&
-        has[6] == 0.0)
-      for (int j = 0; j < K; ++j) enter_link(OneVector{j}, i, dvp, dv);
+    if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
+        has[5] == 0.0 && has[6] == 0.0)
+      for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
     else
-      enter_link(WholePack{}, i, dvp, dv);
+      enter_link<kGiven>(WholePack{}, i, dvp, dv);
   }
   leave_links(previous, -1, false);
   for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
-  if (keep)
-    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
+}
+
+// Once a step, after the response (mimic_solve.cpp's setup): each mimic row's velocity change at
+// the coupled dofs per unit impulse, from rest, by a sweep with the impulses (1, G) given, and
+// its row (docs/math/mimic_joints.md, eq. 2-4).
+template <class A, int K>
+void LaneStep<A, K>::setup_mimic() {
+  V* qd = at(l_.qd);
+  V* saved = at(l_.saved);
+  V* given = at(l_.given);
+  const int k = p_.num_mimic_dofs;
+  for (int d = 0; d < p_.nv; ++d) {
+    saved[d] = qd[d];
+    given[d] = V(0.0);
+  }
+  for (int j = 0; j < p_.num_mimic; ++j) {
+    const MimicConstants& m = p_.mimic[j];
+    const V gear = mimic_parameter(j, mimic_gear_ratio);
+    given[m.dof_a] = V(1.0);
+    given[m.dof_b] = gear;
+    for (int d = 0; d < p_.nv; ++d) qd[d] = V(0.0);
+    sweep_links<true>();
+    given[m.dof_a] = given[m.dof_b] = V(0.0);
+    for (int s = 0; s < k; ++s) at(l_.mimic_change)[j * k + s] = qd[p_.mimic_dofs[s]];
+    const V r = qd[m.dof_a] + gear * qd[m.dof_b];
+    const MimicRowOf<V> row =
+        mimic_law::setup(mimic_parameter(j, mimic_natural_frequency),
+                         mimic_parameter(j, mimic_damping_ratio), r, h_solve_, p_.limit_erp);
+    V* out = at(l_.mimic_row) + 3 * j;
+    out[0] = row.response, out[1] = row.bias_per_error, out[2] = row.effective_mass;
+  }
+  for (int d = 0; d < p_.nv; ++d) qd[d] = saved[d];
+}
+
+// Every mimic row once, in order, at the exact current velocities, then their impulses applied by
+// a sweep (mimic_solve.cpp's solve): qd is exact on exit.
+template <class A, int K>
+void LaneStep<A, K>::solve_mimic() {
+  V* qd = at(l_.qd);
+  V* q = at(l_.q);
+  V* velocity = at(l_.mimic_velocity);
+  V* given = at(l_.given);
+  const int k = p_.num_mimic_dofs;
+  for (int s = 0; s < k; ++s) velocity[s] = qd[p_.mimic_dofs[s]];
+  for (int j = 0; j < p_.num_mimic; ++j) {
+    const MimicConstants& m = p_.mimic[j];
+    const V gear = mimic_parameter(j, mimic_gear_ratio);
+    const V error = q[m.q_a] + gear * q[m.q_b] + mimic_parameter(j, mimic_offset);
+    const V v = velocity[m.slot_a] + gear * velocity[m.slot_b];
+    const V* rw = at(l_.mimic_row) + 3 * j;
+    const V lambda =
+        mimic_law::impulse(MimicRowOf<V>{rw[0], rw[1], rw[2]}, error, v, velocity_iteration_);
+    given[m.dof_a] = given[m.dof_a] + lambda;
+    given[m.dof_b] = given[m.dof_b] + gear * lambda;
+    for (int s = 0; s < k; ++s)
+      velocity[s] = velocity[s] + lambda * at(l_.mimic_change)[j * k + s];
+  }
+  sweep_links<true>();
+  for (int s = 0; s < k; ++s) given[p_.mimic_dofs[s]] = V(0.0);
 }
 
 // q += h qd on every 1-dof joint; TGS also accumulates the position change delta_x.
@@ -1200,6 +1280,7 @@ void LaneStep<A, K>::step() {
   for (int i = 0; i < p_.num_links; ++i)
     if (p_.links[i].leaf)
       for (int r = 0; r < 6; ++r) at(l_.subtree + 6 * i)[r] = V(0.0);
+  if (p_.num_mimic > 0) setup_mimic();
   const double dt = p_.dt;
   velocity_iteration_ = false;
   if (!p_.tgs) {
@@ -1218,9 +1299,11 @@ void LaneStep<A, K>::step() {
       integrate(rho, true);
     }
     velocity_iteration_ = true;
-    // Only friction and limit rows act in TGS velocity iterations; lanes without keep their
-    // velocities.
-    if (any(undriven_) && p_.velocity_iterations > 0) {
+    // Only friction, limit and mimic rows act in TGS velocity iterations; lanes without keep
+    // their velocities.
+    if (p_.num_mimic > 0) {
+      for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
+    } else if (any(undriven_) && p_.velocity_iterations > 0) {
       V* saved = at(l_.saved_tgs);
       for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();

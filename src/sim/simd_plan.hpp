@@ -64,6 +64,22 @@ enum LinkParameter : int {
   kLinkParameters
 };
 
+/// A mimic row's parameters (MimicJoint), per environment.
+enum MimicParameter : int {
+  mimic_gear_ratio,
+  mimic_offset,
+  mimic_natural_frequency,
+  mimic_damping_ratio,
+  kMimicParameters
+};
+
+/// A mimic row's dofs, the same in every lane (docs/math/mimic_joints.md).
+struct MimicConstants {
+  int dof_a = 0, dof_b = 0;    ///< follower and leader
+  int q_a = 0, q_b = 0;        ///< their positions in q
+  int slot_a = 0, slot_b = 0;  ///< their indices in Plan::mimic_dofs
+};
+
 /// A link's topology and joint constants, the same in every lane.
 struct LinkConstants {
   int parent = -1;
@@ -121,6 +137,10 @@ struct Layout {
     tf_applied,    ///< all its impulse changes of the step
     kRowFields
   };
+  // The mimic rows (MimicRowOf's three fields per row), each row's velocity change at the coupled
+  // dofs per unit impulse (rows x coupled dofs), those dofs' current velocities, and the joint
+  // impulses a sweep applies as given (the mimic rows').
+  int mimic_row = 0, mimic_change = 0, mimic_velocity = 0, given = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -132,6 +152,10 @@ struct Plan {
   const LinkConstants* links = nullptr;
   const int* finish_after = nullptr;  ///< links finished after a sweep, in order
   int num_finish_after = 0;
+  /// The mimic rows, in the order they are solved, and the dofs they couple.
+  int num_mimic = 0, num_mimic_dofs = 0;
+  const MimicConstants* mimic = nullptr;
+  const int* mimic_dofs = nullptr;
   int entries = 0;  ///< parameters per environment
   double gravity[3] = {};
   double dt = 0.0;

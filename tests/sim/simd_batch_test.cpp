@@ -409,10 +409,6 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   Simulation f = s;
   f.set_drive_delay(1, 2);
   expect_refused(f, "joint '" + joint + "' has drive delay 2");
-  Simulation mimic = s;
-  mimic.set_mimic_joints({{2, 1, 1.5, 0.0}});
-  const std::string follower = s.model().links[s.model().dof_link[2]].joint_name;
-  expect_refused(mimic, "joint '" + follower + "' has a mimic row");
   // A ground with the model's shapes (the lane step has no contact rows): a fixed arm that can
   // touch the floor would otherwise pass through it.
   Model shaped = s.model();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/model/model.hpp"
 
 namespace featherdrive {
@@ -31,23 +32,16 @@ std::string describe(const Model& model, const MimicJoint& mimic);
 /// dofs they couple.
 void validate_mimic_joints(const Model& model, const std::vector<MimicJoint>& mimic);
 
-/// One row's coefficients for one step (eq. 3-6): lambda = -(bias_per_error C + J v) *
-/// effective_mass in position iterations, -J v / r in velocity iterations.
-struct MimicRow {
-  double response = 0.0;        ///< r = J M^-1 J^T, J = e_a^T + gear_ratio e_b^T (eq. 2)
-  double bias_per_error = 0.0;  ///< erp / h
-  double effective_mass = 0.0;  ///< 1 / (r + cfm)
-};
-
 /// The row for a step of h with response r; bias_coefficient is the solver's (PGS 0.8, TGS
 /// 2 sqrt(1 / n)), used by a rigid row.
-MimicRow setup_mimic_row(const MimicJoint& mimic, double r, double h, double bias_coefficient);
+inline MimicRow setup_mimic_row(const MimicJoint& mimic, double r, double h,
+                                double bias_coefficient) {
+  return mimic_law::setup(mimic.natural_frequency, mimic.damping_ratio, r, h, bias_coefficient);
+}
 
-/// The row's impulse at constraint error C and constraint velocity J v (eq. 5, 6).
 inline double mimic_impulse(const MimicRow& row, double error, double velocity,
                             bool velocity_iteration) {
-  if (velocity_iteration) return -velocity / row.response;
-  return -(row.bias_per_error * error + velocity) * row.effective_mass;
+  return mimic_law::impulse(row, error, velocity, velocity_iteration);
 }
 
 }  // namespace featherdrive
