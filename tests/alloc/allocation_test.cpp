@@ -259,6 +259,7 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
       prototype.set_joint_friction(d, JointFriction{0.1, 0.05, 0.01});
       prototype.set_max_joint_velocity(d, 0.5);
     }
+    prototype.set_mimic_joints({{1, 0, -1.0, 0.0}, {3, 2, 0.5, 0.1, 20.0, 0.5}});
     Batch batch(prototype, 19);
     batch.set_num_threads(threads);
     batch.step();
