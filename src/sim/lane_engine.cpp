@@ -62,7 +62,13 @@ std::string lane_refusal(const Simulation& s) {
     return what + " '" + name + "' has " + value;
   };
   const Model& m = s.model();
-  if (s.options().compat != Compat::none) return has("simulation", "options", "compat: physx");
+  // compat physx departs from compat none, on a fixed base of 1-dof joints, only in its prismatic
+  // rows' link bias and geometric position change (docs/math/physx_departures.md, PD-1 to PD-3):
+  // its revolute rows' bias is 0, and its defaults are settings the lanes take.
+  if (s.options().compat == Compat::physx)
+    for (const Link& link : m.links)
+      if (link.joint_type == JointType::prismatic)
+        return has("joint", link.joint_name, "compat: physx's prismatic link bias");
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
   for (const Link& link : m.links) {

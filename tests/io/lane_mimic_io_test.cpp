@@ -8,33 +8,13 @@
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
+#include "support/lanes.hpp"
 #include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
 
-// Every environment of a lane Batch of `sim` against sim stepped alone; returns the largest
-// relative difference of q, qd and the output forces.
-double lanes_against_alone(const Simulation& sim, int steps, const std::string& what) {
-  Batch lanes(sim, 5);
-  EXPECT_NE(lanes.step_path().find("lanes"), std::string::npos) << what << lanes.step_path();
-  Simulation alone = sim;
-  lanes.step(steps);
-  alone.step(steps);
-  double worst = 0.0;
-  auto compare = [&](const RowMatrix& a, const VecView& b) {
-    for (int e = 0; e < lanes.size(); ++e)
-      worst = std::max(worst, test::relative_difference(a.row(e), b.transpose()));
-  };
-  compare(lanes.q(), alone.q());
-  compare(lanes.qd(), alone.qd());
-  compare(lanes.drive_force(), alone.drive_force());
-  compare(lanes.limit_force(), alone.limit_force());
-  compare(lanes.friction_force(), alone.friction_force());
-  compare(lanes.velocity_limit_force(), alone.velocity_limit_force());
-  std::printf("%s: largest relative difference %.1e (docs/simd_batch.md)\n", what.c_str(), worst);
-  return worst;
-}
+using test::lanes_against_alone;
 
 // Issue 32's case: examples/arm7.urdf as loaded (its limits, friction, effort and velocity
 // limits) with joint3 following joint2 (q3 = 1.5 q2), force drives on the others towards +-0.2

@@ -1,0 +1,71 @@
+// compat: physx in Batch's SIMD lanes. On a fixed base of revolute joints PhysX's departures leave
+// the rows alone (a revolute row's link bias is 0: docs/math/physx_departures.md, PD-2) and its
+// defaults are settings (wrapped revolute joints, link cfm, damping and velocity limits, friction
+// coefficient 0.05), so the lanes step it; each environment against its Simulation stepped alone
+// (another operation order), within 1e-12 over 1000 steps.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/batch.hpp"
+#include "support/compare.hpp"
+#include "support/lanes.hpp"
+#include "support/source_tree.hpp"
+
+namespace featherdrive {
+namespace {
+
+using test::lanes_against_alone;
+
+// DART's KUKA KR5 and Barrett WAM as loaded (their URDF velocity and effort limits), compat physx
+// with PhysX's defaults for the rest, force drives towards a pose 0.5 rad away, PGS and TGS.
+TEST(LaneCompatPhysx, DartArmsAsSimulation) {
+  const std::string dart = "/usr/share/doc/dart/data/urdf/";
+  for (const std::string file : {"KR5/KR5 sixx R650.urdf", "wam/wam.urdf"}) {
+    const UrdfRobot robot = load_urdf(dart + file);
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      SimulationOptions o;
+      o.dt = 1.0 / 240.0;
+      o.solver = solver;
+      o.compat = Compat::physx;
+      Simulation sim(robot.model, o);
+      // The defaults compat physx brings are on: wrapped revolute joints, link damping.
+      ASSERT_EQ(sim.settings().revolute_wrap[0], RevoluteWrap::wrapped);
+      ASSERT_GT(sim.link_parameters(1).angular_damping, 0.0);
+      for (int d = 0; d < robot.model->nv; ++d) {
+        const double effort = robot.model->effort_limit[d];  // KR5's are 0: none
+        sim.set_drive(d, Drive{DriveType::force, 2e3, 100.0, effort > 0.0 ? effort : test::kInf,
+                               d % 2 ? 0.5 : -0.5, 0.0});
+      }
+      EXPECT_LE(lanes_against_alone(sim, 1000, file + ", compat physx, " + to_string(solver)),
+                1e-12);
+    }
+  }
+}
+
+// examples/humanoid_hold.yaml (MuJoCo's humanoid, torso welded, 21 hinges) with compat physx.
+TEST(LaneCompatPhysx, HumanoidHoldAsSimulation) {
+  Scene scene = load_scene(test::kExamples + "humanoid_hold.yaml");
+  scene.options.compat = Compat::physx;
+  EXPECT_LE(lanes_against_alone(make_simulation(scene), 1000, "humanoid_hold, compat physx"),
+            1e-12);
+}
+
+// A prismatic joint's rows carry PhysX's link bias, which the lanes do not model: such a batch
+// steps as Simulations, and says why.
+TEST(LaneCompatPhysx, PrismaticJointStepsAsSimulations) {
+  const UrdfRobot robot = load_urdf(test::kSourceDir + "/tests/data/mimic_gripper.urdf");
+  SimulationOptions o;
+  o.compat = Compat::physx;
+  Batch batch(Simulation(robot.model, o), 3);
+  EXPECT_EQ(batch.step_path(),
+            "scalar: environment 0: joint 'left_finger' has compat: physx's prismatic link bias");
+  o.compat = Compat::none;
+  EXPECT_NE(Batch(Simulation(robot.model, o), 3).step_path().find("lanes"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace featherdrive
