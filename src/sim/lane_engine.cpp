@@ -39,6 +39,10 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
+  const int physx = p.physx_prismatic ? 1 : 0;
+  l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
+  l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
+  l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -62,13 +66,6 @@ std::string lane_refusal(const Simulation& s) {
     return what + " '" + name + "' has " + value;
   };
   const Model& m = s.model();
-  // compat physx departs from compat none, on a fixed base of 1-dof joints, only in its prismatic
-  // rows' link bias and geometric position change (docs/math/physx_departures.md, PD-1 to PD-3):
-  // its revolute rows' bias is 0, and its defaults are settings the lanes take.
-  if (s.options().compat == Compat::physx)
-    for (const Link& link : m.links)
-      if (link.joint_type == JointType::prismatic)
-        return has("joint", link.joint_name, "compat: physx's prismatic link bias");
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
   for (const Link& link : m.links) {
@@ -166,6 +163,11 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   p.position_iterations = o.position_iterations;
   p.velocity_iterations = o.velocity_iterations;
   p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
+  // On a fixed base of 1-dof joints compat physx departs from compat none only at prismatic
+  // joints (a revolute row's link bias is 0, PD-2); its defaults are settings.
+  if (o.compat == Compat::physx)
+    for (const Link& link : m.links)
+      p.physx_prismatic = p.physx_prismatic || link.joint_type == JointType::prismatic;
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
   // kMaxInterleave groups each) starts with the prototype's parameters.

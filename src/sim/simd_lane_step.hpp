@@ -187,6 +187,7 @@ class LaneStep {
   void step();
   void scale_to_velocity_limits();
   void kinematics_and_bias();
+  template <bool kStart = true>
   void link_pose(int i);
   void link_velocity_and_bias(int i);
   void articulated_pass();
@@ -210,6 +211,10 @@ class LaneStep {
   template <bool kGiven>
   void sweep_links();
   void setup_mimic();
+  void link_bias();
+  void track_prismatic(double h);
+  void clamp_prismatic();
+  V row_bias(int d) { return at(l_.row_bias)[d]; }
   void solve_mimic();
   V mimic_parameter(int j, int f) const {
     return parameter(p_.nv * kDofParameters + p_.num_links * kLinkParameters +
@@ -360,12 +365,15 @@ void LaneStep<A, K>::kinematics_and_bias() {
 }
 
 // Link i's pose (world axes; position relative to the root link's origin, frame 0's origin) and
-// S_i, its parent's being done.
+// S_i, its parent's being done; without kStart the pose alone, kept apart (now_R, now_pos) for
+// compat physx's tracking of a sub-step.
 template <class A, int K>
+template <bool kStart>
 [[gnu::always_inline]] inline void LaneStep<A, K>::link_pose(int i) {
   const LinkConstants& k = p_.links[i];
-  V* R = at(l_.R + 9 * i);
-  V* pos = at(l_.pos + 3 * i);
+  const int R_base = kStart ? l_.R : l_.now_R, pos_base = kStart ? l_.pos : l_.now_pos;
+  V* R = at(R_base + 9 * i);
+  V* pos = at(pos_base + 3 * i);
   // The joint frame's axes R_parent E^T: the parent's own rotation, read in place, where the
   // joint frame does not rotate (a copy of nine packs cost a fifth of this pass with AVX2).
   V frame[9];
@@ -375,8 +383,8 @@ template <class A, int K>
       for (int c = 0; c < 3; ++c) frame[3 * r + c] = V(k.E[3 * c + r]);
     for (int r = 0; r < 3; ++r) pos[r] = V(0.0);
   } else {
-    const V* Rp = at(l_.R + 9 * k.parent);
-    const V* pp = at(l_.pos + 3 * k.parent);
+    const V* Rp = at(R_base + 9 * k.parent);
+    const V* pp = at(pos_base + 3 * k.parent);
     for (int r = 0; r < 3; ++r)
       pos[r] =
           pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
@@ -423,7 +431,7 @@ template <class A, int K>
     if (k.type == 2 && k.parent >= 0)
       for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
   }
-  if (k.type == 0) return;
+  if (k.type == 0 || !kStart) return;
   V* S = at(l_.S + 6 * i);
   if (k.type == 1) {
     for (int r = 0; r < 3; ++r) S[r] = aw[r];
@@ -1104,9 +1112,12 @@ template <bool kGiven, class L>
   if constexpr (kGiven) {
     impulse = lane(at(l_.given)[d]);
   } else if constexpr (std::is_same_v<T, V>) {
-    impulse = solve_row(d, at(l_.qd)[d] + base, rw[Layout::delta_x]);
+    // compat physx: a prismatic row sees the link bias (PD-2).
+    const V v = p_.physx_prismatic ? at(l_.qd)[d] + base + row_bias(d) : at(l_.qd)[d] + base;
+    impulse = solve_row(d, v, rw[Layout::delta_x]);
   } else {
     T total(0.0), v = lane(at(l_.qd)[d]) + base;
+    if (p_.physx_prismatic) v = v + lane(at(l_.row_bias)[d]);
     drive_row(d, RowOf<L>{rw, lane}, lane(rw[Layout::response]),
               lane(rw[Layout::delta_x]), total, v);
     impulse = total;
@@ -1201,7 +1212,9 @@ void LaneStep<A, K>::solve_mimic() {
   V* velocity = at(l_.mimic_velocity);
   V* given = at(l_.given);
   const int k = p_.num_mimic_dofs;
-  for (int s = 0; s < k; ++s) velocity[s] = qd[p_.mimic_dofs[s]];
+  for (int s = 0; s < k; ++s)
+    velocity[s] = p_.physx_prismatic ? qd[p_.mimic_dofs[s]] + row_bias(p_.mimic_dofs[s])
+                                     : qd[p_.mimic_dofs[s]];
   for (int j = 0; j < p_.num_mimic; ++j) {
     const MimicConstants& m = p_.mimic[j];
     const V gear = mimic_parameter(j, mimic_gear_ratio);
@@ -1217,6 +1230,131 @@ void LaneStep<A, K>::solve_mimic() {
   }
   sweep_links<true>();
   for (int s = 0; s < k; ++s) given[p_.mimic_dofs[s]] = V(0.0);
+}
+
+// compat physx at a prismatic joint (link_bias.cpp, docs/math/physx_departures.md): after the
+// kinematics, from the step's start poses and velocities, each link's bias B (PD-1) and each
+// prismatic row's bias u . (B_child - B_parent) at the joint point (PD-2); a revolute row's is 0.
+template <class A, int K>
+void LaneStep<A, K>::link_bias() {
+  const V dt(p_.dt);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    const V* R = at(l_.R + 9 * i);
+    const V* pos = at(l_.pos + 3 * i);
+    const V* v = at(l_.vel + 6 * i);  // [w; velocity of the point at frame 0's origin]
+    V* c = at(l_.start_com + 3 * i);
+    V* vc = at(l_.com_velocity + 3 * i);
+    V* bw = at(l_.bias_w + 3 * i);
+    V* bv = at(l_.bias_v + 3 * i);
+    V com[3];
+    for (int r = 0; r < 3; ++r) com[r] = link_parameter_pack(i, com_x + r);
+    for (int r = 0; r < 3; ++r)
+      c[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+    V wc[3];
+    cross(v, c, wc);
+    for (int r = 0; r < 3; ++r) vc[r] = v[3 + r] + wc[r];
+    for (int r = 0; r < 3; ++r) at(l_.turn + 3 * i)[r] = V(0.0);
+    if (k.parent < 0) {
+      for (int r = 0; r < 3; ++r) bw[r] = bv[r] = V(0.0);
+      continue;
+    }
+    const int p = k.parent;
+    const V* cp = at(l_.start_com + 3 * p);
+    const V* wp = at(l_.vel + 6 * p);
+    const V* vcp = at(l_.com_velocity + 3 * p);
+    const V* bwp = at(l_.bias_w + 3 * p);
+    const V* bvp = at(l_.bias_v + 3 * p);
+    V rr[3], mu_w[3], mu_v[3], t[3];
+    for (int r = 0; r < 3; ++r) rr[r] = c[r] - cp[r], mu_w[r] = v[r] - wp[r];
+    cross(wp, rr, t);
+    for (int r = 0; r < 3; ++r) mu_v[r] = vc[r] - vcp[r] - t[r];
+    V a[3], wwr[3], wmu[3], mm[3], br[3];
+    cross(wp, mu_w, a);
+    cross(wp, t, wwr);  // w_p x (w_p x r)
+    cross(wp, mu_v, wmu);
+    cross(mu_w, mu_v, mm);
+    cross(bwp, rr, br);
+    for (int r = 0; r < 3; ++r) {
+      bw[r] = bwp[r] + dt * a[r];
+      bv[r] = bvp[r] + br[r] + dt * (wwr[r] + V(2.0) * wmu[r] + mm[r]);
+    }
+  }
+  for (int d = 0; d < p_.nv; ++d) at(l_.row_bias)[d] = V(0.0);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 2) continue;
+    const V* u = at(l_.S + 6 * i) + 3;  // the joint's world axis
+    const V* J = at(l_.pos + 3 * i);
+    V child[3], parent[3], dc[3], dp[3];
+    for (int r = 0; r < 3; ++r) {
+      dc[r] = J[r] - at(l_.start_com + 3 * i)[r];
+      dp[r] = J[r] - at(l_.start_com + 3 * k.parent)[r];
+    }
+    cross(at(l_.bias_w + 3 * i), dc, child);
+    cross(at(l_.bias_w + 3 * k.parent), dp, parent);
+    V diff[3];
+    for (int r = 0; r < 3; ++r)
+      diff[r] = (at(l_.bias_v + 3 * i)[r] + child[r]) -
+                (at(l_.bias_v + 3 * k.parent)[r] + parent[r]);
+    at(l_.row_bias)[k.v_index] = u[0] * diff[0] + u[1] * diff[1] + u[2] * diff[2];
+  }
+}
+
+// compat physx, TGS, after a sub-step of h moved q (link_bias.cpp's
+// track_prismatic_position_change): every link's turn, and a prismatic row's position change
+// measured from the links' centres of mass (PD-3).
+template <class A, int K>
+void LaneStep<A, K>::track_prismatic(double h_step) {
+  const V h(h_step);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    link_pose<false>(i);
+    // World angular velocity in the step's start frame, kept in the turn's room for the children.
+    V* turn = at(l_.turn + 3 * i);
+    V* w = at(l_.com_velocity + 3 * i);
+    for (int r = 0; r < 3; ++r) {
+      V x = k.parent >= 0 ? at(l_.com_velocity + 3 * k.parent)[r] : V(0.0);
+      if (k.type == 1) x = x + at(l_.S + 6 * i)[r] * at(l_.qd)[k.v_index];
+      w[r] = x;
+      turn[r] = turn[r] + h * (x + at(l_.bias_w + 3 * i)[r]);
+    }
+  }
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 2) continue;
+    const int p = k.parent;
+    auto com_now = [&](int link, V* out) {
+      const V* R = at(l_.now_R + 9 * link);
+      const V* pos = at(l_.now_pos + 3 * link);
+      V com[3];
+      for (int r = 0; r < 3; ++r) com[r] = link_parameter_pack(link, com_x + r);
+      for (int r = 0; r < 3; ++r)
+        out[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+    };
+    V ci[3], cp[3];
+    com_now(i, ci);
+    com_now(p, cp);
+    const V* si = at(l_.start_com + 3 * i);
+    const V* sp = at(l_.start_com + 3 * p);
+    V off[3], t[3], moved[3];
+    for (int r = 0; r < 3; ++r) off[r] = sp[r] - si[r];
+    cross(at(l_.turn + 3 * p), off, t);
+    for (int r = 0; r < 3; ++r) moved[r] = ((ci[r] - si[r]) - (cp[r] - sp[r])) + t[r];
+    const V* u = at(l_.S + 6 * i) + 3;
+    row(k.v_index)[Layout::delta_x] = u[0] * moved[0] + u[1] * moved[1] + u[2] * moved[2];
+  }
+}
+
+// compat physx: every prismatic joint's position back within its limits (prismatic_limits.cpp).
+template <class A, int K>
+void LaneStep<A, K>::clamp_prismatic() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 2) continue;
+    V& q = at(l_.q)[k.q_index];
+    q = clamp_select(q, dof_parameter(k.v_index, lower), dof_parameter(k.v_index, upper));
+  }
 }
 
 // q += h qd on every 1-dof joint; TGS also accumulates the position change delta_x.
@@ -1273,6 +1411,7 @@ template <class A, int K>
 void LaneStep<A, K>::step() {
   if (p_.any_velocity_limit) scale_to_velocity_limits();
   kinematics_and_bias();
+  if (p_.physx_prismatic) link_bias();
   articulated_pass();
   forward_pass();
   // A leaf's subtree impulse is never written by a sweep (no child hands it one) and must read 0;
@@ -1289,6 +1428,7 @@ void LaneStep<A, K>::step() {
     integrate(dt, false);
     velocity_iteration_ = true;
     for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
+    if (p_.physx_prismatic) clamp_prismatic();  // after the rows, which never see it
   } else {
     const int n = p_.position_iterations;
     const double rho = dt / n;
@@ -1297,6 +1437,10 @@ void LaneStep<A, K>::step() {
       time_to_step_end_ = dt - i * rho;
       sweep();
       integrate(rho, true);
+      if (p_.physx_prismatic) {  // the next sub-step's rows see the clamped pose (PD-3)
+        clamp_prismatic();
+        track_prismatic(rho);
+      }
     }
     velocity_iteration_ = true;
     // Only friction, limit and mimic rows act in TGS velocity iterations; lanes without keep

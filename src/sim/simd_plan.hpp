@@ -141,6 +141,11 @@ struct Layout {
   // dofs per unit impulse (rows x coupled dofs), those dofs' current velocities, and the joint
   // impulses a sweep applies as given (the mimic rows').
   int mimic_row = 0, mimic_change = 0, mimic_velocity = 0, given = 0;
+  // compat physx's prismatic departure (Plan::physx_prismatic): each link's centre of mass and
+  // its velocity at the step's start, link bias (angular, linear) and accumulated turn, its pose
+  // at the current sub-step, and each dof's row bias.
+  int start_com = 0, com_velocity = 0, bias_w = 0, bias_v = 0, turn = 0, now_R = 0, now_pos = 0,
+      row_bias = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -167,6 +172,10 @@ struct Plan {
   /// Some environment has link damping or a link velocity limit (forces on the free velocity),
   /// some a cfm_scale (the rows' 1 / (r + cfm)).
   bool any_link_damping = false, any_cfm = false;
+  /// compat physx with a prismatic joint: its rows see the link bias, TGS measures its position
+  /// change geometrically and its position is clamped to its limits (physx_departures.md, PD-1
+  /// to PD-3).
+  bool physx_prismatic = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;

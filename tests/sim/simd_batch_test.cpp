@@ -447,9 +447,6 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
     expect_refused(actuated, "joint '" + joint + "' has an " + to_string(integration) +
                                  " actuator");
   }
-  SimulationOptions physx = s.options();
-  physx.compat = Compat::physx;
-  expect_refused(Simulation(s.model_ptr(), physx), "compat: physx");
   SimdBatch ok(s, 2);
   const int ids[] = {1, 1};
   EXPECT_THROW(ok.set_q(ids, RowMatrix::Zero(1, s.model().nq)), std::invalid_argument);
