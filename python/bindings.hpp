@@ -62,7 +62,7 @@ void bind_sweep(py::module_& m);
 void bind_fit(py::module_& m);  // after bind_io: it extends Scene
 void bind_view(py::module_& m);  // bind_view.cpp: fd.view, fd.link_world_poses
 void bind_joints(py::module_& m);  // after bind_io: it extends Scene
-void bind_simd(py::module_& m);  // bind_simd.cpp: available_simd_isas, the SimdBatch shim
+void bind_simd(py::module_& m);  // bind_simd.cpp: available_simd_isas, a deprecated shim
 void bind_check(py::module_& m);
 /// An instruction set by name ('sse2', 'avx2', 'avx512'), None for the default (bind_batch.cpp).
 std::optional<SimdIsa> to_isa(py::handle obj);  // bind_check.cpp: fd.check
