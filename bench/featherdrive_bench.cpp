@@ -51,7 +51,7 @@ void featherdrive_step(benchmark::State& state, const BenchRobot& robot, SolverT
 
 // The chain prototype against Simulation::step from the same start: the largest difference of q,
 // qd and the drive force over 10 steps, relative to the largest magnitude of each. It grows with
-// the chain's length as the SIMD Batch's does (chain16 2e-15, chain256 1e-12 after one step: the
+// the chain's length as the SIMD lanes' does (chain16 2e-15, chain256 1e-12 after one step: the
 // rounding of a long chain's ill-conditioned dynamics; docs/benchmarks.md).
 double prototype_difference(const BenchRobot& robot) {
   Simulation sim = bench_simulation(robot);

@@ -1,5 +1,5 @@
-"""The SIMD Batch benchmarks of featherdrive_bench's JSON (simd_batch/<robot>/<engine>/envs:<N>/
-threads:<T>): a Markdown table of environment-steps per second and a plot. docs/benchmarks.md."""
+"""The benchmarks of Batch's SIMD lanes in featherdrive_bench's JSON (simd_batch/<robot>/<engine>/
+envs:<N>/threads:<T>): a Markdown table of environment-steps per second and a plot. docs/benchmarks.md."""
 import argparse
 import json
 

@@ -1,9 +1,9 @@
-// Environment-steps per second of the SIMD Batch against the scalar Batch and MuJoCo's mj_step in
-// a loop, on arm7, chain16 and MuJoCo's humanoid with its torso welded
+// Environment-steps per second of Batch through the SIMD lanes at each width against Batch with
+// lanes off (a vector of Simulations) and MuJoCo's mj_step in a loop, on arm7, chain16 and MuJoCo's humanoid with its torso welded
 // (examples/humanoid_hold.yaml), at 1, 8, 64 and 1024 environments on 1 and 2 threads, registered
 // into featherdrive_bench (docs/simd_batch.md has the command; bench/plot_simd_batch.py the table
-// and the plot). Names: simd_batch/<robot>/<engine>/envs:<N>/threads:<T>; engines batch,
-// simd_<isa>, mujoco.
+// and the plot). Names: simd_batch/<robot>/<engine>/envs:<N>/threads:<T>; engines batch (lanes
+// off), simd_<isa> (lanes of that width, Batch::set_isa), mujoco.
 #include <benchmark/benchmark.h>
 
 #include <fstream>
@@ -14,7 +14,7 @@
 #include "bench_models.hpp"
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
-#include "featherdrive/sim/simd_batch.hpp"
+#include "featherdrive/sim/batch.hpp"
 #include "peers.hpp"
 
 namespace featherdrive::bench {
@@ -96,10 +96,13 @@ void as_loaded_batch(benchmark::State& state, const Simulation& prototype, int c
   run(state, batch, prototype.q(), count);
 }
 
-void simd_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads,
-                SimdIsa isa) {
-  SimdBatch batch(bench_simulation(robot), count, isa);
+void lanes_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads,
+                 SimdIsa isa) {
+  Batch batch(bench_simulation(robot), count);
+  batch.set_isa(isa);
   batch.set_num_threads(threads);
+  const std::string path = batch.step_path();
+  if (path != std::string(to_string(isa)) + " lanes") return state.SkipWithError(path.c_str());
   run(state, batch, robot.q0, count);
 }
 
@@ -159,7 +162,7 @@ void register_simd_batch() {
         for (SimdIsa isa : available_simd_isas())
           benchmark::RegisterBenchmark(
               (name + "simd_" + to_string(isa) + tail).c_str(),
-              [=](benchmark::State& s) { simd_batch(s, *robot, n, t, isa); })
+              [=](benchmark::State& s) { lanes_batch(s, *robot, n, t, isa); })
               ->UseRealTime();
         const std::string* xml = r.name == "humanoid" ? &humanoid_xml : nullptr;
         benchmark::RegisterBenchmark((name + "mujoco" + tail).c_str(), [=](benchmark::State& s) {

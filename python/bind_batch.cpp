@@ -16,6 +16,14 @@ int env_index(const Batch& b, py::handle i) {
 
 }  // namespace
 
+std::optional<SimdIsa> featherdrive::python::to_isa(py::handle obj) {
+  if (obj.is_none()) return std::nullopt;
+  const std::string name = to_str(obj, "isa");
+  for (SimdIsa isa : {SimdIsa::sse2, SimdIsa::avx2, SimdIsa::avx512})
+    if (name == to_string(isa)) return isa;
+  throw std::invalid_argument("isa = '" + name + "': expected 'sse2', 'avx2' or 'avx512'");
+}
+
 void featherdrive::python::bind_batch(py::module_& m) {
   // ---- batch ----------------------------------------------------------------------------------
   // States are read-only (N, n) views of the batch's arrays (reference_internal keeps the batch
@@ -106,6 +114,41 @@ void featherdrive::python::bind_batch(py::module_& m) {
       .def_property_readonly(
           "step_path", [](Batch& b) { return locked(b, [&] { return b.step_path(); }); },
           "How the next step() runs: 'avx2 lanes', or 'scalar: ' and why.")
+      .def_property(
+          "isa",
+          [](const Batch& b) { return locked(b, [&] { return std::string(to_string(b.isa())); }); },
+          [](Batch& b, py::handle isa) {
+            const std::optional<SimdIsa> i = to_isa(isa);
+            locked(b, [&] { b.set_isa(i); });
+          },
+          "The lanes' instruction set: 'sse2', 'avx2' or 'avx512' (ValueError for one this CPU "
+          "lacks), or None for the default (the widest, FEATHERDRIVE_SIMD, narrowed for small "
+          "batches). Every width gives the same bits.")
+      .def_property_readonly(
+          "width", [](const Batch& b) { return locked(b, [&] { return b.width(); }); },
+          "Environments per vector of isa: 2, 4 or 8.")
+      .def_property_readonly(
+          "step_count", [](const Batch& b) { return locked(b, [&] { return b.step_count(); }); },
+          "Every environment's step count, a new list.")
+      .def(
+          "divergences",
+          [](const Batch& b) {
+            return locked(b, [&] {
+              py::dict out;
+              for (int e = 0; e < b.size(); ++e)
+                if (const auto& d = b.divergences()[static_cast<size_t>(e)])
+                  out[py::int_(e)] = d->message;
+              return out;
+            });
+          },
+          "{environment: message} of the environments that stopped in the last step().")
+      .def(
+          "simulation",
+          [](const Batch& b, py::handle i) {
+            const int index = env_index(b, i);
+            return locked(b, [&] { return SimulationHolder(new Simulation(b.simulation(index))); });
+          },
+          py::arg("i"), "Environment i as a Simulation of its own (a copy), unlike sim(i).")
       .def(
           "set_options",
           [](Batch& b, const SimulationOptions& o) { locked(b, [&] { b.set_options(o); }); },
@@ -304,6 +347,12 @@ void featherdrive::python::bind_batch(py::module_& m) {
       .def(
           "armature", [](const Batch& b) { return locked(b, [&] { return b.armature(); }); },
           "Every environment's armature (N, nv), a copy.")
+      .def(
+          "drive_gains",
+          [](const Batch& b) {
+            return locked(b, [&] { return py::make_tuple(b.stiffness(), b.damping()); });
+          },
+          "(stiffness, damping), (N, nv) each, copies.")
       .def(
           "joint_limits",
           [](const Batch& b) {

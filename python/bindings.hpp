@@ -62,8 +62,10 @@ void bind_sweep(py::module_& m);
 void bind_fit(py::module_& m);  // after bind_io: it extends Scene
 void bind_view(py::module_& m);  // bind_view.cpp: fd.view, fd.link_world_poses
 void bind_joints(py::module_& m);  // after bind_io: it extends Scene
-void bind_simd(py::module_& m);  // bind_simd.cpp: SimdBatch
-void bind_check(py::module_& m);  // bind_check.cpp: fd.check
+void bind_simd(py::module_& m);  // bind_simd.cpp: available_simd_isas, a deprecated shim
+void bind_check(py::module_& m);
+/// An instruction set by name ('sse2', 'avx2', 'avx512'), None for the default (bind_batch.cpp).
+std::optional<SimdIsa> to_isa(py::handle obj);  // bind_check.cpp: fd.check
 void bind_contact(py::module_& m);  // bind_contact.cpp: after bind_io (UrdfRobot, Scene)
 
 using ModelPtr = std::shared_ptr<Model>;
@@ -607,7 +609,7 @@ inline NamedFrame frame_of(const Model& model, const NameOrIndex& link) {
   return f;
 }
 
-/// set_link_mass of Batch and SimdBatch: a link by name or index, one mass or one per env_ids.
+/// set_link_mass of Batch: a link by name or index, one mass or one per env_ids.
 template <class B>
 void set_link_mass_of(B& b, py::handle link, py::handle mass, py::handle env_ids, bool scale) {
   const NameOrIndex l = link_arg(link);

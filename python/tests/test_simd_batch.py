@@ -1,5 +1,6 @@
-"""fd.SimdBatch: environments in SIMD lanes equal the scalar Batch with the same per-environment
-parameters within 1e-12, every width gives the same bits, and bad input raises ValueError."""
+"""fd.Batch through the SIMD lanes: environments in lanes equal the scalar Batch (lanes off) with
+the same per-environment parameters within 1e-12, every width (Batch.isa) gives the same bits, and
+bad input raises ValueError. fd.SimdBatch, deprecated, is a Batch that must step in lanes."""
 import numpy as np
 import pytest
 
@@ -8,9 +9,10 @@ import featherdrive as fd
 N = 11  # not a multiple of any width
 
 
-def arm_prototype():
+def arm_prototype(fixed_base=True):
     """examples/arm7.urdf as loaded: its URDF velocity limits stay on."""
-    model = fd.load_urdf(fd.example_path("arm7.urdf")).model
+    options = fd.UrdfOptions(fixed_base=fixed_base)
+    model = fd.load_urdf(fd.example_path("arm7.urdf"), options).model
     return fd.Simulation(model, dt=1 / 240, solver="tgs", position_iterations=4,
                          stiffness=2e4, damping=100.0)
 
@@ -29,6 +31,8 @@ def test_lanes_equal_the_scalar_batch_and_every_width_the_same_bits():
     proto = arm_prototype()
     nv = proto.model.nv
     scalar = fd.Batch(proto, N)
+    scalar.lanes = False
+    assert scalar.step_path == "scalar: lanes off (set_lanes)"
     randomise(scalar, np.random.default_rng(4), nv)
     limited = 0.0
     for _ in range(200):
@@ -37,40 +41,43 @@ def test_lanes_equal_the_scalar_batch_and_every_width_the_same_bits():
     assert limited > 1.0  # the targets pull the joints past their URDF velocity limits
     results = []
     for isa in fd.available_simd_isas():
-        simd = fd.SimdBatch(proto, N, isa=isa)
-        assert simd.isa == isa and simd.q.shape == (N, proto.model.nq)
-        randomise(simd, np.random.default_rng(4), nv)
-        simd.step(200)
-        for a, b in ((simd.q, scalar.q), (simd.qd, scalar.qd),
-                     (simd.drive_force, scalar.drive_force),
-                     (simd.friction_force, scalar.friction_force),
-                     (simd.velocity_limit_force, scalar.velocity_limit_force)):
+        lanes = fd.Batch(proto, N)
+        lanes.isa = isa
+        assert lanes.isa == isa and lanes.q.shape == (N, proto.model.nq)
+        randomise(lanes, np.random.default_rng(4), nv)
+        assert lanes.step_path == f"{isa} lanes"
+        lanes.step(200)
+        for a, b in ((lanes.q, scalar.q), (lanes.qd, scalar.qd),
+                     (lanes.drive_force, scalar.drive_force),
+                     (lanes.friction_force, scalar.friction_force),
+                     (lanes.velocity_limit_force, scalar.velocity_limit_force)):
             assert np.max(np.abs(a - b) / np.maximum(1.0, np.abs(b))) <= 1e-12
-        results.append(np.array(simd.qd))
-        assert not simd.qd.flags.writeable
+        results.append(np.array(lanes.qd))
+        assert not lanes.qd.flags.writeable
     for r in results[1:]:
         assert r.tobytes() == results[0].tobytes()
 
 
 def test_bad_input_and_unsupported_settings():
     proto = arm_prototype()
-    batch = fd.SimdBatch(proto, 3)
+    batch = fd.Batch(proto, 3)
     with pytest.raises(ValueError, match="stiffness = -1"):
         batch.set_drive_gains(-1.0, 1.0, env_ids=[1])
     with pytest.raises(ValueError, match=r"env_ids\[1\] = 7 is out of range"):
         batch.set_qd(0.0, env_ids=[0, 7])
     with pytest.raises(ValueError, match="isa = 'avx9'"):
-        fd.SimdBatch(proto, 3, isa="avx9")
+        batch.isa = "avx9"
+    batch.isa = None  # the default again
+    assert batch.width in (2, 4, 8) and batch.step_path == f"{batch.isa} lanes"
     proto.set_drive_delay(2, 2)
-    with pytest.raises(ValueError, match="joint 'joint3' has drive delay 2"):
-        fd.SimdBatch(proto, 3)
+    assert "joint 'joint3' has drive delay 2" in fd.Batch(proto, 3).step_path
 
 
 def test_indices_and_sizes_are_checked():
     """An index is an integer in range (not a bool, not 2**40); a size stays within the bound
     that keeps the padding to whole blocks inside an int."""
     proto = arm_prototype()
-    batch = fd.SimdBatch(proto, 3)
+    batch = fd.Batch(proto, 3)
     for index in (2**40, -1, 3, -(2**70)):
         with pytest.raises(ValueError, match=f"environment index.*{index}"):
             batch.simulation(index)
@@ -80,11 +87,9 @@ def test_indices_and_sizes_are_checked():
     assert batch.simulation(np.int64(2)).model.nv == proto.model.nv
     for count in (2**31 - 1, 2**24 + 1, 2**40):
         with pytest.raises(ValueError, match=f"count = {count}"):
-            fd.SimdBatch(proto, count)
-        with pytest.raises(ValueError, match=f"count = {count}"):
             fd.Batch(proto, count)
     with pytest.raises(TypeError, match="count"):
-        fd.SimdBatch(proto, True)
+        fd.Batch(proto, True)
     with pytest.raises(TypeError, match="environment index"):
         fd.Batch(proto, 2).sim(True)
 
@@ -93,9 +98,25 @@ def test_divergence_names_the_environment():
     proto = arm_prototype()
     for j in range(proto.model.nv):  # a velocity limit would scale 1e200 rad/s back to it
         proto.set_max_joint_velocity(j, np.inf)
-    batch = fd.SimdBatch(proto, 4)
+    batch = fd.Batch(proto, 4)
+    assert batch.step_path.endswith(" lanes")
     batch.set_qd(1e200, env_ids=[2])
-    with pytest.raises(RuntimeError, match="environment 2 \\(1 of 4"):
+    with pytest.raises(RuntimeError, match="batch copy 2 \\(1 of 4"):
         batch.step(3)
     assert batch.step_count == [3, 3, 0, 3]
     assert list(batch.divergences()) == [2]
+
+
+def test_the_simd_batch_shim_warns_and_refuses_what_the_lanes_do_not_step(monkeypatch):
+    proto = arm_prototype()
+    with pytest.warns(DeprecationWarning, match="use featherdrive.Batch"):
+        batch = fd.SimdBatch(proto, 3, isa="sse2")
+    assert isinstance(batch, fd.Batch) and batch.isa == "sse2"
+    assert batch.step_path == "sse2 lanes"
+    with pytest.warns(DeprecationWarning), pytest.raises(
+            ValueError, match="SimdBatch: environment 0: .*floating base"):
+        fd.SimdBatch(arm_prototype(fixed_base=False), 3)
+    monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")
+    with pytest.warns(DeprecationWarning), pytest.raises(
+            ValueError, match="SimdBatch: FEATHERDRIVE_SIMD=scalar: not stepped in SIMD lanes"):
+        fd.SimdBatch(proto, 3)

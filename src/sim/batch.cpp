@@ -167,6 +167,7 @@ Batch::Batch(const Simulation& prototype, int count) {
                                 std::to_string(kMaxSize) + "]");
   sims_.assign(static_cast<size_t>(count), prototype);
   initial_q_ = prototype.q();
+  divergences_.resize(static_cast<size_t>(count));
   lend_rows();
 }
 
@@ -174,7 +175,9 @@ Batch::Batch(const Batch& other)
     : sims_(other.sims_),
       initial_q_(other.initial_q_),
       threads_(other.threads_),
-      lanes_allowed_(other.lanes_allowed_) {
+      lanes_allowed_(other.lanes_allowed_),
+      isa_(other.isa_),
+      divergences_(other.divergences_) {
   lend_rows();
 }
 
@@ -207,6 +210,29 @@ const Simulation& Batch::sim(int i) const {
     throw std::invalid_argument("Batch: environment index " + std::to_string(i) +
                                 " is out of range [0, " + std::to_string(size()) + ")");
   return sims_[static_cast<size_t>(i)];
+}
+
+Simulation Batch::simulation(int i) const {
+  return sim(i);  // the copy owns its state (StateStorage's copy)
+}
+
+void Batch::set_isa(std::optional<SimdIsa> isa) {
+  if (isa) check_simd_isa(*isa, "Batch: isa");
+  isa_ = isa;
+}
+
+SimdIsa Batch::isa() const { return isa_ ? *isa_ : simd::lane_isa(size()); }
+
+std::vector<long> Batch::step_count() const {
+  std::vector<long> out(sims_.size());
+  for (size_t i = 0; i < sims_.size(); ++i) out[i] = sims_[i].step_count();
+  return out;
+}
+
+std::vector<double> Batch::time() const {
+  std::vector<double> out(sims_.size());
+  for (size_t i = 0; i < sims_.size(); ++i) out[i] = sims_[i].time();
+  return out;
 }
 
 void Batch::set_num_threads(int threads) {
@@ -346,6 +372,7 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
     sims_[static_cast<size_t>(i)].reset_actuator_history();  // as Isaac Lab's delay buffers
     sims_[static_cast<size_t>(i)].reset_drive_delay_history();
     sims_[static_cast<size_t>(i)].set_guard_account({});  // a new episode, a new account
+    divergences_[static_cast<size_t>(i)].reset();
     // Contacts start over too: no friction anchors kept from the episode before, no contact
     // outputs. A ground and self-collision switched off forget both; switched on again they are
     // as they were.
@@ -566,6 +593,20 @@ void Batch::set_link_com(std::span<const int> env_ids, int link, const RowMatrix
   });
 }
 
+RowMatrix Batch::stiffness() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.drive(d).stiffness; });
+}
+RowMatrix Batch::damping() const {
+  return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.drive(d).damping; });
+}
+RowMatrix Batch::target_position() const {
+  return per_dof_matrix(sims_,
+                        [](const Simulation& s, int d) { return s.drive(d).target_position; });
+}
+RowMatrix Batch::target_velocity() const {
+  return per_dof_matrix(sims_,
+                        [](const Simulation& s, int d) { return s.drive(d).target_velocity; });
+}
 RowMatrix Batch::armature() const {
   return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.model().armature[d]; });
 }
@@ -745,7 +786,7 @@ void Batch::mark_all(unsigned char what) {
 // since the last step into the lanes' parameters.
 std::string Batch::lane_refusal() {
   if (!lanes_allowed_) return "lanes off (set_lanes)";
-  if (simd_forced_scalar()) return "FEATHERDRIVE_SIMD=scalar";
+  if (!isa_ && simd_forced_scalar()) return "FEATHERDRIVE_SIMD=scalar";
   const int n = size();
   const SimulationOptions& o = sims_.front().options();
   const Vec3& gravity = sims_.front().model().gravity;
@@ -789,7 +830,7 @@ std::string Batch::lane_refusal() {
 std::string Batch::step_path() {
   const std::string why = lane_refusal();
   if (!why.empty()) return "scalar: " + why;
-  return std::string(to_string(simd::lane_isa(size()))) + " lanes";
+  return std::string(to_string(isa())) + " lanes";
 }
 
 // Every environment through the lanes, its clock and divergence as its Simulation keeps them.
@@ -810,7 +851,7 @@ void Batch::step_lanes(int count) {
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
-  lanes_->run(a, count, simd::lane_isa(n), effective_num_threads());
+  lanes_->run(a, count, isa(), effective_num_threads());
   int first = -1, diverged = 0;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
@@ -832,20 +873,26 @@ void Batch::step(int count) {
   if (count < 0)
     throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
   if (count == 0) return;
+  for (std::optional<BatchDivergence>& d : divergences_) d.reset();
   if (lane_refusal().empty()) {
-    step_lanes(count);
+    try {
+      step_lanes(count);
+    } catch (const DivergenceError&) {
+      record_lane_divergences();
+      throw;
+    }
     return;
   }
   const int n = size();
   // One slot per environment: environments never share anything a step writes.
-  std::vector<std::string> diverged(static_cast<size_t>(n));
   std::vector<std::exception_ptr> failed(static_cast<size_t>(n));
   parallel(n, 1, [&](int begin, int end) {
     for (int i = begin; i < end; ++i) {
+      Simulation& s = sims_[static_cast<size_t>(i)];
       try {
-        sims_[static_cast<size_t>(i)].step(count);
+        s.step(count);
       } catch (const DivergenceError& e) {
-        diverged[static_cast<size_t>(i)] = e.what();
+        divergences_[static_cast<size_t>(i)] = BatchDivergence{s.step_count() + 1, e.what()};
       } catch (...) {
         failed[static_cast<size_t>(i)] = std::current_exception();
       }
@@ -855,14 +902,25 @@ void Batch::step(int count) {
     if (e) std::rethrow_exception(e);
   int first = -1, count_diverged = 0;
   for (int i = 0; i < n; ++i)
-    if (!diverged[static_cast<size_t>(i)].empty()) {
+    if (divergences_[static_cast<size_t>(i)]) {
       if (first < 0) first = i;
       ++count_diverged;
     }
   if (first >= 0)
     throw DivergenceError("batch copy " + std::to_string(first) + " (" +
                           std::to_string(count_diverged) + " of " + std::to_string(n) +
-                          " copies diverged): " + diverged[static_cast<size_t>(first)]);
+                          " copies diverged): " +
+                          divergences_[static_cast<size_t>(first)]->message);
+}
+
+// The environments the last lane step stopped, in Simulation's words at the clock each kept.
+void Batch::record_lane_divergences() {
+  for (int i = 0; i < size(); ++i) {
+    if (!lanes_->stopped_now(i)) continue;
+    const Simulation& s = sims_[static_cast<size_t>(i)];
+    divergences_[static_cast<size_t>(i)] = BatchDivergence{
+        s.step_count() + 1, lanes_->divergence_message(i, s.model(), s.step_count(), s.time())};
+  }
 }
 
 }  // namespace featherdrive

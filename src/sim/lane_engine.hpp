@@ -1,6 +1,5 @@
-// The lanes' engine shared by Batch and SimdBatch: what the lane step supports, the per-lane
-// parameters packed from Simulations, and the blocks run on threads (simd_lane_step.hpp).
-// docs/simd_batch.md.
+// Batch's SIMD lanes: what the lane step supports, the per-lane parameters packed from
+// Simulations, and the blocks run on threads (simd_lane_step.hpp). docs/simd_batch.md.
 #pragma once
 
 #include <tbb/task_arena.h>
@@ -9,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "featherdrive/sim/simd_batch.hpp"
+#include "featherdrive/sim/batch.hpp"
 #include "simd_plan.hpp"
 
 namespace featherdrive::simd {

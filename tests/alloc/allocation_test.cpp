@@ -23,7 +23,6 @@
 #include "featherdrive/algorithm/rnea.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/control_step.hpp"
-#include "featherdrive/sim/simd_batch.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
@@ -272,9 +271,9 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
   }
 }
 
-// The SIMD Batch's step allocates nothing on one thread (its scratch is made by the first call),
-// and per call, not per step, on two (TBB's arena), at every width, with drives and limits.
-TEST(SimdBatchAllocations, NoneOnOneThreadPerCallOnTwo) {
+// Batch's lane step allocates nothing on one thread (its scratch is made by the first call), and
+// per call, not per step, on two (TBB's arena), at every width (set_isa), with drives and limits.
+TEST(BatchAllocations, LanesNoneAtEveryWidth) {
   auto model = test::make_random_tree(7, 10, false, false, 0.01);
   Simulation prototype(model, SimulationOptions{});
   for (const Link& l : model->links) {
@@ -284,9 +283,11 @@ TEST(SimdBatchAllocations, NoneOnOneThreadPerCallOnTwo) {
   }
   for (SimdIsa isa : available_simd_isas())
     for (int threads : {1, 2}) {
-      SimdBatch batch(prototype, 19, isa);
+      Batch batch(prototype, 19);
+      batch.set_isa(isa);
       batch.set_num_threads(threads);
       batch.step();
+      ASSERT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
       const long one = allocations_in([&] { batch.step(1); });
       const long many = allocations_in([&] { batch.step(40); });
       if (threads == 1) EXPECT_EQ(many, 0) << to_string(isa);

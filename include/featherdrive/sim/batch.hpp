@@ -41,6 +41,13 @@ void set_drive_targets(Simulation& sim, const VecX& positions, const VecX& veloc
 void set_drive_gains(Simulation& sim, const VecX& stiffness, const VecX& damping,
                      DriveType type = DriveType::force);
 
+/// Where and why an environment stopped in Batch::step: the step (1-based, its step_count + 1)
+/// and Simulation's DivergenceError message (the quantity, the joint and the value).
+struct BatchDivergence {
+  long step = 0;
+  std::string message;
+};
+
 /// What Batch::observe gathers: the state and outputs, and the drives' targets.
 enum class Observation {
   q, qd, applied_force, drive_force, limit_force, friction_force, velocity_limit_force,
@@ -49,7 +56,8 @@ enum class Observation {
 
 class Batch {
  public:
-  /// The most environments a Batch or SimdBatch holds (2^24): std::invalid_argument above.
+  /// The most environments a Batch holds (2^24; the lanes' padding to whole blocks stays within
+  /// int): std::invalid_argument above.
   static constexpr int kMaxSize = 1 << 24;
   /// `count` in [1, kMaxSize] environments, each a new Simulation of `model` with `options`.
   Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options = {});
@@ -69,6 +77,9 @@ class Batch {
   /// for i out of [0, size()). Assigning it a Simulation of other sizes throws.
   Simulation& sim(int i);
   const Simulation& sim(int i) const;
+  /// Environment i as a Simulation of its own (a copy: its model, settings and state), e.g. for
+  /// comparing with the lanes.
+  Simulation simulation(int i) const;
 
   /// The most threads set_num_threads accepts.
   static constexpr int kMaxThreads = 4096;
@@ -95,6 +106,13 @@ class Batch {
   /// How the next step() runs: "avx2 lanes", or "scalar: " and why (the first environment's
   /// setting the lanes do not simulate, lanes off, FEATHERDRIVE_SIMD=scalar).
   std::string step_path();
+  /// The lanes' instruction set: one this CPU runs (std::invalid_argument naming it otherwise),
+  /// or nullopt (the default) for default_simd_isa(), narrowed while a block of two vectors would
+  /// hold more lanes than environments. Every width gives the same bits. One set here is used
+  /// even with FEATHERDRIVE_SIMD=scalar.
+  void set_isa(std::optional<SimdIsa> isa);
+  SimdIsa isa() const;
+  int width() const { return simd_width(isa()); }
 
   // States and outputs, (N, nq) / (N, nv): the environments' storage itself (no copy).
   const RowMatrix& q() const { return rows_[StateStorage::q]; }
@@ -106,6 +124,9 @@ class Batch {
   const RowMatrix& velocity_limit_force() const {
     return rows_[StateStorage::velocity_limit_force];
   }
+  /// Every environment's step count and time (copies).
+  std::vector<long> step_count() const;
+  std::vector<double> time() const;
 
   /// The ground's force on each link of every environment over the last step (world axes, N):
   /// (N, 3 num_links), row i environment i's Simulation::link_contact_force() as fx, fy, fz of
@@ -168,6 +189,10 @@ class Batch {
   /// all; every history is allocated before any environment changes.
   void set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay);
   // The same read back, (N, nv) / (N,) / (N, 3) copies.
+  RowMatrix stiffness() const;
+  RowMatrix damping() const;
+  RowMatrix target_position() const;
+  RowMatrix target_velocity() const;
   RowMatrix armature() const;
   RowMatrix lower_limit() const;
   RowMatrix upper_limit() const;
@@ -201,6 +226,9 @@ class Batch {
   /// other one still makes all its steps. Then throws DivergenceError naming the lowest diverged
   /// one, its message and how many diverged; step_count() of each tells how far it got.
   void step(int count = 1);
+  /// Per environment: why it stopped in the last step() (none: it made all its steps there);
+  /// reset() clears it.
+  const std::vector<std::optional<BatchDivergence>>& divergences() const { return divergences_; }
 
  private:
   void lend_rows();
@@ -224,12 +252,15 @@ class Batch {
   void mark_all(unsigned char what);
   std::string lane_refusal();  ///< packs what changed; empty when the lanes step every environment
   void step_lanes(int count);
+  void record_lane_divergences();
 
   std::vector<Simulation> sims_;
   std::array<RowMatrix, StateStorage::kFields> rows_;
   VecX initial_q_;
   int threads_ = 0;
   bool lanes_allowed_ = true;
+  std::optional<SimdIsa> isa_;  // set_isa's; none: simd::lane_isa(size())
+  std::vector<std::optional<BatchDivergence>> divergences_;
   std::shared_ptr<simd::LaneEngine> lanes_;  // made at the first step through lanes
   std::vector<unsigned char> repack_;        // per environment, Repack bits
   std::vector<char> handed_out_;             // sim(i) handed out writable: packed at every step

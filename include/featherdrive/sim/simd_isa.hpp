@@ -1,7 +1,8 @@
-// The instruction sets the lanes of Batch and SimdBatch are compiled for, chosen at run time.
+// The instruction sets Batch's SIMD lanes are compiled for, chosen at run time.
 // docs/simd_batch.md.
 #pragma once
 
+#include <string>
 #include <vector>
 
 namespace featherdrive {
@@ -19,5 +20,8 @@ SimdIsa default_simd_isa();
 bool simd_forced_scalar();
 /// The instruction sets this CPU runs, narrowest first.
 std::vector<SimdIsa> available_simd_isas();
+/// Throws std::invalid_argument ("<where> = avx512: this CPU has only up to avx2") unless this
+/// CPU runs `isa`.
+void check_simd_isa(SimdIsa isa, const std::string& where);
 
 }  // namespace featherdrive

@@ -1,7 +1,7 @@
 #pragma once
 
 // sin and cos of one angle from + - * / only, inline: glibc's sincos is a call of about 97
-// instructions, a third of the kinematics. The same method as the SIMD Batch's LaneStep::sincos
+// instructions, a third of the kinematics. The same method as the SIMD lanes' LaneStep::sincos
 // (docs/math/sincos.md), so the two agree to the last bits or nearly.
 
 #include <cmath>

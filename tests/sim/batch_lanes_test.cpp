@@ -1,5 +1,6 @@
-// The SIMD Batch against the scalar step (Simulation, Batch: another operation order), and its
-// bits against themselves across lanes, batch sizes, widths and thread counts.
+// Batch through the SIMD lanes against the scalar step (Simulation, Batch with lanes off: another
+// operation order), and its bits against themselves across lanes, batch sizes, widths and thread
+// counts. docs/simd_batch.md.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +9,7 @@
 #include <random>
 #include <string>
 
-#include "featherdrive/sim/simd_batch.hpp"
+#include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
 #include "support/models.hpp"
@@ -46,6 +47,11 @@ Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
   return sim;
 }
 
+// Asserts that the batch's next step() runs in the lanes (Batch::step_path).
+#define ASSERT_LANES(batch)                                                     \
+  ASSERT_EQ((batch).step_path().find(" lanes"), (batch).step_path().size() - 6) \
+      << (batch).step_path()
+
 double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
                                 const Eigen::Ref<const RowMatrix>& b) {
   return test::relative_difference(a, b);
@@ -54,8 +60,9 @@ double simd_relative_difference(const Eigen::Ref<const RowMatrix>& a,
 // Steps both, then every environment's q, qd (1e-12) and drive, friction and velocity limit
 // forces (force_tol) against the lone Simulation's; prints environment 0's q, qd difference for
 // docs/simd_batch.md.
-void step_and_expect_near(SimdBatch& simd, Simulation& sim, int steps, double force_tol,
+void step_and_expect_near(Batch& simd, Simulation& sim, int steps, double force_tol,
                           const std::string& what) {
+  ASSERT_LANES(simd);
   simd.step(steps);
   sim.step(steps);
   for (int e = 0; e < simd.size(); ++e) {
@@ -80,7 +87,7 @@ void step_and_expect_near(SimdBatch& simd, Simulation& sim, int steps, double fo
 
 // Per-environment gains, targets, limits, friction, armature and link inertias of the
 // randomisation API.
-void randomise(SimdBatch& simd, Batch& scalar, unsigned seed) {
+void randomise(Batch& simd, Batch& scalar, unsigned seed) {
   const int n = simd.size(), nv = simd.model().nv;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.5, 1.5);
@@ -129,16 +136,19 @@ void randomise(SimdBatch& simd, Batch& scalar, unsigned seed) {
   scalar.set_link_com(all, 3, com);
 }
 
-TEST(SimdBatch, RandomisedLanesEqualScalarBatchWithTheSameParameters) {
+TEST(BatchLanes, RandomisedLanesEqualScalarBatchWithTheSameParameters) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     // Without the prototype's velocity limits: with them env 1's TGS path runs through stick-slip
     // steps that grow the two step orders' last bits to 5e-10 (WithinTol... checks the limits).
     Simulation proto = simd_prototype(11, solver);
     for (int d = 0; d < proto.model().nv; ++d) proto.set_max_joint_velocity(d, test::kInf);
-    SimdBatch simd(proto, 11);
+    Batch simd(proto, 11);
     Batch scalar(proto, 11);
     scalar.set_num_threads(1);
+    scalar.set_lanes(false);
     randomise(simd, scalar, solver == SolverType::pgs ? 3 : 4);
+    ASSERT_LANES(simd);
+    ASSERT_EQ(scalar.step_path(), "scalar: lanes off (set_lanes)");
     simd.step(300);
     scalar.step(300);
     for (const auto& [a, b] : {std::pair{&simd.q(), &scalar.q()},
@@ -157,10 +167,11 @@ TEST(SimdBatch, RandomisedLanesEqualScalarBatchWithTheSameParameters) {
 }
 
 // A long run of one environment per lane against Simulation::step, 1000 steps.
-TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
+TEST(BatchLanes, WithinTolOfSimulationOverAThousandSteps) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = simd_prototype(21, solver, 12);
-    SimdBatch simd(sim, 3);
+    Batch simd(sim, 3);
+    ASSERT_LANES(simd);
     // The velocity limits act in the first steps (the drives pull harder than 0.3 rad/s).
     simd.step(20);
     sim.step(20);
@@ -178,7 +189,7 @@ TEST(SimdBatch, WithinTolOfSimulationOverAThousandSteps) {
 // on a limit, or at the static threshold, is a knife edge where the two step orders' last bits
 // choose different branches (Batch.RandomisedEnvironmentsEqual...); viscous friction on every
 // joint keeps the tree from chaos, which grows those bits past 1e-12 in 700 steps without it.
-TEST(SimdBatch, ActuatorEnvelopesAsSimulation) {
+TEST(BatchLanes, ActuatorEnvelopesAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = simd_prototype(23, solver, 10);
     const int nv = sim.model().nv;
@@ -192,7 +203,7 @@ TEST(SimdBatch, ActuatorEnvelopesAsSimulation) {
     tau[0] = 0.2;
     tau[2] = -0.1;
     sim.set_applied_force(tau);
-    SimdBatch simd(sim, 3);
+    Batch simd(sim, 3);
     const RowMatrix applied = tau.transpose().replicate(3, 1);
     const int all[] = {0, 1, 2};
     simd.set_applied_force(all, applied);
@@ -216,12 +227,13 @@ TEST(SimdBatch, ActuatorEnvelopesAsSimulation) {
 // PhysX's transmitted-force friction (docs/math/joint_constraints.md J6) on every joint: the
 // lanes form each joint's transmitted force from the articulated-body equation, Simulation by
 // summing the subtree's Newton-Euler forces; joints with static or viscous friction keep theirs.
-TEST(SimdBatch, FrictionCoefficientAsSimulation) {
+TEST(BatchLanes, FrictionCoefficientAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = simd_prototype(29, solver, 10);
     const int nv = sim.model().nv;
     for (int d = 0; d < nv; ++d) sim.set_friction_coefficient(d, 0.1 + 0.05 * d);
-    SimdBatch simd(sim, 3);
+    Batch simd(sim, 3);
+    ASSERT_LANES(simd);
     simd.step(20);
     sim.step(20);
     double transmitted = 0.0;  // on the joints without static or viscous friction
@@ -229,14 +241,15 @@ TEST(SimdBatch, FrictionCoefficientAsSimulation) {
       if (sim.joint_friction(d).static_effort == 0.0)
         transmitted = std::max(transmitted, std::abs(sim.friction_force()[d]));
     EXPECT_GT(transmitted, 0.1) << to_string(solver);
-    step_and_expect_near(simd, sim, 980, 1e-12,
-                         std::string("random tree with friction coefficients, ") + to_string(solver));
+    step_and_expect_near(
+        simd, sim, 980, 1e-12,
+        std::string("random tree with friction coefficients, ") + to_string(solver));
   }
 }
 
 // PhysX's per-link parameters: cfm (the rows' 1 / (r + cfm)), link damping and link velocity
 // limits (forces on the free velocity) on some links each, in the lanes as in Simulation.
-TEST(SimdBatch, LinkParametersAsSimulation) {
+TEST(BatchLanes, LinkParametersAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = simd_prototype(31, solver, 10);
     Simulation plain = sim;
@@ -247,7 +260,8 @@ TEST(SimdBatch, LinkParametersAsSimulation) {
       if (i % 3 == 1) p.max_linear_velocity = 0.3, p.max_angular_velocity = 0.6;
       sim.set_link_parameters(i, p);
     }
-    SimdBatch simd(sim, 3);
+    Batch simd(sim, 3);
+    ASSERT_LANES(simd);
     simd.step(20);
     sim.step(20);
     plain.step(20);
@@ -260,12 +274,12 @@ TEST(SimdBatch, LinkParametersAsSimulation) {
 
 // The same environments, given the same parameters, give the same bits at any lane, in a batch
 // of any size, at every width this CPU has and on any number of threads.
-TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
+TEST(BatchLanes, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
   const Simulation proto = simd_prototype(5, SolverType::tgs);
   const int n = 13;
   auto run = [&](int size, SimdIsa isa, int threads, int shift, int first_call = 40) {
-    SimdBatch simd(proto, size, isa);
-    Batch unused(proto, 1);
+    Batch simd(proto, size);
+    simd.set_isa(isa);
     simd.set_num_threads(threads);
     // Environment e of the reference gets gains of its own; here it sits at (e + shift) % size.
     RowMatrix kp(size, proto.model().nv);
@@ -275,6 +289,7 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
     simd.set_drive_gains(all, kp, RowMatrix::Constant(1, proto.model().nv, 15.0));
     // 40 steps in calls of first_call, then one at a time: a block's scratch is reused by the
     // thread's other blocks and calls, so nothing may be read from it before it is written.
+    EXPECT_EQ(simd.step_path(), std::string(to_string(isa)) + " lanes");
     simd.step(first_call);
     for (int s = first_call; s < 40; ++s) simd.step(1);
     RowMatrix out(size, proto.model().nv + proto.model().nq);
@@ -307,7 +322,9 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
     }
   // Alone in a batch of one: environment 7.
   for (SimdIsa isa : available_simd_isas()) {
-    SimdBatch one(proto, 1, isa);
+    Batch one(proto, 1);
+    one.set_isa(isa);
+    ASSERT_LANES(one);
     RowMatrix kp = RowMatrix::Constant(1, proto.model().nv, 200.0 + 37.0 * 7);
     const int e0[] = {0};
     one.set_drive_gains(e0, kp, RowMatrix::Constant(1, proto.model().nv, 15.0));
@@ -319,12 +336,13 @@ TEST(SimdBatch, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
 
 // An environment that diverges stops with the state before that step and the scalar guard's
 // message; the others make all their steps, bit for bit as without it.
-TEST(SimdBatch, DivergenceStopsOnlyThatEnvironment) {
+TEST(BatchLanes, DivergenceStopsOnlyThatEnvironment) {
   Simulation proto = simd_prototype(8, SolverType::pgs);
   // Without velocity limits, which would scale the huge velocity below back to theirs.
   for (int d = 0; d < proto.model().nv; ++d) proto.set_max_joint_velocity(d, test::kInf);
-  SimdBatch calm(proto, 6), simd(proto, 6);
+  Batch calm(proto, 6), simd(proto, 6);
   const int bad[] = {4};
+  ASSERT_LANES(simd);
   simd.step(3);
   calm.step(3);
   const VecX q_before = simd.q().row(4).transpose();
@@ -341,7 +359,7 @@ TEST(SimdBatch, DivergenceStopsOnlyThatEnvironment) {
     simd.step(5);
     ADD_FAILURE() << "no DivergenceError";
   } catch (const DivergenceError& e) {
-    EXPECT_NE(std::string(e.what()).find("environment 4 (1 of 6"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("batch copy 4 (1 of 6"), std::string::npos) << e.what();
   }
   calm.step(5);
   ASSERT_TRUE(simd.divergences()[4].has_value());
@@ -362,7 +380,7 @@ TEST(SimdBatch, DivergenceStopsOnlyThatEnvironment) {
 
 // A wrapped revolute joint spun at 15 rad/s: its position wraps by 4 pi at each step's end past
 // 2 pi (revolute_wrap.md eq. 1), in the lanes as in Simulation; unwrapped it would reach 75 rad.
-TEST(SimdBatch, WrappedRevoluteJointWrapsAsSimulation) {
+TEST(BatchLanes, WrappedRevoluteJointWrapsAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = simd_prototype(21, solver, 12);
     int spun = -1;
@@ -374,7 +392,8 @@ TEST(SimdBatch, WrappedRevoluteJointWrapsAsSimulation) {
     sim.set_joint_friction(spun, JointFriction{});
     sim.set_drive(spun, Drive{DriveType::force, 0.0, 50.0, kInf, 0.0, 15.0});
     sim.set_revolute_wrap(spun, RevoluteWrap::wrapped);
-    SimdBatch simd(sim, 3);
+    Batch simd(sim, 3);
+    ASSERT_LANES(simd);
     const int q_index = sim.model().links[sim.model().dof_link[spun]].q_index;
     double widest = 0.0;
     int wraps = 0;
@@ -394,14 +413,13 @@ TEST(SimdBatch, WrappedRevoluteJointWrapsAsSimulation) {
   }
 }
 
-TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
+// What the lanes do not simulate sends the batch to the scalar step, named in one line.
+TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   auto expect_refused = [](const Simulation& s, const std::string& words) {
-    try {
-      SimdBatch b(s, 2);
-      ADD_FAILURE() << "accepted: " << words;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-    }
+    Batch b(s, 2);
+    const std::string path = b.step_path();
+    EXPECT_EQ(path.rfind("scalar: environment 0: ", 0), 0u) << "accepted: " << words;
+    EXPECT_NE(path.find(words), std::string::npos) << path;
   };
   expect_refused(Simulation(test::make_random_tree(2, 4, true, false)), "a floating base");
   Simulation s = simd_prototype(9, SolverType::pgs, 5);
@@ -423,7 +441,8 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
   expect_refused(grounded, "simulation 'settings' has a ground with the model's collision shapes");
   ground.enabled = false;
   grounded.set_ground(ground);
-  EXPECT_NO_THROW(SimdBatch(grounded, 2));  // shapes alone do nothing
+  Batch shapes_alone(grounded, 2);  // shapes alone do nothing
+  ASSERT_LANES(shapes_alone);
   // Nor self-collision rows: two shapes on links that are not parent and child.
   Model paired = shaped;
   CollisionShape base_ball = ball;
@@ -444,10 +463,11 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
     a.stiffness = 10.0;
     a.integration = integration;
     actuated.set_actuator(1, a);
-    expect_refused(actuated, "joint '" + joint + "' has an " + to_string(integration) +
-                                 " actuator");
+    expect_refused(actuated,
+                   "joint '" + joint + "' has an " + to_string(integration) + " actuator");
   }
-  SimdBatch ok(s, 2);
+  Batch ok(s, 2);
+  ASSERT_LANES(ok);
   const int ids[] = {1, 1};
   EXPECT_THROW(ok.set_q(ids, RowMatrix::Zero(1, s.model().nq)), std::invalid_argument);
   const int one[] = {1};
@@ -456,7 +476,9 @@ TEST(SimdBatch, RefusesWhatItDoesNotSimulate) {
                        RowMatrix::Zero(1, s.model().nv));
     ADD_FAILURE();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("environment 1: drive on joint"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("environment 1: set_drive_gains: dof 0: drive on joint"),
+              std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("stiffness = -5"), std::string::npos) << e.what();
   }
   EXPECT_EQ(ok.stiffness()(1, 0), s.drive(0).stiffness);  // nothing changed

@@ -1,19 +1,20 @@
-// The SIMD Batch on the robots of the examples, loaded through io: within 1e-12 of the scalar
-// Simulation over 1000 steps (different operation order: docs/simd_batch.md, "Determinism").
+// Batch through the SIMD lanes on the robots of the examples, loaded through io: within 1e-12 of
+// the scalar Simulation over 1000 steps (different operation order: docs/simd_batch.md,
+// "Determinism").
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
 
 #include "featherdrive/io/scene.hpp"
 #include "featherdrive/io/urdf.hpp"
+#include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
-#include "featherdrive/sim/simd_batch.hpp"
 #include "support/compare.hpp"
 #include "support/source_tree.hpp"
 
 namespace featherdrive {
 namespace {
-
 
 // The largest |a - b| / max(1, |b|) of every environment's row against the scalar vector.
 double worst_against(const RowMatrix& a, const VecView& b) {
@@ -28,7 +29,9 @@ double worst_against(const RowMatrix& a, const VecView& b) {
 double expect_within_1e12(Simulation sim, int steps, const std::string& what) {
   double velocity_limited = 0.0;
   for (SimdIsa isa : available_simd_isas()) {
-    SimdBatch simd(sim, 3, isa);
+    Batch simd(sim, 3);
+    simd.set_isa(isa);
+    EXPECT_EQ(simd.step_path(), std::string(to_string(isa)) + " lanes") << what;
     simd.step(steps);
     Simulation scalar = sim;
     for (int s = 0; s < steps; ++s) {
@@ -47,7 +50,7 @@ double expect_within_1e12(Simulation sim, int steps, const std::string& what) {
         << what << ", " << to_string(isa);
     EXPECT_LE(worst_against(simd.velocity_limit_force(), scalar.velocity_limit_force()), 1e-12)
         << what << ", " << to_string(isa);
-    if (isa == SimdIsa::sse2)  // every width gives the same bits (simd_batch_test.cpp)
+    if (isa == SimdIsa::sse2)  // every width gives the same bits (batch_lanes_test.cpp)
       std::printf(
           "%s: q, qd %.1e, drive force %.1e (docs/simd_batch.md)\n", what.c_str(),
           std::max(worst_against(simd.q(), scalar.q()), worst_against(simd.qd(), scalar.qd())),
@@ -66,7 +69,7 @@ Simulation at_240_hz(const UrdfRobot& robot, SolverType solver) {
 
 // examples/arm7.urdf as loaded: its joint limits, friction (URDF <dynamics>), effort and
 // velocity limits; targets near the limits, PGS and TGS, 1000 steps of 1/240 s.
-TEST(SimdBatchRobots, Arm7WithinTolOfSimulation) {
+TEST(BatchLanesRobots, Arm7WithinTolOfSimulation) {
   const UrdfRobot robot = load_urdf(test::kExamples + "arm7.urdf");
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Simulation sim = at_240_hz(robot, solver);
@@ -84,7 +87,7 @@ TEST(SimdBatchRobots, Arm7WithinTolOfSimulation) {
 // DART's KUKA KR5 and Barrett WAM as loaded (their URDF velocity and effort limits on), force
 // drives (their URDF efforts as max_force) towards a pose 0.5 rad away, PGS and TGS, 1000 steps of
 // 1/240 s.
-TEST(SimdBatchRobots, DartArmsAsLoadedWithinTolOfSimulation) {
+TEST(BatchLanesRobots, DartArmsAsLoadedWithinTolOfSimulation) {
   const std::string dart = "/usr/share/doc/dart/data/urdf/";
   for (const std::string file : {"KR5/KR5 sixx R650.urdf", "wam/wam.urdf"}) {
     const UrdfRobot robot = load_urdf(dart + file);
@@ -105,7 +108,7 @@ TEST(SimdBatchRobots, DartArmsAsLoadedWithinTolOfSimulation) {
 // The same arms with PhysX 5.6.1's defaults for what a URDF does not say (physx_default: every
 // link's cfm_scale, damping and velocity limits, every joint's friction coefficient), the values
 // an Isaac Lab robot carries, without compat physx's departures: the lanes as Simulation.
-TEST(SimdBatchRobots, DartArmsWithPhysxDefaultsWithinTolOfSimulation) {
+TEST(BatchLanesRobots, DartArmsWithPhysxDefaultsWithinTolOfSimulation) {
   const std::string dart = "/usr/share/doc/dart/data/urdf/";
   for (const std::string file : {"KR5/KR5 sixx R650.urdf", "wam/wam.urdf"}) {
     const UrdfRobot robot = load_urdf(dart + file);
@@ -125,7 +128,7 @@ TEST(SimdBatchRobots, DartArmsWithPhysxDefaultsWithinTolOfSimulation) {
 // examples/humanoid_hold.yaml: MuJoCo's humanoid (MJCF through MuJoCo's compiler), torso welded,
 // force drives on its 21 hinges (general axes, branches), MJCF joint damping as viscous friction,
 // TGS, 1000 steps.
-TEST(SimdBatchRobots, HumanoidHoldWithinTolOfSimulation) {
+TEST(BatchLanesRobots, HumanoidHoldWithinTolOfSimulation) {
   const Scene scene = load_scene(test::kExamples + "humanoid_hold.yaml");
   expect_within_1e12(make_simulation(scene), 1000, "humanoid_hold");
 }
