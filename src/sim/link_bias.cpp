@@ -6,6 +6,7 @@
 #include "featherdrive/sim/physx_departures.hpp"
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/sim/link_bias_law.hpp"
 
 namespace featherdrive {
 
@@ -130,12 +131,9 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
   for (int i = 1; i < n; ++i) {
     const int p = model.links[i].parent;
     const Vec3 r = s.com[i] - s.com[p];
-    const Vec3& wp = dep.vel.w[p];
-    const Vec3 mu_w = dep.vel.w[i] - wp;
-    const Vec3 mu_v = dep.vel.v[i] - dep.vel.v[p] - wp.cross(r);
-    dep.bias_w[i] = dep.bias_w[p] + dt * wp.cross(mu_w);
-    dep.bias_v[i] = dep.bias_v[p] + dep.bias_w[p].cross(r) +
-                    dt * (wp.cross(wp.cross(r)) + 2.0 * wp.cross(mu_v) + mu_w.cross(mu_v));
+    link_bias_law::link_bias(dep.vel.w[p].data(), dep.vel.v[p].data(), dep.bias_w[p].data(),
+                             dep.bias_v[p].data(), dep.vel.w[i].data(), dep.vel.v[i].data(),
+                             r.data(), dt, dep.bias_w[i].data(), dep.bias_v[i].data());
   }
   // delta = u . (B_child - B_parent) at the joint point (eq. PD-2); zero for revolute rows, whose
   // angular bias has no component along the axis.
@@ -151,10 +149,9 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
     if (link.joint_type != JointType::prismatic) continue;
     const int p = link.parent;
     const Vec3 u = s.R[i] * link.axis;
-    const Vec3& J = s.p[i];
-    const Vec3 child = dep.bias_v[i] + dep.bias_w[i].cross(J - s.com[i]);
-    const Vec3 parent = dep.bias_v[p] + dep.bias_w[p].cross(J - s.com[p]);
-    dep.row_bias[link.v_index] = u.dot(child - parent);
+    dep.row_bias[link.v_index] = link_bias_law::prismatic_row_bias(
+        u.data(), s.p[i].data(), s.com[i].data(), s.com[p].data(), dep.bias_w[i].data(),
+        dep.bias_v[i].data(), dep.bias_w[p].data(), dep.bias_v[p].data());
   }
   for (int i = 0; i < n; ++i) dep.turn[i].setZero();
   (void)qd;
@@ -178,8 +175,9 @@ void track_prismatic_position_change(const Model& model, const VecX& q, const Ve
     if (link.joint_type != JointType::prismatic) continue;
     const int p = link.parent;
     const Vec3 u = s.R[i] * link.axis;
-    const Vec3 moved = (dep.now.com[i] - s.com[i]) - (dep.now.com[p] - s.com[p]);
-    delta_x[link.v_index] = u.dot(moved + dep.turn[p].cross(s.com[p] - s.com[i]));
+    delta_x[link.v_index] = link_bias_law::prismatic_position_change(
+        u.data(), dep.now.com[i].data(), s.com[i].data(), dep.now.com[p].data(), s.com[p].data(),
+        dep.turn[p].data());
   }
 }
 

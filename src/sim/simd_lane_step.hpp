@@ -1,4 +1,4 @@
-// The SIMD Batch's step on one block of W lanes, one environment per lane, written once for any
+// Batch's lane step on one block of W lanes, one environment per lane, written once for any
 // xsimd architecture A and instantiated by simd_lane_step_<isa>.cpp (each compiled for its
 // instruction set, with -ffp-contract=off). It is Simulation's step (step.cpp, aba.cpp,
 // inverse_mass_diagonal.cpp, gauss_seidel.hpp, dof_rows.cpp) for links of 0 or 1 dof on a fixed
@@ -19,6 +19,7 @@
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
+#include "featherdrive/sim/link_bias_law.hpp"
 #include "simd_plan.hpp"
 
 namespace featherdrive::simd {
@@ -1260,44 +1261,20 @@ void LaneStep<A, K>::link_bias() {
       continue;
     }
     const int p = k.parent;
-    const V* cp = at(l_.start_com + 3 * p);
-    const V* wp = at(l_.vel + 6 * p);
-    const V* vcp = at(l_.com_velocity + 3 * p);
-    const V* bwp = at(l_.bias_w + 3 * p);
-    const V* bvp = at(l_.bias_v + 3 * p);
-    V rr[3], mu_w[3], mu_v[3], t[3];
-    for (int r = 0; r < 3; ++r) rr[r] = c[r] - cp[r], mu_w[r] = v[r] - wp[r];
-    cross(wp, rr, t);
-    for (int r = 0; r < 3; ++r) mu_v[r] = vc[r] - vcp[r] - t[r];
-    V a[3], wwr[3], wmu[3], mm[3], br[3];
-    cross(wp, mu_w, a);
-    cross(wp, t, wwr);  // w_p x (w_p x r)
-    cross(wp, mu_v, wmu);
-    cross(mu_w, mu_v, mm);
-    cross(bwp, rr, br);
-    for (int r = 0; r < 3; ++r) {
-      bw[r] = bwp[r] + dt * a[r];
-      bv[r] = bvp[r] + br[r] + dt * (wwr[r] + V(2.0) * wmu[r] + mm[r]);
-    }
+    V rr[3];
+    for (int r = 0; r < 3; ++r) rr[r] = c[r] - at(l_.start_com + 3 * p)[r];
+    link_bias_law::link_bias(at(l_.vel + 6 * p), at(l_.com_velocity + 3 * p),
+                             at(l_.bias_w + 3 * p), at(l_.bias_v + 3 * p), v, vc, rr, dt, bw, bv);
   }
   for (int d = 0; d < p_.nv; ++d) at(l_.row_bias)[d] = V(0.0);
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type != 2) continue;
-    const V* u = at(l_.S + 6 * i) + 3;  // the joint's world axis
-    const V* J = at(l_.pos + 3 * i);
-    V child[3], parent[3], dc[3], dp[3];
-    for (int r = 0; r < 3; ++r) {
-      dc[r] = J[r] - at(l_.start_com + 3 * i)[r];
-      dp[r] = J[r] - at(l_.start_com + 3 * k.parent)[r];
-    }
-    cross(at(l_.bias_w + 3 * i), dc, child);
-    cross(at(l_.bias_w + 3 * k.parent), dp, parent);
-    V diff[3];
-    for (int r = 0; r < 3; ++r)
-      diff[r] = (at(l_.bias_v + 3 * i)[r] + child[r]) -
-                (at(l_.bias_v + 3 * k.parent)[r] + parent[r]);
-    at(l_.row_bias)[k.v_index] = u[0] * diff[0] + u[1] * diff[1] + u[2] * diff[2];
+    const int p = k.parent;
+    at(l_.row_bias)[k.v_index] = link_bias_law::prismatic_row_bias(
+        at(l_.S + 6 * i) + 3, at(l_.pos + 3 * i), at(l_.start_com + 3 * i),
+        at(l_.start_com + 3 * p), at(l_.bias_w + 3 * i), at(l_.bias_v + 3 * i),
+        at(l_.bias_w + 3 * p), at(l_.bias_v + 3 * p));
   }
 }
 
@@ -1335,14 +1312,9 @@ void LaneStep<A, K>::track_prismatic(double h_step) {
     V ci[3], cp[3];
     com_now(i, ci);
     com_now(p, cp);
-    const V* si = at(l_.start_com + 3 * i);
-    const V* sp = at(l_.start_com + 3 * p);
-    V off[3], t[3], moved[3];
-    for (int r = 0; r < 3; ++r) off[r] = sp[r] - si[r];
-    cross(at(l_.turn + 3 * p), off, t);
-    for (int r = 0; r < 3; ++r) moved[r] = ((ci[r] - si[r]) - (cp[r] - sp[r])) + t[r];
-    const V* u = at(l_.S + 6 * i) + 3;
-    row(k.v_index)[Layout::delta_x] = u[0] * moved[0] + u[1] * moved[1] + u[2] * moved[2];
+    row(k.v_index)[Layout::delta_x] = link_bias_law::prismatic_position_change(
+        at(l_.S + 6 * i) + 3, ci, at(l_.start_com + 3 * i), cp, at(l_.start_com + 3 * p),
+        at(l_.turn + 3 * p));
   }
 }
 

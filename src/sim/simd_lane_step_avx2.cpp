@@ -1,4 +1,4 @@
-// The SIMD Batch's lane step for avx2 (compiled with its instruction set and -ffp-contract=off:
+// Batch's lane step for avx2 (compiled with its instruction set and -ffp-contract=off:
 // the top-level CMakeLists.txt). docs/simd_batch.md.
 #include "simd_lane_step.hpp"
 

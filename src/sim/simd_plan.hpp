@@ -1,4 +1,4 @@
-// What the SIMD Batch's lane kernels (simd_lane_step.hpp, one translation unit per instruction
+// What Batch's lane kernels (simd_lane_step.hpp, one translation unit per instruction
 // set) read and write: plain structs and pointers, so that those units, compiled with -mavx2 or
 // -mavx512f, share no inline function with the rest of the library. docs/simd_batch.md.
 #pragma once
@@ -102,7 +102,7 @@ struct LinkConstants {
   double axis[3] = {};  ///< unit joint axis (joint frame)
 };
 
-/// Where a block's scratch keeps each quantity, counted in vectors (simd_batch.cpp fills it).
+/// Where a block's scratch keeps each quantity, counted in vectors (make_layout, lane_engine.cpp, fills it).
 struct Layout {
   // Per dof, kRowFields vectors: the drive row, accumulators, limit errors, masks.
   enum RowField : int {
