@@ -501,7 +501,8 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
       sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.drive_delays_.delay(d);
     sim.row_kinds_changed_ = true;
   }
-  mark(envs, repack_joints);  // a delay takes the environment off the lanes
+  // The lanes' targets of a dof no longer delayed are the drive's again.
+  mark(envs, repack_drives);
 }
 
 // Each environment envs[j] gets the model make(its model, j); with broadcast values, one new
@@ -753,7 +754,7 @@ std::string Batch::lane_refusal() {
     Simulation& s = sims_[static_cast<size_t>(i)];
     std::string& why = refusal_[static_cast<size_t>(i)];
     if (repack_[static_cast<size_t>(i)] || handed_out_[static_cast<size_t>(i)]) {
-      why = simd::lane_refusal(s);
+      why = simd::lane_refusal(s, /*control_stages=*/true);
       // The lanes keep no per-iteration drive impulses (Simulation::last_drive_change).
       if (why.empty() && s.track_convergence()) why = "convergence tracking on";
     }
@@ -807,13 +808,28 @@ void Batch::step_lanes(int count) {
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
-  lanes_->run(a, count, simd::lane_isa(n), effective_num_threads());
+  const SimdIsa isa = simd::lane_isa(n);
+  bool control = false;
+  for (const Simulation& s : sims_) control = control || s.has_control_stages();
+  if (!control) {
+    lanes_->run(a, count, isa, effective_num_threads());
+  } else {
+    // One step a run: each step's control stages read the state it starts from.
+    lane_tau_.resize(n, model().nv);
+    a.applied = lane_tau_.data();
+    for (int k = 0; k < count; ++k) {
+      lane_control_stages();
+      lanes_->run(a, 1, isa, effective_num_threads());
+      for (int i = 0; i < n; ++i)  // Simulation::check_finite_or_throw takes the pushes back
+        if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].undo_actuators();
+    }
+  }
   int first = -1, diverged = 0;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
     s.step_count_ = lane_steps_[static_cast<size_t>(i)];
     s.time_ = lane_time_[static_cast<size_t>(i)];
-    if (!lanes_->stopped_now(i)) continue;
+    if (lanes_->stop(i).quantity == 0) continue;  // stops were cleared above: none in this call
     if (first < 0) first = i;
     ++diverged;
   }
@@ -822,6 +838,28 @@ void Batch::step_lanes(int count) {
     throw DivergenceError("batch copy " + std::to_string(first) + " (" + std::to_string(diverged) +
                           " of " + std::to_string(n) + " copies diverged): " +
                           lanes_->divergence_message(first, s.model(), s.step_count(), s.time()));
+  }
+}
+
+// The step's control stages (Simulation::control_stages: explicit actuators, drive delays) of
+// every environment still stepping, in scalar on its step-start state, as its Simulation runs
+// them; the lanes read their results: the joint force and the delayed dofs' targets.
+void Batch::lane_control_stages() {
+  const int nv = model().nv;
+  for (int i = 0; i < size(); ++i) {
+    if (lanes_->stop(i).quantity != 0) continue;  // stopped in this call: pushes no more
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    s.load_state();
+    lane_tau_.row(i) = s.control_stages().transpose();
+    const DriveDelays& delays = s.drive_delays();
+    if (!delays.any()) continue;
+    for (int d = 0; d < nv; ++d) {
+      if (!delays.delayed(d)) continue;
+      const Drive& seen = delays.drive_seen(d);
+      const int x = d * simd::kDofParameters;
+      lanes_->set_parameter(i, x + simd::target_position, seen.target_position);
+      lanes_->set_parameter(i, x + simd::target_velocity, seen.target_velocity);
+    }
   }
 }
 

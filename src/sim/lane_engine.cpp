@@ -55,7 +55,7 @@ SimdIsa lane_isa(int count) {
   return isa;
 }
 
-std::string lane_refusal(const Simulation& s) {
+std::string lane_refusal(const Simulation& s, bool control_stages) {
   auto has = [](const std::string& what, const std::string& name, const std::string& value) {
     return what + " '" + name + "' has " + value;
   };
@@ -72,10 +72,12 @@ std::string lane_refusal(const Simulation& s) {
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
+    // An implicit actuator's law is a row the lane step does not solve; an explicit one's effort
+    // is a control stage.
+    if (s.has_actuator(d) && (!control_stages || s.actuators().implicit(d)))
       return has("joint", joint,
                  std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
-    if (s.drive_delay(d) != 0)
+    if (s.drive_delay(d) != 0 && !control_stages)
       return has("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
   }
   // Nor contact rows: the robot would pass through the ground.

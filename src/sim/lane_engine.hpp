@@ -20,8 +20,10 @@ namespace featherdrive::simd {
 SimdIsa lane_isa(int count);
 
 /// What of `s` the lane step does not simulate, as "joint 'j' has a floating base" (the setting
-/// and the joint or link named); empty when the lanes step it as Simulation does.
-std::string lane_refusal(const Simulation& s);
+/// and the joint or link named); empty when the lanes step it as Simulation does. With
+/// `control_stages` the caller runs the step's control stages (drive delays, explicit actuators)
+/// per environment and step, as Batch does (docs/simd_batch.md); without, they are refused.
+std::string lane_refusal(const Simulation& s, bool control_stages = false);
 
 class LaneEngine {
  public:

@@ -8,6 +8,7 @@
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
 #include "featherdrive/sim/simd_batch.hpp"
+#include "support/compare.hpp"
 #include "support/source_tree.hpp"
 
 namespace featherdrive {
