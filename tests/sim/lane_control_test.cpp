@@ -107,7 +107,8 @@ struct Worst {
 };
 
 // Environment e of the batch against `alone`: q, qd and every output within the returned
-// differences; the histories and the clock exactly.
+// differences; the clock and the delay and actuator histories (what a checkpoint of sim(e)
+// writes) exactly.
 void compare(const Batch& batch, int e, const Simulation& alone, Worst& worst,
              const std::string& what) {
   const Simulation& s = batch.sim(e);
@@ -128,6 +129,11 @@ void compare(const Batch& batch, int e, const Simulation& alone, Worst& worst,
         EXPECT_EQ(s.drive_delays().ring(d)[k].velocity, alone.drive_delays().ring(d)[k].velocity);
       }
     ASSERT_EQ(s.actuators().pushes(d), alone.actuators().pushes(d)) << what << " dof " << d;
+    if (alone.has_actuator(d))  // the commands as set: the same bits
+      for (size_t k = 0; k < alone.actuators().ring(d).size(); ++k) {
+        EXPECT_EQ(s.actuators().ring(d)[k].position, alone.actuators().ring(d)[k].position);
+        EXPECT_EQ(s.actuators().ring(d)[k].effort, alone.actuators().ring(d)[k].effort);
+      }
   }
 }
 
