@@ -809,16 +809,22 @@ void Batch::step_lanes(int count) {
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
   const SimdIsa isa = simd::lane_isa(n);
-  bool control = false;
-  for (const Simulation& s : sims_) control = control || s.has_control_stages();
+  bool control = false, actuated = false;
+  for (const Simulation& s : sims_) {
+    control = control || s.has_control_stages();
+    actuated = actuated || s.actuators_.any() || s.actuated_;
+  }
   if (!control) {
     lanes_->run(a, count, isa, effective_num_threads());
   } else {
-    // One step a run: each step's control stages read the state it starts from.
-    lane_tau_.resize(n, model().nv);
-    a.applied = lane_tau_.data();
+    // One step a run: each step's control stages read the state it starts from. Without
+    // actuators the joint force is the applied force itself.
+    if (actuated) {
+      lane_tau_.resize(n, model().nv);
+      a.applied = lane_tau_.data();
+    }
     for (int k = 0; k < count; ++k) {
-      lane_control_stages();
+      lane_control_stages(actuated);
       lanes_->run(a, 1, isa, effective_num_threads());
       for (int i = 0; i < n; ++i)  // Simulation::check_finite_or_throw takes the pushes back
         if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].undo_actuators();
@@ -844,13 +850,21 @@ void Batch::step_lanes(int count) {
 // The step's control stages (Simulation::control_stages: explicit actuators, drive delays) of
 // every environment still stepping, in scalar on its step-start state, as its Simulation runs
 // them; the lanes read their results: the joint force and the delayed dofs' targets.
-void Batch::lane_control_stages() {
+void Batch::lane_control_stages(bool actuated) {
   const int nv = model().nv;
+  const RowMatrix& applied = rows_[StateStorage::applied_force];
   for (int i = 0; i < size(); ++i) {
     if (lanes_->stop(i).quantity != 0) continue;  // stopped in this call: pushes no more
     Simulation& s = sims_[static_cast<size_t>(i)];
-    s.load_state();
-    lane_tau_.row(i) = s.control_stages().transpose();
+    // Only the actuators read the step-start state (the delays read the drives): the copy of
+    // 1024 environments' states was an eighth of a delayed WAM's step.
+    const bool reads_state = s.actuators_.any() || s.actuated_;
+    if (reads_state) s.load_state();
+    const VecX& tau = s.control_stages();
+    if (actuated) {
+      if (reads_state) lane_tau_.row(i) = tau.transpose();
+      else lane_tau_.row(i) = applied.row(i);
+    }
     const DriveDelays& delays = s.drive_delays();
     if (!delays.any()) continue;
     for (int d = 0; d < nv; ++d) {

@@ -225,7 +225,7 @@ class Batch {
   void mark_all(unsigned char what);
   std::string lane_refusal();  ///< packs what changed; empty when the lanes step every environment
   void step_lanes(int count);
-  void lane_control_stages();
+  void lane_control_stages(bool actuated);  ///< actuated: the lanes read lane_tau_
 
   std::vector<Simulation> sims_;
   std::array<RowMatrix, StateStorage::kFields> rows_;
