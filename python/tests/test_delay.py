@@ -39,10 +39,14 @@ def test_delay_shifts_the_response_by_k_steps_bit_for_bit():
     assert delayed.drive(1).target_position == targets(39, model.nv)[1]  # as commanded
 
 
-def test_batch_environments_equal_simulations_and_checkpoints_resume(arm, tmp_path):
+@pytest.mark.parametrize("lanes", [False, True])
+def test_batch_environments_equal_simulations_and_checkpoints_resume(arm, tmp_path, lanes):
+    """Without SIMD lanes each environment is its Simulation bit for bit; in them (the delays a
+    control stage before the lane step) within 1e-12, another operation order."""
     proto = fd.Simulation(arm, dt=0.01)
     proto.set_drive_gains(np.full(arm.nv, 900.0), np.full(arm.nv, 40.0))
     batch = fd.Batch(proto, 3)
+    batch.lanes = lanes
     delays = np.array([[0] * 7, [1, 2, 3, 4, 5, 6, 7], [2] * 7])
     batch.set_drive_delay(delays[1:], env_ids=[1, 2])
     assert np.array_equal(batch.drive_delay(), delays)
@@ -58,8 +62,13 @@ def test_batch_environments_equal_simulations_and_checkpoints_resume(arm, tmp_pa
         for s in sims:
             s.set_drive_targets(x)
             s.step()
+    assert batch.step_path.endswith(" lanes") == lanes, batch.step_path
     for i, s in enumerate(sims):
-        assert hexes(batch.q[i]) == hexes(s.q), i
+        if lanes:
+            assert np.abs(batch.q[i] - s.q).max() <= 1e-12, i
+        else:
+            assert hexes(batch.q[i]) == hexes(s.q), i
+        assert [batch.sim(i).drive_delay(j) for j in range(7)] == list(delays[i])
     # A checkpoint mid-delay resumes bit for bit.
     path = tmp_path / "mid.ckpt"
     fd.save_checkpoint(sims[1], str(path))

@@ -69,8 +69,10 @@ def test_bad_input_and_unsupported_settings():
         batch.isa = "avx9"
     batch.isa = None  # the default again
     assert batch.width in (2, 4, 8) and batch.step_path == f"{batch.isa} lanes"
-    proto.set_drive_delay(2, 2)
-    assert "joint 'joint3' has drive delay 2" in fd.Batch(proto, 3).step_path
+    options = proto.options
+    options.guard = fd.StepGuard(max_joint_step=0.1)
+    proto.set_options(options)
+    assert "simulation 'options' has the step guard" in fd.Batch(proto, 3).step_path
 
 
 def test_indices_and_sizes_are_checked():

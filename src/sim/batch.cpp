@@ -528,7 +528,8 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
       sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.drive_delays_.delay(d);
     sim.row_kinds_changed_ = true;
   }
-  mark(envs, repack_joints);  // a delay takes the environment off the lanes
+  // The lanes' targets of a dof no longer delayed are the drive's again.
+  mark(envs, repack_drives);
 }
 
 // Each environment envs[j] gets the model make(its model, j); with broadcast values, one new
@@ -851,13 +852,34 @@ void Batch::step_lanes(int count) {
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
-  lanes_->run(a, count, isa(), effective_num_threads());
+  const SimdIsa lane_isa = isa();
+  bool control = false, actuated = false;
+  for (const Simulation& s : sims_) {
+    control = control || s.has_control_stages();
+    actuated = actuated || s.actuators_.any() || s.actuated_;
+  }
+  if (!control) {
+    lanes_->run(a, count, lane_isa, effective_num_threads());
+  } else {
+    // One step a run: each step's control stages read the state it starts from. Without
+    // actuators the joint force is the applied force itself.
+    if (actuated) {
+      lane_tau_.resize(n, model().nv);
+      a.applied = lane_tau_.data();
+    }
+    for (int k = 0; k < count; ++k) {
+      lane_control_stages(actuated);
+      lanes_->run(a, 1, lane_isa, effective_num_threads());
+      for (int i = 0; i < n; ++i)  // Simulation::check_finite_or_throw takes the pushes back
+        if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].undo_actuators();
+    }
+  }
   int first = -1, diverged = 0;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
     s.step_count_ = lane_steps_[static_cast<size_t>(i)];
     s.time_ = lane_time_[static_cast<size_t>(i)];
-    if (!lanes_->stopped_now(i)) continue;
+    if (lanes_->stop(i).quantity == 0) continue;  // stops were cleared above: none in this call
     if (first < 0) first = i;
     ++diverged;
   }
@@ -866,6 +888,36 @@ void Batch::step_lanes(int count) {
     throw DivergenceError("batch copy " + std::to_string(first) + " (" + std::to_string(diverged) +
                           " of " + std::to_string(n) + " copies diverged): " +
                           lanes_->divergence_message(first, s.model(), s.step_count(), s.time()));
+  }
+}
+
+// The step's control stages (Simulation::control_stages: explicit actuators, drive delays) of
+// every environment still stepping, in scalar on its step-start state, as its Simulation runs
+// them; the lanes read their results: the joint force and the delayed dofs' targets.
+void Batch::lane_control_stages(bool actuated) {
+  const int nv = model().nv;
+  const RowMatrix& applied = rows_[StateStorage::applied_force];
+  for (int i = 0; i < size(); ++i) {
+    if (lanes_->stop(i).quantity != 0) continue;  // stopped in this call: pushes no more
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    // Only the actuators read the step-start state (the delays read the drives): the copy of
+    // 1024 environments' states was an eighth of a delayed WAM's step.
+    const bool reads_state = s.actuators_.any() || s.actuated_;
+    if (reads_state) s.load_state();
+    const VecX& tau = s.control_stages();
+    if (actuated) {
+      if (reads_state) lane_tau_.row(i) = tau.transpose();
+      else lane_tau_.row(i) = applied.row(i);
+    }
+    const DriveDelays& delays = s.drive_delays();
+    if (!delays.any()) continue;
+    for (int d = 0; d < nv; ++d) {
+      if (!delays.delayed(d)) continue;
+      const Drive& seen = delays.drive_seen(d);
+      const int x = d * simd::kDofParameters;
+      lanes_->set_parameter(i, x + simd::target_position, seen.target_position);
+      lanes_->set_parameter(i, x + simd::target_velocity, seen.target_velocity);
+    }
   }
 }
 

@@ -77,11 +77,10 @@ std::string lane_refusal(const Simulation& s) {
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    if (s.has_actuator(d))  // "an explicit actuator" or "an implicit actuator"
-      return has("joint", joint,
-                 std::string("an ") + to_string(s.actuator(d).integration) + " actuator");
-    if (s.drive_delay(d) != 0)
-      return has("joint", joint, "drive delay " + std::to_string(s.drive_delay(d)));
+    // An implicit actuator's law is a row the lane step does not solve; an explicit one's effort
+    // and a drive delay are control stages, which Batch runs per environment.
+    if (s.has_actuator(d) && s.actuators().implicit(d))
+      return has("joint", joint, "an implicit actuator");
   }
   // Nor contact rows: the robot would pass through the ground.
   if (s.ground().enabled && !m.shapes.empty())

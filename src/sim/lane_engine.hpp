@@ -19,7 +19,9 @@ namespace featherdrive::simd {
 SimdIsa lane_isa(int count);
 
 /// What of `s` the lane step does not simulate, as "joint 'j' has a floating base" (the setting
-/// and the joint or link named); empty when the lanes step it as Simulation does.
+/// and the joint or link named); empty when the lanes step it as Simulation does, the step's
+/// control stages (drive delays, explicit actuators) run per environment by the caller, as Batch
+/// does (docs/simd_batch.md).
 std::string lane_refusal(const Simulation& s);
 
 /// Whether two sets of mimic rows couple the same dofs in the same order.

@@ -40,6 +40,10 @@ void Simulation::step() {
 // delayed drives' targets for this step (drive_delay.cpp): pushed once per step.
 const VecX& Simulation::begin_step() {
   load_state();  // the storage keeps the step's start until commit_state
+  return control_stages();
+}
+
+const VecX& Simulation::control_stages() {
   const VecX& tau = apply_actuators();
   if (drive_delays_.any()) drive_delays_.push(settings_.drives);
   return tau;

@@ -247,28 +247,45 @@ TEST(BatchAllocations, PerCallNotPerStep) {
 }
 
 // The same through the SIMD lanes (a fixed base): the lanes' scratch and the clocks are made by
-// the first call; on one thread a call allocates nothing, on two TBB's arena per call.
+// the first call; on one thread a call allocates nothing, on two TBB's arena per call. With mimic
+// rows, and with the control stages (drive delays, explicit actuators) too, which step the lanes
+// one step a run.
 TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
   auto model = test::make_random_tree(7, 10, false, false, 0.01);
-  for (int threads : {1, 2}) {
-    Simulation prototype(model, SimulationOptions{});
-    for (int d = 0; d < model->nv; ++d) {  // every row kind the lanes solve
-      prototype.set_drive(d, Drive{DriveType::force, 400.0, 20.0, 50.0, 0.3, 0.0});
-      prototype.set_joint_limits(d, -0.2, 0.2);
-      prototype.set_joint_friction(d, JointFriction{0.1, 0.05, 0.01});
-      prototype.set_max_joint_velocity(d, 0.5);
+  for (const bool control : {false, true})
+    for (int threads : {1, 2}) {
+      Simulation prototype(model, SimulationOptions{});
+      for (int d = 0; d < model->nv; ++d) {  // every row kind the lanes solve
+        prototype.set_drive(d, Drive{DriveType::force, 400.0, 20.0, 50.0, 0.3, 0.0});
+        prototype.set_joint_limits(d, -0.2, 0.2);
+        prototype.set_joint_friction(d, JointFriction{0.1, 0.05, 0.01});
+        prototype.set_max_joint_velocity(d, 0.5);
+        if (!control) continue;
+        if (d % 3 == 0) {
+          prototype.set_drive(d, Drive{});
+          ExplicitActuator a;
+          a.kind = d % 2 ? ActuatorKind::ideal_pd : ActuatorKind::remotized_pd;
+          a.stiffness = 100.0;
+          a.damping = 5.0;
+          if (a.kind == ActuatorKind::remotized_pd) a.lookup = {{-1.0, 2.0}, {1.0, 4.0}};
+          a.delay = 2;
+          prototype.set_actuator(d, a);
+          prototype.set_drive_target(d, 0.3, 0.0);
+        } else {
+          prototype.set_drive_delay(d, 1 + d % 3);
+        }
+      }
+      prototype.set_mimic_joints({{1, 0, -1.0, 0.0}, {3, 2, 0.5, 0.1, 20.0, 0.5}});
+      Batch batch(prototype, 19);
+      batch.set_num_threads(threads);
+      batch.step();
+      ASSERT_NE(batch.step_path().find("lanes"), std::string::npos) << batch.step_path();
+      const long one = allocations_in([&] { batch.step(1); });
+      const long many = allocations_in([&] { batch.step(40); });
+      if (threads == 1) EXPECT_EQ(one, 0) << control;
+      EXPECT_LE(many, one + 8) << threads << " threads, control stages " << control;
+      EXPECT_EQ(batch.sim(0).step_count(), 42);
     }
-    prototype.set_mimic_joints({{1, 0, -1.0, 0.0}, {3, 2, 0.5, 0.1, 20.0, 0.5}});
-    Batch batch(prototype, 19);
-    batch.set_num_threads(threads);
-    batch.step();
-    ASSERT_NE(batch.step_path().find("lanes"), std::string::npos) << batch.step_path();
-    const long one = allocations_in([&] { batch.step(1); });
-    const long many = allocations_in([&] { batch.step(40); });
-    if (threads == 1) EXPECT_EQ(one, 0);
-    EXPECT_LE(many, one + 8) << threads << " threads";
-    EXPECT_EQ(batch.sim(0).step_count(), 42);
-  }
 }
 
 // Batch's lane step allocates nothing on one thread (its scratch is made by the first call), and

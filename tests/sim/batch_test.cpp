@@ -656,10 +656,11 @@ TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
                 alone[7].velocity_limit_force().cwiseAbs().maxCoeff(),
             0.0);
   // A setting the lanes do not simulate: the batch steps as Simulations, then lanes again.
-  handed.set_drive_delay(0, 2);
-  const std::string joint = model->links[static_cast<size_t>(model->dof_link[0])].joint_name;
-  EXPECT_EQ(batch.step_path(), "scalar: environment 4: joint '" + joint + "' has drive delay 2");
-  handed.set_drive_delay(0, 0);
+  SimulationOptions guarded = handed.options();
+  guarded.guard.enabled = true;
+  handed.set_options(guarded);
+  EXPECT_EQ(batch.step_path(), "scalar: environment 4: simulation 'options' has the step guard");
+  handed.set_options(options);
   EXPECT_EQ(batch.step_path().find("scalar"), std::string::npos);
   // A floating base: scalar, saying why.
   Batch floating(test::make_random_tree(13, 4, /*floating=*/true), 3);

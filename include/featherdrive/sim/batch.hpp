@@ -96,7 +96,8 @@ class Batch {
   /// Whether step() may step the environments in SIMD lanes (the default). It does when every
   /// environment's settings are within what the lane step simulates (docs/simd_batch.md: fixed
   /// bases of revolute and prismatic joints, drives, limits, friction, velocity limits, wrap,
-  /// PGS and TGS, compat none) and the options are the same in all, with the CPU's widest
+  /// drive delays and explicit actuators (run per environment before each lane step), PGS and
+  /// TGS, compat none) and the options are the same in all, with the CPU's widest
   /// instruction set (FEATHERDRIVE_SIMD names a narrower one, or `scalar` for none). Each
   /// environment then gives the same bits whatever its lane, the width, the batch size and the
   /// threads, within 1e-12 of its Simulation stepped alone (the operation order differs);
@@ -253,6 +254,7 @@ class Batch {
   std::string lane_refusal();  ///< packs what changed; empty when the lanes step every environment
   void step_lanes(int count);
   void record_lane_divergences();
+  void lane_control_stages(bool actuated);  ///< actuated: the lanes read lane_tau_
 
   std::vector<Simulation> sims_;
   std::array<RowMatrix, StateStorage::kFields> rows_;
@@ -267,6 +269,7 @@ class Batch {
   std::vector<std::string> refusal_;         // per environment: why its settings need the scalar step
   std::vector<long> lane_steps_;             // the environments' clocks during a lane step
   std::vector<double> lane_time_;
+  RowMatrix lane_tau_;  // the joint force of each environment's lane step (control stages)
 };
 
 }  // namespace featherdrive

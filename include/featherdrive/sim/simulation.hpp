@@ -308,6 +308,11 @@ class Simulation {
   // The step's stages (step.cpp): begin (actuators, delays; once per step), the physics advance
   // over dt_, the end (outputs, finite check, commit, clock).
   const VecX& begin_step();
+  /// begin_step's control stages on the loaded q_, qd_, applied_force_: the actuators' efforts
+  /// and the delays' push; the joint force the physics uses. Batch runs them for its lanes.
+  const VecX& control_stages();
+  /// Whether control_stages() changes anything (actuators, delays, or efforts left to clear).
+  bool has_control_stages() const { return actuators_.any() || drive_delays_.any() || actuated_; }
   void advance(const VecX& tau);
   void row_forces();
   void end_step();
