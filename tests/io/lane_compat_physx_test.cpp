@@ -54,32 +54,5 @@ TEST(LaneCompatPhysx, HumanoidHoldAsSimulation) {
             1e-12);
 }
 
-// tests/data/mimic_gripper.urdf with compat physx: prismatic fingers, whose rows see PhysX's link
-// bias (PD-1, PD-2), whose TGS position change is measured from the links' centres of mass (PD-3)
-// and whose positions are clamped to their limits; two mimic rows, the wrist swinging.
-TEST(LaneCompatPhysx, PrismaticGripperWithMimicRowsAsSimulation) {
-  const UrdfRobot robot = load_urdf(test::kSourceDir + "/tests/data/mimic_gripper.urdf");
-  const Model& m = *robot.model;
-  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions o;
-    o.dt = 0.01;
-    o.solver = solver;
-    o.position_iterations = 8;
-    o.velocity_iterations = 2;
-    o.compat = Compat::physx;
-    Simulation sim(robot.model, o);
-    sim.set_mimic_joints(robot.mimic_joints);
-    sim.set_drive(m.dof_index("wrist"), Drive{DriveType::force, 5.0, 0.5, test::kInf, 0.8, 0.0});
-    sim.set_drive(m.dof_index("left_finger"),
-                  Drive{DriveType::force, 400.0, 20.0, test::kInf, 0.03, 0.0});
-    VecX qd = VecX::Zero(m.nv);
-    qd[m.dof_index("wrist")] = 3.0;  // a swinging hand: the fingers' link bias is not 0
-    sim.set_qd(qd);
-    EXPECT_LE(lanes_against_alone(sim, 1000,
-                                  std::string("mimic gripper, compat physx, ") + to_string(solver)),
-              1e-12);
-  }
-}
-
 }  // namespace
 }  // namespace featherdrive

@@ -41,24 +41,34 @@ TEST(LaneMimicRobots, Arm7WithAMimicJointAsSimulation) {
 }
 
 // tests/data/mimic_gripper.urdf as loaded: two <mimic> rows (a prismatic pair; a knuckle whose
-// velocity limit contradicts its row), the wrist and left finger driven.
+// velocity limit contradicts its row), the wrist swinging and the left finger driven; compat none
+// and physx, whose prismatic fingers' rows see PhysX's link bias (PD-1, PD-2), whose TGS position
+// change is measured from the links' centres of mass (PD-3) and whose positions are clamped to
+// their limits.
 TEST(LaneMimicRobots, UrdfGripperAsSimulation) {
   const UrdfRobot robot = load_urdf(test::kSourceDir + "/tests/data/mimic_gripper.urdf");
   const Model& m = *robot.model;
-  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions o;
-    o.dt = 0.01;
-    o.solver = solver;
-    o.position_iterations = 8;
-    o.velocity_iterations = 2;
-    Simulation sim(robot.model, o);
-    sim.set_mimic_joints(robot.mimic_joints);
-    sim.set_drive(m.dof_index("wrist"), Drive{DriveType::force, 5.0, 0.5, test::kInf, 0.8, 0.0});
-    sim.set_drive(m.dof_index("left_finger"),
-                  Drive{DriveType::force, 400.0, 20.0, test::kInf, 0.03, 0.0});
-    EXPECT_LE(lanes_against_alone(sim, 1000, std::string("mimic gripper, ") + to_string(solver)),
-              1e-12);
-  }
+  for (Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      SimulationOptions o;
+      o.dt = 0.01;
+      o.solver = solver;
+      o.position_iterations = 8;
+      o.velocity_iterations = 2;
+      o.compat = compat;
+      Simulation sim(robot.model, o);
+      sim.set_mimic_joints(robot.mimic_joints);
+      sim.set_drive(m.dof_index("wrist"), Drive{DriveType::force, 5.0, 0.5, test::kInf, 0.8, 0.0});
+      sim.set_drive(m.dof_index("left_finger"),
+                    Drive{DriveType::force, 400.0, 20.0, test::kInf, 0.03, 0.0});
+      VecX qd = VecX::Zero(m.nv);
+      qd[m.dof_index("wrist")] = 3.0;  // a swinging hand: the fingers' link bias is not 0
+      sim.set_qd(qd);
+      EXPECT_LE(lanes_against_alone(sim, 1000,
+                                    std::string("mimic gripper, compat ") + to_string(compat) +
+                                        ", " + to_string(solver)),
+                1e-12);
+    }
 }
 
 }  // namespace

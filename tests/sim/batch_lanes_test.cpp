@@ -12,6 +12,7 @@
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
+#include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -26,12 +27,7 @@ using test::same_bits;
 // away from rest.
 Simulation simd_prototype(unsigned seed, SolverType solver, int links = 9) {
   auto model = test::make_random_tree(seed, links, false, false, 0.01);
-  SimulationOptions o;
-  o.dt = 0.005;
-  o.solver = solver;
-  o.position_iterations = 4;
-  o.velocity_iterations = 1;
-  Simulation sim(model, o);
+  Simulation sim(model, test::lane_test_options(solver));
   std::mt19937 rng(seed);
   test::drive_every_joint(sim, rng, 300.0, 20.0);
   for (int d = 0; d < model->nv; ++d) {

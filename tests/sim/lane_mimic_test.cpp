@@ -10,6 +10,7 @@
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
+#include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -21,12 +22,7 @@ using test::relative_difference;
 // limits and friction on some, and three mimic rows: two rigid, one soft.
 Simulation mimic_prototype(unsigned seed, SolverType solver) {
   auto model = test::make_random_tree(seed, 9, false, false, 0.01);
-  SimulationOptions o;
-  o.dt = 0.005;
-  o.solver = solver;
-  o.position_iterations = 4;
-  o.velocity_iterations = 1;
-  Simulation sim(model, o);
+  Simulation sim(model, test::lane_test_options(solver));
   std::mt19937 rng(seed);
   test::drive_every_joint(sim, rng, 300.0, 20.0);
   const int nv = model->nv;

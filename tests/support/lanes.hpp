@@ -13,6 +13,16 @@
 
 namespace featherdrive::test {
 
+/// The random trees' options in the lane tests: dt 5 ms, 4 position and 1 velocity iterations.
+inline SimulationOptions lane_test_options(SolverType solver) {
+  SimulationOptions o;
+  o.dt = 0.005;
+  o.solver = solver;
+  o.position_iterations = 4;
+  o.velocity_iterations = 1;
+  return o;
+}
+
 /// Steps `count` copies of sim in lanes (asserting they do) and sim alone `steps` times; returns
 /// the largest relative difference of q, qd and the output forces, printed as "what: ...".
 inline double lanes_against_alone(const Simulation& sim, int steps, const std::string& what,
