@@ -216,6 +216,13 @@ class LaneStep {
   void track_prismatic(double h);
   void clamp_prismatic();
   V row_bias(int d) { return at(l_.row_bias)[d]; }
+  // Link i's centre of mass in world axes at the pose (R, pos).
+  void link_com(int i, const V* R, const V* pos, V* out) const {
+    V com[3];
+    for (int r = 0; r < 3; ++r) com[r] = link_parameter_pack(i, com_x + r);
+    for (int r = 0; r < 3; ++r)
+      out[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+  }
   void solve_mimic();
   V mimic_parameter(int j, int f) const {
     return parameter(p_.nv * kDofParameters + p_.num_links * kLinkParameters +
@@ -1248,10 +1255,7 @@ void LaneStep<A, K>::link_bias() {
     V* vc = at(l_.com_velocity + 3 * i);
     V* bw = at(l_.bias_w + 3 * i);
     V* bv = at(l_.bias_v + 3 * i);
-    V com[3];
-    for (int r = 0; r < 3; ++r) com[r] = link_parameter_pack(i, com_x + r);
-    for (int r = 0; r < 3; ++r)
-      c[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
+    link_com(i, R, pos, c);
     V wc[3];
     cross(v, c, wc);
     for (int r = 0; r < 3; ++r) vc[r] = v[3 + r] + wc[r];
@@ -1301,17 +1305,9 @@ void LaneStep<A, K>::track_prismatic(double h_step) {
     const LinkConstants& k = p_.links[i];
     if (k.type != 2) continue;
     const int p = k.parent;
-    auto com_now = [&](int link, V* out) {
-      const V* R = at(l_.now_R + 9 * link);
-      const V* pos = at(l_.now_pos + 3 * link);
-      V com[3];
-      for (int r = 0; r < 3; ++r) com[r] = link_parameter_pack(link, com_x + r);
-      for (int r = 0; r < 3; ++r)
-        out[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
-    };
     V ci[3], cp[3];
-    com_now(i, ci);
-    com_now(p, cp);
+    link_com(i, at(l_.now_R + 9 * i), at(l_.now_pos + 3 * i), ci);
+    link_com(p, at(l_.now_R + 9 * p), at(l_.now_pos + 3 * p), cp);
     row(k.v_index)[Layout::delta_x] = link_bias_law::prismatic_position_change(
         at(l_.S + 6 * i) + 3, ci, at(l_.start_com + 3 * i), cp, at(l_.start_com + 3 * p),
         at(l_.turn + 3 * p));
