@@ -43,6 +43,9 @@ Layout make_layout(const Plan& p) {
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
   l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
   l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
+  const int floating = p.floating_base ? 1 : 0;
+  l.root_R = take(floating * 9), l.root_Rq = take(floating * 9), l.root_U = take(floating * 36);
+  l.root_D_inv = take(floating * 36);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -69,11 +72,12 @@ std::string lane_refusal(const Simulation& s) {
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
   for (const Link& link : m.links) {
-    const bool one_dof =
-        link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic;
-    if (!one_dof && link.joint_type != JointType::fixed)
-      return has("joint", link.joint_name,
-                 link.joint_type == JointType::floating ? "a floating base" : "a spherical joint");
+    if (link.joint_type == JointType::spherical)
+      return has("joint", link.joint_name, "a spherical joint");
+    // compat physx moves a floating root about its centre of mass and keeps its momentum
+    // (physx_departures.md): departures the lanes do not take.
+    if (link.joint_type == JointType::floating && s.options().compat == Compat::physx)
+      return has("joint", link.joint_name, "a floating base under compat physx");
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
@@ -102,6 +106,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     k.parent = link.parent;
     k.type = link.joint_type == JointType::revolute    ? 1
              : link.joint_type == JointType::prismatic ? 2
+             : link.joint_type == JointType::floating  ? 3
                                                        : 0;
     k.v_index = link.v_index;
     k.q_index = link.q_index;
@@ -125,7 +130,8 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     }
     k.later = later[static_cast<size_t>(i)];
     k.leaf = link.children.empty();
-    k.finish_on_leave = k.type != 0 && !k.later;
+    // A floating root's six dofs are finished after the sweep, as a multi-dof joint's.
+    k.finish_on_leave = (k.type == 1 || k.type == 2) && !k.later;
     if (!k.finish_on_leave && (k.type != 0 || k.later)) finish_after_.push_back(i);
   }
   // The mimic rows and the dofs they couple, in MimicSolver's order.
@@ -152,6 +158,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   p.mimic = mimic_.data();
   p.mimic_dofs = mimic_dofs_.data();
   p.num_links = L, p.nq = m.nq, p.nv = nv;
+  p.floating_base = m.floating_base();
   p.links = links_.data();
   p.finish_after = finish_after_.data();
   p.num_finish_after = static_cast<int>(finish_after_.size());

@@ -18,7 +18,7 @@ namespace featherdrive::simd {
 /// environments (fewer padding lanes; every width gives the same bits).
 SimdIsa lane_isa(int count);
 
-/// What of `s` the lane step does not simulate, as "joint 'j' has a floating base" (the setting
+/// What of `s` the lane step does not simulate, as "joint 'j' has a spherical joint" (the setting
 /// and the joint or link named); empty when the lanes step it as Simulation does, the step's
 /// control stages (drive delays, explicit actuators) run per environment by the caller, as Batch
 /// does (docs/simd_batch.md).

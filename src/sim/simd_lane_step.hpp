@@ -2,9 +2,10 @@
 // xsimd architecture A and instantiated by simd_lane_step_<isa>.cpp (each compiled for its
 // instruction set, with -ffp-contract=off). It is Simulation's step (step.cpp, aba.cpp,
 // inverse_mass_diagonal.cpp, gauss_seidel.hpp, dof_rows.cpp) for links of 0 or 1 dof on a fixed
-// base, with every branch on lane data turned into a select, so every lane runs the same
-// operations: only + - * / and exact selects and comparisons, never the library's math functions
-// or fma, whose results differ between instruction sets. docs/simd_batch.md.
+// or floating base, with every branch on lane data turned into a select, so every lane runs the
+// same operations: only + - * /, sqrt (correctly rounded) and exact selects and comparisons, never
+// the library's math functions or fma, whose results differ between instruction sets.
+// docs/simd_batch.md.
 // Everything here has internal linkage: the units compiled with -mavx2 and -mavx512f must not lend
 // an inline function to the rest of the library.
 #pragma once
@@ -232,6 +233,36 @@ class LaneStep {
   bool in_chain_run(int i, int stop, bool correct) const;
   int leave_chain_run(int k, int stop, bool correct);
   void finish_link(int i);
+  // A floating root, link 0 (docs/simd_batch.md, "Floating bases").
+  template <bool kStart>
+  void root_pose(V* R);
+  void root_articulated();
+  void root_acceleration(V* a, const V& dt);
+  void root_response();
+  void root_finish();
+  void integrate_root(double h);
+  void end_classical_root();
+  static void quaternion_rotation(const V* q, V* R);
+  // y = S x and y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
+  template <class T>
+  static void root_S(const T* R0, const T* x, T* y) {
+    for (int h = 0; h < 6; h += 3)
+      for (int r = 0; r < 3; ++r)
+        y[h + r] = R0[3 * r] * x[h] + R0[3 * r + 1] * x[h + 1] + R0[3 * r + 2] * x[h + 2];
+  }
+  template <class T>
+  static void root_St(const T* R0, const T* x, T* y) {
+    for (int h = 0; h < 6; h += 3)
+      for (int c = 0; c < 3; ++c)
+        y[h + c] = R0[c] * x[h] + R0[3 + c] * x[h + 1] + R0[6 + c] * x[h + 2];
+  }
+  static void spd_inverse6(const V* D, V* out);
+  static V sqrt_of(const V& x) {  // correctly rounded: the same bits at every width
+    V out;
+    for (int k = 0; k < K; ++k) out.b[k] = xsimd::sqrt(x.b[k]);
+    return out;
+  }
+  static bool one_dof(const LinkConstants& k) { return k.type == 1 || k.type == 2; }
   void integrate(double h, bool track);
   void wrap_positions();
   void finish_step();
@@ -382,6 +413,11 @@ template <bool kStart>
   const int R_base = kStart ? l_.R : l_.now_R, pos_base = kStart ? l_.pos : l_.now_pos;
   V* R = at(R_base + 9 * i);
   V* pos = at(pos_base + 3 * i);
+  if (k.type == 3) {  // frame 0's origin is the root's own
+    for (int r = 0; r < 3; ++r) pos[r] = V(0.0);
+    root_pose<kStart>(R);
+    return;
+  }
   // The joint frame's axes R_parent E^T: the parent's own rotation, read in place, where the
   // joint frame does not rotate (a copy of nine packs cost a fifth of this pass with AVX2).
   V frame[9];
@@ -465,8 +501,9 @@ template <class A, int K>
   V* cv = at(l_.c + 6 * i);
   V* pAv = at(l_.pA + 6 * i);
   const V* vp = k.parent >= 0 ? at(l_.vel + 6 * k.parent) : nullptr;
-  const V* Sv = k.type != 0 ? at(l_.S + 6 * i) : nullptr;
+  const V* Sv = one_dof(k) ? at(l_.S + 6 * i) : nullptr;
   const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
+  const V* R0 = k.type == 3 ? at(l_.root_R) : nullptr;  // a floating root's S: diag(R0, R0)
   for (int j = 0; j < K; ++j) {
     B R[9], pos[3], com[3];
     for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
@@ -518,6 +555,11 @@ template <class A, int K>
     if (Sv) {
       const B qd = qdv->b[j];
       for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
+    } else if (R0) {
+      B R0j[9], qd[6];
+      for (int e = 0; e < 9; ++e) R0j[e] = R0[e].b[j];
+      for (int r = 0; r < 6; ++r) qd[r] = qdv[r].b[j];
+      root_S(R0j, qd, J);
     }
     B v[6];
     for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
@@ -558,6 +600,10 @@ void LaneStep<A, K>::articulated_pass() {
     const LinkConstants& k = p_.links[i];
     const V* IA = at(l_.IA + 21 * i);
     const V* pA = at(l_.pA + 6 * i);
+    if (k.type == 3) {
+      root_articulated();
+      continue;
+    }
     if (k.type == 0) {
       if (k.parent < 0) continue;
       V* IAp = at(l_.IA + 21 * k.parent);
@@ -606,10 +652,11 @@ void LaneStep<A, K>::forward_pass() {
   const V dt(p_.dt);
   for (int i = 0; i < p_.num_links; ++i) {
     link_acceleration(i, g, dt);
-    if (p_.any_transmission_friction && p_.links[i].type != 0) transmitted_force(i);
+    const bool one = one_dof(p_.links[i]);
+    if (p_.any_transmission_friction && one) transmitted_force(i);
     link_response(i);
     if (p_.any_cfm) link_cfm(i);
-    if (p_.links[i].type != 0) setup_link_rows(i);
+    if (one) setup_link_rows(i);
   }
 }
 
@@ -625,6 +672,10 @@ template <class A, int K>
   V* a = at(l_.acc + 6 * i);
   for (int r = 0; r < 6; ++r) a[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
   if (k.type == 0) return;
+  if (k.type == 3) {
+    root_acceleration(a, dt);
+    return;
+  }
   const V* U = at(l_.U + 6 * i);
   const V* S = at(l_.S + 6 * i);
   const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, a));
@@ -678,7 +729,7 @@ template <class A, int K>
 template <class A, int K>
 void LaneStep<A, K>::link_cfm(int i) {
   V& out = at(l_.cfm)[i];
-  if (p_.links[i].parent < 0) {
+  if (p_.links[i].parent < 0 && p_.links[i].type != 3) {  // the fixed root
     out = V(0.0);
     return;
   }
@@ -732,6 +783,10 @@ template <class A, int K>
     for (int e = 0; e < 21; ++e) L[e] = T[e];
     return;
   }
+  if (k.type == 3) {
+    root_response();
+    return;
+  }
   const V* U = at(l_.U + 6 * i);
   const V* S = at(l_.S + 6 * i);
   V* W = at(l_.W + 6 * i);
@@ -768,6 +823,17 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type == 0) continue;
+    if (k.type == 3) {  // no rows: the accumulators the outputs read stay 0
+      for (int d = k.v_index; d < k.v_index + 6; ++d) {
+        V* rw = row(d);
+        for (int f = 0; f < Layout::kRowFields; ++f) rw[f] = V(0.0);
+        rw[Layout::vmax] = dof_parameter(d, max_velocity);
+        double* has = any_row(d);
+        for (int f = 0; f < 8; ++f) has[f] = 0.0;
+        has[3] = any(rw[Layout::vmax] < V(__builtin_inf())) ? 1.0 : 0.0;
+      }
+      continue;
+    }
     const int d = k.v_index;
     V* rw = row(d);
     const M driven = dof_parameter(d, has_drive) != V(0.0);
@@ -966,7 +1032,7 @@ void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& b
 template <class A, int K>
 bool LaneStep<A, K>::in_chain_run(int i, int stop, bool correct) const {
   const LinkConstants& l = p_.links[i];
-  return i != stop && l.type != 0 && l.parent >= 0 && l.first_child && l.last_child &&
+  return i != stop && one_dof(l) && l.parent >= 0 && l.first_child && l.last_child &&
          l.finish_on_leave && !(correct && l.parent == stop);
 }
 
@@ -1037,7 +1103,7 @@ void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
     const V* pAk = at(l_.subtree + 6 * k);
     const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
     V beta;
-    if (lk.type != 0) {
+    if (one_dof(lk)) {
       U = at(l_.U + 6 * k);
       if constexpr (kVectorByVector)
         for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, k, chain, beta);
@@ -1071,6 +1137,10 @@ void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
 template <class A, int K>
 void LaneStep<A, K>::finish_link(int i) {
   const LinkConstants& lk = p_.links[i];
+  if (lk.type == 3) {
+    root_finish();
+    return;
+  }
   V E[6];
   if (lk.later) {
     const V* Ep = p_.links[lk.parent].later ? at(l_.later + 6 * lk.parent) : at(l_.zero);
@@ -1162,7 +1232,7 @@ void LaneStep<A, K>::sweep_links() {
     previous = i;
     const V* dvp = k.parent >= 0 ? at(l_.dv + 6 * k.parent) : at(l_.zero);
     V* dv = at(l_.dv + 6 * i);
-    if (k.type == 0) {
+    if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
       for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
       continue;
     }
@@ -1332,6 +1402,10 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type == 0) continue;
+    if (k.type == 3) {
+      integrate_root(h_step);
+      continue;
+    }
     const V qd = at(l_.qd)[k.v_index];
     V& q = at(l_.q)[k.q_index];
     q = q + h * qd;
@@ -1358,6 +1432,221 @@ void LaneStep<A, K>::scale_to_velocity_limits() {
   const M scaled = ratio < one;
   if (!any(scaled)) return;
   for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(scaled, at(l_.qd)[d] * ratio, at(l_.qd)[d]);
+}
+
+// A floating root's rotation R0 = E_T^T R_q, with R_q that of its normalised quaternion (w x y z)
+// (kinematics.cpp's position_link on joint_motion.cpp's transform). With kStart, R0 and R_q are
+// kept for the step: R0 gives S = diag(R0, R0) and R_q the axes of compat none's root velocity.
+template <class A, int K>
+template <bool kStart>
+void LaneStep<A, K>::root_pose(V* R) {
+  const LinkConstants& k = p_.links[0];
+  V Rq[9];
+  quaternion_rotation(&at(l_.q)[k.q_index + 3], Rq);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      R[3 * r + c] = k.tree_rotation_identity ? Rq[3 * r + c]
+                                              : V(k.E[r]) * Rq[c] + V(k.E[3 + r]) * Rq[3 + c] +
+                                                    V(k.E[6 + r]) * Rq[6 + c];
+  if (!kStart) return;
+  for (int e = 0; e < 9; ++e) {
+    at(l_.root_R)[e] = R[e];
+    at(l_.root_Rq)[e] = Rq[e];
+  }
+}
+
+// The rotation of the quaternion q (w x y z) normalised, as Eigen's toRotationMatrix.
+template <class A, int K>
+void LaneStep<A, K>::quaternion_rotation(const V* q, V* R) {
+  const V n = sqrt_of(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  const V w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+  const V tx = V(2.0) * x, ty = V(2.0) * y, tz = V(2.0) * z;
+  const V twx = tx * w, twy = ty * w, twz = tz * w, txx = tx * x, txy = ty * x, txz = tz * x;
+  const V tyy = ty * y, tyz = tz * y, tzz = tz * z;
+  const V one(1.0);
+  R[0] = one - (tyy + tzz), R[1] = txy - twz, R[2] = txz + twy;
+  R[3] = txy + twz, R[4] = one - (txx + tzz), R[5] = tyz - twx;
+  R[6] = txz - twy, R[7] = tyz + twx, R[8] = one - (txx + tyy);
+}
+
+// The inverse of a symmetric positive definite 6 x 6 matrix (row-major) from its Cholesky factor
+// L: L^-T L^-1 (aba.cpp's spd_inverse, in its order).
+template <class A, int K>
+void LaneStep<A, K>::spd_inverse6(const V* D, V* out) {
+  V L[36], Li[36];
+  for (int e = 0; e < 36; ++e) L[e] = Li[e] = V(0.0);
+  for (int j = 0; j < 6; ++j) {
+    V d = D[6 * j + j];
+    for (int k = 0; k < j; ++k) d = d - L[6 * j + k] * L[6 * j + k];
+    L[6 * j + j] = sqrt_of(d);
+    for (int i = j + 1; i < 6; ++i) {
+      V x = D[6 * i + j];
+      for (int k = 0; k < j; ++k) x = x - L[6 * i + k] * L[6 * j + k];
+      L[6 * i + j] = x / L[6 * j + j];
+    }
+  }
+  for (int j = 0; j < 6; ++j) {  // L^-1, lower triangular, column by column
+    Li[6 * j + j] = V(1.0) / L[6 * j + j];
+    for (int i = j + 1; i < 6; ++i) {
+      V x(0.0);
+      for (int k = j; k < i; ++k) x = x - L[6 * i + k] * Li[6 * k + j];
+      Li[6 * i + j] = x / L[6 * i + i];
+    }
+  }
+  for (int a = 0; a < 6; ++a)
+    for (int b = a; b < 6; ++b) {
+      const int k0 = b;  // Li[k][a] Li[k][b] is 0 for k < max(a, b) = b
+      V sum = Li[6 * k0 + a] * Li[6 * k0 + b];
+      for (int k = k0 + 1; k < 6; ++k) sum = sum + Li[6 * k + a] * Li[6 * k + b];
+      out[6 * a + b] = out[6 * b + a] = sum;
+    }
+}
+
+// ABA pass 2 at a floating root (aba.cpp's joint_inertia on S = diag(R0, R0)): U = IA S,
+// D = S^T U + armature, D^-1, u = tau - S^T pA. Column c of S is R0's column c % 3 in the upper
+// (c < 3) or the lower half.
+template <class A, int K>
+void LaneStep<A, K>::root_articulated() {
+  const LinkConstants& k = p_.links[0];
+  const V* IA = at(l_.IA);
+  const V* pA = at(l_.pA);
+  const V* R0 = at(l_.root_R);
+  V* U = at(l_.root_U);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) {
+      const int h = c < 3 ? 0 : 3, col = c % 3;
+      U[6 * r + c] = IA[kSym.at[r][h]] * R0[col] + IA[kSym.at[r][h + 1]] * R0[3 + col] +
+                     IA[kSym.at[r][h + 2]] * R0[6 + col];
+    }
+  V D[36];
+  for (int a = 0; a < 6; ++a)
+    for (int c = 0; c < 6; ++c) {
+      const int h = a < 3 ? 0 : 3, col = a % 3;
+      D[6 * a + c] = R0[col] * U[6 * h + c] + R0[3 + col] * U[6 * (h + 1) + c] +
+                     R0[6 + col] * U[6 * (h + 2) + c];
+    }
+  for (int a = 0; a < 6; ++a)
+    D[6 * a + a] = D[6 * a + a] + dof_parameter(k.v_index + a, simd::armature);
+  spd_inverse6(D, at(l_.root_D_inv));
+  V SpA[6];
+  root_St(R0, pA, SpA);
+  for (int c = 0; c < 6; ++c) at(l_.u)[k.v_index + c] = at(l_.tau)[k.v_index + c] - SpA[c];
+}
+
+// ABA pass 3 at a floating root: qdd = D^-1 (u - U^T a), a += S qdd, and the free velocity
+// qd += dt qdd, to which compat none adds dt (w x v) of the root's velocity before it (step.cpp's
+// begin_classical_root; docs/math/contact.md, C26).
+template <class A, int K>
+void LaneStep<A, K>::root_acceleration(V* a, const V& dt) {
+  const LinkConstants& k = p_.links[0];
+  const V* U = at(l_.root_U);
+  const V* Di = at(l_.root_D_inv);
+  const V* R0 = at(l_.root_R);
+  V* qd = &at(l_.qd)[k.v_index];
+  const V* u = &at(l_.u)[k.v_index];
+  V r6[6], qdd[6];
+  for (int c = 0; c < 6; ++c) {
+    V Ua = U[c] * a[0];
+    for (int m = 1; m < 6; ++m) Ua = Ua + U[6 * m + c] * a[m];
+    r6[c] = u[c] - Ua;
+  }
+  for (int d = 0; d < 6; ++d) {
+    V sum = Di[6 * d] * r6[0];
+    for (int c = 1; c < 6; ++c) sum = sum + Di[6 * d + c] * r6[c];
+    qdd[d] = sum;
+  }
+  V Sqdd[6];
+  root_S(R0, qdd, Sqdd);
+  for (int r = 0; r < 6; ++r) a[r] = a[r] + Sqdd[r];
+  V wv[3];
+  cross(qd, qd + 3, wv);
+  for (int d = 0; d < 6; ++d) qd[d] = qd[d] + dt * qdd[d];
+  for (int r = 0; r < 3; ++r) qd[3 + r] = qd[3 + r] + dt * wv[r];
+}
+
+// A floating root's whole-articulation response Lambda = S D^-1 S^T (inverse_mass_diagonal.cpp:
+// its parent is the world, T = 0), in the symmetric storage.
+template <class A, int K>
+void LaneStep<A, K>::root_response() {
+  const V* Di = at(l_.root_D_inv);
+  const V* R0 = at(l_.root_R);
+  V* L = at(l_.Lambda);
+  V SD[36];  // S D^-1
+  for (int a = 0; a < 6; ++a)
+    for (int e = 0; e < 6; ++e) {
+      const int h = a < 3 ? 0 : 3, r = a % 3;
+      SD[6 * a + e] = R0[3 * r] * Di[6 * h + e] + R0[3 * r + 1] * Di[6 * (h + 1) + e] +
+                      R0[3 * r + 2] * Di[6 * (h + 2) + e];
+    }
+  for (int a = 0; a < 6; ++a)
+    for (int b = a; b < 6; ++b) {
+      const int h = b < 3 ? 0 : 3, r = b % 3;
+      L[kSym.at[a][b]] = SD[6 * a + h] * R0[3 * r] + SD[6 * a + h + 1] * R0[3 * r + 1] +
+                         SD[6 * a + h + 2] * R0[3 * r + 2];
+    }
+}
+
+// The end of a sweep at a floating root (gauss_seidel.hpp's finish_link: no rows, W = 0):
+// qd += -D^-1 S^T pA.
+template <class A, int K>
+void LaneStep<A, K>::root_finish() {
+  const LinkConstants& k = p_.links[0];
+  const V* Di = at(l_.root_D_inv);
+  const V* R0 = at(l_.root_R);
+  const V* pA = at(l_.subtree);
+  V y[6];
+  root_St(R0, pA, y);
+  V* qd = &at(l_.qd)[k.v_index];
+  for (int d = 0; d < 6; ++d) {
+    V sum = Di[6 * d] * y[0];
+    for (int c = 1; c < 6; ++c) sum = sum + Di[6 * d + c] * y[c];
+    qd[d] = qd[d] - sum;
+  }
+}
+
+// A floating root moved over h (step.cpp's integrate_positions, compat none): its origin with the
+// world velocity R_q v in the step's start axes, its quaternion by the body rotation w h
+// (spatial.hpp's integrate_body_rotation: q times the quaternion of angle |w h| about w h,
+// normalised).
+template <class A, int K>
+void LaneStep<A, K>::integrate_root(double h_step) {
+  const LinkConstants& k = p_.links[0];
+  const V h(h_step);
+  V* q = &at(l_.q)[k.q_index];
+  const V* qd = &at(l_.qd)[k.v_index];
+  const V* Rq = at(l_.root_Rq);
+  for (int r = 0; r < 3; ++r)
+    q[r] = q[r] + h * (Rq[3 * r] * qd[3] + Rq[3 * r + 1] * qd[4] + Rq[3 * r + 2] * qd[5]);
+  const V n = sqrt_of(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+  const V w = q[3] / n, x = q[4] / n, y = q[5] / n, z = q[6] / n;
+  const V rx = qd[0] * h, ry = qd[1] * h, rz = qd[2] * h;
+  const V angle = sqrt_of(rx * rx + ry * ry + rz * rz);
+  V s, c;
+  sincos(V(0.5) * angle, s, c);
+  const M turns = V(0.0) < angle;  // else the identity (and rx / angle is not read)
+  const V dw = select(turns, c, V(1.0));
+  const V dx = select_zero(turns, s * (rx / angle)), dy = select_zero(turns, s * (ry / angle)),
+          dz = select_zero(turns, s * (rz / angle));
+  const V ow = w * dw - x * dx - y * dy - z * dz;
+  const V ox = w * dx + x * dw + y * dz - z * dy;
+  const V oy = w * dy + y * dw + z * dx - x * dz;
+  const V oz = w * dz + z * dw + x * dy - y * dx;
+  const V m = sqrt_of(ow * ow + ox * ox + oy * oy + oz * oz);
+  q[3] = ow / m, q[4] = ox / m, q[5] = oy / m, q[6] = oz / m;
+}
+
+// compat none, the step's end: a floating root's linear velocity, kept in its start axes R_q
+// through the step, in its new ones (step.cpp's end_classical_root; contact.md, C28).
+template <class A, int K>
+void LaneStep<A, K>::end_classical_root() {
+  const LinkConstants& k = p_.links[0];
+  V R1[9];
+  quaternion_rotation(&at(l_.q)[k.q_index + 3], R1);
+  const V* Rq = at(l_.root_Rq);
+  V* v = &at(l_.qd)[k.v_index + 3];
+  V t[3];
+  for (int r = 0; r < 3; ++r) t[r] = Rq[3 * r] * v[0] + Rq[3 * r + 1] * v[1] + Rq[3 * r + 2] * v[2];
+  for (int r = 0; r < 3; ++r) v[r] = R1[r] * t[0] + R1[3 + r] * t[1] + R1[6 + r] * t[2];
 }
 
 // A wrapped revolute joint's position back into [-2 pi, 2 pi] by one turn of 4 pi, then clamped
@@ -1422,6 +1711,7 @@ void LaneStep<A, K>::step() {
       for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
     }
   }
+  if (p_.floating_base) end_classical_root();
   wrap_positions();
   const V inv_dt(1.0 / dt);
   for (int d = 0; d < p_.nv; ++d) {
@@ -1467,9 +1757,13 @@ void LaneStep<A, K>::finish_step() {
         check(4, d, lane(at(l_.ff)[d]));
         check(5, d, lane(at(l_.vf)[d]));
       }
-      for (int i = 0; i < p_.num_links; ++i)
-        if (p_.links[i].type != 0)
-          check(6, p_.links[i].v_index, lane(at(l_.q)[p_.links[i].q_index]));
+      for (int i = 0; i < p_.num_links; ++i) {
+        const LinkConstants& k = p_.links[i];
+        if (one_dof(k)) check(6, k.v_index, lane(at(l_.q)[k.q_index]));
+        if (k.type == 3)  // position, quaternion: the dofs of q's entries (Simulation's order)
+          for (int e = 0; e < 7; ++e)
+            check(6, k.v_index + (e < 5 ? e : 5), lane(at(l_.q)[k.q_index + e]));
+      }
       b_.stop[b_.env0 + l] = stop;
       b_.stopped_now[b_.env0 + l] = true;
     }

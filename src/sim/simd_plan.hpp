@@ -83,7 +83,7 @@ struct MimicConstants {
 /// A link's topology and joint constants, the same in every lane.
 struct LinkConstants {
   int parent = -1;
-  int type = 0;  ///< 0 fixed, 1 revolute, 2 prismatic
+  int type = 0;  ///< 0 fixed, 1 revolute, 2 prismatic, 3 floating (the root only)
   int v_index = 0;
   int q_index = 0;
   int unit_axis = -1;  ///< k for an axis +-e_k, else -1
@@ -146,6 +146,9 @@ struct Layout {
   // at the current sub-step, and each dof's row bias.
   int start_com = 0, com_velocity = 0, bias_w = 0, bias_v = 0, turn = 0, now_R = 0, now_pos = 0,
       row_bias = 0;
+  // A floating root (Plan::floating_base): its rotation in the world R0 and its joint's R_q (the
+  // step's start axes of compat none's root velocity), U = IA S and D^-1 as full 6 x 6 matrices.
+  int root_R = 0, root_Rq = 0, root_U = 0, root_D_inv = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -165,6 +168,8 @@ struct Plan {
   double gravity[3] = {};
   double dt = 0.0;
   bool tgs = false;
+  /// Link 0 is a floating root (six dofs: body-frame [w; v], q: position and quaternion w x y z).
+  bool floating_base = false;
   /// Some environment has a finite joint velocity limit: steps start by scaling qd to them.
   bool any_velocity_limit = false;
   /// Some environment has a friction coefficient: steps form the joints' transmitted forces.

@@ -289,9 +289,11 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
 }
 
 // Batch's lane step allocates nothing on one thread (its scratch is made by the first call), and
-// per call, not per step, on two (TBB's arena), at every width (set_isa), with drives and limits.
+// per call, not per step, on two (TBB's arena), at every width (set_isa), with drives and limits,
+// on a fixed and on a floating base.
 TEST(BatchAllocations, LanesNoneAtEveryWidth) {
-  auto model = test::make_random_tree(7, 10, false, false, 0.01);
+  for (const bool floating : {false, true}) {
+  auto model = test::make_random_tree(7, 10, floating, false, 0.01);
   Simulation prototype(model, SimulationOptions{});
   for (const Link& l : model->links) {
     if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic) continue;
@@ -307,10 +309,11 @@ TEST(BatchAllocations, LanesNoneAtEveryWidth) {
       ASSERT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
       const long one = allocations_in([&] { batch.step(1); });
       const long many = allocations_in([&] { batch.step(40); });
-      if (threads == 1) EXPECT_EQ(many, 0) << to_string(isa);
-      else EXPECT_LE(many, one + 8) << to_string(isa);
+      if (threads == 1) EXPECT_EQ(many, 0) << to_string(isa) << " floating " << floating;
+      else EXPECT_LE(many, one + 8) << to_string(isa) << " floating " << floating;
       EXPECT_EQ(batch.step_count()[18], 42);
     }
+  }
 }
 
 // The kinematics and dynamics queries on a reused Data and reused outputs: none after the first
