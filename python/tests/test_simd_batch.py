@@ -9,12 +9,21 @@ import featherdrive as fd
 N = 11  # not a multiple of any width
 
 
-def arm_prototype(fixed_base=True, compat="none"):
+def arm_prototype(fixed_base=True):
     """examples/arm7.urdf as loaded: its URDF velocity limits stay on."""
     options = fd.UrdfOptions(fixed_base=fixed_base)
     model = fd.load_urdf(fd.example_path("arm7.urdf"), options).model
     return fd.Simulation(model, dt=1 / 240, solver="tgs", position_iterations=4,
-                         stiffness=2e4, damping=100.0, compat=compat)
+                         stiffness=2e4, damping=100.0)
+
+
+def guarded_prototype():
+    """arm7 with the step guard on, which the lanes do not step (one lane's redone step)."""
+    sim = arm_prototype()
+    options = sim.options
+    options.guard = fd.StepGuard(max_joint_step=0.06)
+    sim.set_options(options)
+    return sim
 
 
 def randomise(batch, rng, nv):
@@ -116,8 +125,8 @@ def test_the_simd_batch_shim_warns_and_refuses_what_the_lanes_do_not_step(monkey
     assert isinstance(batch, fd.Batch) and batch.isa == "sse2"
     assert batch.step_path == "sse2 lanes"
     with pytest.warns(DeprecationWarning), pytest.raises(
-            ValueError, match="SimdBatch: environment 0: .*floating base under compat physx"):
-        fd.SimdBatch(arm_prototype(fixed_base=False, compat="physx"), 3)
+            ValueError, match="SimdBatch: environment 0: simulation 'options' has the step guard"):
+        fd.SimdBatch(guarded_prototype(), 3)
     monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")
     with pytest.warns(DeprecationWarning), pytest.raises(
             ValueError, match="SimdBatch: FEATHERDRIVE_SIMD=scalar: not stepped in SIMD lanes"):

@@ -39,13 +39,17 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
-  const int physx = p.physx_prismatic ? 1 : 0;
+  const int physx = p.physx_prismatic || p.physx_floating ? 1 : 0;
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
   l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
   l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
   const int floating = p.floating_base ? 1 : 0;
   l.root_R = take(floating * 9), l.root_Rq = take(floating * 9), l.root_U = take(floating * 36);
   l.root_D_inv = take(floating * 36);
+  const int pf = p.physx_floating ? 1 : 0;
+  l.start_R = take(pf * 9 * L), l.start_pos = take(pf * 3 * L), l.link_force = take(pf * 6 * L);
+  l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
+  l.vel_v = take(pf * 3 * L), l.now_com = take(pf * 3 * L), l.qd_position = take(pf * n);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -74,10 +78,11 @@ std::string lane_refusal(const Simulation& s) {
   for (const Link& link : m.links) {
     if (link.joint_type == JointType::spherical)
       return has("joint", link.joint_name, "a spherical joint");
-    // compat physx moves a floating root about its centre of mass and keeps its momentum
-    // (physx_departures.md): departures the lanes do not take.
-    if (link.joint_type == JointType::floating && s.options().compat == Compat::physx)
-      return has("joint", link.joint_name, "a floating base under compat physx");
+    // compat physx moves a floating root about its centre of mass in world axes; the lanes take
+    // its joint frame as the world's.
+    if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
+        link.tree_transform.E != Mat3::Identity())
+      return has("joint", link.joint_name, "a rotated joint frame under compat physx");
   }
   for (int d = 0; d < m.nv; ++d) {
     const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
@@ -169,11 +174,13 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   p.position_iterations = o.position_iterations;
   p.velocity_iterations = o.velocity_iterations;
   p.limit_erp = p.tgs ? 2.0 * std::sqrt(1.0 / p.position_iterations) : 0.8;  // step.cpp
-  // On a fixed base of 1-dof joints compat physx departs from compat none only at prismatic
-  // joints (a revolute row's link bias is 0, PD-2); its defaults are settings.
-  if (o.compat == Compat::physx)
+  // compat physx's defaults are settings; on 1-dof joints its departures act at prismatic rows
+  // (a revolute row's link bias is 0, PD-2) and at a floating root (its momentum and pose).
+  if (o.compat == Compat::physx) {
     for (const Link& link : m.links)
       p.physx_prismatic = p.physx_prismatic || link.joint_type == JointType::prismatic;
+    p.physx_floating = p.floating_base;
+  }
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
   // kMaxInterleave groups each) starts with the prototype's parameters.

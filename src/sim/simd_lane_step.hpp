@@ -242,6 +242,23 @@ class LaneStep {
   void root_finish();
   void integrate_root(double h);
   void end_classical_root();
+  // compat physx on a floating root (physx_departures.md, section 2).
+  void physx_start();
+  void physx_free_momentum();
+  void integrate_root_physx(double h);
+  void physx_end_momentum();
+  void world_velocity(const V* R, const V* pos, const V* com, const V* qd, const V* w0,
+                      const V* v0);
+  void momentum(const V* R, const V* com, bool bias_w, bool bias_v, const V* C, const V& M, V* P,
+                V* L) const;
+  void compound_inverse(const V* R, const V* com, const V* C, V* out) const;
+  void rigid_correction(const V* Iinv, const V* com, const V* C, const V& M, const V* P1,
+                        const V* L1, const V& ratio, const V* target, V* dw, V* dv) const;
+  static void rotate(const V* q, const V* v, V* out);  // by the unit quaternion q (w x y z)
+  static void unit_quaternion(const V* q, V* out);    // q / |q|
+  static void quaternion_product(const V* a, const V* b, V* out);  // a b (Hamilton), w x y z
+  // The quaternion of the turn by |t| about t (Eigen's AngleAxis), the identity for t = 0.
+  static void turn_quaternion(const V* t, V* out);
   static void quaternion_rotation(const V* q, V* R);
   // y = S x and y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
   template <class T>
@@ -589,6 +606,8 @@ template <class A, int K>
       B F[6];
       link_damping(i, j, R, RI, cg, m, v, F);
       for (int r = 0; r < 6; ++r) pAv[r].b[j] = pAv[r].b[j] - F[r];
+      if (p_.physx_floating)  // part of the momentum targets (physx_start)
+        for (int r = 0; r < 6; ++r) at(l_.link_force + 6 * i)[r].b[j] = F[r];
     }
   }
 }
@@ -1364,8 +1383,15 @@ void LaneStep<A, K>::track_prismatic(double h_step) {
     // World angular velocity in the step's start frame, kept in the turn's room for the children.
     V* turn = at(l_.turn + 3 * i);
     V* w = at(l_.com_velocity + 3 * i);
+    V root_w[3] = {V(0.0), V(0.0), V(0.0)};  // a floating root's, world axes of the start
+    if (k.type == 3) {
+      const V* R0 = at(l_.root_R);
+      const V* qd = &at(l_.qd)[k.v_index];
+      for (int r = 0; r < 3; ++r)
+        root_w[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
+    }
     for (int r = 0; r < 3; ++r) {
-      V x = k.parent >= 0 ? at(l_.com_velocity + 3 * k.parent)[r] : V(0.0);
+      V x = k.parent >= 0 ? at(l_.com_velocity + 3 * k.parent)[r] : root_w[r];
       if (k.type == 1) x = x + at(l_.S + 6 * i)[r] * at(l_.qd)[k.v_index];
       w[r] = x;
       turn[r] = turn[r] + h * (x + at(l_.bias_w + 3 * i)[r]);
@@ -1403,7 +1429,8 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
     const LinkConstants& k = p_.links[i];
     if (k.type == 0) continue;
     if (k.type == 3) {
-      integrate_root(h_step);
+      if (p_.physx_floating) integrate_root_physx(h_step);
+      else integrate_root(h_step);
       continue;
     }
     const V qd = at(l_.qd)[k.v_index];
@@ -1458,8 +1485,9 @@ void LaneStep<A, K>::root_pose(V* R) {
 // The rotation of the quaternion q (w x y z) normalised, as Eigen's toRotationMatrix.
 template <class A, int K>
 void LaneStep<A, K>::quaternion_rotation(const V* q, V* R) {
-  const V n = sqrt_of(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  const V w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+  V u[4];
+  unit_quaternion(q, u);
+  const V w = u[0], x = u[1], y = u[2], z = u[3];
   const V tx = V(2.0) * x, ty = V(2.0) * y, tz = V(2.0) * z;
   const V twx = tx * w, twy = ty * w, twz = tz * w, txx = tx * x, txy = ty * x, txz = tz * x;
   const V tyy = ty * y, tyz = tz * y, tzz = tz * z;
@@ -1561,6 +1589,7 @@ void LaneStep<A, K>::root_acceleration(V* a, const V& dt) {
   V wv[3];
   cross(qd, qd + 3, wv);
   for (int d = 0; d < 6; ++d) qd[d] = qd[d] + dt * qdd[d];
+  if (p_.physx_floating) return;  // PhysX's root has its own departures (physx_free_momentum)
   for (int r = 0; r < 3; ++r) qd[3 + r] = qd[3 + r] + dt * wv[r];
 }
 
@@ -1617,22 +1646,13 @@ void LaneStep<A, K>::integrate_root(double h_step) {
   const V* Rq = at(l_.root_Rq);
   for (int r = 0; r < 3; ++r)
     q[r] = q[r] + h * (Rq[3 * r] * qd[3] + Rq[3 * r + 1] * qd[4] + Rq[3 * r + 2] * qd[5]);
-  const V n = sqrt_of(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
-  const V w = q[3] / n, x = q[4] / n, y = q[5] / n, z = q[6] / n;
-  const V rx = qd[0] * h, ry = qd[1] * h, rz = qd[2] * h;
-  const V angle = sqrt_of(rx * rx + ry * ry + rz * rz);
-  V s, c;
-  sincos(V(0.5) * angle, s, c);
-  const M turns = V(0.0) < angle;  // else the identity (and rx / angle is not read)
-  const V dw = select(turns, c, V(1.0));
-  const V dx = select_zero(turns, s * (rx / angle)), dy = select_zero(turns, s * (ry / angle)),
-          dz = select_zero(turns, s * (rz / angle));
-  const V ow = w * dw - x * dx - y * dy - z * dz;
-  const V ox = w * dx + x * dw + y * dz - z * dy;
-  const V oy = w * dy + y * dw + z * dx - x * dz;
-  const V oz = w * dz + z * dw + x * dy - y * dx;
-  const V m = sqrt_of(ow * ow + ox * ox + oy * oy + oz * oz);
-  q[3] = ow / m, q[4] = ox / m, q[5] = oy / m, q[6] = oz / m;
+  V Q[4], d[4];
+  unit_quaternion(q + 3, Q);
+  const V rotation[3] = {qd[0] * h, qd[1] * h, qd[2] * h};
+  turn_quaternion(rotation, d);
+  V o[4];
+  quaternion_product(Q, d, o);
+  unit_quaternion(o, q + 3);
 }
 
 // compat none, the step's end: a floating root's linear velocity, kept in its start axes R_q
@@ -1647,6 +1667,385 @@ void LaneStep<A, K>::end_classical_root() {
   V t[3];
   for (int r = 0; r < 3; ++r) t[r] = Rq[3 * r] * v[0] + Rq[3 * r + 1] * v[1] + Rq[3 * r + 2] * v[2];
   for (int r = 0; r < 3; ++r) v[r] = R1[r] * t[0] + R1[3 + r] * t[1] + R1[6 + r] * t[2];
+}
+
+// compat physx, a floating root, after the kinematics and the link bias: the step's start poses
+// kept (the response takes their room), the centre of mass C and total mass M, and the free
+// velocity's momentum targets: the start momentum plus dt times the external wrench (gravity at
+// C, the force applied on the root's dofs, link damping) (momentum_correction.cpp,
+// physx_departures.md PD-4, PD-5).
+template <class A, int K>
+void LaneStep<A, K>::physx_start() {
+  const int L = p_.num_links;
+  for (int e = 0; e < 9 * L; ++e) at(l_.start_R)[e] = at(l_.R)[e];
+  for (int e = 0; e < 3 * L; ++e) at(l_.start_pos)[e] = at(l_.pos)[e];
+  V* t = at(l_.targets);  // P0, L0, C, M
+  V M(0.0), C[3] = {V(0.0), V(0.0), V(0.0)};
+  for (int i = 0; i < L; ++i) {
+    const V m = link_parameter_pack(i, mass);
+    for (int r = 0; r < 3; ++r) C[r] = C[r] + m * at(l_.start_com + 3 * i)[r];
+    M = M + m;
+  }
+  for (int r = 0; r < 3; ++r) C[r] = select(V(0.0) < M, C[r] / M, C[r]);
+  for (int i = 0; i < L; ++i) {  // the start velocities: w from the kinematics, v of the COM
+    for (int r = 0; r < 3; ++r) {
+      at(l_.vel_w + 3 * i)[r] = at(l_.vel + 6 * i)[r];
+      at(l_.vel_v + 3 * i)[r] = at(l_.com_velocity + 3 * i)[r];
+    }
+  }
+  V P0[3], L0[3];
+  momentum(at(l_.start_R), at(l_.start_com), false, false, C, M, P0, L0);
+  const V dt(p_.dt);
+  const V* R0 = at(l_.start_R);
+  const V* tau = &at(l_.tau)[p_.links[0].v_index];
+  V n[3], f[3], arm[3], nf[3];
+  for (int r = 0; r < 3; ++r) {
+    n[r] = R0[3 * r] * tau[0] + R0[3 * r + 1] * tau[1] + R0[3 * r + 2] * tau[2];
+    f[r] = R0[3 * r] * tau[3] + R0[3 * r + 1] * tau[4] + R0[3 * r + 2] * tau[5];
+    arm[r] = V(0.0) - C[r];  // the root's origin (frame 0's) less C
+  }
+  cross(arm, f, nf);
+  for (int r = 0; r < 3; ++r) {
+    P0[r] = P0[r] + dt * (M * V(p_.gravity[r]) + f[r]);
+    L0[r] = L0[r] + dt * (n[r] + nf[r]);
+  }
+  if (p_.any_link_damping)  // [torque about frame 0's origin; force]
+    for (int i = 0; i < L; ++i) {
+      const V* F = at(l_.link_force + 6 * i);
+      V cf[3];
+      cross(C, F + 3, cf);
+      for (int r = 0; r < 3; ++r) {
+        P0[r] = P0[r] + dt * F[3 + r];
+        L0[r] = L0[r] + dt * (F[r] - cf[r]);
+      }
+    }
+  for (int r = 0; r < 3; ++r) t[r] = P0[r], t[3 + r] = L0[r], t[6 + r] = C[r];
+  t[9] = M;
+  compound_inverse(at(l_.start_R), at(l_.start_com), C, at(l_.compound_inverse));
+}
+
+// Link i's angular velocity and COM velocity (vel_w, vel_v) in the pose (R, pos, com) from the
+// root's world twist (w0, origin velocity v0) and the joint rates qd (link_bias.cpp's
+// world_velocity).
+template <class A, int K>
+void LaneStep<A, K>::world_velocity(const V* R, const V* pos, const V* com, const V* qd,
+                                    const V* w0, const V* v0) {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    V* wi = at(l_.vel_w + 3 * i);
+    V* vi = at(l_.vel_v + 3 * i);
+    V w[3], v[3], t[3];
+    if (k.parent < 0) {
+      for (int r = 0; r < 3; ++r) w[r] = w0[r], v[r] = v0[r];
+    } else {
+      const V* wp = at(l_.vel_w + 3 * k.parent);
+      const V* vp = at(l_.vel_v + 3 * k.parent);
+      V d[3];
+      for (int r = 0; r < 3; ++r) d[r] = pos[3 * i + r] - com[3 * k.parent + r];
+      cross(wp, d, t);
+      for (int r = 0; r < 3; ++r) w[r] = wp[r], v[r] = vp[r] + t[r];
+      if (one_dof(k)) {
+        const V* Ri = R + 9 * i;
+        const V x = qd[k.v_index];
+        for (int r = 0; r < 3; ++r) {
+          const V a = Ri[3 * r] * V(k.axis[0]) + Ri[3 * r + 1] * V(k.axis[1]) +
+                      Ri[3 * r + 2] * V(k.axis[2]);
+          if (k.type == 1) w[r] = w[r] + a * x;
+          else v[r] = v[r] + a * x;
+        }
+      }
+    }
+    V d[3];
+    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - pos[3 * i + r];
+    cross(w, d, t);
+    for (int r = 0; r < 3; ++r) wi[r] = w[r], vi[r] = v[r] + t[r];
+  }
+}
+
+// Linear momentum P and angular momentum L about C of the velocities vel_w, vel_v (plus the link
+// bias where asked) in the pose (R, com) (link_bias.cpp's momentum).
+template <class A, int K>
+void LaneStep<A, K>::momentum(const V* R, const V* com, bool bias_w, bool bias_v, const V* C,
+                              const V& M, V* P, V* L) const {
+  auto velocity = [&](int i, V* w, V* v) {
+    for (int r = 0; r < 3; ++r) {
+      w[r] = bias_w ? s_[l_.vel_w + 3 * i + r] + s_[l_.bias_w + 3 * i + r] : s_[l_.vel_w + 3 * i + r];
+      v[r] = bias_v ? s_[l_.vel_v + 3 * i + r] + s_[l_.bias_v + 3 * i + r] : s_[l_.vel_v + 3 * i + r];
+    }
+  };
+  for (int r = 0; r < 3; ++r) P[r] = L[r] = V(0.0);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V m = link_parameter_pack(i, mass);
+    V w[3], v[3];
+    velocity(i, w, v);
+    for (int r = 0; r < 3; ++r) P[r] = P[r] + m * v[r];
+  }
+  V vcom[3];
+  for (int r = 0; r < 3; ++r) vcom[r] = select(V(0.0) < M, P[r] / M, V(0.0));
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V m = link_parameter_pack(i, mass);
+    const V* Ri = R + 9 * i;
+    V w[3], v[3], Iw[3], Ic[9], arm[3], dv[3], h[3];
+    velocity(i, w, v);
+    const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
+            zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
+            xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
+    Ic[0] = xx, Ic[1] = xy, Ic[2] = xz, Ic[3] = xy, Ic[4] = yy, Ic[5] = yz, Ic[6] = xz, Ic[7] = yz,
+    Ic[8] = zz;
+    // I = (R Ic) R^T formed, then I w: the operations of momentum_correction.cpp's Eigen
+    // products (PD-4 divides this momentum's rounding by the compound inertia).
+    V RI[9], Iworld[9];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        Iworld[3 * r + c] =
+            RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
+    for (int r = 0; r < 3; ++r)
+      Iw[r] = Iworld[3 * r] * w[0] + Iworld[3 * r + 1] * w[1] + Iworld[3 * r + 2] * w[2];
+    for (int r = 0; r < 3; ++r) arm[r] = com[3 * i + r] - C[r], dv[r] = v[r] - vcom[r];
+    cross(arm, dv, h);
+    for (int r = 0; r < 3; ++r) L[r] = L[r] + (Iw[r] + m * h[r]);
+  }
+}
+
+// The inverse of the links' inertia about C in the pose (R, com) (momentum_correction.cpp's
+// compound_inertia), by cofactors.
+template <class A, int K>
+void LaneStep<A, K>::compound_inverse(const V* R, const V* com, const V* C, V* out) const {
+  V I[9];
+  for (int e = 0; e < 9; ++e) I[e] = V(0.0);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V m = link_parameter_pack(i, mass);
+    const V* Ri = R + 9 * i;
+    const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
+            zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
+            xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
+    const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+    V RI[9];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
+    V d[3];
+    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - C[r];
+    const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        const V rot = RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
+        const V par = m * ((r == c ? d2 : V(0.0)) - d[r] * d[c]);
+        I[3 * r + c] = I[3 * r + c] + (rot + par);
+      }
+  }
+  // Eigen's 3 x 3 inverse: cofactor (i, j) = m(i1, j1) m(i2, j2) - m(i1, j2) m(i2, j1) with
+  // i1, i2 = i + 1, i + 2 (mod 3); det along column 0; out(j, i) = cofactor(i, j) / det.
+  auto cofactor = [&](int i, int j) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+    return I[3 * i1 + j1] * I[3 * i2 + j2] - I[3 * i1 + j2] * I[3 * i2 + j1];
+  };
+  const V c0[3] = {cofactor(0, 0), cofactor(1, 0), cofactor(2, 0)};
+  const V det = c0[0] * I[0] + c0[1] * I[3] + c0[2] * I[6];
+  const V inv = V(1.0) / det;
+  for (int j = 0; j < 3; ++j) out[j] = c0[j] * inv;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 1; j < 3; ++j) out[3 * j + i] = cofactor(i, j) * inv;
+}
+
+// The rigid rotation dw about C that scales |L1| by `ratio`, then the uniform linear velocity dv
+// that makes the linear momentum `target` (PD-4, PD-5; momentum_correction.cpp).
+template <class A, int K>
+void LaneStep<A, K>::rigid_correction(const V* Iinv, const V* com, const V* C, const V& M,
+                                      const V* P1, const V* L1, const V& ratio, const V* target,
+                                      V* dw, V* dv) const {
+  V l[3];
+  for (int r = 0; r < 3; ++r) l[r] = L1[r] * (ratio - V(1.0));
+  for (int r = 0; r < 3; ++r) dw[r] = Iinv[3 * r] * l[0] + Iinv[3 * r + 1] * l[1] + Iinv[3 * r + 2] * l[2];
+  V P[3] = {P1[0], P1[1], P1[2]};
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V m = link_parameter_pack(i, mass);
+    V d[3], t[3];
+    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - C[r];
+    cross(dw, d, t);
+    for (int r = 0; r < 3; ++r) P[r] = P[r] + m * t[r];
+  }
+  for (int r = 0; r < 3; ++r) dv[r] = (target[r] - P[r]) / M;
+}
+
+// compat physx, after the free velocity: the root's twist changed by a rigid motion so that the
+// biased free velocities have |L0| about C and the linear momentum P0 (PD-4, PD-5;
+// momentum_correction.cpp's correct_free_velocity_momentum).
+template <class A, int K>
+void LaneStep<A, K>::physx_free_momentum() {
+  const V* t = at(l_.targets);
+  const V* R0 = at(l_.start_R);
+  V* qd = &at(l_.qd)[p_.links[0].v_index];
+  V w0[3], v0[3];
+  for (int r = 0; r < 3; ++r) {
+    w0[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
+    v0[r] = R0[3 * r] * qd[3] + R0[3 * r + 1] * qd[4] + R0[3 * r + 2] * qd[5];
+  }
+  world_velocity(at(l_.start_R), at(l_.start_pos), at(l_.start_com), at(l_.qd), w0, v0);
+  V P1[3], L1[3];
+  momentum(at(l_.start_R), at(l_.start_com), true, true, t + 6, t[9], P1, L1);
+  const V l1 = sqrt_of(L1[0] * L1[0] + L1[1] * L1[1] + L1[2] * L1[2]);
+  const V l0 = sqrt_of(t[3] * t[3] + t[4] * t[4] + t[5] * t[5]);
+  const V ratio = select(l1 == V(0.0), V(1.0), l0 / l1);
+  V dw[3], dv[3], arm[3], turn[3];
+  rigid_correction(at(l_.compound_inverse), at(l_.start_com), t + 6, t[9], P1, L1, ratio, t, dw,
+                   dv);
+  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - t[6 + r];
+  cross(dw, arm, turn);
+  for (int r = 0; r < 3; ++r) {
+    w0[r] = w0[r] + dw[r];
+    v0[r] = v0[r] + (dv[r] + turn[r]);
+  }
+  for (int r = 0; r < 3; ++r) {
+    qd[r] = R0[r] * w0[0] + R0[3 + r] * w0[1] + R0[6 + r] * w0[2];
+    qd[3 + r] = R0[r] * v0[0] + R0[3 + r] * v0[1] + R0[6 + r] * v0[2];
+  }
+}
+
+// out = q v q^-1 for a unit quaternion q (w x y z), as Eigen's _transformVector.
+template <class A, int K>
+void LaneStep<A, K>::rotate(const V* q, const V* v, V* out) {
+  V uv[3], uuv[3];
+  cross(q + 1, v, uv);
+  for (int r = 0; r < 3; ++r) uv[r] = uv[r] + uv[r];
+  cross(q + 1, uv, uuv);
+  for (int r = 0; r < 3; ++r) out[r] = (v[r] + q[0] * uv[r]) + uuv[r];
+}
+
+template <class A, int K>
+void LaneStep<A, K>::unit_quaternion(const V* q, V* out) {
+  const V n = sqrt_of(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (int e = 0; e < 4; ++e) out[e] = q[e] / n;
+}
+
+template <class A, int K>
+void LaneStep<A, K>::quaternion_product(const V* a, const V* b, V* out) {
+  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+  out[2] = a[0] * b[2] + a[2] * b[0] + a[3] * b[1] - a[1] * b[3];
+  out[3] = a[0] * b[3] + a[3] * b[0] + a[1] * b[2] - a[2] * b[1];
+}
+
+template <class A, int K>
+void LaneStep<A, K>::turn_quaternion(const V* t, V* out) {
+  const V angle = sqrt_of(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+  V s, c;
+  sincos(V(0.5) * angle, s, c);
+  const M turns = V(0.0) < angle;  // else the identity (and t / angle is not read)
+  out[0] = select(turns, c, V(1.0));
+  for (int r = 0; r < 3; ++r) out[1 + r] = select_zero(turns, s * (t[r] / angle));
+}
+
+// compat physx: a floating root moved over h about its centre of mass with the world velocities
+// of the step's start axes, its turn exp(h w) applied in the world (momentum_correction.cpp's
+// integrate_root_about_com; its joint frame is the world's, lane_refusal).
+template <class A, int K>
+void LaneStep<A, K>::integrate_root_physx(double h_step) {
+  const LinkConstants& k = p_.links[0];
+  const V h(h_step);
+  V* q = &at(l_.q)[k.q_index];
+  const V* qd = &at(l_.qd)[k.v_index];
+  const V* R0 = at(l_.start_R);
+  V c[3];
+  for (int r = 0; r < 3; ++r) c[r] = link_parameter_pack(0, com_x + r);
+  V Q[4];
+  unit_quaternion(q + 3, Q);
+  V p[3], wc[3], vb[3], w[3], vcom[3], Qc[3], com[3];
+  for (int r = 0; r < 3; ++r) p[r] = V(k.r[r]) + q[r];
+  cross(qd, c, wc);
+  for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
+  for (int r = 0; r < 3; ++r) {
+    w[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
+    vcom[r] = R0[3 * r] * vb[0] + R0[3 * r + 1] * vb[1] + R0[3 * r + 2] * vb[2];
+  }
+  rotate(Q, c, Qc);
+  for (int r = 0; r < 3; ++r) com[r] = (p[r] + Qc[r]) + h * vcom[r];
+  const V turn[3] = {h * w[0], h * w[1], h * w[2]};
+  V d[4];
+  turn_quaternion(turn, d);
+  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's)
+  V dQ[4], once[4], o[4];
+  quaternion_product(d, Q, dQ);
+  unit_quaternion(dQ, once);
+  unit_quaternion(once, o);
+  V oc[3];
+  rotate(o, c, oc);
+  for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
+  for (int e = 0; e < 4; ++e) q[3 + e] = o[e];
+}
+
+// compat physx, the step's end (momentum_correction.cpp's correct_end_of_step_momentum): targets
+// from the solver's biased velocities in the start pose, the velocities in the new pose from the
+// root's world twist and the joint rates, a rigid correction to them, and the COM moved where the
+// velocity the positions moved with puts it.
+template <class A, int K>
+void LaneStep<A, K>::physx_end_momentum() {
+  const LinkConstants& k = p_.links[0];
+  const int L = p_.num_links;
+  const V* t = at(l_.targets);
+  const V M = t[9];
+  const V* sR = at(l_.start_R);
+  const V* scom = at(l_.start_com);
+  V* qd = &at(l_.qd)[k.v_index];
+  const V* qp = &at(l_.qd_position)[k.v_index];
+  V w0[3], v0[3], pw[3], pv[3];
+  for (int r = 0; r < 3; ++r) {
+    w0[r] = sR[3 * r] * qd[0] + sR[3 * r + 1] * qd[1] + sR[3 * r + 2] * qd[2];
+    v0[r] = sR[3 * r] * qd[3] + sR[3 * r + 1] * qd[4] + sR[3 * r + 2] * qd[5];
+    pw[r] = sR[3 * r] * qp[0] + sR[3 * r + 1] * qp[1] + sR[3 * r + 2] * qp[2];
+    pv[r] = sR[3 * r] * qp[3] + sR[3 * r + 1] * qp[4] + sR[3 * r + 2] * qp[5];
+  }
+  V PT[3], LT[3], Ppos[3], unused[3];
+  world_velocity(sR, at(l_.start_pos), scom, at(l_.qd), w0, v0);
+  momentum(sR, scom, true, true, t + 6, M, PT, LT);
+  world_velocity(sR, at(l_.start_pos), scom, at(l_.qd_position), pw, pv);
+  momentum(sR, scom, false, true, t + 6, M, Ppos, unused);
+  // The new pose, from the root's new origin.
+  V* ncom = at(l_.now_com);
+  V C1[3] = {V(0.0), V(0.0), V(0.0)};
+  for (int i = 0; i < L; ++i) {
+    link_pose<false>(i);
+    link_com(i, at(l_.now_R + 9 * i), at(l_.now_pos + 3 * i), ncom + 3 * i);
+    const V m = link_parameter_pack(i, mass);
+    for (int r = 0; r < 3; ++r) C1[r] = C1[r] + m * ncom[3 * i + r];
+  }
+  for (int r = 0; r < 3; ++r) C1[r] = select(V(0.0) < M, C1[r] / M, C1[r]);
+  // The root keeps its world angular velocity and its COM's velocity.
+  V a[3], b[3], vo[3];
+  cross(w0, scom, a);   // the start root origin is frame 0's
+  cross(w0, ncom, b);
+  for (int r = 0; r < 3; ++r) vo[r] = (v0[r] + a[r]) - b[r];
+  world_velocity(at(l_.now_R), at(l_.now_pos), ncom, at(l_.qd), w0, vo);
+  V P1[3], L1[3], Iinv[9];
+  momentum(at(l_.now_R), ncom, false, false, C1, M, P1, L1);
+  const V l1 = sqrt_of(L1[0] * L1[0] + L1[1] * L1[1] + L1[2] * L1[2]);
+  const V lt = sqrt_of(LT[0] * LT[0] + LT[1] * LT[1] + LT[2] * LT[2]);
+  const V ratio = select(l1 == V(0.0), V(0.0), lt / l1);
+  compound_inverse(at(l_.now_R), ncom, C1, Iinv);
+  V dw[3], dv[3], arm[3], turn[3];
+  rigid_correction(Iinv, ncom, C1, M, P1, L1, ratio, PT, dw, dv);
+  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - C1[r];
+  cross(dw, arm, turn);
+  for (int r = 0; r < 3; ++r) {
+    w0[r] = w0[r] + dw[r];
+    vo[r] = vo[r] + (dv[r] + turn[r]);
+  }
+  // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q).
+  V* q = &at(l_.q)[k.q_index];
+  const V* q0 = &at(l_.old_q)[k.q_index];
+  const V per_mass = V(p_.dt) / M;
+  for (int r = 0; r < 3; ++r) {
+    const V start = (V(k.r[r]) + q0[r]) + t[6 + r], now = (V(k.r[r]) + q[r]) + C1[r];
+    q[r] = q[r] + ((start + Ppos[r] * per_mass) - now);
+  }
+  const V* nR = at(l_.now_R);
+  for (int r = 0; r < 3; ++r) {
+    qd[r] = nR[r] * w0[0] + nR[3 + r] * w0[1] + nR[6 + r] * w0[2];
+    qd[3 + r] = nR[r] * vo[0] + nR[3 + r] * vo[1] + nR[6 + r] * vo[2];
+  }
 }
 
 // A wrapped revolute joint's position back into [-2 pi, 2 pi] by one turn of 4 pi, then clamped
@@ -1668,9 +2067,11 @@ template <class A, int K>
 void LaneStep<A, K>::step() {
   if (p_.any_velocity_limit) scale_to_velocity_limits();
   kinematics_and_bias();
-  if (p_.physx_prismatic) link_bias();
+  if (p_.physx_prismatic || p_.physx_floating) link_bias();
+  if (p_.physx_floating) physx_start();
   articulated_pass();
   forward_pass();
+  if (p_.physx_floating) physx_free_momentum();
   // A leaf's subtree impulse is never written by a sweep (no child hands it one) and must read 0;
   // its room held the bias forces until now.
   for (int i = 0; i < p_.num_links; ++i)
@@ -1682,6 +2083,8 @@ void LaneStep<A, K>::step() {
   if (!p_.tgs) {
     h_ = dt;
     for (int it = 0; it < p_.position_iterations; ++it) sweep();
+    if (p_.physx_floating)  // the velocity the positions move with
+      for (int d = 0; d < p_.nv; ++d) at(l_.qd_position)[d] = at(l_.qd)[d];
     integrate(dt, false);
     velocity_iteration_ = true;
     for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
@@ -1690,6 +2093,9 @@ void LaneStep<A, K>::step() {
     const int n = p_.position_iterations;
     const double rho = dt / n;
     h_ = rho;
+    if (p_.physx_floating)
+      for (int d = 0; d < p_.nv; ++d) at(l_.qd_position)[d] = V(0.0);
+    const V share(1.0 / n);
     for (int i = 1; i <= n; ++i) {
       time_to_step_end_ = dt - i * rho;
       sweep();
@@ -1698,6 +2104,9 @@ void LaneStep<A, K>::step() {
         clamp_prismatic();
         track_prismatic(rho);
       }
+      if (p_.physx_floating)  // the mean of the sub-steps' velocities
+        for (int d = 0; d < p_.nv; ++d)
+          at(l_.qd_position)[d] = at(l_.qd_position)[d] + share * at(l_.qd)[d];
     }
     velocity_iteration_ = true;
     // Only friction, limit and mimic rows act in TGS velocity iterations; lanes without keep
@@ -1711,7 +2120,8 @@ void LaneStep<A, K>::step() {
       for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
     }
   }
-  if (p_.floating_base) end_classical_root();
+  if (p_.physx_floating) physx_end_momentum();
+  else if (p_.floating_base) end_classical_root();
   wrap_positions();
   const V inv_dt(1.0 / dt);
   for (int d = 0; d < p_.nv; ++d) {

@@ -149,6 +149,13 @@ struct Layout {
   // A floating root (Plan::floating_base): its rotation in the world R0 and its joint's R_q (the
   // step's start axes of compat none's root velocity), U = IA S and D^-1 as full 6 x 6 matrices.
   int root_R = 0, root_Rq = 0, root_U = 0, root_D_inv = 0;
+  // compat physx on a floating root (Plan::physx_floating): the step's start poses (world axes,
+  // positions from the root's origin), link forces (link damping), the free velocity's momentum
+  // targets P0, L0 with the start's centre of mass and total mass (10), the compound inertia's
+  // inverse, link velocities of a momentum pass, the pose after the step and
+  // the velocity the positions moved with.
+  int start_R = 0, start_pos = 0, link_force = 0, targets = 0, compound_inverse = 0, vel_w = 0,
+      vel_v = 0, now_com = 0, qd_position = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -181,6 +188,9 @@ struct Plan {
   /// change geometrically and its position is clamped to its limits (physx_departures.md, PD-1
   /// to PD-3).
   bool physx_prismatic = false;
+  /// compat physx on a floating root: its momentum corrections and its pose integrated about its
+  /// centre of mass (physx_departures.md, section 2); the links' bias (PD-1) feeds them.
+  bool physx_floating = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;

@@ -662,14 +662,9 @@ TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
   EXPECT_EQ(batch.step_path(), "scalar: environment 4: simulation 'options' has the step guard");
   handed.set_options(options);
   EXPECT_EQ(batch.step_path().find("scalar"), std::string::npos);
-  // A floating base under compat physx: scalar, saying why.
-  SimulationOptions physx = options;
-  physx.compat = Compat::physx;
-  Batch floating(Simulation(test::make_random_tree(13, 4, /*floating=*/true), physx), 3);
-  EXPECT_NE(floating.step_path().find("scalar: environment 0: joint"), std::string::npos)
-      << floating.step_path();
-  EXPECT_NE(floating.step_path().find("has a floating base under compat physx"),
-            std::string::npos);
+  // A floating base steps in lanes.
+  Batch floating(test::make_random_tree(13, 4, /*floating=*/true, /*spherical=*/false), 3);
+  EXPECT_NE(floating.step_path().find("lanes"), std::string::npos) << floating.step_path();
   floating.set_lanes(false);
   EXPECT_EQ(floating.step_path(), "scalar: lanes off (set_lanes)");
 }
