@@ -53,13 +53,18 @@ void scalar_batch(benchmark::State& state, const BenchRobot& robot, int count, i
 
 // A robot as loaded from its URDF: its joint limits, friction and velocity limits on, force
 // drives of kStiffness / kDamping with the URDF's efforts (where > 0) as max_force, targets 0.3
-// rad from q0 alternating in sign.
-Simulation as_loaded(const std::string& urdf) {
-  const UrdfRobot robot = load_urdf(urdf);
+// rad from q0 alternating in sign; fixed_base false gives its root a floating joint (no ground:
+// it falls, and the benchmark's resets bring it back).
+Simulation as_loaded(const std::string& urdf, bool fixed_base = true) {
+  UrdfOptions options;
+  options.fixed_base = fixed_base;
+  const UrdfRobot robot = load_urdf(urdf, options);
   SimulationOptions o;
   o.dt = kDt;
   Simulation sim(robot.model, o);
-  for (int d = 0; d < robot.model->nv; ++d) {
+  for (const Link& link : robot.model->links) {
+    if (link.joint_type != JointType::revolute && link.joint_type != JointType::prismatic) continue;
+    const int d = link.v_index;
     const double effort = robot.model->effort_limit[d];
     sim.set_drive(d, Drive{DriveType::force, kStiffness, kDamping,
                            effort > 0.0 ? effort : std::numeric_limits<double>::infinity(),
@@ -135,7 +140,9 @@ void register_simd_batch() {
   static const std::vector<std::pair<std::string, Simulation>> loaded = {
       {"arm7", as_loaded(FEATHERDRIVE_SOURCE_DIR "/examples/arm7.urdf")},
       {"kr5", as_loaded(dart + "KR5/KR5 sixx R650.urdf")},
-      {"wam", as_loaded(dart + "wam/wam.urdf")}};
+      {"wam", as_loaded(dart + "wam/wam.urdf")},
+      {"atlas_floating",
+       as_loaded("/usr/share/doc/dart/data/sdf/atlas/atlas_v3_no_head.urdf", false)}};
   for (const auto& [name, sim] : loaded) {
     const Simulation* prototype = &sim;
     benchmark::RegisterBenchmark(("batch_as_loaded/" + name + "/simulation").c_str(),
