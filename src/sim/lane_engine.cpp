@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/core/format.hpp"
 
 namespace featherdrive::simd {
@@ -46,6 +47,9 @@ Layout make_layout(const Plan& p) {
   const int floating = p.floating_base ? 1 : 0;
   l.root_R = take(floating * 9), l.root_Rq = take(floating * 9), l.root_U = take(floating * 36);
   l.root_D_inv = take(floating * 36);
+  const int ball = p.any_spherical ? 1 : 0;
+  l.ball_S = take(ball * 18 * L), l.ball_U = take(ball * 18 * L), l.ball_W = take(ball * 18 * L);
+  l.ball_D_inv = take(ball * 9 * L), l.ball_response = take(ball * 9 * L);
   const int pf = p.physx_floating ? 1 : 0;
   l.start_R = take(pf * 9 * L), l.start_pos = take(pf * 3 * L), l.link_force = take(pf * 6 * L);
   l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
@@ -76,8 +80,15 @@ std::string lane_refusal(const Simulation& s) {
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
   for (const Link& link : m.links) {
-    if (link.joint_type == JointType::spherical)
-      return has("joint", link.joint_name, "a spherical joint");
+    // compat physx turns a spherical joint's link in the world with its bias (spherical_rows.cpp);
+    // the lanes have no transmitted-force friction on its axes.
+    if (link.joint_type == JointType::spherical) {
+      if (s.options().compat == Compat::physx)
+        return has("joint", link.joint_name, "a spherical joint under compat physx");
+      for (int k = 0; k < 3; ++k)
+        if (s.friction_coefficient(link.v_index + k) > 0.0)
+          return has("joint", link.joint_name, "a friction coefficient on a spherical axis");
+    }
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take
     // its joint frame as the world's.
     if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
@@ -112,6 +123,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     k.type = link.joint_type == JointType::revolute    ? 1
              : link.joint_type == JointType::prismatic ? 2
              : link.joint_type == JointType::floating  ? 3
+             : link.joint_type == JointType::spherical ? 4
                                                        : 0;
     k.v_index = link.v_index;
     k.q_index = link.q_index;
@@ -164,6 +176,8 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   p.mimic_dofs = mimic_dofs_.data();
   p.num_links = L, p.nq = m.nq, p.nv = nv;
   p.floating_base = m.floating_base();
+  for (const Link& link : m.links)
+    p.any_spherical = p.any_spherical || link.joint_type == JointType::spherical;
   p.links = links_.data();
   p.finish_after = finish_after_.data();
   p.num_finish_after = static_cast<int>(finish_after_.size());
@@ -262,6 +276,15 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
   }
 }
 
+void spherical_axes(const double* q, const double* target, const double* driven, double* position,
+                    double* error) {
+  const Quat Q = Quat(q[0], q[1], q[2], q[3]).normalized();  // as spherical_rows.cpp's
+  const Vec3 x = spherical_joint_positions(Q);
+  const Vec3 e = spherical_drive_error(Q, Vec3(target[0], target[1], target[2]),
+                                       {driven[0] != 0.0, driven[1] != 0.0, driven[2] != 0.0});
+  for (int k = 0; k < 3; ++k) position[k] = x[k], error[k] = e[k];
+}
+
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b) {
   if (a.size() != b.size()) return false;
   for (size_t j = 0; j < a.size(); ++j)
@@ -348,8 +371,10 @@ std::string LaneEngine::divergence_message(int e, const Model& model, long step_
   m.precision(6);
   m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): joint '"
     << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
-    << kQuantity[s.quantity] << " = " << s.value
-    << "; the state is left as it was before this step (lower dt or the gains)";
+    << kQuantity[s.quantity] << " = ";
+  if (std::isnan(s.value)) m << "nan";  // as Simulation's: a NaN's sign is the operation order's
+  else m << s.value;
+  m << "; the state is left as it was before this step (lower dt or the gains)";
   return m.str();
 }
 

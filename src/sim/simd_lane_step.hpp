@@ -202,6 +202,7 @@ class LaneStep {
   void link_cfm(int i);
   void setup_row_constants(double h);
   void setup_link_rows(int i);
+  void setup_dof_row(int i, int d, const V& r, const V& x0, const V& x0_drive);
   V solve_row(int d, V v, const V& dx);
   template <class T, class Fields>
   void drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v);
@@ -241,6 +242,18 @@ class LaneStep {
   void root_response();
   void root_finish();
   void integrate_root(double h);
+  // Spherical joints (docs/simd_batch.md, "Spherical joints"): three dofs, S, U, W 6 x 3.
+  void ball_pose(int i, const V* P, V* R, const V* pos, bool start);
+  void ball_articulated(int i);
+  void ball_acceleration(int i, V* a, const V& dt);
+  void ball_response(int i);
+  void ball_rows(int i);
+  template <bool kGiven>
+  void enter_ball(int i, const V* dvp, V* dv);
+  void leave_ball(int k, V* pa);
+  void finish_ball(int i, const V* E);
+  template <int N>
+  static void spd_inverse(const V* D, V* out);
   void end_classical_root();
   // compat physx on a floating root (physx_departures.md, section 2).
   void physx_start();
@@ -273,7 +286,6 @@ class LaneStep {
       for (int c = 0; c < 3; ++c)
         y[h + c] = R0[c] * x[h] + R0[3 + c] * x[h + 1] + R0[6 + c] * x[h + 2];
   }
-  static void spd_inverse6(const V* D, V* out);
   static V sqrt_of(const V& x) {  // correctly rounded: the same bits at every width
     V out;
     for (int k = 0; k < K; ++k) out.b[k] = xsimd::sqrt(x.b[k]);
@@ -458,6 +470,10 @@ template <bool kStart>
                              Rp[3 * r + 2] * V(k.E[3 * c + 2]);
     }
   }
+  if (k.type == 4) {
+    ball_pose(i, P, R, pos, kStart);
+    return;
+  }
   V aw[3];  // the joint axis in world axes
   for (int r = 0; r < 3; ++r)
     aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
@@ -572,6 +588,11 @@ template <class A, int K>
     if (Sv) {
       const B qd = qdv->b[j];
       for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
+    } else if (k.type == 4) {  // S qd, S = ball_S's three columns
+      const V* S3 = at(l_.ball_S + 18 * i);
+      for (int r = 0; r < 6; ++r)
+        J[r] = (S3[r].b[j] * qdv[0].b[j] + S3[6 + r].b[j] * qdv[1].b[j]) +
+               S3[12 + r].b[j] * qdv[2].b[j];
     } else if (R0) {
       B R0j[9], qd[6];
       for (int e = 0; e < 9; ++e) R0j[e] = R0[e].b[j];
@@ -621,6 +642,10 @@ void LaneStep<A, K>::articulated_pass() {
     const V* pA = at(l_.pA + 6 * i);
     if (k.type == 3) {
       root_articulated();
+      continue;
+    }
+    if (k.type == 4) {
+      ball_articulated(i);
       continue;
     }
     if (k.type == 0) {
@@ -676,6 +701,7 @@ void LaneStep<A, K>::forward_pass() {
     link_response(i);
     if (p_.any_cfm) link_cfm(i);
     if (one) setup_link_rows(i);
+    else if (p_.links[i].type == 4) ball_rows(i);
   }
 }
 
@@ -693,6 +719,10 @@ template <class A, int K>
   if (k.type == 0) return;
   if (k.type == 3) {
     root_acceleration(a, dt);
+    return;
+  }
+  if (k.type == 4) {
+    ball_acceleration(i, a, dt);
     return;
   }
   const V* U = at(l_.U + 6 * i);
@@ -806,6 +836,10 @@ template <class A, int K>
     root_response();
     return;
   }
+  if (k.type == 4) {
+    ball_response(i);
+    return;
+  }
   const V* U = at(l_.U + 6 * i);
   const V* S = at(l_.S + 6 * i);
   V* W = at(l_.W + 6 * i);
@@ -853,7 +887,7 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
       }
       continue;
     }
-    const int d = k.v_index;
+    for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
     V* rw = row(d);
     const M driven = dof_parameter(d, has_drive) != V(0.0);
     const V lower_limit = dof_parameter(d, lower), upper_limit = dof_parameter(d, upper);
@@ -891,6 +925,7 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     rows_any = rows_any | transmitting;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
     rows_any = rows_any | limited | rubbing | driven | speed_limited;
+    }
   }
   rowless_ = !rows_any;
 }
@@ -900,10 +935,17 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::setup_link_rows(int i) {
   const LinkConstants& k = p_.links[i];
-  const int d = k.v_index;
-  V* rw = row(d);
-  const V r = at(l_.inverse_mass)[i];
   const V x0 = at(l_.q)[k.q_index];
+  setup_dof_row(i, k.v_index, at(l_.inverse_mass)[i], x0, x0);
+}
+
+// Dof d of link i: unit response r, position x0 (a spherical axis's from its quaternion), and
+// x0_drive, the position its drive's error is taken from (target - error for a spherical axis).
+template <class A, int K>
+[[gnu::always_inline]] inline void LaneStep<A, K>::setup_dof_row(int i, int d, const V& r,
+                                                                 const V& x0, const V& x0_drive) {
+  const LinkConstants& k = p_.links[i];
+  V* rw = row(d);
   const DriveTermsOf<V> terms{dof_parameter(d, stiffness),       dof_parameter(d, damping),
                               dof_parameter(d, target_position), dof_parameter(d, target_velocity),
                               dof_parameter(d, max_force),       dof_parameter(d, max_impulse)};
@@ -917,7 +959,7 @@ template <class A, int K>
   }
   const V r_drive = p_.any_cfm ? select(accel, r + cfm, r) : r;
   const DriveRowOf<V> drive =
-      drive_law::setup(terms, accel, r_drive, x0, h_solve_, p_.dt, p_.tgs);
+      drive_law::setup(terms, accel, r_drive, x0_drive, h_solve_, p_.dt, p_.tgs);
   rw[Layout::tvb] = drive.target_vel_plus_initial_bias;
   rw[Layout::velm] = drive.vel_multiplier;
   rw[Layout::impm] = drive.impulse_multiplier;
@@ -1122,6 +1164,11 @@ void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
     const V* pAk = at(l_.subtree + 6 * k);
     const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
     V beta;
+    V ball_pa[6];  // a spherical joint's hand-over
+    if (lk.type == 4) {
+      leave_ball(k, ball_pa);
+      pAk = ball_pa;
+    }
     if (one_dof(lk)) {
       U = at(l_.U + 6 * k);
       if constexpr (kVectorByVector)
@@ -1176,6 +1223,10 @@ void LaneStep<A, K>::finish_link(int i) {
   if (lk.type == 0) {
     if (lk.later)
       for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r];
+    return;
+  }
+  if (lk.type == 4) {
+    finish_ball(i, lk.later ? E : nullptr);
     return;
   }
   const int d = lk.v_index;
@@ -1253,6 +1304,10 @@ void LaneStep<A, K>::sweep_links() {
     V* dv = at(l_.dv + 6 * i);
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
       for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
+      continue;
+    }
+    if (k.type == 4) {
+      enter_ball<kGiven>(i, dvp, dv);
       continue;
     }
     const double* has = any_row(k.v_index);
@@ -1433,6 +1488,22 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
       else integrate_root(h_step);
       continue;
     }
+    if (k.type == 4) {  // q times the quaternion of the body turn w h, normalised
+      V* q = &at(l_.q)[k.q_index];
+      const V* w = &at(l_.qd)[k.v_index];
+      V Q[4], d[4], o[4];
+      unit_quaternion(q, Q);
+      const V turn[3] = {w[0] * h, w[1] * h, w[2] * h};
+      turn_quaternion(turn, d);
+      quaternion_product(Q, d, o);
+      unit_quaternion(o, q);
+      if (track)
+        for (int a = 0; a < 3; ++a) {
+          V& dx = row(k.v_index + a)[Layout::delta_x];
+          dx = dx + h * w[a];
+        }
+      continue;
+    }
     const V qd = at(l_.qd)[k.v_index];
     V& q = at(l_.q)[k.q_index];
     q = q + h * qd;
@@ -1497,36 +1568,37 @@ void LaneStep<A, K>::quaternion_rotation(const V* q, V* R) {
   R[6] = txz - twy, R[7] = tyz + twx, R[8] = one - (txx + tyy);
 }
 
-// The inverse of a symmetric positive definite 6 x 6 matrix (row-major) from its Cholesky factor
+// The inverse of a symmetric positive definite N x N matrix (row-major) from its Cholesky factor
 // L: L^-T L^-1 (aba.cpp's spd_inverse, in its order).
 template <class A, int K>
-void LaneStep<A, K>::spd_inverse6(const V* D, V* out) {
-  V L[36], Li[36];
-  for (int e = 0; e < 36; ++e) L[e] = Li[e] = V(0.0);
-  for (int j = 0; j < 6; ++j) {
-    V d = D[6 * j + j];
-    for (int k = 0; k < j; ++k) d = d - L[6 * j + k] * L[6 * j + k];
-    L[6 * j + j] = sqrt_of(d);
-    for (int i = j + 1; i < 6; ++i) {
-      V x = D[6 * i + j];
-      for (int k = 0; k < j; ++k) x = x - L[6 * i + k] * L[6 * j + k];
-      L[6 * i + j] = x / L[6 * j + j];
+template <int N>
+void LaneStep<A, K>::spd_inverse(const V* D, V* out) {
+  V L[N * N], Li[N * N];
+  for (int e = 0; e < N * N; ++e) L[e] = Li[e] = V(0.0);
+  for (int j = 0; j < N; ++j) {
+    V d = D[N * j + j];
+    for (int k = 0; k < j; ++k) d = d - L[N * j + k] * L[N * j + k];
+    L[N * j + j] = sqrt_of(d);
+    for (int i = j + 1; i < N; ++i) {
+      V x = D[N * i + j];
+      for (int k = 0; k < j; ++k) x = x - L[N * i + k] * L[N * j + k];
+      L[N * i + j] = x / L[N * j + j];
     }
   }
-  for (int j = 0; j < 6; ++j) {  // L^-1, lower triangular, column by column
-    Li[6 * j + j] = V(1.0) / L[6 * j + j];
-    for (int i = j + 1; i < 6; ++i) {
+  for (int j = 0; j < N; ++j) {  // L^-1, lower triangular, column by column
+    Li[N * j + j] = V(1.0) / L[N * j + j];
+    for (int i = j + 1; i < N; ++i) {
       V x(0.0);
-      for (int k = j; k < i; ++k) x = x - L[6 * i + k] * Li[6 * k + j];
-      Li[6 * i + j] = x / L[6 * i + i];
+      for (int k = j; k < i; ++k) x = x - L[N * i + k] * Li[N * k + j];
+      Li[N * i + j] = x / L[N * i + i];
     }
   }
-  for (int a = 0; a < 6; ++a)
-    for (int b = a; b < 6; ++b) {
+  for (int a = 0; a < N; ++a)
+    for (int b = a; b < N; ++b) {
       const int k0 = b;  // Li[k][a] Li[k][b] is 0 for k < max(a, b) = b
-      V sum = Li[6 * k0 + a] * Li[6 * k0 + b];
-      for (int k = k0 + 1; k < 6; ++k) sum = sum + Li[6 * k + a] * Li[6 * k + b];
-      out[6 * a + b] = out[6 * b + a] = sum;
+      V sum = Li[N * k0 + a] * Li[N * k0 + b];
+      for (int k = k0 + 1; k < N; ++k) sum = sum + Li[N * k + a] * Li[N * k + b];
+      out[N * a + b] = out[N * b + a] = sum;
     }
 }
 
@@ -1555,7 +1627,7 @@ void LaneStep<A, K>::root_articulated() {
     }
   for (int a = 0; a < 6; ++a)
     D[6 * a + a] = D[6 * a + a] + dof_parameter(k.v_index + a, simd::armature);
-  spd_inverse6(D, at(l_.root_D_inv));
+  spd_inverse<6>(D, at(l_.root_D_inv));
   V SpA[6];
   root_St(R0, pA, SpA);
   for (int c = 0; c < 6; ++c) at(l_.u)[k.v_index + c] = at(l_.tau)[k.v_index + c] - SpA[c];
@@ -2048,6 +2120,252 @@ void LaneStep<A, K>::physx_end_momentum() {
   }
 }
 
+// A spherical joint's rotation R = P R(q), P its joint frame's axes, R(q) its normalised
+// quaternion's (kinematics.cpp's position_link); with start, S's three columns
+// [R e_k; pos x R e_k] (aba.cpp's motion_to_frame0 of the link's [1; 0]).
+template <class A, int K>
+void LaneStep<A, K>::ball_pose(int i, const V* P, V* R, const V* pos, bool start) {
+  V Rq[9];
+  quaternion_rotation(&at(l_.q)[p_.links[i].q_index], Rq);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      R[3 * r + c] = P[3 * r] * Rq[c] + P[3 * r + 1] * Rq[3 + c] + P[3 * r + 2] * Rq[6 + c];
+  if (!start) return;
+  V* S3 = at(l_.ball_S + 18 * i);
+  for (int a = 0; a < 3; ++a) {
+    const V col[3] = {R[a], R[3 + a], R[6 + a]};
+    for (int r = 0; r < 3; ++r) S3[6 * a + r] = col[r];
+    cross(pos, col, S3 + 6 * a + 3);
+  }
+}
+
+// ABA pass 2 at a spherical joint (aba.cpp, joint_inertia and the multi-dof hand-over):
+// U = IA S, D = S^T U + armature, D^-1, u = tau - S^T pA; to the parent IA - U D^-1 U^T and
+// pA + U D^-1 u + (IA - U D^-1 U^T) c.
+template <class A, int K>
+void LaneStep<A, K>::ball_articulated(int i) {
+  const LinkConstants& k = p_.links[i];
+  const V* IA = at(l_.IA + 21 * i);
+  const V* pA = at(l_.pA + 6 * i);
+  const V* S3 = at(l_.ball_S + 18 * i);
+  V* U3 = at(l_.ball_U + 18 * i);
+  V* Di = at(l_.ball_D_inv + 9 * i);
+  for (int a = 0; a < 3; ++a)
+    for (int r = 0; r < 6; ++r) {
+      V x = IA[kSym.at[r][0]] * S3[6 * a];
+      for (int m = 1; m < 6; ++m) x = x + IA[kSym.at[r][m]] * S3[6 * a + m];
+      U3[6 * a + r] = x;
+    }
+  V D[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) D[3 * a + b] = dot6(S3 + 6 * a, U3 + 6 * b);
+  for (int a = 0; a < 3; ++a)
+    D[4 * a] = D[4 * a] + dof_parameter(k.v_index + a, simd::armature);
+  spd_inverse<3>(D, Di);
+  V u[3];
+  for (int a = 0; a < 3; ++a) {
+    u[a] = at(l_.tau)[k.v_index + a] - dot6(S3 + 6 * a, pA);
+    at(l_.u)[k.v_index + a] = u[a];
+  }
+  if (k.parent < 0) return;
+  V UD[18];  // U D^-1, column by column
+  for (int b = 0; b < 3; ++b)
+    for (int r = 0; r < 6; ++r)
+      UD[6 * b + r] = (U3[r] * Di[b] + U3[6 + r] * Di[3 + b]) + U3[12 + r] * Di[6 + b];
+  V Ia[21];
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) {
+      const V x = (UD[r] * U3[c] + UD[6 + r] * U3[6 + c]) + UD[12 + r] * U3[12 + c];
+      Ia[kSym.at[r][c]] = IA[kSym.at[r][c]] - x;
+    }
+  const V* c = at(l_.c + 6 * i);
+  V pa[6], Iac[6];
+  for (int r = 0; r < 6; ++r) pa[r] = pA[r] + ((UD[r] * u[0] + UD[6 + r] * u[1]) + UD[12 + r] * u[2]);
+  sym_times(Ia, c, Iac);
+  V* IAp = at(l_.IA + 21 * k.parent);
+  V* pAp = at(l_.pA + 6 * k.parent);
+  for (int r = 0; r < 6; ++r) pAp[r] = pAp[r] + (pa[r] + Iac[r]);
+  for (int e = 0; e < 21; ++e) IAp[e] = IAp[e] + Ia[e];
+}
+
+// ABA pass 3 at a spherical joint: qdd = D^-1 (u - U^T a), a += S qdd, qd += dt qdd.
+template <class A, int K>
+void LaneStep<A, K>::ball_acceleration(int i, V* a, const V& dt) {
+  const LinkConstants& k = p_.links[i];
+  const V* S3 = at(l_.ball_S + 18 * i);
+  const V* U3 = at(l_.ball_U + 18 * i);
+  const V* Di = at(l_.ball_D_inv + 9 * i);
+  V r3[3], qdd[3];
+  for (int b = 0; b < 3; ++b) r3[b] = at(l_.u)[k.v_index + b] - dot6(U3 + 6 * b, a);
+  for (int b = 0; b < 3; ++b) qdd[b] = (Di[3 * b] * r3[0] + Di[3 * b + 1] * r3[1]) + Di[3 * b + 2] * r3[2];
+  for (int r = 0; r < 6; ++r)
+    a[r] = a[r] + ((S3[r] * qdd[0] + S3[6 + r] * qdd[1]) + S3[12 + r] * qdd[2]);
+  for (int b = 0; b < 3; ++b) {
+    V& qd = at(l_.qd)[k.v_index + b];
+    qd = qd + dt * qdd[b];
+  }
+}
+
+// A spherical joint's response (inverse_mass_diagonal.cpp, several dofs): W = T U with T its
+// parent's Lambda, Lambda = T - S D^-1 W^T - W (S D^-1)^T + S D^-1 U^T W (S D^-1)^T + S D^-1 S^T,
+// and the unit-response block D^-1 + D^-1 U^T W D^-1.
+template <class A, int K>
+void LaneStep<A, K>::ball_response(int i) {
+  const LinkConstants& k = p_.links[i];
+  const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
+  V* L = at(l_.Lambda + 21 * i);
+  const V* S3 = at(l_.ball_S + 18 * i);
+  const V* U3 = at(l_.ball_U + 18 * i);
+  const V* Di = at(l_.ball_D_inv + 9 * i);
+  V* W3 = at(l_.ball_W + 18 * i);
+  for (int b = 0; b < 3; ++b) sym_times(T, U3 + 6 * b, W3 + 6 * b);
+  V UtW[9], SD[18], SDU[18], DU[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) UtW[3 * a + b] = dot6(U3 + 6 * a, W3 + 6 * b);
+  for (int b = 0; b < 3; ++b)
+    for (int r = 0; r < 6; ++r)
+      SD[6 * b + r] = (S3[r] * Di[b] + S3[6 + r] * Di[3 + b]) + S3[12 + r] * Di[6 + b];
+  for (int b = 0; b < 3; ++b)  // (S D^-1) U^T W
+    for (int r = 0; r < 6; ++r)
+      SDU[6 * b + r] = (SD[r] * UtW[b] + SD[6 + r] * UtW[3 + b]) + SD[12 + r] * UtW[6 + b];
+  auto row3 = [](const V* X, int r, const V* Y, int c) {  // sum_b X(r, b) Y(c, b), 6 x 3 each
+    return (X[r] * Y[c] + X[6 + r] * Y[6 + c]) + X[12 + r] * Y[12 + c];
+  };
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) {
+      const int e = kSym.at[r][c];
+      L[e] = (((T[e] - row3(SD, r, W3, c)) - row3(W3, r, SD, c)) + row3(SDU, r, SD, c)) +
+             row3(SD, r, S3, c);
+    }
+  for (int a = 0; a < 3; ++a)  // D^-1 U^T W
+    for (int b = 0; b < 3; ++b)
+      DU[3 * a + b] = (Di[3 * a] * UtW[b] + Di[3 * a + 1] * UtW[3 + b]) + Di[3 * a + 2] * UtW[6 + b];
+  V* Minv = at(l_.ball_response + 9 * i);
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      Minv[3 * a + b] =
+          Di[3 * a + b] + ((DU[3 * a] * Di[b] + DU[3 * a + 1] * Di[3 + b]) + DU[3 * a + 2] * Di[6 + b]);
+}
+
+// A spherical joint's three rows (step.cpp's setup_dof_rows): each axis's position and its drive's
+// error from the quaternion, as PhysX has them (spherical_axes.hpp, called per lane), and its
+// unit response, the block's diagonal.
+template <class A, int K>
+void LaneStep<A, K>::ball_rows(int i) {
+  const LinkConstants& k = p_.links[i];
+  const int v = k.v_index;
+  alignas(64) double q[4][kW], target[3][kW], driven[3][kW], position[3][kW], error[3][kW];
+  for (int e = 0; e < 4; ++e) at(l_.q)[k.q_index + e].store_aligned(q[e]);
+  for (int a = 0; a < 3; ++a) {
+    dof_parameter(v + a, target_position).store_aligned(target[a]);
+    dof_parameter(v + a, has_drive).store_aligned(driven[a]);
+  }
+  for (int l = 0; l < kW; ++l) {
+    const double ql[4] = {q[0][l], q[1][l], q[2][l], q[3][l]};
+    const double tl[3] = {target[0][l], target[1][l], target[2][l]};
+    const double dl[3] = {driven[0][l], driven[1][l], driven[2][l]};
+    double x[3], err[3];
+    spherical_axes(ql, tl, dl, x, err);
+    for (int a = 0; a < 3; ++a) position[a][l] = x[a], error[a][l] = err[a];
+  }
+  const V* Minv = at(l_.ball_response + 9 * i);
+  for (int a = 0; a < 3; ++a) {
+    const V x0 = V::load_aligned(position[a]);
+    const V drive_x0 = select(V::load_aligned(driven[a]) != V(0.0),
+                              V::load_aligned(target[a]) - V::load_aligned(error[a]), x0);
+    setup_dof_row(i, v + a, Minv[4 * a], x0, drive_x0);
+  }
+}
+
+// A spherical joint entered in a sweep (gauss_seidel.hpp, several dofs): its axes' rows in turn,
+// each at the velocity the impulses before it leave (kGiven: the impulses given at its dofs),
+// then its velocity change and its link's.
+template <class A, int K>
+template <bool kGiven>
+void LaneStep<A, K>::enter_ball(int i, const V* dvp, V* dv) {
+  const int v = p_.links[i].v_index;
+  const V* S3 = at(l_.ball_S + 18 * i);
+  const V* U3 = at(l_.ball_U + 18 * i);
+  const V* W3 = at(l_.ball_W + 18 * i);
+  const V* Di = at(l_.ball_D_inv + 9 * i);
+  const V* Minv = at(l_.ball_response + 9 * i);
+  V Ud[3], base[3], impulse[3] = {V(0.0), V(0.0), V(0.0)};
+  for (int b = 0; b < 3; ++b) Ud[b] = dot6(U3 + 6 * b, dvp);
+  for (int a = 0; a < 3; ++a)
+    base[a] = -((Di[3 * a] * Ud[0] + Di[3 * a + 1] * Ud[1]) + Di[3 * a + 2] * Ud[2]);
+  for (int a = 0; a < 3; ++a) {
+    if constexpr (kGiven) {
+      impulse[a] = at(l_.given)[v + a];
+      continue;
+    }
+    const V current = (at(l_.qd)[v + a] + base[a]) +
+                      ((Minv[3 * a] * impulse[0] + Minv[3 * a + 1] * impulse[1]) +
+                       Minv[3 * a + 2] * impulse[2]);
+    impulse[a] = impulse[a] + solve_row(v + a, current, row(v + a)[Layout::delta_x]);
+  }
+  V t[3], now[6], r3[3];
+  for (int a = 0; a < 3; ++a) {
+    at(l_.jimp)[v + a] = impulse[a];
+    t[a] = (Di[3 * a] * impulse[0] + Di[3 * a + 1] * impulse[1]) + Di[3 * a + 2] * impulse[2];
+  }
+  for (int r = 0; r < 6; ++r)
+    now[r] = dvp[r] - ((W3[r] * t[0] + W3[6 + r] * t[1]) + W3[12 + r] * t[2]);
+  for (int a = 0; a < 3; ++a) r3[a] = impulse[a] - dot6(U3 + 6 * a, now);
+  V dqd[3];
+  for (int a = 0; a < 3; ++a) {
+    dqd[a] = (Di[3 * a] * r3[0] + Di[3 * a + 1] * r3[1]) + Di[3 * a + 2] * r3[2];
+    at(l_.entry)[v + a] = dqd[a];
+  }
+  for (int r = 0; r < 6; ++r)
+    dv[r] = now[r] + ((S3[r] * dqd[0] + S3[6 + r] * dqd[1]) + S3[12 + r] * dqd[2]);
+}
+
+// The impulse a spherical joint's link hands its parent: pA + U D^-1 (impulse - S^T pA).
+template <class A, int K>
+void LaneStep<A, K>::leave_ball(int k, V* pa) {
+  const int v = p_.links[k].v_index;
+  const V* pA = at(l_.subtree + 6 * k);
+  const V* S3 = at(l_.ball_S + 18 * k);
+  const V* U3 = at(l_.ball_U + 18 * k);
+  const V* Di = at(l_.ball_D_inv + 9 * k);
+  V t[3], y[3];
+  for (int a = 0; a < 3; ++a) t[a] = at(l_.jimp)[v + a] - dot6(S3 + 6 * a, pA);
+  for (int b = 0; b < 3; ++b) y[b] = (Di[3 * b] * t[0] + Di[3 * b + 1] * t[1]) + Di[3 * b + 2] * t[2];
+  for (int r = 0; r < 6; ++r)
+    pa[r] = pA[r] + ((U3[r] * y[0] + U3[6 + r] * y[1]) + U3[12 + r] * y[2]);
+}
+
+// A spherical joint after a sweep (gauss_seidel.hpp's finish_link, several dofs): its velocity
+// change from its subtree, entry - M_ii S^T pA + D^-1 W^T pA, and from later subtrees (E).
+template <class A, int K>
+void LaneStep<A, K>::finish_ball(int i, const V* E) {
+  const int v = p_.links[i].v_index;
+  const V* pA = at(l_.subtree + 6 * i);
+  const V* S3 = at(l_.ball_S + 18 * i);
+  const V* U3 = at(l_.ball_U + 18 * i);
+  const V* W3 = at(l_.ball_W + 18 * i);
+  const V* Di = at(l_.ball_D_inv + 9 * i);
+  const V* Minv = at(l_.ball_response + 9 * i);
+  V Sp[3], Wp[3], dqd[3];
+  for (int a = 0; a < 3; ++a) Sp[a] = dot6(S3 + 6 * a, pA), Wp[a] = dot6(W3 + 6 * a, pA);
+  for (int a = 0; a < 3; ++a)
+    dqd[a] = (at(l_.entry)[v + a] -
+              ((Minv[3 * a] * Sp[0] + Minv[3 * a + 1] * Sp[1]) + Minv[3 * a + 2] * Sp[2])) +
+             ((Di[3 * a] * Wp[0] + Di[3 * a + 1] * Wp[1]) + Di[3 * a + 2] * Wp[2]);
+  if (E) {
+    V UE[3], later[3];
+    for (int b = 0; b < 3; ++b) UE[b] = dot6(U3 + 6 * b, E);
+    for (int a = 0; a < 3; ++a) {
+      later[a] = -((Di[3 * a] * UE[0] + Di[3 * a + 1] * UE[1]) + Di[3 * a + 2] * UE[2]);
+      dqd[a] = dqd[a] + later[a];
+    }
+    V* out = at(l_.later + 6 * i);
+    for (int r = 0; r < 6; ++r)
+      out[r] = E[r] + ((S3[r] * later[0] + S3[6 + r] * later[1]) + S3[12 + r] * later[2]);
+  }
+  for (int a = 0; a < 3; ++a) at(l_.qd)[v + a] = at(l_.qd)[v + a] + dqd[a];
+}
+
 // A wrapped revolute joint's position back into [-2 pi, 2 pi] by one turn of 4 pi, then clamped
 // to [-4 pi, 4 pi] (revolute_wrap.cpp, docs/math/revolute_wrap.md eq. 1).
 template <class A, int K>
@@ -2173,6 +2491,9 @@ void LaneStep<A, K>::finish_step() {
         if (k.type == 3)  // position, quaternion: the dofs of q's entries (Simulation's order)
           for (int e = 0; e < 7; ++e)
             check(6, k.v_index + (e < 5 ? e : 5), lane(at(l_.q)[k.q_index + e]));
+        if (k.type == 4)
+          for (int e = 0; e < 4; ++e)
+            check(6, k.v_index + (e < 2 ? e : 2), lane(at(l_.q)[k.q_index + e]));
       }
       b_.stop[b_.env0 + l] = stop;
       b_.stopped_now[b_.env0 + l] = true;

@@ -83,7 +83,7 @@ struct MimicConstants {
 /// A link's topology and joint constants, the same in every lane.
 struct LinkConstants {
   int parent = -1;
-  int type = 0;  ///< 0 fixed, 1 revolute, 2 prismatic, 3 floating (the root only)
+  int type = 0;  ///< 0 fixed, 1 revolute, 2 prismatic, 3 floating (the root only), 4 spherical
   int v_index = 0;
   int q_index = 0;
   int unit_axis = -1;  ///< k for an axis +-e_k, else -1
@@ -149,6 +149,9 @@ struct Layout {
   // A floating root (Plan::floating_base): its rotation in the world R0 and its joint's R_q (the
   // step's start axes of compat none's root velocity), U = IA S and D^-1 as full 6 x 6 matrices.
   int root_R = 0, root_Rq = 0, root_U = 0, root_D_inv = 0;
+  // Spherical joints (Plan::any_spherical), per link: S, U and W as 6 x 3 (column by column),
+  // D^-1 and the unit-response block as 3 x 3 (row-major).
+  int ball_S = 0, ball_U = 0, ball_W = 0, ball_D_inv = 0, ball_response = 0;
   // compat physx on a floating root (Plan::physx_floating): the step's start poses (world axes,
   // positions from the root's origin), link forces (link damping), the free velocity's momentum
   // targets P0, L0 with the start's centre of mass and total mass (10), the compound inertia's
@@ -177,6 +180,8 @@ struct Plan {
   bool tgs = false;
   /// Link 0 is a floating root (six dofs: body-frame [w; v], q: position and quaternion w x y z).
   bool floating_base = false;
+  /// Some link has a spherical joint (three dofs: twist, swing1, swing2; q: quaternion w x y z).
+  bool any_spherical = false;
   /// Some environment has a finite joint velocity limit: steps start by scaling qd to them.
   bool any_velocity_limit = false;
   /// Some environment has a friction coefficient: steps form the joints' transmitted forces.
@@ -224,6 +229,12 @@ struct Block {
   bool* stopped_now = nullptr;  ///< per environment: stopped in this call
   bool any_limit = true;        ///< some lane has a finite joint limit
 };
+
+/// A spherical joint's PhysX positions (twist, swing1, swing2) and drive errors for the
+/// orientation q (w x y z, normalised here as Simulation does) and its axes' targets (driven: 1 or 0): spherical_axes.hpp's,
+/// out of line, so that the lane units call it on plain arrays.
+void spherical_axes(const double* q, const double* target, const double* driven, double* position,
+                    double* error);
 
 /// The layout of p's scratch, and the doubles of scratch one block of any width needs (kGroup
 /// kMaxInterleave doubles a vector).

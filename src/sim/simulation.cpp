@@ -530,8 +530,11 @@ void Simulation::check_finite_or_throw() {
     std::fill(link_contact_force_.begin(), link_contact_force_.end(), Vec3::Zero());
     std::ostringstream s;
     s.precision(6);
-    s << "simulation diverged at step " << step << " (t = " << t << " s): " << what << " = "
-      << value << "; the state is left as it was before this step (lower dt or the gains)";
+    // A NaN's sign is the operation order's (the lanes' may differ): "nan" whatever it is.
+    s << "simulation diverged at step " << step << " (t = " << t << " s): " << what << " = ";
+    if (std::isnan(value)) s << "nan";
+    else s << value;
+    s << "; the state is left as it was before this step (lower dt or the gains)";
     throw DivergenceError(s.str());
   };
   auto fail = [&](const char* quantity, int dof, double value) {

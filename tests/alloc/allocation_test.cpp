@@ -293,12 +293,17 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
 // on a fixed and on a floating base.
 TEST(BatchAllocations, LanesNoneAtEveryWidth) {
   for (const bool floating : {false, true}) {
-  auto model = test::make_random_tree(7, 10, floating, false, 0.01);
+  // Spherical joints too (compat none): their axes' positions are read per lane.
+  auto model = test::make_random_tree(7, 10, floating, /*spherical=*/true, 0.01);
   Simulation prototype(model, SimulationOptions{});
   for (const Link& l : model->links) {
-    if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic) continue;
-    prototype.set_drive(l.v_index, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
-    prototype.set_joint_limits(l.v_index, -0.3, 0.4);
+    const bool ball = l.joint_type == JointType::spherical;
+    if (l.joint_type != JointType::revolute && l.joint_type != JointType::prismatic && !ball)
+      continue;
+    for (int a = 0; a < (ball ? 3 : 1); ++a) {
+      prototype.set_drive(l.v_index + a, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
+      prototype.set_joint_limits(l.v_index + a, -0.3, 0.4);
+    }
   }
   for (SimdIsa isa : available_simd_isas())
     for (int threads : {1, 2}) {

@@ -424,7 +424,9 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
         if (l.joint_type == JointType::spherical) return m;
     }
   };
-  expect_refused(Simulation(with_ball()), "a spherical joint");
+  SimulationOptions physx;
+  physx.compat = Compat::physx;
+  expect_refused(Simulation(with_ball(), physx), "a spherical joint under compat physx");
   Simulation s = simd_prototype(9, SolverType::pgs, 5);
   const std::string joint = s.model().links[s.model().dof_link[1]].joint_name;
   Simulation guarded = s;

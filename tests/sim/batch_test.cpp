@@ -45,6 +45,7 @@ TEST(Batch, EqualsSeparateSimulationsForAnyThreadCount) {
     }
     for (int threads : {1, 3, 0}) {
       Batch batch(model, n, options);
+      batch.set_lanes(false);  // the scalar path: bit for bit (the lanes: batch_lanes_test.cpp)
       batch.set_num_threads(threads);
       for (int i = 0; i < n; ++i) configure(batch.sim(i), i);
       batch.step(steps);
@@ -133,6 +134,7 @@ TEST(Batch, SphericalAxesTakeGainsAndLimitsAsSimulationDoes) {
     by_axis.set_joint_limits(d, -0.2, 0.3);
   }
   Batch batch(model, 1);
+  batch.set_lanes(false);  // the scalar path: bit for bit (the lanes: lane_spherical_test.cpp)
   const int all[] = {0};
   batch.set_drive_gains(kp, kd);
   batch.set_joint_limits(all, lower, upper);
@@ -156,6 +158,7 @@ TEST(Batch, SphericalAxesTakeGainsAndLimitsAsSimulationDoes) {
 TEST(Batch, StateArraysAreTheEnvironmentsStorage) {
   const auto model = test::make_random_tree(4, 6, /*floating=*/true);
   Batch batch(model, 5);
+  batch.set_lanes(false);  // the scalar path: bit for bit (the lanes: batch_lanes_test.cpp)
   for (int i = 0; i < batch.size(); ++i) configure(batch.sim(i), i);
   batch.step(3);
   for (int i = 0; i < batch.size(); ++i) {
@@ -240,6 +243,7 @@ TEST(Batch, ResetStartsAgainAndLeavesTheOthersBitForBit) {
   prototype.set_q(test::random_configuration(*model, rng));
   test::drive_every_joint(prototype, rng, 300.0, 8.0);
   Batch batch(prototype, 5);
+  batch.set_lanes(false);  // the scalar path: bit for bit (the lanes: batch_lanes_test.cpp)
   for (int i = 0; i < 5; ++i) {
     std::mt19937 r(static_cast<unsigned>(40 + i));
     batch.sim(i).set_qd(test::random_vector(model->nv, r, 0.5));

@@ -82,7 +82,7 @@ TEST_P(Divergence, NonFiniteVelocityFromAnAbsurdForce) {
   EXPECT_EQ(e.substr(0, head.size()), head) << e;
   EXPECT_EQ(e.substr(e.size() - tail.size()), tail) << e;
   const std::string value = e.substr(head.size(), e.size() - head.size() - tail.size());
-  EXPECT_TRUE(value == "inf" || value == "nan" || value == "-nan") << value;
+  EXPECT_TRUE(value == "inf" || value == "nan") << value;  // a NaN is "nan", whatever its sign
   before.expect_equal(sim);
 }
 

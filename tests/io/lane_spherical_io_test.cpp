@@ -1,0 +1,28 @@
+// examples/spherical_wrist.yaml (an arm with a spherical wrist driven per axis, limits on two
+// axes) in Batch's SIMD lanes against the prototype stepped alone as a Simulation, within 1e-12
+// over 1000 steps: docs/simd_batch.md, "Spherical joints".
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "featherdrive/io/scene.hpp"
+#include "featherdrive/sim/batch.hpp"
+#include "support/lanes.hpp"
+#include "support/source_tree.hpp"
+
+namespace featherdrive {
+namespace {
+
+TEST(LaneSphericalRobots, SphericalWristAsSimulation) {
+  Scene scene = load_scene(test::kExamples + "spherical_wrist.yaml");
+  scene.options.compat = Compat::none;  // the file's compat physx steps as Simulations
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    scene.options.solver = solver;
+    EXPECT_LE(test::lanes_against_alone(make_simulation(scene), 1000,
+                                        "spherical_wrist, " + std::string(to_string(solver))),
+              1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace featherdrive
