@@ -7,7 +7,8 @@ using namespace featherdrive::python;
 
 namespace {
 
-/// Environment i of b (a Python int; negative counts from the end).
+/// Environment i of b: a Python int in [0, size) (a negative one is refused, not counted from the
+/// end: python/tests/test_errors.py).
 int env_index(const Batch& b, py::handle i) {
   constexpr auto lo = std::numeric_limits<long long>::min();
   constexpr auto hi = std::numeric_limits<long long>::max();
