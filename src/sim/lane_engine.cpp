@@ -40,7 +40,7 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
-  const int physx = p.physx_prismatic || p.physx_floating ? 1 : 0;
+  const int physx = p.physx_prismatic || p.physx_floating || p.physx_spherical ? 1 : 0;
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
   l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
   l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
@@ -50,6 +50,7 @@ Layout make_layout(const Plan& p) {
   const int ball = p.any_spherical ? 1 : 0;
   l.ball_S = take(ball * 18 * L), l.ball_U = take(ball * 18 * L), l.ball_W = take(ball * 18 * L);
   l.ball_D_inv = take(ball * 9 * L), l.ball_response = take(ball * 9 * L);
+  l.ball_w = take(p.physx_spherical ? 3 * L : 0);
   const int pf = p.physx_floating ? 1 : 0;
   l.start_R = take(pf * 9 * L), l.start_pos = take(pf * 3 * L), l.link_force = take(pf * 6 * L);
   l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
@@ -80,15 +81,7 @@ std::string lane_refusal(const Simulation& s) {
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
   for (const Link& link : m.links) {
-    // compat physx turns a spherical joint's link in the world with its bias (spherical_rows.cpp);
-    // the lanes have no transmitted-force friction on its axes.
-    if (link.joint_type == JointType::spherical) {
-      if (s.options().compat == Compat::physx)
-        return has("joint", link.joint_name, "a spherical joint under compat physx");
-      for (int k = 0; k < 3; ++k)
-        if (s.friction_coefficient(link.v_index + k) > 0.0)
-          return has("joint", link.joint_name, "a friction coefficient on a spherical axis");
-    }
+
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take
     // its joint frame as the world's.
     if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
@@ -194,6 +187,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     for (const Link& link : m.links)
       p.physx_prismatic = p.physx_prismatic || link.joint_type == JointType::prismatic;
     p.physx_floating = p.floating_base;
+    p.physx_spherical = p.any_spherical;
   }
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
@@ -283,6 +277,15 @@ void spherical_axes(const double* q, const double* target, const double* driven,
   const Vec3 e = spherical_drive_error(Q, Vec3(target[0], target[1], target[2]),
                                        {driven[0] != 0.0, driven[1] != 0.0, driven[2] != 0.0});
   for (int k = 0; k < 3; ++k) position[k] = x[k], error[k] = e[k];
+}
+
+void rotation_quaternion(const double* m, double* q) {
+  Mat3 M;
+  M << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+  Quat Q(M);
+  Q.normalize();
+  if (Q.coeffs().dot(Eigen::Vector4d(q[1], q[2], q[3], q[0])) < 0.0) Q.coeffs() = -Q.coeffs();
+  q[0] = Q.w(), q[1] = Q.x(), q[2] = Q.y(), q[3] = Q.z();
 }
 
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b) {

@@ -242,6 +242,7 @@ class LaneStep {
   void root_response();
   void root_finish();
   void integrate_root(double h);
+  void integrate_balls_physx(double h);
   // Spherical joints (docs/simd_batch.md, "Spherical joints"): three dofs, S, U, W 6 x 3.
   void ball_pose(int i, const V* P, V* R, const V* pos, bool start);
   void ball_articulated(int i);
@@ -697,7 +698,7 @@ void LaneStep<A, K>::forward_pass() {
   for (int i = 0; i < p_.num_links; ++i) {
     link_acceleration(i, g, dt);
     const bool one = one_dof(p_.links[i]);
-    if (p_.any_transmission_friction && one) transmitted_force(i);
+    if (p_.any_transmission_friction && (one || p_.links[i].type == 4)) transmitted_force(i);
     link_response(i);
     if (p_.any_cfm) link_cfm(i);
     if (one) setup_link_rows(i);
@@ -817,8 +818,9 @@ void LaneStep<A, K>::transmitted_force(int i) {
   V magnitude;
   for (int k = 0; k < K; ++k)  // sqrt is correctly rounded: the same bits at every width
     magnitude.b[k] = xsimd::sqrt(torque2.b[k]) + xsimd::sqrt(force2.b[k]);
-  const int d = p_.links[i].v_index;
-  row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;
+  const LinkConstants& k = p_.links[i];
+  for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d)
+    row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;
 }
 
 // Link i's whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
@@ -1417,6 +1419,14 @@ void LaneStep<A, K>::link_bias() {
   for (int d = 0; d < p_.nv; ++d) at(l_.row_bias)[d] = V(0.0);
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
+    if (k.type == 4 && k.parent >= 0) {  // its axes' angular bias (spherical_joints.md, S-8)
+      const V* R = at(l_.R + 9 * i);
+      const V* bw = at(l_.bias_w + 3 * i);
+      const V* bp = at(l_.bias_w + 3 * k.parent);
+      const V d[3] = {bw[0] - bp[0], bw[1] - bp[1], bw[2] - bp[2]};
+      for (int a = 0; a < 3; ++a)
+        at(l_.row_bias)[k.v_index + a] = (R[a] * d[0] + R[3 + a] * d[1]) + R[6 + a] * d[2];
+    }
     if (k.type != 2) continue;
     const int p = k.parent;
     at(l_.row_bias)[k.v_index] = link_bias_law::prismatic_row_bias(
@@ -1448,6 +1458,11 @@ void LaneStep<A, K>::track_prismatic(double h_step) {
     for (int r = 0; r < 3; ++r) {
       V x = k.parent >= 0 ? at(l_.com_velocity + 3 * k.parent)[r] : root_w[r];
       if (k.type == 1) x = x + at(l_.S + 6 * i)[r] * at(l_.qd)[k.v_index];
+      if (k.type == 4) {  // S's angular rows: the start rotation's columns
+        const V* S3 = at(l_.ball_S + 18 * i);
+        const V* qd = &at(l_.qd)[k.v_index];
+        x = x + ((S3[r] * qd[0] + S3[6 + r] * qd[1]) + S3[12 + r] * qd[2]);
+      }
       w[r] = x;
       turn[r] = turn[r] + h * (x + at(l_.bias_w + 3 * i)[r]);
     }
@@ -1480,6 +1495,9 @@ void LaneStep<A, K>::clamp_prismatic() {
 template <class A, int K>
 void LaneStep<A, K>::integrate(double h_step, bool track) {
   const V h(h_step);
+  // compat physx: the poses before the (sub)step, which a spherical joint's link turns from.
+  if (p_.physx_spherical)
+    for (int i = 0; i < p_.num_links; ++i) link_pose<false>(i);
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type == 0) continue;
@@ -1491,16 +1509,19 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
     if (k.type == 4) {  // q times the quaternion of the body turn w h, normalised
       V* q = &at(l_.q)[k.q_index];
       const V* w = &at(l_.qd)[k.v_index];
-      V Q[4], d[4], o[4];
-      unit_quaternion(q, Q);
-      const V turn[3] = {w[0] * h, w[1] * h, w[2] * h};
-      turn_quaternion(turn, d);
-      quaternion_product(Q, d, o);
-      unit_quaternion(o, q);
+      if (!p_.physx_spherical) {  // compat physx turns it in the world (integrate_balls_physx)
+        V Q[4], d[4], o[4];
+        unit_quaternion(q, Q);
+        const V turn[3] = {w[0] * h, w[1] * h, w[2] * h};
+        turn_quaternion(turn, d);
+        quaternion_product(Q, d, o);
+        unit_quaternion(o, q);
+      }
       if (track)
         for (int a = 0; a < 3; ++a) {
           V& dx = row(k.v_index + a)[Layout::delta_x];
           dx = dx + h * w[a];
+          if (p_.physx_spherical) dx = dx + h * row_bias(k.v_index + a);  // S-8
         }
       continue;
     }
@@ -1511,6 +1532,95 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
       V& dx = row(k.v_index)[Layout::delta_x];
       dx = dx + h * qd;
     }
+  }
+  if (p_.physx_spherical) integrate_balls_physx(h_step);
+}
+
+// compat physx: a spherical joint's link turned in the world by h (w + B^w), w its angular
+// velocity in the step's start frames and B^w its link bias, and its quaternion read back from
+// the turned rotation in its new parent's joint frame (spherical_rows.cpp's
+// integrate_spherical_joints); the other links' rotations follow their new positions. now_R holds
+// the poses before the (sub)step on entry (integrate), after it on return.
+template <class A, int K>
+void LaneStep<A, K>::integrate_balls_physx(double h_step) {
+  const V h(h_step);
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    V* w = at(l_.ball_w + 3 * i);
+    for (int r = 0; r < 3; ++r) w[r] = k.parent >= 0 ? at(l_.ball_w + 3 * k.parent)[r] : V(0.0);
+    if (k.type == 1) {
+      for (int r = 0; r < 3; ++r) w[r] = w[r] + at(l_.S + 6 * i)[r] * at(l_.qd)[k.v_index];
+    } else if (k.type == 3 || k.type == 4) {
+      const V* qd = &at(l_.qd)[k.v_index];
+      V t[3];
+      if (k.type == 3) {
+        const V* R0 = at(l_.root_R);
+        for (int r = 0; r < 3; ++r) t[r] = (R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1]) + R0[3 * r + 2] * qd[2];
+      } else {
+        const V* S3 = at(l_.ball_S + 18 * i);
+        for (int r = 0; r < 3; ++r) t[r] = (S3[r] * qd[0] + S3[6 + r] * qd[1]) + S3[12 + r] * qd[2];
+      }
+      for (int r = 0; r < 3; ++r) w[r] = w[r] + t[r];
+    }
+    if (k.type != 4) {
+      link_pose<false>(i);
+      continue;
+    }
+    V* R = at(l_.now_R + 9 * i);
+    const V* bw = at(l_.bias_w + 3 * i);
+    const V turn[3] = {w[0] + bw[0], w[1] + bw[1], w[2] + bw[2]};
+    const V norm = sqrt_of(turn[0] * turn[0] + turn[1] * turn[1] + turn[2] * turn[2]);
+    const V angle = h * norm;
+    const M turns = V(0.0) < angle;
+    // Eigen's AngleAxis::toRotationMatrix of (angle, turn / |turn|), then times R.
+    V sn, c;
+    sincos(angle, sn, c);
+    V axis[3], sa[3], ca[3], T[9];
+    for (int r = 0; r < 3; ++r) {
+      axis[r] = turn[r] / norm;
+      sa[r] = sn * axis[r];
+      ca[r] = (V(1.0) - c) * axis[r];
+    }
+    V tmp = ca[0] * axis[1];
+    T[1] = tmp - sa[2], T[3] = tmp + sa[2];
+    tmp = ca[0] * axis[2];
+    T[2] = tmp + sa[1], T[6] = tmp - sa[1];
+    tmp = ca[1] * axis[2];
+    T[5] = tmp - sa[0], T[7] = tmp + sa[0];
+    for (int r = 0; r < 3; ++r) T[4 * r] = ca[r] * axis[r] + c;
+    V Rn[9];
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col)
+        Rn[3 * r + col] = select(turns,
+                                 (T[3 * r] * R[col] + T[3 * r + 1] * R[3 + col]) + T[3 * r + 2] * R[6 + col],
+                                 R[3 * r + col]);
+    // The link's rotation in its joint frame: E_T P^T R, P its parent's new rotation.
+    V P[9];
+    if (k.parent >= 0)
+      for (int e = 0; e < 9; ++e) P[e] = at(l_.now_R + 9 * k.parent)[e];
+    else
+      for (int e = 0; e < 9; ++e) P[e] = V(e % 4 == 0 ? 1.0 : 0.0);
+    V EP[9], Mj[9];
+    for (int a = 0; a < 3; ++a)
+      for (int cc = 0; cc < 3; ++cc)
+        EP[3 * a + cc] = (V(k.E[3 * a]) * P[3 * cc] + V(k.E[3 * a + 1]) * P[3 * cc + 1]) +
+                         V(k.E[3 * a + 2]) * P[3 * cc + 2];
+    for (int a = 0; a < 3; ++a)
+      for (int d = 0; d < 3; ++d)
+        Mj[3 * a + d] = (EP[3 * a] * Rn[d] + EP[3 * a + 1] * Rn[3 + d]) + EP[3 * a + 2] * Rn[6 + d];
+    alignas(64) double m[9][kW], qo[4][kW];
+    for (int e = 0; e < 9; ++e) Mj[e].store_aligned(m[e]);
+    V* q = &at(l_.q)[k.q_index];
+    for (int e = 0; e < 4; ++e) q[e].store_aligned(qo[e]);
+    for (int l = 0; l < kW; ++l) {
+      double ml[9], ql[4];
+      for (int e = 0; e < 9; ++e) ml[e] = m[e][l];
+      for (int e = 0; e < 4; ++e) ql[e] = qo[e][l];
+      rotation_quaternion(ml, ql);
+      for (int e = 0; e < 4; ++e) qo[e][l] = ql[e];
+    }
+    for (int e = 0; e < 4; ++e) q[e] = V::load_aligned(qo[e]);
+    for (int e = 0; e < 9; ++e) R[e] = Rn[e];
   }
 }
 
@@ -1825,6 +1935,11 @@ void LaneStep<A, K>::world_velocity(const V* R, const V* pos, const V* com, cons
           if (k.type == 1) w[r] = w[r] + a * x;
           else v[r] = v[r] + a * x;
         }
+      } else if (k.type == 4) {  // R qd: its body-frame angular velocity
+        const V* Ri = R + 9 * i;
+        const V* x = qd + k.v_index;
+        for (int r = 0; r < 3; ++r)
+          w[r] = w[r] + ((Ri[3 * r] * x[0] + Ri[3 * r + 1] * x[1]) + Ri[3 * r + 2] * x[2]);
       }
     }
     V d[3];
@@ -2298,9 +2413,10 @@ void LaneStep<A, K>::enter_ball(int i, const V* dvp, V* dv) {
       impulse[a] = at(l_.given)[v + a];
       continue;
     }
-    const V current = (at(l_.qd)[v + a] + base[a]) +
-                      ((Minv[3 * a] * impulse[0] + Minv[3 * a + 1] * impulse[1]) +
-                       Minv[3 * a + 2] * impulse[2]);
+    V current = (at(l_.qd)[v + a] + base[a]) +
+                ((Minv[3 * a] * impulse[0] + Minv[3 * a + 1] * impulse[1]) +
+                 Minv[3 * a + 2] * impulse[2]);
+    if (p_.physx_spherical) current = current + row_bias(v + a);  // S-8
     impulse[a] = impulse[a] + solve_row(v + a, current, row(v + a)[Layout::delta_x]);
   }
   V t[3], now[6], r3[3];
@@ -2385,7 +2501,7 @@ template <class A, int K>
 void LaneStep<A, K>::step() {
   if (p_.any_velocity_limit) scale_to_velocity_limits();
   kinematics_and_bias();
-  if (p_.physx_prismatic || p_.physx_floating) link_bias();
+  if (p_.physx_prismatic || p_.physx_floating || p_.physx_spherical) link_bias();
   if (p_.physx_floating) physx_start();
   articulated_pass();
   forward_pass();

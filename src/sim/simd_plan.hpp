@@ -152,6 +152,7 @@ struct Layout {
   // Spherical joints (Plan::any_spherical), per link: S, U and W as 6 x 3 (column by column),
   // D^-1 and the unit-response block as 3 x 3 (row-major).
   int ball_S = 0, ball_U = 0, ball_W = 0, ball_D_inv = 0, ball_response = 0;
+  int ball_w = 0;  ///< compat physx: each link's angular velocity of a (sub)step, start frames
   // compat physx on a floating root (Plan::physx_floating): the step's start poses (world axes,
   // positions from the root's origin), link forces (link damping), the free velocity's momentum
   // targets P0, L0 with the start's centre of mass and total mass (10), the compound inertia's
@@ -196,6 +197,8 @@ struct Plan {
   /// compat physx on a floating root: its momentum corrections and its pose integrated about its
   /// centre of mass (physx_departures.md, section 2); the links' bias (PD-1) feeds them.
   bool physx_floating = false;
+  /// compat physx with a spherical joint: its rows' link bias (S-8), its link turned in the world.
+  bool physx_spherical = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;
@@ -235,6 +238,9 @@ struct Block {
 /// out of line, so that the lane units call it on plain arrays.
 void spherical_axes(const double* q, const double* target, const double* driven, double* position,
                     double* error);
+/// compat physx: the unit quaternion of the rotation m (row-major) in q's hemisphere, written over
+/// q (w x y z): spherical_rows.cpp's, out of line.
+void rotation_quaternion(const double* m, double* q);
 
 /// The layout of p's scratch, and the doubles of scratch one block of any width needs (kGroup
 /// kMaxInterleave doubles a vector).
