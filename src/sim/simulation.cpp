@@ -231,8 +231,18 @@ void Simulation::set_state(const State& s) {
                                   ": the dof has no drive delay");
   }
   if (!s.friction_anchors.empty()) contact_rows_.check_anchors(s.friction_anchors);
-  // Checks q and the outputs before it changes anything; nothing below throws.
-  restore_state(s.q, s.drive_force, s.limit_force, s.friction_force, s.velocity_limit_force);
+  // q exactly as given (no normalisation, unlike set_q): a checkpoint's, bit for bit.
+  VecX exact = checked_configuration(*model_, s.q, /*unit=*/true);
+  check_state_vector(s.drive_force, nv, "drive_force");
+  check_state_vector(s.limit_force, nv, "limit_force");
+  check_state_vector(s.friction_force, nv, "friction_force");
+  check_state_vector(s.velocity_limit_force, nv, "velocity_limit_force");
+  // Nothing below throws.
+  state_[StateStorage::q] = exact;
+  state_[StateStorage::drive_force] = s.drive_force;
+  state_[StateStorage::limit_force] = s.limit_force;
+  state_[StateStorage::friction_force] = s.friction_force;
+  state_[StateStorage::velocity_limit_force] = s.velocity_limit_force;
   if (s.friction_anchors.empty()) contact_rows_.clear_anchors();
   else contact_rows_.set_anchors(s.friction_anchors);
   state_[StateStorage::qd] = s.qd;
@@ -243,20 +253,6 @@ void Simulation::set_state(const State& s) {
   actuated_ = true;  // actuator_force_ may be nonzero
   actuators_ = std::move(actuators);
   drive_delays_ = std::move(delays);
-}
-
-void Simulation::restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
-                               const VecX& friction_force, const VecX& velocity_limit_force) {
-  VecX exact = checked_configuration(*model_, q, /*unit=*/true);
-  check_state_vector(drive_force, model_->nv, "drive_force");
-  check_state_vector(limit_force, model_->nv, "limit_force");
-  check_state_vector(friction_force, model_->nv, "friction_force");
-  check_state_vector(velocity_limit_force, model_->nv, "velocity_limit_force");
-  state_[StateStorage::q] = exact;
-  state_[StateStorage::drive_force] = drive_force;
-  state_[StateStorage::limit_force] = limit_force;
-  state_[StateStorage::friction_force] = friction_force;
-  state_[StateStorage::velocity_limit_force] = velocity_limit_force;
 }
 
 void Simulation::set_qd(const VecX& qd) {

@@ -108,11 +108,6 @@ class Simulation {
   /// settings' (ring of delay + 1 on exactly the dofs with an actuator or a drive delay); nothing
   /// changes then.
   void set_state(const State& state);
-  /// Restores q exactly as given (no normalisation, unlike set_q; quaternions must have unit norm
-  /// within 1e-9) and the outputs of the last step (set_state: a checkpoint's state).
-  /// Sizes and finiteness are checked; nothing changes if a check fails.
-  void restore_state(const VecX& q, const VecX& drive_force, const VecX& limit_force,
-                     const VecX& friction_force, const VecX& velocity_limit_force);
 
   // Inputs.
   /// Joint forces applied through the whole step (nv), e.g. feed-forward torques.
