@@ -20,6 +20,7 @@
 #include "featherdrive/model/model_variant.hpp"
 #include "featherdrive/sim/state.hpp"
 #include "lane_engine.hpp"
+#include "workspace.hpp"
 
 namespace featherdrive {
 namespace {
@@ -518,15 +519,15 @@ void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay
   std::vector<DriveDelays> made;
   made.reserve(envs.size());
   for (size_t j = 0; j < envs.size(); ++j) {
-    DriveDelays& lines = made.emplace_back(sims_[static_cast<size_t>(envs[j])].drive_delays_);
+    DriveDelays& lines = made.emplace_back(sims_[static_cast<size_t>(envs[j])].ws_->drive_delays);
     for (int d = 0; d < nv; ++d) lines.set(d, static_cast<int>(row_of(delay, j)[d]));
   }
   for (size_t j = 0; j < envs.size(); ++j) {
     Simulation& sim = sims_[static_cast<size_t>(envs[j])];
-    sim.drive_delays_ = std::move(made[j]);
+    sim.ws_->drive_delays = std::move(made[j]);
     for (int d = 0; d < nv; ++d)
-      sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.drive_delays_.delay(d);
-    sim.row_kinds_changed_ = true;
+      sim.settings_.drive_delay[static_cast<size_t>(d)] = sim.ws_->drive_delays.delay(d);
+    sim.ws_->row_kinds_changed = true;
   }
   // The lanes' targets of a dof no longer delayed are the drive's again.
   mark(envs, repack_drives);
@@ -855,8 +856,8 @@ void Batch::step_lanes(int count) {
   const SimdIsa lane_isa = isa();
   bool control = false, actuated = false;
   for (const Simulation& s : sims_) {
-    control = control || s.has_control_stages();
-    actuated = actuated || s.actuators_.any() || s.actuated_;
+    control = control || s.ws_->has_control_stages();
+    actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
   }
   if (!control) {
     lanes_->run(a, count, lane_isa, effective_num_threads());
@@ -870,8 +871,8 @@ void Batch::step_lanes(int count) {
     for (int k = 0; k < count; ++k) {
       lane_control_stages(actuated);
       lanes_->run(a, 1, lane_isa, effective_num_threads());
-      for (int i = 0; i < n; ++i)  // Simulation::check_finite_or_throw takes the pushes back
-        if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].undo_actuators();
+      for (int i = 0; i < n; ++i)  // Stepper::check_finite_or_throw takes the pushes back
+        if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].stepper().undo_actuators();
     }
   }
   int first = -1, diverged = 0;
@@ -891,7 +892,7 @@ void Batch::step_lanes(int count) {
   }
 }
 
-// The step's control stages (Simulation::control_stages: explicit actuators, drive delays) of
+// The step's control stages (Stepper::control_stages: explicit actuators, drive delays) of
 // every environment still stepping, in scalar on its step-start state, as its Simulation runs
 // them; the lanes read their results: the joint force and the delayed dofs' targets.
 void Batch::lane_control_stages(bool actuated) {
@@ -902,9 +903,10 @@ void Batch::lane_control_stages(bool actuated) {
     Simulation& s = sims_[static_cast<size_t>(i)];
     // Only the actuators read the step-start state (the delays read the drives): the copy of
     // 1024 environments' states was an eighth of a delayed WAM's step.
-    const bool reads_state = s.actuators_.any() || s.actuated_;
-    if (reads_state) s.load_state();
-    const VecX& tau = s.control_stages();
+    const bool reads_state = s.ws_->actuators.any() || s.ws_->actuated;
+    Stepper stepper = s.stepper();
+    if (reads_state) stepper.load_state();
+    const VecX& tau = stepper.control_stages();
     if (actuated) {
       if (reads_state) lane_tau_.row(i) = tau.transpose();
       else lane_tau_.row(i) = applied.row(i);

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/core/format.hpp"
 

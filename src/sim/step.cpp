@@ -7,8 +7,8 @@
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
-#include "featherdrive/sim/simulation.hpp"
 #include "physx_stages.hpp"
+#include "workspace.hpp"
 
 namespace featherdrive {
 namespace {
@@ -23,13 +23,13 @@ double limit_erp(SolverType solver, int position_iterations) {
 
 // The step's stages: its start (once per step), the physics advance over dt, its end. With the
 // guard on, the advance may be redone as sub-steps (step_guard.cpp, docs/math/step_guard.md).
-void Simulation::step() {
+void Stepper::step() {
   const VecX& tau = begin_step();
   if (settings_.options.guard.enabled) {
     guarded_advance(tau);
   } else {
-    dt_ = settings_.options.dt;
-    target_lead_ = 0.0;
+    ws_.dt = settings_.options.dt;
+    ws_.target_lead = 0.0;
     advance(tau);
     row_forces();
   }
@@ -38,79 +38,85 @@ void Simulation::step() {
 
 // Explicit actuators on the step-start state (tau = applied force + their efforts), and the
 // delayed drives' targets for this step (drive_delay.cpp): pushed once per step.
-const VecX& Simulation::begin_step() {
+const VecX& Stepper::begin_step() {
   load_state();  // the storage keeps the step's start until commit_state
   return control_stages();
 }
 
-const VecX& Simulation::control_stages() {
+const VecX& Stepper::control_stages() {
   const VecX& tau = apply_actuators();
-  if (drive_delays_.any()) drive_delays_.push(settings_.drives);
+  if (ws_.drive_delays.any()) ws_.drive_delays.push(settings_.drives);
   return tau;
 }
 
-// The physics over dt_ from q_, qd_ with joint force tau: the rows' impulses are left in rows_.
-void Simulation::advance(const VecX& tau) {
+// The physics over the workspace's dt from its q, qd with joint force tau: the rows' impulses are
+// left in its rows.
+void Stepper::advance(const VecX& tau) {
   const Model& model = *model_;
-  const double dt = dt_;
+  const double dt = ws_.dt;
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
   // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
   // bias of compat physx and link damping read the link-frame ones.
-  if (physx() || link_damping_active_) forward_kinematics(model, data_, q_, qd_);
-  else world_poses(model, data_, q_);
+  if (physx() || ws_.link_damping_active)
+    forward_kinematics(model, ws_.data, ws_.q, ws_.qd);
+  else
+    world_poses(model, ws_.data, ws_.q);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
-  any_link_force_ = link_damping_active_ &&
-                    link_damping_forces(model, data_, settings_.link_parameters, dt, link_force_);
-  const std::vector<Vec6>* link_force = any_link_force_ ? &link_force_ : nullptr;
+  ws_.any_link_force =
+      ws_.link_damping_active &&
+      link_damping_forces(model, ws_.data, settings_.link_parameters, dt, ws_.link_force);
+  const std::vector<Vec6>* link_force = ws_.any_link_force ? &ws_.link_force : nullptr;
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1);
   // with the accelerations, in the same pass, the unit responses r = (M^-1)_jj and the
   // whole-articulation response, frozen for the step.
-  articulated_bodies(model, data_, qd_, tau, link_force);
-  accelerations_and_response(model, data_);
+  articulated_bodies(model, ws_.data, ws_.qd, tau, link_force);
+  accelerations_and_response(model, ws_.data);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((settings_.friction_coefficient.array() > 0.0).any())
-    transmitted_force_magnitudes(model, data_, link_force, subtree_force_, transmitted_force_);
+    transmitted_force_magnitudes(model, ws_.data, link_force, ws_.subtree_force,
+                                 ws_.transmitted_force);
   const bool classical_root = !physx() && model.floating_base();
   Vec6 root_qd0 = Vec6::Zero();
-  if (classical_root) root_qd0 = qd_.head<6>();
-  qd_ += dt * data_.qdd;
+  if (classical_root) root_qd0 = ws_.qd.head<6>();
+  ws_.qd += dt * ws_.data.qdd;
   if (classical_root) begin_classical_root(root_qd0, dt);
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
   if (physx()) {
-    compute_link_bias(model, data_, qd_, dt, departures_);
+    compute_link_bias(model, ws_.data, ws_.qd, dt, ws_.departures);
     if (model.floating_base())
-      correct_free_velocity_momentum(model, data_, tau, link_force, dt, departures_, qd_);
+      correct_free_velocity_momentum(model, ws_.data, tau, link_force, dt, ws_.departures, ws_.qd);
   }
-  if (link_cfm_active_)
-    link_cfm(model, data_, settings_.link_parameters, link_cfm_);  // link_cfm.cpp
+  if (ws_.link_cfm_active)
+    link_cfm(model, ws_.data, settings_.link_parameters, ws_.link_cfm);  // link_cfm.cpp
   // Rows, position iterations, position update, velocity iterations.
   if (settings_.options.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
-  if (physx() && model.floating_base()) correct_end_of_step_momentum(model, dt, departures_, q_, qd_);
+  if (physx() && model.floating_base())
+    correct_end_of_step_momentum(model, dt, ws_.departures, ws_.q, ws_.qd);
   if (classical_root) end_classical_root();
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
-  wrap_revolute_positions(model, settings_.revolute_wrap, q_);
+  wrap_revolute_positions(model, settings_.revolute_wrap, ws_.q);
 }
 
 // Outputs: each force is its accumulated impulse of the step / dt (ERRATA 7).
-void Simulation::row_forces() {
+void Stepper::row_forces() {
   const double inv_dt = 1.0 / settings_.options.dt;
   for (int d = 0; d < model_->nv; ++d) {
-    const DofRows& r = rows_[static_cast<size_t>(d)];
-    drive_force_[d] = r.drive_impulse * inv_dt;
-    if (actuated_ && actuators_.implicit(d)) {  // the row was the actuator's
-      actuator_force_[d] = drive_force_[d];
-      drive_force_[d] = 0.0;
+    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+    ws_.drive_force[d] = r.drive_impulse * inv_dt;
+    if (ws_.actuated && ws_.actuators.implicit(d)) {  // the row was the actuator's
+      ws_.actuator_force[d] = ws_.drive_force[d];
+      ws_.drive_force[d] = 0.0;
     }
-    limit_force_[d] = (r.low_impulse + r.high_impulse) * inv_dt;
-    friction_force_[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
-    velocity_limit_force_[d] = r.velocity_limit_impulse * inv_dt;
+    ws_.limit_force[d] = (r.low_impulse + r.high_impulse) * inv_dt;
+    ws_.friction_force[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
+    ws_.velocity_limit_force[d] = r.velocity_limit_impulse * inv_dt;
   }
   contact_forces();  // contact.cpp
 }
 
-void Simulation::end_step() {
+void Stepper::end_step() {
   check_finite_or_throw();
   commit_state();
   if (settings_.options.guard.enabled) commit_guard_account();
@@ -121,68 +127,69 @@ void Simulation::end_step() {
 // Rows later in a sweep can push a dof already clamped by its velocity limit past it again. Like
 // PhysX (computeLinkStates), the step starts by scaling every joint velocity by the one ratio that
 // brings the worst offender back to its limit, which keeps the direction of motion.
-void Simulation::scale_to_velocity_limits() {
+void Stepper::scale_to_velocity_limits() {
   double ratio = 1.0;
   for (int d = 0; d < model_->nv; ++d)
-    if (std::abs(qd_[d]) > settings_.max_joint_velocity[d])
-      ratio = std::min(ratio, settings_.max_joint_velocity[d] / std::abs(qd_[d]));
-  if (ratio < 1.0) qd_ *= ratio;
+    if (std::abs(ws_.qd[d]) > settings_.max_joint_velocity[d])
+      ratio = std::min(ratio, settings_.max_joint_velocity[d] / std::abs(ws_.qd[d]));
+  if (ratio < 1.0) ws_.qd *= ratio;
 }
 
 // Every dof's rows, set up once per step from the start-of-step configuration (eq. 20-24, 35-39).
 // A dof whose only row is an undelayed drive needs its drive row alone: the other fields stay as
 // the last full setup left them (the drive row writes no other accumulator).
-void Simulation::setup_rows(double h, bool tgs) {
+void Stepper::setup_rows(double h, bool tgs) {
   const Model& model = *model_;
   const int nv = model.nv;
-  int* const order = dof_order_.data();
-  if (row_kinds_changed_) {
+  int* const order = ws_.dof_order.data();
+  if (ws_.row_kinds_changed) {
     int front = 0, back = nv;
     for (int d = 0; d < nv; ++d) {
       setup_dof_rows(d, h, tgs);
       // An implicit actuator's row is set up from the actuator, not from settings_.drives.
-      const bool lone = rows_[static_cast<size_t>(d)].drive_only && !drive_delays_.delayed(d) &&
-                        !actuators_.implicit(d) &&
+      const bool lone = ws_.rows[static_cast<size_t>(d)].drive_only &&
+                        !ws_.drive_delays.delayed(d) && !ws_.actuators.implicit(d) &&
                         model.links[model.dof_link[d]].joint_type != JointType::spherical;
       order[lone ? front++ : --back] = d;
     }
-    num_lone_drives_ = front;
-    row_kinds_changed_ = false;
+    ws_.num_lone_drives = front;
+    ws_.row_kinds_changed = false;
   } else {
     setup_lone_drives(h, tgs);
-    for (int k = nv - 1; k >= num_lone_drives_; --k) setup_dof_rows(order[k], h, tgs);
+    for (int k = nv - 1; k >= ws_.num_lone_drives; --k) setup_dof_rows(order[k], h, tgs);
   }
   bool other_rows = false;  // rows on a dof that is not a lone drive
-  any_undriven_rows_ = false;
-  for (int k = num_lone_drives_; k < nv; ++k) {
-    const DofRows& rows = rows_[static_cast<size_t>(order[k])];
+  ws_.any_undriven_rows = false;
+  for (int k = ws_.num_lone_drives; k < nv; ++k) {
+    const DofRows& rows = ws_.rows[static_cast<size_t>(order[k])];
     other_rows = other_rows || rows.active();
-    any_undriven_rows_ = any_undriven_rows_ || (rows.active() && !rows.drive_only);
+    ws_.any_undriven_rows = ws_.any_undriven_rows || (rows.active() && !rows.drive_only);
   }
-  any_rows_ = num_lone_drives_ > 0 || other_rows;
-  only_lone_drives_pgs_ = !other_rows && !tgs && !physx() && mimic_.empty();
-  delta_x_.setZero();
-  if (!mimic_.empty())  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient
-    mimic_.setup(model, data_, h,
-                 limit_erp(settings_.options.solver, settings_.options.position_iterations));
-  if (target_lead_ != 0.0) lead_drive_targets();  // a guard sub-step (step_guard.cpp)
+  ws_.any_rows = ws_.num_lone_drives > 0 || other_rows;
+  ws_.only_lone_drives_pgs = !other_rows && !tgs && !physx() && ws_.mimic.empty();
+  ws_.delta_x.setZero();
+  // mimic_solve.cpp: the rows' responses, with the limits' bias coefficient.
+  if (!ws_.mimic.empty())
+    ws_.mimic.setup(model, ws_.data, h,
+                    limit_erp(settings_.options.solver, settings_.options.position_iterations));
+  if (ws_.target_lead != 0.0) lead_drive_targets();  // a guard sub-step (step_guard.cpp)
 }
 
 // The lone drives' rows (setup_dof_rows's fields that change from step to step), in one loop
 // over raw pointers: Eigen's stores may alias anything, so the compiler would reload every
 // vector's data pointer after each of them.
-void Simulation::setup_lone_drives(double h, bool tgs) {
+void Stepper::setup_lone_drives(double h, bool tgs) {
   const int* const dof_link = model_->dof_link.data();
-  const Data::LinkInfo* const info = data_.info.data();
-  const double* const r_of = data_.inverse_mass_diagonal.data();
-  const double* const q = q_.data();
-  const double* const cfm = link_cfm_.data();
-  const double* const applied = applied_force_.data();
+  const Data::LinkInfo* const info = ws_.data.info.data();
+  const double* const r_of = ws_.data.inverse_mass_diagonal.data();
+  const double* const q = ws_.q.data();
+  const double* const cfm = ws_.link_cfm.data();
+  const double* const applied = ws_.applied_force.data();
   const Drive* const drives = settings_.drives.data();
-  DofRows* const rows = rows_.data();
-  const int* const order = dof_order_.data();
-  const double dt = dt_;
-  for (int k = 0; k < num_lone_drives_; ++k) {
+  DofRows* const rows = ws_.rows.data();
+  const int* const order = ws_.dof_order.data();
+  const double dt = ws_.dt;
+  for (int k = 0; k < ws_.num_lone_drives; ++k) {
     const int d = order[k];
     const int i = dof_link[d];
     const Data::LinkInfo& link = info[i];
@@ -199,12 +206,12 @@ void Simulation::setup_lone_drives(double h, bool tgs) {
 }
 
 // Dof d's rows, every field.
-void Simulation::setup_dof_rows(int d, double h, bool tgs) {
+void Stepper::setup_dof_rows(int d, double h, bool tgs) {
   const Model& model = *model_;
-  const double dt = dt_;
+  const double dt = ws_.dt;
   auto drive_seen = [this](int dof) -> const Drive& {
-    return drive_delays_.delayed(dof) ? drive_delays_.drive_seen(dof)
-                                      : settings_.drives[static_cast<size_t>(dof)];
+    return ws_.drive_delays.delayed(dof) ? ws_.drive_delays.drive_seen(dof)
+                                         : settings_.drives[static_cast<size_t>(dof)];
   };
   // A spherical joint's three drives, twist first: their targets make one rotation.
   auto axis_drives = [&](int dof) {
@@ -212,13 +219,13 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
     return std::array<const Drive*, 3>{&drive_seen(first), &drive_seen(first + 1),
                                        &drive_seen(first + 2)};
   };
-  DofRows& rows = rows_[static_cast<size_t>(d)];
+  DofRows& rows = ws_.rows[static_cast<size_t>(d)];
   // Data's compact copy of the link: a Link spreads over a kilobyte.
-  const Data::LinkInfo& link = data_.info[model.dof_link[d]];
+  const Data::LinkInfo& link = ws_.data.info[model.dof_link[d]];
   const bool spherical = link.type == JointType::spherical;
   if (link.type != JointType::revolute && link.type != JointType::prismatic && !spherical) {
     rows = DofRows{};
-    sweep_.has_rows[d] = 0;
+    ws_.sweep.has_rows[d] = 0;
     return;
   }
   // Every field is set below; the accumulators start from zero.
@@ -229,12 +236,12 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   rows.low_impulse = 0.0;
   rows.high_impulse = 0.0;
   rows.velocity_limit_impulse = 0.0;
-  const double r = data_.inverse_mass_diagonal[d];
+  const double r = ws_.data.inverse_mass_diagonal[d];
   // A spherical axis's position is PhysX's, from the quaternion (spherical_rows.cpp).
-  const double x0 = spherical ? spherical_axis_position(model, q_, d) : q_[link.q_index];
+  const double x0 = spherical ? spherical_axis_position(model, ws_.q, d) : ws_.q[link.q_index];
   // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
-  const double cfm = std::max(link_cfm_[model.dof_link[d]],
-                              link.parent >= 0 ? link_cfm_[link.parent] : 0.0);
+  const double cfm =
+      std::max(ws_.link_cfm[model.dof_link[d]], link.parent >= 0 ? ws_.link_cfm[link.parent] : 0.0);
   rows.response = r;
   const Drive& drive = drive_seen(d);
   const bool driven = drive.type != DriveType::none;
@@ -243,29 +250,29 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
   // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
   const double x0_drive =
       spherical && rows.has_drive
-          ? drive.target_position - spherical_axis_drive_error(model, q_, d, axis_drives(d))
+          ? drive.target_position - spherical_axis_drive_error(model, ws_.q, d, axis_drives(d))
           : x0;
   rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
                                                            ? r + cfm : r, x0_drive, h, dt, tgs)
                               : DriveRow{};
   // An implicit actuator's law is the row of its (driveless) dof (implicit_actuators.md, I4-I7).
   rows.actuator = nullptr;
-  if (actuators_.implicit(d)) {
-    const ExplicitActuator& actuator = actuators_.actuator(d);
+  if (ws_.actuators.implicit(d)) {
+    const ExplicitActuator& actuator = ws_.actuators.actuator(d);
     rows.has_drive = true;
-    rows.drive = setup_actuator_row(actuator, actuators_.command_seen(d), r, x0, h, dt, tgs);
+    rows.drive = setup_actuator_row(actuator, ws_.actuators.command_seen(d), r, x0, h, dt, tgs);
     if (actuator_clip_depends_on_state(actuator)) rows.actuator = &actuator;
     rows.actuator_x0 = x0;
   }
   const ActuatorEnvelope& envelope = settings_.envelopes[static_cast<size_t>(d)];
   rows.has_envelope = driven && envelope.active();
   rows.envelope = envelope;
-  rows.external_impulse = applied_force_[d] * dt;
+  rows.external_impulse = ws_.applied_force[d] * dt;
   const JointFriction& friction = settings_.friction[static_cast<size_t>(d)];
   rows.has_transmission_friction = settings_.friction_coefficient[d] > 0.0 &&
                                    friction.static_effort == 0.0 && friction.viscous == 0.0;
   rows.transmission_friction_bound =
-      settings_.friction_coefficient[d] * h * transmitted_force_[model.dof_link[d]];
+      settings_.friction_coefficient[d] * h * ws_.transmitted_force[model.dof_link[d]];
   rows.has_friction = friction.active();
   rows.static_friction_impulse = friction.static_effort * dt;
   rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
@@ -281,7 +288,7 @@ void Simulation::setup_dof_rows(int d, double h, bool tgs) {
                     !(rows.max_velocity < DofRows::kNoVelocityLimit);
   // 1 / (r + cfm) is read by every row but a lone drive.
   rows.recip_response = rows.drive_only ? 0.0 : 1.0 / (r + cfm);
-  sweep_.has_rows[d] = rows.active() ? 1 : 0;
+  ws_.sweep.has_rows[d] = rows.active() ? 1 : 0;
 }
 
 // Where a contact solve stands: TGS's elapsed time is the sub-step's start; the velocity
@@ -298,89 +305,92 @@ static ContactPhase contact_phase(const RowPhase& phase) {
 
 // The phase is updated in place with each dof's delta_x (a copy per row solve was a fifth of the
 // row solves' cost).
-void Simulation::sweep(RowPhase& phase) {
+void Stepper::sweep(RowPhase& phase) {
   // PhysX solves the mimic rows first in every iteration (solveInternalConstraints).
-  if (!mimic_.empty())
-    mimic_.solve(*model_, data_, q_, departures_.row_bias.data(), phase.velocity_iteration, qd_);
+  if (!ws_.mimic.empty())
+    ws_.mimic.solve(*model_, ws_.data, ws_.q, ws_.departures.row_bias.data(),
+                    phase.velocity_iteration, ws_.qd);
   // Self-collision rows too, as PhysX's constraints outside the sweep (contact.md, C31).
-  if (self_contacts_active_) self_contacts_.solve(*model_, data_, contact_phase(phase), qd_);
-  if (!any_rows_ && !contacts_active_) return;
+  if (ws_.self_contacts_active)
+    ws_.self_contacts.solve(*model_, ws_.data, contact_phase(phase), ws_.qd);
+  if (!ws_.any_rows && !ws_.contacts_active) return;
   // Raw pointers and a copy of the phase: the compiler need not reload them after each store.
-  DofRows* const rows = rows_.data();
-  const double* const row_bias = departures_.row_bias.data();
-  const double* const delta_x = delta_x_.data();
+  DofRows* const rows = ws_.rows.data();
+  const double* const row_bias = ws_.departures.row_bias.data();
+  const double* const delta_x = ws_.delta_x.data();
   auto solve_row = [rows, row_bias, delta_x, phase](int dof, double v) mutable {
     phase.delta_x = delta_x[dof];
     return solve_dof_rows(rows[dof], v + row_bias[dof], phase);
   };
-  if (contacts_active_) {
+  if (ws_.contacts_active) {
     // Each link's contact rows right after its joint's rows (docs/math/contact.md, C15), at
     // the link's velocity of the sweep's start plus the sweep's change.
     contact_link_velocities();
     const ContactPhase contacts = contact_phase(phase);
-    gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row, [&](int link, Vec6& dv) {
-      return contact_rows_.solve_link(link, contact_link_velocity_[static_cast<size_t>(link)], dv,
-                                      contacts);
+    gauss_seidel_sweep(*model_, ws_.data, ws_.sweep, ws_.qd, solve_row, [&](int link, Vec6& dv) {
+      return ws_.contact_rows.solve_link(link, ws_.contact_link_velocity[static_cast<size_t>(link)],
+                                         dv, contacts);
     });
     return;
   }
-  if (only_lone_drives_pgs_) {  // the common case of drives alone, without the general row law
-    gauss_seidel_sweep(*model_, data_, sweep_, qd_,
+  if (ws_.only_lone_drives_pgs) {  // the common case of drives alone, without the general row law
+    gauss_seidel_sweep(*model_, ws_.data, ws_.sweep, ws_.qd,
                        [rows](int dof, double v) { return solve_lone_drive_pgs(rows[dof], v); });
     return;
   }
-  gauss_seidel_sweep(*model_, data_, sweep_, qd_, solve_row);
+  gauss_seidel_sweep(*model_, ws_.data, ws_.sweep, ws_.qd, solve_row);
 }
 
 // PGS: the rows converge on the coupled implicit step; positions move with the velocity after the
 // position iterations; velocity iterations continue the same update without new position error
 // (spec "PGS Velocity Iteration").
-void Simulation::solve_pgs() {
-  const double dt = dt_;
+void Stepper::solve_pgs() {
+  const double dt = ws_.dt;
   setup_rows(dt, /*tgs=*/false);
   RowPhase phase;
   phase.dt = dt;
   phase.h = dt;
   phase.limit_erp = limit_erp(SolverType::pgs, settings_.options.position_iterations);
-  if (contacts_active_ || self_contacts_active_) setup_contacts(phase);
+  if (ws_.contacts_active || ws_.self_contacts_active) setup_contacts(phase);
   const int last = settings_.options.position_iterations - 1;
   for (int it = 0; it < last; ++it) sweep(phase);
-  if (track_convergence_)  // the impulses before the last iteration, then its change
+  if (ws_.track_convergence)  // the impulses before the last iteration, then its change
     for (int d = 0; d < model_->nv; ++d)
-      last_drive_change_[d] = rows_[static_cast<size_t>(d)].drive_impulse;
+      ws_.last_drive_change[d] = ws_.rows[static_cast<size_t>(d)].drive_impulse;
   sweep(phase);
-  if (track_convergence_)
+  if (ws_.track_convergence)
     for (int d = 0; d < model_->nv; ++d)
-      last_drive_change_[d] = rows_[static_cast<size_t>(d)].drive_impulse - last_drive_change_[d];
-  departures_.qd_position = qd_;
+      ws_.last_drive_change[d] =
+          ws_.rows[static_cast<size_t>(d)].drive_impulse - ws_.last_drive_change[d];
+  ws_.departures.qd_position = ws_.qd;
   integrate_positions(dt);
   phase.velocity_iteration = true;
   // A guard sub-step runs none: at every sub-step they fed energy into long chains
   // (docs/math/step_guard.md, "The sub-step law").
   const int velocity_iterations =
-      dt_ == settings_.options.dt ? settings_.options.velocity_iterations : 0;
+      ws_.dt == settings_.options.dt ? settings_.options.velocity_iterations : 0;
   for (int it = 0; it < velocity_iterations; ++it) sweep(phase);
   if (physx())  // prismatic_limits.cpp
-    clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
+    clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, ws_.q);
 }
 
 // TGS: each position iteration is a sub-step of rho = dt / n with a fresh drive impulse, the
 // target interpolated (eq. 41) and the position change tracked (eq. 42-45); the inertia stays that
 // of the step's start. Drive impulses are frozen in the velocity iterations (spec "TGS Velocity
 // Iteration"); friction, limits and velocity limits keep acting there.
-void Simulation::solve_tgs() {
-  const double dt = dt_;
+void Stepper::solve_tgs() {
+  const double dt = ws_.dt;
   const int n = settings_.options.position_iterations;
   const double rho = dt / n;
   setup_rows(rho, /*tgs=*/true);
-  if (track_convergence_) last_drive_change_.setZero();  // no iteration to converge
+  if (ws_.track_convergence) ws_.last_drive_change.setZero();  // no iteration to converge
   RowPhase phase;
   phase.dt = dt;
   phase.h = rho;
   phase.tgs = true;
   phase.limit_erp = limit_erp(SolverType::tgs, n);
-  if (contacts_active_ || self_contacts_active_) setup_contacts(phase);
-  departures_.qd_position.setZero();
+  if (ws_.contacts_active || ws_.self_contacts_active) setup_contacts(phase);
+  ws_.departures.qd_position.setZero();
   for (int i = 1; i <= n; ++i) {
     phase.time_to_step_end = dt - i * rho;
     sweep(phase);
@@ -389,22 +399,24 @@ void Simulation::solve_tgs() {
     // from recordDeltaMotion), so the next sub-step's rows and the velocity iterations measure
     // the position change from the clamped pose (prismatic_limits.cpp).
     if (physx())
-      clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, q_);
-    delta_x_ += rho * qd_;
+      clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, ws_.q);
+    ws_.delta_x += rho * ws_.qd;
     if (physx()) {
       // A spherical row's position change carries its link bias (spherical_joints.md, eq. S-8);
       // a prismatic row's is measured again below.
-      delta_x_ += rho * departures_.row_bias;
+      ws_.delta_x += rho * ws_.departures.row_bias;
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1);
       // the sub-step's poses and turns it leaves are the contacts' too (contact.md, C25a).
-      track_prismatic_position_change(*model_, q_, qd_, rho, departures_, delta_x_);
-      departures_.qd_position += (1.0 / n) * qd_;
+      track_prismatic_position_change(*model_, ws_.q, ws_.qd, rho, ws_.departures, ws_.delta_x);
+      ws_.departures.qd_position += (1.0 / n) * ws_.qd;
     }
-    if (contacts_active_ || self_contacts_active_) track_contacts(rho);
+    if (ws_.contacts_active || ws_.self_contacts_active) track_contacts(rho);
   }
   phase.velocity_iteration = true;
   // Drives alone apply nothing there: the sweep would leave every velocity as it is.
-  if (!any_undriven_rows_ && mimic_.empty() && !contacts_active_ && !self_contacts_active_) return;
+  if (!ws_.any_undriven_rows && ws_.mimic.empty() && !ws_.contacts_active &&
+      !ws_.self_contacts_active)
+    return;
   for (int it = 0; it < settings_.options.velocity_iterations; ++it) sweep(phase);
 }
 
@@ -412,42 +424,147 @@ void Simulation::solve_tgs() {
 // over the free update, which makes R0 v_b the classical velocity of its origin at the step's end
 // (v_O + dt a_O) instead of the spatial one; the rows and the position update use that, and the
 // step's end expresses it in the root's new axes (docs/math/contact.md, C26-C28).
-void Simulation::begin_classical_root(const Vec6& root_qd0, double dt) {
+void Stepper::begin_classical_root(const Vec6& root_qd0, double dt) {
   const Vec3 w = root_qd0.head<3>(), v = root_qd0.tail<3>();
-  qd_.segment<3>(3) += dt * w.cross(v);
-  root_rotation0_ = Quat(q_[3], q_[4], q_[5], q_[6]).normalized().toRotationMatrix();
+  ws_.qd.segment<3>(3) += dt * w.cross(v);
+  ws_.root_rotation0 = Quat(ws_.q[3], ws_.q[4], ws_.q[5], ws_.q[6]).normalized().toRotationMatrix();
 }
 
-void Simulation::end_classical_root() {
-  const Mat3 R1 = Quat(q_[3], q_[4], q_[5], q_[6]).normalized().toRotationMatrix();
-  qd_.segment<3>(3) = R1.transpose() * (root_rotation0_ * qd_.segment<3>(3));
+void Stepper::end_classical_root() {
+  const Mat3 R1 = Quat(ws_.q[3], ws_.q[4], ws_.q[5], ws_.q[6]).normalized().toRotationMatrix();
+  ws_.qd.segment<3>(3) = R1.transpose() * (ws_.root_rotation0 * ws_.qd.segment<3>(3));
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of
 // the step's start frame, as PhysX keeps it (updateRootBody, recordDeltaMotion).
-void Simulation::integrate_positions(double h) {
+void Stepper::integrate_positions(double h) {
   // compat physx turns a spherical joint's link in the world as PhysX does (spherical_rows.cpp):
   // the rotations before the sub-step.
   const bool spherical = physx() && has_spherical_joints(*model_);
-  if (spherical) world_pose(*model_, q_, departures_.now);
+  if (spherical) world_pose(*model_, ws_.q, ws_.departures.now);
   if (!model_->floating_base()) {
-    integrate_configuration(*model_, q_, qd_, h, q_);
+    integrate_configuration(*model_, ws_.q, ws_.qd, h, ws_.q);
   } else if (!physx()) {
     // The root's origin moves with its world velocity in the step's start axes (R0 v_b), the
     // velocity the rows solved for (docs/math/contact.md, C27).
-    const Vec3 p = q_.head<3>();
-    integrate_configuration(*model_, q_, qd_, h, q_);
-    q_.head<3>() = p + h * (root_rotation0_ * qd_.segment<3>(3));
+    const Vec3 p = ws_.q.head<3>();
+    integrate_configuration(*model_, ws_.q, ws_.qd, h, ws_.q);
+    ws_.q.head<3>() = p + h * (ws_.root_rotation0 * ws_.qd.segment<3>(3));
   } else {
     const int iq = model_->links[0].q_index;
-    const Eigen::Matrix<double, 7, 1> root = q_.segment<7>(iq);
-    integrate_configuration(*model_, q_, qd_, h, q_);
-    q_.segment<7>(iq) = root;
-    integrate_root_about_com(*model_, qd_, h, departures_, q_);
+    const Eigen::Matrix<double, 7, 1> root = ws_.q.segment<7>(iq);
+    integrate_configuration(*model_, ws_.q, ws_.qd, h, ws_.q);
+    ws_.q.segment<7>(iq) = root;
+    integrate_root_about_com(*model_, ws_.qd, h, ws_.departures, ws_.q);
   }
   if (spherical)
-    integrate_spherical_joints(*model_, data_.world_rotation, qd_,
-                               &departures_.bias_w, h, departures_, q_);
+    integrate_spherical_joints(*model_, ws_.data.world_rotation, ws_.qd, &ws_.departures.bias_w, h,
+                               ws_.departures, ws_.q);
+}
+
+// Called by step() first: the efforts on the state the step starts from, added to the applied
+// force for the whole step (eq. 10 of docs/math/explicit_actuators.md).
+const VecX& Stepper::apply_actuators() {
+  ws_.actuator_force_start = ws_.actuator_force;
+  ws_.actuated_start = ws_.actuated;
+  if (!ws_.actuators.any()) {
+    if (ws_.actuated) ws_.actuator_force.setZero();
+    ws_.actuated = false;
+    return ws_.applied_force;
+  }
+  ws_.actuators.compute(*model_, ws_.q, ws_.qd, settings_.drives, ws_.actuator_force);
+  ws_.joint_force = ws_.applied_force + ws_.actuator_force;
+  ws_.actuated = true;
+  return ws_.joint_force;
+}
+
+// What apply_actuators() and the drive delays' push changed, taken back when the step diverges
+// (the state itself is only committed by a whole step).
+void Stepper::undo_actuators() {
+  if (ws_.actuators.any()) ws_.actuators.undo_push();
+  if (ws_.drive_delays.any()) ws_.drive_delays.undo_push();
+  ws_.actuator_force = ws_.actuator_force_start;
+  ws_.actuated = ws_.actuated_start;
+}
+
+// The step's working copies of the state it starts from (the step writes every force); the
+// storage keeps it until the step is committed, so a step that diverges leaves it as it was.
+void Stepper::load_state() {
+  ws_.q = state_[StateStorage::q];
+  ws_.qd = state_[StateStorage::qd];
+  ws_.applied_force = state_[StateStorage::applied_force];
+}
+
+void Stepper::commit_state() {
+  state_[StateStorage::q] = ws_.q;
+  state_[StateStorage::qd] = ws_.qd;
+  state_[StateStorage::drive_force] = ws_.drive_force;
+  state_[StateStorage::limit_force] = ws_.limit_force;
+  state_[StateStorage::friction_force] = ws_.friction_force;
+  state_[StateStorage::velocity_limit_force] = ws_.velocity_limit_force;
+}
+
+void Stepper::check_finite_or_throw() {
+  const Model& model = *model_;
+  // A diverged step reports no contacts (its forces may be the culprit).
+  auto diverged = [&](const std::string& what, double value) {
+    const long step = step_count_ + 1;
+    const double t = time_;
+    undo_actuators();
+    ws_.num_contacts = 0;
+    std::fill(ws_.link_contact_force.begin(), ws_.link_contact_force.end(), Vec3::Zero());
+    std::ostringstream s;
+    s.precision(6);
+    // A NaN's sign is the operation order's (the lanes' may differ): "nan" whatever it is.
+    s << "simulation diverged at step " << step << " (t = " << t << " s): " << what << " = ";
+    if (std::isnan(value)) s << "nan";
+    else s << value;
+    s << "; the state is left as it was before this step (lower dt or the gains)";
+    throw DivergenceError(s.str());
+  };
+  auto fail = [&](const char* quantity, int dof, double value) {
+    diverged("joint '" + model.links[model.dof_link[dof]].joint_name + "' " + quantity, value);
+  };
+  // x * 0 is 0 for a finite x and NaN otherwise, so one sum tells whether all are finite; the
+  // search for the culprit runs only when one is not. The contact forces too: impulse / dt can
+  // overflow where the state stays finite (found by fuzzing: dt = 1e-100).
+  double zero = (ws_.qd.array() * 0.0).sum() + (ws_.drive_force.array() * 0.0).sum() +
+                (ws_.limit_force.array() * 0.0).sum() + (ws_.friction_force.array() * 0.0).sum() +
+                (ws_.velocity_limit_force.array() * 0.0).sum() + (ws_.q.array() * 0.0).sum();
+  if (ws_.contacts_active)
+    for (const Vec3& f : ws_.link_contact_force) zero += (f.array() * 0.0).sum();
+  if (zero == 0.0 && std::isfinite(time_ + settings_.options.dt)) return;
+  // Velocities and forces first: a non-finite velocity also makes the position non-finite, and
+  // the velocity is the nearer cause.
+  for (int d = 0; d < model.nv; ++d) {
+    if (!std::isfinite(ws_.qd[d])) fail("velocity qd", d, ws_.qd[d]);
+    if (!std::isfinite(ws_.drive_force[d])) fail("drive force", d, ws_.drive_force[d]);
+    if (!std::isfinite(ws_.limit_force[d])) fail("limit force", d, ws_.limit_force[d]);
+    if (!std::isfinite(ws_.friction_force[d])) fail("friction force", d, ws_.friction_force[d]);
+    if (!std::isfinite(ws_.velocity_limit_force[d]))
+      fail("velocity limit force", d, ws_.velocity_limit_force[d]);
+  }
+  for (const Link& link : model.links)
+    for (int k = 0; k < link.nq; ++k)
+      if (!std::isfinite(ws_.q[link.q_index + k])) {
+        if (link.nv > 0)
+          fail("position q", link.v_index + std::min(k, link.nv - 1), ws_.q[link.q_index + k]);
+      }
+  for (size_t l = 0; l < ws_.link_contact_force.size(); ++l)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(ws_.link_contact_force[l][k]))
+        diverged("link '" + model.links[l].name + "' contact force f" + "xyz"[k],
+                 ws_.link_contact_force[l][k]);
+  // The clock itself (found by fuzzing: dt = 1e308 twice made the time +inf without an error).
+  if (!std::isfinite(time_ + settings_.options.dt)) {
+    undo_actuators();
+    std::ostringstream s;
+    s.precision(6);
+    s << "simulation diverged at step " << step_count_ + 1 << " (t = " << time_
+      << " s): time t + dt = " << time_ + settings_.options.dt
+      << " is not finite; the state is left as it was before this step (lower dt)";
+    throw DivergenceError(s.str());
+  }
 }
 
 }  // namespace featherdrive

@@ -12,7 +12,7 @@
 #include "featherdrive/algorithm/energy.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/core/format.hpp"
-#include "featherdrive/sim/simulation.hpp"
+#include "workspace.hpp"
 
 namespace featherdrive {
 namespace {
@@ -37,14 +37,14 @@ double rotation_angle(const double* a, const double* b) {
 
 }  // namespace
 
-void Simulation::size_guard() {
-  guard_data_.emplace(*model_);
-  const Eigen::Index nq = model_->nq, nv = model_->nv;
-  guard_q0_ = VecX::Zero(nq);
-  guard_qd0_ = guard_force_ = guard_actuator_ = guard_qd1_ = VecX::Zero(nv);
-  guard_q1_ = VecX::Zero(nq);
-  for (VecX& v : guard_impulse_) v = VecX::Zero(nv);
-  guard_e1_valid_ = false;
+void Workspace::size_guard(const Model& model) {
+  guard_data.emplace(model);
+  const Eigen::Index nq = model.nq, nv = model.nv;
+  guard_q0 = VecX::Zero(nq);
+  guard_qd0 = guard_force = guard_actuator = guard_qd1 = VecX::Zero(nv);
+  guard_q1 = VecX::Zero(nq);
+  for (VecX& v : guard_impulse) v = VecX::Zero(nv);
+  guard_e1_valid = false;
 }
 
 void Simulation::set_guard_account(const GuardAccount& account) {
@@ -57,24 +57,24 @@ void Simulation::set_guard_account(const GuardAccount& account) {
   check(account.created, "created", true);
   check(account.dissipated, "dissipated", false);
   check(account.scale, "scale", false);
-  guard_account_ = account;
+  ws_->guard_account = account;
 }
 
 void Simulation::reset_guard_counters() {
-  guard_substeps_ = 1;
-  guard_triggers_ = 0;
-  guard_exhausted_ = 0;
+  ws_->guard_substeps = 1;
+  ws_->guard_triggers = 0;
+  ws_->guard_exhausted = 0;
 }
 
-void Simulation::guard_energy(const VecX& q, const VecX& qd, double e[2]) {
-  forward_kinematics(*model_, *guard_data_, q, qd);
-  e[0] = kinetic_energy(*model_, *guard_data_, qd);
-  e[1] = potential_energy(*model_, *guard_data_);
+void Stepper::guard_energy(const VecX& q, const VecX& qd, double e[2]) {
+  forward_kinematics(*model_, *ws_.guard_data, q, qd);
+  e[0] = kinetic_energy(*model_, *ws_.guard_data, qd);
+  e[1] = potential_energy(*model_, *ws_.guard_data);
 }
 
-bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
+bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
   const Model& model = *model_;
-  const double h = dt_;
+  const double h = ws_.dt;
   const double bound = settings_.options.guard.max_joint_step;
   bool moved_too_far = false;
   double work = 0.0;  // eq. (G-3): sum over dofs of the joint force's impulse times the motion
@@ -83,36 +83,37 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   // Explicit actuators' efforts are evaluated at the start of the (sub-)step: their work is the
   // trapezoid of the efforts at its start and end (eq. G-3), which for a spring is the change of
   // its energy, so that an explicit law's overshoot shows as energy gained.
-  const bool actuated = actuators_.any();
-  if (actuated) actuators_.evaluate(*model_, q_, qd_, guard_force_);
+  const bool actuated = ws_.actuators.any();
+  if (actuated) ws_.actuators.evaluate(*model_, ws_.q, ws_.qd, ws_.guard_force);
   auto impulse = [&](int d) {
-    const DofRows& r = rows_[static_cast<size_t>(d)];
+    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
     const double explicit_force =
-        actuated ? tau[d] + 0.5 * (guard_force_[d] - (tau[d] - applied_force_[d])) : tau[d];
+        actuated ? tau[d] + 0.5 * (ws_.guard_force[d] - (tau[d] - ws_.applied_force[d])) : tau[d];
     return explicit_force * h + r.drive_impulse + r.low_impulse + r.high_impulse +
            r.friction_impulse + r.transmission_friction_applied + r.velocity_limit_impulse;
   };
   for (const Link& link : model.links) {
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
       // A wrapped revolute joint's position jumps by 2 pi at the wrap: the move is modulo 2 pi.
-      double dq = q_[link.q_index] - guard_q0_[link.q_index];
+      double dq = ws_.q[link.q_index] - ws_.guard_q0[link.q_index];
       if (settings_.revolute_wrap[static_cast<size_t>(link.v_index)] == RevoluteWrap::wrapped)
         dq = std::remainder(dq, 2.0 * std::numbers::pi);
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
       work += force * dq;
-      bracket += drive_bracket(link.v_index, guard_q0_[link.q_index], dq, h);
-      work_rounding += std::abs(force) * (std::abs(q_[link.q_index]) + std::abs(dq));
+      bracket += drive_bracket(link.v_index, ws_.guard_q0[link.q_index], dq, h);
+      work_rounding += std::abs(force) * (std::abs(ws_.q[link.q_index]) + std::abs(dq));
     } else if (link.joint_type == JointType::spherical || link.joint_type == JointType::floating) {
       // The rotation's angle (a floating base's translation is not bounded); the work over the
       // velocity coordinates, the motion h qd.
       const int iq = link.q_index + (link.joint_type == JointType::floating ? 3 : 0);
       moved_too_far =
-          moved_too_far || !(rotation_angle(guard_q0_.data() + iq, q_.data() + iq) <= bound);
-      for (int k = 0; k < link.nv; ++k) work += impulse(link.v_index + k) * qd_[link.v_index + k];
+          moved_too_far || !(rotation_angle(ws_.guard_q0.data() + iq, ws_.q.data() + iq) <= bound);
+      for (int k = 0; k < link.nv; ++k)
+        work += impulse(link.v_index + k) * ws_.qd[link.v_index + k];
     }
   }
-  guard_energy(q_, qd_, e1);
+  guard_energy(ws_.q, ws_.qd, e1);
   // eq. (G-4), (G-5); a NaN anywhere fails.
   const double excess = (e1[0] + e1[1]) - (e0[0] + e0[1]) - work;
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
@@ -122,7 +123,7 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
   // Test (iii), eq. (G-7)-(G-9): the account over the run, a sub-step's memory fading by its
   // share of the step.
   const double leak = h == settings_.options.dt ? kAccountLeak : std::pow(kAccountLeak, h / settings_.options.dt);
-  GuardAccount& next = guard_account_next_;
+  GuardAccount& next = ws_.guard_account_next;
   const double created = excess + bracket;
   next.created = leak * next.created + created;
   next.dissipated = leak * next.dissipated + h * damper_power();
@@ -139,16 +140,16 @@ bool Simulation::guard_passes(const VecX& tau, const double e0[2], double e1[2])
 // took, F dq + dU + kd (dq / h - v_T) dq; -kp dq^2 / 2 for a converged PGS row, positive where
 // an unconverged row pushed harder than its spring. Not for rows another bound shaped (max force,
 // an envelope) nor actuators' rows. TGS applies its force in sub-steps: credit (G-11).
-double Simulation::drive_bracket(int d, double q0, double dq, double h) const {
-  const DofRows& r = rows_[static_cast<size_t>(d)];
-  if (!r.has_drive || actuators_.active(d) || r.has_envelope ||
+double Stepper::drive_bracket(int d, double q0, double dq, double h) const {
+  const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+  if (!r.has_drive || ws_.actuators.active(d) || r.has_envelope ||
       std::abs(r.drive_impulse) >= r.drive.max_impulse)
     return 0.0;
-  const Drive& drive =
-      drive_delays_.delayed(d) ? drive_delays_.drive_seen(d) : settings_.drives[static_cast<size_t>(d)];
+  const Drive& drive = ws_.drive_delays.delayed(d) ? ws_.drive_delays.drive_seen(d)
+                                                   : settings_.drives[static_cast<size_t>(d)];
   const double inv_m = drive.type == DriveType::acceleration ? 1.0 / r.response : 1.0;
   const double kp = drive.stiffness * inv_m, kd = drive.damping * inv_m;
-  const double x = drive.target_position - drive.target_velocity * target_lead_;
+  const double x = drive.target_position - drive.target_velocity * ws_.target_lead;
   const double q1 = q0 + dq;  // before a wrap: the branch the row's error was taken on
   const double credit = settings_.options.solver == SolverType::tgs ? kTgsSpringCredit * kp * dq * dq : 0.0;
   return r.drive_impulse / h * dq + 0.5 * kp * ((q1 - x) * (q1 - x) - (q0 - x) * (q0 - x)) +
@@ -158,72 +159,72 @@ double Simulation::drive_bracket(int d, double q0, double dq, double h) const {
 // Eq. (G-7): the power the dampers take out at the end velocity, sum c_d v_d^2: a force drive's
 // (or an actuator's) damping, an acceleration drive's times the dof's effective mass 1 / r,
 // viscous friction. A drive at its force bound is not counted (its damper is not acting).
-double Simulation::damper_power() const {
+double Stepper::damper_power() const {
   double power = 0.0;
   for (int d = 0; d < model_->nv; ++d) {
-    const DofRows& r = rows_[static_cast<size_t>(d)];
+    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
     double c = settings_.friction[static_cast<size_t>(d)].viscous;
-    if (actuators_.active(d)) c += actuators_.actuator(d).damping;
-    if (r.has_drive && !actuators_.implicit(d) &&
+    if (ws_.actuators.active(d)) c += ws_.actuators.actuator(d).damping;
+    if (r.has_drive && !ws_.actuators.implicit(d) &&
         !(std::abs(r.drive_impulse) >= r.drive.max_impulse)) {
       const Drive& drive = settings_.drives[static_cast<size_t>(d)];
       c += drive.type == DriveType::acceleration ? drive.damping / r.response : drive.damping;
     }
-    power += c * qd_[d] * qd_[d];
+    power += c * ws_.qd[d] * ws_.qd[d];
   }
   return power;
 }
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
-void Simulation::guarded_advance(const VecX& tau_step) {
+void Stepper::guarded_advance(const VecX& tau_step) {
   const double dt = settings_.options.dt;
   const int most = settings_.options.guard.max_substeps;
   double e_start[2], e0[2], e1[2];
-  guard_q0_ = q_;
-  guard_qd0_ = qd_;
+  ws_.guard_q0 = ws_.q;
+  ws_.guard_qd0 = ws_.qd;
   // The start's energies are the last step's end's where nothing moved the state since (a
   // comparison instead of a forward kinematics pass).
-  if (guard_e1_valid_ && q_ == guard_q1_ && qd_ == guard_qd1_) {
-    e_start[0] = guard_e1_[0];
-    e_start[1] = guard_e1_[1];
+  if (ws_.guard_e1_valid && ws_.q == ws_.guard_q1 && ws_.qd == ws_.guard_qd1) {
+    e_start[0] = ws_.guard_e1[0];
+    e_start[1] = ws_.guard_e1[1];
   } else {
-    guard_energy(guard_q0_, guard_qd0_, e_start);
+    guard_energy(ws_.guard_q0, ws_.guard_qd0, e_start);
   }
-  guard_e1_valid_ = false;  // valid again once this step has ended
-  dt_ = dt;
-  target_lead_ = 0.0;
+  ws_.guard_e1_valid = false;  // valid again once this step has ended
+  ws_.dt = dt;
+  ws_.target_lead = 0.0;
   advance(tau_step);
-  guard_substeps_ = 1;
-  guard_account_next_ = guard_account_;
+  ws_.guard_substeps = 1;
+  ws_.guard_account_next = ws_.guard_account;
   if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
     row_forces();
     keep_guard_end(e1);
     return;
   }
-  ++guard_triggers_;
+  ++ws_.guard_triggers;
   for (int n = 2;; n = std::min(2 * n, most)) {
     load_state();  // the step's start again
-    for (VecX& v : guard_impulse_) v.setZero();
-    guard_actuator_.setZero();
-    dt_ = dt / n;
+    for (VecX& v : ws_.guard_impulse) v.setZero();
+    ws_.guard_actuator.setZero();
+    ws_.dt = dt / n;
     e0[0] = e_start[0];
     e0[1] = e_start[1];
-    guard_account_next_ = guard_account_;
+    ws_.guard_account_next = ws_.guard_account;
     bool passed = true;
     // A failing sub-step ends this n, unless n is the last one there is: that one is kept.
     for (int i = 1; i <= n && (passed || n == most); ++i) {
       // Sub-step i's targets: x_T - v_T (n - i) dt / n, eq. (G-6).
-      target_lead_ = (n - i) * dt_;
-      guard_q0_ = q_;
-      guard_qd0_ = qd_;
+      ws_.target_lead = (n - i) * ws_.dt;
+      ws_.guard_q0 = ws_.q;
+      ws_.guard_qd0 = ws_.qd;
       const VecX& tau = guard_substep_force();
       advance(tau);
       for (int d = 0; d < model_->nv; ++d) {
-        const DofRows& r = rows_[static_cast<size_t>(d)];
-        guard_impulse_[0][d] += r.drive_impulse;
-        guard_impulse_[1][d] += r.low_impulse + r.high_impulse;
-        guard_impulse_[2][d] += r.friction_impulse + r.transmission_friction_applied;
-        guard_impulse_[3][d] += r.velocity_limit_impulse;
+        const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+        ws_.guard_impulse[0][d] += r.drive_impulse;
+        ws_.guard_impulse[1][d] += r.low_impulse + r.high_impulse;
+        ws_.guard_impulse[2][d] += r.friction_impulse + r.transmission_friction_applied;
+        ws_.guard_impulse[3][d] += r.velocity_limit_impulse;
       }
       const bool ok = guard_passes(tau, e0, e1);
       passed = passed && ok;
@@ -231,23 +232,23 @@ void Simulation::guarded_advance(const VecX& tau_step) {
       e0[1] = e1[1];
     }
     if (passed || n == most) {
-      guard_substeps_ = n;
-      if (!passed) ++guard_exhausted_;
+      ws_.guard_substeps = n;
+      if (!passed) ++ws_.guard_exhausted;
       const double inv_dt = 1.0 / dt;  // the step's forces: its summed impulses / dt
-      drive_force_ = guard_impulse_[0] * inv_dt;
-      limit_force_ = guard_impulse_[1] * inv_dt;
-      friction_force_ = guard_impulse_[2] * inv_dt;
-      velocity_limit_force_ = guard_impulse_[3] * inv_dt;
-      if (actuators_.any()) {
-        actuator_force_ = guard_actuator_ / n;  // the explicit ones' mean effort
+      ws_.drive_force = ws_.guard_impulse[0] * inv_dt;
+      ws_.limit_force = ws_.guard_impulse[1] * inv_dt;
+      ws_.friction_force = ws_.guard_impulse[2] * inv_dt;
+      ws_.velocity_limit_force = ws_.guard_impulse[3] * inv_dt;
+      if (ws_.actuators.any()) {
+        ws_.actuator_force = ws_.guard_actuator / n;  // the explicit ones' mean effort
         for (int d = 0; d < model_->nv; ++d)
-          if (actuators_.implicit(d)) {  // the row was the actuator's
-            actuator_force_[d] = drive_force_[d];
-            drive_force_[d] = 0.0;
+          if (ws_.actuators.implicit(d)) {  // the row was the actuator's
+            ws_.actuator_force[d] = ws_.drive_force[d];
+            ws_.drive_force[d] = 0.0;
           }
       }
-      dt_ = dt;
-      target_lead_ = 0.0;
+      ws_.dt = dt;
+      ws_.target_lead = 0.0;
       keep_guard_end(e1);
       return;
     }
@@ -256,46 +257,46 @@ void Simulation::guarded_advance(const VecX& tau_step) {
 
 // Test (iii)'s account after a committed step (eq. G-8). One that overflowed (gains near the
 // largest double make inf - inf) starts again empty rather than failing every later step.
-void Simulation::commit_guard_account() {
-  const GuardAccount& a = guard_account_next_;
+void Stepper::commit_guard_account() {
+  const GuardAccount& a = ws_.guard_account_next;
   const bool finite = std::isfinite(a.created) && std::isfinite(a.dissipated) &&
                       std::isfinite(a.scale);
-  guard_account_ = finite ? a : GuardAccount{};
+  ws_.guard_account = finite ? a : GuardAccount{};
 }
 
 // The end of a step that may be committed: end_step's finite check may still refuse it, and then
 // the state is the start again, which the comparison tells apart.
-void Simulation::keep_guard_end(const double e1[2]) {
-  guard_q1_ = q_;
-  guard_qd1_ = qd_;
-  guard_e1_[0] = e1[0];
-  guard_e1_[1] = e1[1];
-  guard_e1_valid_ = true;
+void Stepper::keep_guard_end(const double e1[2]) {
+  ws_.guard_q1 = ws_.q;
+  ws_.guard_qd1 = ws_.qd;
+  ws_.guard_e1[0] = e1[0];
+  ws_.guard_e1[1] = e1[1];
+  ws_.guard_e1_valid = true;
 }
 
 // Explicit actuators at a sub-step's start: the step's (delayed) commands, this state.
-const VecX& Simulation::guard_substep_force() {
-  if (!actuators_.any()) return applied_force_;
-  actuators_.evaluate(*model_, q_, qd_, guard_force_);
-  guard_actuator_ += guard_force_;
-  joint_force_ = applied_force_ + guard_force_;
-  return joint_force_;
+const VecX& Stepper::guard_substep_force() {
+  if (!ws_.actuators.any()) return ws_.applied_force;
+  ws_.actuators.evaluate(*model_, ws_.q, ws_.qd, ws_.guard_force);
+  ws_.guard_actuator += ws_.guard_force;
+  ws_.joint_force = ws_.applied_force + ws_.guard_force;
+  return ws_.joint_force;
 }
 
-// A sub-step ending target_lead_ before the step's end drives towards x_T - v_T target_lead_
+// A sub-step ending target_lead before the step's end drives towards x_T - v_T target_lead
 // (eq. G-6): the row's constant term x (b + h kp (x_T - x0)) moves by -(x h kp) v_T lead, its
 // bias_coefficient times -v_T lead (eq. 20, 23 of docs/math/implicit_drives.md).
-void Simulation::lead_drive_targets() {
+void Stepper::lead_drive_targets() {
   for (int d = 0; d < model_->nv; ++d) {
-    DofRows& rows = rows_[static_cast<size_t>(d)];
+    DofRows& rows = ws_.rows[static_cast<size_t>(d)];
     if (!rows.has_drive) continue;
     // An implicit actuator's row drives towards the command its delay line gives.
     const double target_velocity =
-        actuators_.implicit(d)     ? actuators_.command_seen(d).velocity
-        : drive_delays_.delayed(d) ? drive_delays_.drive_seen(d).target_velocity
-                                   : settings_.drives[static_cast<size_t>(d)].target_velocity;
+        ws_.actuators.implicit(d)     ? ws_.actuators.command_seen(d).velocity
+        : ws_.drive_delays.delayed(d) ? ws_.drive_delays.drive_seen(d).target_velocity
+                                      : settings_.drives[static_cast<size_t>(d)].target_velocity;
     rows.drive.target_vel_plus_initial_bias -=
-        rows.drive.bias_coefficient * target_velocity * target_lead_;
+        rows.drive.bias_coefficient * target_velocity * ws_.target_lead;
   }
 }
 

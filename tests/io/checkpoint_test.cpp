@@ -479,7 +479,7 @@ TEST(Checkpoint, TheClockAcceptsOnlyWhatARunReaches) {
   EXPECT_EQ(s.step_count(), kMaxStepCount + 1);
 }
 
-TEST(Checkpoint, ClockAndRestoreStateValidateTheirArguments) {
+TEST(Checkpoint, ClockAndSetStateValidateTheirArguments) {
   Simulation s(test::make_random_tree(2, 3, true));
   EXPECT_THROW(s.set_clock(-1.0, 0), std::invalid_argument);
   EXPECT_THROW(s.set_clock(std::nan(""), 0), std::invalid_argument);
@@ -489,19 +489,25 @@ TEST(Checkpoint, ClockAndRestoreStateValidateTheirArguments) {
   EXPECT_EQ(s.time(), 2.5);
   EXPECT_EQ(s.step_count(), 150);
   const int nv = s.model().nv;
-  const VecX z = VecX::Zero(nv);
-  VecX q = s.q();
-  q[3] = 2.0;  // the floating root's quaternion w: norm 2
-  try {
-    s.restore_state(q, z, z, z, z);
-    ADD_FAILURE() << "a quaternion of norm 2 is restored";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("has norm 2, expected 1"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(s.restore_state(s.q(), VecX::Zero(nv + 1), z, z, z), std::invalid_argument);
-  VecX bad = z;
-  bad[0] = std::nan("");
-  EXPECT_THROW(s.restore_state(s.q(), z, bad, z, z), std::invalid_argument);
+  const State good = s.state();
+  // set_state refuses the state with a message containing `word`.
+  auto expect_refused = [&](const State& bad, const char* word) {
+    try {
+      s.set_state(bad);
+      ADD_FAILURE() << "restored a state that should be refused for " << word;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  State bad = good;
+  bad.q[3] = 2.0;  // the floating root's quaternion w: norm 2
+  expect_refused(bad, "has norm 2, expected 1");
+  bad = good;
+  bad.drive_force = VecX::Zero(nv + 1);
+  expect_refused(bad, "drive_force");
+  bad = good;
+  bad.limit_force[0] = std::nan("");
+  expect_refused(bad, "limit_force");
   EXPECT_EQ(s.q()[3], 1.0);
 }
 

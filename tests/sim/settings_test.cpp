@@ -1,6 +1,7 @@
 // Settings and State as values (issue 32): the defaults are the model's values (and PhysX's where
 // compat physx says so), Settings::validate throws the very message the setter of the same field
-// throws, and a simulation given another's settings and state steps as that one, bit for bit.
+// throws, a simulation given another's settings and state steps as that one, bit for bit, and so
+// does a copy of one, whose workspace is its own.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -318,6 +319,39 @@ TEST(State, AStateGivenToAnotherSimulationContinuesTheSameBits) {
   EXPECT_EQ(refused([](State& s) { s.drive_delay_history.pop_back(); }),
             "state: " + std::to_string(model->nv - 1) +
                 " delay histories, expected one per dof (nv = " + std::to_string(model->nv) + ")");
+}
+
+// The workspace (src/sim/workspace.hpp) goes with its simulation: a copy made mid-run, delay
+// histories in flight, steps the original's bits and leaves the original alone; so do a move and
+// an assignment over a simulation of another model.
+TEST(Workspace, ACopyMidRunStepsTheOriginalsBitsOnItsOwn) {
+  const auto model = tree();
+  const int r = first_dof(*model, JointType::revolute);
+  const int r2 = second_revolute(*model);
+  Simulation a(model);
+  a.set_drive(r, {.type = DriveType::force, .stiffness = 200.0, .damping = 5.0,
+                  .target_position = 0.3});
+  a.set_drive_delay(r, 2);
+  a.set_actuator(r2, {.kind = ActuatorKind::dc_motor, .stiffness = 80.0, .damping = 2.0,
+                      .saturation_effort = 30.0, .velocity_limit = 10.0, .delay = 1});
+  a.set_drive_target(r2, -0.2, 0.0);
+  a.step(10);
+  Simulation copy = a;
+  const VecX q_before = a.q();
+  copy.step(50);
+  EXPECT_TRUE(same_bits(a.q(), q_before));
+  const Simulation moved = std::move(copy);
+  Simulation assigned(test::make_pendulum(1.0, 0.5));
+  assigned = a;
+  a.step(50);
+  assigned.step(50);
+  for (const Simulation* s : {&moved, static_cast<const Simulation*>(&assigned)}) {
+    EXPECT_EQ(s->step_count(), 60);
+    EXPECT_TRUE(same_bits(s->q(), a.q()));
+    EXPECT_TRUE(same_bits(s->qd(), a.qd()));
+    EXPECT_TRUE(same_bits(s->drive_force(), a.drive_force()));
+    EXPECT_TRUE(same_bits(s->actuator_force(), a.actuator_force()));
+  }
 }
 
 }  // namespace
