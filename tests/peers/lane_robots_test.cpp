@@ -1,6 +1,8 @@
 // Batch's SIMD lanes on real robots with a floating base (and the same robots fixed), each
 // environment against the prototype stepped alone as a Simulation (another operation order),
-// within 1e-12 over 1000 steps: docs/simd_batch.md, "Floating bases".
+// within 1e-12 over 1000 steps: docs/simd_batch.md, "Floating bases". In the main build only
+// (seconds there, minutes under the sanitizers); the random floating trees of
+// tests/sim/lane_floating_test.cpp run in both.
 #include <gtest/gtest.h>
 
 #include <string>
