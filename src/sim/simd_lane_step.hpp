@@ -266,6 +266,7 @@ class LaneStep {
   void momentum(const V* R, const V* com, bool bias_w, bool bias_v, const V* C, const V& M, V* P,
                 V* L) const;
   void compound_inverse(const V* R, const V* com, const V* C, V* out) const;
+  void world_inertia(int i, const V* Ri, V* I) const;  // (R Ic) R^T of link i at rotation Ri
   void rigid_correction(const V* Iinv, const V* com, const V* C, const V& M, const V* P1,
                         const V* L1, const V& ratio, const V* target, V* dw, V* dv) const;
   static void rotate(const V* q, const V* v, V* out);  // by the unit quaternion q (w x y z)
@@ -1972,29 +1973,35 @@ void LaneStep<A, K>::momentum(const V* R, const V* com, bool bias_w, bool bias_v
   for (int i = 0; i < p_.num_links; ++i) {
     const V m = link_parameter_pack(i, mass);
     const V* Ri = R + 9 * i;
-    V w[3], v[3], Iw[3], Ic[9], arm[3], dv[3], h[3];
+    V w[3], v[3], Iw[3], arm[3], dv[3], h[3];
     velocity(i, w, v);
-    const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
-            zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
-            xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
-    Ic[0] = xx, Ic[1] = xy, Ic[2] = xz, Ic[3] = xy, Ic[4] = yy, Ic[5] = yz, Ic[6] = xz, Ic[7] = yz,
-    Ic[8] = zz;
-    // I = (R Ic) R^T formed, then I w: the operations of momentum_correction.cpp's Eigen
-    // products (PD-4 divides this momentum's rounding by the compound inertia).
-    V RI[9], Iworld[9];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        Iworld[3 * r + c] =
-            RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
+    // I formed, then I w: the operations of momentum_correction.cpp's Eigen products (PD-4
+    // divides this momentum's rounding by the compound inertia).
+    V Iworld[9];
+    world_inertia(i, Ri, Iworld);
     for (int r = 0; r < 3; ++r)
       Iw[r] = Iworld[3 * r] * w[0] + Iworld[3 * r + 1] * w[1] + Iworld[3 * r + 2] * w[2];
     for (int r = 0; r < 3; ++r) arm[r] = com[3 * i + r] - C[r], dv[r] = v[r] - vcom[r];
     cross(arm, dv, h);
     for (int r = 0; r < 3; ++r) L[r] = L[r] + (Iw[r] + m * h[r]);
   }
+}
+
+// Link i's inertia about its centre of mass in world axes, (R Ic) R^T with R Ic formed first, as
+// momentum_correction.cpp's Eigen products are.
+template <class A, int K>
+void LaneStep<A, K>::world_inertia(int i, const V* Ri, V* I) const {
+  const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
+          zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
+          xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
+  const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+  V RI[9];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      I[3 * r + c] = RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
 }
 
 // The inverse of the links' inertia about C in the pose (R, com) (momentum_correction.cpp's
@@ -2005,23 +2012,15 @@ void LaneStep<A, K>::compound_inverse(const V* R, const V* com, const V* C, V* o
   for (int e = 0; e < 9; ++e) I[e] = V(0.0);
   for (int i = 0; i < p_.num_links; ++i) {
     const V m = link_parameter_pack(i, mass);
-    const V* Ri = R + 9 * i;
-    const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
-            zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
-            xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
-    const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
-    V RI[9];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
+    V Iworld[9];
+    world_inertia(i, R + 9 * i, Iworld);
     V d[3];
     for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - C[r];
     const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) {
-        const V rot = RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
         const V par = m * ((r == c ? d2 : V(0.0)) - d[r] * d[c]);
-        I[3 * r + c] = I[3 * r + c] + (rot + par);
+        I[3 * r + c] = I[3 * r + c] + (Iworld[3 * r + c] + par);
       }
   }
   // Eigen's 3 x 3 inverse: cofactor (i, j) = m(i1, j1) m(i2, j2) - m(i1, j2) m(i2, j1) with
