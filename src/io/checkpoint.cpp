@@ -371,7 +371,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   write_actuators(p, settings, state);
   write_drive_delays(p, settings, state);
   write_joint_coupling(p, settings);
-  const GuardAccount& account = sim.guard_account();  // version 7
+  const GuardAccount& account = state.guard_account;  // version 7
   for (double v : {account.created, account.dissipated, account.scale}) p.f64(v);
   write_contact_settings(p, settings);  // version 8
   write_friction_anchors(p, state);
@@ -576,7 +576,7 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
     read_actuators(r, settings, state, name, version);
     if (version >= 4) read_drive_delays(r, settings, state, name);    // version 3 has none
     if (version >= 5) read_joint_coupling(r, model, settings, name);  // 3 and 4 have none
-    GuardAccount account;  // before version 7, the guard's account starts empty
+    GuardAccount& account = state.guard_account;  // before version 7, it starts empty
     if (version >= 7) {
       account.created = r.f64();
       account.dissipated = r.f64();
@@ -592,7 +592,6 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
                                 " bytes left over after the payload");
     next.set_settings(settings);
     next.set_state(state);
-    next.set_guard_account(account);
   } catch (const CheckpointError&) {
     throw;
   } catch (const std::invalid_argument& e) {

@@ -372,7 +372,7 @@ void Batch::reset(std::span<const int> env_ids, const std::optional<RowMatrix>& 
     sims_[static_cast<size_t>(i)].set_clock(0.0, 0);
     sims_[static_cast<size_t>(i)].reset_actuator_history();  // as Isaac Lab's delay buffers
     sims_[static_cast<size_t>(i)].reset_drive_delay_history();
-    sims_[static_cast<size_t>(i)].set_guard_account({});  // a new episode, a new account
+    sims_[static_cast<size_t>(i)].ws_->guard_account = {};  // a new episode, a new account
     divergences_[static_cast<size_t>(i)].reset();
     // Contacts start over too: no friction anchors kept from the episode before, no contact
     // outputs. A ground and self-collision switched off forget both; switched on again they are

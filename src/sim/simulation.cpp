@@ -212,6 +212,7 @@ State Simulation::state() const {
       s.drive_delay_history[k] = {ws_->drive_delays.pushes(d), ws_->drive_delays.ring(d)};
   }
   s.friction_anchors = ws_->contact_rows.anchors();
+  s.guard_account = ws_->guard_account;
   return s;
 }
 
@@ -248,6 +249,7 @@ void Simulation::set_state(const State& s) {
   check_state_vector(s.limit_force, nv, "limit_force");
   check_state_vector(s.friction_force, nv, "friction_force");
   check_state_vector(s.velocity_limit_force, nv, "velocity_limit_force");
+  check_guard_account(s.guard_account);
   // Nothing below throws.
   state_[StateStorage::q] = exact;
   state_[StateStorage::drive_force] = s.drive_force;
@@ -264,6 +266,7 @@ void Simulation::set_state(const State& s) {
   ws_->actuated = true;  // the actuator force may be nonzero
   ws_->actuators = std::move(actuators);
   ws_->drive_delays = std::move(delays);
+  ws_->guard_account = s.guard_account;
 }
 
 void Simulation::set_qd(const VecX& qd) {

@@ -39,6 +39,18 @@ VecX checked_configuration(const Model& model, const VecX& q, bool unit) {
   return checked;
 }
 
+void check_guard_account(const GuardAccount& account) {
+  auto check = [](double v, const char* name, bool signed_ok) {
+    if (!(std::isfinite(v) && (signed_ok || v >= 0.0)))
+      throw std::invalid_argument(std::string("guard account: ") + name + " = " +
+                                  format_double(v) +
+                                  (signed_ok ? " must be finite" : " must be finite and >= 0"));
+  };
+  check(account.created, "created", true);
+  check(account.dissipated, "dissipated", false);
+  check(account.scale, "scale", false);
+}
+
 void check_clock(double time, long step_count) {
   if (step_count < 0 || step_count > kMaxStepCount)
     throw std::invalid_argument("clock: step_count = " + std::to_string(step_count) +

@@ -47,19 +47,6 @@ void Workspace::size_guard(const Model& model) {
   guard_e1_valid = false;
 }
 
-void Simulation::set_guard_account(const GuardAccount& account) {
-  auto check = [](double v, const char* name, bool signed_ok) {
-    if (!(std::isfinite(v) && (signed_ok || v >= 0.0)))
-      throw std::invalid_argument(std::string("guard account: ") + name + " = " +
-                                  format_double(v) +
-                                  (signed_ok ? " must be finite" : " must be finite and >= 0"));
-  };
-  check(account.created, "created", true);
-  check(account.dissipated, "dissipated", false);
-  check(account.scale, "scale", false);
-  ws_->guard_account = account;
-}
-
 void Simulation::reset_guard_counters() {
   ws_->guard_substeps = 1;
   ws_->guard_triggers = 0;

@@ -803,7 +803,10 @@ TEST(Checkpoint, GuardedRunResumesBitForBit) {
     payload |= static_cast<std::uint64_t>(static_cast<unsigned char>(v6[28 + i])) << (8 * i);
   v6 = forged(forged(v6, 8, 6, 4), 28, payload - kAccountBytes);
   Simulation old(model, o);
-  old.set_guard_account({1.0, 2.0, 3.0});
+  State with_account = old.state();
+  with_account.guard_account = {1.0, 2.0, 3.0};
+  old.set_state(with_account);
+  ASSERT_EQ(old.guard_account().scale, 3.0);
   restore_checkpoint(v6, old, "old.ckpt");
   EXPECT_EQ(old.guard_account().created, 0.0);
   EXPECT_EQ(old.guard_account().dissipated, 0.0);

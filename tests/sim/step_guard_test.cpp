@@ -225,6 +225,39 @@ TEST(StepGuard, TheAccountOfASliderIsItsClosedForm) {
   }
 }
 
+// The account is state: a second simulation given the first's state() continues with the
+// same account, so its next step keeps the same bits; a bad account is refused and leaves the
+// state as it was.
+TEST(StepGuard, TheAccountTravelsWithTheState) {
+  const auto model = test::make_slider(2.0, Vec3(1, 0, 0), Vec3::Zero());
+  Simulation a(model, guard_options(SolverType::pgs, true));
+  a.set_drive("slide", Drive{DriveType::force, 50.0, 3.0, kInf, 0.1, 0.05});
+  a.set_qd(VecX::Constant(1, 0.3));
+  for (int k = 0; k < 3; ++k) a.step();
+  Simulation b = a;
+  State fresh = b.state();
+  fresh.guard_account = {};
+  b.set_state(fresh);
+  ASSERT_EQ(b.guard_account().scale, 0.0);
+  b.set_state(a.state());
+  ASSERT_GT(b.guard_account().scale, 0.0);
+  a.step();
+  b.step();
+  EXPECT_EQ(a.guard_account().created, b.guard_account().created);
+  EXPECT_EQ(a.guard_account().scale, b.guard_account().scale);
+  State bad = a.state();
+  bad.guard_account.dissipated = -1.0;
+  bad.q[0] = 7.0;
+  try {
+    b.set_state(bad);
+    ADD_FAILURE() << "a negative dissipation was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "guard account: dissipated = -1 must be finite and >= 0");
+  }
+  EXPECT_EQ(b.q()[0], a.q()[0]);
+  EXPECT_EQ(b.guard_account().scale, a.guard_account().scale);
+}
+
 TEST(StepGuard, BadBoundsAreRefusedNamingKeyAndValue) {
   auto message = [](const StepGuard& g) {
     SimulationOptions o;

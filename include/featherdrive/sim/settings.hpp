@@ -43,14 +43,6 @@ struct StepGuard {
   double dissipation_share = 0.15;
 };
 
-/// Test (iii)'s account (docs/math/step_guard.md, eq. G-7, G-8): leaky sums over the run of the
-/// energy created beyond the work (X), of what the dampers dissipated (D) and of the steps'
-/// energy scales (S). Part of the state: a checkpoint keeps it.
-struct GuardAccount {
-  double created = 0.0;
-  double dissipated = 0.0;
-  double scale = 0.0;
-};
 inline constexpr int kMaxGuardSubsteps = 4096;
 
 struct SimulationOptions {

@@ -264,11 +264,8 @@ class Simulation {
   /// Steps whose max_substeps sub-steps still failed a test (kept as they were).
   long guard_exhausted() const;
   void reset_guard_counters();
-  /// Test (iii)'s account (eq. G-7, G-8), carried from step to step; checkpoints keep it.
+  /// Test (iii)'s account (eq. G-7, G-8), carried from step to step: part of state().
   const GuardAccount& guard_account() const;
-  /// Throws std::invalid_argument for a negative or non-finite scale or dissipation, or a
-  /// non-finite created energy.
-  void set_guard_account(const GuardAccount& account);
 
  private:
   friend class Batch;  // lends the storage of state_; runs the control stages for its lanes

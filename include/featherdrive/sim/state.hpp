@@ -20,6 +20,15 @@ struct DelayHistory {
   std::vector<Sample> ring;
 };
 
+/// Test (iii)'s account (docs/math/step_guard.md, eq. G-7, G-8): leaky sums over the run of the
+/// energy created beyond the work (X), of what the dampers dissipated (D) and of the steps'
+/// energy scales (S). Part of the state (State::guard_account).
+struct GuardAccount {
+  double created = 0.0;
+  double dissipated = 0.0;
+  double scale = 0.0;
+};
+
 /// A simulation's state (Simulation::state, set_state): what the next step starts from and the
 /// outputs of the last one. Sizes in brackets.
 struct State {
@@ -38,6 +47,8 @@ struct State {
   /// Per shape (Model::shapes): the friction anchors kept from the last step (C9 of
   /// docs/math/contact.md); empty: none kept.
   std::vector<FrictionAnchors> friction_anchors;
+  /// The step guard's test (iii) account, carried from step to step (zero with the guard off).
+  GuardAccount guard_account;
 };
 
 /// Throws std::invalid_argument "what: expected n values, got m" or "what[i] = x is not finite".
@@ -47,6 +58,10 @@ void check_state_vector(const VecX& x, Eigen::Index expected, const char* what);
 /// is neither zero nor overflows, or of norm 1 within 1e-9 with `unit`) and, unless `unit`,
 /// normalised: what Simulation::set_q stores. Throws std::invalid_argument naming the joint.
 VecX checked_configuration(const Model& model, const VecX& q, bool unit = false);
+
+/// Throws std::invalid_argument "guard account: dissipated = -1 must be finite and >= 0" for a
+/// negative or non-finite scale or dissipation, or a non-finite created energy.
+void check_guard_account(const GuardAccount& account);
 
 /// A clock a run can reach: throws std::invalid_argument for a step count outside
 /// [0, kMaxStepCount], a time that is not finite or < 0, or a time above 2 * step_count * kMaxDt
