@@ -845,6 +845,16 @@ void Batch::step_lanes(int count) {
     lane_time_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].time_;
     lanes_->clear_stop(i);  // a diverged environment steps again, as its Simulation would
   }
+  // Each environment's contact rows, reports and anchors are its Simulation's (lane_contacts.cpp).
+  simd::ContactLanes& contacts = lanes_->contacts();
+  contacts.envs.resize(static_cast<size_t>(n));
+  bool grounded = false;
+  for (int i = 0; i < n; ++i) {
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
+    grounded = grounded || s.ws_->contacts_active;
+  }
+  if (grounded != lanes_->plan().contacts) lanes_->set_contacts(grounded);
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
   a.applied = rows_[StateStorage::applied_force].data();

@@ -56,6 +56,7 @@ Layout make_layout(const Plan& p) {
   l.start_R = take(pf * 9 * L), l.start_pos = take(pf * 3 * L), l.link_force = take(pf * 6 * L);
   l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
   l.vel_v = take(pf * 3 * L), l.now_com = take(pf * 3 * L), l.qd_position = take(pf * n);
+  l.contact_vel = take(p.contacts ? 6 * L : 0);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -96,9 +97,11 @@ std::string lane_refusal(const Simulation& s) {
     if (s.has_actuator(d) && s.actuators().implicit(d))
       return has("joint", joint, "an implicit actuator");
   }
-  // Nor contact rows: the robot would pass through the ground.
-  if (s.ground().enabled && !m.shapes.empty())
-    return has("simulation", "settings", "a ground with the model's collision shapes");
+  // compat physx's contact rows see the link bias and its tracked motion (contact.md, C23a,
+  // C25a), which the lanes do not form.
+  if (s.ground().enabled && !m.shapes.empty() && s.options().compat == Compat::physx)
+    return has("simulation", "settings", "a ground with the model's collision shapes under compat physx");
+  // Self-collision rows are solved outside the sweep (contact.md, C31).
   if (s.contact_options().self_collision && m.shapes.size() > 1)
     return has("simulation", "settings", "self-collision between the model's shapes");
   return {};
@@ -140,6 +143,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
       later[static_cast<size_t>(i)] = !k.last_child || later[static_cast<size_t>(link.parent)];
     }
     k.later = later[static_cast<size_t>(i)];
+    first_child_free_.push_back(k.first_child);
     k.leaf = link.children.empty();
     // A floating root's six dofs are finished after the sweep, as a multi-dof joint's.
     k.finish_on_leave = (k.type == 1 || k.type == 2) && !k.later;
@@ -190,6 +194,8 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     p.physx_floating = p.floating_base;
     p.physx_spherical = p.any_spherical;
   }
+  shape_links_.assign(static_cast<size_t>(L), 0);
+  for (const CollisionShape& shape : m.shapes) shape_links_[static_cast<size_t>(shape.link)] = 1;
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
   // kMaxInterleave groups each) starts with the prototype's parameters.
@@ -203,6 +209,18 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   }
   stops_.resize(static_cast<size_t>(count));
   stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
+}
+
+void LaneEngine::set_contacts(bool on) {
+  plan_.contacts = on;
+  for (size_t i = 0; i < links_.size(); ++i) {
+    LinkConstants& k = links_[i];
+    k.contacts = on && shape_links_[i];
+    // gauss_seidel.cpp's set_contact_links: the first child of a link with contacts adds to the
+    // pA they started.
+    k.first_child = first_child_free_[i] && !(k.parent >= 0 && links_[static_cast<size_t>(k.parent)].contacts);
+  }
+  plan_.layout = make_layout(plan_);
 }
 
 void LaneEngine::pack_drives(int env, const Simulation& sim) {
@@ -337,6 +355,7 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
     b.valid = std::min(W, count_ - b.env0);
     b.parameters = parameters_.data();
     b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
+    b.contacts = plan_.contacts ? &contacts_ : nullptr;
     switch (isa) {
       case SimdIsa::sse2:
         run_block_sse2(plan_, b, scratch, steps);
@@ -373,9 +392,13 @@ std::string LaneEngine::divergence_message(int e, const Model& model, long step_
       "friction force", "velocity limit force", "position q"};
   std::ostringstream m;
   m.precision(6);
-  m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): joint '"
-    << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
-    << kQuantity[s.quantity] << " = ";
+  m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): ";
+  if (s.quantity == 7)  // as Stepper::check_finite_or_throw words it
+    m << "link '" << model.links[static_cast<size_t>(s.dof / 3)].name << "' contact force f"
+      << "xyz"[s.dof % 3] << " = ";
+  else
+    m << "joint '" << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
+      << kQuantity[s.quantity] << " = ";
   if (std::isnan(s.value)) m << "nan";  // as Simulation's: a NaN's sign is the operation order's
   else m << s.value;
   m << "; the state is left as it was before this step (lower dt or the gains)";
