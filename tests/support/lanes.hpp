@@ -83,49 +83,61 @@ inline double lanes_against_alone(const Simulation& sim, int steps, const std::s
 }
 
 /// batch_against_alone's figures: the lanes' largest lane_difference from each environment
-/// stepped alone, and the scalar step's own from a start changed in the last bit of every q.
+/// stepped alone, the scalar step's own from a start changed in its last bits, and the
+/// largest ratio of the two of one environment (its nudged difference taken as at least 1e-12).
+/// Another operation order differs from the scalar step by the rounding of each operation, about
+/// what a last-bit change of the start does; contact rows amplify either by orders of magnitude
+/// (docs/simd_batch.md, "Contacts"), so each environment's ratio is bounded, not the difference.
 struct LaneFigures {
   double lanes = 0.0;
   double nudged = 0.0;
-  /// What the lanes must stay within: another operation order differs from the scalar step
-  /// by the rounding of each operation, about what a last-bit change of the start does; contact
-  /// rows amplify either by orders of magnitude (docs/simd_batch.md, "Contacts").
-  double bound(double factor = 10.0) const { return std::max(1e-12, factor * nudged); }
+  double ratio = 0.0;
 };
 
 /// Steps every environment of `lanes` (asserting it runs in lanes), a copy of each stepped alone
-/// as a Simulation and two more started with every q one ulp up and down, `steps` times in `chunks`
-/// calls; returns the largest differences after any call (the contacts of several steps
+/// as a Simulation and four more started with every q, or every qd, one ulp up or down, `steps` times in
+/// `chunks` calls; returns the largest differences after any call (the contacts of several steps
 /// compared), printed as "what: ...".
 inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
                                        const std::string& what) {
+  constexpr size_t kNudges = 4;
   EXPECT_NE(lanes.step_path().find("lanes"), std::string::npos) << what << lanes.step_path();
   const Batch& view = lanes;
+  const auto n = static_cast<size_t>(lanes.size());
   std::vector<Simulation> alone, nudged;
-  for (int e = 0; e < lanes.size(); ++e) {
-    alone.push_back(view.sim(e));
-    for (const double way : {1.0, -1.0}) {
-      nudged.push_back(view.sim(e));
-      VecX q = alone.back().q();
-      for (double& x : q) x = std::nextafter(x, way * std::numeric_limits<double>::infinity());
-      nudged.back().set_q(q);
+  for (size_t e = 0; e < n; ++e) {
+    alone.push_back(view.sim(static_cast<int>(e)));
+    // q one ulp up, down; qd one ulp up, down.
+    for (size_t k = 0; k < kNudges; ++k) {
+      nudged.push_back(alone.back());
+      const double way = k % 2 == 0 ? 1.0 : -1.0;
+      VecX x = k < 2 ? VecX(alone.back().q()) : VecX(alone.back().qd());
+      for (double& v : x) v = std::nextafter(v, way * std::numeric_limits<double>::infinity());
+      if (k < 2) nudged.back().set_q(x);
+      else nudged.back().set_qd(x);
     }
   }
-  LaneFigures f;
+  std::vector<double> apart(n, 0.0), own(n, 1e-12);
   for (int c = 0; c < chunks; ++c) {
     lanes.step(steps / chunks);
-    for (size_t e = 0; e < alone.size(); ++e) {
+    for (size_t e = 0; e < n; ++e) {
       alone[e].step(steps / chunks);
-      f.lanes = std::max(f.lanes, lane_difference(view, static_cast<int>(e), alone[e]));
-      for (size_t k = 2 * e; k < 2 * e + 2; ++k) {
+      apart[e] = std::max(apart[e], lane_difference(view, static_cast<int>(e), alone[e]));
+      for (size_t k = kNudges * e; k < kNudges * (e + 1); ++k) {
         nudged[k].step(steps / chunks);
-        f.nudged = std::max(f.nudged, simulation_difference(nudged[k], alone[e]));
+        own[e] = std::max(own[e], simulation_difference(nudged[k], alone[e]));
       }
     }
   }
+  LaneFigures f;
+  for (size_t e = 0; e < n; ++e) {
+    f.lanes = std::max(f.lanes, apart[e]);
+    f.nudged = std::max(f.nudged, own[e]);
+    f.ratio = std::max(f.ratio, apart[e] / own[e]);
+  }
   std::printf("%s: largest relative difference %.1e, the scalar step's from a start one ulp off "
-              "%.1e (docs/simd_batch.md)\n",
-              what.c_str(), f.lanes, f.nudged);
+              "%.1e, largest ratio of an environment's %.2g (docs/simd_batch.md)\n",
+              what.c_str(), f.lanes, f.nudged, f.ratio);
   return f;
 }
 
