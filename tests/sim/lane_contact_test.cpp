@@ -179,6 +179,42 @@ TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
       }
 }
 
+// A contact force that overflows where the state stays finite (dt 1e-200: the push-out impulse
+// over dt) stops the lane with its state and reports as Simulation's check words it, the other
+// environments (airborne) going on; the stopped one reports no contacts.
+TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
+  SimulationOptions o = test::lane_test_options(SolverType::pgs);
+  o.dt = 1e-200;
+  Simulation box(test::make_ground_box(0.5), o);
+  Ground ground;
+  ground.enabled = true;
+  box.set_ground(ground);
+  std::string messages[2];
+  for (const bool lanes_on : {true, false}) {
+    Batch b(box, 3);
+    b.set_lanes(lanes_on);
+    for (int e = 0; e < 3; ++e) {
+      VecX q = box.q();
+      q[2] = e == 1 ? 0.09 : 5.0;  // environment 1 a centimetre into the ground
+      b.sim(e).set_q(q);
+    }
+    const VecX q1 = b.sim(1).q();
+    try {
+      b.step(2);
+      ADD_FAILURE() << "no DivergenceError";
+    } catch (const DivergenceError& e) {
+      messages[lanes_on ? 0 : 1] = e.what();
+    }
+    EXPECT_EQ(b.step_path().find("scalar") == std::string::npos, lanes_on) << b.step_path();
+    ASSERT_TRUE(b.divergences()[1].has_value());
+    EXPECT_TRUE(test::same_bits(VecX(b.sim(1).q()), q1));
+    EXPECT_TRUE(b.contacts(1).empty());
+    EXPECT_EQ(b.sim(0).step_count(), 2);
+  }
+  EXPECT_NE(messages[0].find("link 'box' contact force f"), std::string::npos) << messages[0];
+  EXPECT_EQ(messages[0], messages[1]);
+}
+
 // The path: a grounded robot runs in the lanes; self-collision and compat physx with a ground
 // stay refused, named.
 TEST(LaneContact, StepPath) {
