@@ -179,6 +179,34 @@ TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
       }
 }
 
+// The ground switched on between calls (the plan takes the contact rows then), and off again in
+// one environment: a lane without a ground beside grounded ones, as its Simulation.
+TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    const Simulation proto = grounded_tree(6, solver, false);
+    Simulation airy = proto;
+    Ground off = proto.ground();
+    off.enabled = false;
+    airy.set_ground(off);
+    Batch lanes(airy, 5);
+    for (int e = 0; e < lanes.size(); ++e) {
+      VecX q = proto.q();
+      q[2] = 0.3 + 0.05 * e;
+      lanes.sim(e).set_q(q);
+    }
+    lanes.step(3);
+    for (int e = 0; e < lanes.size(); ++e) lanes.sim(e).set_ground(e == 2 ? off : proto.ground());
+    const std::string what = std::string("ground switched on, one lane without, ") +
+                             to_string(solver);
+    const test::LaneFigures f = test::batch_against_alone(lanes, 300, 3, what);
+    EXPECT_LE(f.ratio, 10.0) << what;
+    EXPECT_TRUE(lanes.contacts(2).empty()) << what;
+    for (int e = 0; e < lanes.size(); ++e)  // held by the ground, or through where it is
+      if (e == 2) EXPECT_LT(lanes.q()(e, 2), -1.0) << what;
+      else EXPECT_GT(lanes.q()(e, 2), -0.5) << what;
+  }
+}
+
 // A contact force that overflows where the state stays finite (dt 1e-200: the push-out impulse
 // over dt) stops the lane with its state and reports as Simulation's check words it, the other
 // environments (airborne) going on; the stopped one reports no contacts.
