@@ -10,13 +10,24 @@ namespace featherdrive::simd {
 namespace {
 
 // Entry (a, b) of a symmetric 6 x 6 matrix in the lanes' storage (simd_lane_step.hpp's
-// sym_index): A's (00, 11, 22, 01, 02, 12), B's nine row-major, C's six.
-int symmetric_entry(int a, int b) {
-  if (a > b) std::swap(a, b);
+// sym_index): A's (00, 11, 22, 01, 02, 12), B's nine row-major, C's six; as a table, column by
+// column (Mat6's order).
+constexpr int symmetric_entry(int a, int b) {
+  if (a > b) return symmetric_entry(b, a);
   if (a < 3 && b >= 3) return 6 + 3 * a + (b - 3);
   const int base = a < 3 ? 0 : 15, r = a % 3, c = b % 3;
   return base + (r == c ? r : r + c + 2);
 }
+struct SymmetricEntries {
+  int at[36];
+};
+constexpr SymmetricEntries make_entries() {
+  SymmetricEntries t{};
+  for (int c = 0; c < 6; ++c)
+    for (int r = 0; r < 6; ++r) t.at[6 * c + r] = symmetric_entry(r, c);
+  return t;
+}
+constexpr SymmetricEntries kEntries = make_entries();
 
 // A lane's entries of the scratch.
 struct LaneEntries {
@@ -45,7 +56,6 @@ bool contacts_active(const ContactLanes& c, int env) {
 
 void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane) {
   const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
-  const Model& model = e.sim->model();
   Data& data = e.ws->data;
   const Layout& l = p.layout;
   const LaneEntries x{s, width, lane};
@@ -62,8 +72,9 @@ void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int
     }
   }
   data.frame_origin = origin;
-  for (const CollisionShape& shape : model.shapes) {
-    const int L = shape.link;
+  const std::vector<char>& shaped = e.ws->contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L) {
+    if (!shaped[static_cast<size_t>(L)]) continue;
     for (int r = 0; r < 3; ++r) {
       for (int col = 0; col < 3; ++col) data.world_rotation[L](r, col) = x(l.R + 9 * L + 3 * r + col);
       data.world_position[L][r] = x(l.pos + 3 * L + r) + origin[r];
@@ -76,11 +87,11 @@ void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int
   Workspace& ws = *e.ws;
   const Layout& l = p.layout;
   const LaneEntries x{s, width, lane};
-  for (const CollisionShape& shape : e.sim->model().shapes) {
-    const int L = shape.link;
-    Mat6& response = ws.data.response[L];
-    for (int a = 0; a < 6; ++a)
-      for (int b = 0; b < 6; ++b) response(a, b) = x(l.Lambda + 21 * L + symmetric_entry(a, b));
+  const std::vector<char>& shaped = ws.contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L) {
+    if (!shaped[static_cast<size_t>(L)]) continue;
+    double* response = ws.data.response[L].data();
+    for (int k = 0; k < 36; ++k) response[k] = x(l.Lambda + 21 * L + kEntries.at[k]);
     ws.link_cfm[L] = p.any_cfm ? x(l.cfm + L) : 0.0;
     ws.contact_link_velocity[static_cast<size_t>(L)] = x.six(l.contact_vel + 6 * L);
   }
@@ -96,11 +107,13 @@ void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int
 
 void contact_solve(ContactLanes& c, const Plan& p, int env, int link, const LaneContactPhase& phase,
                    double* s, int width, int lane) {
+  ContactRows& rows = c.envs[static_cast<size_t>(env)].ws->contact_rows;
+  if (!rows.link_has_rows(link)) return;  // the lane step wrote its subtree impulse 0
   const Layout& l = p.layout;
   const LaneEntries x{s, width, lane};
   Vec6 dv = x.six(l.dv + 6 * link);
-  const Vec6 impulse = c.envs[static_cast<size_t>(env)].ws->contact_rows.solve_link(
-      link, x.six(l.contact_vel + 6 * link), dv, phase_of(phase));
+  const Vec6 impulse =
+      rows.solve_link(link, x.six(l.contact_vel + 6 * link), dv, phase_of(phase));
   for (int r = 0; r < 6; ++r) {
     s[static_cast<long>(l.dv + 6 * link + r) * width + lane] = dv[r];
     s[static_cast<long>(l.subtree + 6 * link + r) * width + lane] = -impulse[r];
@@ -111,9 +124,10 @@ void contact_track(ContactLanes& c, const Plan& p, int env, double h, const doub
                    int lane) {
   const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
   const LaneEntries x{s, width, lane};
-  for (const CollisionShape& shape : e.sim->model().shapes)
-    e.ws->contact_link_velocity[static_cast<size_t>(shape.link)] =
-        x.six(p.layout.contact_vel + 6 * shape.link);
+  const std::vector<char>& shaped = e.ws->contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L)
+    if (shaped[static_cast<size_t>(L)])
+      e.ws->contact_link_velocity[static_cast<size_t>(L)] = x.six(p.layout.contact_vel + 6 * L);
   e.ws->contact_rows.track(e.ws->contact_link_velocity, h);
 }
 
