@@ -799,6 +799,11 @@ std::string Batch::lane_refusal() {
       why = simd::lane_refusal(s);
       // The lanes keep no per-iteration drive impulses (Simulation::last_drive_change).
       if (why.empty() && s.track_convergence()) why = "convergence tracking on";
+      // The plan solves contacts on environment 0's shape links (LaneEngine::set_contacts).
+      if (why.empty() && s.ground().enabled &&
+          s.ws_->contact_rows.links_with_shapes() !=
+              sims_.front().ws_->contact_rows.links_with_shapes())
+        why = "collision shapes on other links than environment 0's";
     }
     if (!why.empty()) return "environment " + std::to_string(i) + ": " + why;
     const SimulationOptions& oi = s.options();
@@ -854,7 +859,7 @@ void Batch::step_lanes(int count) {
     contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
     grounded = grounded || s.ws_->contacts_active;
   }
-  if (grounded != lanes_->plan().contacts) lanes_->set_contacts(grounded);
+  lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
   a.applied = rows_[StateStorage::applied_force].data();

@@ -195,7 +195,6 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     p.physx_spherical = p.any_spherical;
   }
   shape_links_.assign(static_cast<size_t>(L), 0);
-  for (const CollisionShape& shape : m.shapes) shape_links_[static_cast<size_t>(shape.link)] = 1;
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
   // kMaxInterleave groups each) starts with the prototype's parameters.
@@ -211,8 +210,10 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
 }
 
-void LaneEngine::set_contacts(bool on) {
+void LaneEngine::set_contacts(bool on, const std::vector<char>& shape_links) {
+  if (on == plan_.contacts && shape_links == shape_links_) return;
   plan_.contacts = on;
+  shape_links_ = shape_links;
   for (size_t i = 0; i < links_.size(); ++i) {
     LinkConstants& k = links_[i];
     k.contacts = on && shape_links_[i];

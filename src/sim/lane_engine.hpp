@@ -49,10 +49,11 @@ class LaneEngine {
   int size() const { return count_; }
   const Plan& plan() const { return plan_; }
 
-  /// Whether the lanes solve ground contacts (Plan::contacts): the links with shapes get their
-  /// rows in the sweep, and their children's flags change as SweepWorkspace::set_contact_links
-  /// changes them.
-  void set_contacts(bool on);
+  /// Whether the lanes solve ground contacts (Plan::contacts) and on which links (flags per
+  /// link: those with shapes): those get their rows in the sweep, and their children's flags
+  /// change as SweepWorkspace::set_contact_links changes them. Nothing changes when both are
+  /// as they were.
+  void set_contacts(bool on, const std::vector<char>& shape_links);
   /// The environments whose contact rows the lanes use (Plan::contacts).
   ContactLanes& contacts() { return contacts_; }
 
@@ -99,7 +100,7 @@ class LaneEngine {
 
   int count_ = 0;
   std::vector<LinkConstants> links_;
-  std::vector<char> shape_links_, first_child_free_;  // per link: shapes; first_child without contacts
+  std::vector<char> shape_links_, first_child_free_;  // per link: contacts; first_child without them
   ContactLanes contacts_;
   std::vector<int> finish_after_;
   std::vector<MimicJoint> mimic_joints_;  // the prototype's

@@ -249,6 +249,14 @@ TEST(LaneContact, StepPath) {
   Simulation s = grounded_tree(5, SolverType::pgs, false);
   Batch grounded(s, 3);
   EXPECT_EQ(grounded.step_path().find("scalar"), std::string::npos) << grounded.step_path();
+  // An environment whose shapes sit on other links than environment 0's (the plan's).
+  Model moved = s.model();
+  moved.shapes.erase(moved.shapes.begin() + 1);
+  grounded.sim(2).set_model(std::make_shared<const Model>(moved));
+  EXPECT_NE(grounded.step_path().find("environment 2: collision shapes on other links than "
+                                      "environment 0's"),
+            std::string::npos)
+      << grounded.step_path();
   Simulation self = s;
   ContactOptions contact;
   contact.self_collision = true;
