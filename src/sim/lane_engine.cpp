@@ -41,7 +41,8 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
-  const int physx = p.physx_prismatic || p.physx_floating || p.physx_spherical ? 1 : 0;
+  const int physx =
+      p.physx_prismatic || p.physx_floating || p.physx_spherical || p.physx_contacts ? 1 : 0;
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
   l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
   l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
@@ -57,6 +58,8 @@ Layout make_layout(const Plan& p) {
   l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
   l.vel_v = take(pf * 3 * L), l.now_com = take(pf * 3 * L), l.qd_position = take(pf * n);
   l.contact_vel = take(p.contacts ? 6 * L : 0);
+  l.contact_bias = take(p.physx_contacts ? 6 * L : 0);
+  l.contact_motion = take(p.physx_contacts ? 6 * L : 0);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -97,10 +100,6 @@ std::string lane_refusal(const Simulation& s) {
     if (s.has_actuator(d) && s.actuators().implicit(d))
       return has("joint", joint, "an implicit actuator");
   }
-  // compat physx's contact rows see the link bias and its tracked motion (contact.md, C23a,
-  // C25a), which the lanes do not form.
-  if (s.ground().enabled && !m.shapes.empty() && s.options().compat == Compat::physx)
-    return has("simulation", "settings", "a ground with the model's collision shapes under compat physx");
   // Self-collision rows are solved outside the sweep (contact.md, C31).
   if (s.contact_options().self_collision && m.shapes.size() > 1)
     return has("simulation", "settings", "self-collision between the model's shapes");
@@ -189,6 +188,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   // compat physx's defaults are settings; on 1-dof joints its departures act at prismatic rows
   // (a revolute row's link bias is 0, PD-2) and at a floating root (its momentum and pose).
   if (o.compat == Compat::physx) {
+    p.physx = true;
     for (const Link& link : m.links)
       p.physx_prismatic = p.physx_prismatic || link.joint_type == JointType::prismatic;
     p.physx_floating = p.floating_base;
@@ -213,6 +213,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
 void LaneEngine::set_contacts(bool on, const std::vector<char>& shape_links) {
   if (on == plan_.contacts && shape_links == shape_links_) return;
   plan_.contacts = on;
+  plan_.physx_contacts = on && plan_.physx;
   shape_links_ = shape_links;
   for (size_t i = 0; i < links_.size(); ++i) {
     LinkConstants& k = links_[i];

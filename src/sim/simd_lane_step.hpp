@@ -296,6 +296,7 @@ class LaneStep {
   static bool one_dof(const LinkConstants& k) { return k.type == 1 || k.type == 2; }
   // Ground contacts (docs/simd_batch.md, "Contacts"): each live lane's own rows, out of line.
   void contact_velocities();
+  void contact_bias();
   template <bool kGiven>
   void contact_link(int i);
   void track_contacts(double h);
@@ -1363,6 +1364,28 @@ void LaneStep<A, K>::contact_velocities() {
       for (int r = 0; r < 6; ++r) v[r] = vp[r];
     }
   }
+  if (!p_.physx_contacts) return;
+  // compat physx: PhysX's link velocities, with the bias B of the free update (C23a).
+  for (int i = p_.num_links - 1; i >= 0; --i) {
+    V* v = at(l_.contact_vel + 6 * i);
+    const V* b = at(l_.contact_bias + 6 * i);
+    for (int r = 0; r < 6; ++r) v[r] = v[r] + b[r];
+  }
+}
+
+// compat physx, once a step (Stepper::setup_contacts): each link's bias B, at its centre of mass
+// in world axes (link_bias), as a twist in frame 0, and its tracked motion zero.
+template <class A, int K>
+void LaneStep<A, K>::contact_bias() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V* bw = at(l_.bias_w + 3 * i);
+    const V* bv = at(l_.bias_v + 3 * i);
+    V t[3];
+    cross(bw, at(l_.start_com + 3 * i), t);
+    V* b = at(l_.contact_bias + 6 * i);
+    for (int r = 0; r < 3; ++r) b[r] = bw[r], b[3 + r] = bv[r] - t[r];
+    for (int r = 0; r < 6; ++r) at(l_.contact_motion + 6 * i)[r] = V(0.0);
+  }
 }
 
 // Link i's contact rows in a sweep, each live lane's own: their impulse starts its subtree
@@ -1382,8 +1405,49 @@ void LaneStep<A, K>::contact_link(int i) {
 template <class A, int K>
 void LaneStep<A, K>::track_contacts(double h_step) {
   contact_velocities();
+  double h_track = h_step;
+  if (p_.physx_contacts) {
+    // PhysX (recordDeltaMotion; contact.md C25a): a child link's linear motion is its centre of
+    // mass's move to the posed sub-step, its angular motion its turn (track_prismatic); the
+    // root's the sum of h V. Their increments over the sub-step take the velocities' place.
+    // The poses of the sub-step are from frame 0's origin then: the root's move is added.
+    const LinkConstants& root = p_.links[0];
+    V move[3] = {V(0.0), V(0.0), V(0.0)};
+    if (root.type == 3) {
+      for (int r = 0; r < 3; ++r)
+        move[r] = at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r];
+    } else if (root.type == 2) {
+      const V dx = at(l_.q)[root.q_index] - at(l_.old_q)[root.q_index];
+      for (int r = 0; r < 3; ++r)  // E^T axis, kinematics.cpp's prismatic root
+        move[r] = (V(root.E[r]) * V(root.axis[0]) + V(root.E[3 + r]) * V(root.axis[1]) +
+                   V(root.E[6 + r]) * V(root.axis[2])) * dx;
+    }
+    for (int i = 0; i < p_.num_links; ++i) {
+      V* M = at(l_.contact_motion + 6 * i);
+      V* v = at(l_.contact_vel + 6 * i);
+      V next[6];
+      if (p_.links[i].parent < 0) {
+        for (int r = 0; r < 6; ++r) next[r] = M[r] + V(h_step) * v[r];
+      } else {
+        const V* theta = at(l_.turn + 3 * i);
+        const V* start = at(l_.start_com + 3 * i);
+        V now[3], t[3];
+        link_com(i, at(l_.now_R + 9 * i), at(l_.now_pos + 3 * i), now);
+        cross(theta, start, t);
+        for (int r = 0; r < 3; ++r) {
+          next[r] = theta[r];
+          next[3 + r] = ((now[r] + move[r]) - start[r]) - t[r];
+        }
+      }
+      for (int r = 0; r < 6; ++r) {
+        v[r] = next[r] - M[r];
+        M[r] = next[r];
+      }
+    }
+    h_track = 1.0;
+  }
   for (int l = 0; l < b_.valid; ++l)
-    if (live_[l]) contact_track(*b_.contacts, p_, b_.env0 + l, h_step, scratch(), kW, l);
+    if (live_[l]) contact_track(*b_.contacts, p_, b_.env0 + l, h_track, scratch(), kW, l);
 }
 
 // Once a step, after the response (mimic_solve.cpp's setup): each mimic row's velocity change at
@@ -2568,7 +2632,8 @@ void LaneStep<A, K>::step() {
       if (live_[l]) contact_poses(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
     }
   }
-  if (p_.physx_prismatic || p_.physx_floating || p_.physx_spherical) link_bias();
+  if (p_.physx_prismatic || p_.physx_floating || p_.physx_spherical || p_.physx_contacts)
+    link_bias();
   if (p_.physx_floating) physx_start();
   articulated_pass();
   forward_pass();
@@ -2580,6 +2645,7 @@ void LaneStep<A, K>::step() {
       for (int r = 0; r < 6; ++r) at(l_.subtree + 6 * i)[r] = V(0.0);
   if (p_.num_mimic > 0) setup_mimic();
   if (p_.contacts) {  // Stepper::setup_contacts, from the free velocity
+    if (p_.physx_contacts) contact_bias();
     contact_velocities();
     for (int l = 0; l < b_.valid; ++l)
       if (live_[l]) contact_setup(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
@@ -2609,6 +2675,8 @@ void LaneStep<A, K>::step() {
       if (p_.physx_prismatic) {  // the next sub-step's rows see the clamped pose (PD-3)
         clamp_prismatic();
         track_prismatic(rho);
+      } else if (p_.physx_contacts) {
+        track_prismatic(rho);  // the sub-step's poses and turns, the contacts' motion (C25a)
       }
       if (p_.contacts) track_contacts(rho);
       if (p_.physx_floating)  // the mean of the sub-steps' velocities

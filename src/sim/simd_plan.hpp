@@ -164,6 +164,9 @@ struct Layout {
   int start_R = 0, start_pos = 0, link_force = 0, targets = 0, compound_inverse = 0, vel_w = 0,
       vel_v = 0, now_com = 0, qd_position = 0;
   int contact_vel = 0;  ///< Plan::contacts: each link's velocity at a sweep's start (frame 0)
+  /// Plan::physx_contacts: each link's bias B as a twist in frame 0 (contact.md, C23a) and its
+  /// motion since the step's start as PhysX tracks it (C25a).
+  int contact_bias = 0, contact_motion = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -206,6 +209,8 @@ struct Plan {
   /// Some environment's ground is on and the model has shapes: each environment's own contact
   /// rows (ContactRows) run in its lane, out of line (lane_contacts.cpp).
   bool contacts = false;
+  /// compat physx; with contacts: their rows see the link bias and PhysX's tracked motion.
+  bool physx = false, physx_contacts = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;

@@ -38,7 +38,7 @@ TEST(LaneContactIo, AntOnTheGroundAsSimulation) {
     const std::string what = std::string("Ant on the ground (") + file + ", " +
                              to_string(ant.options().solver) + ")";
     const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
-    EXPECT_LE(f.ratio, 10.0) << what;
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
     EXPECT_FALSE(lanes.contacts(0).empty()) << what;
     EXPECT_TRUE(lanes.contacts(4).empty()) << what;
   }

@@ -432,8 +432,8 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   o.guard.enabled = true;
   guarded.set_options(o);
   expect_refused(guarded, "simulation 'options' has the step guard");
-  // A ground with the model's shapes under compat physx (its contact rows see the link bias the
-  // lanes do not form); under compat none the lanes solve them (lane_contact_test.cpp).
+  // A ground with the model's shapes: the lanes solve their rows (lane_contact_test.cpp), under
+  // compat none and physx.
   Model shaped = s.model();
   CollisionShape ball;
   ball.link = shaped.num_links() - 1;
@@ -449,9 +449,8 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   physx_options.compat = Compat::physx;
   Simulation grounded_physx(grounded.model_ptr(), physx_options);
   grounded_physx.set_ground(ground);
-  expect_refused(grounded_physx,
-                 "simulation 'settings' has a ground with the model's collision shapes under "
-                 "compat physx");
+  Batch on_ground_physx(grounded_physx, 2);
+  ASSERT_LANES(on_ground_physx);
   ground.enabled = false;
   grounded.set_ground(ground);
   Batch shapes_alone(grounded, 2);  // shapes alone do nothing
