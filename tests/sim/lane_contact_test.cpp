@@ -3,12 +3,15 @@
 // and every contact report. docs/simd_batch.md, "Contacts".
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/contact_models.hpp"
@@ -158,6 +161,47 @@ TEST(LaneContact, QuadrupedStandingAndDroppedAsSimulation) {
     EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
     EXPECT_GE(lanes.contacts(0).size(), 4u) << what;
     EXPECT_TRUE(lanes.contacts(4).empty()) << what;
+  }
+}
+
+// A fixed random tree of revolute joints (no prismatic, spherical or floating joint asks for the
+// link bias) with a ball on each link, its lowest 5 mm into the ground, under compat physx: the
+// bias is formed for the contacts alone. (Under compat none one of its balls sits where its link
+// cannot move along the normal: J Lambda J is 0 to rounding and the row's impulse 1e16 in the
+// scalar step too; physx's cfm keeps it finite.)
+TEST(LaneContact, FixedTreeOnTheGroundUnderCompatPhysxAsSimulation) {
+  Model m = *test::make_random_tree(1, 7, /*floating=*/false, /*spherical=*/false, 0.01);
+  for (const Link& link : m.links) ASSERT_NE(link.joint_type, JointType::prismatic);
+  for (int i = 1; i < m.num_links(); ++i) {
+    CollisionShape ball;
+    ball.link = i;
+    ball.size = Vec3(0.05, 0.0, 0.0);
+    m.shapes.push_back(ball);
+  }
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o = test::lane_test_options(solver);
+    o.compat = Compat::physx;
+    Simulation sim(std::make_shared<const Model>(m), o);
+    Data posed(sim.model());
+    forward_kinematics(sim.model(), posed, sim.q());
+    Ground ground;
+    ground.enabled = true;
+    ground.height = std::numeric_limits<double>::infinity();
+    for (const CollisionShape& ball : sim.model().shapes)
+      ground.height = std::min(ground.height, posed.world_position[ball.link].z() - 0.045);
+    sim.set_ground(ground);
+    std::mt19937 rng(1);
+    test::drive_every_joint(sim, rng, 100.0, 10.0);
+    for (int d = 0; d < sim.model().nv; ++d)
+      sim.set_joint_friction(d, JointFriction{0.0, 0.0, 0.2});
+    Batch lanes(sim, 5);
+    for (int e = 0; e < lanes.size(); ++e)
+      lanes.sim(e).set_qd(test::random_vector(sim.model().nv, rng, 0.3));
+    const std::string what = std::string("fixed tree on the ground, compat physx, ") +
+                             to_string(solver);
+    const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+    EXPECT_FALSE(lanes.contacts(0).empty()) << what;
   }
 }
 
