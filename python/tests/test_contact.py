@@ -196,7 +196,7 @@ def test_a_ball_lands_rests_and_rolls_on_the_ground():
 def test_a_batch_carries_each_environments_contacts():
     """Balls of masses m_i resting on the ground in one Batch: environment i's ground carries
     m_i g (linear momentum of a resting step), bit for bit what a ball of that mass gives
-    alone."""
+    alone without SIMD lanes, within 1e-11 in them (another operation order)."""
     def resting(mass):
         robot = fd.parse_urdf(BALL.replace('mass value="2"', f'mass value="{mass!r}"'),
                               "ball.urdf", fd.UrdfOptions(fixed_base=False))
@@ -205,9 +205,16 @@ def test_a_batch_carries_each_environments_contacts():
         sim.set_base_state(position=[0.0, 0.0, 0.1])
         return sim
     masses = np.array([0.5, 2.0, 3.5])
+    lanes = fd.Batch(resting(2.0), len(masses))
+    lanes.set_link_mass("ball", masses, scale_inertia=False)
+    assert lanes.step_path.endswith(" lanes"), lanes.step_path
+    lanes.step(100)
     batch = fd.Batch(resting(2.0), len(masses))
+    batch.lanes = False
     batch.set_link_mass("ball", masses, scale_inertia=False)
     batch.step(100)
+    np.testing.assert_allclose(lanes.link_contact_force, batch.link_contact_force, rtol=1e-11,
+                               atol=1e-11)
     f = batch.link_contact_force
     assert f.shape == (3, 1, 3)
     np.testing.assert_allclose(f[:, 0, 2], masses * 9.81, rtol=1e-9)

@@ -799,6 +799,11 @@ std::string Batch::lane_refusal() {
       why = simd::lane_refusal(s);
       // The lanes keep no per-iteration drive impulses (Simulation::last_drive_change).
       if (why.empty() && s.track_convergence()) why = "convergence tracking on";
+      // The plan solves contacts on environment 0's shape links (LaneEngine::set_contacts).
+      if (why.empty() && s.ground().enabled &&
+          s.ws_->contact_rows.links_with_shapes() !=
+              sims_.front().ws_->contact_rows.links_with_shapes())
+        why = "collision shapes on other links than environment 0's";
     }
     if (!why.empty()) return "environment " + std::to_string(i) + ": " + why;
     const SimulationOptions& oi = s.options();
@@ -845,6 +850,16 @@ void Batch::step_lanes(int count) {
     lane_time_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].time_;
     lanes_->clear_stop(i);  // a diverged environment steps again, as its Simulation would
   }
+  // Each environment's contact rows, reports and anchors are its Simulation's (lane_contacts.cpp).
+  simd::ContactLanes& contacts = lanes_->contacts();
+  contacts.envs.resize(static_cast<size_t>(n));
+  bool grounded = false;
+  for (int i = 0; i < n; ++i) {
+    Simulation& s = sims_[static_cast<size_t>(i)];
+    contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
+    grounded = grounded || s.ws_->contacts_active;
+  }
+  lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
   a.applied = rows_[StateStorage::applied_force].data();

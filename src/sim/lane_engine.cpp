@@ -41,7 +41,8 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
-  const int physx = p.physx_prismatic || p.physx_floating || p.physx_spherical ? 1 : 0;
+  const int physx =
+      p.physx_prismatic || p.physx_floating || p.physx_spherical || p.physx_contacts ? 1 : 0;
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
   l.bias_w = take(physx * 3 * L), l.bias_v = take(physx * 3 * L), l.turn = take(physx * 3 * L);
   l.now_R = take(physx * 9 * L), l.now_pos = take(physx * 3 * L), l.row_bias = take(physx * n);
@@ -56,6 +57,9 @@ Layout make_layout(const Plan& p) {
   l.start_R = take(pf * 9 * L), l.start_pos = take(pf * 3 * L), l.link_force = take(pf * 6 * L);
   l.targets = take(pf * 10), l.compound_inverse = take(pf * 9), l.vel_w = take(pf * 3 * L);
   l.vel_v = take(pf * 3 * L), l.now_com = take(pf * 3 * L), l.qd_position = take(pf * n);
+  l.contact_vel = take(p.contacts ? 6 * L : 0);
+  l.contact_bias = take(p.physx_contacts ? 6 * L : 0);
+  l.contact_motion = take(p.physx_contacts ? 6 * L : 0);
   l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
   l.size = at;
   return l;
@@ -96,9 +100,7 @@ std::string lane_refusal(const Simulation& s) {
     if (s.has_actuator(d) && s.actuators().implicit(d))
       return has("joint", joint, "an implicit actuator");
   }
-  // Nor contact rows: the robot would pass through the ground.
-  if (s.ground().enabled && !m.shapes.empty())
-    return has("simulation", "settings", "a ground with the model's collision shapes");
+  // Self-collision rows are solved outside the sweep (contact.md, C31).
   if (s.contact_options().self_collision && m.shapes.size() > 1)
     return has("simulation", "settings", "self-collision between the model's shapes");
   return {};
@@ -140,6 +142,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
       later[static_cast<size_t>(i)] = !k.last_child || later[static_cast<size_t>(link.parent)];
     }
     k.later = later[static_cast<size_t>(i)];
+    first_child_free_.push_back(k.first_child);
     k.leaf = link.children.empty();
     // A floating root's six dofs are finished after the sweep, as a multi-dof joint's.
     k.finish_on_leave = (k.type == 1 || k.type == 2) && !k.later;
@@ -185,11 +188,13 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   // compat physx's defaults are settings; on 1-dof joints its departures act at prismatic rows
   // (a revolute row's link bias is 0, PD-2) and at a floating root (its momentum and pose).
   if (o.compat == Compat::physx) {
+    p.physx = true;
     for (const Link& link : m.links)
       p.physx_prismatic = p.physx_prismatic || link.joint_type == JointType::prismatic;
     p.physx_floating = p.floating_base;
     p.physx_spherical = p.any_spherical;
   }
+  shape_links_.assign(static_cast<size_t>(L), 0);
   p.layout = make_layout(p);
   // Every environment (and the padding up to whole blocks of the widest width and interleave,
   // kMaxInterleave groups each) starts with the prototype's parameters.
@@ -203,6 +208,21 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   }
   stops_.resize(static_cast<size_t>(count));
   stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
+}
+
+void LaneEngine::set_contacts(bool on, const std::vector<char>& shape_links) {
+  if (on == plan_.contacts && shape_links == shape_links_) return;
+  plan_.contacts = on;
+  plan_.physx_contacts = on && plan_.physx;
+  shape_links_ = shape_links;
+  for (size_t i = 0; i < links_.size(); ++i) {
+    LinkConstants& k = links_[i];
+    k.contacts = on && shape_links_[i];
+    // gauss_seidel.cpp's set_contact_links: the first child of a link with contacts adds to the
+    // pA they started.
+    k.first_child = first_child_free_[i] && !(k.parent >= 0 && links_[static_cast<size_t>(k.parent)].contacts);
+  }
+  plan_.layout = make_layout(plan_);
 }
 
 void LaneEngine::pack_drives(int env, const Simulation& sim) {
@@ -337,6 +357,7 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
     b.valid = std::min(W, count_ - b.env0);
     b.parameters = parameters_.data();
     b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
+    b.contacts = plan_.contacts ? &contacts_ : nullptr;
     switch (isa) {
       case SimdIsa::sse2:
         run_block_sse2(plan_, b, scratch, steps);
@@ -373,9 +394,13 @@ std::string LaneEngine::divergence_message(int e, const Model& model, long step_
       "friction force", "velocity limit force", "position q"};
   std::ostringstream m;
   m.precision(6);
-  m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): joint '"
-    << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
-    << kQuantity[s.quantity] << " = ";
+  m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): ";
+  if (s.quantity == 7)  // as Stepper::check_finite_or_throw words it
+    m << "link '" << model.links[static_cast<size_t>(s.dof / 3)].name << "' contact force f"
+      << "xyz"[s.dof % 3] << " = ";
+  else
+    m << "joint '" << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
+      << kQuantity[s.quantity] << " = ";
   if (std::isnan(s.value)) m << "nan";  // as Simulation's: a NaN's sign is the operation order's
   else m << s.value;
   m << "; the state is left as it was before this step (lower dt or the gains)";

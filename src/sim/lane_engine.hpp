@@ -11,7 +11,21 @@
 #include "featherdrive/sim/batch.hpp"
 #include "simd_plan.hpp"
 
+namespace featherdrive {
+struct Workspace;
+}
+
 namespace featherdrive::simd {
+
+/// Each environment's simulation and workspace, whose contact rows, reports and anchors the
+/// lanes use as Simulation's step does (Batch fills it before a run; lane_contacts.cpp).
+struct ContactLanes {
+  struct Env {
+    const Simulation* sim = nullptr;
+    Workspace* ws = nullptr;
+  };
+  std::vector<Env> envs;
+};
 
 /// The lanes' instruction set for `count` environments: default_simd_isa(), and without
 /// FEATHERDRIVE_SIMD narrowed while a block of two vectors would hold more lanes than
@@ -34,6 +48,14 @@ class LaneEngine {
 
   int size() const { return count_; }
   const Plan& plan() const { return plan_; }
+
+  /// Whether the lanes solve ground contacts (Plan::contacts) and on which links (flags per
+  /// link: those with shapes): those get their rows in the sweep, and their children's flags
+  /// change as SweepWorkspace::set_contact_links changes them. Nothing changes when both are
+  /// as they were.
+  void set_contacts(bool on, const std::vector<char>& shape_links);
+  /// The environments whose contact rows the lanes use (Plan::contacts).
+  ContactLanes& contacts() { return contacts_; }
 
   /// Environment env's per-lane parameters from `sim` (same topology and options): drives
   /// (with targets), joint limits, friction, velocity limits, wrap and mimic rows (whose dofs
@@ -78,6 +100,8 @@ class LaneEngine {
 
   int count_ = 0;
   std::vector<LinkConstants> links_;
+  std::vector<char> shape_links_, first_child_free_;  // per link: contacts; first_child without them
+  ContactLanes contacts_;
   std::vector<int> finish_after_;
   std::vector<MimicJoint> mimic_joints_;  // the prototype's
   std::vector<MimicConstants> mimic_;

@@ -294,6 +294,13 @@ class LaneStep {
     return out;
   }
   static bool one_dof(const LinkConstants& k) { return k.type == 1 || k.type == 2; }
+  // Ground contacts (docs/simd_batch.md, "Contacts"): each live lane's own rows, out of line.
+  void contact_velocities();
+  void contact_bias();
+  template <bool kGiven>
+  void contact_link(int i);
+  void track_contacts(double h);
+  double* scratch() const { return reinterpret_cast<double*>(s_); }
   void integrate(double h, bool track);
   void wrap_positions();
   void finish_step();
@@ -364,6 +371,10 @@ class LaneStep {
   M stopped_ = none();
   M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
   M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
+  M grounded_ = none();  // lanes whose environment's ground contacts run (Plan::contacts)
+  bool live_[kW] = {};   // per lane: its contact rows run this step (grounded, not stopped)
+  Stop contact_stop_[kW] = {};  // per live lane: its first non-finite contact force
+  LaneContactPhase contact_phase_;  // the sweep's
 };
 
 template <class A, int K>
@@ -1285,6 +1296,12 @@ template <bool kGiven, class L>
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
   if (p_.num_mimic > 0) solve_mimic();
+  if (p_.contacts) {  // Stepper::sweep: the links' velocities at the sweep's start, its phase
+    contact_velocities();
+    LaneContactPhase& c = contact_phase_;
+    c.dt = p_.dt, c.h = h_, c.tgs = p_.tgs, c.velocity_iteration = velocity_iteration_;
+    c.elapsed = velocity_iteration_ ? p_.dt : p_.dt - time_to_step_end_ - h_;
+  }
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
   if (keep)
@@ -1307,23 +1324,130 @@ void LaneStep<A, K>::sweep_links() {
     V* dv = at(l_.dv + 6 * i);
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
       for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
-      continue;
-    }
-    if (k.type == 4) {
+    } else if (k.type == 4) {
       enter_ball<kGiven>(i, dvp, dv);
-      continue;
+    } else {
+      const double* has = any_row(k.v_index);
+      // A lone drive: one vector at a time. With friction or a limit row in the block the whole
+      // pack measured faster (the welded humanoid).
+      if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
+          has[5] == 0.0 && has[6] == 0.0)
+        for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
+      else
+        enter_link<kGiven>(WholePack{}, i, dvp, dv);
     }
-    const double* has = any_row(k.v_index);
-    // A lone drive: one vector at a time. With friction or a limit row in the block the whole
-    // pack measured faster (the welded humanoid).
-    if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
-        has[5] == 0.0 && has[6] == 0.0)
-      for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
-    else
-      enter_link<kGiven>(WholePack{}, i, dvp, dv);
+    if (k.contacts) contact_link<kGiven>(i);  // right after its joint's rows (contact.md, C15)
   }
   leave_links(previous, -1, false);
   for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
+}
+
+// Every link's velocity in frame 0 from qd with the step-start subspaces (contact_rows.cpp's
+// link_velocities0), for the contact rows.
+template <class A, int K>
+void LaneStep<A, K>::contact_velocities() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    V* v = at(l_.contact_vel + 6 * i);
+    const V* vp = k.parent >= 0 ? at(l_.contact_vel + 6 * k.parent) : at(l_.zero);
+    const V* qd = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
+    if (one_dof(k)) {
+      const V* S = at(l_.S + 6 * i);
+      for (int r = 0; r < 6; ++r) v[r] = vp[r] + S[r] * qd[0];
+    } else if (k.type == 3) {
+      root_S(at(l_.root_R), qd, v);
+    } else if (k.type == 4) {
+      const V* S3 = at(l_.ball_S + 18 * i);
+      for (int r = 0; r < 6; ++r)
+        v[r] = vp[r] + ((S3[r] * qd[0] + S3[6 + r] * qd[1]) + S3[12 + r] * qd[2]);
+    } else {
+      for (int r = 0; r < 6; ++r) v[r] = vp[r];
+    }
+  }
+  if (!p_.physx_contacts) return;
+  // compat physx: PhysX's link velocities, with the bias B of the free update (C23a).
+  for (int i = p_.num_links - 1; i >= 0; --i) {
+    V* v = at(l_.contact_vel + 6 * i);
+    const V* b = at(l_.contact_bias + 6 * i);
+    for (int r = 0; r < 6; ++r) v[r] = v[r] + b[r];
+  }
+}
+
+// compat physx, once a step (Stepper::setup_contacts): each link's bias B, at its centre of mass
+// in world axes (link_bias), as a twist in frame 0, and its tracked motion zero.
+template <class A, int K>
+void LaneStep<A, K>::contact_bias() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const V* bw = at(l_.bias_w + 3 * i);
+    const V* bv = at(l_.bias_v + 3 * i);
+    V t[3];
+    cross(bw, at(l_.start_com + 3 * i), t);
+    V* b = at(l_.contact_bias + 6 * i);
+    for (int r = 0; r < 3; ++r) b[r] = bw[r], b[3 + r] = bv[r] - t[r];
+    for (int r = 0; r < 6; ++r) at(l_.contact_motion + 6 * i)[r] = V(0.0);
+  }
+}
+
+// Link i's contact rows in a sweep, each live lane's own: their impulse starts its subtree
+// impulse (0 in the other lanes and in kGiven's sweeps, which solve no rows).
+template <class A, int K>
+template <bool kGiven>
+void LaneStep<A, K>::contact_link(int i) {
+  V* pA = at(l_.subtree + 6 * i);
+  for (int r = 0; r < 6; ++r) pA[r] = V(0.0);
+  if constexpr (!kGiven)
+    for (int l = 0; l < b_.valid; ++l)
+      if (live_[l])
+        contact_solve(*b_.contacts, p_, b_.env0 + l, i, contact_phase_, scratch(), kW, l);
+}
+
+// TGS, after a sub-step's positions (Stepper::track_contacts).
+template <class A, int K>
+void LaneStep<A, K>::track_contacts(double h_step) {
+  contact_velocities();
+  double h_track = h_step;
+  if (p_.physx_contacts) {
+    // PhysX (recordDeltaMotion; contact.md C25a): a child link's linear motion is its centre of
+    // mass's move to the posed sub-step, its angular motion its turn (track_prismatic); the
+    // root's the sum of h V. Their increments over the sub-step take the velocities' place.
+    // The poses of the sub-step are from frame 0's origin then: the root's move is added.
+    const LinkConstants& root = p_.links[0];
+    V move[3] = {V(0.0), V(0.0), V(0.0)};
+    if (root.type == 3) {
+      for (int r = 0; r < 3; ++r)
+        move[r] = at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r];
+    } else if (root.type == 2) {
+      const V dx = at(l_.q)[root.q_index] - at(l_.old_q)[root.q_index];
+      for (int r = 0; r < 3; ++r)  // E^T axis, kinematics.cpp's prismatic root
+        move[r] = (V(root.E[r]) * V(root.axis[0]) + V(root.E[3 + r]) * V(root.axis[1]) +
+                   V(root.E[6 + r]) * V(root.axis[2])) * dx;
+    }
+    for (int i = 0; i < p_.num_links; ++i) {
+      V* M = at(l_.contact_motion + 6 * i);
+      V* v = at(l_.contact_vel + 6 * i);
+      V next[6];
+      if (p_.links[i].parent < 0) {
+        for (int r = 0; r < 6; ++r) next[r] = M[r] + V(h_step) * v[r];
+      } else {
+        const V* theta = at(l_.turn + 3 * i);
+        const V* start = at(l_.start_com + 3 * i);
+        V now[3], t[3];
+        link_com(i, at(l_.now_R + 9 * i), at(l_.now_pos + 3 * i), now);
+        cross(theta, start, t);
+        for (int r = 0; r < 3; ++r) {
+          next[r] = theta[r];
+          next[3 + r] = ((now[r] + move[r]) - start[r]) - t[r];
+        }
+      }
+      for (int r = 0; r < 6; ++r) {
+        v[r] = next[r] - M[r];
+        M[r] = next[r];
+      }
+    }
+    h_track = 1.0;
+  }
+  for (int l = 0; l < b_.valid; ++l)
+    if (live_[l]) contact_track(*b_.contacts, p_, b_.env0 + l, h_track, scratch(), kW, l);
 }
 
 // Once a step, after the response (mimic_solve.cpp's setup): each mimic row's velocity change at
@@ -2500,7 +2624,16 @@ template <class A, int K>
 void LaneStep<A, K>::step() {
   if (p_.any_velocity_limit) scale_to_velocity_limits();
   kinematics_and_bias();
-  if (p_.physx_prismatic || p_.physx_floating || p_.physx_spherical) link_bias();
+  if (p_.contacts) {  // the poses, before the response takes their room
+    alignas(64) double stopped[kW];
+    select(stopped_, V(1.0), V(0.0)).store_aligned(stopped);
+    for (int l = 0; l < b_.valid; ++l) {
+      live_[l] = stopped[l] == 0.0 && contacts_active(*b_.contacts, b_.env0 + l);
+      if (live_[l]) contact_poses(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
+    }
+  }
+  if (p_.physx_prismatic || p_.physx_floating || p_.physx_spherical || p_.physx_contacts)
+    link_bias();
   if (p_.physx_floating) physx_start();
   articulated_pass();
   forward_pass();
@@ -2511,6 +2644,12 @@ void LaneStep<A, K>::step() {
     if (p_.links[i].leaf)
       for (int r = 0; r < 6; ++r) at(l_.subtree + 6 * i)[r] = V(0.0);
   if (p_.num_mimic > 0) setup_mimic();
+  if (p_.contacts) {  // Stepper::setup_contacts, from the free velocity
+    if (p_.physx_contacts) contact_bias();
+    contact_velocities();
+    for (int l = 0; l < b_.valid; ++l)
+      if (live_[l]) contact_setup(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
+  }
   const double dt = p_.dt;
   velocity_iteration_ = false;
   if (!p_.tgs) {
@@ -2536,7 +2675,10 @@ void LaneStep<A, K>::step() {
       if (p_.physx_prismatic) {  // the next sub-step's rows see the clamped pose (PD-3)
         clamp_prismatic();
         track_prismatic(rho);
+      } else if (p_.physx_contacts) {
+        track_prismatic(rho);  // the sub-step's poses and turns, the contacts' motion (C25a)
       }
+      if (p_.contacts) track_contacts(rho);
       if (p_.physx_floating)  // the mean of the sub-steps' velocities
         for (int d = 0; d < p_.nv; ++d)
           at(l_.qd_position)[d] = at(l_.qd_position)[d] + share * at(l_.qd)[d];
@@ -2546,11 +2688,11 @@ void LaneStep<A, K>::step() {
     // their velocities.
     if (p_.num_mimic > 0) {
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
-    } else if (any(undriven_) && p_.velocity_iterations > 0) {
+    } else if (const M acting = undriven_ | grounded_; any(acting) && p_.velocity_iterations > 0) {
       V* saved = at(l_.saved_tgs);
       for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
-      for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(undriven_, at(l_.qd)[d], saved[d]);
+      for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(acting, at(l_.qd)[d], saved[d]);
     }
   }
   if (p_.physx_floating) physx_end_momentum();
@@ -2564,6 +2706,9 @@ void LaneStep<A, K>::step() {
     at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
     at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
   }
+  if (p_.contacts)  // Stepper::contact_forces: the forces, checked with the state
+    for (int l = 0; l < b_.valid; ++l)
+      if (live_[l]) contact_stop_[l] = contact_report(*b_.contacts, p_, b_.env0 + l);
 }
 
 // After a step: lanes with a non-finite value stop with the state before it (the first culprit
@@ -2576,6 +2721,12 @@ void LaneStep<A, K>::finish_step() {
     z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
              at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
+  if (p_.contacts) {
+    alignas(64) double forces[kW] = {};
+    for (int l = 0; l < b_.valid; ++l)
+      if (live_[l] && contact_stop_[l].quantity != 0) forces[l] = __builtin_nan("");
+    z = z + V::load_aligned(forces);
+  }
   // Not z != 0: xsimd 8's != is unordered with SSE2 and ordered with AVX (false for a NaN).
   const M bad = !(z == zero);
   const M fresh = bad & (!stopped_);
@@ -2610,11 +2761,18 @@ void LaneStep<A, K>::finish_step() {
           for (int e = 0; e < 4; ++e)
             check(6, k.v_index + (e < 2 ? e : 2), lane(at(l_.q)[k.q_index + e]));
       }
+      if (stop.quantity == 0 && p_.contacts && live_[l]) stop = contact_stop_[l];
       b_.stop[b_.env0 + l] = stop;
       b_.stopped_now[b_.env0 + l] = true;
     }
   }
   stopped_ = stopped_ | bad;
+  if (p_.contacts) {  // the anchors kept only from a step that ends
+    alignas(64) double bad_lanes[kW];
+    select(bad, V(1.0), zero).store_aligned(bad_lanes);
+    for (int l = 0; l < b_.valid; ++l)
+      if (live_[l]) contact_conclude(*b_.contacts, b_.env0 + l, bad_lanes[l] == 0.0);
+  }
   if (any(stopped_)) {
     for (int k = 0; k < p_.nq; ++k) at(l_.q)[k] = select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
     for (int d = 0; d < p_.nv; ++d) {
@@ -2654,6 +2812,13 @@ void LaneStep<A, K>::run(int steps) {
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
   setup_row_constants(p_.tgs ? p_.dt / p_.position_iterations : p_.dt);
+  if (p_.contacts) {  // a grounded lane sweeps (and iterates) with or without joint rows
+    alignas(64) double grounded[kW];
+    for (int l = 0; l < kW; ++l)
+      grounded[l] = contacts_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+    grounded_ = V::load_aligned(grounded) != V(0.0);
+    rowless_ = rowless_ & !grounded_;
+  }
   for (int s = 0; s < steps; ++s) {
     for (int k = 0; k < nq; ++k) at(l_.old_q)[k] = at(l_.q)[k];
     for (int d = 0; d < nv; ++d) {

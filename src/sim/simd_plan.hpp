@@ -97,6 +97,9 @@ struct LinkConstants {
   bool later = false;       ///< it or an ancestor has a sibling after it
   bool leaf = true;         ///< it has no children
   bool finish_on_leave = false;
+  /// It carries collision shapes and Plan::contacts: its ground contact rows are solved right
+  /// after its joint's (the sweep's C15), and its children add to the pA they start.
+  bool contacts = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
   double axis[3] = {};  ///< unit joint axis (joint frame)
@@ -160,6 +163,10 @@ struct Layout {
   // the velocity the positions moved with.
   int start_R = 0, start_pos = 0, link_force = 0, targets = 0, compound_inverse = 0, vel_w = 0,
       vel_v = 0, now_com = 0, qd_position = 0;
+  int contact_vel = 0;  ///< Plan::contacts: each link's velocity at a sweep's start (frame 0)
+  /// Plan::physx_contacts: each link's bias B as a twist in frame 0 (contact.md, C23a) and its
+  /// motion since the step's start as PhysX tracks it (C25a).
+  int contact_bias = 0, contact_motion = 0;
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
@@ -199,6 +206,11 @@ struct Plan {
   bool physx_floating = false;
   /// compat physx with a spherical joint: its rows' link bias (S-8), its link turned in the world.
   bool physx_spherical = false;
+  /// Some environment's ground is on and the model has shapes: each environment's own contact
+  /// rows (ContactRows) run in its lane, out of line (lane_contacts.cpp).
+  bool contacts = false;
+  /// compat physx; with contacts: their rows see the link bias and PhysX's tracked motion.
+  bool physx = false, physx_contacts = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;
@@ -207,11 +219,39 @@ struct Plan {
 /// Why a lane stopped: the first non-finite quantity in Simulation's order.
 struct Stop {
   /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 velocity limit
-  /// force, 6 position q
+  /// force, 6 position q, 7 a link's contact force (dof: 3 link + component)
   int quantity = 0;
   int dof = -1;
   double value = 0.0;
 };
+
+/// Each environment's ground contact rows (lane_engine.hpp), which the lane step calls out of
+/// line, one lane at a time, on that lane's entries of its scratch (docs/simd_batch.md,
+/// "Contacts"). s: the scratch as doubles; entry k of a lane at s[k * width + lane].
+struct ContactLanes;
+/// Where a contact solve stands (ContactPhase's fields).
+struct LaneContactPhase {
+  double dt = 0.0, h = 0.0, elapsed = 0.0;
+  bool tgs = false, velocity_iteration = false;
+};
+/// Whether environment env's ground contact rows run (its ground is on).
+bool contacts_active(const ContactLanes& c, int env);
+/// The step's start: the shape links' poses (before the response takes their room), then the
+/// rows from the response, the cfm and the link velocities (layout contact_vel).
+void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
+void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
+/// Link's rows in a sweep at its start velocity plus its change dv (layout dv), which they
+/// change; their impulse starts its subtree impulse (layout subtree).
+void contact_solve(ContactLanes& c, const Plan& p, int env, int link, const LaneContactPhase& phase,
+                   double* s, int width, int lane);
+/// TGS: the points moved over a sub-step h at the link velocities (layout contact_vel).
+void contact_track(ContactLanes& c, const Plan& p, int env, double h, const double* s, int width,
+                   int lane);
+/// The step's contact forces into the environment's reports; the first non-finite one as a Stop
+/// (quantity 7), or quantity 0.
+Stop contact_report(ContactLanes& c, const Plan& p, int env);
+/// The step's end: the anchors kept (kept) or, for a lane that stopped, no contacts reported.
+void contact_conclude(ContactLanes& c, int env, bool kept);
 
 /// One block of lanes: environments env0 ... env0 + W - 1, of which the first `valid` exist (the
 /// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major.
@@ -231,6 +271,7 @@ struct Block {
   Stop* stop = nullptr;         ///< per environment; quantity != 0: stopped
   bool* stopped_now = nullptr;  ///< per environment: stopped in this call
   bool any_limit = true;        ///< some lane has a finite joint limit
+  ContactLanes* contacts = nullptr;  ///< Plan::contacts: each environment's contact rows
 };
 
 /// A spherical joint's PhysX positions (twist, swing1, swing2) and drive errors for the

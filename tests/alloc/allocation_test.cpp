@@ -321,6 +321,43 @@ TEST(BatchAllocations, LanesNoneAtEveryWidth) {
   }
 }
 
+// The same with ground contacts in the lanes (each environment's ContactRows, per lane): a
+// floating tree with a shape of each kind on its links, half sunk into the ground, PGS and TGS,
+// at every width, none on one thread.
+TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
+  Model m = *test::make_random_tree(5, 8, true, /*spherical=*/true, 0.01);
+  for (int i = 0; i < m.num_links(); ++i) {
+    CollisionShape s;
+    s.link = i;
+    constexpr ShapeType kinds[] = {ShapeType::box, ShapeType::sphere, ShapeType::capsule,
+                                   ShapeType::cylinder};
+    s.type = kinds[i % 4];
+    s.size = Vec3(0.1, 0.08, 0.06);
+    m.shapes.push_back(s);
+  }
+  auto model = std::make_shared<const Model>(m);
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o;
+    o.solver = solver;
+    Simulation prototype(model, o);
+    VecX q = prototype.q();
+    q[2] = 0.05;  // the root's box half in the ground
+    prototype.set_q(q);
+    Ground ground;
+    ground.enabled = true;
+    prototype.set_ground(ground);
+    for (SimdIsa isa : available_simd_isas()) {
+      Batch batch(prototype, 11);
+      batch.set_isa(isa);
+      batch.set_num_threads(1);
+      batch.step();
+      ASSERT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
+      EXPECT_EQ(allocations_in([&] { batch.step(30); }), 0) << to_string(isa);
+      EXPECT_GT(batch.contacts(10).size(), 0u);
+    }
+  }
+}
+
 // The kinematics and dynamics queries on a reused Data and reused outputs: none after the first
 // round (which sizes the Jacobians), on fixed and floating random trees with every joint type.
 TEST(QueryAllocations, NoneOnReusedWorkspace) {

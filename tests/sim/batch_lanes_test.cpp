@@ -432,8 +432,8 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   o.guard.enabled = true;
   guarded.set_options(o);
   expect_refused(guarded, "simulation 'options' has the step guard");
-  // A ground with the model's shapes (the lane step has no contact rows): a fixed arm that can
-  // touch the floor would otherwise pass through it.
+  // A ground with the model's shapes: the lanes solve their rows (lane_contact_test.cpp), under
+  // compat none and physx.
   Model shaped = s.model();
   CollisionShape ball;
   ball.link = shaped.num_links() - 1;
@@ -443,7 +443,14 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   Ground ground;
   ground.enabled = true;
   grounded.set_ground(ground);
-  expect_refused(grounded, "simulation 'settings' has a ground with the model's collision shapes");
+  Batch on_ground(grounded, 2);
+  ASSERT_LANES(on_ground);
+  SimulationOptions physx_options = grounded.options();
+  physx_options.compat = Compat::physx;
+  Simulation grounded_physx(grounded.model_ptr(), physx_options);
+  grounded_physx.set_ground(ground);
+  Batch on_ground_physx(grounded_physx, 2);
+  ASSERT_LANES(on_ground_physx);
   ground.enabled = false;
   grounded.set_ground(ground);
   Batch shapes_alone(grounded, 2);  // shapes alone do nothing

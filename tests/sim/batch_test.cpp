@@ -16,6 +16,7 @@
 #include "support/models.hpp"
 #include "support/compare.hpp"
 #include "support/contact_models.hpp"
+#include "support/lanes.hpp"
 
 namespace featherdrive {
 namespace {
@@ -526,7 +527,9 @@ TEST(Batch, ObserveAndFramePositions) {
 
 // Boxes of masses m_i resting on the ground (set_link_mass): each environment's ground carries its
 // own weight, m_i g along z (a steady state's linear momentum balance), and its contact outputs
-// are, bit for bit, those of the same box stepped alone, for 1 and 2 threads.
+// are, bit for bit, those of the same box stepped alone, for 1 and 2 threads, on the scalar
+// path; through the lanes (another operation order: docs/simd_batch.md, "Contacts") within
+// 1e-11 of them.
 TEST(Batch, ContactForcesPerEnvironmentCarryEachBoxsWeight) {
   const std::vector<double> masses{0.5, 1.0, 2.0, 3.7};
   const int n = static_cast<int>(masses.size());
@@ -542,9 +545,11 @@ TEST(Batch, ContactForcesPerEnvironmentCarryEachBoxsWeight) {
         prototype.model(), 0, m, box.com, Mat3(box.inertia_com * (m / box.mass)))));
     alone.back().step(200);
   }
+  for (const bool lanes : {false, true})
   for (int threads : {1, 2}) {
     Batch batch(prototype, n);
     batch.set_num_threads(threads);
+    batch.set_lanes(lanes);
     batch.set_link_mass(std::vector<int>{0, 1, 2, 3}, 0, Eigen::Map<const VecX>(masses.data(), n));
     EXPECT_EQ(batch.link_contact_force(), RowMatrix::Zero(n, 3));
     batch.step(200);
@@ -556,6 +561,10 @@ TEST(Batch, ContactForcesPerEnvironmentCarryEachBoxsWeight) {
       EXPECT_LT(std::abs(f(i, 2) / weight - 1.0), 1e-9) << i << ", threads " << threads;
       EXPECT_LT(std::hypot(f(i, 0), f(i, 1)), 1e-9 * weight) << i;
       const Simulation& lone = alone[static_cast<size_t>(i)];
+      if (lanes) {
+        EXPECT_LE(test::lane_difference(batch, i, lone), 1e-11) << i;
+        continue;
+      }
       EXPECT_TRUE(same_bits(batch.sim(i).q(), lone.q())) << i;
       EXPECT_EQ(f.row(i).transpose(), lone.link_contact_force()[0]) << i;
       const auto c = batch.contacts(i), expected = lone.contacts();

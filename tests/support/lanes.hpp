@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
@@ -23,8 +26,49 @@ inline SimulationOptions lane_test_options(SolverType solver) {
   return o;
 }
 
+/// The largest relative difference |a - b| / max(1, |b|) of a simulation against another: q,
+/// qd, the output forces, each link's contact force and the contact reports (the same points,
+/// link and shape, in the same order; a count that differs: infinity).
+inline double simulation_difference(const Simulation& lane, const Simulation& alone) {
+  double worst = 0.0;
+  auto compare = [&](const VecView& a, const VecView& b) {
+    worst = std::max(worst, relative_difference(a, b));
+  };
+  compare(lane.q(), alone.q());
+  compare(lane.qd(), alone.qd());
+  compare(lane.drive_force(), alone.drive_force());
+  compare(lane.limit_force(), alone.limit_force());
+  compare(lane.friction_force(), alone.friction_force());
+  compare(lane.velocity_limit_force(), alone.velocity_limit_force());
+  auto near = [&](double a, double b) {
+    worst = std::max(worst, std::abs(a - b) / std::max(1.0, std::abs(b)));
+  };
+  auto near3 = [&](const Vec3& a, const Vec3& b) {
+    for (int k = 0; k < 3; ++k) near(a[k], b[k]);
+  };
+  for (size_t l = 0; l < alone.link_contact_force().size(); ++l)
+    near3(lane.link_contact_force()[l], alone.link_contact_force()[l]);
+  const auto a = lane.contacts(), b = alone.contacts();
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < a.size(); ++k) {
+    if (a[k].link != b[k].link || a[k].shape != b[k].shape || a[k].other_link != b[k].other_link)
+      return std::numeric_limits<double>::infinity();
+    near3(a[k].position, b[k].position);
+    near3(a[k].normal, b[k].normal);
+    near(a[k].separation, b[k].separation);
+    near(a[k].normal_impulse, b[k].normal_impulse);
+    near3(a[k].friction_impulse, b[k].friction_impulse);
+  }
+  return worst;
+}
+
+/// simulation_difference of a lane environment e against a Simulation stepped alone.
+inline double lane_difference(const Batch& lanes, int e, const Simulation& alone) {
+  return simulation_difference(lanes.sim(e), alone);
+}
+
 /// Steps `count` copies of sim in lanes (asserting they do) and sim alone `steps` times; returns
-/// the largest relative difference of q, qd and the output forces, printed as "what: ...".
+/// the largest lane_difference, printed as "what: ...".
 inline double lanes_against_alone(const Simulation& sim, int steps, const std::string& what,
                                   int count = 5) {
   Batch lanes(sim, count);
@@ -33,18 +77,78 @@ inline double lanes_against_alone(const Simulation& sim, int steps, const std::s
   lanes.step(steps);
   alone.step(steps);
   double worst = 0.0;
-  auto compare = [&](const RowMatrix& a, const VecView& b) {
-    for (int e = 0; e < lanes.size(); ++e)
-      worst = std::max(worst, relative_difference(a.row(e), b.transpose()));
-  };
-  compare(lanes.q(), alone.q());
-  compare(lanes.qd(), alone.qd());
-  compare(lanes.drive_force(), alone.drive_force());
-  compare(lanes.limit_force(), alone.limit_force());
-  compare(lanes.friction_force(), alone.friction_force());
-  compare(lanes.velocity_limit_force(), alone.velocity_limit_force());
+  for (int e = 0; e < lanes.size(); ++e) worst = std::max(worst, lane_difference(lanes, e, alone));
   std::printf("%s: largest relative difference %.1e (docs/simd_batch.md)\n", what.c_str(), worst);
   return worst;
+}
+
+/// batch_against_alone's figures: the lanes' largest lane_difference from each environment
+/// stepped alone, the scalar step's own from a start changed in its last bits, and the
+/// largest ratio of the two of one environment (its nudged difference taken as at least 1e-11).
+/// Another operation order differs from the scalar step by the rounding of each operation, about
+/// what a last-bit change of the start does; contact rows amplify either by orders of magnitude
+/// (docs/simd_batch.md, "Contacts"), so each environment's ratio is bounded (kSensitivityFactor),
+/// not the difference.
+/// How far past an environment's own sampled sensitivity its lanes may be: the four last-bit
+/// changes sample a chaotic run's spread, they do not bound it (ratios up to 6.7 seen over the
+/// contact cases of docs/simd_batch.md, "Contacts").
+inline constexpr double kSensitivityFactor = 30.0;
+
+struct LaneFigures {
+  double lanes = 0.0;
+  double nudged = 0.0;
+  double ratio = 0.0;
+};
+
+/// Steps every environment of `lanes` (asserting it runs in lanes), a copy of each stepped alone
+/// as a Simulation and four more started with every q, or every qd, a last bit up or down, `steps` times in
+/// `chunks` calls; returns the largest differences after any call (the contacts of several steps
+/// compared), printed as "what: ...".
+inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
+                                       const std::string& what) {
+  constexpr size_t kNudges = 4;
+  EXPECT_NE(lanes.step_path().find("lanes"), std::string::npos) << what << lanes.step_path();
+  const Batch& view = lanes;
+  const auto n = static_cast<size_t>(lanes.size());
+  std::vector<Simulation> alone, nudged;
+  for (size_t e = 0; e < n; ++e) {
+    alone.push_back(view.sim(static_cast<int>(e)));
+    // q up, down; qd up, down: by the last bit of max(1, |x|), the scale the differences are
+    // measured in (a zero's own last bit, a denormal, would change nothing).
+    for (size_t k = 0; k < kNudges; ++k) {
+      nudged.push_back(alone.back());
+      const double way = k % 2 == 0 ? 1.0 : -1.0;
+      VecX x = k < 2 ? VecX(alone.back().q()) : VecX(alone.back().qd());
+      for (double& v : x)
+        v += way * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
+      if (k < 2) nudged.back().set_q(x);
+      else nudged.back().set_qd(x);
+    }
+  }
+  // At least 1e-11: without contacts the lanes' own order already parts from the scalar step's
+  // by up to 4e-11 where a start's last bits change nothing (a compat physx tree falling 120 m).
+  std::vector<double> apart(n, 0.0), own(n, 1e-11);
+  for (int c = 0; c < chunks; ++c) {
+    lanes.step(steps / chunks);
+    for (size_t e = 0; e < n; ++e) {
+      alone[e].step(steps / chunks);
+      apart[e] = std::max(apart[e], lane_difference(view, static_cast<int>(e), alone[e]));
+      for (size_t k = kNudges * e; k < kNudges * (e + 1); ++k) {
+        nudged[k].step(steps / chunks);
+        own[e] = std::max(own[e], simulation_difference(nudged[k], alone[e]));
+      }
+    }
+  }
+  LaneFigures f;
+  for (size_t e = 0; e < n; ++e) {
+    f.lanes = std::max(f.lanes, apart[e]);
+    f.nudged = std::max(f.nudged, own[e]);
+    f.ratio = std::max(f.ratio, apart[e] / own[e]);
+  }
+  std::printf("%s: largest relative difference %.1e, the scalar step's from a start a last bit off "
+              "%.1e, largest ratio of an environment's %.2g (docs/simd_batch.md)\n",
+              what.c_str(), f.lanes, f.nudged, f.ratio);
+  return f;
 }
 
 }  // namespace featherdrive::test

@@ -81,6 +81,10 @@ class ContactRows {
              const VecX& link_cfm, int position_iterations, const ContactPhase& phase,
              std::vector<ContactReport>& reports);
 
+  /// Whether link has rows this step (solve_link would change nothing otherwise).
+  bool link_has_rows(int link) const {
+    return link_end_patch_[static_cast<size_t>(link)] > link_first_patch_[static_cast<size_t>(link)];
+  }
   /// Solves link's rows at its velocity v + dv (frame 0) and adds their velocity change to dv;
   /// returns the spatial impulse they applied (frame 0).
   Vec6 solve_link(int link, const Vec6& v, Vec6& dv, const ContactPhase& phase);

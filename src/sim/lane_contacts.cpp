@@ -1,0 +1,155 @@
+// Ground contacts in Batch's lanes: each environment's own ContactRows (Simulation's, in its
+// workspace) on its lane's entries of a block's scratch, one lane at a time, out of line, so the
+// contact law is the scalar step's (docs/simd_batch.md, "Contacts"; docs/math/contact.md).
+#include <cmath>
+
+#include "lane_engine.hpp"
+#include "workspace.hpp"
+
+namespace featherdrive::simd {
+namespace {
+
+// Entry (a, b) of a symmetric 6 x 6 matrix in the lanes' storage (simd_lane_step.hpp's
+// sym_index): A's (00, 11, 22, 01, 02, 12), B's nine row-major, C's six; as a table, column by
+// column (Mat6's order).
+constexpr int symmetric_entry(int a, int b) {
+  if (a > b) return symmetric_entry(b, a);
+  if (a < 3 && b >= 3) return 6 + 3 * a + (b - 3);
+  const int base = a < 3 ? 0 : 15, r = a % 3, c = b % 3;
+  return base + (r == c ? r : r + c + 2);
+}
+struct SymmetricEntries {
+  int at[36];
+};
+constexpr SymmetricEntries make_entries() {
+  SymmetricEntries t{};
+  for (int c = 0; c < 6; ++c)
+    for (int r = 0; r < 6; ++r) t.at[6 * c + r] = symmetric_entry(r, c);
+  return t;
+}
+constexpr SymmetricEntries kEntries = make_entries();
+
+// A lane's entries of the scratch.
+struct LaneEntries {
+  const double* s;
+  int width, lane;
+  double operator()(int k) const { return s[static_cast<long>(k) * width + lane]; }
+  Vec6 six(int k) const {
+    Vec6 v;
+    for (int r = 0; r < 6; ++r) v[r] = (*this)(k + r);
+    return v;
+  }
+};
+
+ContactPhase phase_of(const LaneContactPhase& p) {
+  ContactPhase c;
+  c.dt = p.dt, c.h = p.h, c.tgs = p.tgs, c.velocity_iteration = p.velocity_iteration;
+  c.elapsed = p.elapsed;
+  return c;
+}
+
+}  // namespace
+
+bool contacts_active(const ContactLanes& c, int env) {
+  return c.envs[static_cast<size_t>(env)].ws->contacts_active;
+}
+
+void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane) {
+  const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
+  Data& data = e.ws->data;
+  const Layout& l = p.layout;
+  const LaneEntries x{s, width, lane};
+  // Frame 0's origin, the root link's origin in the world, from the step-start q.
+  const LinkConstants& root = p.links[0];
+  Vec3 origin;
+  if (root.type == 3) {
+    for (int r = 0; r < 3; ++r) origin[r] = x(l.q + root.q_index + r);
+  } else {
+    origin = Vec3(root.r[0], root.r[1], root.r[2]);
+    if (root.type == 2) {  // kinematics.cpp: r + E^T (axis q)
+      const Mat3 E = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(root.E);
+      origin += E.transpose() * (Vec3(root.axis[0], root.axis[1], root.axis[2]) * x(l.q + root.q_index));
+    }
+  }
+  data.frame_origin = origin;
+  const std::vector<char>& shaped = e.ws->contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L) {
+    if (!shaped[static_cast<size_t>(L)]) continue;
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) data.world_rotation[L](r, col) = x(l.R + 9 * L + 3 * r + col);
+      data.world_position[L][r] = x(l.pos + 3 * L + r) + origin[r];
+    }
+  }
+}
+
+void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane) {
+  const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
+  Workspace& ws = *e.ws;
+  const Layout& l = p.layout;
+  const LaneEntries x{s, width, lane};
+  const std::vector<char>& shaped = ws.contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L) {
+    if (!shaped[static_cast<size_t>(L)]) continue;
+    double* response = ws.data.response[L].data();
+    for (int k = 0; k < 36; ++k) response[k] = x(l.Lambda + 21 * L + kEntries.at[k]);
+    ws.link_cfm[L] = p.any_cfm ? x(l.cfm + L) : 0.0;
+    ws.contact_link_velocity[static_cast<size_t>(L)] = x.six(l.contact_vel + 6 * L);
+  }
+  ContactPhase phase;  // Stepper::setup_contacts
+  phase.dt = p.dt;
+  phase.h = p.tgs ? p.dt / p.position_iterations : p.dt;
+  phase.tgs = p.tgs;
+  ws.num_ground_contacts = ws.contact_rows.setup(
+      e.sim->model(), ws.data, e.sim->ground(), e.sim->contact_options(),
+      ws.contact_link_velocity, ws.link_cfm, p.position_iterations, phase, ws.contacts);
+  ws.num_contacts = ws.num_ground_contacts;
+}
+
+void contact_solve(ContactLanes& c, const Plan& p, int env, int link, const LaneContactPhase& phase,
+                   double* s, int width, int lane) {
+  ContactRows& rows = c.envs[static_cast<size_t>(env)].ws->contact_rows;
+  if (!rows.link_has_rows(link)) return;  // the lane step wrote its subtree impulse 0
+  const Layout& l = p.layout;
+  const LaneEntries x{s, width, lane};
+  Vec6 dv = x.six(l.dv + 6 * link);
+  const Vec6 impulse =
+      rows.solve_link(link, x.six(l.contact_vel + 6 * link), dv, phase_of(phase));
+  for (int r = 0; r < 6; ++r) {
+    s[static_cast<long>(l.dv + 6 * link + r) * width + lane] = dv[r];
+    s[static_cast<long>(l.subtree + 6 * link + r) * width + lane] = -impulse[r];
+  }
+}
+
+void contact_track(ContactLanes& c, const Plan& p, int env, double h, const double* s, int width,
+                   int lane) {
+  const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
+  const LaneEntries x{s, width, lane};
+  const std::vector<char>& shaped = e.ws->contact_rows.links_with_shapes();
+  for (int L = 0; L < p.num_links; ++L)
+    if (shaped[static_cast<size_t>(L)])
+      e.ws->contact_link_velocity[static_cast<size_t>(L)] = x.six(p.layout.contact_vel + 6 * L);
+  e.ws->contact_rows.track(e.ws->contact_link_velocity, h);
+}
+
+Stop contact_report(ContactLanes& c, const Plan& p, int env) {
+  Workspace& ws = *c.envs[static_cast<size_t>(env)].ws;
+  ws.contact_rows.report(p.dt, ws.contacts, ws.link_contact_force);
+  for (size_t i = 0; i < ws.link_contact_force.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(ws.link_contact_force[i][k]))
+        return Stop{7, static_cast<int>(3 * i) + k, ws.link_contact_force[i][k]};
+  return Stop{};
+}
+
+void contact_conclude(ContactLanes& c, int env, bool kept) {
+  Workspace& ws = *c.envs[static_cast<size_t>(env)].ws;
+  if (kept) {
+    ws.contact_rows.conclude();
+    return;
+  }
+  // Stepper::check_finite_or_throw: a diverged step reports no contacts.
+  ws.num_contacts = 0;
+  std::fill(ws.link_contact_force.begin(), ws.link_contact_force.end(), Vec3::Zero());
+}
+
+}  // namespace featherdrive::simd

@@ -1,0 +1,333 @@
+// Ground contacts in Batch's SIMD lanes against each environment stepped alone as a Simulation
+// (the scalar path, another operation order): q, qd, the output forces, the links' contact forces
+// and every contact report. docs/simd_batch.md, "Contacts".
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/sim/batch.hpp"
+#include "support/compare.hpp"
+#include "support/contact_models.hpp"
+#include "support/drives.hpp"
+#include "support/lanes.hpp"
+#include "support/models.hpp"
+
+namespace featherdrive {
+namespace {
+
+// A random floating tree (revolute and prismatic joints, optionally spherical ones) with a box
+// on its root and a sphere, capsule or box on each other link, over the ground: damped drives
+// on every joint, viscous friction that keeps it from chaos (lane_floating_test.cpp).
+Simulation grounded_tree(unsigned seed, SolverType solver, bool spherical,
+                         Compat compat = Compat::none) {
+  Model model = *test::make_random_tree(seed, 9, /*floating=*/true, spherical, 0.01);
+  for (int i = 0; i < model.num_links(); ++i) {
+    CollisionShape shape;
+    shape.link = i;
+    shape.type = i == 0 ? ShapeType::box : i % 3 == 1 ? ShapeType::sphere
+                                        : i % 3 == 2 ? ShapeType::capsule
+                                                     : ShapeType::box;
+    shape.size = shape.type == ShapeType::box      ? Vec3(0.08, 0.06, 0.05)
+                 : shape.type == ShapeType::sphere ? Vec3(0.06, 0.0, 0.0)
+                                                   : Vec3(0.03, 0.08, 0.0);
+    shape.position = Vec3(0.02, -0.01, 0.03);
+    shape.material.static_friction = 0.8;
+    shape.material.dynamic_friction = 0.6;
+    model.shapes.push_back(shape);
+  }
+  auto shared = std::make_shared<const Model>(std::move(model));
+  SimulationOptions o = test::lane_test_options(solver);
+  o.compat = compat;
+  Simulation sim(shared, o);
+  std::mt19937 rng(seed);
+  test::drive_every_joint(sim, rng, 200.0, 20.0);
+  for (int d = 6; d < shared->nv; ++d) sim.set_joint_friction(d, JointFriction{0.0, 0.0, 0.2});
+  Ground ground;
+  ground.enabled = true;
+  ground.material.static_friction = 0.8;
+  ground.material.dynamic_friction = 0.6;
+  sim.set_ground(ground);
+  return sim;
+}
+
+// Environments dropped from their own heights and turns: some land at once, some later, one
+// stays airborne through the run (5 s fall 123 m), so the lanes differ in contact count.
+void drop_from_own_heights(Batch& batch, std::mt19937& rng) {
+  const double heights[] = {0.25, 0.5, 0.9, 1.6, 200.0, 0.35, 0.7};
+  for (int e = 0; e < batch.size(); ++e) {
+    Simulation& s = batch.sim(e);
+    VecX q = s.q();
+    q[2] = heights[e % 7];
+    q[3] = 1.0, q[4] = 0.1 * e, q[5] = -0.05 * e, q[6] = 0.02;  // set_q normalises
+    s.set_q(q);
+    s.set_qd(test::random_vector(s.model().nv, rng, 0.3));
+  }
+}
+
+// Each case's figures against the bound LaneFigures gives: the lanes stay as close to the scalar
+// step as a last-bit change of its start moves it (contact rows amplify both alike).
+TEST(LaneContact, RandomTreesDroppedOnTheGroundAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+  for (const bool spherical : {false, true})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Batch lanes(grounded_tree(5, solver, spherical, compat), 7);
+      std::mt19937 rng(17);
+      drop_from_own_heights(lanes, rng);
+      const std::string what = std::string("random trees on the ground") +
+                               (spherical ? " (spherical joints), " : ", ") + to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      int touching = 0;
+      for (int e = 0; e < lanes.size(); ++e) touching += !lanes.contacts(e).empty();
+      EXPECT_GE(touching, 4) << what;
+      EXPECT_TRUE(lanes.contacts(4).empty()) << what;  // the one still falling
+    }
+}
+
+// contact_models.hpp's box (cases a, b) under compat none: resting, sliding at speeds of its
+// own, dropped, one high above the ground.
+TEST(LaneContact, BoxesRestingSlidingAndFallingAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o = test::lane_test_options(solver);
+    o.compat = compat;
+    Simulation box(test::make_ground_box(0.5), o);
+    Ground ground;
+    ground.enabled = true;
+    ground.material = Material{0.5, 0.5, 0.0};
+    box.set_ground(ground);
+    Batch lanes(box, 6);
+    const double heights[] = {0.1, 0.1, 0.1, 0.25, 200.0, 0.1};
+    const double speeds[] = {0.0, 0.5, 1.5, 0.0, 0.0, 3.0};
+    for (int e = 0; e < lanes.size(); ++e) {
+      VecX q = box.q(), qd = box.qd();
+      q[2] = heights[e];
+      qd[3] = speeds[e];  // along the box's x, its start axes the world's
+      qd[2] = 0.4 * (e % 2);
+      lanes.sim(e).set_q(q);
+      lanes.sim(e).set_qd(qd);
+    }
+    const std::string what = std::string("boxes on the ground, ") + to_string(solver) +
+                             (compat == Compat::physx ? ", compat physx" : "");
+    const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+    EXPECT_EQ(lanes.contacts(0).size(), 4u) << what;
+    EXPECT_TRUE(lanes.contacts(4).empty()) << what;
+  }
+}
+
+// contact_models.hpp's quadruped under compat none, its PD drives holding the standing pose:
+// standing, dropped from heights of its own, turned, one high above the ground.
+TEST(LaneContact, QuadrupedStandingAndDroppedAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o = test::lane_test_options(solver);
+    o.compat = compat;
+    Simulation sim(test::make_quadruped(1.0), o);
+    Ground ground;
+    ground.enabled = true;
+    ground.material = Material{1.0, 1.0, 0.0};
+    sim.set_ground(ground);
+    const Model& model = sim.model();
+    VecX q = sim.q();
+    for (const char* leg : {"fl", "fr", "hl", "hr"})
+      for (const auto& [joint, target] : {std::pair{"_hip", test::kQuadrupedHip},
+                                          std::pair{"_knee", test::kQuadrupedKnee}}) {
+        const std::string name = std::string(leg) + joint;
+        q[model.links[model.joint_link_index(name)].q_index] = target;
+        sim.set_drive(name, Drive{DriveType::force, 300.0, 10.0, test::kInf, target, 0.0});
+      }
+    Batch lanes(sim, 7);
+    std::mt19937 rng(17);
+    const double lift[] = {0.0, 0.05, 0.1, 0.2, 200.0, 0.02, 0.3};
+    for (int e = 0; e < lanes.size(); ++e) {
+      VecX qe = q;
+      qe[2] = test::quadruped_standing_height() + lift[e];
+      qe[3] = 1.0, qe[4] = 0.03 * e, qe[5] = -0.02 * e, qe[6] = 0.01 * e;  // set_q normalises
+      lanes.sim(e).set_q(qe);
+      lanes.sim(e).set_qd(test::random_vector(model.nv, rng, 0.1));
+    }
+    const std::string what = std::string("quadruped on the ground, ") + to_string(solver) +
+                             (compat == Compat::physx ? ", compat physx" : "");
+    const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+    EXPECT_GE(lanes.contacts(0).size(), 4u) << what;
+    EXPECT_TRUE(lanes.contacts(4).empty()) << what;
+  }
+}
+
+// A fixed random tree of revolute joints (no prismatic, spherical or floating joint asks for the
+// link bias) with a ball on each link, its lowest 5 mm into the ground, under compat physx: the
+// bias is formed for the contacts alone. (Under compat none one of its balls sits where its link
+// cannot move along the normal: J Lambda J is 0 to rounding and the row's impulse 1e16 in the
+// scalar step too; physx's cfm keeps it finite.)
+TEST(LaneContact, FixedTreeOnTheGroundUnderCompatPhysxAsSimulation) {
+  Model m = *test::make_random_tree(1, 7, /*floating=*/false, /*spherical=*/false, 0.01);
+  for (const Link& link : m.links) ASSERT_NE(link.joint_type, JointType::prismatic);
+  for (int i = 1; i < m.num_links(); ++i) {
+    CollisionShape ball;
+    ball.link = i;
+    ball.size = Vec3(0.05, 0.0, 0.0);
+    m.shapes.push_back(ball);
+  }
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    SimulationOptions o = test::lane_test_options(solver);
+    o.compat = Compat::physx;
+    Simulation sim(std::make_shared<const Model>(m), o);
+    Data posed(sim.model());
+    forward_kinematics(sim.model(), posed, sim.q());
+    Ground ground;
+    ground.enabled = true;
+    ground.height = std::numeric_limits<double>::infinity();
+    for (const CollisionShape& ball : sim.model().shapes)
+      ground.height = std::min(ground.height, posed.world_position[ball.link].z() - 0.045);
+    sim.set_ground(ground);
+    std::mt19937 rng(1);
+    test::drive_every_joint(sim, rng, 100.0, 10.0);
+    for (int d = 0; d < sim.model().nv; ++d)
+      sim.set_joint_friction(d, JointFriction{0.0, 0.0, 0.2});
+    Batch lanes(sim, 5);
+    for (int e = 0; e < lanes.size(); ++e)
+      lanes.sim(e).set_qd(test::random_vector(sim.model().nv, rng, 0.3));
+    const std::string what = std::string("fixed tree on the ground, compat physx, ") +
+                             to_string(solver);
+    const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+    EXPECT_FALSE(lanes.contacts(0).empty()) << what;
+  }
+}
+
+// Each environment's bits are the same at any lane, in a batch of any size, at every width and
+// on any number of threads.
+TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
+  const Simulation proto = grounded_tree(8, SolverType::tgs, false);
+  // Environment k at lane (k + shift) % size, dropped from a height of its own.
+  auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+    Batch b(proto, size);
+    b.set_isa(isa);
+    b.set_num_threads(threads);
+    for (int k = 0; k < size; ++k) {
+      VecX q = proto.q();
+      q[2] = 0.3 + 0.1 * (k % 5);
+      b.sim((k + shift) % size).set_q(q);
+    }
+    b.step(150);
+    RowMatrix out(size, proto.model().nq + 3 * proto.model().num_links());
+    for (int k = 0; k < size; ++k)
+      out.row(k) << b.q().row((k + shift) % size), b.link_contact_force().row((k + shift) % size);
+    return out;
+  };
+  const RowMatrix reference = run(5, SimdIsa::sse2, 1, 0);
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2})
+      for (int shift : {0, 7}) {
+        const RowMatrix x = run(13, isa, threads, shift);
+        EXPECT_TRUE(test::same_bits(RowMatrix(x.topRows(5)), reference))
+            << to_string(isa) << " threads " << threads << " shift " << shift;
+      }
+}
+
+// The ground switched on between calls (the plan takes the contact rows then), and off again in
+// one environment: a lane without a ground beside grounded ones, as its Simulation.
+TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    const Simulation proto = grounded_tree(6, solver, false);
+    Simulation airy = proto;
+    Ground off = proto.ground();
+    off.enabled = false;
+    airy.set_ground(off);
+    Batch lanes(airy, 5);
+    for (int e = 0; e < lanes.size(); ++e) {
+      VecX q = proto.q();
+      q[2] = 0.3 + 0.05 * e;
+      lanes.sim(e).set_q(q);
+    }
+    lanes.step(3);
+    for (int e = 0; e < lanes.size(); ++e) lanes.sim(e).set_ground(e == 2 ? off : proto.ground());
+    const std::string what = std::string("ground switched on, one lane without, ") +
+                             to_string(solver);
+    const test::LaneFigures f = test::batch_against_alone(lanes, 300, 3, what);
+    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+    EXPECT_TRUE(lanes.contacts(2).empty()) << what;
+    for (int e = 0; e < lanes.size(); ++e)  // held by the ground, or through where it is
+      if (e == 2) EXPECT_LT(lanes.q()(e, 2), -1.0) << what;
+      else EXPECT_GT(lanes.q()(e, 2), -0.5) << what;
+  }
+}
+
+// A contact force that overflows where the state stays finite (dt 1e-200: the push-out impulse
+// over dt) stops the lane with its state and reports as Simulation's check words it, the other
+// environments (airborne) going on; the stopped one reports no contacts.
+TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
+  SimulationOptions o = test::lane_test_options(SolverType::pgs);
+  o.dt = 1e-200;
+  Simulation box(test::make_ground_box(0.5), o);
+  Ground ground;
+  ground.enabled = true;
+  box.set_ground(ground);
+  std::string messages[2];
+  for (const bool lanes_on : {true, false}) {
+    Batch b(box, 3);
+    b.set_lanes(lanes_on);
+    for (int e = 0; e < 3; ++e) {
+      VecX q = box.q();
+      q[2] = e == 1 ? 0.09 : 5.0;  // environment 1 a centimetre into the ground
+      b.sim(e).set_q(q);
+    }
+    const VecX q1 = b.sim(1).q();
+    try {
+      b.step(2);
+      ADD_FAILURE() << "no DivergenceError";
+    } catch (const DivergenceError& e) {
+      messages[lanes_on ? 0 : 1] = e.what();
+    }
+    EXPECT_EQ(b.step_path().find("scalar") == std::string::npos, lanes_on) << b.step_path();
+    ASSERT_TRUE(b.divergences()[1].has_value());
+    EXPECT_TRUE(test::same_bits(VecX(b.sim(1).q()), q1));
+    EXPECT_TRUE(b.contacts(1).empty());
+    EXPECT_EQ(b.sim(0).step_count(), 2);
+  }
+  EXPECT_NE(messages[0].find("link 'box' contact force f"), std::string::npos) << messages[0];
+  EXPECT_EQ(messages[0], messages[1]);
+}
+
+// The path: a grounded robot runs in the lanes, under compat none and physx; self-collision
+// stays refused, and so do shapes on other links than environment 0's, named.
+TEST(LaneContact, StepPath) {
+  Simulation s = grounded_tree(5, SolverType::pgs, false);
+  Batch grounded(s, 3);
+  EXPECT_EQ(grounded.step_path().find("scalar"), std::string::npos) << grounded.step_path();
+  // An environment whose shapes sit on other links than environment 0's (the plan's).
+  Model moved = s.model();
+  moved.shapes.erase(moved.shapes.begin() + 1);
+  grounded.sim(2).set_model(std::make_shared<const Model>(moved));
+  EXPECT_NE(grounded.step_path().find("environment 2: collision shapes on other links than "
+                                      "environment 0's"),
+            std::string::npos)
+      << grounded.step_path();
+  Simulation self = s;
+  ContactOptions contact;
+  contact.self_collision = true;
+  self.set_contact_options(contact);
+  Batch selfish(self, 2);
+  EXPECT_NE(selfish.step_path().find("self-collision between the model's shapes"),
+            std::string::npos)
+      << selfish.step_path();
+  SimulationOptions o = s.options();
+  o.compat = Compat::physx;
+  Simulation physx(s.model_ptr(), o);
+  physx.set_ground(s.ground());
+  Batch px(physx, 2);
+  EXPECT_EQ(px.step_path().find("scalar"), std::string::npos) << px.step_path();
+}
+
+}  // namespace
+}  // namespace featherdrive
