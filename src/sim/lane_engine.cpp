@@ -219,9 +219,10 @@ void LaneEngine::pack_drives(int env, const Simulation& sim) {
     static const ExplicitActuator kNone;  // (a reference: a copy would copy the table)
     const ExplicitActuator& a = implicit ? actuators.actuator(d) : kNone;
     set_parameter(env, x + implicit_actuator, implicit);
-    set_parameter(env, x + actuator_kind, a.kind == ActuatorKind::dc_motor       ? 1.0
-                                          : a.kind == ActuatorKind::remotized_pd ? 2.0
-                                                                                 : 0.0);
+    const double kind = a.kind == ActuatorKind::dc_motor ? 1.0
+                        : a.kind == ActuatorKind::remotized_pd ? 2.0
+                                                               : 0.0;
+    set_parameter(env, x + actuator_kind, kind);
     set_parameter(env, x + actuator_stiffness, a.stiffness);
     set_parameter(env, x + actuator_damping, a.damping);
     set_parameter(env, x + actuator_effort_limit, a.effort_limit);

@@ -43,10 +43,10 @@ class LaneEngine {
   const Plan& plan() const { return plan_; }
 
   /// Environment env's per-lane parameters from `sim` (same topology and options): drives
-  /// (with targets) and implicit actuators (with the commands they saw last), joint limits, friction, velocity limits, wrap and mimic rows (whose dofs
-  /// must be the plan's: same_mimic_dofs); its model's armature and
-  /// link inertials. A link whose inertia is not diagonal makes the lanes use the general
-  /// rotation for it from then on.
+  /// (with targets) and implicit actuators (with the commands they saw last), joint limits,
+  /// friction, velocity limits, wrap and mimic rows (whose dofs must be the plan's:
+  /// same_mimic_dofs); its model's armature and link inertials. A link whose inertia is not
+  /// diagonal makes the lanes use the general rotation for it from then on.
   void pack_drives(int env, const Simulation& sim);
   void pack_joints(int env, const Simulation& sim);
   void pack_model(int env, const Model& model);

@@ -133,23 +133,25 @@ TEST_P(LaneImplicitActuators, EveryKindWithMimicRowsWithinTolOfSimulation) {
     for (int d = 0; d < s.model().nv; ++d)
       if (s.has_actuator(d)) EXPECT_EQ(s.drive_force()[d], 0.0) << what;
     const double change = s.last_drive_impulse_change().cwiseAbs().maxCoeff();
-    if (e % 2 == 0 && solver == SolverType::pgs) EXPECT_GT(change, 0.0) << what << " env " << e;
-    else EXPECT_EQ(change, 0.0) << what << " env " << e;
+    if (e % 2 == 0 && solver == SolverType::pgs)
+      EXPECT_GT(change, 0.0) << what << " env " << e;
+    else
+      EXPECT_EQ(change, 0.0) << what << " env " << e;
   }
   EXPECT_GT(alone[0].actuator_force().cwiseAbs().maxCoeff(), 1.0);
-  std::printf("lanes with implicit actuators, %s: q, qd %.1e, forces %.1e, drive changes %.1e "
-              "(docs/simd_batch.md)\n",
-              what.c_str(), worst.state, worst.force, worst.change);
+  std::printf(
+      "lanes with implicit actuators, %s: q, qd %.1e, forces %.1e, drive changes %.1e "
+      "(docs/simd_batch.md)\n",
+      what.c_str(), worst.state, worst.force, worst.change);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    SolversAndCompat, LaneImplicitActuators,
-    testing::Combine(testing::Values(SolverType::pgs, SolverType::tgs),
-                     testing::Values(Compat::none, Compat::physx)),
-    [](const testing::TestParamInfo<std::tuple<SolverType, Compat>>& info) {
-      return std::string(to_string(std::get<0>(info.param))) + "_" +
-             to_string(std::get<1>(info.param));
-    });
+INSTANTIATE_TEST_SUITE_P(SolversAndCompat, LaneImplicitActuators,
+                         testing::Combine(testing::Values(SolverType::pgs, SolverType::tgs),
+                                          testing::Values(Compat::none, Compat::physx)),
+                         [](const testing::TestParamInfo<std::tuple<SolverType, Compat>>& info) {
+                           return std::string(to_string(std::get<0>(info.param))) + "_" +
+                                  to_string(std::get<1>(info.param));
+                         });
 
 // Each clip binds somewhere in a run: an ideal PD's at +-E, a DC motor's below E at speed, a
 // remotized PD's at its table's value; one environment per kind on every actuated dof.

@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <limits>
 
-#include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/actuator_law.hpp"
+#include "featherdrive/constraint/drive.hpp"
 
 namespace featherdrive {
 
@@ -31,8 +31,8 @@ DriveRowOf<T> setup(const ActuatorTermsOf<T>& a, const T& r, const T& x0, double
                     double step_dt, bool tgs) {
   const T inf(std::numeric_limits<double>::infinity()), h(h_solve), one(1.0);
   const DriveTermsOf<T> drive{a.stiffness, a.damping, a.position, a.velocity, inf, inf};
-  DriveRowOf<T> row = drive_law::setup(drive, /*acceleration=*/T(0.0) != T(0.0), r, x0, h_solve,
-                                       step_dt, tgs);
+  DriveRowOf<T> row =
+      drive_law::setup(drive, /*acceleration=*/T(0.0) != T(0.0), r, x0, h_solve, step_dt, tgs);
   // x of implicit_drives.md eq. (15): the impulse a constant effort ff adds per solve is x h ff.
   const T x = one / (h * (h * a.stiffness + a.damping) * r + one);
   row.target_vel_plus_initial_bias = row.target_vel_plus_initial_bias + x * h * a.effort;
