@@ -26,7 +26,7 @@ namespace {
 
 using test::kInf;
 
-constexpr int kEnvironments = 7;  // not a whole number of blocks: padding lanes too
+constexpr int kEnvironments = 5;  // not a whole number of blocks: padding lanes too
 
 // A random fixed-base tree of 9 links (revolute and prismatic joints) with force drives on every
 // dof, joint limits (with `limits`) and velocity limits on some, viscous friction everywhere (no
@@ -115,20 +115,21 @@ TEST_P(LaneImplicitActuators, EveryKindWithMimicRowsWithinTolOfSimulation) {
   const auto [solver, compat] = GetParam();
   const std::string what = std::string(to_string(solver)) + ", compat " + to_string(compat);
   const Simulation prototype = actuator_prototype(21, solver, compat);
-  Batch batch(prototype, kEnvironments);
+  // Three under compat physx: its scalar steps are most of this test's time under the sanitizers.
+  Batch batch(prototype, compat == Compat::physx ? 3 : kEnvironments);
   batch.set_num_threads(2);
   std::vector<Simulation> alone = test::give_each(batch, prototype, give_implicit_control);
   EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
   test::step_with_commands(batch, alone, 1000, implicit_command);
   test::LaneWorst worst;
-  for (int e = 0; e < kEnvironments; ++e)
+  for (int e = 0; e < batch.size(); ++e)
     test::compare_with_alone(batch, e, alone[static_cast<size_t>(e)], worst, what);
   EXPECT_LE(worst.state, 1e-12) << what;
   EXPECT_LE(worst.force, 1e-12) << what;
   EXPECT_LE(worst.change, 1e-12) << what;
   // The rows acted, their forces are the actuators' (the drive's 0 on their dofs), and the
   // tracked changes are there in PGS only, in the tracking environments only.
-  for (int e = 0; e < kEnvironments; ++e) {
+  for (int e = 0; e < batch.size(); ++e) {
     const Simulation& s = batch.sim(e);
     for (int d = 0; d < s.model().nv; ++d)
       if (s.has_actuator(d)) EXPECT_EQ(s.drive_force()[d], 0.0) << what;
@@ -210,8 +211,8 @@ TEST(LaneConvergenceTracking, SeveralEnvironmentsAndADivergenceAsSimulation) {
     Batch batch(prototype, kEnvironments);
     std::vector<Simulation> alone(kEnvironments, prototype);
     for (int e = 0; e < kEnvironments; ++e) {
-      batch.sim(e).set_track_convergence(e != 1 && e != 5);
-      alone[static_cast<size_t>(e)].set_track_convergence(e != 1 && e != 5);
+      batch.sim(e).set_track_convergence(e != 1);
+      alone[static_cast<size_t>(e)].set_track_convergence(e != 1);
     }
     ASSERT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
     batch.step(300);
