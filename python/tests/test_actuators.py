@@ -102,15 +102,17 @@ def test_actuator_force_is_a_read_only_view(slider):
     assert not view.flags.writeable
 
 
+@pytest.mark.parametrize("integration", ["explicit", "implicit"])
 @pytest.mark.parametrize("lanes", [False, True])
-def test_batch_set_actuator_equals_single_simulations(slider, lanes):
+def test_batch_set_actuator_equals_single_simulations(slider, lanes, integration):
     """Without SIMD lanes each environment is its Simulation bit for bit; in them (the actuators
-    a control stage before the lane step) within 1e-12, another operation order."""
+    a control stage before the lane step, an implicit one's law the dof's row there) within
+    1e-12, another operation order."""
     proto = fd.Simulation(slider, dt=H)
     batch = fd.Batch(proto, 3)
     batch.lanes = lanes
     motor = fd.DCMotor(stiffness=800.0, damping=20.0, saturation_effort=60.0,
-                       velocity_limit=1.5, delay=2)
+                       velocity_limit=1.5, delay=2, integration=integration)
     batch.set_actuator("slide", motor, env_ids=np.array([0, 2]))
     singles = [fd.Simulation(slider, dt=H) for _ in range(3)]
     for i in (0, 2):

@@ -22,9 +22,11 @@ const char* to_string(ActuatorIntegration integration) {
   return "unknown";
 }
 
-// eq. (6): linear between the table's points, the end values beyond them.
+// eq. (6): linear between the table's points, the end values beyond them. A NaN q (a diverging
+// iterate, which the step then reports) reads the first value: the search below would run off the
+// table's end.
 double lookup_effort_limit(const std::vector<std::pair<double, double>>& lookup, double q) {
-  if (q <= lookup.front().first) return lookup.front().second;
+  if (!(q > lookup.front().first)) return lookup.front().second;
   if (q >= lookup.back().first) return lookup.back().second;
   // The first point above q; the one before it is at or below q.
   const auto hi = std::upper_bound(lookup.begin(), lookup.end(), q,

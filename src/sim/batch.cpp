@@ -797,8 +797,6 @@ std::string Batch::lane_refusal() {
     std::string& why = refusal_[static_cast<size_t>(i)];
     if (repack_[static_cast<size_t>(i)] || handed_out_[static_cast<size_t>(i)]) {
       why = simd::lane_refusal(s);
-      // The lanes keep no per-iteration drive impulses (Simulation::last_drive_change).
-      if (why.empty() && s.track_convergence()) why = "convergence tracking on";
       // The plan solves contacts on environment 0's shape links (LaneEngine::set_contacts).
       if (why.empty() && s.ground().enabled &&
           s.ws_->contact_rows.links_with_shapes() !=
@@ -869,10 +867,25 @@ void Batch::step_lanes(int count) {
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
   const SimdIsa lane_isa = isa();
-  bool control = false, actuated = false;
+  bool control = false, actuated = false, implicit = false, tracking = false;
   for (const Simulation& s : sims_) {
     control = control || s.ws_->has_control_stages();
     actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
+    implicit = implicit || s.ws_->actuators.any_implicit();
+    tracking = tracking || s.ws_->track_convergence;
+  }
+  const int nv = model().nv;
+  // The implicit actuators' forces and the tracked drive changes, copied into each Simulation's
+  // workspace after the call (lane_results). Implicit actuators are control stages: one step a run.
+  if (implicit) {
+    lane_actuator_force_.resize(n, nv);
+    a.actuator_force = lane_actuator_force_.data();
+  }
+  if (tracking) {  // the lanes keep a stopped lane's: they start from every environment's own
+    lane_drive_change_.resize(n, nv);
+    for (int i = 0; i < n; ++i)
+      lane_drive_change_.row(i) = sims_[static_cast<size_t>(i)].ws_->last_drive_change.transpose();
+    a.drive_change = lane_drive_change_.data();
   }
   if (!control) {
     lanes_->run(a, count, lane_isa, effective_num_threads());
@@ -886,10 +899,23 @@ void Batch::step_lanes(int count) {
     for (int k = 0; k < count; ++k) {
       lane_control_stages(actuated);
       lanes_->run(a, 1, lane_isa, effective_num_threads());
-      for (int i = 0; i < n; ++i)  // Stepper::check_finite_or_throw takes the pushes back
-        if (lanes_->stopped_now(i)) sims_[static_cast<size_t>(i)].stepper().undo_actuators();
+      for (int i = 0; i < n; ++i) {
+        Simulation& s = sims_[static_cast<size_t>(i)];
+        if (lanes_->stopped_now(i)) {  // Stepper::check_finite_or_throw takes the pushes back
+          s.stepper().undo_actuators();
+        } else if (implicit && lanes_->stop(i).quantity == 0 && s.ws_->actuators.any()) {
+          // Stepper::row_forces: an implicit actuator's row force is its actuator force.
+          for (int d = 0; d < nv; ++d)
+            if (s.ws_->actuators.implicit(d)) s.ws_->actuator_force[d] = lane_actuator_force_(i, d);
+        }
+      }
     }
   }
+  if (tracking)
+    for (int i = 0; i < n; ++i) {
+      Simulation& s = sims_[static_cast<size_t>(i)];
+      if (s.ws_->track_convergence) s.ws_->last_drive_change = lane_drive_change_.row(i).transpose();
+    }
   int first = -1, diverged = 0;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
@@ -926,6 +952,10 @@ void Batch::lane_control_stages(bool actuated) {
       if (reads_state) lane_tau_.row(i) = tau.transpose();
       else lane_tau_.row(i) = applied.row(i);
     }
+    const ExplicitActuators& actuators = s.ws_->actuators;
+    if (actuators.any())
+      for (int d = 0; d < nv; ++d)  // the command each implicit one sees this step (I16)
+        if (actuators.implicit(d)) lanes_->set_command(i, d, actuators.command_seen(d));
     const DriveDelays& delays = s.drive_delays();
     if (!delays.any()) continue;
     for (int d = 0; d < nv; ++d) {

@@ -41,6 +41,7 @@ Layout make_layout(const Plan& p) {
   l.zero = take(21);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
+  l.af = take(n), l.before = take(n), l.change = take(n);
   const int physx =
       p.physx_prismatic || p.physx_floating || p.physx_spherical || p.physx_contacts ? 1 : 0;
   l.start_com = take(physx * 3 * L), l.com_velocity = take(physx * 3 * L);
@@ -92,13 +93,6 @@ std::string lane_refusal(const Simulation& s) {
     if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
         link.tree_transform.E != Mat3::Identity())
       return has("joint", link.joint_name, "a rotated joint frame under compat physx");
-  }
-  for (int d = 0; d < m.nv; ++d) {
-    const std::string& joint = m.links[static_cast<size_t>(m.dof_link[d])].joint_name;
-    // An implicit actuator's law is a row the lane step does not solve; an explicit one's effort
-    // and a drive delay are control stages, which Batch runs per environment.
-    if (s.has_actuator(d) && s.actuators().implicit(d))
-      return has("joint", joint, "an implicit actuator");
   }
   // Self-collision rows are solved outside the sweep (contact.md, C31).
   if (s.contact_options().self_collision && m.shapes.size() > 1)
@@ -201,6 +195,8 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   const int groups = (count + kGroup * kMaxInterleave - 1) / (kGroup * kMaxInterleave) *
                      kMaxInterleave;
   parameters_.assign(static_cast<size_t>(groups) * p.entries * kGroup, 0.0);
+  tables_.nv = nv;
+  tables_.lookup.resize(static_cast<size_t>(groups) * kGroup * static_cast<size_t>(nv));
   for (int e = 0; e < groups * kGroup; ++e) {
     pack_drives(e, prototype);
     pack_joints(e, prototype);
@@ -237,7 +233,38 @@ void LaneEngine::pack_drives(int env, const Simulation& sim) {
     set_parameter(env, x + max_impulse, drive.max_impulse);
     set_parameter(env, x + target_position, drive.target_position);
     set_parameter(env, x + target_velocity, drive.target_velocity);
+    // An implicit actuator: its law's row in the drive's place (a dof with one has no drive).
+    const ExplicitActuators& actuators = sim.actuators();
+    const bool implicit = actuators.implicit(d);
+    static const ExplicitActuator kNone;  // (a reference: a copy would copy the table)
+    const ExplicitActuator& a = implicit ? actuators.actuator(d) : kNone;
+    set_parameter(env, x + implicit_actuator, implicit);
+    const double kind = a.kind == ActuatorKind::dc_motor ? 1.0
+                        : a.kind == ActuatorKind::remotized_pd ? 2.0
+                                                               : 0.0;
+    set_parameter(env, x + actuator_kind, kind);
+    set_parameter(env, x + actuator_stiffness, a.stiffness);
+    set_parameter(env, x + actuator_damping, a.damping);
+    set_parameter(env, x + actuator_effort_limit, a.effort_limit);
+    set_parameter(env, x + actuator_saturation, a.saturation_effort);
+    set_parameter(env, x + actuator_velocity_limit, a.velocity_limit);
+    set_command(env, d, implicit ? actuators.command_seen(d) : ActuatorCommand{});
+    // Copied into room kept from before where it fits: a repack allocates nothing then.
+    tables_.lookup[static_cast<size_t>(env) * plan_.nv + d] = a.lookup;
+    // Set, never cleared, as any_velocity_limit: without one the outputs change no bit.
+    plan_.any_implicit_actuator = plan_.any_implicit_actuator || implicit;
   }
+}
+
+void LaneEngine::set_command(int env, int dof, const ActuatorCommand& command) {
+  const int x = dof * kDofParameters;
+  set_parameter(env, x + command_position, command.position);
+  set_parameter(env, x + command_velocity, command.velocity);
+  set_parameter(env, x + command_effort, command.effort);
+}
+
+double table_effort_limit(const ActuatorTables& tables, int env, int dof, double x) {
+  return lookup_effort_limit(tables.lookup[static_cast<size_t>(env) * tables.nv + dof], x);
 }
 
 void LaneEngine::pack_joints(int env, const Simulation& sim) {
@@ -358,6 +385,7 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
     b.parameters = parameters_.data();
     b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
     b.contacts = plan_.contacts ? &contacts_ : nullptr;
+    b.tables = &tables_;
     switch (isa) {
       case SimdIsa::sse2:
         run_block_sse2(plan_, b, scratch, steps);

@@ -41,6 +41,13 @@ std::string lane_refusal(const Simulation& s);
 /// Whether two sets of mimic rows couple the same dofs in the same order.
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b);
 
+/// Every lane's remotized_pd tables (an implicit one's, else empty), at env * nv + dof: copies,
+/// so that no lane points into a Simulation.
+struct ActuatorTables {
+  int nv = 0;
+  std::vector<std::vector<std::pair<double, double>>> lookup;
+};
+
 class LaneEngine {
  public:
   /// `count` environments of the prototype's topology and options, each with its parameters.
@@ -58,13 +65,15 @@ class LaneEngine {
   ContactLanes& contacts() { return contacts_; }
 
   /// Environment env's per-lane parameters from `sim` (same topology and options): drives
-  /// (with targets), joint limits, friction, velocity limits, wrap and mimic rows (whose dofs
-  /// must be the plan's: same_mimic_dofs); its model's armature and
-  /// link inertials. A link whose inertia is not diagonal makes the lanes use the general
-  /// rotation for it from then on.
+  /// (with targets) and implicit actuators (with the commands they saw last), joint limits,
+  /// friction, velocity limits, wrap and mimic rows (whose dofs must be the plan's:
+  /// same_mimic_dofs); its model's armature and link inertials. A link whose inertia is not
+  /// diagonal makes the lanes use the general rotation for it from then on.
   void pack_drives(int env, const Simulation& sim);
   void pack_joints(int env, const Simulation& sim);
   void pack_model(int env, const Model& model);
+  /// The command environment env's implicit actuator on dof sees this step (its control stage's).
+  void set_command(int env, int dof, const ActuatorCommand& command);
   void pack(int env, const Simulation& sim) {
     pack_drives(env, sim);
     pack_joints(env, sim);
@@ -108,6 +117,7 @@ class LaneEngine {
   std::vector<int> mimic_dofs_;
   Plan plan_;
   std::vector<double> parameters_;  // packed in groups of kGroup environments
+  ActuatorTables tables_;
   std::vector<Stop> stops_;
   std::unique_ptr<bool[]> stopped_now_;
   std::vector<std::vector<double>> scratch_;  // one per thread, 64 bytes of slack for alignment

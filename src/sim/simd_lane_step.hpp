@@ -17,6 +17,7 @@
 
 #include <xsimd/xsimd.hpp>
 
+#include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
@@ -178,8 +179,14 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
   }
   V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
+  static constexpr double kActuator = 1.0, kMotorClip = 2.0, kTableClip = 4.0;
+  static bool has_bit(double flags, double bit) {
+    return (static_cast<int>(flags) & static_cast<int>(bit)) != 0;
+  }
   // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit,
-  // some a wrapped position.
+  // some a wrapped position, some an envelope, some transmitted friction, and [7] the implicit
+  // actuators' kinds (bits: kActuator some lane has one, kMotorClip a dc_motor, kTableClip a
+  // remotized_pd).
   double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 8 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   V gather(const double* rows, int stride, int k) const;
@@ -206,6 +213,8 @@ class LaneStep {
   V solve_row(int d, V v, const V& dx);
   template <class T, class Fields>
   void drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v);
+  V clip_actuator(int d, const V* rw, const V& lambda, const V& accumulated, const V& v,
+                  const V& r, const V& dx);
   template <bool kGiven, class L>
   void enter_link(const L& lane, int i, const V* dvp, V* dv);
   template <class L>
@@ -903,7 +912,10 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     }
     for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
     V* rw = row(d);
-    const M driven = dof_parameter(d, has_drive) != V(0.0);
+    const M drive = dof_parameter(d, has_drive) != V(0.0);
+    // An implicit actuator's row is solved as the drive's (implicit_actuators.md, I4).
+    const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
+    const M driven = drive | actuated;
     const V lower_limit = dof_parameter(d, lower), upper_limit = dof_parameter(d, upper);
     const V inf(__builtin_inf());
     const M limited = (lower_limit > -inf) | (upper_limit < inf);
@@ -927,7 +939,8 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     has[2] = all(driven) ? 1.0 : 0.0;
     has[3] = any(speed_limited) ? 1.0 : 0.0;
     has[4] = any(dof_parameter(d, wrapped) != V(0.0)) ? 1.0 : 0.0;
-    const M enveloped = driven & (V(0.0) < dof_parameter(d, envelope_max_effort));
+    // The envelope is the drive's: an implicit actuator's row has none.
+    const M enveloped = drive & (V(0.0) < dof_parameter(d, envelope_max_effort));
     rw[Layout::has_envelope] = select_zero(enveloped, V(1.0));
     has[5] = any(enveloped) ? 1.0 : 0.0;
     // Transmitted-force friction only where no static or viscous friction is set (like PhysX).
@@ -935,6 +948,10 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
                            (fv == V(0.0));
     rw[Layout::has_tf] = select_zero(transmitting, V(1.0));
     has[6] = any(transmitting) ? 1.0 : 0.0;
+    const V kind = dof_parameter(d, actuator_kind);
+    has[7] = (any(actuated) ? kActuator : 0.0) +
+             (any(actuated & (kind == V(1.0))) ? kMotorClip : 0.0) +
+             (any(actuated & (kind == V(2.0))) ? kTableClip : 0.0);
     undriven_ = undriven_ | transmitting;
     rows_any = rows_any | transmitting;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
@@ -972,8 +989,25 @@ template <class A, int K>
     cfm = select(child < parent, parent, child);
   }
   const V r_drive = p_.any_cfm ? select(accel, r + cfm, r) : r;
-  const DriveRowOf<V> drive =
-      drive_law::setup(terms, accel, r_drive, x0_drive, h_solve_, p_.dt, p_.tgs);
+  DriveRowOf<V> drive = drive_law::setup(terms, accel, r_drive, x0_drive, h_solve_, p_.dt, p_.tgs);
+  if (any_row(d)[7] != 0.0) {  // an implicit actuator's row in the drive's place (step.cpp)
+    const ActuatorTermsOf<V> a{dof_parameter(d, actuator_stiffness),
+                               dof_parameter(d, actuator_damping),
+                               dof_parameter(d, actuator_effort_limit),
+                               dof_parameter(d, command_position),
+                               dof_parameter(d, command_velocity),
+                               dof_parameter(d, command_effort)};
+    const DriveRowOf<V> act = actuator_row::setup(a, r, x0, h_solve_, p_.dt, p_.tgs);
+    const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
+    drive.target_vel_plus_initial_bias =
+        select(actuated, act.target_vel_plus_initial_bias, drive.target_vel_plus_initial_bias);
+    drive.vel_multiplier = select(actuated, act.vel_multiplier, drive.vel_multiplier);
+    drive.impulse_multiplier = select(actuated, act.impulse_multiplier, drive.impulse_multiplier);
+    drive.bias_coefficient = select(actuated, act.bias_coefficient, drive.bias_coefficient);
+    drive.target_pos_bias = select(actuated, act.target_pos_bias, drive.target_pos_bias);
+    drive.max_impulse = select(actuated, act.max_impulse, drive.max_impulse);
+    rw[Layout::x_start] = x0;
+  }
   rw[Layout::tvb] = drive.target_vel_plus_initial_bias;
   rw[Layout::velm] = drive.vel_multiplier;
   rw[Layout::impm] = drive.impulse_multiplier;
@@ -1015,6 +1049,8 @@ void LaneStep<A, K>::drive_row(int d, const Fields& rw, const T& r, const T& dx,
                       row_law::envelope(e, lambda, dimp, v, r, rw[Layout::external], p_.dt),
                       lambda);
     }
+    if (has_bit(any_row(d)[7], kMotorClip) || has_bit(any_row(d)[7], kTableClip))
+      lambda = clip_actuator(d, rw, lambda, dimp, v, r, dx);
   }
   const bool all_driven = any_row(d)[2] != 0.0;
   if (all_driven) {  // every lane driven: the selects below would keep each result
@@ -1029,6 +1065,35 @@ void LaneStep<A, K>::drive_row(int d, const Fields& rw, const T& r, const T& dx,
     total = select(driven, total + delta, total);
     v = select(driven, v + r * delta, v);
   }
+}
+
+// An implicit actuator's clip that depends on the state (actuator_row.hpp, dof_rows.cpp): on
+// dc_motor lanes the torque-speed line's (eq. I8-I11), on remotized_pd lanes the table's at the
+// iterate's end-of-(sub-)step position (eq. I13), read lane by lane out of line; lambda elsewhere.
+template <class A, int K>
+auto LaneStep<A, K>::clip_actuator(int d, const V* rw, const V& lambda, const V& accumulated,
+                                   const V& v, const V& r, const V& dx) -> V {
+  const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
+  const V kind = dof_parameter(d, actuator_kind);
+  const V bound = dof_parameter(d, actuator_effort_limit) * V(p_.dt);
+  V out = lambda;
+  if (has_bit(any_row(d)[7], kMotorClip)) {
+    const V clipped = actuator_row::clip_dc_motor(lambda, accumulated, v, r, bound,
+                                                  dof_parameter(d, actuator_saturation),
+                                                  dof_parameter(d, actuator_velocity_limit), p_.dt);
+    out = select(actuated & (kind == V(1.0)), clipped, out);
+  }
+  if (has_bit(any_row(d)[7], kTableClip)) {
+    const M table = actuated & (kind == V(2.0));
+    alignas(64) double position[kW], on[kW], limit[kW];
+    (rw[Layout::x_start] + dx + V(h_) * v).store_aligned(position);
+    select(table, V(1.0), V(0.0)).store_aligned(on);
+    for (int l = 0; l < kW; ++l)
+      limit[l] = on[l] != 0.0 ? table_effort_limit(*b_.tables, b_.env0 + l, d, position[l]) : 0.0;
+    out = select(table, actuator_row::clip_to_table(lambda, bound, V::load_aligned(limit), p_.dt),
+                 out);
+  }
+  return out;
 }
 
 // All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
@@ -1329,9 +1394,9 @@ void LaneStep<A, K>::sweep_links() {
     } else {
       const double* has = any_row(k.v_index);
       // A lone drive: one vector at a time. With friction or a limit row in the block the whole
-      // pack measured faster (the welded humanoid).
+      // pack measured faster (the welded humanoid). An actuator's clip on the state needs the pack.
       if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
-          has[5] == 0.0 && has[6] == 0.0)
+          has[5] == 0.0 && has[6] == 0.0 && (has[7] == 0.0 || has[7] == kActuator))
         for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
       else
         enter_link<kGiven>(WholePack{}, i, dvp, dv);
@@ -2652,9 +2717,20 @@ void LaneStep<A, K>::step() {
   }
   const double dt = p_.dt;
   velocity_iteration_ = false;
+  // Convergence tracking (step.cpp's solve_pgs): each drive impulse before the last position
+  // iteration, then its change; TGS solves each sub-step's impulse once: 0. A stopped lane keeps
+  // the change of the step it stopped in, as its Simulation does.
+  V* const change = at(l_.change);
   if (!p_.tgs) {
     h_ = dt;
-    for (int it = 0; it < p_.position_iterations; ++it) sweep();
+    for (int it = 0; it < p_.position_iterations; ++it) {
+      if (b_.drive_change && it == p_.position_iterations - 1)
+        for (int d = 0; d < p_.nv; ++d) at(l_.before)[d] = row(d)[Layout::dimp];
+      sweep();
+    }
+    if (b_.drive_change)
+      for (int d = 0; d < p_.nv; ++d)
+        change[d] = select(stopped_, change[d], row(d)[Layout::dimp] - at(l_.before)[d]);
     if (p_.physx_floating)  // the velocity the positions move with
       for (int d = 0; d < p_.nv; ++d) at(l_.qd_position)[d] = at(l_.qd)[d];
     integrate(dt, false);
@@ -2665,6 +2741,8 @@ void LaneStep<A, K>::step() {
     const int n = p_.position_iterations;
     const double rho = dt / n;
     h_ = rho;
+    if (b_.drive_change)
+      for (int d = 0; d < p_.nv; ++d) change[d] = select(stopped_, change[d], V(0.0));
     if (p_.physx_floating)
       for (int d = 0; d < p_.nv; ++d) at(l_.qd_position)[d] = V(0.0);
     const V share(1.0 / n);
@@ -2702,6 +2780,11 @@ void LaneStep<A, K>::step() {
   for (int d = 0; d < p_.nv; ++d) {
     const V* rw = row(d);
     at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
+    if (p_.any_implicit_actuator) {  // the row was the actuator's (step.cpp's row_forces)
+      const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
+      at(l_.af)[d] = select_zero(actuated, at(l_.df)[d]);
+      at(l_.df)[d] = select(actuated, V(0.0), at(l_.df)[d]);
+    }
     at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
     at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
     at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
@@ -2807,6 +2890,7 @@ void LaneStep<A, K>::run(int steps) {
     at(l_.lf)[d] = gather(b_.limit_force, nv, d);
     at(l_.ff)[d] = gather(b_.friction_force, nv, d);
     at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
+    if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
   }
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
@@ -2838,6 +2922,10 @@ void LaneStep<A, K>::run(int steps) {
     scatter(at(l_.lf)[d], b_.limit_force, nv, d);
     scatter(at(l_.ff)[d], b_.friction_force, nv, d);
     scatter(at(l_.vf)[d], b_.velocity_limit_force, nv, d);
+    if (b_.drive_change) scatter(at(l_.change)[d], b_.drive_change, nv, d);
+    // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
+    if (b_.actuator_force && p_.any_implicit_actuator)
+      scatter(at(l_.af)[d], b_.actuator_force, nv, d);
   }
 }
 

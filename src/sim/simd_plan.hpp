@@ -42,6 +42,19 @@ enum DofParameter : int {
   envelope_gradient,
   envelope_resistance,
   friction_coefficient,  ///< PhysX's transmitted-force friction (joint_constraints.md J6)
+  // An implicit actuator (ExplicitActuator with implicit_law; docs/math/implicit_actuators.md): its
+  // row takes the drive's (a dof with one has no drive).
+  implicit_actuator,  ///< 1: the dof's row is its implicit actuator's
+  actuator_kind,      ///< its clip: 1 dc_motor, 2 remotized_pd, 0 the outer bound alone
+  actuator_stiffness,
+  actuator_damping,
+  actuator_effort_limit,
+  actuator_saturation,      ///< dc_motor: the stall effort
+  actuator_velocity_limit,  ///< dc_motor: the no-load speed
+  // The command the actuator sees this step (eq. I16), set before every step.
+  command_position,
+  command_velocity,
+  command_effort,
   kDofParameters
 };
 enum LinkParameter : int {
@@ -138,12 +151,16 @@ struct Layout {
     tf_bound,      ///< its bound coefficient h |F| [N s]
     tf_imp,        ///< PGS: its accumulated impulse
     tf_applied,    ///< all its impulse changes of the step
+    x_start,       ///< the dof's position at the step's start (a remotized_pd clip reads it)
     kRowFields
   };
   // The mimic rows (MimicRowOf's three fields per row), each row's velocity change at the coupled
   // dofs per unit impulse (rows x coupled dofs), those dofs' current velocities, and the joint
   // impulses a sweep applies as given (the mimic rows').
   int mimic_row = 0, mimic_change = 0, mimic_velocity = 0, given = 0;
+  // Per dof: the implicit actuators' forces, and for convergence tracking the drive impulses
+  // before the last position iteration and their change in it.
+  int af = 0, before = 0, change = 0;
   // compat physx's prismatic departure (Plan::physx_prismatic): each link's centre of mass and
   // its velocity at the step's start, link bias (angular, linear) and accumulated turn, its pose
   // at the current sub-step, and each dof's row bias.
@@ -211,6 +228,8 @@ struct Plan {
   bool contacts = false;
   /// compat physx; with contacts: their rows see the link bias and PhysX's tracked motion.
   bool physx = false, physx_contacts = false;
+  /// Some environment has an implicit actuator: the drive force of its dofs is the actuator's.
+  bool any_implicit_actuator = false;
   int position_iterations = 1, velocity_iterations = 0;
   double limit_erp = 0.8;
   Layout layout;
@@ -252,6 +271,7 @@ void contact_track(ContactLanes& c, const Plan& p, int env, double h, const doub
 Stop contact_report(ContactLanes& c, const Plan& p, int env);
 /// The step's end: the anchors kept (kept) or, for a lane that stopped, no contacts reported.
 void contact_conclude(ContactLanes& c, int env, bool kept);
+struct ActuatorTables;  // lane_engine.hpp: every lane's remotized_pd tables
 
 /// One block of lanes: environments env0 ... env0 + W - 1, of which the first `valid` exist (the
 /// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major.
@@ -272,6 +292,12 @@ struct Block {
   bool* stopped_now = nullptr;  ///< per environment: stopped in this call
   bool any_limit = true;        ///< some lane has a finite joint limit
   ContactLanes* contacts = nullptr;  ///< Plan::contacts: each environment's contact rows
+  /// (N, nv), or null: the implicit actuators' forces, written at their dofs (0 elsewhere).
+  double* actuator_force = nullptr;
+  /// (N, nv), or null (no environment tracks convergence): each drive impulse's change in the
+  /// last position iteration (Simulation::last_drive_impulse_change), kept for stopped lanes.
+  double* drive_change = nullptr;
+  const ActuatorTables* tables = nullptr;  ///< the remotized_pd tables (lane_engine.hpp)
 };
 
 /// A spherical joint's PhysX positions (twist, swing1, swing2) and drive errors for the
@@ -279,6 +305,9 @@ struct Block {
 /// out of line, so that the lane units call it on plain arrays.
 void spherical_axes(const double* q, const double* target, const double* driven, double* position,
                     double* error);
+/// The remotized_pd table's limit of environment env's dof at position x (lookup_effort_limit),
+/// out of line, so that the lane units call it on plain values.
+double table_effort_limit(const ActuatorTables& tables, int env, int dof, double x);
 /// compat physx: the unit quaternion of the rotation m (row-major) in q's hemisphere, written over
 /// q (w x y z): spherical_rows.cpp's, out of line.
 void rotation_quaternion(const double* m, double* q);

@@ -249,10 +249,11 @@ TEST(BatchAllocations, PerCallNotPerStep) {
 // The same through the SIMD lanes (a fixed base): the lanes' scratch and the clocks are made by
 // the first call; on one thread a call allocates nothing, on two TBB's arena per call. With mimic
 // rows, and with the control stages (drive delays, explicit actuators) too, which step the lanes
-// one step a run.
+// one step a run, and with implicit actuators of every kind and convergence tracking.
 TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
   auto model = test::make_random_tree(7, 10, false, false, 0.01);
-  for (const bool control : {false, true})
+  enum Control { none, control_stages, implicit_actuators };
+  for (const Control control : {none, control_stages, implicit_actuators})
     for (int threads : {1, 2}) {
       Simulation prototype(model, SimulationOptions{});
       for (int d = 0; d < model->nv; ++d) {  // every row kind the lanes solve
@@ -260,21 +261,27 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
         prototype.set_joint_limits(d, -0.2, 0.2);
         prototype.set_joint_friction(d, JointFriction{0.1, 0.05, 0.01});
         prototype.set_max_joint_velocity(d, 0.5);
-        if (!control) continue;
-        if (d % 3 == 0) {
+        if (control == none) continue;
+        if (d % 3 == 0 || (control == implicit_actuators && d % 3 == 1)) {
           prototype.set_drive(d, Drive{});
           ExplicitActuator a;
-          a.kind = d % 2 ? ActuatorKind::ideal_pd : ActuatorKind::remotized_pd;
+          const int kind = control == implicit_actuators ? d % 3 + (d / 3) % 2 : d % 2;
+          a.kind = kind == 0   ? ActuatorKind::remotized_pd
+                   : kind == 1 ? ActuatorKind::ideal_pd
+                               : ActuatorKind::dc_motor;
           a.stiffness = 100.0;
           a.damping = 5.0;
           if (a.kind == ActuatorKind::remotized_pd) a.lookup = {{-1.0, 2.0}, {1.0, 4.0}};
+          if (a.kind == ActuatorKind::dc_motor) a.saturation_effort = 3.0, a.velocity_limit = 1.0;
           a.delay = 2;
+          if (control == implicit_actuators) a.integration = ActuatorIntegration::implicit_law;
           prototype.set_actuator(d, a);
           prototype.set_drive_target(d, 0.3, 0.0);
         } else {
           prototype.set_drive_delay(d, 1 + d % 3);
         }
       }
+      prototype.set_track_convergence(control == implicit_actuators);
       prototype.set_mimic_joints({{1, 0, -1.0, 0.0}, {3, 2, 0.5, 0.1, 20.0, 0.5}});
       Batch batch(prototype, 19);
       batch.set_num_threads(threads);
@@ -283,7 +290,7 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
       const long one = allocations_in([&] { batch.step(1); });
       const long many = allocations_in([&] { batch.step(40); });
       if (threads == 1) EXPECT_EQ(one, 0) << control;
-      EXPECT_LE(many, one + 8) << threads << " threads, control stages " << control;
+      EXPECT_LE(many, one + 8) << threads << " threads, control " << control;
       EXPECT_EQ(batch.sim(0).step_count(), 42);
     }
 }

@@ -13,6 +13,7 @@
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
+#include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -102,41 +103,6 @@ void command(Simulation& s, int e, int k) {
   }
 }
 
-struct Worst {
-  double state = 0.0, force = 0.0;
-};
-
-// Environment e of the batch against `alone`: q, qd and every output within the returned
-// differences; the clock and the delay and actuator histories (what a checkpoint of sim(e)
-// writes) exactly.
-void compare(const Batch& batch, int e, const Simulation& alone, Worst& worst,
-             const std::string& what) {
-  const Simulation& s = batch.sim(e);
-  worst.state = std::max({worst.state, test::relative_difference(s.q(), alone.q()),
-                          test::relative_difference(s.qd(), alone.qd())});
-  worst.force =
-      std::max({worst.force, test::relative_difference(s.drive_force(), alone.drive_force()),
-                test::relative_difference(s.limit_force(), alone.limit_force()),
-                test::relative_difference(s.friction_force(), alone.friction_force()),
-                test::relative_difference(s.velocity_limit_force(), alone.velocity_limit_force()),
-                test::relative_difference(s.actuator_force(), alone.actuator_force())});
-  ASSERT_EQ(s.step_count(), alone.step_count()) << what << " env " << e;
-  for (int d = 0; d < s.model().nv; ++d) {
-    ASSERT_EQ(s.drive_delays().pushes(d), alone.drive_delays().pushes(d)) << what << " dof " << d;
-    if (alone.drive_delays().delayed(d))
-      for (size_t k = 0; k < alone.drive_delays().ring(d).size(); ++k) {
-        EXPECT_EQ(s.drive_delays().ring(d)[k].position, alone.drive_delays().ring(d)[k].position);
-        EXPECT_EQ(s.drive_delays().ring(d)[k].velocity, alone.drive_delays().ring(d)[k].velocity);
-      }
-    ASSERT_EQ(s.actuators().pushes(d), alone.actuators().pushes(d)) << what << " dof " << d;
-    if (alone.has_actuator(d))  // the commands as set: the same bits
-      for (size_t k = 0; k < alone.actuators().ring(d).size(); ++k) {
-        EXPECT_EQ(s.actuators().ring(d)[k].position, alone.actuators().ring(d)[k].position);
-        EXPECT_EQ(s.actuators().ring(d)[k].effort, alone.actuators().ring(d)[k].effort);
-      }
-  }
-}
-
 class LaneControl : public testing::TestWithParam<SolverType> {};
 
 // Per-environment delays and actuators of every kind, targets changed between calls of 1 to 9
@@ -146,27 +112,12 @@ TEST_P(LaneControl, DelaysAndActuatorsWithinTolOfSimulation) {
   const Simulation prototype = control_prototype(11, solver);
   Batch batch(prototype, kEnvironments);
   batch.set_num_threads(2);
-  std::vector<Simulation> alone;
-  for (int e = 0; e < kEnvironments; ++e) {
-    give_control(batch.sim(e), e);
-    alone.push_back(prototype);
-    give_control(alone.back(), e);
-  }
+  std::vector<Simulation> alone = test::give_each(batch, prototype, give_control);
   EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
-  Worst worst;
-  int steps = 0;
-  for (int k = 0; steps < 1000; ++k) {
-    const int n = std::min(1 + k % 9, 1000 - steps);
-    for (int e = 0; e < kEnvironments; ++e) {
-      command(batch.sim(e), e, k);
-      command(alone[static_cast<size_t>(e)], e, k);
-    }
-    batch.step(n);
-    for (Simulation& s : alone) s.step(n);
-    steps += n;
-  }
+  test::LaneWorst worst;
+  test::step_with_commands(batch, alone, 1000, command);
   for (int e = 0; e < kEnvironments; ++e)
-    compare(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
+    test::compare_with_alone(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
   EXPECT_LE(worst.state, 1e-12);
   // Where a velocity limit holds a drive back, the two rows' forces are large and opposite and
   // their split carries the two orders' last bits: 1.2e-12 measured (TGS, the drive and the
@@ -199,7 +150,7 @@ TEST_P(LaneControl, BatchSettersAndResetWithinTolOfSimulation) {
   set_delays();
   EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
   RowMatrix xt(kEnvironments, nv), vt(kEnvironments, nv);
-  Worst worst;
+  test::LaneWorst worst;
   for (int k = 0; k < 100; ++k) {
     for (int e = 0; e < kEnvironments; ++e)
       for (int d = 0; d < nv; ++d) {
@@ -231,7 +182,7 @@ TEST_P(LaneControl, BatchSettersAndResetWithinTolOfSimulation) {
   }
   // Environment 0 stepped only through the batch's setters: never handed out before this.
   for (int e = 0; e < kEnvironments; ++e)
-    compare(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
+    test::compare_with_alone(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
   EXPECT_LE(worst.state, 1e-12);
   EXPECT_LE(worst.force, 1e-12);
   std::printf("lanes with Batch's delay setters and reset, %s: q, qd %.1e, forces %.1e\n",
@@ -245,12 +196,7 @@ TEST_P(LaneControl, DivergingEnvironmentTakesItsPushesBack) {
   const SolverType solver = GetParam();
   const Simulation prototype = control_prototype(13, solver);
   Batch batch(prototype, kEnvironments);
-  std::vector<Simulation> alone;
-  for (int e = 0; e < kEnvironments; ++e) {
-    give_control(batch.sim(e), e);
-    alone.push_back(prototype);
-    give_control(alone.back(), e);
-  }
+  std::vector<Simulation> alone = test::give_each(batch, prototype, give_control);
   // Environment 3's dof 0: an unclipped ideal PD with one step of delay, which the batch and
   // the lone Simulation step 5 times before it is told a target it cannot follow.
   const int bad = 3;
@@ -287,9 +233,9 @@ TEST_P(LaneControl, DivergingEnvironmentTakesItsPushesBack) {
   // It made the step that pushed the target (seen a step later) and none after the next.
   EXPECT_EQ(alone[bad].step_count(), 6);
   EXPECT_EQ(alone[bad].actuators().pushes(0), 6);
-  Worst worst;
+  test::LaneWorst worst;
   for (int e = 0; e < kEnvironments; ++e)
-    compare(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
+    test::compare_with_alone(batch, e, alone[static_cast<size_t>(e)], worst, to_string(solver));
   EXPECT_LE(worst.state, 1e-12);
   EXPECT_LE(worst.force, 1e-12);
   EXPECT_EQ(batch.sim(0).step_count(), 35);
@@ -300,21 +246,18 @@ INSTANTIATE_TEST_SUITE_P(Solvers, LaneControl, testing::Values(SolverType::pgs, 
                            return std::string(to_string(info.param));
                          });
 
-// A setting still refused names itself (an implicit actuator's row), and the lanes take the
-// environment again once it is gone.
-TEST(LaneControlRefusal, ImplicitActuatorStepsAsSimulation) {
+// A setting still refused names itself (the step guard: one lane's redone step would hold up
+// the others), and the lanes take the environment again once it is gone, actuators included.
+TEST(LaneControlRefusal, GuardedEnvironmentStepsAsSimulation) {
   const Simulation prototype = control_prototype(14, SolverType::pgs);
   Batch batch(prototype, 3);
   Simulation& s = batch.sim(2);
-  s.set_drive(1, Drive{});
-  ExplicitActuator a = actuator_of_kind(0, 0);
-  a.integration = ActuatorIntegration::implicit_law;
-  s.set_actuator(1, a);
-  const std::string joint = prototype.model().links[static_cast<size_t>(
-      prototype.model().dof_link[1])].joint_name;
-  EXPECT_EQ(batch.step_path(),
-            "scalar: environment 2: joint '" + joint + "' has an implicit actuator");
-  s.set_actuator(1, actuator_of_kind(0, 0));
+  give_control(s, 2);
+  SimulationOptions guarded = s.options();
+  guarded.guard.enabled = true;
+  s.set_options(guarded);
+  EXPECT_EQ(batch.step_path(), "scalar: environment 2: simulation 'options' has the step guard");
+  s.set_options(prototype.options());
   EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
 }
 

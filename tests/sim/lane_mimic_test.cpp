@@ -32,10 +32,7 @@ Simulation mimic_prototype(unsigned seed, SolverType solver) {
     // last bits past 1e-12 in 1000 steps.
     sim.set_joint_friction(d, JointFriction{0.0, 0.0, 0.2});
   }
-  EXPECT_GE(nv, 6);
-  sim.set_mimic_joints({{1, 0, -1.5, 0.05},
-                        {4, 2, 0.8, -0.1},
-                        {nv - 1, 3, -1.0, 0.0, /*natural_frequency=*/30.0, /*damping_ratio=*/0.7}});
+  test::set_three_mimic_rows(sim);
   sim.set_qd(test::random_vector(nv, rng, 0.5));
   return sim;
 }

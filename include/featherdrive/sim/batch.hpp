@@ -96,8 +96,8 @@ class Batch {
   /// Whether step() may step the environments in SIMD lanes (the default). It does when every
   /// environment's settings are within what the lane step simulates (docs/simd_batch.md: fixed
   /// bases of revolute and prismatic joints, drives, limits, friction, velocity limits, wrap,
-  /// drive delays and explicit actuators (run per environment before each lane step), PGS and
-  /// TGS, compat none) and the options are the same in all, with the CPU's widest
+  /// drive delays and explicit actuators (run per environment before each lane step), implicit
+  /// actuators, convergence tracking, PGS and TGS, compat none) and the options are the same in all, with the CPU's widest
   /// instruction set (FEATHERDRIVE_SIMD names a narrower one, or `scalar` for none). Each
   /// environment then gives the same bits whatever its lane, the width, the batch size and the
   /// threads, within 1e-12 of its Simulation stepped alone (the operation order differs);
@@ -270,6 +270,8 @@ class Batch {
   std::vector<long> lane_steps_;             // the environments' clocks during a lane step
   std::vector<double> lane_time_;
   RowMatrix lane_tau_;  // the joint force of each environment's lane step (control stages)
+  RowMatrix lane_actuator_force_;  // the implicit actuators' forces of a lane step
+  RowMatrix lane_drive_change_;    // the drive impulses' change in the last iteration (tracking)
 };
 
 }  // namespace featherdrive

@@ -43,6 +43,12 @@ class ExplicitActuators {
   bool implicit(int dof) const {
     return active(dof) && actuator(dof).integration == ActuatorIntegration::implicit_law;
   }
+  /// Some dof's actuator is implicit.
+  bool any_implicit() const {
+    for (const int d : active_)
+      if (implicit(d)) return true;
+    return false;
+  }
   /// The command an implicit actuator sees this step, eq. (8)-(9): set by the step's compute().
   const ActuatorCommand& command_seen(int dof) const { return slot(dof).seen; }
   void set_feedforward(int dof, double effort) {
