@@ -44,5 +44,39 @@ TEST(LaneContactIo, AntOnTheGroundAsSimulation) {
   }
 }
 
+// The features compose in the lanes: the standing Ant's hinges driven by implicit DC motors (their
+// rows in the drives' place, the speed-dependent clip solved in the sweep) while its feet are on
+// the ground, against each environment alone, bounded as above.
+TEST(LaneContactIo, AntOnTheGroundWithImplicitActuators) {
+  Simulation ant = make_simulation(load_scene(test::kExamples + std::string("ant_standing.yaml")));
+  for (int d = 6; d < ant.model().nv; ++d) {
+    const Drive drive = ant.drive(d);
+    ExplicitActuator motor;
+    motor.kind = ActuatorKind::dc_motor;
+    motor.stiffness = drive.stiffness;
+    motor.damping = drive.damping;
+    motor.effort_limit = 0.1;
+    motor.saturation_effort = 0.12;
+    motor.velocity_limit = 1.0;
+    motor.integration = ActuatorIntegration::implicit_law;
+    ant.set_drive(d, Drive{});
+    ant.set_actuator(d, motor);
+    ant.set_drive_target(d, drive.target_position, 0.0);
+  }
+  Batch lanes(ant, 6);
+  ant_starts(lanes);
+  const test::LaneFigures f =
+      test::batch_against_alone(lanes, 1000, 10, "Ant on the ground, implicit DC motors");
+  EXPECT_LE(f.ratio, test::kSensitivityFactor);
+  EXPECT_FALSE(lanes.contacts(0).empty());
+  // The motors' rows replaced the drives' and their clip binds (the drives alone push up to
+  // 0.13 Nm here).
+  for (int e = 0; e < lanes.size(); ++e) {
+    EXPECT_EQ(lanes.sim(e).drive_force().cwiseAbs().maxCoeff(), 0.0) << e;
+    EXPECT_LE(lanes.sim(e).actuator_force().cwiseAbs().maxCoeff(), 0.1 * (1 + 1e-12)) << e;
+  }
+  EXPECT_GE(lanes.sim(0).actuator_force().cwiseAbs().maxCoeff(), 0.1 * (1 - 1e-12));
+}
+
 }  // namespace
 }  // namespace featherdrive
