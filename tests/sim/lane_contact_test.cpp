@@ -16,81 +16,12 @@
 #include "support/compare.hpp"
 #include "support/contact_models.hpp"
 #include "support/drives.hpp"
+#include "support/lane_contact_models.hpp"
 #include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
 namespace {
-
-// A random floating tree (revolute and prismatic joints, optionally spherical ones) with a box
-// on its root and a sphere, capsule or box on each other link, over the ground: damped drives
-// on every joint, viscous friction that keeps it from chaos (lane_floating_test.cpp).
-Simulation grounded_tree(unsigned seed, SolverType solver, bool spherical,
-                         Compat compat = Compat::none) {
-  Model model = *test::make_random_tree(seed, 9, /*floating=*/true, spherical, 0.01);
-  for (int i = 0; i < model.num_links(); ++i) {
-    CollisionShape shape;
-    shape.link = i;
-    shape.type = i == 0 ? ShapeType::box : i % 3 == 1 ? ShapeType::sphere
-                                        : i % 3 == 2 ? ShapeType::capsule
-                                                     : ShapeType::box;
-    shape.size = shape.type == ShapeType::box      ? Vec3(0.08, 0.06, 0.05)
-                 : shape.type == ShapeType::sphere ? Vec3(0.06, 0.0, 0.0)
-                                                   : Vec3(0.03, 0.08, 0.0);
-    shape.position = Vec3(0.02, -0.01, 0.03);
-    shape.material.static_friction = 0.8;
-    shape.material.dynamic_friction = 0.6;
-    model.shapes.push_back(shape);
-  }
-  auto shared = std::make_shared<const Model>(std::move(model));
-  SimulationOptions o = test::lane_test_options(solver);
-  o.compat = compat;
-  Simulation sim(shared, o);
-  std::mt19937 rng(seed);
-  test::drive_every_joint(sim, rng, 200.0, 20.0);
-  for (int d = 6; d < shared->nv; ++d) sim.set_joint_friction(d, JointFriction{0.0, 0.0, 0.2});
-  Ground ground;
-  ground.enabled = true;
-  ground.material.static_friction = 0.8;
-  ground.material.dynamic_friction = 0.6;
-  sim.set_ground(ground);
-  return sim;
-}
-
-// Environments dropped from their own heights and turns: some land at once, some later, one
-// stays airborne through the run (5 s fall 123 m), so the lanes differ in contact count.
-void drop_from_own_heights(Batch& batch, std::mt19937& rng) {
-  const double heights[] = {0.25, 0.5, 0.9, 1.6, 200.0, 0.35, 0.7};
-  for (int e = 0; e < batch.size(); ++e) {
-    Simulation& s = batch.sim(e);
-    VecX q = s.q();
-    q[2] = heights[e % 7];
-    q[3] = 1.0, q[4] = 0.1 * e, q[5] = -0.05 * e, q[6] = 0.02;  // set_q normalises
-    s.set_q(q);
-    s.set_qd(test::random_vector(s.model().nv, rng, 0.3));
-  }
-}
-
-// Each case's figures against the bound LaneFigures gives: the lanes stay as close to the scalar
-// step as a last-bit change of its start moves it (contact rows amplify both alike).
-TEST(LaneContact, RandomTreesDroppedOnTheGroundAsSimulation) {
-  for (const Compat compat : {Compat::none, Compat::physx})
-  for (const bool spherical : {false, true})
-    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-      Batch lanes(grounded_tree(5, solver, spherical, compat), 7);
-      std::mt19937 rng(17);
-      drop_from_own_heights(lanes, rng);
-      const std::string what = std::string("random trees on the ground") +
-                               (spherical ? " (spherical joints), " : ", ") + to_string(solver) +
-                               (compat == Compat::physx ? ", compat physx" : "");
-      const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
-      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
-      int touching = 0;
-      for (int e = 0; e < lanes.size(); ++e) touching += !lanes.contacts(e).empty();
-      EXPECT_GE(touching, 4) << what;
-      EXPECT_TRUE(lanes.contacts(4).empty()) << what;  // the one still falling
-    }
-}
 
 // contact_models.hpp's box (cases a, b) under compat none: resting, sliding at speeds of its
 // own, dropped, one high above the ground.
@@ -120,46 +51,6 @@ TEST(LaneContact, BoxesRestingSlidingAndFallingAsSimulation) {
     const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
     EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
     EXPECT_EQ(lanes.contacts(0).size(), 4u) << what;
-    EXPECT_TRUE(lanes.contacts(4).empty()) << what;
-  }
-}
-
-// contact_models.hpp's quadruped under compat none, its PD drives holding the standing pose:
-// standing, dropped from heights of its own, turned, one high above the ground.
-TEST(LaneContact, QuadrupedStandingAndDroppedAsSimulation) {
-  for (const Compat compat : {Compat::none, Compat::physx})
-  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions o = test::lane_test_options(solver);
-    o.compat = compat;
-    Simulation sim(test::make_quadruped(1.0), o);
-    Ground ground;
-    ground.enabled = true;
-    ground.material = Material{1.0, 1.0, 0.0};
-    sim.set_ground(ground);
-    const Model& model = sim.model();
-    VecX q = sim.q();
-    for (const char* leg : {"fl", "fr", "hl", "hr"})
-      for (const auto& [joint, target] : {std::pair{"_hip", test::kQuadrupedHip},
-                                          std::pair{"_knee", test::kQuadrupedKnee}}) {
-        const std::string name = std::string(leg) + joint;
-        q[model.links[model.joint_link_index(name)].q_index] = target;
-        sim.set_drive(name, Drive{DriveType::force, 300.0, 10.0, test::kInf, target, 0.0});
-      }
-    Batch lanes(sim, 7);
-    std::mt19937 rng(17);
-    const double lift[] = {0.0, 0.05, 0.1, 0.2, 200.0, 0.02, 0.3};
-    for (int e = 0; e < lanes.size(); ++e) {
-      VecX qe = q;
-      qe[2] = test::quadruped_standing_height() + lift[e];
-      qe[3] = 1.0, qe[4] = 0.03 * e, qe[5] = -0.02 * e, qe[6] = 0.01 * e;  // set_q normalises
-      lanes.sim(e).set_q(qe);
-      lanes.sim(e).set_qd(test::random_vector(model.nv, rng, 0.1));
-    }
-    const std::string what = std::string("quadruped on the ground, ") + to_string(solver) +
-                             (compat == Compat::physx ? ", compat physx" : "");
-    const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
-    EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
-    EXPECT_GE(lanes.contacts(0).size(), 4u) << what;
     EXPECT_TRUE(lanes.contacts(4).empty()) << what;
   }
 }
@@ -208,7 +99,7 @@ TEST(LaneContact, FixedTreeOnTheGroundUnderCompatPhysxAsSimulation) {
 // Each environment's bits are the same at any lane, in a batch of any size, at every width and
 // on any number of threads.
 TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
-  const Simulation proto = grounded_tree(8, SolverType::tgs, false);
+  const Simulation proto = test::grounded_tree(8, SolverType::tgs, false);
   // Environment k at lane (k + shift) % size, dropped from a height of its own.
   auto run = [&](int size, SimdIsa isa, int threads, int shift) {
     Batch b(proto, size);
@@ -239,7 +130,7 @@ TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
 // one environment: a lane without a ground beside grounded ones, as its Simulation.
 TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    const Simulation proto = grounded_tree(6, solver, false);
+    const Simulation proto = test::grounded_tree(6, solver, false);
     Simulation airy = proto;
     Ground off = proto.ground();
     off.enabled = false;
@@ -302,7 +193,7 @@ TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
 // The path: a grounded robot runs in the lanes, under compat none and physx; self-collision
 // stays refused, and so do shapes on other links than environment 0's, named.
 TEST(LaneContact, StepPath) {
-  Simulation s = grounded_tree(5, SolverType::pgs, false);
+  Simulation s = test::grounded_tree(5, SolverType::pgs, false);
   Batch grounded(s, 3);
   EXPECT_EQ(grounded.step_path().find("scalar"), std::string::npos) << grounded.step_path();
   // An environment whose shapes sit on other links than environment 0's (the plan's).
