@@ -46,13 +46,8 @@ TEST(LaneContact, RandomTreesDroppedOnTheGroundAsSimulation) {
 TEST(LaneContact, QuadrupedStandingAndDroppedAsSimulation) {
   for (const Compat compat : {Compat::none, Compat::physx})
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions o = test::lane_test_options(solver);
-    o.compat = compat;
-    Simulation sim(test::make_quadruped(1.0), o);
-    Ground ground;
-    ground.enabled = true;
-    ground.material = Material{1.0, 1.0, 0.0};
-    sim.set_ground(ground);
+    Simulation sim =
+        test::on_ground(test::make_quadruped(1.0), solver, compat, Material{1.0, 1.0, 0.0});
     const Model& model = sim.model();
     VecX q = sim.q();
     for (const char* leg : {"fl", "fr", "hl", "hr"})

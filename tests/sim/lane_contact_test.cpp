@@ -28,13 +28,8 @@ namespace {
 TEST(LaneContact, BoxesRestingSlidingAndFallingAsSimulation) {
   for (const Compat compat : {Compat::none, Compat::physx})
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions o = test::lane_test_options(solver);
-    o.compat = compat;
-    Simulation box(test::make_ground_box(0.5), o);
-    Ground ground;
-    ground.enabled = true;
-    ground.material = Material{0.5, 0.5, 0.0};
-    box.set_ground(ground);
+    const Simulation box =
+        test::on_ground(test::make_ground_box(0.5), solver, compat, Material{0.5, 0.5, 0.0});
     Batch lanes(box, 6);
     const double heights[] = {0.1, 0.1, 0.1, 0.25, 200.0, 0.1};
     const double speeds[] = {0.0, 0.5, 1.5, 0.0, 0.0, 3.0};

@@ -2,8 +2,10 @@
 // cases in tests/peers/lane_contact_long_test.cpp): built here once for both executables.
 #pragma once
 
+#include <memory>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "featherdrive/sim/batch.hpp"
 #include "support/drives.hpp"
@@ -59,6 +61,19 @@ inline void drop_from_own_heights(Batch& batch, std::mt19937& rng) {
     s.set_q(q);
     s.set_qd(random_vector(s.model().nv, rng, 0.3));
   }
+}
+
+/// A Simulation of `model` at lane_test_options(solver) with `compat`, on a ground of `material`.
+inline Simulation on_ground(std::shared_ptr<const Model> model, SolverType solver, Compat compat,
+                            const Material& material) {
+  SimulationOptions o = lane_test_options(solver);
+  o.compat = compat;
+  Simulation sim(std::move(model), o);
+  Ground ground;
+  ground.enabled = true;
+  ground.material = material;
+  sim.set_ground(ground);
+  return sim;
 }
 
 }  // namespace featherdrive::test
