@@ -232,9 +232,9 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
     }
     if (count == 0) continue;
     const double cfm = link_cfm[L];
-    // Rows on a link that cannot move (a fixed root) do nothing.
+    // Rows on a link that cannot move along n (a fixed root, a turntable) do nothing (C22a).
     const Vec6 probe = spatial_force(points[0] - origin, n);
-    if (!(probe.dot(lambda * probe) + cfm > 0.0)) continue;
+    if (!(row_response(probe, lambda * probe, lambda) + cfm > 0.0)) continue;
     ContactPatch& patch = patches_[static_cast<size_t>(num_patches_)];
     shape_patch_[static_cast<size_t>(k)] = num_patches_;
     if (link_end_patch_[L] == 0) link_first_patch_[L] = num_patches_;
@@ -259,7 +259,7 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
       report.separation = separations[p];
       row.J = spatial_force(points[p] - origin, n);
       row.response = lambda * row.J;
-      row.mass = row_mass(1.0, row.J.dot(row.response) + cfm);  // C20, C22
+      row.mass = row_mass(1.0, row_response(row.J, row.response, lambda) + cfm);  // C20, C22a
       const double vn = row.J.dot(V);
       setup_normal_law(row, separations[p], vn, restitution, options, phase, tgs_share);
       const double p0 = separations[p] - rest_distance;  // C2
@@ -350,7 +350,8 @@ int ContactRows::setup(const Model& model, const Data& data, const Ground& groun
         row.J = spatial_force(anchor_at[j] - origin, *t);
         row.error = t->dot(drift);
         row.response = lambda * row.J;
-        row.mass = row_mass(kFrictionMassScale, row.J.dot(row.response) + cfm);  // C11, C22
+        const double u = row_response(row.J, row.response, lambda);
+        row.mass = row_mass(kFrictionMassScale, u + cfm);  // C11, C22a
         row.dx = 0.0;
         row.impulse = 0.0;
       }

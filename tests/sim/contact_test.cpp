@@ -8,8 +8,10 @@
 #include <numbers>
 
 #include "featherdrive/algorithm/floating_base.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "support/models.hpp"
 
 namespace featherdrive {
 namespace {
@@ -344,6 +346,116 @@ TEST_P(Contact, SliderDropsOntoTheGroundAndCarriesItsWeight) {
   for (int k = 0; k < 300; ++k) sim.step();
   EXPECT_NEAR(sim.q()[0] - r, g.height, 1e-5);
   EXPECT_NEAR(normal_sum(sim) / (dt * m * kG), 1.0, 1e-9);
+}
+
+// A turntable: a fixed base and one revolute joint whose axis is the world's vertical to rounding
+// (y turned a quarter about x, off the origin), carrying a ball 1 mm into the ground. Its link
+// cannot move along the normal: J . Lambda J is rounding (C22a), so the rows apply nothing, under
+// compat none (no cfm) the normal impulse is exactly 0 and the joint turns on as without a ground.
+TEST_P(Contact, TurntableBallInTheGroundAppliesNothing) {
+  const double r = 0.05;
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  JointSpec turn = revolute_joint("turn", Vec3::UnitY(), Vec3(0.3, -0.2, 0.1),
+                                  Vec3(std::numbers::pi / 2, 0.0, 0.0));
+  b.add_link(make_link("table", "base", 1.5, Vec3(0.1, 0.0, 0.0), Mat3::Identity() * 0.01, turn));
+  CollisionShape s;
+  s.type = ShapeType::sphere;
+  s.size = Vec3(r, 0, 0);
+  s.position = Vec3(0.4, 0.05, 0.1);
+  b.add_shape("table", s);
+  SimulationOptions o;
+  o.solver = GetParam();
+  Simulation sim(std::make_shared<const Model>(b.build()), o), free(sim.model_ptr(), o);
+  for (Simulation* x : {&sim, &free}) {
+    x->set_q(VecX::Constant(1, 0.7));
+    x->set_qd(VecX::Constant(1, 1.3));
+  }
+  Data posed(sim.model());
+  forward_kinematics(sim.model(), posed, sim.q());
+  const Vec3 centre = posed.world_position[1] + posed.world_rotation[1] * s.position;
+  Ground g;
+  g.enabled = true;
+  g.height = centre.z() - r + 1e-3;
+  sim.set_ground(g);
+  for (int k = 0; k < 20; ++k) {
+    sim.step();
+    free.step();
+    for (const ContactReport& c : sim.contacts()) EXPECT_EQ(c.normal_impulse, 0.0) << k;
+    EXPECT_EQ(sim.qd()[0], free.qd()[0]) << k;
+  }
+}
+
+// The fixed random tree of seed 1 (7 links, a ball on each, the lowest 5 mm into the ground) whose
+// third ball sits where its link cannot move along the normal: that row's impulse was 1e16 under
+// compat none. A step's impulse on a ball is bounded by the tree's momentum when its links fall
+// from rest: M (g dt + sqrt(2 g H)), H the tree's height above the ground.
+TEST_P(Contact, FixedRandomTreeOnTheGroundStaysBounded) {
+  Model m = *test::make_random_tree(1, 7, /*floating=*/false, /*spherical=*/false, 0.01);
+  for (int i = 1; i < m.num_links(); ++i) {
+    CollisionShape ball;
+    ball.link = i;
+    ball.size = Vec3(0.05, 0.0, 0.0);
+    m.shapes.push_back(ball);
+  }
+  double mass = 0.0;
+  for (const Link& link : m.links) mass += link.mass;
+  SimulationOptions o;
+  o.solver = GetParam();
+  Simulation sim(std::make_shared<const Model>(m), o);
+  Data posed(sim.model());
+  forward_kinematics(sim.model(), posed, sim.q());
+  Ground g;
+  g.enabled = true;
+  g.height = std::numeric_limits<double>::infinity();
+  double top = -g.height;
+  for (const CollisionShape& ball : sim.model().shapes) {
+    g.height = std::min(g.height, posed.world_position[ball.link].z() - 0.045);
+    top = std::max(top, posed.world_position[ball.link].z() + 0.05);
+  }
+  sim.set_ground(g);
+  const double bound = mass * (kG * sim.options().dt + std::sqrt(2.0 * kG * (top - g.height)));
+  double largest = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    sim.step();
+    for (const ContactReport& c : sim.contacts()) largest = std::max(largest, std::abs(c.normal_impulse));
+    ASSERT_TRUE(sim.qd().allFinite()) << k;
+  }
+  EXPECT_LE(largest, bound);
+  EXPECT_GT(largest, 0.0);
+}
+
+// A light long pendulum (50 g at 2 m) hanging 1 mrad off the vertical, its ball just touching a
+// frictionless ground: the normal's lever about the pivot is 2 mm, so u = sin^2(1e-3) / m is
+// 2e-5 and 1e-6 of |J|^2 max Lambda_ii, far above C22a's rounding: it is kept. From rest the
+// ground holds it in one step: the impulse's torque cancels gravity's about the same lever,
+// lambda = m g dt. (To 1e-6: the row's velocity g dt sin^2(theta) is 1e-7 m/s, so the separation's
+// last bit, 1e-17 m, over dt moves the impulse by 1e-8 of itself.)
+TEST_P(Contact, LightLongPendulumNearlyUnderItsPivotIsHeldByTheGround) {
+  const double m = 0.05, l = 2.0, r = 0.02, theta = 1e-3;
+  const Vec3 centre(l * std::sin(theta), 0.0, -l * std::cos(theta));
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  b.add_link(make_link("rod", "base", m, centre, Mat3::Identity() * 0.4 * m * r * r,
+                       revolute_joint("pivot", Vec3::UnitY())));
+  CollisionShape s;
+  s.type = ShapeType::sphere;
+  s.size = Vec3(r, 0, 0);
+  s.position = centre;
+  s.material.static_friction = s.material.dynamic_friction = 0.0;
+  b.add_shape("rod", s);
+  SimulationOptions o;
+  o.solver = GetParam();
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  Ground g;
+  g.enabled = true;
+  g.height = centre.z() - r;
+  g.material.static_friction = g.material.dynamic_friction = 0.0;
+  sim.set_ground(g);
+  sim.step();
+  ASSERT_EQ(sim.contacts().size(), 1u);
+  EXPECT_NEAR(normal_sum(sim) / (m * kG * sim.options().dt), 1.0, 1e-6);
+  EXPECT_NEAR(sim.qd()[0], 0.0, 1e-12);
 }
 
 }  // namespace

@@ -52,9 +52,9 @@ TEST(LaneContact, BoxesRestingSlidingAndFallingAsSimulation) {
 
 // A fixed random tree of revolute joints (no prismatic, spherical or floating joint asks for the
 // link bias) with a ball on each link, its lowest 5 mm into the ground, under compat physx: the
-// bias is formed for the contacts alone. (Under compat none one of its balls sits where its link
-// cannot move along the normal: J Lambda J is 0 to rounding and the row's impulse 1e16 in the
-// scalar step too; physx's cfm keeps it finite.)
+// bias is formed for the contacts alone. (One of its balls sits where its link cannot move along
+// the normal: J Lambda J is rounding, counted as 0 (C22a; contact_test.cpp's
+// FixedRandomTreeOnTheGroundStaysBounded).)
 TEST(LaneContact, FixedTreeOnTheGroundUnderCompatPhysxAsSimulation) {
   Model m = *test::make_random_tree(1, 7, /*floating=*/false, /*spherical=*/false, 0.01);
   for (const Link& link : m.links) ASSERT_NE(link.joint_type, JointType::prismatic);

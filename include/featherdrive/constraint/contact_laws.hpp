@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 
 #include "featherdrive/spatial/spatial.hpp"
 
@@ -18,6 +19,19 @@ inline constexpr int kManifoldPoints = 4;
 /// sideways friction rows), which then applies nothing (C22).
 inline double row_mass(double scale, double u) {
   return u > 0.0 ? scale / u : 0.0;
+}
+
+/// C22a's k: J . Lambda J's own rounding is at most 72 eps |J|^2 max_i Lambda_ii (36 products of
+/// |Lambda_ij| <= max_i Lambda_ii), Lambda's from the sweep a few eps per level of the tree.
+inline constexpr double kResponseRounding = 1024.0;
+
+/// A row's response u = J . Lambda J (lambda_j = Lambda J), or 0 when it is within the rounding of
+/// its own computation, a direction the link cannot move in (C22a).
+inline double row_response(const Vec6& J, const Vec6& lambda_j, const Mat6& lambda) {
+  const double u = J.dot(lambda_j);
+  const double rounding = kResponseRounding * std::numeric_limits<double>::epsilon() *
+                          J.squaredNorm() * lambda.diagonal().maxCoeff();
+  return u > rounding ? u : 0.0;
 }
 
 /// The friction direction of a patch at rest, PhysX's (C10a): x cross n, or z cross n when n lies
