@@ -5,7 +5,8 @@
 // floating root's world pose, the step guard, and collision shapes with a ground. Refused
 // parameters (std::invalid_argument, ModelError) and DivergenceError are fine; a crash, undefined
 // behaviour, a non-finite state or contact force without an error, a diverging step that changes
-// the state, or a checkpoint that does not restore bit for bit are bugs.
+// the state, a checkpoint that does not restore bit for bit, or copies of one simulation in a
+// Batch (its SIMD lanes where they take it) that part are bugs.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -21,6 +22,7 @@
 #include "featherdrive/io/checkpoint.hpp"
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/model/model_variant.hpp"
+#include "featherdrive/sim/batch.hpp"
 
 using namespace featherdrive;
 
@@ -66,6 +68,32 @@ void try_set(F&& f) {
   try {
     f();
   } catch (const std::invalid_argument&) {
+  }
+}
+
+// Three copies of `sim` stepped together: the lanes give every environment the same bits
+// whatever its lane (docs/simd_batch.md), so the copies stay equal, finite or stopped alike.
+void batch_steps(const Simulation& sim, int steps) {
+  std::optional<Batch> maybe;
+  try {
+    maybe.emplace(sim, 3);
+  } catch (const std::invalid_argument&) {
+    return;
+  }
+  Batch& batch = *maybe;
+  const Batch& view = batch;  // reading through sim(i) const leaves the lanes' packs as they are
+  batch.set_num_threads(1);
+  for (int k = 0; k < steps; ++k) {
+    try {
+      batch.step();
+    } catch (const DivergenceError&) {
+    }
+    for (int i = 0; i < 3; ++i) fuzz::check_finite(view.sim(i));
+    for (int i = 1; i < 3; ++i)
+      if (!fuzz::same_bits(view.sim(i).q(), view.sim(0).q()) ||
+          !fuzz::same_bits(view.sim(i).qd(), view.sim(0).qd()) ||
+          view.sim(i).step_count() != view.sim(0).step_count())
+        fuzz::bug("copies of one simulation in a Batch part");
   }
 }
 
@@ -294,6 +322,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (int k = 1 + in.small(4); k > 0; --k)
       if (!fuzz::checked_step(sim)) break;
   }
+
+  // Then the simulation as it is now, three times in a Batch (read last, so that older inputs
+  // decode as they did).
+  if (in.flag()) batch_steps(sim, 1 + in.small(3));
 
   // The checkpoint of whatever state this reached restores bit for bit into a fresh simulation.
   const std::string bytes = checkpoint_bytes(sim);
