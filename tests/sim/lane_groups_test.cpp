@@ -23,9 +23,11 @@ namespace {
 // A random fixed-base tree with drives on every dof, limits on some, viscous friction on all
 // (it keeps the tree from chaos, which would grow the two step orders' last bits past 1e-12)
 // and three mimic rows.
-Simulation group_prototype(unsigned seed, SolverType solver) {
+Simulation group_prototype(unsigned seed, SolverType solver, Compat compat = Compat::none) {
   auto model = test::make_random_tree(seed, 9, false, false, 0.01);
-  Simulation sim(model, test::lane_test_options(solver));
+  SimulationOptions o = test::lane_test_options(solver);
+  o.compat = compat;
+  Simulation sim(model, o);
   std::mt19937 rng(seed);
   test::drive_every_joint(sim, rng, 300.0, 20.0);
   for (int d = 0; d < model->nv; ++d) {
@@ -178,21 +180,36 @@ TEST(LaneGroups, RegroupedWhenAPlanChanges) {
   EXPECT_EQ(batch.env_path(0), "scalar: lanes off (set_lanes)");
 }
 
+// compat is a plan's setting (its departures are stages of their own): an environment under
+// compat physx (chosen at construction: a Simulation assigned to it) in a batch under none steps
+// in a group of its own, as its Simulation.
+TEST(LaneGroups, CompatSplitsTheGroups) {
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    const Simulation proto = group_prototype(5, solver);
+    Batch batch(proto, 4);
+    batch.sim(1) = group_prototype(5, solver, Compat::physx);
+    EXPECT_NE(batch.step_path().find("2 groups (3, 1 environments)"), std::string::npos)
+        << batch.step_path();
+    std::vector<Simulation> alone;
+    for (int e = 0; e < batch.size(); ++e) alone.push_back(batch.simulation(e));
+    for (int call = 0; call < 3; ++call) {
+      batch.step(100);
+      for (Simulation& s : alone) s.step(100);
+    }
+    for (int e = 0; e < batch.size(); ++e)
+      EXPECT_LE(test::lane_difference(batch, e, alone[static_cast<size_t>(e)]), 1e-12)
+          << to_string(solver) << ", environment " << e;
+    EXPECT_GT((batch.sim(1).q() - batch.sim(0).q()).cwiseAbs().maxCoeff(), 1e-6);
+  }
+}
+
 // A grounded batch whose environments carry shapes on different links: a group per set of
 // shape links, each environment's contacts as its Simulation's, within the sampled sensitivity
-// of the contact cases (tests/support/lanes.hpp).
+// of the contact cases (tests/support/lanes.hpp); 300 steps here, 1000 in
+// tests/peers/lane_contact_long_test.cpp.
 TEST(LaneGroups, ShapesOnOtherLinksInGroupsOfTheirOwn) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    const Simulation proto = test::grounded_tree(5, solver, false);
-    Batch batch(proto, 6);
-    Model fewer = proto.model();
-    fewer.shapes.erase(fewer.shapes.begin() + 1);
-    Model fewest = fewer;
-    fewest.shapes.erase(fewest.shapes.begin() + 2);
-    for (int e : {2, 4}) batch.sim(e).set_model(std::make_shared<const Model>(fewer));
-    batch.sim(5).set_model(std::make_shared<const Model>(fewest));
-    std::mt19937 rng(3);
-    test::drop_from_own_heights(batch, rng);
+    Batch batch = test::shapes_on_three_link_sets(solver);
     EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments)"), std::string::npos)
         << batch.step_path();
     const std::string what = std::string("shapes on other links, ") + to_string(solver);

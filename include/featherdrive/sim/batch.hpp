@@ -1,11 +1,11 @@
-// N environments of one robot stepped together on all cores (TBB): in SIMD lanes where every
-// environment's settings are within the lane step's (the same bits whatever the lane, width,
-// batch size and threads, within 1e-12 of each stepped alone), else as independent Simulations
-// that share nothing a step writes, each bit-identical to stepping it alone whatever the number
-// of threads. Their states lie in (N, n) row-major arrays, one row per
-// environment (each Simulation's storage is its row), and each may have its own model parameters
-// (masses, centres of mass, armature) over one topology. Also whole-vector drive setters for one
-// Simulation. docs/conventions.md, "Batch".
+// N environments of one robot stepped together on all cores (TBB): in SIMD lanes, in lane groups
+// of the environments whose plans agree, each environment whose settings are within the lane
+// step's (the same bits whatever the group, lane, width, batch size and threads, within 1e-12 of
+// each stepped alone), every other one as an independent Simulation that shares nothing a step
+// writes, bit-identical to stepping it alone whatever the number of threads. Their states lie in
+// (N, n) row-major arrays, one row per environment (each Simulation's storage is its row), and
+// each may have its own model parameters (masses, centres of mass, armature, gravity) over one
+// topology. Also whole-vector drive setters for one Simulation. docs/conventions.md, "Batch".
 #pragma once
 
 #include <array>
