@@ -139,6 +139,47 @@ TEST(LaneGroups, BitsIndependentOfTheGroupsComposition) {
     }
 }
 
+// Environments that diverge in two groups stop with their state from before that step and the
+// scalar step's message, the lowest one named; the others, in lanes and on the scalar step, make
+// all their steps; a partial reset starts them again.
+TEST(LaneGroups, DivergenceInTwoGroups) {
+  Simulation proto = group_prototype(5, SolverType::pgs);
+  Batch batch = mixed_batch(proto);
+  batch.step(3);
+  const int bad[] = {4, 6};
+  const VecX q4 = batch.sim(4).q(), q6 = batch.sim(6).q();
+  batch.set_qd(bad, RowMatrix::Constant(1, proto.model().nv, 1e200));
+  Simulation alone = batch.simulation(4);
+  std::string scalar_message;
+  try {
+    alone.step();
+  } catch (const DivergenceError& e) {
+    scalar_message = e.what();
+  }
+  ASSERT_FALSE(scalar_message.empty());
+  try {
+    batch.step(5);
+    ADD_FAILURE() << "no DivergenceError";
+  } catch (const DivergenceError& e) {
+    EXPECT_NE(std::string(e.what()).find("batch copy 4 (2 of 10"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(batch.divergences()[4].has_value() && batch.divergences()[6].has_value());
+  EXPECT_EQ(batch.divergences()[4]->message, scalar_message);
+  EXPECT_EQ(batch.divergences()[6]->step, 4);
+  EXPECT_TRUE(test::same_bits(batch.sim(4).q(), q4));
+  EXPECT_TRUE(test::same_bits(batch.sim(6).q(), q6));
+  for (int e = 0; e < batch.size(); ++e)
+    if (e != 4 && e != 6) {
+      EXPECT_FALSE(batch.divergences()[static_cast<size_t>(e)].has_value()) << e;
+      EXPECT_EQ(batch.step_count()[static_cast<size_t>(e)], 8) << e;
+    }
+  batch.reset(bad);
+  batch.step(2);
+  EXPECT_EQ(batch.step_count()[4], 2);
+  EXPECT_EQ(batch.step_count()[6], 2);
+  EXPECT_FALSE(batch.divergences()[6].has_value());
+}
+
 // A settings change moves an environment from group to group, or to the scalar step and back:
 // the lanes regroup before the next step and it goes on as its Simulation.
 TEST(LaneGroups, RegroupedWhenAPlanChanges) {
