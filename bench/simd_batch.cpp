@@ -101,6 +101,35 @@ void as_loaded_batch(benchmark::State& state, const Simulation& prototype, int c
   run(state, batch, prototype.q(), count);
 }
 
+// Lane groups (docs/simd_batch.md, "Lane groups"): 1024 arm7 as loaded with gravity of their
+// own (one group), half of them at another dt (two groups), or one under the step guard (one
+// group and one Simulation); `scalar` the same batch with lanes off, as every such batch stepped
+// before groups. Names: batch_groups/arm7/<case>/<lanes|scalar>/envs:1024/threads:1.
+void grouped_batch(benchmark::State& state, const Simulation& prototype, const std::string& kind,
+                   bool lanes) {
+  const int count = 1024;
+  Batch batch(prototype, count);
+  batch.set_num_threads(1);
+  batch.set_lanes(lanes);
+  if (kind == "gravity") {
+    RowMatrix g(count, 3);
+    for (int e = 0; e < count; ++e) g.row(e) << 0.01 * (e % 7), 0.0, -9.0 - 0.002 * e;
+    std::vector<int> all(static_cast<size_t>(count));
+    for (int e = 0; e < count; ++e) all[static_cast<size_t>(e)] = e;
+    batch.set_gravity(all, g);
+  } else if (kind == "two_dt") {
+    SimulationOptions o = prototype.options();
+    o.dt *= 0.5;
+    for (int e = 0; e < count; e += 2) batch.sim(e).set_options(o);
+  } else if (kind == "one_guarded") {
+    SimulationOptions o = prototype.options();
+    o.guard.enabled = true;
+    batch.sim(5).set_options(o);
+  }
+  state.SetLabel(batch.step_path());
+  run(state, batch, prototype.q(), count);
+}
+
 void lanes_batch(benchmark::State& state, const BenchRobot& robot, int count, int threads,
                  SimdIsa isa) {
   Batch batch(bench_simulation(robot), count);
@@ -154,6 +183,16 @@ void register_simd_batch() {
           [=](benchmark::State& s) { as_loaded_batch(s, *prototype, 1024, t); })
           ->UseRealTime();
   }
+  for (const char* kind : {"gravity", "two_dt", "one_guarded"})
+    for (const bool lanes : {true, false}) {
+      const Simulation* prototype = &loaded.front().second;
+      const std::string k = kind;
+      benchmark::RegisterBenchmark(("batch_groups/arm7/" + k + (lanes ? "/lanes" : "/scalar") +
+                                    "/envs:1024/threads:1")
+                                       .c_str(),
+                                   [=](benchmark::State& s) { grouped_batch(s, *prototype, k, lanes); })
+          ->UseRealTime();
+    }
   static std::vector<BenchRobot> robots = {make_arm7(), make_chain(16), humanoid_hold()};
   robots[1].name = "chain16";
   static const std::string humanoid_xml = welded_humanoid_xml();

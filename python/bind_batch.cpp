@@ -114,7 +114,17 @@ void featherdrive::python::bind_batch(py::module_& m) {
           "bit.")
       .def_property_readonly(
           "step_path", [](Batch& b) { return locked(b, [&] { return b.step_path(); }); },
-          "How the next step() runs: 'avx2 lanes', or 'scalar: ' and why.")
+          "How the next step() runs: 'avx2 lanes' (one lane group), 'scalar: ' and why, or for "
+          "a mixed batch one line such as 'avx2 lanes: 2 groups (6, 2 environments); scalar: 1 "
+          "environment (environment 5: ...)'.")
+      .def(
+          "env_path",
+          [](Batch& b, py::handle i) {
+            const int index = env_index(b, i);
+            return locked(b, [&] { return b.env_path(index); });
+          },
+          py::arg("i"),
+          "How the next step() runs environment i: 'avx2 lanes, group 1' or 'scalar: ' and why.")
       .def_property(
           "isa",
           [](const Batch& b) { return locked(b, [&] { return std::string(to_string(b.isa())); }); },
@@ -345,6 +355,19 @@ void featherdrive::python::bind_batch(py::module_& m) {
           },
           py::arg("link"), py::arg("com"), py::arg("env_ids") = py::none(),
           "Centre of mass (link frame) of a link in env_ids (None: all): (3,) or (k, 3).")
+      .def(
+          "set_gravity",
+          [](Batch& b, py::handle gravity, py::handle env_ids) {
+            const std::vector<int> ids = to_env_ids(env_ids, b.size());
+            const RowMatrix g = to_rows(gravity, ids.size(), 3, "gravity", /*scalar_ok=*/false);
+            locked(b, [&] { b.set_gravity(ids, g); });
+          },
+          py::arg("gravity"), py::arg("env_ids") = py::none(),
+          "Gravity [m/s^2] of env_ids (None: all): (3,) or (k, 3), finite; the lanes take it "
+          "per environment.")
+      .def(
+          "gravity", [](const Batch& b) { return locked(b, [&] { return b.gravity(); }); },
+          "Every environment's gravity (N, 3), a copy.")
       .def(
           "armature", [](const Batch& b) { return locked(b, [&] { return b.armature(); }); },
           "Every environment's armature (N, nv), a copy.")

@@ -601,9 +601,10 @@ def center_of_mass_jacobian(model: Model, q: ArrayLike) -> Vector: ...
 EnvIds = Union[None, Int, Sequence[Int], npt.NDArray[np.integer]]
 
 class Batch:
-    """N environments of one robot stepped together on all cores: in SIMD lanes where every
-    environment's settings allow (the same bits for any lane, width, batch size and threads,
-    within 1e-12 of each stepped alone), else each bit-identical to stepping it alone.
+    """N environments of one robot stepped together on all cores: in SIMD lanes, in groups of
+    the environments that share dt, solver, iteration counts, compat, mimic dofs and shape
+    links (the same bits for any group, lane, width, batch size and threads, within 1e-12 of
+    each stepped alone); one whose settings the lanes refuse bit-identical to stepping it alone.
     States are read-only (N, n) views of the batch's arrays. Setters take env_ids (None: all;
     distinct indices in [0, N)) and values as a scalar, one row for every environment named or
     (k, n), one row each."""
@@ -618,7 +619,12 @@ class Batch:
     def isa(self, value: str | None) -> None: ...
     @property
     def step_path(self) -> str:
-        """How the next step() runs: 'avx2 lanes', or 'scalar: ' and why."""
+        """How the next step() runs: 'avx2 lanes' (one lane group), 'scalar: ' and why, or for
+        a mixed batch one line such as 'avx2 lanes: 2 groups (6, 2 environments); scalar: 1
+        environment (environment 5: ...)'."""
+    def env_path(self, i: Int) -> str:
+        """How the next step() runs environment i: 'avx2 lanes, group 1' or 'scalar: ' and
+        why."""
     @property
     def width(self) -> int:
         """Environments per vector of isa: 2, 4 or 8."""
@@ -695,6 +701,9 @@ class Batch:
                       scale_inertia: bool = True) -> None: ...
     def set_link_com(self, link: Union[str, Int], com: ArrayLike,
                      env_ids: EnvIds = None) -> None: ...
+    def set_gravity(self, gravity: ArrayLike, env_ids: EnvIds = None) -> None:
+        """Gravity (3,) or (k, 3) of env_ids (None: all); the lanes take it per environment."""
+    def gravity(self) -> Vector: ...
     def armature(self) -> Vector: ...
     def drive_gains(self) -> tuple[Vector, Vector]: ...
     def joint_limits(self) -> tuple[Vector, Vector]: ...

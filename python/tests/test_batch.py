@@ -208,3 +208,31 @@ def test_batch_compat_physx_is_each_copy_s_compat_physx_simulation(arm):
     alone.step(20)
     np.testing.assert_allclose(batch.q[2], alone.q, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(bits(scalar.q[2]), bits(alone.q))
+
+
+def test_batch_with_gravity_per_environment_steps_in_lanes(arm):
+    """Gravity is each lane's own (docs/simd_batch.md, "Lane groups"): a batch of randomised
+    gravity stays one lane group, within 1e-12 of the same batch stepped as Simulations."""
+    n = 6
+    g = np.zeros((n, 3))
+    g[:, 2] = -9.81 + np.arange(n)
+    g[:, 0] = 0.3 * np.arange(n)
+    batch = fd.Batch(arm, n)
+    batch.set_gravity(g)
+    batch.set_gravity([0.0, 0.0, -1.0], env_ids=[5])
+    g[5] = [0.0, 0.0, -1.0]
+    np.testing.assert_array_equal(batch.gravity(), g)
+    assert batch.step_path.endswith(" lanes"), batch.step_path
+    assert batch.env_path(3).endswith(" lanes, group 0"), batch.env_path(3)
+    scalar = fd.Batch(batch.sim(0), n)
+    scalar.set_gravity(g)
+    scalar.lanes = False
+    assert scalar.env_path(3) == "scalar: lanes off (set_lanes)"
+    batch.step(50)
+    scalar.step(50)
+    np.testing.assert_allclose(batch.q, scalar.q, rtol=1e-12, atol=1e-12)
+    assert np.abs(batch.q[0] - batch.q[4]).max() > 1e-3  # the gravity acted
+    with pytest.raises(ValueError, match="gravity"):
+        batch.set_gravity([0.0, np.nan, 0.0], env_ids=[1])
+    with pytest.raises(ValueError):
+        batch.env_path(n)

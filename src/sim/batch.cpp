@@ -5,6 +5,7 @@
 #include <exception>
 #include <map>
 #include <string>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
@@ -186,7 +187,6 @@ Batch::Batch(const Batch& other)
 void Batch::lend_rows() {
   repack_.assign(sims_.size(), repack_all);
   handed_out_.assign(sims_.size(), 0);
-  refusal_.assign(sims_.size(), std::string());
   for (int f = 0; f < StateStorage::kFields; ++f)
     rows_[static_cast<size_t>(f)].resize(size(), sims_.front().state_.size(StateStorage::Field(f)));
   for (int i = 0; i < size(); ++i) {
@@ -252,7 +252,7 @@ int Batch::effective_num_threads() const {
 void Batch::set_options(const SimulationOptions& options) {
   validate_options(options);
   for (Simulation& s : sims_) s.set_options(options);
-  lanes_.reset();  // a plan of other options
+  lanes_.reset();  // plans of other options: grouped again
   mark_all(repack_all);
 }
 
@@ -595,6 +595,26 @@ void Batch::set_link_com(std::span<const int> env_ids, int link, const RowMatrix
   });
 }
 
+void Batch::set_gravity(std::span<const int> env_ids, const RowMatrix& gravity) {
+  const std::vector<int> envs = check_env_ids(env_ids);
+  check_values(gravity, envs.size(), 3, "gravity");
+  vary_models(envs, gravity.rows() == 1, [&](const Model& m, size_t j) {
+    const Vec3 g = row_of(gravity, j).transpose();
+    if (!g.allFinite())
+      throw std::invalid_argument("gravity = " + format_vec3(g) + " is not finite");
+    Model out = m;
+    out.gravity = g;
+    return out;
+  });
+}
+
+RowMatrix Batch::gravity() const {
+  RowMatrix out(size(), 3);
+  for (int i = 0; i < size(); ++i)
+    out.row(i) = sims_[static_cast<size_t>(i)].model().gravity.transpose();
+  return out;
+}
+
 RowMatrix Batch::stiffness() const {
   return per_dof_matrix(sims_, [](const Simulation& s, int d) { return s.drive(d).stiffness; });
 }
@@ -784,80 +804,165 @@ void Batch::mark_all(unsigned char what) {
   for (unsigned char& r : repack_) r |= what;
 }
 
-// Why the lanes cannot step every environment (empty: they can), after packing what changed
-// since the last step into the lanes' parameters.
-std::string Batch::lane_refusal() {
+// Why no environment steps in lanes (lanes off, FEATHERDRIVE_SIMD=scalar), else empty.
+std::string Batch::lanes_off() const {
   if (!lanes_allowed_) return "lanes off (set_lanes)";
   if (!isa_ && simd_forced_scalar()) return "FEATHERDRIVE_SIMD=scalar";
-  const int n = size();
-  const SimulationOptions& o = sims_.front().options();
-  const Vec3& gravity = sims_.front().model().gravity;
-  for (int i = 0; i < n; ++i) {
-    Simulation& s = sims_[static_cast<size_t>(i)];
-    std::string& why = refusal_[static_cast<size_t>(i)];
-    if (repack_[static_cast<size_t>(i)] || handed_out_[static_cast<size_t>(i)]) {
-      why = simd::lane_refusal(s);
-      // The plan solves contacts on environment 0's shape links (LaneEngine::set_contacts).
-      if (why.empty() && s.ground().enabled &&
-          s.ws_->contact_rows.links_with_shapes() !=
-              sims_.front().ws_->contact_rows.links_with_shapes())
-        why = "collision shapes on other links than environment 0's";
-    }
-    if (!why.empty()) return "environment " + std::to_string(i) + ": " + why;
-    const SimulationOptions& oi = s.options();
-    if (oi.dt != o.dt || oi.solver != o.solver ||
-        oi.position_iterations != o.position_iterations ||
-        oi.velocity_iterations != o.velocity_iterations || s.model().gravity != gravity)
-      return "environment " + std::to_string(i) + ": options or gravity other than environment 0's";
-    if (!simd::same_mimic_dofs(s.mimic_joints(), sims_.front().mimic_joints()))
-      return "environment " + std::to_string(i) + ": mimic rows on other dofs than environment 0's";
-  }
-  const simd::Plan* plan = lanes_ ? &lanes_->plan() : nullptr;
-  if (!plan || plan->dt != o.dt || plan->tgs != (o.solver == SolverType::tgs) ||
-      plan->position_iterations != o.position_iterations ||
-      plan->velocity_iterations != o.velocity_iterations ||
-      !lanes_->same_mimic_dofs(sims_.front())) {
-    lanes_ = std::make_shared<simd::LaneEngine>(sims_.front(), n);
-    mark_all(repack_all);
-  }
-  for (int i = 0; i < n; ++i) {
-    unsigned char& what = repack_[static_cast<size_t>(i)];
-    if (handed_out_[static_cast<size_t>(i)]) what = repack_all;
-    const Simulation& s = sims_[static_cast<size_t>(i)];
-    if (what & repack_drives) lanes_->pack_drives(i, s);
-    if (what & repack_joints) lanes_->pack_joints(i, s);
-    if (what & repack_model) lanes_->pack_model(i, s.model());
-    what = 0;
-  }
   return {};
 }
 
-std::string Batch::step_path() {
-  const std::string why = lane_refusal();
-  if (!why.empty()) return "scalar: " + why;
-  return std::string(to_string(isa())) + " lanes";
+// Groups the environments again when one's plan-level settings or refusal changed since (only
+// environments a setter marked or handed out can have changed), then packs what changed into
+// each lane group's parameters. False when no environment steps in lanes.
+bool Batch::prepare_lanes() {
+  if (!lanes_off().empty()) return false;
+  const int n = size();
+  bool regroup = !lanes_;
+  for (int i = 0; i < n && !regroup; ++i) {
+    if (!repack_[static_cast<size_t>(i)] && !handed_out_[static_cast<size_t>(i)]) continue;
+    const Simulation& s = sims_[static_cast<size_t>(i)];
+    const int g = lanes_->group_of[static_cast<size_t>(i)];
+    if (simd::lanes_refuse(s) != (g < 0))
+      regroup = true;
+    else if (g >= 0 && !lanes_->groups[static_cast<size_t>(g)].key.matches(
+                           s.options(), s.mimic_joints(), s.ws_->contact_rows.links_with_shapes()))
+      regroup = true;
+  }
+  if (regroup) {
+    // Allocates: a new set of groups and engines, each packed whole below.
+    auto lanes = std::make_shared<simd::LaneGroups>();
+    lanes->group_of.assign(static_cast<size_t>(n), -1);
+    lanes->lane_of.assign(static_cast<size_t>(n), -1);
+    int last = -1;
+    for (int i = 0; i < n; ++i) {
+      const Simulation& s = sims_[static_cast<size_t>(i)];
+      if (simd::lanes_refuse(s)) {
+        lanes->scalar.push_back(i);
+        continue;
+      }
+      const std::vector<char>& shapes = s.ws_->contact_rows.links_with_shapes();
+      auto fits = [&](int g) {
+        return g >= 0 && lanes->groups[static_cast<size_t>(g)].key.matches(
+                             s.options(), s.mimic_joints(), shapes);
+      };
+      int g = fits(last) ? last : -1;
+      for (int k = 0; g < 0 && k < static_cast<int>(lanes->groups.size()); ++k)
+        if (fits(k)) g = k;
+      if (g < 0) {
+        g = static_cast<int>(lanes->groups.size());
+        lanes->groups.push_back({simd::PlanKey(s.options(), s.mimic_joints(), shapes), {}, {}, {}});
+      }
+      simd::LaneGroup& group = lanes->groups[static_cast<size_t>(g)];
+      lanes->group_of[static_cast<size_t>(i)] = g;
+      lanes->lane_of[static_cast<size_t>(i)] = static_cast<int>(group.members.size());
+      group.members.push_back(i);
+      last = g;
+    }
+    for (simd::LaneGroup& group : lanes->groups) {
+      const int count = static_cast<int>(group.members.size());
+      group.engine =
+          std::make_unique<simd::LaneEngine>(sims_[static_cast<size_t>(group.members[0])], count);
+    }
+    lanes_ = std::move(lanes);
+    mark_all(repack_all);
+  }
+  for (simd::LaneGroup& group : lanes_->groups) {
+    // The group's own width: narrowed for a small group as for a small batch (every width
+    // gives the same bits).
+    group.isa = isa_ ? *isa_ : simd::lane_isa(static_cast<int>(group.members.size()));
+    for (size_t j = 0; j < group.members.size(); ++j) {
+      const int i = group.members[j];
+      unsigned char& what = repack_[static_cast<size_t>(i)];
+      if (handed_out_[static_cast<size_t>(i)]) what = repack_all;
+      const Simulation& s = sims_[static_cast<size_t>(i)];
+      const int lane = static_cast<int>(j);
+      if (what & repack_drives) group.engine->pack_drives(lane, s);
+      if (what & repack_joints) group.engine->pack_joints(lane, s);
+      if (what & repack_model) group.engine->pack_model(lane, s.model());
+      what = 0;
+    }
+  }
+  for (int i : lanes_->scalar) repack_[static_cast<size_t>(i)] = 0;  // looked at above
+  return !lanes_->groups.empty();
 }
 
-// Every environment through the lanes, its clock and divergence as its Simulation keeps them.
+std::string Batch::step_path() {
+  const std::string off = lanes_off();
+  if (!off.empty()) return "scalar: " + off;
+  prepare_lanes();
+  const simd::LaneGroups& l = *lanes_;
+  auto scalar_why = [&](int i) {
+    return "environment " + std::to_string(i) + ": " +
+           simd::lane_refusal(sims_[static_cast<size_t>(i)]);
+  };
+  if (l.groups.empty()) return "scalar: " + scalar_why(l.scalar.front());
+  if (l.groups.size() == 1 && l.scalar.empty())
+    return std::string(to_string(l.groups.front().isa)) + " lanes";
+  auto plural = [](size_t k, const char* what) {
+    return std::to_string(k) + " " + what + (k == 1 ? "" : "s");
+  };
+  bool one_isa = true;
+  for (const simd::LaneGroup& g : l.groups) one_isa = one_isa && g.isa == l.groups.front().isa;
+  std::string path =
+      one_isa ? std::string(to_string(l.groups.front().isa)) + " lanes: " : "lanes: ";
+  path += plural(l.groups.size(), "group") + " (";
+  for (size_t g = 0; g < l.groups.size(); ++g) {
+    if (g > 0) path += ", ";
+    if (!one_isa) path += std::string(to_string(l.groups[g].isa)) + " ";
+    path += std::to_string(l.groups[g].members.size());
+  }
+  path += l.groups.size() == 1 && l.groups.front().members.size() == 1 ? " environment)"
+                                                                       : " environments)";
+  if (!l.scalar.empty()) {
+    path +=
+        "; scalar: " + plural(l.scalar.size(), "environment") + " (" + scalar_why(l.scalar.front());
+    if (l.scalar.size() > 1) path += ", and " + std::to_string(l.scalar.size() - 1) + " more";
+    path += ")";
+  }
+  return path;
+}
+
+std::string Batch::env_path(int i) {
+  static_cast<const Batch&>(*this).sim(i);  // the index check
+  const std::string off = lanes_off();
+  if (!off.empty()) return "scalar: " + off;
+  prepare_lanes();
+  const int g = lanes_->group_of[static_cast<size_t>(i)];
+  if (g < 0) return "scalar: " + simd::lane_refusal(sims_[static_cast<size_t>(i)]);
+  return std::string(to_string(lanes_->groups[static_cast<size_t>(g)].isa)) + " lanes, group " +
+         std::to_string(g);
+}
+
+// Every lane group's environments through its lanes (all groups' blocks on one pool of
+// threads), each environment's clock as its Simulation keeps it, and each one stopped in this
+// call recorded in divergences_.
 void Batch::step_lanes(int count) {
+  simd::LaneGroups& l = *lanes_;
   const int n = size();
   lane_steps_.resize(static_cast<size_t>(n));
   lane_time_.resize(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    lane_steps_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].step_count_;
-    lane_time_[static_cast<size_t>(i)] = sims_[static_cast<size_t>(i)].time_;
-    lanes_->clear_stop(i);  // a diverged environment steps again, as its Simulation would
+  bool control = false, actuated = false, implicit = false, tracking = false;
+  for (simd::LaneGroup& g : l.groups) {
+    // Each environment's contact rows, reports and anchors are its Simulation's
+    // (lane_contacts.cpp).
+    simd::ContactLanes& contacts = g.engine->contacts();
+    contacts.envs.resize(g.members.size());
+    bool grounded = false;
+    for (size_t j = 0; j < g.members.size(); ++j) {
+      const auto i = static_cast<size_t>(g.members[j]);
+      Simulation& s = sims_[i];
+      lane_steps_[i] = s.step_count_;
+      lane_time_[i] = s.time_;
+      g.engine->clear_stop(static_cast<int>(j));  // a diverged one steps again, as its Simulation
+      contacts.envs[j] = {&s, &*s.ws_};
+      grounded = grounded || s.ws_->contacts_active;
+      control = control || s.ws_->has_control_stages();
+      actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
+      implicit = implicit || s.ws_->actuators.any_implicit();
+      tracking = tracking || s.ws_->track_convergence;
+    }
+    g.engine->set_contacts(grounded, g.key.shape_links);
   }
-  // Each environment's contact rows, reports and anchors are its Simulation's (lane_contacts.cpp).
-  simd::ContactLanes& contacts = lanes_->contacts();
-  contacts.envs.resize(static_cast<size_t>(n));
-  bool grounded = false;
-  for (int i = 0; i < n; ++i) {
-    Simulation& s = sims_[static_cast<size_t>(i)];
-    contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
-    grounded = grounded || s.ws_->contacts_active;
-  }
-  lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
   a.applied = rows_[StateStorage::applied_force].data();
@@ -866,14 +971,6 @@ void Batch::step_lanes(int count) {
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
-  const SimdIsa lane_isa = isa();
-  bool control = false, actuated = false, implicit = false, tracking = false;
-  for (const Simulation& s : sims_) {
-    control = control || s.ws_->has_control_stages();
-    actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
-    implicit = implicit || s.ws_->actuators.any_implicit();
-    tracking = tracking || s.ws_->track_convergence;
-  }
   const int nv = model().nv;
   // The implicit actuators' forces and the tracked drive changes, copied into each Simulation's
   // workspace after the call (lane_results). Implicit actuators are control stages: one step a run.
@@ -883,89 +980,102 @@ void Batch::step_lanes(int count) {
   }
   if (tracking) {  // the lanes keep a stopped lane's: they start from every environment's own
     lane_drive_change_.resize(n, nv);
-    for (int i = 0; i < n; ++i)
-      lane_drive_change_.row(i) = sims_[static_cast<size_t>(i)].ws_->last_drive_change.transpose();
+    for (const simd::LaneGroup& g : l.groups)
+      for (int i : g.members)
+        lane_drive_change_.row(i) =
+            sims_[static_cast<size_t>(i)].ws_->last_drive_change.transpose();
     a.drive_change = lane_drive_change_.data();
   }
+  // Without actuators the joint force is the applied force itself.
+  if (control && actuated) {
+    lane_tau_.resize(n, nv);
+    a.applied = lane_tau_.data();
+  }
+  l.jobs.clear();
+  for (simd::LaneGroup& g : l.groups) {
+    simd::Block b = a;
+    b.rows = g.members.data();
+    l.jobs.push_back({g.engine.get(), b, g.isa});
+  }
+  const int threads = effective_num_threads();
   if (!control) {
-    lanes_->run(a, count, lane_isa, effective_num_threads());
+    l.pool.run(l.jobs, count, threads);
   } else {
-    // One step a run: each step's control stages read the state it starts from. Without
-    // actuators the joint force is the applied force itself.
-    if (actuated) {
-      lane_tau_.resize(n, model().nv);
-      a.applied = lane_tau_.data();
-    }
+    // One step a run: each step's control stages read the state it starts from.
     for (int k = 0; k < count; ++k) {
       lane_control_stages(actuated);
-      lanes_->run(a, 1, lane_isa, effective_num_threads());
-      for (int i = 0; i < n; ++i) {
-        Simulation& s = sims_[static_cast<size_t>(i)];
-        if (lanes_->stopped_now(i)) {  // Stepper::check_finite_or_throw takes the pushes back
-          s.stepper().undo_actuators();
-        } else if (implicit && lanes_->stop(i).quantity == 0 && s.ws_->actuators.any()) {
-          // Stepper::row_forces: an implicit actuator's row force is its actuator force.
-          for (int d = 0; d < nv; ++d)
-            if (s.ws_->actuators.implicit(d)) s.ws_->actuator_force[d] = lane_actuator_force_(i, d);
+      l.pool.run(l.jobs, 1, threads);
+      for (const simd::LaneGroup& g : l.groups)
+        for (size_t j = 0; j < g.members.size(); ++j) {
+          const int lane = static_cast<int>(j), i = g.members[j];
+          Simulation& s = sims_[static_cast<size_t>(i)];
+          if (g.engine->stopped_now(
+                  lane)) {  // Stepper::check_finite_or_throw takes the pushes back
+            s.stepper().undo_actuators();
+          } else if (implicit && g.engine->stop(lane).quantity == 0 && s.ws_->actuators.any()) {
+            // Stepper::row_forces: an implicit actuator's row force is its actuator force.
+            for (int d = 0; d < nv; ++d)
+              if (s.ws_->actuators.implicit(d))
+                s.ws_->actuator_force[d] = lane_actuator_force_(i, d);
+          }
         }
-      }
     }
   }
-  if (tracking)
-    for (int i = 0; i < n; ++i) {
+  for (const simd::LaneGroup& g : l.groups)
+    for (size_t j = 0; j < g.members.size(); ++j) {
+      const int i = g.members[j];
       Simulation& s = sims_[static_cast<size_t>(i)];
-      if (s.ws_->track_convergence) s.ws_->last_drive_change = lane_drive_change_.row(i).transpose();
+      if (tracking && s.ws_->track_convergence)
+        s.ws_->last_drive_change = lane_drive_change_.row(i).transpose();
+      s.step_count_ = lane_steps_[static_cast<size_t>(i)];
+      s.time_ = lane_time_[static_cast<size_t>(i)];
+      // Stops were cleared above: one now stopped in this call, in Simulation's words at the
+      // clock it kept.
+      if (g.engine->stop(static_cast<int>(j)).quantity == 0) continue;
+      divergences_[static_cast<size_t>(i)] = BatchDivergence{
+          s.step_count() + 1,
+          g.engine->divergence_message(static_cast<int>(j), s.model(), s.step_count(), s.time())};
     }
-  int first = -1, diverged = 0;
-  for (int i = 0; i < n; ++i) {
-    Simulation& s = sims_[static_cast<size_t>(i)];
-    s.step_count_ = lane_steps_[static_cast<size_t>(i)];
-    s.time_ = lane_time_[static_cast<size_t>(i)];
-    if (lanes_->stop(i).quantity == 0) continue;  // stops were cleared above: none in this call
-    if (first < 0) first = i;
-    ++diverged;
-  }
-  if (first >= 0) {
-    const Simulation& s = sims_[static_cast<size_t>(first)];
-    throw DivergenceError("batch copy " + std::to_string(first) + " (" + std::to_string(diverged) +
-                          " of " + std::to_string(n) + " copies diverged): " +
-                          lanes_->divergence_message(first, s.model(), s.step_count(), s.time()));
-  }
 }
 
 // The step's control stages (Stepper::control_stages: explicit actuators, drive delays) of
-// every environment still stepping, in scalar on its step-start state, as its Simulation runs
-// them; the lanes read their results: the joint force and the delayed dofs' targets.
+// every lane environment still stepping, in scalar on its step-start state, as its Simulation
+// runs them; the lanes read their results: the joint force and the delayed dofs' targets.
 void Batch::lane_control_stages(bool actuated) {
   const int nv = model().nv;
   const RowMatrix& applied = rows_[StateStorage::applied_force];
-  for (int i = 0; i < size(); ++i) {
-    if (lanes_->stop(i).quantity != 0) continue;  // stopped in this call: pushes no more
-    Simulation& s = sims_[static_cast<size_t>(i)];
-    // Only the actuators read the step-start state (the delays read the drives): the copy of
-    // 1024 environments' states was an eighth of a delayed WAM's step.
-    const bool reads_state = s.ws_->actuators.any() || s.ws_->actuated;
-    Stepper stepper = s.stepper();
-    if (reads_state) stepper.load_state();
-    const VecX& tau = stepper.control_stages();
-    if (actuated) {
-      if (reads_state) lane_tau_.row(i) = tau.transpose();
-      else lane_tau_.row(i) = applied.row(i);
+  for (const simd::LaneGroup& g : lanes_->groups)
+    for (size_t j = 0; j < g.members.size(); ++j) {
+      const int lane = static_cast<int>(j), i = g.members[j];
+      simd::LaneEngine& lanes = *g.engine;
+      if (lanes.stop(lane).quantity != 0) continue;  // stopped in this call: pushes no more
+      Simulation& s = sims_[static_cast<size_t>(i)];
+      // Only the actuators read the step-start state (the delays read the drives): the copy of
+      // 1024 environments' states was an eighth of a delayed WAM's step.
+      const bool reads_state = s.ws_->actuators.any() || s.ws_->actuated;
+      Stepper stepper = s.stepper();
+      if (reads_state) stepper.load_state();
+      const VecX& tau = stepper.control_stages();
+      if (actuated) {
+        if (reads_state)
+          lane_tau_.row(i) = tau.transpose();
+        else
+          lane_tau_.row(i) = applied.row(i);
+      }
+      const ExplicitActuators& actuators = s.ws_->actuators;
+      if (actuators.any())
+        for (int d = 0; d < nv; ++d)  // the command each implicit one sees this step (I16)
+          if (actuators.implicit(d)) lanes.set_command(lane, d, actuators.command_seen(d));
+      const DriveDelays& delays = s.drive_delays();
+      if (!delays.any()) continue;
+      for (int d = 0; d < nv; ++d) {
+        if (!delays.delayed(d)) continue;
+        const Drive& seen = delays.drive_seen(d);
+        const int x = d * simd::kDofParameters;
+        lanes.set_parameter(lane, x + simd::target_position, seen.target_position);
+        lanes.set_parameter(lane, x + simd::target_velocity, seen.target_velocity);
+      }
     }
-    const ExplicitActuators& actuators = s.ws_->actuators;
-    if (actuators.any())
-      for (int d = 0; d < nv; ++d)  // the command each implicit one sees this step (I16)
-        if (actuators.implicit(d)) lanes_->set_command(i, d, actuators.command_seen(d));
-    const DriveDelays& delays = s.drive_delays();
-    if (!delays.any()) continue;
-    for (int d = 0; d < nv; ++d) {
-      if (!delays.delayed(d)) continue;
-      const Drive& seen = delays.drive_seen(d);
-      const int x = d * simd::kDofParameters;
-      lanes_->set_parameter(i, x + simd::target_position, seen.target_position);
-      lanes_->set_parameter(i, x + simd::target_velocity, seen.target_velocity);
-    }
-  }
 }
 
 void Batch::step(int count) {
@@ -973,32 +1083,32 @@ void Batch::step(int count) {
     throw std::invalid_argument("step count = " + std::to_string(count) + " must be >= 0");
   if (count == 0) return;
   for (std::optional<BatchDivergence>& d : divergences_) d.reset();
-  if (lane_refusal().empty()) {
-    try {
-      step_lanes(count);
-    } catch (const DivergenceError&) {
-      record_lane_divergences();
-      throw;
-    }
-    return;
-  }
+  const bool lanes = prepare_lanes();
+  if (lanes) step_lanes(count);
+  // The environments the lanes do not step, each its Simulation (every one without lanes).
   const int n = size();
+  const std::vector<int>* some = lanes_off().empty() ? &lanes_->scalar : nullptr;
+  const int scalar = some ? static_cast<int>(some->size()) : n;
+  auto env = [&](int k) { return some ? (*some)[static_cast<size_t>(k)] : k; };
   // One slot per environment: environments never share anything a step writes.
-  std::vector<std::exception_ptr> failed(static_cast<size_t>(n));
-  parallel(n, 1, [&](int begin, int end) {
-    for (int i = begin; i < end; ++i) {
-      Simulation& s = sims_[static_cast<size_t>(i)];
-      try {
-        s.step(count);
-      } catch (const DivergenceError& e) {
-        divergences_[static_cast<size_t>(i)] = BatchDivergence{s.step_count() + 1, e.what()};
-      } catch (...) {
-        failed[static_cast<size_t>(i)] = std::current_exception();
+  std::vector<std::exception_ptr>& failed = failed_;
+  failed.resize(static_cast<size_t>(n));
+  if (scalar > 0)
+    parallel(scalar, 1, [&](int begin, int end) {
+      for (int k = begin; k < end; ++k) {
+        const int i = env(k);
+        Simulation& s = sims_[static_cast<size_t>(i)];
+        try {
+          s.step(count);
+        } catch (const DivergenceError& e) {
+          divergences_[static_cast<size_t>(i)] = BatchDivergence{s.step_count() + 1, e.what()};
+        } catch (...) {
+          failed[static_cast<size_t>(i)] = std::current_exception();
+        }
       }
-    }
-  });
-  for (const std::exception_ptr& e : failed)
-    if (e) std::rethrow_exception(e);
+    });
+  for (std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(std::exchange(e, nullptr));
   int first = -1, count_diverged = 0;
   for (int i = 0; i < n; ++i)
     if (divergences_[static_cast<size_t>(i)]) {
@@ -1010,16 +1120,6 @@ void Batch::step(int count) {
                           std::to_string(count_diverged) + " of " + std::to_string(n) +
                           " copies diverged): " +
                           divergences_[static_cast<size_t>(first)]->message);
-}
-
-// The environments the last lane step stopped, in Simulation's words at the clock each kept.
-void Batch::record_lane_divergences() {
-  for (int i = 0; i < size(); ++i) {
-    if (!lanes_->stopped_now(i)) continue;
-    const Simulation& s = sims_[static_cast<size_t>(i)];
-    divergences_[static_cast<size_t>(i)] = BatchDivergence{
-        s.step_count() + 1, lanes_->divergence_message(i, s.model(), s.step_count(), s.time())};
-  }
 }
 
 }  // namespace featherdrive

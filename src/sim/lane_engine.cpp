@@ -79,25 +79,70 @@ SimdIsa lane_isa(int count) {
   return isa;
 }
 
-std::string lane_refusal(const Simulation& s) {
-  auto has = [](const std::string& what, const std::string& name, const std::string& value) {
-    return what + " '" + name + "' has " + value;
-  };
+namespace {
+
+// The first setting of s the lane step does not simulate (kind 0: none), found without
+// allocating: Batch looks at its handed-out environments before every step.
+struct Refusal {
+  enum Kind { none, guard, rotated_root, self_collision } kind = none;
+  const Link* link = nullptr;
+};
+
+Refusal find_refusal(const Simulation& s) {
   const Model& m = s.model();
   // The lanes step in lockstep: one lane's redone step would hold up every other.
-  if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
+  if (s.options().guard.enabled) return {Refusal::guard};
   for (const Link& link : m.links) {
-
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take
     // its joint frame as the world's.
     if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
         link.tree_transform.E != Mat3::Identity())
-      return has("joint", link.joint_name, "a rotated joint frame under compat physx");
+      return {Refusal::rotated_root, &link};
   }
   // Self-collision rows are solved outside the sweep (contact.md, C31).
-  if (s.contact_options().self_collision && m.shapes.size() > 1)
-    return has("simulation", "settings", "self-collision between the model's shapes");
+  if (s.contact_options().self_collision && m.shapes.size() > 1) return {Refusal::self_collision};
   return {};
+}
+
+}  // namespace
+
+bool lanes_refuse(const Simulation& s) {
+  return find_refusal(s).kind != Refusal::none;
+}
+
+std::string lane_refusal(const Simulation& s) {
+  auto has = [](const std::string& what, const std::string& name, const std::string& value) {
+    return what + " '" + name + "' has " + value;
+  };
+  const Refusal r = find_refusal(s);
+  switch (r.kind) {
+    case Refusal::none:
+      return {};
+    case Refusal::guard:
+      return has("simulation", "options", "the step guard");
+    case Refusal::rotated_root:
+      return has("joint", r.link->joint_name, "a rotated joint frame under compat physx");
+    case Refusal::self_collision:
+      return has("simulation", "settings", "self-collision between the model's shapes");
+  }
+  return {};
+}
+
+PlanKey::PlanKey(const SimulationOptions& o, const std::vector<MimicJoint>& mimic,
+                 const std::vector<char>& shapes)
+    : dt(o.dt),
+      solver(o.solver),
+      position_iterations(o.position_iterations),
+      velocity_iterations(o.velocity_iterations),
+      compat(o.compat),
+      mimic_joints(mimic),
+      shape_links(shapes) {}
+
+bool PlanKey::matches(const SimulationOptions& o, const std::vector<MimicJoint>& mimic,
+                      const std::vector<char>& shapes) const {
+  return o.dt == dt && o.solver == solver && o.position_iterations == position_iterations &&
+         o.velocity_iterations == velocity_iterations && o.compat == compat &&
+         same_mimic_dofs(mimic, mimic_joints) && shapes == shape_links;
 }
 
 LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
@@ -172,8 +217,8 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
   p.links = links_.data();
   p.finish_after = finish_after_.data();
   p.num_finish_after = static_cast<int>(finish_after_.size());
-  p.entries = nv * kDofParameters + L * kLinkParameters + p.num_mimic * kMimicParameters;
-  for (int a = 0; a < 3; ++a) p.gravity[a] = m.gravity[a];
+  p.entries =
+      nv * kDofParameters + L * kLinkParameters + p.num_mimic * kMimicParameters + kEnvParameters;
   p.dt = o.dt;
   p.tgs = o.solver == SolverType::tgs;
   p.position_iterations = o.position_iterations;
@@ -360,46 +405,72 @@ void LaneEngine::pack_model(int env, const Model& m) {
     if (I(0, 1) != 0.0 || I(0, 2) != 0.0 || I(1, 2) != 0.0)
       links_[static_cast<size_t>(i)].diagonal_inertia = false;
   }
+  const int x = plan_.nv * kDofParameters + plan_.num_links * kLinkParameters +
+                plan_.num_mimic * kMimicParameters;
+  for (int a = 0; a < 3; ++a) set_parameter(env, x + gravity_x + a, m.gravity[a]);
 }
 
-double* LaneEngine::scratch_of(int thread) {
+void LaneEngine::begin_run() {
+  std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
+}
+
+int LaneEngine::blocks(SimdIsa isa, int threads) const {
+  const int W = simd_width(isa) * interleave(simd_width(isa), count_, threads);
+  return (count_ + W - 1) / W;
+}
+
+void LaneEngine::run_block(const Block& arrays, int block, int steps, SimdIsa isa, int threads,
+                           double* scratch) {
+  const int K = interleave(simd_width(isa), count_, threads);
+  const int W = simd_width(isa) * K;  // lanes of a block
+  Block b = arrays;
+  b.env0 = block * W;
+  b.interleave = K;
+  b.valid = std::min(W, count_ - b.env0);
+  b.parameters = parameters_.data();
+  b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
+  b.contacts = plan_.contacts ? &contacts_ : nullptr;
+  b.tables = &tables_;
+  switch (isa) {
+    case SimdIsa::sse2:
+      run_block_sse2(plan_, b, scratch, steps);
+      break;
+    case SimdIsa::avx2:
+      run_block_avx2(plan_, b, scratch, steps);
+      break;
+    case SimdIsa::avx512:
+      run_block_avx512(plan_, b, scratch, steps);
+      break;
+  }
+}
+
+double* LanePool::scratch_of(int thread) {
   auto address = reinterpret_cast<std::uintptr_t>(scratch_[static_cast<size_t>(thread)].data());
   return reinterpret_cast<double*>((address + 63) & ~std::uintptr_t{63});
 }
 
-void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wanted) {
-  const int K = interleave(simd_width(isa), count_, threads_wanted);
-  const int W = simd_width(isa) * K;  // lanes of a block
-  const int blocks = (count_ + W - 1) / W;
-  const int threads = std::max(1, std::min(threads_wanted, blocks));
-  const std::size_t doubles = scratch_doubles(plan_) + 8;
+void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_wanted) {
+  work_.clear();
+  std::size_t doubles = 0;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    LaneEngine& e = *jobs[j].engine;
+    e.begin_run();
+    doubles = std::max(doubles, scratch_doubles(e.plan()) + 8);
+    const int blocks = e.blocks(jobs[j].isa, threads_wanted);
+    for (int b = 0; b < blocks; ++b) work_.push_back({static_cast<int>(j), b});
+  }
+  const int n = static_cast<int>(work_.size());
+  const int threads = std::max(1, std::min(threads_wanted, n));
   if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(static_cast<size_t>(threads));
   for (auto& s : scratch_)
     if (s.size() < doubles) s.assign(doubles, 0.0);
-  std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
-  auto run_one = [&](int block, double* scratch) {
-    Block b = arrays;
-    b.env0 = block * W;
-    b.interleave = K;
-    b.valid = std::min(W, count_ - b.env0);
-    b.parameters = parameters_.data();
-    b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
-    b.contacts = plan_.contacts ? &contacts_ : nullptr;
-    b.tables = &tables_;
-    switch (isa) {
-      case SimdIsa::sse2:
-        run_block_sse2(plan_, b, scratch, steps);
-        break;
-      case SimdIsa::avx2:
-        run_block_avx2(plan_, b, scratch, steps);
-        break;
-      case SimdIsa::avx512:
-        run_block_avx512(plan_, b, scratch, steps);
-        break;
-    }
+  auto run_one = [&](int w, double* scratch) {
+    const LaneJob& job = jobs[static_cast<size_t>(work_[static_cast<size_t>(w)].first)];
+    job.engine->run_block(job.arrays, work_[static_cast<size_t>(w)].second, steps, job.isa,
+                          threads_wanted, scratch);
   };
   if (threads <= 1) {
-    for (int block = 0; block < blocks; ++block) run_one(block, scratch_of(0));
+    for (int w = 0; w < n; ++w) run_one(w, scratch_of(0));
     return;
   }
   if (!arena_ || arena_threads_ != threads) {
@@ -407,9 +478,9 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
     arena_threads_ = threads;
   }
   arena_->execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, blocks), [&](const tbb::blocked_range<int>& r) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& r) {
       double* scratch = scratch_of(tbb::this_task_arena::current_thread_index());
-      for (int block = r.begin(); block < r.end(); ++block) run_one(block, scratch);
+      for (int w = r.begin(); w < r.end(); ++w) run_one(w, scratch);
     });
   });
 }

@@ -37,9 +37,29 @@ SimdIsa lane_isa(int count);
 /// control stages (drive delays, explicit actuators) run per environment by the caller, as Batch
 /// does (docs/simd_batch.md).
 std::string lane_refusal(const Simulation& s);
+/// Whether lane_refusal(s) is not empty, without allocating.
+bool lanes_refuse(const Simulation& s);
 
 /// Whether two sets of mimic rows couple the same dofs in the same order.
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b);
+
+/// What one LaneEngine's plan fixes for all its lanes (the rest is per lane: drives, limits,
+/// model parameters, gravity): the options of the step (dt, solver, iteration counts, compat),
+/// the mimic rows' dofs and the links with collision shapes. Batch steps the environments that
+/// agree in them as one lane group (docs/simd_batch.md, "Lane groups").
+struct PlanKey {
+  PlanKey(const SimulationOptions& options, const std::vector<MimicJoint>& mimic,
+          const std::vector<char>& shape_links);
+  /// Whether an environment of these settings belongs here (allocates nothing).
+  bool matches(const SimulationOptions& options, const std::vector<MimicJoint>& mimic,
+               const std::vector<char>& shape_links) const;
+  double dt;
+  SolverType solver;
+  int position_iterations, velocity_iterations;
+  Compat compat;
+  std::vector<MimicJoint> mimic_joints;  ///< their dofs count (same_mimic_dofs)
+  std::vector<char> shape_links;         ///< per link: it carries collision shapes
+};
 
 /// Every lane's remotized_pd tables (an implicit one's, else empty), at env * nv + dof: copies,
 /// so that no lane points into a Simulation.
@@ -90,10 +110,14 @@ class LaneEngine {
   double parameter(int env, int index) const { return parameters_[at(env, index)]; }
   void set_parameter(int env, int index, double value) { parameters_[at(env, index)] = value; }
 
-  /// `steps` steps of every environment, W lanes a block (W: the isa's width times the
-  /// interleave), blocks on `threads` threads, on the state arrays and clocks `arrays` points at
-  /// (its other fields are the engine's to set). An environment stopped earlier (stop(e)) stays.
-  void run(const Block& arrays, int steps, SimdIsa isa, int threads);
+  /// A run's blocks (LanePool::run): begin_run() clears stopped_now(); the blocks of W lanes
+  /// (W: the isa's width times the interleave, chosen for `threads`) each make `steps` steps of
+  /// their environments on the state arrays and clocks `arrays` points at (its other fields are
+  /// the engine's to set). An environment stopped earlier (stop(e)) stays.
+  void begin_run();
+  int blocks(SimdIsa isa, int threads) const;
+  void run_block(const Block& arrays, int block, int steps, SimdIsa isa, int threads,
+                 double* scratch);
   /// Why environment e stopped (quantity 0: it did not), and whether in the last run.
   const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
   bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }
@@ -105,7 +129,6 @@ class LaneEngine {
   size_t at(int env, int index) const {
     return static_cast<size_t>(((env / kGroup) * plan_.entries + index) * kGroup + env % kGroup);
   }
-  double* scratch_of(int thread);
 
   int count_ = 0;
   std::vector<LinkConstants> links_;
@@ -120,11 +143,47 @@ class LaneEngine {
   ActuatorTables tables_;
   std::vector<Stop> stops_;
   std::unique_ptr<bool[]> stopped_now_;
+};
+
+/// One engine's run: its state arrays (Block::rows: its lanes' rows) and instruction set.
+struct LaneJob {
+  LaneEngine* engine = nullptr;
+  Block arrays;
+  SimdIsa isa = SimdIsa::sse2;
+};
+
+/// The threads that run the blocks of several engines (Batch's lane groups) together, with a
+/// scratch per thread for any of their plans.
+class LanePool {
+ public:
+  /// `steps` steps of every job's environments, all their blocks on `threads` threads.
+  void run(const std::vector<LaneJob>& jobs, int steps, int threads);
+
+ private:
+  double* scratch_of(int thread);
+  std::vector<std::pair<int, int>> work_;     // (job, block)
   std::vector<std::vector<double>> scratch_;  // one per thread, 64 bytes of slack for alignment
   // Kept between calls: a fresh arena makes its workers join again each call, and with a few
   // blocks a call is over before they do.
   std::unique_ptr<tbb::task_arena> arena_;
   int arena_threads_ = 0;
+};
+
+/// Batch's lane groups: environments whose plans agree (PlanKey) share one engine, lane j of
+/// group g being environment members[j]; an environment the lanes refuse steps as its
+/// Simulation (group -1).
+struct LaneGroup {
+  PlanKey key;
+  std::vector<int> members;
+  SimdIsa isa = SimdIsa::sse2;
+  std::unique_ptr<LaneEngine> engine;
+};
+struct LaneGroups {
+  std::vector<LaneGroup> groups;
+  std::vector<int> group_of, lane_of;  // per environment; group -1: scalar
+  std::vector<int> scalar;             // the environments that step as Simulations
+  std::vector<LaneJob> jobs;
+  LanePool pool;
 };
 
 }  // namespace featherdrive::simd

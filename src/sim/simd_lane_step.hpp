@@ -189,6 +189,13 @@ class LaneStep {
   // remotized_pd).
   double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 8 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
+  // The state arrays' row of environment e (Block::rows).
+  long row_of(int e) const { return b_.rows ? b_.rows[e] : e; }
+  // Gravity's component r, per lane (EnvParameter).
+  int gravity_entry(int r) const {
+    return p_.nv * kDofParameters + p_.num_links * kLinkParameters +
+           p_.num_mimic * kMimicParameters + gravity_x + r;
+  }
   V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
 
@@ -389,7 +396,7 @@ class LaneStep {
 template <class A, int K>
 auto LaneStep<A, K>::gather(const double* rows, int stride, int k) const -> V {
   alignas(64) double t[kW];
-  for (int l = 0; l < kW; ++l) t[l] = rows[static_cast<long>(env_of_lane(l)) * stride + k];
+  for (int l = 0; l < kW; ++l) t[l] = rows[row_of(env_of_lane(l)) * stride + k];
   return V::load_aligned(t);
 }
 
@@ -397,7 +404,7 @@ template <class A, int K>
 void LaneStep<A, K>::scatter(V x, double* rows, int stride, int k) const {
   alignas(64) double t[kW];
   x.store_aligned(t);
-  for (int l = 0; l < b_.valid; ++l) rows[static_cast<long>(b_.env0 + l) * stride + k] = t[l];
+  for (int l = 0; l < b_.valid; ++l) rows[row_of(b_.env0 + l) * stride + k] = t[l];
 }
 
 // sin and cos from + - * / only: the quadrant j = round(2 x / pi) (by adding and subtracting
@@ -714,7 +721,12 @@ void LaneStep<A, K>::articulated_pass() {
 // accelerations_and_response and setup_rows): each reads what the one before wrote for the link.
 template <class A, int K>
 void LaneStep<A, K>::forward_pass() {
-  const V g[6] = {V(0.0), V(0.0), V(0.0), V(-p_.gravity[0]), V(-p_.gravity[1]), V(-p_.gravity[2])};
+  const V g[6] = {V(0.0),
+                  V(0.0),
+                  V(0.0),
+                  -parameter(gravity_entry(0)),
+                  -parameter(gravity_entry(1)),
+                  -parameter(gravity_entry(2))};
   const V dt(p_.dt);
   for (int i = 0; i < p_.num_links; ++i) {
     link_acceleration(i, g, dt);
@@ -781,7 +793,7 @@ template <class A, int K>
   const B ang_scale = excess(spin, link_parameter(i, link_max_angular_velocity, j));
   const B fc = -m * (lin + lin_scale / dt), gc = m * lin * dt;
   B f[3];
-  for (int r = 0; r < 3; ++r) f[r] = fc * v_com[r] - gc * B(p_.gravity[r]);
+  for (int r = 0; r < 3; ++r) f[r] = fc * v_com[r] - gc * parameter(gravity_entry(r), j);
   B local[3], Iw[3];  // I_w omega = (R Ic) (R^T omega)
   for (int r = 0; r < 3; ++r) local[r] = R[r] * v[0] + R[3 + r] * v[1] + R[6 + r] * v[2];
   for (int r = 0; r < 3; ++r)
@@ -2078,7 +2090,7 @@ void LaneStep<A, K>::physx_start() {
   }
   cross(arm, f, nf);
   for (int r = 0; r < 3; ++r) {
-    P0[r] = P0[r] + dt * (M * V(p_.gravity[r]) + f[r]);
+    P0[r] = P0[r] + dt * (M * parameter(gravity_entry(r)) + f[r]);
     L0[r] = L0[r] + dt * (n[r] + nf[r]);
   }
   if (p_.any_link_damping)  // [torque about frame 0's origin; force]
@@ -2870,8 +2882,8 @@ void LaneStep<A, K>::finish_step() {
   select(stopped_, V(1.0), zero).store_aligned(stopped_lanes);
   for (int l = 0; l < b_.valid; ++l) {
     if (stopped_lanes[l] != 0.0) continue;
-    ++b_.step_count[b_.env0 + l];
-    b_.time[b_.env0 + l] += p_.dt;
+    ++b_.step_count[row_of(b_.env0 + l)];
+    b_.time[row_of(b_.env0 + l)] += p_.dt;
   }
 }
 

@@ -77,6 +77,10 @@ enum LinkParameter : int {
   kLinkParameters
 };
 
+/// An environment's own parameters of the whole model, after its mimic rows': gravity, per lane
+/// (environments of one lane group may differ in it; docs/simd_batch.md, "Lane groups").
+enum EnvParameter : int { gravity_x, gravity_y, gravity_z, kEnvParameters };
+
 /// A mimic row's parameters (MimicJoint), per environment.
 enum MimicParameter : int {
   mimic_gear_ratio,
@@ -200,7 +204,6 @@ struct Plan {
   const MimicConstants* mimic = nullptr;
   const int* mimic_dofs = nullptr;
   int entries = 0;  ///< parameters per environment
-  double gravity[3] = {};
   double dt = 0.0;
   bool tgs = false;
   /// Link 0 is a floating root (six dofs: body-frame [w; v], q: position and quaternion w x y z).
@@ -274,9 +277,12 @@ void contact_conclude(ContactLanes& c, int env, bool kept);
 struct ActuatorTables;  // lane_engine.hpp: every lane's remotized_pd tables
 
 /// One block of lanes: environments env0 ... env0 + W - 1, of which the first `valid` exist (the
-/// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major.
+/// others repeat environment env0 + valid - 1 and are never written). States are (N, n) row-major;
+/// the parameters, stops and contacts are the engine's, by lane index e, the state arrays' row of
+/// lane e is rows[e] (a lane group's members in the Batch), or e without rows.
 struct Block {
   int env0 = 0, valid = 0;
+  const int* rows = nullptr;
   int interleave = 2;  ///< K: vectors of the block (2 or 4)
   double* q = nullptr;
   double* qd = nullptr;

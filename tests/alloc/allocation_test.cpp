@@ -295,6 +295,41 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
     }
 }
 
+// A batch of two lane groups (another dt), gravity per lane and one environment on the scalar
+// step (the step guard), its environments handed out (looked at before every step): regrouping
+// after a settings change may allocate, the steps after it do not, on one thread.
+TEST(BatchAllocations, LaneGroupsAndAScalarEnvironmentNoneOnOneThread) {
+  auto model = test::make_random_tree(7, 10, false, false, 0.01);
+  Simulation prototype(model, SimulationOptions{});
+  for (int d = 0; d < model->nv; ++d) {
+    prototype.set_drive(d, Drive{DriveType::force, 400.0, 20.0, 50.0, 0.3, 0.0});
+    prototype.set_joint_limits(d, -0.2, 0.2);
+  }
+  Batch batch(prototype, 9);
+  batch.set_num_threads(1);
+  SimulationOptions other = prototype.options();
+  other.dt = 0.01;
+  for (int e : {2, 5}) batch.sim(e).set_options(other);
+  SimulationOptions guarded = prototype.options();
+  guarded.guard.enabled = true;
+  batch.sim(7).set_options(guarded);
+  const int heavy[] = {1};
+  batch.set_gravity(heavy, RowMatrix::Constant(1, 3, -4.0));
+  batch.step();
+  ASSERT_NE(batch.step_path().find("2 groups (6, 2 environments); scalar: 1 environment"),
+            std::string::npos)
+      << batch.step_path();
+  EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
+  EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
+  batch.sim(3).set_options(other);  // into the other group: the next step regroups
+  batch.step();
+  ASSERT_NE(batch.step_path().find("2 groups (5, 3 environments)"), std::string::npos)
+      << batch.step_path();
+  EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
+  EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
+  EXPECT_EQ(batch.step_count()[7], 84);
+}
+
 // Batch's lane step allocates nothing on one thread (its scratch is made by the first call), and
 // per call, not per step, on two (TBB's arena), at every width (set_isa), with drives and limits,
 // on a fixed and on a floating base.

@@ -48,6 +48,22 @@ TEST(LaneContact, RandomTreesDroppedOnTheGroundAsSimulation) {
     }
 }
 
+// Shapes on three sets of links in one batch: three lane groups (docs/simd_batch.md, "Lane
+// groups"), each environment's contacts as its Simulation's, 1000 steps, compat none and physx.
+TEST(LaneContact, ShapesOnOtherLinksInLaneGroupsAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Batch lanes = test::shapes_on_three_link_sets(solver, compat);
+      EXPECT_NE(lanes.step_path().find("3 groups (3, 2, 1 environments)"), std::string::npos)
+          << lanes.step_path();
+      const std::string what = std::string("shapes on three link sets, ") + to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      EXPECT_LE(test::batch_against_alone(lanes, 1000, 10, what).ratio, test::kSensitivityFactor)
+          << what;
+      EXPECT_FALSE(lanes.contacts(5).empty()) << what;  // the group of one on the ground
+    }
+}
+
 // contact_models.hpp's quadruped under compat none, its PD drives holding the standing pose:
 // standing, dropped from heights of its own, turned, one high above the ground.
 TEST(LaneContact, QuadrupedStandingAndDroppedAsSimulation) {

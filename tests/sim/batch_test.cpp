@@ -610,7 +610,7 @@ namespace {
 // Batch through the SIMD lanes (docs/simd_batch.md, "Batch through the lanes"): every setter and
 // every change made through a handed-out sim(i) reaches the lanes before the next step, each
 // environment stays within 1e-12 of a Simulation given the same changes, and a setting the lanes
-// do not simulate sends the whole batch to the scalar step, named in step_path().
+// do not simulate sends that environment to the scalar step, named in step_path() and env_path().
 TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
   const auto model = test::make_random_tree(13, 7, /*floating=*/false, /*spherical=*/false);
   SimulationOptions options;
@@ -668,11 +668,16 @@ TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
   EXPECT_GT(alone[5].velocity_limit_force().cwiseAbs().maxCoeff() +
                 alone[7].velocity_limit_force().cwiseAbs().maxCoeff(),
             0.0);
-  // A setting the lanes do not simulate: the batch steps as Simulations, then lanes again.
+  // A setting the lanes do not simulate: that environment steps as its Simulation, the others
+  // in lanes, then it takes its lane again.
   SimulationOptions guarded = handed.options();
   guarded.guard.enabled = true;
   handed.set_options(guarded);
-  EXPECT_EQ(batch.step_path(), "scalar: environment 4: simulation 'options' has the step guard");
+  EXPECT_NE(batch.step_path().find(" lanes: 1 group (8 environments); scalar: 1 environment "
+                                   "(environment 4: simulation 'options' has the step guard)"),
+            std::string::npos)
+      << batch.step_path();
+  EXPECT_EQ(batch.env_path(4), "scalar: simulation 'options' has the step guard");
   handed.set_options(options);
   EXPECT_EQ(batch.step_path().find("scalar"), std::string::npos);
   // A floating base steps in lanes.

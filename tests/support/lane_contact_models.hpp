@@ -76,4 +76,21 @@ inline Simulation on_ground(std::shared_ptr<const Model> model, SolverType solve
   return sim;
 }
 
+/// Six grounded_tree environments (lane groups, docs/simd_batch.md): 0, 1 and 3 with a shape on
+/// every link, 2 and 4 without link 1's, 5 without link 3's either (three sets of shape links,
+/// three groups), dropped from their own heights.
+inline Batch shapes_on_three_link_sets(SolverType solver, Compat compat = Compat::none) {
+  const Simulation proto = grounded_tree(5, solver, false, compat);
+  Batch batch(proto, 6);
+  Model fewer = proto.model();
+  fewer.shapes.erase(fewer.shapes.begin() + 1);
+  Model fewest = fewer;
+  fewest.shapes.erase(fewest.shapes.begin() + 2);
+  for (int e : {2, 4}) batch.sim(e).set_model(std::make_shared<const Model>(fewer));
+  batch.sim(5).set_model(std::make_shared<const Model>(fewest));
+  std::mt19937 rng(3);
+  drop_from_own_heights(batch, rng);
+  return batch;
+}
+
 }  // namespace featherdrive::test

@@ -151,6 +151,26 @@ inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
   return f;
 }
 
+/// The DivergenceError message of `steps` steps of sim (empty: none).
+inline std::string divergence_of(Simulation& sim, int steps = 1) {
+  try {
+    sim.step(steps);
+  } catch (const DivergenceError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+/// The DivergenceError message of `steps` steps of the batch (empty: none).
+inline std::string divergence_of(Batch& batch, int steps) {
+  try {
+    batch.step(steps);
+  } catch (const DivergenceError& e) {
+    return e.what();
+  }
+  return {};
+}
+
 /// Three mimic rows on a random tree of at least 6 dofs: two rigid, one soft.
 inline void set_three_mimic_rows(Simulation& sim) {
   const int nv = sim.model().nv;

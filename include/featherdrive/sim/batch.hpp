@@ -1,14 +1,15 @@
-// N environments of one robot stepped together on all cores (TBB): in SIMD lanes where every
-// environment's settings are within the lane step's (the same bits whatever the lane, width,
-// batch size and threads, within 1e-12 of each stepped alone), else as independent Simulations
-// that share nothing a step writes, each bit-identical to stepping it alone whatever the number
-// of threads. Their states lie in (N, n) row-major arrays, one row per
-// environment (each Simulation's storage is its row), and each may have its own model parameters
-// (masses, centres of mass, armature) over one topology. Also whole-vector drive setters for one
-// Simulation. docs/conventions.md, "Batch".
+// N environments of one robot stepped together on all cores (TBB): in SIMD lanes, in lane groups
+// of the environments whose plans agree, each environment whose settings are within the lane
+// step's (the same bits whatever the group, lane, width, batch size and threads, within 1e-12 of
+// each stepped alone), every other one as an independent Simulation that shares nothing a step
+// writes, bit-identical to stepping it alone whatever the number of threads. Their states lie in
+// (N, n) row-major arrays, one row per environment (each Simulation's storage is its row), and
+// each may have its own model parameters (masses, centres of mass, armature, gravity) over one
+// topology. Also whole-vector drive setters for one Simulation. docs/conventions.md, "Batch".
 #pragma once
 
 #include <array>
+#include <exception>
 #include <initializer_list>
 #include <memory>
 #include <optional>
@@ -24,7 +25,7 @@
 namespace featherdrive {
 
 namespace simd {
-class LaneEngine;
+struct LaneGroups;
 }
 
 /// One row per environment: (N, nq) or (N, nv), row-major like numpy's default.
@@ -93,23 +94,34 @@ class Batch {
   /// Sets every environment's options.
   void set_options(const SimulationOptions& options);
 
-  /// Whether step() may step the environments in SIMD lanes (the default). It does when every
-  /// environment's settings are within what the lane step simulates (docs/simd_batch.md: fixed
-  /// bases of revolute and prismatic joints, drives, limits, friction, velocity limits, wrap,
-  /// drive delays and explicit actuators (run per environment before each lane step), implicit
-  /// actuators, convergence tracking, PGS and TGS, compat none) and the options are the same in all, with the CPU's widest
-  /// instruction set (FEATHERDRIVE_SIMD names a narrower one, or `scalar` for none). Each
-  /// environment then gives the same bits whatever its lane, the width, the batch size and the
-  /// threads, within 1e-12 of its Simulation stepped alone (the operation order differs);
-  /// otherwise, and with lanes off, each environment is its Simulation stepped alone, bit for bit.
+  /// Whether step() may step the environments in SIMD lanes (the default). It steps in lanes
+  /// every environment whose settings are within what the lane step simulates
+  /// (docs/simd_batch.md: fixed and floating bases, revolute, prismatic and spherical joints,
+  /// drives, limits, friction, velocity limits, wrap, drive delays and explicit actuators (run
+  /// per environment before each lane step), implicit actuators, convergence tracking, mimic
+  /// rows, ground contacts, PGS and TGS, compat none and physx), with the CPU's widest
+  /// instruction set (FEATHERDRIVE_SIMD names a narrower one, or `scalar` for none): in lane
+  /// groups of the environments that share dt, solver, iteration counts, compat, mimic dofs and
+  /// the links with shapes (gravity and every other setting may differ from lane to lane), each
+  /// environment giving the same bits whatever its group, lane, the width, the batch size and
+  /// the threads, within 1e-12 of its Simulation stepped alone (the operation order differs).
+  /// Every other environment (the step guard, self-collision, a rotated floating root under
+  /// compat physx), and every one with lanes off, is its Simulation stepped alone, bit for bit.
   void set_lanes(bool allowed) { lanes_allowed_ = allowed; }
   bool lanes() const { return lanes_allowed_; }
-  /// How the next step() runs: "avx2 lanes", or "scalar: " and why (the first environment's
-  /// setting the lanes do not simulate, lanes off, FEATHERDRIVE_SIMD=scalar).
+  /// How the next step() runs: "avx2 lanes" (one lane group), "scalar: " and why (lanes off,
+  /// FEATHERDRIVE_SIMD=scalar, or the first environment's setting the lanes do not simulate,
+  /// when none steps in lanes), or for a mixed batch one line such as "avx2 lanes: 2 groups
+  /// (1021, 2 environments); scalar: 1 environment (environment 5: simulation 'options' has the
+  /// step guard)".
   std::string step_path();
+  /// How the next step() runs environment i: "avx2 lanes, group 1" or "scalar: " and why;
+  /// std::invalid_argument for i out of [0, size()).
+  std::string env_path(int i);
   /// The lanes' instruction set: one this CPU runs (std::invalid_argument naming it otherwise),
   /// or nullopt (the default) for default_simd_isa(), narrowed while a block of two vectors would
-  /// hold more lanes than environments. Every width gives the same bits. One set here is used
+  /// hold more lanes than environments (of the batch here; of its group for each lane group).
+  /// Every width gives the same bits. One set here is used
   /// even with FEATHERDRIVE_SIMD=scalar.
   void set_isa(std::optional<SimdIsa> isa);
   SimdIsa isa() const;
@@ -181,6 +193,8 @@ class Batch {
   void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
                      bool scale_inertia = true);
   void set_link_com(std::span<const int> env_ids, int link, const RowMatrix& com);  ///< (k|1, 3)
+  /// Gravity (k|1, 3) [m/s^2], each finite (the lanes take it per environment).
+  void set_gravity(std::span<const int> env_ids, const RowMatrix& gravity);
   /// The most samples of drive delay history (delay + 1 per delayed dof, 16 bytes each) a batch
   /// holds over all its environments: 2^26, 1 GiB.
   static constexpr long long kMaxDelaySamples = 1LL << 26;
@@ -204,6 +218,7 @@ class Batch {
   RowMatrix drive_delay() const;
   VecX link_mass(int link) const;
   RowMatrix link_com(int link) const;
+  RowMatrix gravity() const;
 
   /// The fields side by side, (N, sum of their widths), in the order given.
   RowMatrix observe(std::span<const Observation> fields) const;
@@ -251,9 +266,9 @@ class Batch {
   enum Repack : unsigned char { repack_drives = 1, repack_joints = 2, repack_model = 4, repack_all = 7 };
   void mark(const std::vector<int>& envs, unsigned char what);
   void mark_all(unsigned char what);
-  std::string lane_refusal();  ///< packs what changed; empty when the lanes step every environment
+  std::string lanes_off() const;  ///< why no environment steps in lanes; empty: some may
+  bool prepare_lanes();           ///< (re)groups and packs what changed; false: no lane group
   void step_lanes(int count);
-  void record_lane_divergences();
   void lane_control_stages(bool actuated);  ///< actuated: the lanes read lane_tau_
 
   std::vector<Simulation> sims_;
@@ -263,10 +278,10 @@ class Batch {
   bool lanes_allowed_ = true;
   std::optional<SimdIsa> isa_;  // set_isa's; none: simd::lane_isa(size())
   std::vector<std::optional<BatchDivergence>> divergences_;
-  std::shared_ptr<simd::LaneEngine> lanes_;  // made at the first step through lanes
+  std::shared_ptr<simd::LaneGroups> lanes_;  // made at the first step through lanes
   std::vector<unsigned char> repack_;        // per environment, Repack bits
-  std::vector<char> handed_out_;             // sim(i) handed out writable: packed at every step
-  std::vector<std::string> refusal_;         // per environment: why its settings need the scalar step
+  std::vector<char> handed_out_;             // sim(i) handed out writable: looked at every step
+  std::vector<std::exception_ptr> failed_;   // per environment: a scalar step's other exception
   std::vector<long> lane_steps_;             // the environments' clocks during a lane step
   std::vector<double> lane_time_;
   RowMatrix lane_tau_;  // the joint force of each environment's lane step (control stages)
