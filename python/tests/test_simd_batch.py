@@ -1,6 +1,8 @@
 """fd.Batch through the SIMD lanes: environments in lanes equal the scalar Batch (lanes off) with
 the same per-environment parameters within 1e-12, every width (Batch.isa) gives the same bits, and
 bad input raises ValueError. fd.SimdBatch, deprecated, is a Batch that must step in lanes."""
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -17,9 +19,11 @@ def arm_prototype(fixed_base=True):
                          stiffness=2e4, damping=100.0)
 
 
-def guarded_prototype():
-    """arm7 with the step guard on, which the lanes do not step (one lane's redone step)."""
-    sim = arm_prototype()
+def guarded_on_the_ground():
+    """The quadruped on the ground with the step guard on, which the lanes do not step (a redone
+    step reports no contacts)."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    sim = fd.make_simulation(fd.load_scene(root / "tests" / "data" / "quadruped_ground.yaml"))
     options = sim.options
     options.guard = fd.StepGuard(max_joint_step=0.06)
     sim.set_options(options)
@@ -81,7 +85,9 @@ def test_bad_input_and_unsupported_settings():
     options = proto.options
     options.guard = fd.StepGuard(max_joint_step=0.1)
     proto.set_options(options)
-    assert "simulation 'options' has the step guard" in fd.Batch(proto, 3).step_path
+    assert fd.Batch(proto, 3).step_path.endswith(" lanes")  # the lanes take the guard
+    grounded = fd.Batch(guarded_on_the_ground(), 3)
+    assert "has the step guard with ground contacts" in grounded.step_path
 
 
 def test_indices_and_sizes_are_checked():
@@ -126,7 +132,7 @@ def test_the_simd_batch_shim_warns_and_refuses_what_the_lanes_do_not_step(monkey
     assert batch.step_path == "sse2 lanes"
     with pytest.warns(DeprecationWarning), pytest.raises(
             ValueError, match="SimdBatch: environment 0: simulation 'options' has the step guard"):
-        fd.SimdBatch(guarded_prototype(), 3)
+        fd.SimdBatch(guarded_on_the_ground(), 3)
     monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")
     with pytest.warns(DeprecationWarning), pytest.raises(
             ValueError, match="SimdBatch: FEATHERDRIVE_SIMD=scalar: not stepped in SIMD lanes"):

@@ -867,8 +867,9 @@ void Batch::step_lanes(int count) {
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
   const SimdIsa lane_isa = isa();
-  bool control = false, actuated = false, implicit = false, tracking = false;
+  bool control = false, actuated = false, implicit = false, tracking = false, guarded = false;
   for (const Simulation& s : sims_) {
+    guarded = guarded || s.options().guard.enabled;
     control = control || s.ws_->has_control_stages();
     actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
     implicit = implicit || s.ws_->actuators.any_implicit();
@@ -887,20 +888,27 @@ void Batch::step_lanes(int count) {
       lane_drive_change_.row(i) = sims_[static_cast<size_t>(i)].ws_->last_drive_change.transpose();
     a.drive_change = lane_drive_change_.data();
   }
-  if (!control) {
+  if (guarded) {  // the rows the guard reads (lane_guard.cpp)
+    lane_guard_rows_.resize(n, nv * simd::kGuardFields);
+    a.guard_rows = lane_guard_rows_.data();
+  }
+  if (!control && !guarded) {
     lanes_->run(a, count, lane_isa, effective_num_threads());
   } else {
-    // One step a run: each step's control stages read the state it starts from. Without
-    // actuators the joint force is the applied force itself.
+    // One step a run: each step's control stages read the state it starts from, and its guard
+    // tests it. Without actuators the joint force is the applied force itself.
     if (actuated) {
       lane_tau_.resize(n, model().nv);
       a.applied = lane_tau_.data();
     }
     for (int k = 0; k < count; ++k) {
-      lane_control_stages(actuated);
+      if (control) lane_control_stages(actuated);
+      if (guarded) lane_guard_start();
       lanes_->run(a, 1, lane_isa, effective_num_threads());
+      if (guarded) lane_guard_finish(tracking ? &lane_drive_change_ : nullptr);
       for (int i = 0; i < n; ++i) {
         Simulation& s = sims_[static_cast<size_t>(i)];
+        if (guarded && lane_guard_redone(i)) continue;  // its Simulation's step wrote all
         if (lanes_->stopped_now(i)) {  // Stepper::check_finite_or_throw takes the pushes back
           s.stepper().undo_actuators();
         } else if (implicit && lanes_->stop(i).quantity == 0 && s.ws_->actuators.any()) {
@@ -1015,7 +1023,8 @@ void Batch::step(int count) {
 // The environments the last lane step stopped, in Simulation's words at the clock each kept.
 void Batch::record_lane_divergences() {
   for (int i = 0; i < size(); ++i) {
-    if (!lanes_->stopped_now(i)) continue;
+    // Every stop is of this call (step_lanes clears them); stopped_now is the last run's.
+    if (lanes_->stop(i).quantity == 0) continue;
     const Simulation& s = sims_[static_cast<size_t>(i)];
     divergences_[static_cast<size_t>(i)] = BatchDivergence{
         s.step_count() + 1, lanes_->divergence_message(i, s.model(), s.step_count(), s.time())};

@@ -12,6 +12,7 @@
 #include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/core/format.hpp"
+#include "workspace.hpp"
 
 namespace featherdrive::simd {
 
@@ -84,8 +85,10 @@ std::string lane_refusal(const Simulation& s) {
     return what + " '" + name + "' has " + value;
   };
   const Model& m = s.model();
-  // The lanes step in lockstep: one lane's redone step would hold up every other.
-  if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
+  // A guarded step that is redone reports no contacts and keeps no anchors (step_guard.cpp); the
+  // lanes report and keep them in the step they advance.
+  if (s.options().guard.enabled && s.ground().enabled && !m.shapes.empty())
+    return has("simulation", "options", "the step guard with ground contacts");
   for (const Link& link : m.links) {
 
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take
@@ -336,6 +339,30 @@ void rotation_quaternion(const double* m, double* q) {
   q[0] = Q.w(), q[1] = Q.x(), q[2] = Q.y(), q[3] = Q.z();
 }
 
+void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out) {
+  for (int d = 0; d < nv; ++d) {
+    const double* x = rows + static_cast<size_t>(d) * kGuardFields;
+    GuardRow& g = out[static_cast<size_t>(d)];
+    g.drive_impulse = x[guard_drive];
+    g.low_impulse = x[guard_low];
+    g.high_impulse = x[guard_high];
+    g.friction_impulse = x[guard_friction];
+    g.transmission_friction_applied = x[guard_transmission];
+    g.velocity_limit_impulse = x[guard_velocity_limit];
+    g.response = x[guard_response];
+    g.max_impulse = x[guard_max_impulse];
+    g.has_drive = x[guard_has_drive] != 0.0;
+    g.has_envelope = x[guard_has_envelope] != 0.0;
+  }
+}
+
+void LaneEngine::stop_with(int e, const std::string& message) {
+  stops_[static_cast<size_t>(e)] = Stop{8, -1, 0.0};
+  stopped_now_[static_cast<size_t>(e)] = true;
+  if (messages_.empty()) messages_.resize(static_cast<size_t>(count_));
+  messages_[static_cast<size_t>(e)] = message;
+}
+
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b) {
   if (a.size() != b.size()) return false;
   for (size_t j = 0; j < a.size(); ++j)
@@ -417,6 +444,7 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
 std::string LaneEngine::divergence_message(int e, const Model& model, long step_count,
                                            double time) const {
   const Stop& s = stop(e);
+  if (s.quantity == 8) return messages_[static_cast<size_t>(e)];
   static const char* const kQuantity[] = {
       "",           "velocity qd",          "drive force", "limit force",
       "friction force", "velocity limit force", "position q"};

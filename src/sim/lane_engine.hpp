@@ -13,6 +13,7 @@
 
 namespace featherdrive {
 struct Workspace;
+struct GuardRow;
 }
 
 namespace featherdrive::simd {
@@ -37,6 +38,10 @@ SimdIsa lane_isa(int count);
 /// control stages (drive delays, explicit actuators) run per environment by the caller, as Batch
 /// does (docs/simd_batch.md).
 std::string lane_refusal(const Simulation& s);
+
+/// One environment's rows of the last lane step (Block::guard_rows: nv kGuardFields values) as
+/// the step guard reads them (out: nv entries).
+void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out);
 
 /// Whether two sets of mimic rows couple the same dofs in the same order.
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b);
@@ -98,6 +103,13 @@ class LaneEngine {
   const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
   bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }
   void clear_stop(int e) { stops_[static_cast<size_t>(e)] = Stop{}; }
+  /// Environment e steps on: the step it stopped in is redone by its guard (docs/simd_batch.md).
+  void resume(int e) {
+    clear_stop(e);
+    stopped_now_[static_cast<size_t>(e)] = false;
+  }
+  /// Environment e stops with Simulation's own DivergenceError message (its guard's redo).
+  void stop_with(int e, const std::string& message);
   /// A stopped environment's reason worded as Simulation's DivergenceError, at the clock it kept.
   std::string divergence_message(int e, const Model& model, long step_count, double time) const;
 
@@ -119,6 +131,7 @@ class LaneEngine {
   std::vector<double> parameters_;  // packed in groups of kGroup environments
   ActuatorTables tables_;
   std::vector<Stop> stops_;
+  std::vector<std::string> messages_;  // per environment: stop_with's
   std::unique_ptr<bool[]> stopped_now_;
   std::vector<std::vector<double>> scratch_;  // one per thread, 64 bytes of slack for alignment
   // Kept between calls: a fresh arena makes its workers join again each call, and with a few

@@ -196,16 +196,21 @@ TEST_P(StepAllocations, NoneAfterTheFirstStep) {
   }
 }
 
+// A guard bound so small that every step is redone.
+SimulationOptions guard_redoing_every_step(SolverType solver) {
+  SimulationOptions options;
+  options.dt = 1.0 / 60.0;
+  options.solver = solver;
+  options.guard = {true, 1e-3, 16};
+  return options;
+}
+
 // The step guard's redone steps (docs/math/step_guard.md) run on scratch sized with the options:
-// a bound so small that every step is redone, explicit actuators re-evaluated per sub-step.
+// every step redone, explicit actuators re-evaluated per sub-step.
 TEST(StepAllocations, NoneInGuardedStepsThatAreRedone) {
   const auto tree = test::make_random_tree(11, 24, /*floating=*/true, true, 0.01);
   for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    SimulationOptions options;
-    options.dt = 1.0 / 60.0;
-    options.solver = solver;
-    options.guard = {true, 1e-3, 16};
-    Simulation sim(tree, options);
+    Simulation sim(tree, guard_redoing_every_step(solver));
     std::mt19937 rng(3);
     constrain_every_joint(sim, rng);
     int actuated = 0;
@@ -324,6 +329,35 @@ TEST(BatchAllocations, LanesNoneAtEveryWidth) {
       if (threads == 1) EXPECT_EQ(many, 0) << to_string(isa) << " floating " << floating;
       else EXPECT_LE(many, one + 8) << to_string(isa) << " floating " << floating;
       EXPECT_EQ(batch.step_count()[18], 42);
+    }
+  }
+}
+
+// The step guard in the lanes (docs/simd_batch.md, "The step guard"): every environment's step
+// tested on the lanes' rows, a bound so small that the guarded ones are redone by their scalar
+// sub-steps, one environment in three unguarded; none on one thread at every width.
+TEST(BatchAllocations, LanesGuardedNoneAtEveryWidth) {
+  auto model = test::make_random_tree(11, 10, false, /*spherical=*/true, 0.01);
+  for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+    const SimulationOptions o = guard_redoing_every_step(solver);
+    Simulation prototype(model, o);
+    std::mt19937 rng(3);
+    constrain_every_joint(prototype, rng);
+    prototype.set_qd(test::random_vector(model->nv, rng, 0.5));
+    for (SimdIsa isa : available_simd_isas()) {
+      Batch batch(prototype, 11);
+      for (int e = 0; e < batch.size(); e += 3) {
+        SimulationOptions off = o;
+        off.guard.enabled = false;
+        batch.sim(e).set_options(off);
+      }
+      batch.set_isa(isa);
+      batch.set_num_threads(1);
+      batch.step();
+      ASSERT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
+      EXPECT_EQ(allocations_in([&] { batch.step(20); }), 0) << to_string(isa);
+      EXPECT_EQ(batch.sim(1).guard_triggers(), 21) << to_string(isa);
+      EXPECT_EQ(batch.sim(0).guard_triggers(), 0) << to_string(isa);
     }
   }
 }

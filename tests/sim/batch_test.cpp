@@ -669,10 +669,11 @@ TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
                 alone[7].velocity_limit_force().cwiseAbs().maxCoeff(),
             0.0);
   // A setting the lanes do not simulate: the batch steps as Simulations, then lanes again.
-  SimulationOptions guarded = handed.options();
-  guarded.guard.enabled = true;
-  handed.set_options(guarded);
-  EXPECT_EQ(batch.step_path(), "scalar: environment 4: simulation 'options' has the step guard");
+  SimulationOptions other = handed.options();
+  other.dt = 0.004;
+  handed.set_options(other);
+  EXPECT_EQ(batch.step_path(),
+            "scalar: environment 4: options or gravity other than environment 0's");
   handed.set_options(options);
   EXPECT_EQ(batch.step_path().find("scalar"), std::string::npos);
   // A floating base steps in lanes.

@@ -6,12 +6,15 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
+#include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -163,16 +166,19 @@ TEST(StepGuard, BoundsAStiffExplicitActuator) {
   }
 }
 
-// A Batch steps its Simulations: one guarded environment equals a guarded Simulation bit for bit
-// (through triggered steps), as does one that recomputes every start's energies; the lanes
-// refuse the guard in one line (step_path), so a guarded batch steps its Simulations.
-TEST(StepGuard, BatchEqualsASimulationAndTheLanesRefuse) {
+// A Batch with its lanes off steps its Simulations: one guarded environment equals a guarded
+// Simulation bit for bit (through triggered steps), as does one that recomputes every start's
+// energies. Through the lanes, which take the guard (docs/simd_batch.md, "The step guard"), it
+// equals it within 1e-12 (another operation order) with the same steps redone.
+TEST(StepGuard, BatchEqualsASimulationWithLanesOffAndOn) {
   const auto model = test::make_benchmark_chain(32, Vec3::Zero());
   const SimulationOptions o = guard_options(SolverType::pgs, true);
   Simulation alone(model, o);
   test::drive_benchmark_chain(alone);
-  Batch batch(model, 2, o);
+  Batch batch(model, 2, o), lanes(model, 3, o);
+  batch.set_lanes(false);
   for (int i = 0; i < 2; ++i) test::drive_benchmark_chain(batch.sim(i));
+  for (int i = 0; i < 3; ++i) test::drive_benchmark_chain(lanes.sim(i));
   // The start's energies reused from the last step's end (step_guard.cpp) are the ones a new
   // forward kinematics pass gives: set_model (same model) drops them every step here.
   Simulation recomputed(model, o);
@@ -181,18 +187,116 @@ TEST(StepGuard, BatchEqualsASimulationAndTheLanesRefuse) {
     recomputed.set_model(recomputed.model_ptr());
     recomputed.step();
   }
-  const std::string path = batch.step_path();
-  EXPECT_EQ(path.rfind("scalar: ", 0), 0u) << path;
-  EXPECT_NE(path.find("step guard"), std::string::npos) << path;
+  EXPECT_EQ(batch.step_path(), "scalar: lanes off (set_lanes)");
+  EXPECT_NE(lanes.step_path().find(" lanes"), std::string::npos) << lanes.step_path();
   alone.step(60);
   batch.step(60);
+  lanes.step(60);
   EXPECT_TRUE(guard_same_outputs(recomputed, alone));
   EXPECT_EQ(recomputed.guard_triggers(), alone.guard_triggers());
   EXPECT_GT(alone.guard_triggers(), 0);
   EXPECT_EQ(batch.sim(1).guard_triggers(), alone.guard_triggers());
   EXPECT_TRUE(guard_same_outputs(batch.sim(1), alone));
-  Batch copies(alone, 4);
-  EXPECT_NE(copies.step_path().find("step guard"), std::string::npos) << copies.step_path();
+  test::LaneWorst worst;
+  for (int i = 0; i < 3; ++i) {
+    test::compare_with_alone(lanes, i, alone, worst, "chain");
+    EXPECT_EQ(lanes.sim(i).guard_triggers(), alone.guard_triggers());
+    EXPECT_EQ(lanes.sim(i).guard_exhausted(), alone.guard_exhausted());
+  }
+  EXPECT_LT(worst.state, 1e-12);
+  EXPECT_LT(worst.force, 1e-12);
+}
+
+// A random fixed-base tree (spherical joints too) at dt 1/30 with limits, friction and velocity
+// limits on some dofs; environment e's drives are stiff (kp 4000: steps the guard redoes as
+// their targets jump) for e % 3 == 0, soft (kp 40: kept) otherwise, and e % 4 == 3 is not
+// guarded.
+SimulationOptions guard_lane_options(SolverType solver, Compat compat, bool guard) {
+  SimulationOptions o = test::lane_test_options(solver);
+  o.dt = 1.0 / 30.0;
+  o.compat = compat;
+  o.guard.enabled = guard;
+  return o;
+}
+
+Simulation guard_prototype(SolverType solver, Compat compat) {
+  auto model = test::make_random_tree(11, 7, false, true, 0.01);
+  Simulation sim(model, guard_lane_options(solver, compat, true));
+  std::mt19937 rng(3);
+  test::drive_every_joint(sim, rng, 40.0, 4.0);
+  for (int d = 0; d < model->nv; ++d) {
+    if (!dof_has_rows(*model, d)) continue;
+    if (d % 4 == 1) sim.set_joint_friction(d, JointFriction{0.3, 0.2, 0.1});
+    if (d % 5 == 3) sim.set_max_joint_velocity(d, 6.0);
+  }
+  return sim;
+}
+
+void give_guard_lane_gains(Simulation& sim, int e) {
+  const Model& m = sim.model();
+  const double kp = e % 3 == 0 ? 4000.0 : 40.0, kd = e % 3 == 0 ? 20.0 : 4.0;
+  for (int d = 0; d < m.nv; ++d) {
+    if (!dof_has_rows(m, d)) continue;
+    Drive drive = sim.drive(d);
+    drive.type = DriveType::force;
+    drive.stiffness = kp;
+    drive.damping = kd;
+    sim.set_drive(d, drive);
+  }
+  if (e % 4 == 3) {
+    SimulationOptions o = sim.options();
+    o.guard.enabled = false;
+    sim.set_options(o);
+  }
+}
+
+// Targets jumping by up to 1.2 rad every call (calls of 1 to 9 steps).
+void jump_guard_lane_targets(Simulation& sim, int e, int k) {
+  const Model& m = sim.model();
+  for (int d = 0; d < m.nv; ++d) {
+    if (!dof_has_rows(m, d)) continue;
+    const double x = 0.6 * std::sin(0.7 * k + 1.3 * d + 0.5 * e);
+    sim.set_drive_target(d, x, 0.2 * std::cos(0.3 * k + d));
+  }
+}
+
+TEST(StepGuard, GuardedLanesEqualGuardedSimulations) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      const std::string what = std::string(to_string(compat)) + " " + to_string(solver);
+      const Simulation proto = guard_prototype(solver, compat);
+      Batch batch(proto, 7);
+      std::vector<Simulation> alone = test::give_each(batch, proto, give_guard_lane_gains);
+      EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
+      test::step_with_commands(batch, alone, 1000, jump_guard_lane_targets);
+      test::LaneWorst worst;
+      long redone = 0, kept_guarded = 0;
+      double account = 0.0;
+      for (int e = 0; e < batch.size(); ++e) {
+        const Simulation& s = batch.sim(e);
+        const Simulation& a = alone[static_cast<size_t>(e)];
+        test::compare_with_alone(batch, e, a, worst, what);
+        EXPECT_EQ(s.guard_triggers(), a.guard_triggers()) << what << " env " << e;
+        EXPECT_EQ(s.guard_exhausted(), a.guard_exhausted()) << what << " env " << e;
+        EXPECT_EQ(s.guard_substeps(), a.guard_substeps()) << what << " env " << e;
+        const GuardAccount &x = s.guard_account(), &y = a.guard_account();
+        for (const auto& [u, v] : {std::pair{x.created, y.created},
+                                   std::pair{x.dissipated, y.dissipated},
+                                   std::pair{x.scale, y.scale}})
+          account = std::max(account, std::abs(u - v) / std::max(1.0, std::abs(v)));
+        if (e % 4 != 3 && e % 3 == 0) redone += a.guard_triggers() > 0;
+        if (e % 4 != 3 && e % 3 != 0) kept_guarded += a.guard_triggers() == 0;
+      }
+      std::printf("%s: guarded lanes against guarded Simulations: state %.1e, forces %.1e, "
+                  "accounts %.1e (docs/simd_batch.md)\n",
+                  what.c_str(), worst.state, worst.force, account);
+      EXPECT_LT(worst.state, 1e-12) << what;
+      EXPECT_LT(worst.force, 1e-12) << what;
+      EXPECT_LT(account, 1e-12) << what;
+      // The case exercises both: the stiff environments redone, soft ones kept every step.
+      EXPECT_EQ(redone, 2) << what;
+      EXPECT_GE(kept_guarded, 2) << what;
+    }
 }
 
 // Test (iii)'s account on a slider without gravity, PGS, steps the guard keeps: each step is the

@@ -1,0 +1,79 @@
+// The step guard on Batch's lanes (docs/simd_batch.md, "The step guard"): the lanes advance
+// every environment; each guarded one's advance is then tested by its own Stepper's guard
+// (step_guard.cpp, docs/math/step_guard.md) on the lanes' end and rows, kept as a Simulation
+// keeps it, or redone from its start by the Simulation's scalar sub-steps.
+#include "featherdrive/sim/batch.hpp"
+#include "lane_engine.hpp"
+#include "workspace.hpp"
+
+namespace featherdrive {
+
+// Each guarded environment still stepping: its start loaded, its energies taken, its outputs
+// and clock kept for a redo (the lanes write over the storage).
+void Batch::lane_guard_start() {
+  const auto n = sims_.size();
+  guard_live_.resize(n);
+  guard_redone_.resize(n);
+  guard_steps_.resize(n);
+  guard_time_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    Simulation& s = sims_[i];
+    guard_redone_[i] = 0;
+    guard_live_[i] = s.options().guard.enabled && lanes_->stop(static_cast<int>(i)).quantity == 0;
+    if (!guard_live_[i]) continue;
+    Workspace& ws = *s.ws_;
+    Stepper stepper(*s.model_, s.settings_, s.state_, lane_time_[i], lane_steps_[i], ws);
+    stepper.load_state();
+    stepper.guard_start();
+    ws.drive_force = s.state_[StateStorage::drive_force];
+    ws.limit_force = s.state_[StateStorage::limit_force];
+    ws.friction_force = s.state_[StateStorage::friction_force];
+    ws.velocity_limit_force = s.state_[StateStorage::velocity_limit_force];
+    guard_steps_[i] = lane_steps_[i];
+    guard_time_[i] = lane_time_[i];
+  }
+}
+
+// The guard on each guarded environment's lane step: a step that passes is kept with its
+// account; one that fails (or that the lanes stopped as not finite) goes back to its start and
+// is redone by the environment's scalar sub-steps, which may diverge as a Simulation's would.
+void Batch::lane_guard_finish(RowMatrix* drive_change) {
+  const int nv = model().nv;
+  for (size_t i = 0; i < sims_.size(); ++i) {
+    if (!guard_live_[i]) continue;
+    const int e = static_cast<int>(i);
+    Simulation& s = sims_[i];
+    Workspace& ws = *s.ws_;
+    Stepper stepper(*s.model_, s.settings_, s.state_, lane_time_[i], lane_steps_[i], ws);
+    // The joint force the lanes used: control_stages's (applied force + explicit efforts).
+    const VecX& tau = ws.actuators.any() ? ws.joint_force : ws.applied_force;
+    if (!lanes_->stopped_now(e)) {
+      stepper.load_state();  // the lanes' end
+      simd::unpack_guard_rows(lane_guard_rows_.row(e).data(), nv, ws.guard_rows);
+      if (stepper.guard_first_passes(tau)) {
+        stepper.commit_guard_account();
+        continue;
+      }
+    }
+    guard_redone_[i] = 1;
+    lanes_->resume(e);
+    s.state_[StateStorage::q] = ws.guard_q0;
+    s.state_[StateStorage::qd] = ws.guard_qd0;
+    s.state_[StateStorage::drive_force] = ws.drive_force;
+    s.state_[StateStorage::limit_force] = ws.limit_force;
+    s.state_[StateStorage::friction_force] = ws.friction_force;
+    s.state_[StateStorage::velocity_limit_force] = ws.velocity_limit_force;
+    lane_steps_[i] = guard_steps_[i];
+    lane_time_[i] = guard_time_[i];
+    stepper.load_state();
+    stepper.guard_redo();
+    try {
+      stepper.end_step();
+    } catch (const DivergenceError& error) {  // the state and the pushes as they were
+      lanes_->stop_with(e, error.what());
+    }
+    if (drive_change) drive_change->row(e) = ws.last_drive_change.transpose();
+  }
+}
+
+}  // namespace featherdrive
