@@ -299,6 +299,80 @@ TEST(StepGuard, GuardedLanesEqualGuardedSimulations) {
     }
 }
 
+// A guarded batch's bits do not depend on where an environment sits, the width, the batch size
+// or the threads: each environment's guard runs on its own lane's values (docs/simd_batch.md,
+// "Determinism").
+TEST(StepGuard, GuardedLanesBitsIndependentOfLaneWidthSizeAndThreads) {
+  const Simulation proto = guard_prototype(SolverType::pgs, Compat::none);
+  const int nq = proto.model().nq, nv = proto.model().nv;
+  // Environment e of the reference (settings e % 7) sits at (e + shift) % size.
+  auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+    Batch batch(proto, size);
+    batch.set_isa(isa);
+    batch.set_num_threads(threads);
+    auto at = [&](int e) -> Simulation& { return batch.sim((e + shift) % size); };
+    for (int e = 0; e < size; ++e) give_guard_lane_gains(at(e), e % 7);
+    for (int k = 0; k < 40; ++k) {
+      for (int e = 0; e < size; ++e) jump_guard_lane_targets(at(e), e % 7, k);
+      batch.step(1 + k % 3);
+    }
+    RowMatrix out(size, nq + nv + 2);
+    for (int e = 0; e < size; ++e)
+      out.row(e) << at(e).q().transpose(), at(e).qd().transpose(),
+          static_cast<double>(at(e).guard_triggers()), at(e).guard_account().created;
+    return out;
+  };
+  const RowMatrix reference = run(7, SimdIsa::sse2, 1, 0);
+  EXPECT_GT(reference(0, nq + nv), 0.0);  // environment 0 was redone
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2})
+      for (int shift : {0, 3})
+        EXPECT_TRUE(test::same_bits(run(7, isa, threads, shift), reference))
+            << to_string(isa) << ", " << threads << " threads, shift " << shift;
+  for (SimdIsa isa : available_simd_isas())
+    EXPECT_TRUE(test::same_bits(RowMatrix(run(19, isa, 2, 0).topRows(7)), reference))
+        << to_string(isa) << ", 19 environments";
+}
+
+// A guarded environment whose redone step still diverges (its sub-steps too) stops with the
+// state before that step and its Simulation's message; the others step on.
+TEST(StepGuard, GuardedLaneThatDivergesStopsAsItsSimulation) {
+  Simulation proto = guard_prototype(SolverType::tgs, Compat::none);
+  SimulationOptions o = proto.options();
+  o.guard.max_substeps = 4;
+  proto.set_options(o);
+  // Without velocity limits, which would scale the huge velocity below back to theirs.
+  for (int d = 0; d < proto.model().nv; ++d)
+    if (dof_has_rows(proto.model(), d)) proto.set_max_joint_velocity(d, kInf);
+  Batch batch(proto, 5);
+  EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
+  const int bad[] = {3};
+  batch.step(2);
+  batch.set_qd(bad, RowMatrix::Constant(1, proto.model().nv, 1e200));
+  const VecX q_before = batch.q().row(3).transpose();
+  Simulation alone = batch.simulation(3);
+  std::string message;
+  try {
+    alone.step();
+  } catch (const DivergenceError& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty());
+  EXPECT_EQ(alone.guard_triggers(), 1);
+  try {
+    batch.step(4);
+    ADD_FAILURE() << "no DivergenceError";
+  } catch (const DivergenceError& e) {
+    EXPECT_NE(std::string(e.what()).find("batch copy 3 (1 of 5"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(batch.divergences()[3].has_value());
+  EXPECT_EQ(batch.divergences()[3]->message, message);
+  EXPECT_EQ(batch.step_count()[3], 2);
+  EXPECT_EQ(batch.sim(3).guard_triggers(), 1);
+  EXPECT_TRUE(test::same_bits(VecX(batch.q().row(3).transpose()), q_before));
+  for (int e : {0, 1, 2, 4}) EXPECT_EQ(batch.step_count()[e], 6) << e;
+}
+
 // Test (iii)'s account on a slider without gravity, PGS, steps the guard keeps: each step is the
 // implicit Euler of the drive law, v1 = (m v0 + h (kp (xT - x0) + kd vT)) / (m + h kd + h^2 kp),
 // so the energy created beyond the work is -m (v1 - v0)^2 / 2 (G-4), the drive's work beyond its
