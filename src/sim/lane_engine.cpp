@@ -206,6 +206,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     pack_model(e, m);
   }
   stops_.resize(static_cast<size_t>(count));
+  messages_.resize(static_cast<size_t>(count));
   stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
 }
 
@@ -359,7 +360,6 @@ void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out) {
 void LaneEngine::stop_with(int e, const std::string& message) {
   stops_[static_cast<size_t>(e)] = Stop{8, -1, 0.0};
   stopped_now_[static_cast<size_t>(e)] = true;
-  if (messages_.empty()) messages_.resize(static_cast<size_t>(count_));
   messages_[static_cast<size_t>(e)] = message;
 }
 
@@ -404,6 +404,7 @@ void LaneEngine::run(const Block& arrays, int steps, SimdIsa isa, int threads_wa
   for (auto& s : scratch_)
     if (s.size() < doubles) s.assign(doubles, 0.0);
   std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
+  run_threads_ = threads;
   auto run_one = [&](int block, double* scratch) {
     Block b = arrays;
     b.env0 = block * W;

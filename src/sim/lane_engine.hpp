@@ -2,6 +2,8 @@
 // Simulations, and the blocks run on threads (simd_lane_step.hpp). docs/simd_batch.md.
 #pragma once
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <memory>
@@ -110,6 +112,20 @@ class LaneEngine {
   }
   /// Environment e stops with Simulation's own DivergenceError message (its guard's redo).
   void stop_with(int e, const std::string& message);
+  /// f(e) for every environment, on the threads of the last run (its arena), else in turn: for
+  /// work each environment does on its own (the step guard's), so the same for any threads.
+  template <class F>
+  void each_environment(F f) {
+    if (run_threads_ <= 1) {
+      for (int e = 0; e < count_; ++e) f(e);
+      return;
+    }
+    arena_->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<int>(0, count_), [&](const tbb::blocked_range<int>& r) {
+        for (int e = r.begin(); e < r.end(); ++e) f(e);
+      });
+    });
+  }
   /// A stopped environment's reason worded as Simulation's DivergenceError, at the clock it kept.
   std::string divergence_message(int e, const Model& model, long step_count, double time) const;
 
@@ -138,6 +154,7 @@ class LaneEngine {
   // blocks a call is over before they do.
   std::unique_ptr<tbb::task_arena> arena_;
   int arena_threads_ = 0;
+  int run_threads_ = 1;  // the last run's threads (its arena's, when more than one)
 };
 
 }  // namespace featherdrive::simd

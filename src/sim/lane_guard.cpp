@@ -39,9 +39,10 @@ void Batch::lane_guard_start() {
 // is redone by the environment's scalar sub-steps, which may diverge as a Simulation's would.
 void Batch::lane_guard_finish(RowMatrix* drive_change) {
   const int nv = model().nv;
-  for (size_t i = 0; i < sims_.size(); ++i) {
-    if (!guard_live_[i]) continue;
-    const int e = static_cast<int>(i);
+  // Each environment on its own (its Simulation, its rows of the arrays): any thread order.
+  lanes_->each_environment([&](int e) {
+    const auto i = static_cast<size_t>(e);
+    if (!guard_live_[i]) return;
     Simulation& s = sims_[i];
     Workspace& ws = *s.ws_;
     Stepper stepper(*s.model_, s.settings_, s.state_, lane_time_[i], lane_steps_[i], ws);
@@ -52,7 +53,7 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
       simd::unpack_guard_rows(lane_guard_rows_.row(e).data(), nv, ws.guard_rows);
       if (stepper.guard_first_passes(tau)) {
         stepper.commit_guard_account();
-        continue;
+        return;
       }
     }
     guard_redone_[i] = 1;
@@ -73,7 +74,7 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
       lanes_->stop_with(e, error.what());
     }
     if (drive_change) drive_change->row(e) = ws.last_drive_change.transpose();
-  }
+  });
 }
 
 }  // namespace featherdrive
