@@ -19,14 +19,12 @@ def arm_prototype(fixed_base=True):
                          stiffness=2e4, damping=100.0)
 
 
-def guarded_on_the_ground():
-    """The quadruped on the ground with the step guard on, which the lanes do not step (a redone
-    step reports no contacts)."""
+def self_colliding():
+    """The quadruped on the ground with self-collision on, which the lanes do not step (its rows
+    are solved outside the sweep)."""
     root = pathlib.Path(__file__).resolve().parents[2]
     sim = fd.make_simulation(fd.load_scene(root / "tests" / "data" / "quadruped_ground.yaml"))
-    options = sim.options
-    options.guard = fd.StepGuard(max_joint_step=0.06)
-    sim.set_options(options)
+    sim.set_contact_options(fd.ContactOptions(self_collision=True))
     return sim
 
 
@@ -86,8 +84,7 @@ def test_bad_input_and_unsupported_settings():
     options.guard = fd.StepGuard(max_joint_step=0.1)
     proto.set_options(options)
     assert fd.Batch(proto, 3).step_path.endswith(" lanes")  # the lanes take the guard
-    grounded = fd.Batch(guarded_on_the_ground(), 3)
-    assert "has the step guard with ground contacts" in grounded.step_path
+    assert "has self-collision between the model's shapes" in fd.Batch(self_colliding(), 3).step_path
 
 
 def test_indices_and_sizes_are_checked():
@@ -131,8 +128,8 @@ def test_the_simd_batch_shim_warns_and_refuses_what_the_lanes_do_not_step(monkey
     assert isinstance(batch, fd.Batch) and batch.isa == "sse2"
     assert batch.step_path == "sse2 lanes"
     with pytest.warns(DeprecationWarning), pytest.raises(
-            ValueError, match="SimdBatch: environment 0: simulation 'options' has the step guard"):
-        fd.SimdBatch(guarded_on_the_ground(), 3)
+            ValueError, match="SimdBatch: environment 0: simulation 'settings' has self-collision"):
+        fd.SimdBatch(self_colliding(), 3)
     monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")
     with pytest.warns(DeprecationWarning), pytest.raises(
             ValueError, match="SimdBatch: FEATHERDRIVE_SIMD=scalar: not stepped in SIMD lanes"):

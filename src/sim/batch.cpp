@@ -854,7 +854,7 @@ void Batch::step_lanes(int count) {
   bool grounded = false;
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
-    contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
+    contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_, s.options().guard.enabled};
     grounded = grounded || s.ws_->contacts_active;
   }
   lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());

@@ -85,10 +85,6 @@ std::string lane_refusal(const Simulation& s) {
     return what + " '" + name + "' has " + value;
   };
   const Model& m = s.model();
-  // A guarded step that is redone reports no contacts and keeps no anchors (step_guard.cpp); the
-  // lanes report and keep them in the step they advance.
-  if (s.options().guard.enabled && s.ground().enabled && !m.shapes.empty())
-    return has("simulation", "options", "the step guard with ground contacts");
   for (const Link& link : m.links) {
 
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take

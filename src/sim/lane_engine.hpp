@@ -26,6 +26,9 @@ struct ContactLanes {
   struct Env {
     const Simulation* sim = nullptr;
     Workspace* ws = nullptr;
+    /// Its step guard is on: the anchors of a step are kept once the guard keeps the step
+    /// (lane_guard.cpp), not by the lane step.
+    bool guarded = false;
   };
   std::vector<Env> envs;
 };

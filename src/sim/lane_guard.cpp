@@ -31,6 +31,10 @@ void Batch::lane_guard_start() {
     ws.velocity_limit_force = s.state_[StateStorage::velocity_limit_force];
     guard_steps_[i] = lane_steps_[i];
     guard_time_[i] = lane_time_[i];
+    if (ws.contacts_active) {  // same sizes from the second step: copies into their room
+      ws.guard_contacts = ws.contacts;
+      ws.guard_link_contact_force = ws.link_contact_force;
+    }
   }
 }
 
@@ -53,6 +57,7 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
       simd::unpack_guard_rows(lane_guard_rows_.row(e).data(), nv, ws.guard_rows);
       if (stepper.guard_first_passes(tau)) {
         stepper.commit_guard_account();
+        if (ws.contacts_active) ws.contact_rows.conclude();  // as Stepper::contact_forces
         return;
       }
     }
@@ -66,6 +71,12 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
     s.state_[StateStorage::velocity_limit_force] = ws.velocity_limit_force;
     lane_steps_[i] = guard_steps_[i];
     lane_time_[i] = guard_time_[i];
+    // A redone step reports no contacts (Stepper::guard_redo): the start's reports and forces, the
+    // anchors not kept (contact_conclude left them to the guard).
+    if (ws.contacts_active) {
+      ws.contacts = ws.guard_contacts;
+      ws.link_contact_force = ws.guard_link_contact_force;
+    }
     stepper.load_state();
     stepper.guard_redo();
     try {

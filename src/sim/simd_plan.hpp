@@ -235,8 +235,8 @@ struct Plan {
   Layout layout;
 };
 
-/// What the step guard reads of a dof's rows after a lane step (GuardRow, workspace.hpp), kGuardFields
-/// values a dof in Block::guard_rows.
+/// What the step guard reads of a dof's rows after a lane step (GuardRow, workspace.hpp):
+/// kGuardFields values a dof in Block::guard_rows.
 enum GuardField : int {
   guard_drive,
   guard_low,

@@ -123,6 +123,10 @@ struct Workspace {
   VecX guard_q1, guard_qd1;
   double guard_e1[2] = {0.0, 0.0};
   bool guard_e1_valid = false;
+  /// The contact reports and link forces at the step's start: Batch's lanes report the step they
+  /// advance, a redone step keeps these (lane_guard.cpp).
+  std::vector<ContactReport> guard_contacts;
+  std::vector<Vec3> guard_link_contact_force;
   GuardAccount guard_account;  ///< test (iii): committed with the step
   GuardAccount guard_account_next;  ///< the account after the (sub-)step being tested
   int guard_substeps = 1;
