@@ -39,8 +39,9 @@ void Batch::lane_guard_start() {
 }
 
 // The guard on each guarded environment's lane step: a step that passes is kept with its
-// account; one that fails (or that the lanes stopped as not finite) goes back to its start and
-// is redone by the environment's scalar sub-steps, which may diverge as a Simulation's would.
+// account; one that fails goes back to its start and is redone by the environment's scalar
+// sub-steps, one the lanes stopped (not finite) by its whole scalar guarded advance; either may
+// diverge as a Simulation's would.
 void Batch::lane_guard_finish(RowMatrix* drive_change) {
   const int nv = model().nv;
   // Each environment on its own (its Simulation, its rows of the arrays): any thread order.
@@ -52,7 +53,8 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
     Stepper stepper(*s.model_, s.settings_, s.state_, lane_time_[i], lane_steps_[i], ws);
     // The joint force the lanes used: control_stages's (applied force + explicit efforts).
     const VecX& tau = ws.actuators.any() ? ws.joint_force : ws.applied_force;
-    if (!lanes_->stopped_now(e)) {
+    const bool stopped = lanes_->stopped_now(e);
+    if (!stopped) {
       stepper.load_state();  // the lanes' end
       simd::unpack_guard_rows(lane_guard_rows_.row(e).data(), nv, ws.guard_rows);
       if (stepper.guard_first_passes(tau)) {
@@ -78,8 +80,12 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
       ws.link_contact_force = ws.guard_link_contact_force;
     }
     stepper.load_state();
-    stepper.guard_redo();
     try {
+      // A step the lanes stopped (not finite) left no end to test: the Simulation's whole guarded
+      // advance, which tests its own (and may find a contact force overflowed where the state did
+      // not, and stop as the Simulation stops).
+      if (stopped) stepper.guarded_advance(tau);
+      else stepper.guard_redo();
       stepper.end_step();
     } catch (const DivergenceError& error) {  // the state and the pushes as they were
       lanes_->stop_with(e, error.what());

@@ -161,6 +161,8 @@ class Stepper {
   // (step_guard.cpp, docs/simd_batch.md): guard_start on the loaded step-start state; after the
   // advance (its end loaded as q, qd, its rows in ws.guard_rows) guard_first_passes (true: the
   // step is kept, as a Simulation keeps it); else, from the start loaded again, guard_redo.
+  // guarded_advance: the whole guarded advance from the loaded start, the step's forces.
+  void guarded_advance(const VecX& tau);
   void guard_start();
   bool guard_first_passes(const VecX& tau);
   void guard_redo();
@@ -192,7 +194,6 @@ class Stepper {
   void contact_link_velocities();
   void contact_forces();
   // The guard (step_guard.cpp).
-  void guarded_advance(const VecX& tau);
   void guard_rows_from_step();
   /// Tests (i) and (ii) of the advance just made from guard_q0, guard_qd0 (energies e0);
   /// leaves the end's energies in e1.
