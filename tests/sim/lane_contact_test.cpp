@@ -86,13 +86,17 @@ TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
 // over dt) stops the lane with its state and reports as Simulation's check words it, the other
 // environments (airborne) going on; the stopped one reports no contacts.
 TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
+  // Guarded too: the lane is stepped again by its Simulation's guarded advance, which decides.
+  for (const bool guard : {false, true}) {
   SimulationOptions o = test::lane_test_options(SolverType::pgs);
   o.dt = 1e-200;
+  o.guard.enabled = guard;
   Simulation box(test::make_ground_box(0.5), o);
   Ground ground;
   ground.enabled = true;
   box.set_ground(ground);
   std::string messages[2];
+  long triggers[2] = {0, 0};
   for (const bool lanes_on : {true, false}) {
     Batch b(box, 3);
     b.set_lanes(lanes_on);
@@ -108,6 +112,7 @@ TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
     } catch (const DivergenceError& e) {
       messages[lanes_on ? 0 : 1] = e.what();
     }
+    triggers[lanes_on ? 0 : 1] = b.sim(1).guard_triggers();
     EXPECT_EQ(b.step_path().find("scalar") == std::string::npos, lanes_on) << b.step_path();
     ASSERT_TRUE(b.divergences()[1].has_value());
     EXPECT_TRUE(test::same_bits(VecX(b.sim(1).q()), q1));
@@ -116,6 +121,8 @@ TEST(LaneContact, ContactForceOverflowStopsTheLaneAsSimulation) {
   }
   EXPECT_NE(messages[0].find("link 'box' contact force f"), std::string::npos) << messages[0];
   EXPECT_EQ(messages[0], messages[1]);
+  EXPECT_EQ(triggers[0], triggers[1]) << guard;
+  }
 }
 
 // The step guard on the ground (docs/simd_batch.md, "The step guard"): guarded trees dropped
