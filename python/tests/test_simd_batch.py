@@ -1,6 +1,8 @@
 """fd.Batch through the SIMD lanes: environments in lanes equal the scalar Batch (lanes off) with
 the same per-environment parameters within 1e-12, every width (Batch.isa) gives the same bits, and
 bad input raises ValueError. fd.SimdBatch, deprecated, is a Batch that must step in lanes."""
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -17,12 +19,12 @@ def arm_prototype(fixed_base=True):
                          stiffness=2e4, damping=100.0)
 
 
-def guarded_prototype():
-    """arm7 with the step guard on, which the lanes do not step (one lane's redone step)."""
-    sim = arm_prototype()
-    options = sim.options
-    options.guard = fd.StepGuard(max_joint_step=0.06)
-    sim.set_options(options)
+def self_colliding():
+    """The quadruped on the ground with self-collision on, which the lanes do not step (its rows
+    are solved outside the sweep)."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    sim = fd.make_simulation(fd.load_scene(root / "tests" / "data" / "quadruped_ground.yaml"))
+    sim.set_contact_options(fd.ContactOptions(self_collision=True))
     return sim
 
 
@@ -81,7 +83,8 @@ def test_bad_input_and_unsupported_settings():
     options = proto.options
     options.guard = fd.StepGuard(max_joint_step=0.1)
     proto.set_options(options)
-    assert "simulation 'options' has the step guard" in fd.Batch(proto, 3).step_path
+    assert fd.Batch(proto, 3).step_path.endswith(" lanes")  # the lanes take the guard
+    assert "has self-collision between the model's shapes" in fd.Batch(self_colliding(), 3).step_path
 
 
 def test_indices_and_sizes_are_checked():
@@ -125,8 +128,8 @@ def test_the_simd_batch_shim_warns_and_refuses_what_the_lanes_do_not_step(monkey
     assert isinstance(batch, fd.Batch) and batch.isa == "sse2"
     assert batch.step_path == "sse2 lanes"
     with pytest.warns(DeprecationWarning), pytest.raises(
-            ValueError, match="SimdBatch: environment 0: simulation 'options' has the step guard"):
-        fd.SimdBatch(guarded_prototype(), 3)
+            ValueError, match="SimdBatch: environment 0: simulation 'settings' has self-collision"):
+        fd.SimdBatch(self_colliding(), 3)
     monkeypatch.setenv("FEATHERDRIVE_SIMD", "scalar")
     with pytest.warns(DeprecationWarning), pytest.raises(
             ValueError, match="SimdBatch: FEATHERDRIVE_SIMD=scalar: not stepped in SIMD lanes"):

@@ -941,7 +941,7 @@ void Batch::step_lanes(int count) {
   const int n = size();
   lane_steps_.resize(static_cast<size_t>(n));
   lane_time_.resize(static_cast<size_t>(n));
-  bool control = false, actuated = false, implicit = false, tracking = false;
+  bool control = false, actuated = false, implicit = false, tracking = false, guarded = false;
   for (simd::LaneGroup& g : l.groups) {
     // Each environment's contact rows, reports and anchors are its Simulation's
     // (lane_contacts.cpp).
@@ -954,8 +954,9 @@ void Batch::step_lanes(int count) {
       lane_steps_[i] = s.step_count_;
       lane_time_[i] = s.time_;
       g.engine->clear_stop(static_cast<int>(j));  // a diverged one steps again, as its Simulation
-      contacts.envs[j] = {&s, &*s.ws_};
+      contacts.envs[j] = {&s, &*s.ws_, s.options().guard.enabled};
       grounded = grounded || s.ws_->contacts_active;
+      guarded = guarded || s.options().guard.enabled;
       control = control || s.ws_->has_control_stages();
       actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
       implicit = implicit || s.ws_->actuators.any_implicit();
@@ -991,6 +992,10 @@ void Batch::step_lanes(int count) {
     lane_tau_.resize(n, nv);
     a.applied = lane_tau_.data();
   }
+  if (guarded) {  // the rows the guard reads (lane_guard.cpp)
+    lane_guard_rows_.resize(n, nv * simd::kGuardFields);
+    a.guard_rows = lane_guard_rows_.data();
+  }
   l.jobs.clear();
   for (simd::LaneGroup& g : l.groups) {
     simd::Block b = a;
@@ -998,19 +1003,22 @@ void Batch::step_lanes(int count) {
     l.jobs.push_back({g.engine.get(), b, g.isa});
   }
   const int threads = effective_num_threads();
-  if (!control) {
+  if (!control && !guarded) {
     l.pool.run(l.jobs, count, threads);
   } else {
-    // One step a run: each step's control stages read the state it starts from.
+    // One step a run: each step's control stages read the state it starts from, and its guard
+    // tests it.
     for (int k = 0; k < count; ++k) {
-      lane_control_stages(actuated);
+      if (control) lane_control_stages(actuated);
+      if (guarded) lane_guard_start();
       l.pool.run(l.jobs, 1, threads);
+      if (guarded) lane_guard_finish(tracking ? &lane_drive_change_ : nullptr);
       for (const simd::LaneGroup& g : l.groups)
         for (size_t j = 0; j < g.members.size(); ++j) {
           const int lane = static_cast<int>(j), i = g.members[j];
           Simulation& s = sims_[static_cast<size_t>(i)];
-          if (g.engine->stopped_now(
-                  lane)) {  // Stepper::check_finite_or_throw takes the pushes back
+          if (guarded && lane_guard_redone(i)) continue;  // its Simulation's step wrote all
+          if (g.engine->stopped_now(lane)) {  // Stepper::check_finite_or_throw takes the pushes back
             s.stepper().undo_actuators();
           } else if (implicit && g.engine->stop(lane).quantity == 0 && s.ws_->actuators.any()) {
             // Stepper::row_forces: an implicit actuator's row force is its actuator force.

@@ -142,9 +142,10 @@ Stop contact_report(ContactLanes& c, const Plan& p, int env) {
 }
 
 void contact_conclude(ContactLanes& c, int env, bool kept) {
-  Workspace& ws = *c.envs[static_cast<size_t>(env)].ws;
+  const ContactLanes::Env& e = c.envs[static_cast<size_t>(env)];
+  Workspace& ws = *e.ws;
   if (kept) {
-    ws.contact_rows.conclude();
+    if (!e.guarded) ws.contact_rows.conclude();  // else once the guard keeps it
     return;
   }
   // Stepper::check_finite_or_throw: a diverged step reports no contacts.

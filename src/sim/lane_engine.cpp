@@ -12,6 +12,7 @@
 #include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/core/format.hpp"
+#include "workspace.hpp"
 
 namespace featherdrive::simd {
 
@@ -84,14 +85,12 @@ namespace {
 // The first setting of s the lane step does not simulate (kind 0: none), found without
 // allocating: Batch looks at its handed-out environments before every step.
 struct Refusal {
-  enum Kind { none, guard, rotated_root, self_collision } kind = none;
+  enum Kind { none, rotated_root, self_collision } kind = none;
   const Link* link = nullptr;
 };
 
 Refusal find_refusal(const Simulation& s) {
   const Model& m = s.model();
-  // The lanes step in lockstep: one lane's redone step would hold up every other.
-  if (s.options().guard.enabled) return {Refusal::guard};
   for (const Link& link : m.links) {
     // compat physx moves a floating root about its centre of mass in world axes; the lanes take
     // its joint frame as the world's.
@@ -118,8 +117,6 @@ std::string lane_refusal(const Simulation& s) {
   switch (r.kind) {
     case Refusal::none:
       return {};
-    case Refusal::guard:
-      return has("simulation", "options", "the step guard");
     case Refusal::rotated_root:
       return has("joint", r.link->joint_name, "a rotated joint frame under compat physx");
     case Refusal::self_collision:
@@ -248,6 +245,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     pack_model(e, m);
   }
   stops_.resize(static_cast<size_t>(count));
+  messages_.resize(static_cast<size_t>(count));
   stopped_now_ = std::make_unique<bool[]>(static_cast<size_t>(count));
 }
 
@@ -381,6 +379,29 @@ void rotation_quaternion(const double* m, double* q) {
   q[0] = Q.w(), q[1] = Q.x(), q[2] = Q.y(), q[3] = Q.z();
 }
 
+void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out) {
+  for (int d = 0; d < nv; ++d) {
+    const double* x = rows + static_cast<size_t>(d) * kGuardFields;
+    GuardRow& g = out[static_cast<size_t>(d)];
+    g.drive_impulse = x[guard_drive];
+    g.low_impulse = x[guard_low];
+    g.high_impulse = x[guard_high];
+    g.friction_impulse = x[guard_friction];
+    g.transmission_friction_applied = x[guard_transmission];
+    g.velocity_limit_impulse = x[guard_velocity_limit];
+    g.response = x[guard_response];
+    g.max_impulse = x[guard_max_impulse];
+    g.has_drive = x[guard_has_drive] != 0.0;
+    g.has_envelope = x[guard_has_envelope] != 0.0;
+  }
+}
+
+void LaneEngine::stop_with(int e, const std::string& message) {
+  stops_[static_cast<size_t>(e)] = Stop{8, -1, 0.0};
+  stopped_now_[static_cast<size_t>(e)] = true;
+  messages_[static_cast<size_t>(e)] = message;
+}
+
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b) {
   if (a.size() != b.size()) return false;
   for (size_t j = 0; j < a.size(); ++j)
@@ -461,6 +482,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
   }
   const int n = static_cast<int>(work_.size());
   const int threads = std::max(1, std::min(threads_wanted, n));
+  run_threads_ = threads;
   if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(static_cast<size_t>(threads));
   for (auto& s : scratch_)
     if (s.size() < doubles) s.assign(doubles, 0.0);
@@ -488,6 +510,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
 std::string LaneEngine::divergence_message(int e, const Model& model, long step_count,
                                            double time) const {
   const Stop& s = stop(e);
+  if (s.quantity == 8) return messages_[static_cast<size_t>(e)];
   static const char* const kQuantity[] = {
       "",           "velocity qd",          "drive force", "limit force",
       "friction force", "velocity limit force", "position q"};

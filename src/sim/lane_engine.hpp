@@ -2,6 +2,8 @@
 // Simulations, and the blocks run on threads (simd_lane_step.hpp). docs/simd_batch.md.
 #pragma once
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <memory>
@@ -13,6 +15,7 @@
 
 namespace featherdrive {
 struct Workspace;
+struct GuardRow;
 }
 
 namespace featherdrive::simd {
@@ -23,6 +26,9 @@ struct ContactLanes {
   struct Env {
     const Simulation* sim = nullptr;
     Workspace* ws = nullptr;
+    /// Its step guard is on: the anchors of a step are kept once the guard keeps the step
+    /// (lane_guard.cpp), not by the lane step.
+    bool guarded = false;
   };
   std::vector<Env> envs;
 };
@@ -39,6 +45,10 @@ SimdIsa lane_isa(int count);
 std::string lane_refusal(const Simulation& s);
 /// Whether lane_refusal(s) is not empty, without allocating.
 bool lanes_refuse(const Simulation& s);
+
+/// One environment's rows of the last lane step (Block::guard_rows: nv kGuardFields values) as
+/// the step guard reads them (out: nv entries).
+void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out);
 
 /// Whether two sets of mimic rows couple the same dofs in the same order.
 bool same_mimic_dofs(const std::vector<MimicJoint>& a, const std::vector<MimicJoint>& b);
@@ -122,6 +132,13 @@ class LaneEngine {
   const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
   bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }
   void clear_stop(int e) { stops_[static_cast<size_t>(e)] = Stop{}; }
+  /// Environment e steps on: the step it stopped in is redone by its guard (docs/simd_batch.md).
+  void resume(int e) {
+    clear_stop(e);
+    stopped_now_[static_cast<size_t>(e)] = false;
+  }
+  /// Environment e stops with Simulation's own DivergenceError message (its guard's redo).
+  void stop_with(int e, const std::string& message);
   /// A stopped environment's reason worded as Simulation's DivergenceError, at the clock it kept.
   std::string divergence_message(int e, const Model& model, long step_count, double time) const;
 
@@ -142,6 +159,7 @@ class LaneEngine {
   std::vector<double> parameters_;  // packed in groups of kGroup environments
   ActuatorTables tables_;
   std::vector<Stop> stops_;
+  std::vector<std::string> messages_;  // per environment: stop_with's
   std::unique_ptr<bool[]> stopped_now_;
 };
 
@@ -158,6 +176,20 @@ class LanePool {
  public:
   /// `steps` steps of every job's environments, all their blocks on `threads` threads.
   void run(const std::vector<LaneJob>& jobs, int steps, int threads);
+  /// f(i) for i in [0, count), on the threads of the last run (its arena), else in turn: for
+  /// work each environment does on its own (the step guard's), so the same for any threads.
+  template <class F>
+  void each(int count, F f) {
+    if (run_threads_ <= 1 || !arena_) {
+      for (int i = 0; i < count; ++i) f(i);
+      return;
+    }
+    arena_->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<int>(0, count), [&](const tbb::blocked_range<int>& r) {
+        for (int i = r.begin(); i < r.end(); ++i) f(i);
+      });
+    });
+  }
 
  private:
   double* scratch_of(int thread);
@@ -167,6 +199,7 @@ class LanePool {
   // blocks a call is over before they do.
   std::unique_ptr<tbb::task_arena> arena_;
   int arena_threads_ = 0;
+  int run_threads_ = 1;  // the last run's threads (its arena's, when more than one)
 };
 
 /// Batch's lane groups: environments whose plans agree (PlanKey) share one engine, lane j of

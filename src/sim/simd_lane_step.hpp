@@ -2939,6 +2939,14 @@ void LaneStep<A, K>::run(int steps) {
     if (b_.actuator_force && p_.any_implicit_actuator)
       scatter(at(l_.af)[d], b_.actuator_force, nv, d);
   }
+  if (b_.guard_rows) {  // GuardField's order
+    static constexpr int kField[kGuardFields] = {
+        Layout::dimp,     Layout::low,  Layout::high,   Layout::fimp,   Layout::tf_applied,
+        Layout::vlimp, Layout::response, Layout::maxi, Layout::driven, Layout::has_envelope};
+    for (int d = 0; d < nv; ++d)
+      for (int f = 0; f < kGuardFields; ++f)
+        scatter(row(d)[kField[f]], b_.guard_rows, nv * kGuardFields, d * kGuardFields + f);
+  }
 }
 
 }  // namespace

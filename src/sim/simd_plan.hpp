@@ -238,10 +238,27 @@ struct Plan {
   Layout layout;
 };
 
+/// What the step guard reads of a dof's rows after a lane step (GuardRow, workspace.hpp):
+/// kGuardFields values a dof in Block::guard_rows.
+enum GuardField : int {
+  guard_drive,
+  guard_low,
+  guard_high,
+  guard_friction,
+  guard_transmission,
+  guard_velocity_limit,
+  guard_response,
+  guard_max_impulse,
+  guard_has_drive,
+  guard_has_envelope,
+  kGuardFields
+};
+
 /// Why a lane stopped: the first non-finite quantity in Simulation's order.
 struct Stop {
   /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 velocity limit
-  /// force, 6 position q, 7 a link's contact force (dof: 3 link + component)
+  /// force, 6 position q, 7 a link's contact force (dof: 3 link + component), 8 the step guard's
+  /// scalar redo diverged (LaneEngine keeps its message)
   int quantity = 0;
   int dof = -1;
   double value = 0.0;
@@ -304,6 +321,9 @@ struct Block {
   /// last position iteration (Simulation::last_drive_impulse_change), kept for stopped lanes.
   double* drive_change = nullptr;
   const ActuatorTables* tables = nullptr;  ///< the remotized_pd tables (lane_engine.hpp)
+  /// (N, nv kGuardFields), or null (no environment is guarded): each dof's rows of the last step
+  /// (GuardField), for the step guard, which Batch runs one step a call.
+  double* guard_rows = nullptr;
 };
 
 /// A spherical joint's PhysX positions (twist, swing1, swing2) and drive errors for the

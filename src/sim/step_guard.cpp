@@ -44,6 +44,7 @@ void Workspace::size_guard(const Model& model) {
   guard_qd0 = guard_force = guard_actuator = guard_qd1 = VecX::Zero(nv);
   guard_q1 = VecX::Zero(nq);
   for (VecX& v : guard_impulse) v = VecX::Zero(nv);
+  guard_rows.assign(static_cast<size_t>(nv), GuardRow{});
   guard_e1_valid = false;
 }
 
@@ -73,7 +74,7 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
   const bool actuated = ws_.actuators.any();
   if (actuated) ws_.actuators.evaluate(*model_, ws_.q, ws_.qd, ws_.guard_force);
   auto impulse = [&](int d) {
-    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+    const GuardRow& r = ws_.guard_rows[static_cast<size_t>(d)];
     const double explicit_force =
         actuated ? tau[d] + 0.5 * (ws_.guard_force[d] - (tau[d] - ws_.applied_force[d])) : tau[d];
     return explicit_force * h + r.drive_impulse + r.low_impulse + r.high_impulse +
@@ -128,9 +129,9 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
 // an unconverged row pushed harder than its spring. Not for rows another bound shaped (max force,
 // an envelope) nor actuators' rows. TGS applies its force in sub-steps: credit (G-11).
 double Stepper::drive_bracket(int d, double q0, double dq, double h) const {
-  const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+  const GuardRow& r = ws_.guard_rows[static_cast<size_t>(d)];
   if (!r.has_drive || ws_.actuators.active(d) || r.has_envelope ||
-      std::abs(r.drive_impulse) >= r.drive.max_impulse)
+      std::abs(r.drive_impulse) >= r.max_impulse)
     return 0.0;
   const Drive& drive = ws_.drive_delays.delayed(d) ? ws_.drive_delays.drive_seen(d)
                                                    : settings_.drives[static_cast<size_t>(d)];
@@ -149,11 +150,11 @@ double Stepper::drive_bracket(int d, double q0, double dq, double h) const {
 double Stepper::damper_power() const {
   double power = 0.0;
   for (int d = 0; d < model_->nv; ++d) {
-    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+    const GuardRow& r = ws_.guard_rows[static_cast<size_t>(d)];
     double c = settings_.friction[static_cast<size_t>(d)].viscous;
     if (ws_.actuators.active(d)) c += ws_.actuators.actuator(d).damping;
     if (r.has_drive && !ws_.actuators.implicit(d) &&
-        !(std::abs(r.drive_impulse) >= r.drive.max_impulse)) {
+        !(std::abs(r.drive_impulse) >= r.max_impulse)) {
       const Drive& drive = settings_.drives[static_cast<size_t>(d)];
       c += drive.type == DriveType::acceleration ? drive.damping / r.response : drive.damping;
     }
@@ -164,30 +165,68 @@ double Stepper::damper_power() const {
 
 // The step's start is in the storage (state_) until end_step commits; tau_step is begin_step's.
 void Stepper::guarded_advance(const VecX& tau_step) {
-  const double dt = settings_.options.dt;
-  const int most = settings_.options.guard.max_substeps;
-  double e_start[2], e0[2], e1[2];
+  guard_start();
+  advance(tau_step);
+  guard_rows_from_step();
+  if (guard_first_passes(tau_step)) {  // the unguarded step, bit for bit
+    row_forces();
+    return;
+  }
+  guard_redo();
+}
+
+// What the tests read of the advance's rows: copies, so the same bits as the rows themselves.
+void Stepper::guard_rows_from_step() {
+  for (int d = 0; d < model_->nv; ++d) {
+    const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+    GuardRow& g = ws_.guard_rows[static_cast<size_t>(d)];
+    g.drive_impulse = r.drive_impulse;
+    g.low_impulse = r.low_impulse;
+    g.high_impulse = r.high_impulse;
+    g.friction_impulse = r.friction_impulse;
+    g.transmission_friction_applied = r.transmission_friction_applied;
+    g.velocity_limit_impulse = r.velocity_limit_impulse;
+    g.response = r.response;
+    g.max_impulse = r.drive.max_impulse;
+    g.has_drive = r.has_drive;
+    g.has_envelope = r.has_envelope;
+  }
+}
+
+// The loaded state is the step's start: kept for the tests, its energies taken.
+void Stepper::guard_start() {
   ws_.guard_q0 = ws_.q;
   ws_.guard_qd0 = ws_.qd;
   // The start's energies are the last step's end's where nothing moved the state since (a
   // comparison instead of a forward kinematics pass).
   if (ws_.guard_e1_valid && ws_.q == ws_.guard_q1 && ws_.qd == ws_.guard_qd1) {
-    e_start[0] = ws_.guard_e1[0];
-    e_start[1] = ws_.guard_e1[1];
+    ws_.guard_e0[0] = ws_.guard_e1[0];
+    ws_.guard_e0[1] = ws_.guard_e1[1];
   } else {
-    guard_energy(ws_.guard_q0, ws_.guard_qd0, e_start);
+    guard_energy(ws_.guard_q0, ws_.guard_qd0, ws_.guard_e0);
   }
   ws_.guard_e1_valid = false;  // valid again once this step has ended
-  ws_.dt = dt;
+  ws_.dt = settings_.options.dt;
   ws_.target_lead = 0.0;
-  advance(tau_step);
+}
+
+// The whole step's advance, its end in q, qd and its rows in guard_rows, tested; kept on a pass.
+bool Stepper::guard_first_passes(const VecX& tau) {
   ws_.guard_substeps = 1;
   ws_.guard_account_next = ws_.guard_account;
-  if (guard_passes(tau_step, e_start, e1)) {  // the unguarded step, bit for bit
-    row_forces();
-    keep_guard_end(e1);
-    return;
-  }
+  double e1[2];
+  if (!guard_passes(tau, ws_.guard_e0, e1)) return false;
+  keep_guard_end(e1);
+  return true;
+}
+
+// The step again from its start (loaded) as n = 2, 4, ... sub-steps (docs/math/step_guard.md,
+// "The sub-step law").
+void Stepper::guard_redo() {
+  const double dt = settings_.options.dt;
+  const int most = settings_.options.guard.max_substeps;
+  double e0[2], e1[2];
+  const double* e_start = ws_.guard_e0;
   ++ws_.guard_triggers;
   for (int n = 2;; n = std::min(2 * n, most)) {
     load_state();  // the step's start again
@@ -206,6 +245,7 @@ void Stepper::guarded_advance(const VecX& tau_step) {
       ws_.guard_qd0 = ws_.qd;
       const VecX& tau = guard_substep_force();
       advance(tau);
+      guard_rows_from_step();
       for (int d = 0; d < model_->nv; ++d) {
         const DofRows& r = ws_.rows[static_cast<size_t>(d)];
         ws_.guard_impulse[0][d] += r.drive_impulse;

@@ -20,6 +20,16 @@
 
 namespace featherdrive {
 
+/// What the step guard reads of a dof's rows after an advance (step_guard.cpp, eq. G-3, G-7,
+/// G-10): filled from the rows by the scalar step, from the lanes' rows by Batch's lanes.
+struct GuardRow {
+  double drive_impulse = 0.0, low_impulse = 0.0, high_impulse = 0.0, friction_impulse = 0.0;
+  double transmission_friction_applied = 0.0, velocity_limit_impulse = 0.0;
+  double response = 0.0;     ///< r = (M^-1)_jj
+  double max_impulse = 0.0;  ///< the drive row's bound
+  bool has_drive = false, has_envelope = false;
+};
+
 /// The workspace of one simulation: the step's working copies of the state and its scratch, the
 /// setters' copies of settings that carry delay histories or buffers (actuators, drive delays,
 /// mimic rows), the contact rows with their anchors, the outputs a State does not hold and the
@@ -107,10 +117,16 @@ struct Workspace {
   double target_lead = 0.0;
   std::optional<Data> guard_data;  ///< for the energies (a second Data: data keeps the step's)
   VecX guard_q0, guard_qd0, guard_force, guard_actuator, guard_impulse[4];
+  std::vector<GuardRow> guard_rows;  ///< the advance's rows, as the tests read them
+  double guard_e0[2] = {0.0, 0.0};  ///< the step's start energies (kinetic, potential)
   /// The last step's end state and energies: the next step's start, unless a setter moved it.
   VecX guard_q1, guard_qd1;
   double guard_e1[2] = {0.0, 0.0};
   bool guard_e1_valid = false;
+  /// The contact reports and link forces at the step's start: Batch's lanes report the step they
+  /// advance, a redone step keeps these (lane_guard.cpp).
+  std::vector<ContactReport> guard_contacts;
+  std::vector<Vec3> guard_link_contact_force;
   GuardAccount guard_account;  ///< test (iii): committed with the step
   GuardAccount guard_account_next;  ///< the account after the (sub-)step being tested
   int guard_substeps = 1;
@@ -138,6 +154,19 @@ class Stepper {
   const VecX& control_stages();
   /// What control_stages changed, taken back when the step diverges.
   void undo_actuators();
+  /// The end: outputs' finite check (throws DivergenceError, state unchanged), commit, clock.
+  void end_step();
+
+  // The step guard in parts, for Batch's lanes, which advance the step themselves
+  // (step_guard.cpp, docs/simd_batch.md): guard_start on the loaded step-start state; after the
+  // advance (its end loaded as q, qd, its rows in ws.guard_rows) guard_first_passes (true: the
+  // step is kept, as a Simulation keeps it); else, from the start loaded again, guard_redo.
+  // guarded_advance: the whole guarded advance from the loaded start, the step's forces.
+  void guarded_advance(const VecX& tau);
+  void guard_start();
+  bool guard_first_passes(const VecX& tau);
+  void guard_redo();
+  void commit_guard_account();
 
  private:
   bool physx() const { return settings_.options.compat == Compat::physx; }
@@ -147,7 +176,6 @@ class Stepper {
   const VecX& apply_actuators();
   void advance(const VecX& tau);
   void row_forces();
-  void end_step();
   void check_finite_or_throw();
   void commit_state();
   void scale_to_velocity_limits();
@@ -166,7 +194,7 @@ class Stepper {
   void contact_link_velocities();
   void contact_forces();
   // The guard (step_guard.cpp).
-  void guarded_advance(const VecX& tau);
+  void guard_rows_from_step();
   /// Tests (i) and (ii) of the advance just made from guard_q0, guard_qd0 (energies e0);
   /// leaves the end's energies in e1.
   bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);
@@ -174,7 +202,6 @@ class Stepper {
   const VecX& guard_substep_force();
   void keep_guard_end(const double e1[2]);
   double damper_power() const;
-  void commit_guard_account();
   double drive_bracket(int d, double q0, double dq, double h) const;
   void lead_drive_targets();
 

@@ -417,11 +417,13 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   expect_refused(Simulation(std::make_shared<const Model>(turned), physx),
                  "a rotated joint frame under compat physx");
   Simulation s = simd_prototype(9, SolverType::pgs, 5);
+  // The step guard the lanes take (step_guard_test.cpp), with ground contacts too.
+  SimulationOptions guard = s.options();
+  guard.guard.enabled = true;
   Simulation guarded = s;
-  SimulationOptions o = s.options();
-  o.guard.enabled = true;
-  guarded.set_options(o);
-  expect_refused(guarded, "simulation 'options' has the step guard");
+  guarded.set_options(guard);
+  Batch guarded_batch(guarded, 2);
+  ASSERT_LANES(guarded_batch);
   // A ground with the model's shapes: the lanes solve their rows (lane_contact_test.cpp), under
   // compat none and physx.
   Model shaped = s.model();
@@ -435,6 +437,10 @@ TEST(BatchLanes, StepPathNamesWhatTheLanesDoNotSimulate) {
   grounded.set_ground(ground);
   Batch on_ground(grounded, 2);
   ASSERT_LANES(on_ground);
+  Simulation guarded_on_ground = grounded;
+  guarded_on_ground.set_options(guard);
+  Batch guarded_grounded_batch(guarded_on_ground, 2);
+  ASSERT_LANES(guarded_grounded_batch);
   SimulationOptions physx_options = grounded.options();
   physx_options.compat = Compat::physx;
   Simulation grounded_physx(grounded.model_ptr(), physx_options);

@@ -3,15 +3,20 @@
 // diverges, the bad values refused.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/batch.hpp"
 #include "support/compare.hpp"
 #include "support/drives.hpp"
+#include "support/lanes.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -163,16 +168,19 @@ TEST(StepGuard, BoundsAStiffExplicitActuator) {
   }
 }
 
-// A Batch steps its Simulations: one guarded environment equals a guarded Simulation bit for bit
-// (through triggered steps), as does one that recomputes every start's energies; the lanes
-// refuse the guard in one line (step_path), so a guarded batch steps its Simulations.
-TEST(StepGuard, BatchEqualsASimulationAndTheLanesRefuse) {
+// A Batch with its lanes off steps its Simulations: one guarded environment equals a guarded
+// Simulation bit for bit (through triggered steps), as does one that recomputes every start's
+// energies. Through the lanes, which take the guard (docs/simd_batch.md, "The step guard"), it
+// equals it within 1e-12 (another operation order) with the same steps redone.
+TEST(StepGuard, BatchEqualsASimulationWithLanesOffAndOn) {
   const auto model = test::make_benchmark_chain(32, Vec3::Zero());
   const SimulationOptions o = guard_options(SolverType::pgs, true);
   Simulation alone(model, o);
   test::drive_benchmark_chain(alone);
-  Batch batch(model, 2, o);
+  Batch batch(model, 2, o), lanes(model, 3, o);
+  batch.set_lanes(false);
   for (int i = 0; i < 2; ++i) test::drive_benchmark_chain(batch.sim(i));
+  for (int i = 0; i < 3; ++i) test::drive_benchmark_chain(lanes.sim(i));
   // The start's energies reused from the last step's end (step_guard.cpp) are the ones a new
   // forward kinematics pass gives: set_model (same model) drops them every step here.
   Simulation recomputed(model, o);
@@ -181,18 +189,246 @@ TEST(StepGuard, BatchEqualsASimulationAndTheLanesRefuse) {
     recomputed.set_model(recomputed.model_ptr());
     recomputed.step();
   }
-  const std::string path = batch.step_path();
-  EXPECT_EQ(path.rfind("scalar: ", 0), 0u) << path;
-  EXPECT_NE(path.find("step guard"), std::string::npos) << path;
+  EXPECT_EQ(batch.step_path(), "scalar: lanes off (set_lanes)");
+  EXPECT_NE(lanes.step_path().find(" lanes"), std::string::npos) << lanes.step_path();
   alone.step(60);
   batch.step(60);
+  lanes.step(60);
   EXPECT_TRUE(guard_same_outputs(recomputed, alone));
   EXPECT_EQ(recomputed.guard_triggers(), alone.guard_triggers());
   EXPECT_GT(alone.guard_triggers(), 0);
   EXPECT_EQ(batch.sim(1).guard_triggers(), alone.guard_triggers());
   EXPECT_TRUE(guard_same_outputs(batch.sim(1), alone));
-  Batch copies(alone, 4);
-  EXPECT_NE(copies.step_path().find("step guard"), std::string::npos) << copies.step_path();
+  test::LaneWorst worst;
+  for (int i = 0; i < 3; ++i) {
+    test::compare_with_alone(lanes, i, alone, worst, "chain");
+    EXPECT_EQ(lanes.sim(i).guard_triggers(), alone.guard_triggers());
+    EXPECT_EQ(lanes.sim(i).guard_exhausted(), alone.guard_exhausted());
+  }
+  EXPECT_LT(worst.state, 1e-12);
+  EXPECT_LT(worst.force, 1e-12);
+}
+
+// A random fixed-base tree (spherical joints too) at dt 1/30 with limits, friction and velocity
+// limits on some dofs; environment e's drives are stiff (kp 4000: steps the guard redoes as
+// their targets jump) for e % 3 == 0, soft (kp 40: kept) otherwise, and e % 4 == 3 is not
+// guarded (and soft: stiff and unguarded, a floating tree's steps diverge).
+SimulationOptions guard_lane_options(SolverType solver, Compat compat, bool guard) {
+  SimulationOptions o = test::lane_test_options(solver);
+  o.dt = 1.0 / 30.0;
+  o.compat = compat;
+  o.guard.enabled = guard;
+  return o;
+}
+
+Simulation guard_prototype(SolverType solver, Compat compat, bool floating = false) {
+  auto model = test::make_random_tree(11, 7, floating, true, 0.01);
+  SimulationOptions o = guard_lane_options(solver, compat, true);
+  if (floating) o.dt = 0.01;  // its light links spin up at dt 1/30 even guarded
+  Simulation sim(model, o);
+  std::mt19937 rng(3);
+  test::drive_every_joint(sim, rng, 40.0, 4.0);
+  for (int d = 0; d < model->nv; ++d) {
+    if (!dof_has_rows(*model, d)) continue;
+    if (d % 4 == 1) sim.set_joint_friction(d, JointFriction{0.3, 0.2, 0.1});
+    if (d % 5 == 3) sim.set_max_joint_velocity(d, 6.0);
+  }
+  return sim;
+}
+
+void give_guard_lane_gains(Simulation& sim, int e) {
+  const Model& m = sim.model();
+  const bool stiff = e % 3 == 0 && e % 4 != 3;
+  // A floating tree, whose root the drives swing too, is stiff (redone) at 3 % of the gains.
+  const double scale = m.floating_base() ? 0.03 : 1.0;
+  const double kp = stiff ? 4000.0 * scale : 40.0, kd = stiff ? 20.0 * scale : 4.0;
+  for (int d = 0; d < m.nv; ++d) {
+    if (!dof_has_rows(m, d)) continue;
+    Drive drive = sim.drive(d);
+    drive.type = DriveType::force;
+    drive.stiffness = kp;
+    drive.damping = kd;
+    sim.set_drive(d, drive);
+  }
+  if (e % 4 == 3) {
+    SimulationOptions o = sim.options();
+    o.guard.enabled = false;
+    sim.set_options(o);
+  }
+}
+
+// Targets jumping by up to 1.2 rad every call (calls of 1 to 9 steps).
+void jump_guard_lane_targets(Simulation& sim, int e, int k) {
+  const Model& m = sim.model();
+  for (int d = 0; d < m.nv; ++d) {
+    if (!dof_has_rows(m, d)) continue;
+    const double x = 0.6 * std::sin(0.7 * k + 1.3 * d + 0.5 * e);
+    sim.set_drive_target(d, x, 0.2 * std::cos(0.3 * k + d));
+  }
+}
+
+// Environment s's guard counters equal those of a, stepped alone; returns the largest relative
+// difference of their accounts.
+double expect_same_guard(const Simulation& s, const Simulation& a, const std::string& what) {
+  EXPECT_EQ(s.guard_triggers(), a.guard_triggers()) << what;
+  EXPECT_EQ(s.guard_exhausted(), a.guard_exhausted()) << what;
+  EXPECT_EQ(s.guard_substeps(), a.guard_substeps()) << what;
+  const GuardAccount &x = s.guard_account(), &y = a.guard_account();
+  double worst = 0.0;
+  for (const auto& [u, v] : {std::pair{x.created, y.created}, std::pair{x.dissipated, y.dissipated},
+                             std::pair{x.scale, y.scale}})
+    worst = std::max(worst, std::abs(u - v) / std::max(1.0, std::abs(v)));
+  return worst;
+}
+
+TEST(StepGuard, GuardedLanesEqualGuardedSimulations) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (const SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      const std::string what = std::string(to_string(compat)) + " " + to_string(solver);
+      const Simulation proto = guard_prototype(solver, compat);
+      Batch batch(proto, 7);
+      std::vector<Simulation> alone = test::give_each(batch, proto, give_guard_lane_gains);
+      EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
+      test::step_with_commands(batch, alone, 1000, jump_guard_lane_targets);
+      test::LaneWorst worst;
+      long redone = 0, kept_guarded = 0;
+      double account = 0.0;
+      for (int e = 0; e < batch.size(); ++e) {
+        const Simulation& a = alone[static_cast<size_t>(e)];
+        test::compare_with_alone(batch, e, a, worst, what);
+        account = std::max(account, expect_same_guard(batch.sim(e), a, what));
+        if (e % 4 != 3 && e % 3 == 0) redone += a.guard_triggers() > 0;
+        if (e % 4 != 3 && e % 3 != 0) kept_guarded += a.guard_triggers() == 0;
+      }
+      std::printf("%s: guarded lanes against guarded Simulations: state %.1e, forces %.1e, "
+                  "accounts %.1e (docs/simd_batch.md)\n",
+                  what.c_str(), worst.state, worst.force, account);
+      EXPECT_LT(worst.state, 1e-12) << what;
+      EXPECT_LT(worst.force, 1e-12) << what;
+      EXPECT_LT(account, 1e-12) << what;
+      // The case exercises both: the stiff environments redone, soft ones kept every step.
+      EXPECT_EQ(redone, 2) << what;
+      EXPECT_GE(kept_guarded, 2) << what;
+    }
+}
+
+// A floating tree at dt 0.01 (its root falling freely and swung by its drives: test (i) on the
+// root's rotation, the work over its velocity coordinates) is sensitive: the scalar step's own
+// difference from a start a last bit off reaches 1.5e-11 in 300 steps. Each environment in the
+// lanes stays within kSensitivityFactor of that sensitivity, its own (tests/support/lanes.hpp),
+// with the same steps redone.
+TEST(StepGuard, GuardedFloatingLanesWithinTheirOwnSensitivity) {
+  const Simulation proto = guard_prototype(SolverType::tgs, Compat::none, /*floating=*/true);
+  Batch batch(proto, 7);
+  std::vector<Simulation> alone = test::give_each(batch, proto, give_guard_lane_gains);
+  std::vector<Simulation> nudged = alone;
+  for (Simulation& s : nudged) {
+    VecX qd = s.qd();
+    for (double& v : qd) v += std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
+    s.set_qd(qd);
+  }
+  EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
+  for (int k = 0, done = 0; done < 300; ++k) {
+    const int n = std::min(1 + k % 9, 300 - done);
+    for (int e = 0; e < batch.size(); ++e) {
+      jump_guard_lane_targets(batch.sim(e), e, k);
+      jump_guard_lane_targets(alone[static_cast<size_t>(e)], e, k);
+      jump_guard_lane_targets(nudged[static_cast<size_t>(e)], e, k);
+    }
+    batch.step(n);
+    for (Simulation& s : alone) s.step(n);
+    for (Simulation& s : nudged) s.step(n);
+    done += n;
+  }
+  double ratio = 0.0;
+  for (int e = 0; e < batch.size(); ++e) {
+    const Simulation& a = alone[static_cast<size_t>(e)];
+    test::LaneWorst worst;
+    test::compare_with_alone(batch, e, a, worst, "floating");
+    const double own =
+        std::max(1e-12, test::simulation_difference(nudged[static_cast<size_t>(e)], a));
+    ratio = std::max(ratio, std::max(worst.state, worst.force) / own);
+    expect_same_guard(batch.sim(e), a, "floating env " + std::to_string(e));
+  }
+  std::printf("floating: guarded lanes against guarded Simulations: largest ratio to an "
+              "environment's own sensitivity %.2g (docs/simd_batch.md)\n", ratio);
+  EXPECT_LE(ratio, test::kSensitivityFactor);
+  EXPECT_GT(alone[0].guard_triggers(), 0);
+  EXPECT_EQ(alone[1].guard_triggers(), 0);
+}
+
+// A guarded batch's bits do not depend on where an environment sits, the width, the batch size
+// or the threads: each environment's guard runs on its own lane's values (docs/simd_batch.md,
+// "Determinism").
+TEST(StepGuard, GuardedLanesBitsIndependentOfLaneWidthSizeAndThreads) {
+  const Simulation proto = guard_prototype(SolverType::pgs, Compat::none);
+  const int nq = proto.model().nq, nv = proto.model().nv;
+  // Environment e of the reference (settings e % 7) sits at (e + shift) % size.
+  auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+    Batch batch(proto, size);
+    batch.set_isa(isa);
+    batch.set_num_threads(threads);
+    auto at = [&](int e) -> Simulation& { return batch.sim((e + shift) % size); };
+    for (int e = 0; e < size; ++e) give_guard_lane_gains(at(e), e % 7);
+    for (int k = 0; k < 40; ++k) {
+      for (int e = 0; e < size; ++e) jump_guard_lane_targets(at(e), e % 7, k);
+      batch.step(1 + k % 3);
+    }
+    RowMatrix out(size, nq + nv + 2);
+    for (int e = 0; e < size; ++e)
+      out.row(e) << at(e).q().transpose(), at(e).qd().transpose(),
+          static_cast<double>(at(e).guard_triggers()), at(e).guard_account().created;
+    return out;
+  };
+  const RowMatrix reference = run(7, SimdIsa::sse2, 1, 0);
+  EXPECT_GT(reference(0, nq + nv), 0.0);  // environment 0 was redone
+  for (SimdIsa isa : available_simd_isas())
+    for (int threads : {1, 2})
+      for (int shift : {0, 3})
+        EXPECT_TRUE(test::same_bits(run(7, isa, threads, shift), reference))
+            << to_string(isa) << ", " << threads << " threads, shift " << shift;
+  for (SimdIsa isa : available_simd_isas())
+    EXPECT_TRUE(test::same_bits(RowMatrix(run(19, isa, 2, 0).topRows(7)), reference))
+        << to_string(isa) << ", 19 environments";
+}
+
+// A guarded environment whose redone step still diverges (its sub-steps too) stops with the
+// state before that step and its Simulation's message; the others step on.
+TEST(StepGuard, GuardedLaneThatDivergesStopsAsItsSimulation) {
+  Simulation proto = guard_prototype(SolverType::tgs, Compat::none);
+  SimulationOptions o = proto.options();
+  o.guard.max_substeps = 4;
+  proto.set_options(o);
+  // Without velocity limits, which would scale the huge velocity below back to theirs.
+  for (int d = 0; d < proto.model().nv; ++d)
+    if (dof_has_rows(proto.model(), d)) proto.set_max_joint_velocity(d, kInf);
+  Batch batch(proto, 5);
+  EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
+  const int bad[] = {3};
+  batch.step(2);
+  batch.set_qd(bad, RowMatrix::Constant(1, proto.model().nv, 1e200));
+  const VecX q_before = batch.q().row(3).transpose();
+  Simulation alone = batch.simulation(3);
+  std::string message;
+  try {
+    alone.step();
+  } catch (const DivergenceError& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty());
+  EXPECT_EQ(alone.guard_triggers(), 1);
+  try {
+    batch.step(4);
+    ADD_FAILURE() << "no DivergenceError";
+  } catch (const DivergenceError& e) {
+    EXPECT_NE(std::string(e.what()).find("batch copy 3 (1 of 5"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(batch.divergences()[3].has_value());
+  EXPECT_EQ(batch.divergences()[3]->message, message);
+  EXPECT_EQ(batch.step_count()[3], 2);
+  EXPECT_EQ(batch.sim(3).guard_triggers(), 1);
+  EXPECT_TRUE(test::same_bits(VecX(batch.q().row(3).transpose()), q_before));
+  for (int e : {0, 1, 2, 4}) EXPECT_EQ(batch.step_count()[e], 6) << e;
 }
 
 // Test (iii)'s account on a slider without gravity, PGS, steps the guard keeps: each step is the

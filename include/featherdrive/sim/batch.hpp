@@ -270,6 +270,11 @@ class Batch {
   bool prepare_lanes();           ///< (re)groups and packs what changed; false: no lane group
   void step_lanes(int count);
   void lane_control_stages(bool actuated);  ///< actuated: the lanes read lane_tau_
+  // The step guard on the lanes' step (lane_guard.cpp): each guarded environment's start kept,
+  // then its guard run on the lanes' end: kept, or redone by its own scalar step.
+  void lane_guard_start();
+  void lane_guard_finish(RowMatrix* drive_change);
+  bool lane_guard_redone(int i) const { return guard_redone_[static_cast<size_t>(i)] != 0; }
 
   std::vector<Simulation> sims_;
   std::array<RowMatrix, StateStorage::kFields> rows_;
@@ -287,6 +292,10 @@ class Batch {
   RowMatrix lane_tau_;  // the joint force of each environment's lane step (control stages)
   RowMatrix lane_actuator_force_;  // the implicit actuators' forces of a lane step
   RowMatrix lane_drive_change_;    // the drive impulses' change in the last iteration (tracking)
+  RowMatrix lane_guard_rows_;      // the rows the guard reads (simd::GuardField), per environment
+  std::vector<char> guard_live_, guard_redone_;  // per environment: guarded this step; redone
+  std::vector<long> guard_steps_;    // the guarded environments' clocks at the step's start
+  std::vector<double> guard_time_;
 };
 
 }  // namespace featherdrive
