@@ -855,7 +855,7 @@ void Batch::step_lanes(int count) {
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
     contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
-    grounded = grounded || s.ws_->contacts_active;
+    grounded = grounded || s.ws_->contacts_active || s.ws_->self_contacts_active;
   }
   lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());
   simd::Block a;

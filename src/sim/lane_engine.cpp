@@ -94,9 +94,6 @@ std::string lane_refusal(const Simulation& s) {
         link.tree_transform.E != Mat3::Identity())
       return has("joint", link.joint_name, "a rotated joint frame under compat physx");
   }
-  // Self-collision rows are solved outside the sweep (contact.md, C31).
-  if (s.contact_options().self_collision && m.shapes.size() > 1)
-    return has("simulation", "settings", "self-collision between the model's shapes");
   return {};
 }
 

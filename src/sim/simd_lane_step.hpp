@@ -381,7 +381,9 @@ class LaneStep {
   M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
   M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
   M grounded_ = none();  // lanes whose environment's ground contacts run (Plan::contacts)
-  bool live_[kW] = {};   // per lane: its contact rows run this step (grounded, not stopped)
+  M colliding_ = none();  // lanes whose environment's self contacts run (Plan::contacts)
+  bool live_[kW] = {};   // per lane: its contact rows run this step (ground or self, not stopped)
+  bool self_live_[kW] = {};  // per live lane: its self-contact rows run
   Stop contact_stop_[kW] = {};  // per live lane: its first non-finite contact force
   LaneContactPhase contact_phase_;  // the sweep's
 };
@@ -1361,11 +1363,14 @@ template <bool kGiven, class L>
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
   if (p_.num_mimic > 0) solve_mimic();
-  if (p_.contacts) {  // Stepper::sweep: the links' velocities at the sweep's start, its phase
-    contact_velocities();
+  if (p_.contacts) {  // Stepper::sweep: its phase, the self rows, the links' velocities then
     LaneContactPhase& c = contact_phase_;
     c.dt = p_.dt, c.h = h_, c.tgs = p_.tgs, c.velocity_iteration = velocity_iteration_;
     c.elapsed = velocity_iteration_ ? p_.dt : p_.dt - time_to_step_end_ - h_;
+    if (any(colliding_))
+      for (int l = 0; l < b_.valid; ++l)
+        if (self_live_[l]) contact_self_solve(*b_.contacts, p_, b_.env0 + l, c, scratch(), kW, l);
+    contact_velocities();
   }
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
@@ -2694,6 +2699,7 @@ void LaneStep<A, K>::step() {
     select(stopped_, V(1.0), V(0.0)).store_aligned(stopped);
     for (int l = 0; l < b_.valid; ++l) {
       live_[l] = stopped[l] == 0.0 && contacts_active(*b_.contacts, b_.env0 + l);
+      self_live_[l] = live_[l] && self_contacts_active(*b_.contacts, b_.env0 + l);
       if (live_[l]) contact_poses(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
     }
   }
@@ -2766,7 +2772,8 @@ void LaneStep<A, K>::step() {
     // their velocities.
     if (p_.num_mimic > 0) {
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
-    } else if (const M acting = undriven_ | grounded_; any(acting) && p_.velocity_iterations > 0) {
+    } else if (const M acting = undriven_ | grounded_ | colliding_;
+               any(acting) && p_.velocity_iterations > 0) {
       V* saved = at(l_.saved_tgs);
       for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
@@ -2897,10 +2904,15 @@ void LaneStep<A, K>::run(int steps) {
   stopped_ = V::load_aligned(stopped) != V(0.0);
   setup_row_constants(p_.tgs ? p_.dt / p_.position_iterations : p_.dt);
   if (p_.contacts) {  // a grounded lane sweeps (and iterates) with or without joint rows
-    alignas(64) double grounded[kW];
-    for (int l = 0; l < kW; ++l)
-      grounded[l] = contacts_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+    alignas(64) double grounded[kW], colliding[kW];
+    for (int l = 0; l < kW; ++l) {
+      grounded[l] = ground_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+      colliding[l] = self_contacts_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+    }
     grounded_ = V::load_aligned(grounded) != V(0.0);
+    // A lane with self contacts alone iterates in TGS's velocity iterations too, but sweeps
+    // only with joint rows (Stepper::sweep solves its rows before the sweep).
+    colliding_ = V::load_aligned(colliding) != V(0.0);
     rowless_ = rowless_ & !grounded_;
   }
   for (int s = 0; s < steps; ++s) {

@@ -244,8 +244,8 @@ struct Stop {
   double value = 0.0;
 };
 
-/// Each environment's ground contact rows (lane_engine.hpp), which the lane step calls out of
-/// line, one lane at a time, on that lane's entries of its scratch (docs/simd_batch.md,
+/// Each environment's ground and self-contact rows (lane_engine.hpp), which the lane step calls
+/// out of line, one lane at a time, on that lane's entries of its scratch (docs/simd_batch.md,
 /// "Contacts"). s: the scratch as doubles; entry k of a lane at s[k * width + lane].
 struct ContactLanes;
 /// Where a contact solve stands (ContactPhase's fields).
@@ -253,13 +253,20 @@ struct LaneContactPhase {
   double dt = 0.0, h = 0.0, elapsed = 0.0;
   bool tgs = false, velocity_iteration = false;
 };
-/// Whether environment env's ground contact rows run (its ground is on).
+/// Whether environment env's contact rows run: its ground's (the ground is on), its self
+/// contacts' (self_collision is on and some pair can touch), either.
 bool contacts_active(const ContactLanes& c, int env);
+bool ground_active(const ContactLanes& c, int env);
+bool self_contacts_active(const ContactLanes& c, int env);
 /// The step's start: the shape links' poses (before the response takes their room), then the
 /// rows from the response, the cfm and the link velocities (layout contact_vel).
 void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
 void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
-/// Link's rows in a sweep at its start velocity plus its change dv (layout dv), which they
+/// The self-contact rows, each iteration before the sweep (Stepper::sweep; contact.md, C31), at
+/// the joint velocities (layout qd), which they change.
+void contact_self_solve(ContactLanes& c, const Plan& p, int env, const LaneContactPhase& phase,
+                        double* s, int width, int lane);
+/// Link's ground rows in a sweep at its start velocity plus its change dv (layout dv), which they
 /// change; their impulse starts its subtree impulse (layout subtree).
 void contact_solve(ContactLanes& c, const Plan& p, int env, int link, const LaneContactPhase& phase,
                    double* s, int width, int lane);

@@ -67,7 +67,12 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
                         const std::vector<Vec6>& link_velocity, const VecX& link_cfm,
                         int position_iterations, const ContactPhase& phase,
                         std::vector<ContactReport>& reports, int first) {
-  tgs_ = phase.tgs;
+  find(model, data, options);
+  return setup_rows(model, data, options, link_velocity, link_cfm, position_iterations, phase,
+                    reports, first);
+}
+
+int SelfContacts::find(const Model& model, const Data& data, const ContactOptions& options) {
   const double contact_distance = 2.0 * options.contact_offset;  // C1
   // The narrow phase (C29, C29a), then the deepest pairs whose points fit, whole.
   int found = 0;
@@ -97,6 +102,14 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
   std::sort(order_.begin(), order_.begin() + num_pairs_);  // pair order: deterministic
   num_contacts_ = points;
   num_rows_ = 3 * num_contacts_;
+  return num_contacts_;
+}
+
+int SelfContacts::setup_rows(const Model& model, const Data& data, const ContactOptions& options,
+                             const std::vector<Vec6>& link_velocity, const VecX& link_cfm,
+                             int position_iterations, const ContactPhase& phase,
+                             std::vector<ContactReport>& reports, int first) {
+  tgs_ = phase.tgs;
   const Vec3& origin = data.frame_origin;
   const double share = tgs_penetration_share(position_iterations);
   int c = 0;

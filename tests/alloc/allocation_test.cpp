@@ -24,6 +24,7 @@
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "support/lane_contact_models.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
 
@@ -328,6 +329,32 @@ TEST(BatchAllocations, LanesNoneAtEveryWidth) {
   }
 }
 
+// The contacts of the last environment of 11 in lanes of `isa` on one thread, over 30 steps after
+// the first call (which makes the scratch), in which nothing is allocated.
+struct LaneContactCount {
+  int contacts = 0, self = 0;
+};
+LaneContactCount lane_contacts_allocating_nothing(const Simulation& prototype, SimdIsa isa) {
+  Batch batch(prototype, 11);
+  batch.set_isa(isa);
+  batch.set_num_threads(1);
+  batch.step();
+  EXPECT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
+  LaneContactCount count;
+  EXPECT_EQ(allocations_in([&] {
+              for (int k = 0; k < 30; ++k) {
+                batch.step();
+                for (const ContactReport& c : batch.contacts(10)) {
+                  ++count.contacts;
+                  count.self += c.other_link >= 0;
+                }
+              }
+            }),
+            0)
+      << to_string(isa);
+  return count;
+}
+
 // The same with ground contacts in the lanes (each environment's ContactRows, per lane): a
 // floating tree with a shape of each kind on its links, half sunk into the ground, PGS and TGS,
 // at every width, none on one thread.
@@ -354,15 +381,24 @@ TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
     ground.enabled = true;
     prototype.set_ground(ground);
     for (SimdIsa isa : available_simd_isas()) {
-      Batch batch(prototype, 11);
-      batch.set_isa(isa);
-      batch.set_num_threads(1);
-      batch.step();
-      ASSERT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
-      EXPECT_EQ(allocations_in([&] { batch.step(30); }), 0) << to_string(isa);
-      EXPECT_GT(batch.contacts(10).size(), 0u);
+      const LaneContactCount count = lane_contacts_allocating_nothing(prototype, isa);
+      EXPECT_GT(count.contacts, 0) << to_string(isa);
     }
   }
+}
+
+// The same with self-collision in the lanes (each environment's SelfContacts, and the response its
+// rows sweep, per lane): a robot whose box rests on its plate on the ground, PGS and TGS, compat
+// none and physx, at every width, none on one thread.
+TEST(BatchAllocations, LanesWithSelfContactsNoneAtEveryWidth) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      const Simulation prototype = test::self_touching_robot(solver, compat);
+      for (SimdIsa isa : available_simd_isas()) {
+        const LaneContactCount count = lane_contacts_allocating_nothing(prototype, isa);
+        EXPECT_EQ(count.self, 30 * 4) << to_string(isa);  // the box's four corners each step
+      }
+    }
 }
 
 // The kinematics and dynamics queries on a reused Data and reused outputs: none after the first

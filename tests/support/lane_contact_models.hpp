@@ -7,7 +7,9 @@
 #include <string>
 #include <utility>
 
+#include "featherdrive/model/model_builder.hpp"
 #include "featherdrive/sim/batch.hpp"
+#include "support/compare.hpp"
 #include "support/drives.hpp"
 #include "support/lanes.hpp"
 #include "support/models.hpp"
@@ -49,6 +51,19 @@ inline Simulation grounded_tree(unsigned seed, SolverType solver, bool spherical
   return sim;
 }
 
+// grounded_tree with self-collision on, the ground on (grounded) or off.
+inline Simulation self_colliding_tree(unsigned seed, SolverType solver, Compat compat,
+                                      bool grounded) {
+  Simulation sim = grounded_tree(seed, solver, false, compat);
+  ContactOptions contact;
+  contact.self_collision = true;
+  sim.set_contact_options(contact);
+  Ground ground = sim.ground();
+  ground.enabled = grounded;
+  sim.set_ground(ground);
+  return sim;
+}
+
 // Environments dropped from their own heights and turns: some land at once, some later, one
 // stays airborne through the run (5 s fall 123 m), so the lanes differ in contact count.
 inline void drop_from_own_heights(Batch& batch, std::mt19937& rng) {
@@ -73,6 +88,52 @@ inline Simulation on_ground(std::shared_ptr<const Model> model, SolverType solve
   ground.enabled = true;
   ground.material = material;
   sim.set_ground(ground);
+  return sim;
+}
+
+/// A robot whose links rest on each other, on the ground: a floating plate (5 kg, half extents
+/// 0.3, 0.3, 0.05 m) lying on the ground, a lift (0.5 kg, a free slider along the plate's z) and
+/// on it, on a hinge about x driven to 0, a box (2 kg, half extents 0.1, 0.1, 0.05 m) whose lower
+/// face starts `gap` above the plate's top: the box rests on the plate on its four corners
+/// (self contacts, contact.md C29a), the plate on the ground on its own four. Self-collision on.
+inline Simulation self_touching_robot(SolverType solver, Compat compat, double gap = 1e-3) {
+  ModelBuilder b;
+  b.set_gravity(Vec3(0, 0, -9.81));
+  auto cuboid = [](double mass, const Vec3& half) {
+    const Vec3 s = half.cwiseProduct(half);
+    return Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * mass / 3;
+  };
+  auto box = [](const Vec3& half) {
+    CollisionShape s;
+    s.type = ShapeType::box;
+    s.size = half;
+    s.material.static_friction = s.material.dynamic_friction = 0.8;
+    return s;
+  };
+  const Vec3 plate(0.3, 0.3, 0.05), top(0.1, 0.1, 0.05);
+  b.add_link(make_link("plate", "", 5.0, Vec3::Zero(), cuboid(5.0, plate),
+                       floating_joint("plate_root")));
+  b.add_link(make_link("lift", "plate", 0.5, Vec3::Zero(), Mat3::Identity() * 0.01,
+                       prismatic_joint("up", Vec3::UnitZ())));
+  b.add_link(make_link("box", "lift", 2.0, Vec3::Zero(), cuboid(2.0, top),
+                       revolute_joint("tilt", Vec3::UnitX())));
+  b.add_shape("plate", box(plate));
+  b.add_shape("box", box(top));
+  SimulationOptions o = lane_test_options(solver);
+  o.compat = compat;
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  VecX q = sim.q();
+  q[2] = plate.z();
+  q[7] = plate.z() + top.z() + gap;
+  sim.set_q(q);
+  sim.set_drive("tilt", Drive{DriveType::force, 50.0, 5.0, kInf, 0.0, 0.0});
+  Ground ground;
+  ground.enabled = true;
+  ground.material.static_friction = ground.material.dynamic_friction = 0.8;
+  sim.set_ground(ground);
+  ContactOptions contact;
+  contact.self_collision = true;
+  sim.set_contact_options(contact);
   return sim;
 }
 
