@@ -119,17 +119,17 @@ void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int
                                   phase, ws.contacts)
           : 0;
   ws.num_contacts = ws.num_ground_contacts;
-  if (!ws.self_contacts_active || ws.self_contacts.find(model, ws.data, e.sim->contact_options()) == 0)
-    return;
+  const ContactOptions& options = e.sim->contact_options();
+  if (!ws.self_contacts_active || ws.self_contacts.find(model, ws.data, options) == 0) return;
   // The self rows' responses between two links are sweeps of the scalar step's articulated
   // quantities (contact.md, C30, C31): where this lane's pairs touch, its Data gets them from the
   // step-start q, as Simulation's step computes them (their poses and response its own, within
   // rounding of the lane's).
   for (int k = 0; k < p.nq; ++k) ws.q[k] = x(l.q + k);
   inverse_mass_diagonal(model, ws.data, ws.q);
-  ws.num_contacts += ws.self_contacts.setup_rows(
-      model, ws.data, e.sim->contact_options(), ws.contact_link_velocity, ws.link_cfm,
-      p.position_iterations, phase, ws.contacts, ws.num_ground_contacts);
+  ws.num_contacts += ws.self_contacts.setup_rows(model, ws.data, options, ws.contact_link_velocity,
+                                                 ws.link_cfm, p.position_iterations, phase,
+                                                 ws.contacts, ws.num_ground_contacts);
 }
 
 void contact_self_solve(ContactLanes& c, const Plan& p, int env, const LaneContactPhase& phase,
