@@ -75,24 +75,13 @@ TEST(LaneContact, SelfCollidingRandomTreesOnTheGroundAsSimulation) {
     }
 }
 
-// lane_contact_models.hpp's robot whose box rests on its own plate, on the ground: started a
-// millimetre to 3 cm above the plate, the box turning at speeds of its own, one robot high above
-// the ground for the whole run.
+// lane_contact_models.hpp's robot whose box rests on its own plate, on the ground, from its
+// starts (one robot high above the ground for the whole run).
 TEST(LaneContact, ARobotRestingOnItselfOnTheGroundAsSimulation) {
   for (const Compat compat : {Compat::none, Compat::physx})
     for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-      const Simulation robot = test::self_touching_robot(solver, compat);
-      Batch lanes(robot, 6);
-      const double gaps[] = {1e-3, 0.01, 0.03, 1e-3, 1e-3, 0.002};
-      for (int e = 0; e < lanes.size(); ++e) {
-        VecX q = robot.q(), qd = robot.qd();
-        q[7] += gaps[e] - 1e-3;
-        if (e == 4) q[2] += 200.0;
-        qd[8] = 0.5 * e;
-        qd[3] = 0.2 * (e % 3);  // the plate sliding along its x
-        lanes.sim(e).set_q(q);
-        lanes.sim(e).set_qd(qd);
-      }
+      Batch lanes(test::self_touching_robot(solver, compat), 6);
+      test::self_touching_starts(lanes);
       const std::string what = std::string("a robot resting on itself on the ground, ") +
                                to_string(solver) +
                                (compat == Compat::physx ? ", compat physx" : "");

@@ -137,4 +137,21 @@ inline Simulation self_touching_robot(SolverType solver, Compat compat, double g
   return sim;
 }
 
+/// self_touching_robot's environments: the box a millimetre to 3 cm above the plate, turning at
+/// speeds of its own, the plate sliding along its x in some; environment 4 200 m above the ground
+/// (its box on its plate in free fall).
+inline void self_touching_starts(Batch& lanes) {
+  const double gaps[] = {1e-3, 0.01, 0.03, 1e-3, 1e-3, 0.002};
+  for (int e = 0; e < lanes.size(); ++e) {
+    Simulation& s = lanes.sim(e);
+    VecX q = s.q(), qd = s.qd();
+    q[7] += gaps[e % 6] - 1e-3;
+    if (e == 4) q[2] += 200.0;
+    qd[8] = 0.5 * e;
+    qd[3] = 0.2 * (e % 3);
+    s.set_q(q);
+    s.set_qd(qd);
+  }
+}
+
 }  // namespace featherdrive::test
