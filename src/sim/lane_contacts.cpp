@@ -73,15 +73,15 @@ void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int
   const LaneEntries x{s, width, lane};
   // Frame 0's origin, the root link's origin in the world, from the step-start q.
   const LinkConstants& root = p.links[0];
-  Vec3 origin;
+  // kinematics.cpp: r + E^T (axis q) for a prismatic root, r + E^T q for a floating one.
+  Vec3 origin(root.r[0], root.r[1], root.r[2]);
+  const Mat3 E = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(root.E);
   if (root.type == 3) {
-    for (int r = 0; r < 3; ++r) origin[r] = x(l.q + root.q_index + r);
-  } else {
-    origin = Vec3(root.r[0], root.r[1], root.r[2]);
-    if (root.type == 2) {  // kinematics.cpp: r + E^T (axis q)
-      const Mat3 E = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(root.E);
-      origin += E.transpose() * (Vec3(root.axis[0], root.axis[1], root.axis[2]) * x(l.q + root.q_index));
-    }
+    const Vec3 at(x(l.q + root.q_index), x(l.q + root.q_index + 1), x(l.q + root.q_index + 2));
+    origin += root.tree_rotation_identity ? at : Vec3(E.transpose() * at);
+  } else if (root.type == 2) {
+    origin += E.transpose() * (Vec3(root.axis[0], root.axis[1], root.axis[2]) *
+                               x(l.q + root.q_index));
   }
   data.frame_origin = origin;
   const std::vector<char>& shaped = e.ws->contact_rows.links_with_shapes();

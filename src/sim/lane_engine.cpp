@@ -83,17 +83,8 @@ std::string lane_refusal(const Simulation& s) {
   auto has = [](const std::string& what, const std::string& name, const std::string& value) {
     return what + " '" + name + "' has " + value;
   };
-  const Model& m = s.model();
   // The lanes step in lockstep: one lane's redone step would hold up every other.
   if (s.options().guard.enabled) return has("simulation", "options", "the step guard");
-  for (const Link& link : m.links) {
-
-    // compat physx moves a floating root about its centre of mass in world axes; the lanes take
-    // its joint frame as the world's.
-    if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
-        link.tree_transform.E != Mat3::Identity())
-      return has("joint", link.joint_name, "a rotated joint frame under compat physx");
-  }
   return {};
 }
 
@@ -124,6 +115,9 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
       }
     }
     k.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
+    const Quat frame(Mat3(link.tree_transform.E.transpose()));  // as integrate_root_about_com's
+    k.frame_q[0] = frame.w(), k.frame_q[1] = frame.x(), k.frame_q[2] = frame.y();
+    k.frame_q[3] = frame.z();
     const Mat3& Ic = link.inertia_com;
     k.diagonal_inertia = Ic(0, 1) == 0.0 && Ic(0, 2) == 0.0 && Ic(1, 2) == 0.0;
     if (link.parent >= 0) {

@@ -269,6 +269,7 @@ class LaneStep {
   void physx_start();
   void physx_free_momentum();
   void integrate_root_physx(double h);
+  void root_origin(const V* q, V* p);
   void physx_end_momentum();
   void world_velocity(const V* R, const V* pos, const V* com, const V* qd, const V* w0,
                       const V* v0);
@@ -1484,8 +1485,13 @@ void LaneStep<A, K>::track_contacts(double h_step) {
     const LinkConstants& root = p_.links[0];
     V move[3] = {V(0.0), V(0.0), V(0.0)};
     if (root.type == 3) {
+      V now[3], before[3];
+      root_origin(&at(l_.q)[root.q_index], now);
+      root_origin(&at(l_.old_q)[root.q_index], before);
       for (int r = 0; r < 3; ++r)
-        move[r] = at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r];
+        move[r] = root.tree_rotation_identity
+                      ? at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r]
+                      : now[r] - before[r];
     } else if (root.type == 2) {
       const V dx = at(l_.q)[root.q_index] - at(l_.old_q)[root.q_index];
       for (int r = 0; r < 3; ++r)  // E^T axis, kinematics.cpp's prismatic root
@@ -2319,9 +2325,19 @@ void LaneStep<A, K>::turn_quaternion(const V* t, V* out) {
   for (int r = 0; r < 3; ++r) out[1 + r] = select_zero(turns, s * (t[r] / angle));
 }
 
+// A floating root's origin in the world from its q: r_T + E_T^T q (kinematics.cpp's X_J X_T).
+template <class A, int K>
+void LaneStep<A, K>::root_origin(const V* q, V* p) {
+  const LinkConstants& k = p_.links[0];
+  for (int r = 0; r < 3; ++r)
+    p[r] = k.tree_rotation_identity
+               ? V(k.r[r]) + q[r]
+               : V(k.r[r]) + ((V(k.E[r]) * q[0] + V(k.E[3 + r]) * q[1]) + V(k.E[6 + r]) * q[2]);
+}
+
 // compat physx: a floating root moved over h about its centre of mass with the world velocities
-// of the step's start axes, its turn exp(h w) applied in the world (momentum_correction.cpp's
-// integrate_root_about_com; its joint frame is the world's, lane_refusal).
+// of the step's start axes, its turn exp(h w) applied in the world, its joint frame's turn Q_T
+// taken off after (momentum_correction.cpp's integrate_root_about_com).
 template <class A, int K>
 void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const LinkConstants& k = p_.links[0];
@@ -2331,10 +2347,15 @@ void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const V* R0 = at(l_.start_R);
   V c[3];
   for (int r = 0; r < 3; ++r) c[r] = link_parameter_pack(0, com_x + r);
+  const V QT[4] = {V(k.frame_q[0]), V(k.frame_q[1]), V(k.frame_q[2]), V(k.frame_q[3])};
   V Q[4];
   unit_quaternion(q + 3, Q);
+  if (!k.tree_rotation_identity) {  // Q_T Q_J
+    const V QJ[4] = {Q[0], Q[1], Q[2], Q[3]};
+    quaternion_product(QT, QJ, Q);
+  }
   V p[3], wc[3], vb[3], w[3], vcom[3], Qc[3], com[3];
-  for (int r = 0; r < 3; ++r) p[r] = V(k.r[r]) + q[r];
+  root_origin(q, p);
   cross(qd, c, wc);
   for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
   for (int r = 0; r < 3; ++r) {
@@ -2346,14 +2367,25 @@ void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const V turn[3] = {h * w[0], h * w[1], h * w[2]};
   V d[4];
   turn_quaternion(turn, d);
-  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's)
-  V dQ[4], once[4], o[4];
+  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's: Q_T^-1 first)
+  V dQ[4], once[4], o[4], oc[3];
   quaternion_product(d, Q, dQ);
   unit_quaternion(dQ, once);
-  unit_quaternion(once, o);
-  V oc[3];
-  rotate(o, c, oc);
-  for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
+  if (k.tree_rotation_identity) {
+    unit_quaternion(once, o);
+    rotate(o, c, oc);
+    for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
+  } else {
+    rotate(once, c, oc);
+    const V back[4] = {QT[0], V(0.0) - QT[1], V(0.0) - QT[2], V(0.0) - QT[3]};
+    V joint[4], d_world[3];
+    quaternion_product(back, once, joint);
+    unit_quaternion(joint, o);
+    for (int r = 0; r < 3; ++r) d_world[r] = (com[r] - oc[r]) - V(k.r[r]);
+    for (int a = 0; a < 3; ++a)  // E_T (p - r_T)
+      q[a] = (V(k.E[3 * a]) * d_world[0] + V(k.E[3 * a + 1]) * d_world[1]) +
+             V(k.E[3 * a + 2]) * d_world[2];
+  }
   for (int e = 0; e < 4; ++e) q[3 + e] = o[e];
 }
 
@@ -2413,14 +2445,23 @@ void LaneStep<A, K>::physx_end_momentum() {
     w0[r] = w0[r] + dw[r];
     vo[r] = vo[r] + (dv[r] + turn[r]);
   }
-  // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q).
+  // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q), the
+  // shift into the joint frame's axes (E_T shift).
   V* q = &at(l_.q)[k.q_index];
   const V* q0 = &at(l_.old_q)[k.q_index];
   const V per_mass = V(p_.dt) / M;
+  V o0[3], o1[3], shift[3];
+  root_origin(q0, o0);
+  root_origin(q, o1);
   for (int r = 0; r < 3; ++r) {
-    const V start = (V(k.r[r]) + q0[r]) + t[6 + r], now = (V(k.r[r]) + q[r]) + C1[r];
-    q[r] = q[r] + ((start + Ppos[r] * per_mass) - now);
+    const V start = o0[r] + t[6 + r], now = o1[r] + C1[r];
+    shift[r] = (start + Ppos[r] * per_mass) - now;
   }
+  for (int a = 0; a < 3; ++a)
+    q[a] = q[a] + (k.tree_rotation_identity
+                       ? shift[a]
+                       : (V(k.E[3 * a]) * shift[0] + V(k.E[3 * a + 1]) * shift[1]) +
+                             V(k.E[3 * a + 2]) * shift[2]);
   const V* nR = at(l_.now_R);
   for (int r = 0; r < 3; ++r) {
     qd[r] = nR[r] * w0[0] + nR[3 + r] * w0[1] + nR[6 + r] * w0[2];

@@ -115,6 +115,9 @@ struct LinkConstants {
   bool contacts = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
+  /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which
+  /// compat physx turns the root about (momentum_correction.cpp's integrate_root_about_com).
+  double frame_q[4] = {1.0, 0.0, 0.0, 0.0};
   double axis[3] = {};  ///< unit joint axis (joint frame)
 };
 

@@ -156,6 +156,36 @@ TEST(LaneContact, ARobotWhoseLinksRestOnEachOtherAsSimulation) {
     }
 }
 
+// A box whose floating root's joint frame is turned and moved, dropped and slid on the ground:
+// frame 0's origin is the root's world position r_T + E_T^T q (contact_poses), compat physx's
+// root turns in the world and its contacts track the root's move in the world (C25a).
+TEST(LaneContact, BoxOnATurnedRootFrameAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Model m = *test::make_ground_box(0.5);
+      Transform& frame = m.links[0].tree_transform;
+      frame.E = rotation_about(Vec3(0.3, -0.5, 0.8).normalized(), 0.6);
+      frame.r = Vec3(0.1, -0.2, 0.05);
+      const Simulation box = test::on_ground(std::make_shared<const Model>(m), solver, compat,
+                                             Material{0.5, 0.5, 0.0});
+      Batch lanes(box, 5);
+      for (int e = 0; e < lanes.size(); ++e) {
+        VecX q = box.q(), qd = box.qd();
+        // The box's origin at height 0.2 + 0.1 e in the world, in the joint frame's axes.
+        q.head<3>() = frame.E * (Vec3(0.0, 0.0, 0.2 + 0.1 * e) - frame.r);
+        qd[3] = 0.5 * e;
+        lanes.sim(e).set_q(q);
+        lanes.sim(e).set_qd(qd);
+      }
+      const std::string what = std::string("a box on a turned root frame, ") + to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      const test::LaneFigures f = test::batch_against_alone(lanes, 300, 6, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      for (int e = 0; e < lanes.size(); ++e)
+        EXPECT_FALSE(lanes.contacts(e).empty()) << what << " environment " << e;
+    }
+}
+
 // The ground switched on between calls (the plan takes the contact rows then), and off again in
 // one environment: a lane without a ground beside grounded ones, as its Simulation.
 TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
