@@ -851,13 +851,13 @@ void Batch::step_lanes(int count) {
   // Each environment's contact rows, reports and anchors are its Simulation's (lane_contacts.cpp).
   simd::ContactLanes& contacts = lanes_->contacts();
   contacts.envs.resize(static_cast<size_t>(n));
-  bool grounded = false;
+  bool touching = false;  // some environment's ground or self-collision is on
   for (int i = 0; i < n; ++i) {
     Simulation& s = sims_[static_cast<size_t>(i)];
     contacts.envs[static_cast<size_t>(i)] = {&s, &*s.ws_};
-    grounded = grounded || s.ws_->contacts_active || s.ws_->self_contacts_active;
+    touching = touching || s.ws_->contacts_active || s.ws_->self_contacts_active;
   }
-  lanes_->set_contacts(grounded, sims_.front().ws_->contact_rows.links_with_shapes());
+  lanes_->set_contacts(touching, sims_.front().ws_->contact_rows.links_with_shapes());
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
   a.applied = rows_[StateStorage::applied_force].data();

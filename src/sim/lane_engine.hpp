@@ -56,8 +56,9 @@ class LaneEngine {
   int size() const { return count_; }
   const Plan& plan() const { return plan_; }
 
-  /// Whether the lanes solve ground contacts (Plan::contacts) and on which links (flags per
-  /// link: those with shapes): those get their rows in the sweep, and their children's flags
+  /// Whether the lanes solve contacts, the ground's or self contacts (Plan::contacts), and on
+  /// which links (flags per link: those with shapes): those get their ground rows in the sweep
+  /// (the self rows run before it), and their children's flags
   /// change as SweepWorkspace::set_contact_links changes them. Nothing changes when both are
   /// as they were.
   void set_contacts(bool on, const std::vector<char>& shape_links);

@@ -226,8 +226,9 @@ struct Plan {
   bool physx_floating = false;
   /// compat physx with a spherical joint: its rows' link bias (S-8), its link turned in the world.
   bool physx_spherical = false;
-  /// Some environment's ground is on and the model has shapes: each environment's own contact
-  /// rows (ContactRows) run in its lane, out of line (lane_contacts.cpp).
+  /// Some environment's ground or self-collision is on and the model has shapes: each
+  /// environment's own contact rows (ContactRows, SelfContacts) run in its lane, out of line
+  /// (lane_contacts.cpp).
   bool contacts = false;
   /// compat physx; with contacts: their rows see the link bias and PhysX's tracked motion.
   bool physx = false, physx_contacts = false;
