@@ -138,7 +138,7 @@ TEST(LaneContact, SelfCollisionAsSimulation) {
 }
 
 // A robot whose box rests on its own plate, on the ground (lane_contact_models.hpp's starts),
-// against each environment alone over 300 steps (1000 in lane_contact_long_test.cpp).
+// against each environment alone over 150 steps (1000 in lane_contact_long_test.cpp).
 TEST(LaneContact, ARobotWhoseLinksRestOnEachOtherAsSimulation) {
   for (const Compat compat : {Compat::none, Compat::physx})
     for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
@@ -147,7 +147,7 @@ TEST(LaneContact, ARobotWhoseLinksRestOnEachOtherAsSimulation) {
       const std::string what = std::string("a robot resting on itself, on the ground, ") +
                                to_string(solver) +
                                (compat == Compat::physx ? ", compat physx" : "");
-      const test::LaneFigures f = test::batch_against_alone(lanes, 300, 6, what);
+      const test::LaneFigures f = test::batch_against_alone(lanes, 150, 3, what);
       EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
       for (int e = 0; e < lanes.size(); ++e)
         EXPECT_EQ(self_contacts(lanes, e), 4) << what << " environment " << e;
