@@ -99,7 +99,7 @@ inline Simulation on_ground(std::shared_ptr<const Model> model, SolverType solve
 inline Simulation self_touching_robot(SolverType solver, Compat compat, double gap = 1e-3) {
   ModelBuilder b;
   b.set_gravity(Vec3(0, 0, -9.81));
-  auto cuboid = [](double mass, const Vec3& half) {
+  auto cuboid = [](double mass, const Vec3& half) -> Mat3 {  // a Mat3, not an expression
     const Vec3 s = half.cwiseProduct(half);
     return Mat3(Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y()).asDiagonal()) * mass / 3;
   };
