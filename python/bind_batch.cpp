@@ -114,9 +114,8 @@ void featherdrive::python::bind_batch(py::module_& m) {
           "bit.")
       .def_property_readonly(
           "step_path", [](Batch& b) { return locked(b, [&] { return b.step_path(); }); },
-          "How the next step() runs: 'avx2 lanes' (one lane group), 'scalar: ' and why, or for "
-          "a mixed batch one line such as 'avx2 lanes: 2 groups (6, 2 environments); scalar: 1 "
-          "environment (environment 5: ...)'.")
+          "How the next step() runs: 'avx2 lanes' (one lane group), 'avx2 lanes: 2 groups (6, 2 "
+          "environments)', or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar).")
       .def(
           "env_path",
           [](Batch& b, py::handle i) {

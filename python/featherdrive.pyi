@@ -619,9 +619,8 @@ class Batch:
     def isa(self, value: str | None) -> None: ...
     @property
     def step_path(self) -> str:
-        """How the next step() runs: 'avx2 lanes' (one lane group), 'scalar: ' and why, or for
-        a mixed batch one line such as 'avx2 lanes: 2 groups (6, 2 environments); scalar: 1
-        environment (environment 5: ...)'."""
+        """How the next step() runs: 'avx2 lanes' (one lane group), 'avx2 lanes: 2 groups (6, 2
+        environments)', or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar)."""
     def env_path(self, i: Int) -> str:
         """How the next step() runs environment i: 'avx2 lanes, group 1' or 'scalar: ' and
         why."""

@@ -811,9 +811,9 @@ std::string Batch::lanes_off() const {
   return {};
 }
 
-// Groups the environments again when one's plan-level settings or refusal changed since (only
-// environments a setter marked or handed out can have changed), then packs what changed into
-// each lane group's parameters. False when no environment steps in lanes.
+// Groups the environments again when one's plan-level settings changed since (only environments
+// a setter marked or handed out can have changed), then packs what changed into each lane
+// group's parameters. False when no environment steps in lanes.
 bool Batch::prepare_lanes() {
   if (!lanes_off().empty()) return false;
   const int n = size();
@@ -822,10 +822,8 @@ bool Batch::prepare_lanes() {
     if (!repack_[static_cast<size_t>(i)] && !handed_out_[static_cast<size_t>(i)]) continue;
     const Simulation& s = sims_[static_cast<size_t>(i)];
     const int g = lanes_->group_of[static_cast<size_t>(i)];
-    if (simd::lanes_refuse(s) != (g < 0))
-      regroup = true;
-    else if (g >= 0 && !lanes_->groups[static_cast<size_t>(g)].key.matches(
-                           s.options(), s.mimic_joints(), s.ws_->contact_rows.links_with_shapes()))
+    if (!lanes_->groups[static_cast<size_t>(g)].key.matches(
+            s.options(), s.mimic_joints(), s.ws_->contact_rows.links_with_shapes()))
       regroup = true;
   }
   if (regroup) {
@@ -836,10 +834,6 @@ bool Batch::prepare_lanes() {
     int last = -1;
     for (int i = 0; i < n; ++i) {
       const Simulation& s = sims_[static_cast<size_t>(i)];
-      if (simd::lanes_refuse(s)) {
-        lanes->scalar.push_back(i);
-        continue;
-      }
       const std::vector<char>& shapes = s.ws_->contact_rows.links_with_shapes();
       auto fits = [&](int g) {
         return g >= 0 && lanes->groups[static_cast<size_t>(g)].key.matches(
@@ -882,7 +876,6 @@ bool Batch::prepare_lanes() {
       what = 0;
     }
   }
-  for (int i : lanes_->scalar) repack_[static_cast<size_t>(i)] = 0;  // looked at above
   return !lanes_->groups.empty();
 }
 
@@ -891,13 +884,7 @@ std::string Batch::step_path() {
   if (!off.empty()) return "scalar: " + off;
   prepare_lanes();
   const simd::LaneGroups& l = *lanes_;
-  auto scalar_why = [&](int i) {
-    return "environment " + std::to_string(i) + ": " +
-           simd::lane_refusal(sims_[static_cast<size_t>(i)]);
-  };
-  if (l.groups.empty()) return "scalar: " + scalar_why(l.scalar.front());
-  if (l.groups.size() == 1 && l.scalar.empty())
-    return std::string(to_string(l.groups.front().isa)) + " lanes";
+  if (l.groups.size() == 1) return std::string(to_string(l.groups.front().isa)) + " lanes";
   auto plural = [](size_t k, const char* what) {
     return std::to_string(k) + " " + what + (k == 1 ? "" : "s");
   };
@@ -911,15 +898,7 @@ std::string Batch::step_path() {
     if (!one_isa) path += std::string(to_string(l.groups[g].isa)) + " ";
     path += std::to_string(l.groups[g].members.size());
   }
-  path += l.groups.size() == 1 && l.groups.front().members.size() == 1 ? " environment)"
-                                                                       : " environments)";
-  if (!l.scalar.empty()) {
-    path +=
-        "; scalar: " + plural(l.scalar.size(), "environment") + " (" + scalar_why(l.scalar.front());
-    if (l.scalar.size() > 1) path += ", and " + std::to_string(l.scalar.size() - 1) + " more";
-    path += ")";
-  }
-  return path;
+  return path + " environments)";
 }
 
 std::string Batch::env_path(int i) {
@@ -928,7 +907,6 @@ std::string Batch::env_path(int i) {
   if (!off.empty()) return "scalar: " + off;
   prepare_lanes();
   const int g = lanes_->group_of[static_cast<size_t>(i)];
-  if (g < 0) return "scalar: " + simd::lane_refusal(sims_[static_cast<size_t>(i)]);
   return std::string(to_string(lanes_->groups[static_cast<size_t>(g)].isa)) + " lanes, group " +
          std::to_string(g);
 }
@@ -947,7 +925,7 @@ void Batch::step_lanes(int count) {
     // (lane_contacts.cpp).
     simd::ContactLanes& contacts = g.engine->contacts();
     contacts.envs.resize(g.members.size());
-    bool grounded = false;
+    bool touching = false;  // some environment's ground or self-collision is on
     for (size_t j = 0; j < g.members.size(); ++j) {
       const auto i = static_cast<size_t>(g.members[j]);
       Simulation& s = sims_[i];
@@ -955,14 +933,14 @@ void Batch::step_lanes(int count) {
       lane_time_[i] = s.time_;
       g.engine->clear_stop(static_cast<int>(j));  // a diverged one steps again, as its Simulation
       contacts.envs[j] = {&s, &*s.ws_, s.options().guard.enabled};
-      grounded = grounded || s.ws_->contacts_active;
+      touching = touching || s.ws_->contacts_active || s.ws_->self_contacts_active;
       guarded = guarded || s.options().guard.enabled;
       control = control || s.ws_->has_control_stages();
       actuated = actuated || s.ws_->actuators.any() || s.ws_->actuated;
       implicit = implicit || s.ws_->actuators.any_implicit();
       tracking = tracking || s.ws_->track_convergence;
     }
-    g.engine->set_contacts(grounded, g.key.shape_links);
+    g.engine->set_contacts(touching, g.key.shape_links);
   }
   simd::Block a;
   a.q = rows_[StateStorage::q].data(), a.qd = rows_[StateStorage::qd].data();
@@ -1093,18 +1071,16 @@ void Batch::step(int count) {
   for (std::optional<BatchDivergence>& d : divergences_) d.reset();
   const bool lanes = prepare_lanes();
   if (lanes) step_lanes(count);
-  // The environments the lanes do not step, each its Simulation (every one without lanes).
+  // Without lanes every environment is its Simulation.
   const int n = size();
-  const std::vector<int>* some = lanes_off().empty() ? &lanes_->scalar : nullptr;
-  const int scalar = some ? static_cast<int>(some->size()) : n;
-  auto env = [&](int k) { return some ? (*some)[static_cast<size_t>(k)] : k; };
+  const int scalar = lanes ? 0 : n;
   // One slot per environment: environments never share anything a step writes.
   std::vector<std::exception_ptr>& failed = failed_;
   failed.resize(static_cast<size_t>(n));
   if (scalar > 0)
     parallel(scalar, 1, [&](int begin, int end) {
       for (int k = begin; k < end; ++k) {
-        const int i = env(k);
+        const int i = k;
         Simulation& s = sims_[static_cast<size_t>(i)];
         try {
           s.step(count);

@@ -80,51 +80,6 @@ SimdIsa lane_isa(int count) {
   return isa;
 }
 
-namespace {
-
-// The first setting of s the lane step does not simulate (kind 0: none), found without
-// allocating: Batch looks at its handed-out environments before every step.
-struct Refusal {
-  enum Kind { none, rotated_root, self_collision } kind = none;
-  const Link* link = nullptr;
-};
-
-Refusal find_refusal(const Simulation& s) {
-  const Model& m = s.model();
-  for (const Link& link : m.links) {
-    // compat physx moves a floating root about its centre of mass in world axes; the lanes take
-    // its joint frame as the world's.
-    if (link.joint_type == JointType::floating && s.options().compat == Compat::physx &&
-        link.tree_transform.E != Mat3::Identity())
-      return {Refusal::rotated_root, &link};
-  }
-  // Self-collision rows are solved outside the sweep (contact.md, C31).
-  if (s.contact_options().self_collision && m.shapes.size() > 1) return {Refusal::self_collision};
-  return {};
-}
-
-}  // namespace
-
-bool lanes_refuse(const Simulation& s) {
-  return find_refusal(s).kind != Refusal::none;
-}
-
-std::string lane_refusal(const Simulation& s) {
-  auto has = [](const std::string& what, const std::string& name, const std::string& value) {
-    return what + " '" + name + "' has " + value;
-  };
-  const Refusal r = find_refusal(s);
-  switch (r.kind) {
-    case Refusal::none:
-      return {};
-    case Refusal::rotated_root:
-      return has("joint", r.link->joint_name, "a rotated joint frame under compat physx");
-    case Refusal::self_collision:
-      return has("simulation", "settings", "self-collision between the model's shapes");
-  }
-  return {};
-}
-
 PlanKey::PlanKey(const SimulationOptions& o, const std::vector<MimicJoint>& mimic,
                  const std::vector<char>& shapes)
     : dt(o.dt),
@@ -169,6 +124,9 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
       }
     }
     k.tree_rotation_identity = link.tree_transform.E == Mat3::Identity();
+    const Quat frame(Mat3(link.tree_transform.E.transpose()));  // as integrate_root_about_com's
+    k.frame_q[0] = frame.w(), k.frame_q[1] = frame.x(), k.frame_q[2] = frame.y();
+    k.frame_q[3] = frame.z();
     const Mat3& Ic = link.inertia_com;
     k.diagonal_inertia = Ic(0, 1) == 0.0 && Ic(0, 2) == 0.0 && Ic(1, 2) == 0.0;
     if (link.parent >= 0) {

@@ -38,14 +38,6 @@ struct ContactLanes {
 /// environments (fewer padding lanes; every width gives the same bits).
 SimdIsa lane_isa(int count);
 
-/// What of `s` the lane step does not simulate, as "joint 'j' has a spherical joint" (the setting
-/// and the joint or link named); empty when the lanes step it as Simulation does, the step's
-/// control stages (drive delays, explicit actuators) run per environment by the caller, as Batch
-/// does (docs/simd_batch.md).
-std::string lane_refusal(const Simulation& s);
-/// Whether lane_refusal(s) is not empty, without allocating.
-bool lanes_refuse(const Simulation& s);
-
 /// One environment's rows of the last lane step (Block::guard_rows: nv kGuardFields values) as
 /// the step guard reads them (out: nv entries).
 void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out);
@@ -86,8 +78,9 @@ class LaneEngine {
   int size() const { return count_; }
   const Plan& plan() const { return plan_; }
 
-  /// Whether the lanes solve ground contacts (Plan::contacts) and on which links (flags per
-  /// link: those with shapes): those get their rows in the sweep, and their children's flags
+  /// Whether the lanes solve contacts, the ground's or self contacts (Plan::contacts), and on
+  /// which links (flags per link: those with shapes): those get their ground rows in the sweep
+  /// (the self rows run before it), and their children's flags
   /// change as SweepWorkspace::set_contact_links changes them. Nothing changes when both are
   /// as they were.
   void set_contacts(bool on, const std::vector<char>& shape_links);
@@ -213,8 +206,7 @@ struct LaneGroup {
 };
 struct LaneGroups {
   std::vector<LaneGroup> groups;
-  std::vector<int> group_of, lane_of;  // per environment; group -1: scalar
-  std::vector<int> scalar;             // the environments that step as Simulations
+  std::vector<int> group_of, lane_of;  // per environment
   std::vector<LaneJob> jobs;
   LanePool pool;
 };

@@ -276,6 +276,7 @@ class LaneStep {
   void physx_start();
   void physx_free_momentum();
   void integrate_root_physx(double h);
+  void root_origin(const V* q, V* p);
   void physx_end_momentum();
   void world_velocity(const V* R, const V* pos, const V* com, const V* qd, const V* w0,
                       const V* v0);
@@ -388,7 +389,9 @@ class LaneStep {
   M rowless_ = none();   // lanes with no row at all: a sweep leaves their velocities alone
   M undriven_ = none();  // lanes with a limit or friction row: what a TGS velocity iteration solves
   M grounded_ = none();  // lanes whose environment's ground contacts run (Plan::contacts)
-  bool live_[kW] = {};   // per lane: its contact rows run this step (grounded, not stopped)
+  M colliding_ = none();  // lanes whose environment's self contacts run (Plan::contacts)
+  bool live_[kW] = {};   // per lane: its contact rows run this step (ground or self, not stopped)
+  bool self_live_[kW] = {};  // per live lane: its self-contact rows run
   Stop contact_stop_[kW] = {};  // per live lane: its first non-finite contact force
   LaneContactPhase contact_phase_;  // the sweep's
 };
@@ -1373,11 +1376,14 @@ template <bool kGiven, class L>
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
   if (p_.num_mimic > 0) solve_mimic();
-  if (p_.contacts) {  // Stepper::sweep: the links' velocities at the sweep's start, its phase
-    contact_velocities();
+  if (p_.contacts) {  // Stepper::sweep: its phase, the self rows, the links' velocities then
     LaneContactPhase& c = contact_phase_;
     c.dt = p_.dt, c.h = h_, c.tgs = p_.tgs, c.velocity_iteration = velocity_iteration_;
     c.elapsed = velocity_iteration_ ? p_.dt : p_.dt - time_to_step_end_ - h_;
+    if (any(colliding_))
+      for (int l = 0; l < b_.valid; ++l)
+        if (self_live_[l]) contact_self_solve(*b_.contacts, p_, b_.env0 + l, c, scratch(), kW, l);
+    contact_velocities();
   }
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
@@ -1491,8 +1497,13 @@ void LaneStep<A, K>::track_contacts(double h_step) {
     const LinkConstants& root = p_.links[0];
     V move[3] = {V(0.0), V(0.0), V(0.0)};
     if (root.type == 3) {
+      V now[3], before[3];
+      root_origin(&at(l_.q)[root.q_index], now);
+      root_origin(&at(l_.old_q)[root.q_index], before);
       for (int r = 0; r < 3; ++r)
-        move[r] = at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r];
+        move[r] = root.tree_rotation_identity
+                      ? at(l_.q)[root.q_index + r] - at(l_.old_q)[root.q_index + r]
+                      : now[r] - before[r];
     } else if (root.type == 2) {
       const V dx = at(l_.q)[root.q_index] - at(l_.old_q)[root.q_index];
       for (int r = 0; r < 3; ++r)  // E^T axis, kinematics.cpp's prismatic root
@@ -2326,9 +2337,19 @@ void LaneStep<A, K>::turn_quaternion(const V* t, V* out) {
   for (int r = 0; r < 3; ++r) out[1 + r] = select_zero(turns, s * (t[r] / angle));
 }
 
+// A floating root's origin in the world from its q: r_T + E_T^T q (kinematics.cpp's X_J X_T).
+template <class A, int K>
+void LaneStep<A, K>::root_origin(const V* q, V* p) {
+  const LinkConstants& k = p_.links[0];
+  for (int r = 0; r < 3; ++r)
+    p[r] = k.tree_rotation_identity
+               ? V(k.r[r]) + q[r]
+               : V(k.r[r]) + ((V(k.E[r]) * q[0] + V(k.E[3 + r]) * q[1]) + V(k.E[6 + r]) * q[2]);
+}
+
 // compat physx: a floating root moved over h about its centre of mass with the world velocities
-// of the step's start axes, its turn exp(h w) applied in the world (momentum_correction.cpp's
-// integrate_root_about_com; its joint frame is the world's, lane_refusal).
+// of the step's start axes, its turn exp(h w) applied in the world, its joint frame's turn Q_T
+// taken off after (momentum_correction.cpp's integrate_root_about_com).
 template <class A, int K>
 void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const LinkConstants& k = p_.links[0];
@@ -2338,10 +2359,15 @@ void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const V* R0 = at(l_.start_R);
   V c[3];
   for (int r = 0; r < 3; ++r) c[r] = link_parameter_pack(0, com_x + r);
+  const V QT[4] = {V(k.frame_q[0]), V(k.frame_q[1]), V(k.frame_q[2]), V(k.frame_q[3])};
   V Q[4];
   unit_quaternion(q + 3, Q);
+  if (!k.tree_rotation_identity) {  // Q_T Q_J
+    const V QJ[4] = {Q[0], Q[1], Q[2], Q[3]};
+    quaternion_product(QT, QJ, Q);
+  }
   V p[3], wc[3], vb[3], w[3], vcom[3], Qc[3], com[3];
-  for (int r = 0; r < 3; ++r) p[r] = V(k.r[r]) + q[r];
+  root_origin(q, p);
   cross(qd, c, wc);
   for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
   for (int r = 0; r < 3; ++r) {
@@ -2353,14 +2379,25 @@ void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const V turn[3] = {h * w[0], h * w[1], h * w[2]};
   V d[4];
   turn_quaternion(turn, d);
-  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's)
-  V dQ[4], once[4], o[4];
+  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's: Q_T^-1 first)
+  V dQ[4], once[4], o[4], oc[3];
   quaternion_product(d, Q, dQ);
   unit_quaternion(dQ, once);
-  unit_quaternion(once, o);
-  V oc[3];
-  rotate(o, c, oc);
-  for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
+  if (k.tree_rotation_identity) {
+    unit_quaternion(once, o);
+    rotate(o, c, oc);
+    for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
+  } else {
+    rotate(once, c, oc);
+    const V back[4] = {QT[0], V(0.0) - QT[1], V(0.0) - QT[2], V(0.0) - QT[3]};
+    V joint[4], d_world[3];
+    quaternion_product(back, once, joint);
+    unit_quaternion(joint, o);
+    for (int r = 0; r < 3; ++r) d_world[r] = (com[r] - oc[r]) - V(k.r[r]);
+    for (int a = 0; a < 3; ++a)  // E_T (p - r_T)
+      q[a] = (V(k.E[3 * a]) * d_world[0] + V(k.E[3 * a + 1]) * d_world[1]) +
+             V(k.E[3 * a + 2]) * d_world[2];
+  }
   for (int e = 0; e < 4; ++e) q[3 + e] = o[e];
 }
 
@@ -2420,14 +2457,23 @@ void LaneStep<A, K>::physx_end_momentum() {
     w0[r] = w0[r] + dw[r];
     vo[r] = vo[r] + (dv[r] + turn[r]);
   }
-  // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q).
+  // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q), the
+  // shift into the joint frame's axes (E_T shift).
   V* q = &at(l_.q)[k.q_index];
   const V* q0 = &at(l_.old_q)[k.q_index];
   const V per_mass = V(p_.dt) / M;
+  V o0[3], o1[3], shift[3];
+  root_origin(q0, o0);
+  root_origin(q, o1);
   for (int r = 0; r < 3; ++r) {
-    const V start = (V(k.r[r]) + q0[r]) + t[6 + r], now = (V(k.r[r]) + q[r]) + C1[r];
-    q[r] = q[r] + ((start + Ppos[r] * per_mass) - now);
+    const V start = o0[r] + t[6 + r], now = o1[r] + C1[r];
+    shift[r] = (start + Ppos[r] * per_mass) - now;
   }
+  for (int a = 0; a < 3; ++a)
+    q[a] = q[a] + (k.tree_rotation_identity
+                       ? shift[a]
+                       : (V(k.E[3 * a]) * shift[0] + V(k.E[3 * a + 1]) * shift[1]) +
+                             V(k.E[3 * a + 2]) * shift[2]);
   const V* nR = at(l_.now_R);
   for (int r = 0; r < 3; ++r) {
     qd[r] = nR[r] * w0[0] + nR[3 + r] * w0[1] + nR[6 + r] * w0[2];
@@ -2706,6 +2752,7 @@ void LaneStep<A, K>::step() {
     select(stopped_, V(1.0), V(0.0)).store_aligned(stopped);
     for (int l = 0; l < b_.valid; ++l) {
       live_[l] = stopped[l] == 0.0 && contacts_active(*b_.contacts, b_.env0 + l);
+      self_live_[l] = live_[l] && self_contacts_active(*b_.contacts, b_.env0 + l);
       if (live_[l]) contact_poses(*b_.contacts, p_, b_.env0 + l, scratch(), kW, l);
     }
   }
@@ -2778,7 +2825,8 @@ void LaneStep<A, K>::step() {
     // their velocities.
     if (p_.num_mimic > 0) {
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
-    } else if (const M acting = undriven_ | grounded_; any(acting) && p_.velocity_iterations > 0) {
+    } else if (const M acting = undriven_ | grounded_ | colliding_;
+               any(acting) && p_.velocity_iterations > 0) {
       V* saved = at(l_.saved_tgs);
       for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
       for (int it = 0; it < p_.velocity_iterations; ++it) sweep();
@@ -2909,10 +2957,15 @@ void LaneStep<A, K>::run(int steps) {
   stopped_ = V::load_aligned(stopped) != V(0.0);
   setup_row_constants(p_.tgs ? p_.dt / p_.position_iterations : p_.dt);
   if (p_.contacts) {  // a grounded lane sweeps (and iterates) with or without joint rows
-    alignas(64) double grounded[kW];
-    for (int l = 0; l < kW; ++l)
-      grounded[l] = contacts_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+    alignas(64) double grounded[kW], colliding[kW];
+    for (int l = 0; l < kW; ++l) {
+      grounded[l] = ground_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+      colliding[l] = self_contacts_active(*b_.contacts, env_of_lane(l)) ? 1.0 : 0.0;
+    }
     grounded_ = V::load_aligned(grounded) != V(0.0);
+    // A lane with self contacts alone iterates in TGS's velocity iterations too, but sweeps
+    // only with joint rows (Stepper::sweep solves its rows before the sweep).
+    colliding_ = V::load_aligned(colliding) != V(0.0);
     rowless_ = rowless_ & !grounded_;
   }
   for (int s = 0; s < steps; ++s) {

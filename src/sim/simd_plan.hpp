@@ -119,6 +119,9 @@ struct LinkConstants {
   bool contacts = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
+  /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which
+  /// compat physx turns the root about (momentum_correction.cpp's integrate_root_about_com).
+  double frame_q[4] = {1.0, 0.0, 0.0, 0.0};
   double axis[3] = {};  ///< unit joint axis (joint frame)
 };
 
@@ -226,8 +229,9 @@ struct Plan {
   bool physx_floating = false;
   /// compat physx with a spherical joint: its rows' link bias (S-8), its link turned in the world.
   bool physx_spherical = false;
-  /// Some environment's ground is on and the model has shapes: each environment's own contact
-  /// rows (ContactRows) run in its lane, out of line (lane_contacts.cpp).
+  /// Some environment's ground or self-collision is on and the model has shapes: each
+  /// environment's own contact rows (ContactRows, SelfContacts) run in its lane, out of line
+  /// (lane_contacts.cpp).
   bool contacts = false;
   /// compat physx; with contacts: their rows see the link bias and PhysX's tracked motion.
   bool physx = false, physx_contacts = false;
@@ -264,8 +268,8 @@ struct Stop {
   double value = 0.0;
 };
 
-/// Each environment's ground contact rows (lane_engine.hpp), which the lane step calls out of
-/// line, one lane at a time, on that lane's entries of its scratch (docs/simd_batch.md,
+/// Each environment's ground and self-contact rows (lane_engine.hpp), which the lane step calls
+/// out of line, one lane at a time, on that lane's entries of its scratch (docs/simd_batch.md,
 /// "Contacts"). s: the scratch as doubles; entry k of a lane at s[k * width + lane].
 struct ContactLanes;
 /// Where a contact solve stands (ContactPhase's fields).
@@ -273,13 +277,20 @@ struct LaneContactPhase {
   double dt = 0.0, h = 0.0, elapsed = 0.0;
   bool tgs = false, velocity_iteration = false;
 };
-/// Whether environment env's ground contact rows run (its ground is on).
+/// Whether environment env's contact rows run: its ground's (the ground is on), its self
+/// contacts' (self_collision is on and some pair can touch), either.
 bool contacts_active(const ContactLanes& c, int env);
+bool ground_active(const ContactLanes& c, int env);
+bool self_contacts_active(const ContactLanes& c, int env);
 /// The step's start: the shape links' poses (before the response takes their room), then the
 /// rows from the response, the cfm and the link velocities (layout contact_vel).
 void contact_poses(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
 void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int width, int lane);
-/// Link's rows in a sweep at its start velocity plus its change dv (layout dv), which they
+/// The self-contact rows, each iteration before the sweep (Stepper::sweep; contact.md, C31), at
+/// the joint velocities (layout qd), which they change.
+void contact_self_solve(ContactLanes& c, const Plan& p, int env, const LaneContactPhase& phase,
+                        double* s, int width, int lane);
+/// Link's ground rows in a sweep at its start velocity plus its change dv (layout dv), which they
 /// change; their impulse starts its subtree impulse (layout subtree).
 void contact_solve(ContactLanes& c, const Plan& p, int env, int link, const LaneContactPhase& phase,
                    double* s, int width, int lane);

@@ -6,7 +6,7 @@
 #include "featherdrive/constraint/contact_laws.hpp"
 
 namespace featherdrive {
-using namespace contact_laws;  // constants, row_mass, fallback_tangent, spatial_force
+using namespace contact_laws;  // constants and the small laws both row kinds share
 namespace {
 
 constexpr double kTgsFrictionBias = 0.8;  // C14
@@ -21,7 +21,7 @@ double default_cfm(const Model& model, const Data& data, int link) {
   double largest = 0.0;
   for (int k = 0; k < 3; ++k) {
     const Vec6 J = spatial_force(com, Vec3::Unit(k));
-    largest = std::max(largest, J.dot(data.response[link] * J));
+    largest = std::max(largest, row_response(J, data.response[link] * J, data.response[link]));
   }
   return kCfmScale * largest;
 }
@@ -67,7 +67,12 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
                         const std::vector<Vec6>& link_velocity, const VecX& link_cfm,
                         int position_iterations, const ContactPhase& phase,
                         std::vector<ContactReport>& reports, int first) {
-  tgs_ = phase.tgs;
+  find(model, data, options);
+  return setup_rows(model, data, options, link_velocity, link_cfm, position_iterations, phase,
+                    reports, first);
+}
+
+int SelfContacts::find(const Model& model, const Data& data, const ContactOptions& options) {
   const double contact_distance = 2.0 * options.contact_offset;  // C1
   // The narrow phase (C29, C29a), then the deepest pairs whose points fit, whole.
   int found = 0;
@@ -97,6 +102,14 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
   std::sort(order_.begin(), order_.begin() + num_pairs_);  // pair order: deterministic
   num_contacts_ = points;
   num_rows_ = 3 * num_contacts_;
+  return num_contacts_;
+}
+
+int SelfContacts::setup_rows(const Model& model, const Data& data, const ContactOptions& options,
+                             const std::vector<Vec6>& link_velocity, const VecX& link_cfm,
+                             int position_iterations, const ContactPhase& phase,
+                             std::vector<ContactReport>& reports, int first) {
+  tgs_ = phase.tgs;
   const Vec3& origin = data.frame_origin;
   const double share = tgs_penetration_share(position_iterations);
   int c = 0;
@@ -168,10 +181,14 @@ int SelfContacts::setup(const Model& model, const Data& data, const ContactOptio
     // C32: at least PhysX's default cfm, whatever the compat mode.
     const double cfm = std::max(
         {link_cfm[a], link_cfm[b], default_cfm(model, data, a), default_cfm(model, data, b)});
+    // C22a on W_ii = J (Lambda_a + Lambda_b - Lambda_ab - Lambda_ba) J: the cross responses'
+    // entries are bounded by the two links' diagonals, so their sum bounds the rounding.
+    const double largest = data.response[a].diagonal().maxCoeff() +
+                           data.response[b].diagonal().maxCoeff();
     for (int k = 0; k < 3; ++k) {
       Row& row = rows_[static_cast<size_t>(3 * c + k)];
-      const double u = W_[static_cast<size_t>(3 * c + k) * (R + 1)] + cfm;
-      row.mass = row_mass(k == 0 ? 1.0 : kFrictionMassScale, u);  // C20, C22
+      const double u = row_response(W_[static_cast<size_t>(3 * c + k) * (R + 1)], row.J, largest);
+      row.mass = row_mass(k == 0 ? 1.0 : kFrictionMassScale, u + cfm);  // C20, C22, C22a
     }
     ContactNormalRow& law = laws_[static_cast<size_t>(c)];
     law.mass = rows_[static_cast<size_t>(3 * c)].mass;

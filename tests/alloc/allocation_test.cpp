@@ -24,6 +24,7 @@
 #include "featherdrive/sim/batch.hpp"
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
+#include "support/lane_contact_models.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
 
@@ -300,10 +301,10 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
     }
 }
 
-// A batch of two lane groups (another dt), gravity per lane and one environment on the scalar
-// step (the step guard), its environments handed out (looked at before every step): regrouping
+// A batch of two lane groups (another dt), gravity per lane and one guarded environment, its
+// environments handed out (looked at before every step): regrouping
 // after a settings change may allocate, the steps after it do not, on one thread.
-TEST(BatchAllocations, LaneGroupsAndAScalarEnvironmentNoneOnOneThread) {
+TEST(BatchAllocations, LaneGroupsAndAGuardedEnvironmentNoneOnOneThread) {
   auto model = test::make_random_tree(7, 10, false, false, 0.01);
   Simulation prototype(model, SimulationOptions{});
   for (int d = 0; d < model->nv; ++d) {
@@ -321,14 +322,14 @@ TEST(BatchAllocations, LaneGroupsAndAScalarEnvironmentNoneOnOneThread) {
   const int heavy[] = {1};
   batch.set_gravity(heavy, RowMatrix::Constant(1, 3, -4.0));
   batch.step();
-  ASSERT_NE(batch.step_path().find("2 groups (6, 2 environments); scalar: 1 environment"),
+  ASSERT_NE(batch.step_path().find("2 groups (7, 2 environments)"),
             std::string::npos)
       << batch.step_path();
   EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
   EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
   batch.sim(3).set_options(other);  // into the other group: the next step regroups
   batch.step();
-  ASSERT_NE(batch.step_path().find("2 groups (5, 3 environments)"), std::string::npos)
+  ASSERT_NE(batch.step_path().find("2 groups (6, 3 environments)"), std::string::npos)
       << batch.step_path();
   EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
   EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
@@ -402,6 +403,32 @@ TEST(BatchAllocations, LanesGuardedNoneAtEveryWidth) {
   }
 }
 
+// The contacts of the last environment of 11 in lanes of `isa` on one thread, over 30 steps after
+// the first call (which makes the scratch), in which nothing is allocated.
+struct LaneContactCount {
+  int contacts = 0, self = 0;
+};
+LaneContactCount lane_contacts_allocating_nothing(const Simulation& prototype, SimdIsa isa) {
+  Batch batch(prototype, 11);
+  batch.set_isa(isa);
+  batch.set_num_threads(1);
+  batch.step();
+  EXPECT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
+  LaneContactCount count;
+  EXPECT_EQ(allocations_in([&] {
+              for (int k = 0; k < 30; ++k) {
+                batch.step();
+                for (const ContactReport& c : batch.contacts(10)) {
+                  ++count.contacts;
+                  count.self += c.other_link >= 0;
+                }
+              }
+            }),
+            0)
+      << to_string(isa);
+  return count;
+}
+
 // The same with ground contacts in the lanes (each environment's ContactRows, per lane): a
 // floating tree with a shape of each kind on its links, half sunk into the ground, PGS and TGS,
 // unguarded and guarded (its landing redone, the start's reports kept), at every width, none on
@@ -442,6 +469,20 @@ TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
       else EXPECT_GT(batch.contacts(10).size(), 0u);
     }
   }
+}
+
+// The same with self-collision in the lanes (each environment's SelfContacts, and the response its
+// rows sweep, per lane): a robot whose box rests on its plate on the ground, PGS and TGS, compat
+// none and physx, at every width, none on one thread.
+TEST(BatchAllocations, LanesWithSelfContactsNoneAtEveryWidth) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      const Simulation prototype = test::self_touching_robot(solver, compat);
+      for (SimdIsa isa : available_simd_isas()) {
+        const LaneContactCount count = lane_contacts_allocating_nothing(prototype, isa);
+        EXPECT_EQ(count.self, 30 * 4) << to_string(isa);  // the box's four corners each step
+      }
+    }
 }
 
 // The kinematics and dynamics queries on a reused Data and reused outputs: none after the first

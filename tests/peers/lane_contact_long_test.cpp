@@ -1,5 +1,6 @@
 // Ground contacts in Batch's SIMD lanes over 1000 steps: random floating trees (with and without
-// spherical joints) dropped on the ground, the quadruped standing and dropped, boxes resting,
+// spherical joints, with self-collision) dropped on the ground, a robot resting on itself on the
+// ground, the quadruped standing and dropped, boxes resting,
 // sliding and falling, a fixed tree under compat physx, and the examples' Ant loaded through io
 // (standing, walking, with implicit DC motors), each environment bounded by the scalar step's own
 // last-bit sensitivity (docs/simd_batch.md, "Contacts"). Each case steps five Simulations per
@@ -61,6 +62,49 @@ TEST(LaneContact, ShapesOnOtherLinksInLaneGroupsAsSimulation) {
       EXPECT_LE(test::batch_against_alone(lanes, 1000, 10, what).ratio, test::kSensitivityFactor)
           << what;
       EXPECT_FALSE(lanes.contacts(5).empty()) << what;  // the group of one on the ground
+    }
+}
+
+// The same trees with self-collision on (the self rows per lane, before each sweep): links that
+// touch each other as they land and tumble, besides the ground.
+TEST(LaneContact, SelfCollidingRandomTreesOnTheGroundAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Batch lanes(test::self_colliding_tree(8, solver, compat, true), 7);
+      std::mt19937 rng(17);
+      test::drop_from_own_heights(lanes, rng);
+      int touching = 0;  // self contacts over the steps, of the environments alone
+      for (int e = 0; e < lanes.size(); ++e) {
+        Simulation alone = lanes.sim(e);
+        for (int k = 0; k < 1000; ++k) {
+          alone.step();
+          for (const ContactReport& r : alone.contacts()) touching += r.other_link >= 0;
+        }
+      }
+      const std::string what = std::string("self-colliding random trees on the ground, ") +
+                               to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      EXPECT_GT(touching, 100) << what;
+      const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      EXPECT_TRUE(lanes.contacts(4).empty()) << what;  // the one still falling
+    }
+}
+
+// lane_contact_models.hpp's robot whose box rests on its own plate, on the ground, from its
+// starts (one robot high above the ground for the whole run).
+TEST(LaneContact, ARobotRestingOnItselfOnTheGroundAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Batch lanes(test::self_touching_robot(solver, compat), 6);
+      test::self_touching_starts(lanes);
+      const std::string what = std::string("a robot resting on itself on the ground, ") +
+                               to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      const test::LaneFigures f = test::batch_against_alone(lanes, 1000, 10, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      EXPECT_EQ(lanes.contacts(0).size(), 8u) << what;  // four corners on the ground, four above
+      EXPECT_EQ(lanes.contacts(4).size(), 4u) << what;  // the box on the falling plate
     }
 }
 

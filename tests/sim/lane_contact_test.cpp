@@ -54,6 +54,139 @@ TEST(LaneContact, SameBitsForAnyLaneWidthAndThreads) {
       }
 }
 
+// The number of environment e's contacts between its own links.
+int self_contacts(const Batch& b, int e) {
+  const auto c = b.contacts(e);
+  return static_cast<int>(
+      std::count_if(c.begin(), c.end(), [](const ContactReport& r) { return r.other_link >= 0; }));
+}
+
+// Self-collision in the lanes (the self rows before each sweep, the scalar step's own, lane by
+// lane): the same bits at any lane, width, batch size and number of threads, with the ground and
+// without it.
+TEST(LaneContact, SelfCollisionSameBitsForAnyLaneWidthAndThreads) {
+  for (const bool grounded : {true, false}) {
+    const Simulation proto = test::self_colliding_tree(8, SolverType::tgs, Compat::none, grounded);
+    int touching = 0;
+    auto run = [&](int size, SimdIsa isa, int threads, int shift) {
+      Batch b(proto, size);
+      b.set_isa(isa);
+      b.set_num_threads(threads);
+      std::mt19937 rng(3);
+      for (int k = 0; k < size; ++k) {
+        VecX q = proto.q();
+        q[2] = 0.3 + 0.1 * (k % 5);
+        b.sim((k + shift) % size).set_q(q);
+        b.sim((k + shift) % size).set_qd(test::random_vector(proto.model().nv, rng, 1.0));
+      }
+      RowMatrix out(size, proto.model().nq + 3 * proto.model().num_links());
+      for (int c = 0; c < 10; ++c) {
+        b.step(15);
+        for (int k = 0; k < 5; ++k) touching += self_contacts(b, (k + shift) % size);
+      }
+      EXPECT_EQ(b.step_path().find("scalar"), std::string::npos) << b.step_path();
+      for (int k = 0; k < size; ++k)
+        out.row(k) << b.q().row((k + shift) % size), b.link_contact_force().row((k + shift) % size);
+      return out;
+    };
+    const RowMatrix reference = run(5, SimdIsa::sse2, 1, 0);
+    EXPECT_GT(touching, 0) << grounded;
+    for (SimdIsa isa : available_simd_isas())
+      for (int threads : {1, 2})
+        for (int shift : {0, 7}) {
+          const RowMatrix x = run(13, isa, threads, shift);
+          EXPECT_TRUE(test::same_bits(RowMatrix(x.topRows(5)), reference))
+              << to_string(isa) << " threads " << threads << " shift " << shift << " ground "
+              << grounded;
+        }
+  }
+}
+
+// Self-collision in the lanes against each environment alone, short (the 1000-step cases are in
+// tests/peers/lane_contact_long_test.cpp): the random trees of the case above, PGS and TGS,
+// compat none and physx, with and without the ground, one environment without self-collision.
+TEST(LaneContact, SelfCollisionAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (const bool grounded : {true, false})
+      for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+        const Simulation proto = test::self_colliding_tree(8, solver, compat, grounded);
+        Batch lanes(proto, 5);
+        std::mt19937 rng(3);
+        for (int e = 0; e < lanes.size(); ++e) {
+          VecX q = proto.q();
+          q[2] = 0.3 + 0.1 * e;
+          lanes.sim(e).set_q(q);
+          lanes.sim(e).set_qd(test::random_vector(proto.model().nv, rng, 1.0));
+        }
+        lanes.sim(3).set_contact_options(ContactOptions{});
+        const std::string what = std::string("self-collision, ") +
+                                 (grounded ? "on the ground, " : "no ground, ") +
+                                 to_string(solver) +
+                                 (compat == Compat::physx ? ", compat physx" : "");
+        int touching = 0;  // steps with self contacts, of the environments alone
+        for (int e = 0; e < lanes.size(); ++e) {
+          Simulation alone = lanes.sim(e);
+          for (int k = 0; k < 150; ++k) {
+            alone.step();
+            for (const ContactReport& r : alone.contacts()) touching += r.other_link >= 0;
+          }
+        }
+        EXPECT_GT(touching, 100) << what;
+        const test::LaneFigures f = test::batch_against_alone(lanes, 150, 15, what);
+        EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+        EXPECT_EQ(self_contacts(lanes, 3), 0) << what;
+      }
+}
+
+// A robot whose box rests on its own plate, on the ground (lane_contact_models.hpp's starts),
+// against each environment alone over 150 steps (1000 in lane_contact_long_test.cpp).
+TEST(LaneContact, ARobotWhoseLinksRestOnEachOtherAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Batch lanes(test::self_touching_robot(solver, compat), 6);
+      test::self_touching_starts(lanes);
+      const std::string what = std::string("a robot resting on itself, on the ground, ") +
+                               to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      const test::LaneFigures f = test::batch_against_alone(lanes, 150, 3, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      for (int e = 0; e < lanes.size(); ++e)
+        EXPECT_EQ(self_contacts(lanes, e), 4) << what << " environment " << e;
+      EXPECT_EQ(lanes.contacts(0).size(), 8u) << what;
+      EXPECT_EQ(lanes.contacts(4).size(), 4u) << what;  // falling: the box on the plate alone
+    }
+}
+
+// A box whose floating root's joint frame is turned and moved, dropped and slid on the ground:
+// frame 0's origin is the root's world position r_T + E_T^T q (contact_poses), compat physx's
+// root turns in the world and its contacts track the root's move in the world (C25a).
+TEST(LaneContact, BoxOnATurnedRootFrameAsSimulation) {
+  for (const Compat compat : {Compat::none, Compat::physx})
+    for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
+      Model m = *test::make_ground_box(0.5);
+      Transform& frame = m.links[0].tree_transform;
+      frame.E = rotation_about(Vec3(0.3, -0.5, 0.8).normalized(), 0.6);
+      frame.r = Vec3(0.1, -0.2, 0.05);
+      const Simulation box = test::on_ground(std::make_shared<const Model>(m), solver, compat,
+                                             Material{0.5, 0.5, 0.0});
+      Batch lanes(box, 5);
+      for (int e = 0; e < lanes.size(); ++e) {
+        VecX q = box.q(), qd = box.qd();
+        // The box's origin at height 0.2 + 0.1 e in the world, in the joint frame's axes.
+        q.head<3>() = frame.E * (Vec3(0.0, 0.0, 0.2 + 0.1 * e) - frame.r);
+        qd[3] = 0.5 * e;
+        lanes.sim(e).set_q(q);
+        lanes.sim(e).set_qd(qd);
+      }
+      const std::string what = std::string("a box on a turned root frame, ") + to_string(solver) +
+                               (compat == Compat::physx ? ", compat physx" : "");
+      const test::LaneFigures f = test::batch_against_alone(lanes, 300, 6, what);
+      EXPECT_LE(f.ratio, test::kSensitivityFactor) << what;
+      for (int e = 0; e < lanes.size(); ++e)
+        EXPECT_FALSE(lanes.contacts(e).empty()) << what << " environment " << e;
+    }
+}
+
 // The ground switched on between calls (the plan takes the contact rows then), and off again in
 // one environment: a lane without a ground beside grounded ones, as its Simulation.
 TEST(LaneContact, GroundSwitchedBetweenCallsAsSimulation) {
@@ -160,8 +293,9 @@ TEST(LaneContact, GuardedOnTheGroundAsSimulation) {
   }
 }
 
-// The path: a grounded robot runs in the lanes, under compat none and physx; shapes on other
-// links than environment 0's make a lane group of their own; self-collision stays refused.
+// The path: a grounded robot runs in the lanes, under compat none and physx, with self-collision
+// too, and with self-collision alone; shapes on other links than environment 0's make a lane
+// group of their own.
 TEST(LaneContact, StepPath) {
   Simulation s = test::grounded_tree(5, SolverType::pgs, false);
   Batch grounded(s, 3);
@@ -177,9 +311,12 @@ TEST(LaneContact, StepPath) {
   contact.self_collision = true;
   self.set_contact_options(contact);
   Batch selfish(self, 2);
-  EXPECT_NE(selfish.step_path().find("self-collision between the model's shapes"),
-            std::string::npos)
-      << selfish.step_path();
+  EXPECT_EQ(selfish.step_path().find("scalar"), std::string::npos) << selfish.step_path();
+  Ground off = s.ground();  // self-collision alone
+  off.enabled = false;
+  selfish.sim(1).set_ground(off);
+  selfish.sim(0).set_ground(off);
+  EXPECT_EQ(selfish.step_path().find("scalar"), std::string::npos) << selfish.step_path();
   SimulationOptions o = s.options();
   o.compat = Compat::physx;
   Simulation physx(s.model_ptr(), o);

@@ -108,6 +108,26 @@ TEST(LaneFloating, RandomTreeWithMimicRowsAsSimulation) {
   }
 }
 
+// floating_prototype(7, solver) under compat physx without gravity, its root's joint frame
+// `frame` (the tree's own: none).
+Simulation physx_prototype(SolverType solver, const Transform* frame = nullptr) {
+  const Simulation none = floating_prototype(7, solver);
+  SimulationOptions o = none.options();
+  o.compat = Compat::physx;
+  auto model = std::make_shared<Model>(none.model());
+  model->gravity.setZero();
+  if (frame) model->links[0].tree_transform = *frame;
+  Simulation proto(model, o);
+  for (int d = 6; d < none.model().nv; ++d) {
+    proto.set_drive(d, none.drive(d));
+    proto.set_joint_limits(d, none.lower_limit(d), none.upper_limit(d));
+    proto.set_joint_friction(d, none.joint_friction(d));
+  }
+  proto.set_q(none.q());
+  proto.set_qd(none.qd());
+  return proto;
+}
+
 // compat physx: the root's momentum corrections and its pose integrated about its centre of mass
 // (docs/math/physx_departures.md, section 2), PhysX's defaults (wrapped revolute joints, link
 // damping and cfm, friction coefficients), prismatic rows with their link bias. Without gravity:
@@ -116,25 +136,27 @@ TEST(LaneFloating, RandomTreeWithMimicRowsAsSimulation) {
 // root's velocity per step of either order's rounding (4e-15 without gravity), growing to 6e-11
 // in 1000 steps (measured, docs/simd_batch.md).
 TEST(LaneFloating, RandomTreeCompatPhysxAsSimulation) {
-  for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
-    const Simulation none = floating_prototype(7, solver);
-    SimulationOptions o = none.options();
-    o.compat = Compat::physx;
-    auto model = std::make_shared<Model>(none.model());
-    model->gravity.setZero();
-    Simulation proto(model, o);
-    for (int d = 6; d < none.model().nv; ++d) {
-      proto.set_drive(d, none.drive(d));
-      proto.set_joint_limits(d, none.lower_limit(d), none.upper_limit(d));
-      proto.set_joint_friction(d, none.joint_friction(d));
-    }
-    proto.set_q(none.q());
-    proto.set_qd(none.qd());
-    EXPECT_LE(lanes_against_alone(proto, 1000,
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs})
+    EXPECT_LE(lanes_against_alone(physx_prototype(solver), 1000,
                                   std::string("random floating tree, compat physx, ") +
                                       to_string(solver)),
               1e-12);
-  }
+}
+
+// The same with the root's joint frame turned (0.7 rad about a skew axis) and moved: compat
+// physx turns the root about its centre of mass in the world's axes, its joint frame's turn taken
+// off after (momentum_correction.cpp's integrate_root_about_com), and shifts its centre of mass
+// in the world (correct_end_of_step_momentum).
+TEST(LaneFloating, TurnedRootFrameCompatPhysxAsSimulation) {
+  Transform frame;
+  frame.E = rotation_about(Vec3(0.2, -0.6, 0.77).normalized(), 0.7);
+  frame.r = Vec3(0.3, -0.2, 0.1);
+  for (SolverType solver : {SolverType::pgs, SolverType::tgs})
+    EXPECT_LE(lanes_against_alone(physx_prototype(solver, &frame), 1000,
+                                  std::string("random floating tree, turned root frame, compat "
+                                              "physx, ") +
+                                      to_string(solver)),
+              1e-12);
 }
 
 }  // namespace

@@ -137,6 +137,42 @@ TEST_P(SelfContact, ParentAndChildAreFiltered) {
   EXPECT_EQ(with.qd(), without.qd());
 }
 
+// Two balls, each spinning on a hinge whose axis runs through its centre and centre of mass, touch
+// 1 cm deep: neither can move along the normal row, whose response is rounding (u of order eps
+// where Lambda is of order 1), nor has a linear response at its centre of mass, so the cfm of C32
+// is rounding too. C22a counts such a u as 0: the row applies nothing, and the friction rows
+// (which can turn the balls) see a normal impulse of 0. Exact rows would divide by the rounding.
+TEST_P(SelfContact, TwoLinksThatCannotMoveAlongTheirRowApplyNothing) {
+  ModelBuilder b;
+  b.add_link(make_link("base", "", 0.0, Vec3::Zero(), Mat3::Zero(), fixed_joint("weld")));
+  // Axes and the line of centres (0.19 m long) off the coordinate axes.
+  const Vec3 a = Vec3(0.3, 0.7, -0.2).normalized(), c = Vec3(-0.6, 0.1, 0.5).normalized();
+  const Vec3 left(0.1, 0.2, 0.3), right = left + Vec3(0.11, -0.07, 0.13).normalized() * 0.19;
+  b.add_link(make_link("left", "base", 1.3, Vec3::Zero(), Mat3::Identity() * 0.013,
+                       revolute_joint("spin_left", a, left)));
+  b.add_link(make_link("right", "base", 0.7, Vec3::Zero(), Mat3::Identity() * 0.007,
+                       revolute_joint("spin_right", c, right)));
+  b.add_shape("left", sphere(0.1));
+  b.add_shape("right", sphere(0.1));
+  SimulationOptions o;
+  o.solver = GetParam();
+  Simulation sim(std::make_shared<const Model>(b.build()), o);
+  ContactOptions options;
+  options.self_collision = true;
+  sim.set_contact_options(options);
+  VecX qd(2);
+  qd << 1.0, -2.0;
+  sim.set_qd(qd);
+  for (int k = 0; k < 10; ++k) {
+    sim.step();
+    ASSERT_EQ(sim.contacts().size(), 1u);
+    EXPECT_NEAR(sim.contacts()[0].separation, -0.01, 1e-12);
+    EXPECT_EQ(sim.contacts()[0].normal_impulse, 0.0);
+    EXPECT_EQ(sim.contacts()[0].friction_impulse, Vec3::Zero());
+  }
+  EXPECT_LT((sim.qd() - qd).cwiseAbs().maxCoeff(), 1e-12);  // no moment about either axis
+}
+
 // A floating tree in zero gravity (no armature: rotors would carry momentum the links do not)
 // whose links 2 and 8 (not parent and child) carry overlapping spheres: the
 // contact is internal, so one step keeps the tree's spatial momentum (measured at the step's start

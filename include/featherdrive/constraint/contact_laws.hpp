@@ -25,13 +25,18 @@ inline double row_mass(double scale, double u) {
 /// |Lambda_ij| <= max_i Lambda_ii), Lambda's from the sweep a few eps per level of the tree.
 inline constexpr double kResponseRounding = 1024.0;
 
-/// A row's response u = J . Lambda J (lambda_j = Lambda J), or 0 when it is within the rounding of
-/// its own computation, a direction the link cannot move in (C22a).
-inline double row_response(const Vec6& J, const Vec6& lambda_j, const Mat6& lambda) {
-  const double u = J.dot(lambda_j);
-  const double rounding = kResponseRounding * std::numeric_limits<double>::epsilon() *
-                          J.squaredNorm() * lambda.diagonal().maxCoeff();
+/// A row's computed response u, or 0 when it is within the rounding of its own computation, a
+/// direction the links cannot move in (C22a); largest: the largest diagonal entry of the
+/// responses u was formed from.
+inline double row_response(double u, const Vec6& J, double largest) {
+  const double rounding =
+      kResponseRounding * std::numeric_limits<double>::epsilon() * J.squaredNorm() * largest;
   return u > rounding ? u : 0.0;
+}
+
+/// A row's response u = J . Lambda J (lambda_j = Lambda J) on one link, C22a's way.
+inline double row_response(const Vec6& J, const Vec6& lambda_j, const Mat6& lambda) {
+  return row_response(J.dot(lambda_j), J, lambda.diagonal().maxCoeff());
 }
 
 /// The friction direction of a patch at rest, PhysX's (C10a): x cross n, or z cross n when n lies

@@ -105,15 +105,11 @@ class Batch {
   /// the links with shapes (gravity and every other setting may differ from lane to lane), each
   /// environment giving the same bits whatever its group, lane, the width, the batch size and
   /// the threads, within 1e-12 of its Simulation stepped alone (the operation order differs).
-  /// Every other environment (the step guard, self-collision, a rotated floating root under
-  /// compat physx), and every one with lanes off, is its Simulation stepped alone, bit for bit.
+  /// With lanes off every environment is its Simulation stepped alone, bit for bit.
   void set_lanes(bool allowed) { lanes_allowed_ = allowed; }
   bool lanes() const { return lanes_allowed_; }
-  /// How the next step() runs: "avx2 lanes" (one lane group), "scalar: " and why (lanes off,
-  /// FEATHERDRIVE_SIMD=scalar, or the first environment's setting the lanes do not simulate,
-  /// when none steps in lanes), or for a mixed batch one line such as "avx2 lanes: 2 groups
-  /// (1021, 2 environments); scalar: 1 environment (environment 5: simulation 'options' has the
-  /// step guard)".
+  /// How the next step() runs: "avx2 lanes" (one lane group), "avx2 lanes: 2 groups (1021, 3
+  /// environments)", or "scalar: " and why (lanes off, FEATHERDRIVE_SIMD=scalar).
   std::string step_path();
   /// How the next step() runs environment i: "avx2 lanes, group 1" or "scalar: " and why;
   /// std::invalid_argument for i out of [0, size()).

@@ -33,6 +33,14 @@ class SelfContacts {
   int setup(const Model& model, const Data& data, const ContactOptions& options,
             const std::vector<Vec6>& link_velocity, const VecX& link_cfm, int position_iterations,
             const ContactPhase& phase, std::vector<ContactReport>& reports, int first);
+  /// setup in two: find, the narrow phase at data's poses (C29, C29a), which keeps this step's
+  /// contacts and returns their number, then setup_rows, their rows (data's response must be
+  /// the step's from then on). Batch's lanes give the response only where find found contacts.
+  int find(const Model& model, const Data& data, const ContactOptions& options);
+  int setup_rows(const Model& model, const Data& data, const ContactOptions& options,
+                 const std::vector<Vec6>& link_velocity, const VecX& link_cfm,
+                 int position_iterations, const ContactPhase& phase,
+                 std::vector<ContactReport>& reports, int first);
   /// Every row once, in order, at the joint velocities qd (exact on entry), then the pass's
   /// impulses applied: qd is exact on exit.
   void solve(const Model& model, const Data& data, const ContactPhase& phase, VecX& qd);
