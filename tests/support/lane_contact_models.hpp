@@ -164,7 +164,7 @@ inline void self_touching_starts(Batch& lanes) {
     VecX q = s.q(), qd = s.qd();
     q[7] += gaps[e % 6] - 1e-3;
     if (e == 4) q[2] += 200.0;
-    qd[8] = 0.5 * e;
+    qd[7] = 0.5 * e;  // the box's hinge
     qd[3] = 0.2 * (e % 3);
     s.set_q(q);
     s.set_qd(qd);
