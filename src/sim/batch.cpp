@@ -974,38 +974,39 @@ void Batch::step_lanes(int count) {
     lane_guard_rows_.resize(n, nv * simd::kGuardFields);
     a.guard_rows = lane_guard_rows_.data();
   }
+  // Groups without control stages or the guard make all their steps in one run; the others one
+  // step a run: each step's control stages read the state it starts from, and the guard tests
+  // each step (a guarded environment's group holds only guarded ones: PlanKey).
   l.jobs.clear();
+  l.stepwise.clear();
   for (simd::LaneGroup& g : l.groups) {
     simd::Block b = a;
     b.rows = g.members.data();
-    l.jobs.push_back({g.engine.get(), b, g.isa});
+    if (!g.key.guarded) b.guard_rows = nullptr;
+    (control || g.key.guarded ? l.stepwise : l.jobs).push_back({g.engine.get(), b, g.isa});
   }
   const int threads = effective_num_threads();
-  if (!control && !guarded) {
-    l.pool.run(l.jobs, count, threads);
-  } else {
-    // One step a run: each step's control stages read the state it starts from, and its guard
-    // tests it.
-    for (int k = 0; k < count; ++k) {
-      if (control) lane_control_stages(actuated);
-      if (guarded) lane_guard_start();
-      l.pool.run(l.jobs, 1, threads);
-      if (guarded) lane_guard_finish(tracking ? &lane_drive_change_ : nullptr);
-      for (const simd::LaneGroup& g : l.groups)
-        for (size_t j = 0; j < g.members.size(); ++j) {
-          const int lane = static_cast<int>(j), i = g.members[j];
-          Simulation& s = sims_[static_cast<size_t>(i)];
-          if (guarded && lane_guard_redone(i)) continue;  // its Simulation's step wrote all
-          if (g.engine->stopped_now(lane)) {  // Stepper::check_finite_or_throw takes the pushes back
-            s.stepper().undo_actuators();
-          } else if (implicit && g.engine->stop(lane).quantity == 0 && s.ws_->actuators.any()) {
-            // Stepper::row_forces: an implicit actuator's row force is its actuator force.
-            for (int d = 0; d < nv; ++d)
-              if (s.ws_->actuators.implicit(d))
-                s.ws_->actuator_force[d] = lane_actuator_force_(i, d);
-          }
+  if (!l.jobs.empty()) l.pool.run(l.jobs, count, threads);
+  for (int k = 0; k < count && !l.stepwise.empty(); ++k) {
+    if (control) lane_control_stages(actuated);
+    if (guarded) lane_guard_start();
+    l.pool.run(l.stepwise, 1, threads);
+    if (guarded) lane_guard_finish(tracking ? &lane_drive_change_ : nullptr);
+    if (!control) continue;
+    for (const simd::LaneGroup& g : l.groups)
+      for (size_t j = 0; j < g.members.size(); ++j) {
+        const int lane = static_cast<int>(j), i = g.members[j];
+        Simulation& s = sims_[static_cast<size_t>(i)];
+        if (guarded && lane_guard_redone(i)) continue;  // its Simulation's step wrote all
+        if (g.engine->stopped_now(lane)) {  // Stepper::check_finite_or_throw takes the pushes back
+          s.stepper().undo_actuators();
+        } else if (implicit && g.engine->stop(lane).quantity == 0 && s.ws_->actuators.any()) {
+          // Stepper::row_forces: an implicit actuator's row force is its actuator force.
+          for (int d = 0; d < nv; ++d)
+            if (s.ws_->actuators.implicit(d))
+              s.ws_->actuator_force[d] = lane_actuator_force_(i, d);
         }
-    }
+      }
   }
   for (const simd::LaneGroup& g : l.groups)
     for (size_t j = 0; j < g.members.size(); ++j) {

@@ -87,6 +87,7 @@ PlanKey::PlanKey(const SimulationOptions& o, const std::vector<MimicJoint>& mimi
       position_iterations(o.position_iterations),
       velocity_iterations(o.velocity_iterations),
       compat(o.compat),
+      guarded(o.guard.enabled),
       mimic_joints(mimic),
       shape_links(shapes) {}
 
@@ -94,7 +95,8 @@ bool PlanKey::matches(const SimulationOptions& o, const std::vector<MimicJoint>&
                       const std::vector<char>& shapes) const {
   return o.dt == dt && o.solver == solver && o.position_iterations == position_iterations &&
          o.velocity_iterations == velocity_iterations && o.compat == compat &&
-         same_mimic_dofs(mimic, mimic_joints) && shapes == shape_links;
+         o.guard.enabled == guarded && same_mimic_dofs(mimic, mimic_joints) &&
+         shapes == shape_links;
 }
 
 LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {

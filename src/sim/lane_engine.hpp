@@ -59,6 +59,9 @@ struct PlanKey {
   SolverType solver;
   int position_iterations, velocity_iterations;
   Compat compat;
+  /// The step guard: a guarded group steps one step a run (its guard tests each), so that the
+  /// others keep many.
+  bool guarded;
   std::vector<MimicJoint> mimic_joints;  ///< their dofs count (same_mimic_dofs)
   std::vector<char> shape_links;         ///< per link: it carries collision shapes
 };
@@ -207,7 +210,7 @@ struct LaneGroup {
 struct LaneGroups {
   std::vector<LaneGroup> groups;
   std::vector<int> group_of, lane_of;  // per environment
-  std::vector<LaneJob> jobs;
+  std::vector<LaneJob> jobs, stepwise;  // a call's runs of many steps; of one step a run
   LanePool pool;
 };
 

@@ -75,10 +75,10 @@ TEST(LaneGroups, MixedPlansEachAsItsSimulation) {
     const Simulation proto = group_prototype(5, solver);
     Batch batch = mixed_batch(proto);
     batch.set_isa(SimdIsa::sse2);
-    EXPECT_EQ(batch.step_path(), "sse2 lanes: 5 groups (5, 2, 1, 1, 1 environments)");
+    EXPECT_EQ(batch.step_path(), "sse2 lanes: 6 groups (4, 2, 1, 1, 1, 1 environments)");
     EXPECT_EQ(batch.env_path(9), "sse2 lanes, group 0");
     EXPECT_EQ(batch.env_path(4), "sse2 lanes, group 1");
-    EXPECT_EQ(batch.env_path(8), "sse2 lanes, group 0");  // the guard is each lane's
+    EXPECT_EQ(batch.env_path(8), "sse2 lanes, group 5");  // guarded: one step a run
     EXPECT_THROW(batch.env_path(10), std::invalid_argument);
     batch.set_isa(std::nullopt);
     std::vector<Simulation> alone;
@@ -167,7 +167,7 @@ TEST(LaneGroups, DivergenceInTwoGroups) {
   EXPECT_FALSE(batch.divergences()[6].has_value());
 }
 
-// A settings change moves an environment from group to group (the guard keeps it where it is):
+// A settings change moves an environment from group to group (the guard too):
 // the lanes regroup before the next step and it goes on as its Simulation.
 TEST(LaneGroups, RegroupedWhenAPlanChanges) {
   const Simulation proto = group_prototype(9, SolverType::pgs);
@@ -191,7 +191,7 @@ TEST(LaneGroups, RegroupedWhenAPlanChanges) {
   SimulationOptions guarded = o;
   guarded.guard.enabled = true;
   change(1, guarded);
-  EXPECT_NE(batch.step_path().find("2 groups (4, 1 environments)"),
+  EXPECT_NE(batch.step_path().find("3 groups (3, 1, 1 environments)"),
             std::string::npos)
       << batch.step_path();
   step_all(20);
