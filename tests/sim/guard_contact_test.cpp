@@ -83,8 +83,8 @@ TEST(GuardContact, RedoneLandingReportsTheGroundsImpulse) {
 
 // A tree half sunk into the ground (its root box's centre on it), guarded with up to 8 and 64
 // sub-steps: no step diverges (before eq. G-3a, G-3b PGS reached NaN at the first step with 64).
-// Its energy is not bounded yet: the push-out throws it, unguarded too (docs/math/step_guard.md,
-// "The sub-step law").
+// Its energy is not bounded yet: the push-out throws it, unguarded too (PGS 24 m, TGS 2.4 m;
+// guarded 16 m and 3 m; docs/math/step_guard.md, "The sub-step law").
 
 TEST(GuardContact, HalfSunkTreeStaysBounded) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs})
