@@ -55,7 +55,8 @@ void setup_normal_law(ContactNormalRow& row, double d, double vn, double restitu
   row.target = bounce ? -restitution * vn : 0.0;
   if (!phase.tgs) {
     row.separation = p0;
-    row.bias = bounce ? 0.0 : (p0 >= 0.0 ? p0 / dt : kPgsBias * p0 / dt);  // C3
+    const double push_dt = phase.push_dt > 0.0 ? phase.push_dt : dt;
+    row.bias = bounce ? 0.0 : (p0 >= 0.0 ? p0 / dt : kPgsBias * p0 / push_dt);  // C3, (G-3b)
   } else {
     // C6, C7: the bounce leaves from where the body meets the ground.
     row.separation = bounce ? p0 + row.target * (dt + p0 / vn) : p0;
@@ -460,6 +461,19 @@ void ContactRows::report(double dt, std::vector<ContactReport>& reports,
     }
     link_force[static_cast<size_t>(patch.link)] += inv_dt * total;
   }
+}
+
+double ContactRows::work(const std::vector<Vec6>& link_velocity) const {
+  double w = 0.0;
+  for (int k = 0; k < num_patches_; ++k) {
+    const ContactPatch& patch = patches_[static_cast<size_t>(k)];
+    const Vec6& V = link_velocity[static_cast<size_t>(patch.link)];
+    for (int r = patch.first_normal; r < patch.first_normal + patch.num_normals; ++r)
+      w += normals_[static_cast<size_t>(r)].impulse * normals_[static_cast<size_t>(r)].J.dot(V);
+    for (int r = patch.first_friction; r < patch.first_friction + 2 * patch.num_anchors; ++r)
+      w += frictions_[static_cast<size_t>(r)].impulse * frictions_[static_cast<size_t>(r)].J.dot(V);
+  }
+  return w;
 }
 
 namespace contact_laws {

@@ -48,6 +48,7 @@ void Stepper::setup_contacts(const RowPhase& phase) {
   contact_phase.dt = phase.dt;
   contact_phase.h = phase.h;
   contact_phase.tgs = phase.tgs;
+  contact_phase.push_dt = settings_.options.dt;
   const int iterations = settings_.options.position_iterations;
   ws_.num_ground_contacts =
       ws_.contacts_active
@@ -94,6 +95,12 @@ void Stepper::track_contacts(double h) {
 
 void Stepper::contact_forces() {
   if (!ws_.contacts_active && !ws_.self_contacts_active) return;
+  report_contacts();
+  conclude_contacts();
+}
+
+// The (sub-)step's impulses into the reports, the links' forces their sum / options.dt.
+void Stepper::report_contacts() {
   if (ws_.contacts_active)
     ws_.contact_rows.report(settings_.options.dt, ws_.contacts, ws_.link_contact_force);
   else
@@ -101,6 +108,9 @@ void Stepper::contact_forces() {
   if (ws_.self_contacts_active)
     ws_.self_contacts.report(settings_.options.dt, ws_.contacts, ws_.num_ground_contacts,
                              ws_.link_contact_force);
+}
+
+void Stepper::conclude_contacts() {
   // The anchors are kept only from a step that ends: one that diverges throws here and leaves
   // them as they were, as it leaves the state (found by fuzz_step: NaN anchors then made the
   // simulation's checkpoint unreadable).

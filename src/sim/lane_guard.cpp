@@ -48,10 +48,6 @@ void Batch::lane_guard_start() {
     ws.velocity_limit_force = s.state_[StateStorage::velocity_limit_force];
     guard_steps_[i] = lane_steps_[i];
     guard_time_[i] = lane_time_[i];
-    if (ws.contacts_active) {  // same sizes from the second step: copies into their room
-      ws.guard_contacts = ws.contacts;
-      ws.guard_link_contact_force = ws.link_contact_force;
-    }
   }
 }
 
@@ -91,12 +87,8 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
     s.state_[StateStorage::velocity_limit_force] = ws.velocity_limit_force;
     lane_steps_[i] = guard_steps_[i];
     lane_time_[i] = guard_time_[i];
-    // A redone step reports no contacts (Stepper::guard_redo): the start's reports and forces, the
-    // anchors not kept (contact_conclude left them to the guard).
-    if (ws.contacts_active) {
-      ws.contacts = ws.guard_contacts;
-      ws.link_contact_force = ws.guard_link_contact_force;
-    }
+    // The redo reports its contacts and keeps its anchors (Stepper::guard_redo) from the start's
+    // anchors, which contact_conclude left to the guard.
     stepper.load_state();
     try {
       // A step the lanes stopped (not finite) left no end to test: the Simulation's whole guarded

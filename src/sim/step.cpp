@@ -365,10 +365,11 @@ void Stepper::solve_pgs() {
   ws_.departures.qd_position = ws_.qd;
   integrate_positions(dt);
   phase.velocity_iteration = true;
-  // A guard sub-step runs none: at every sub-step they fed energy into long chains
-  // (docs/math/step_guard.md, "The sub-step law").
+  // A guard sub-step runs none: at every sub-step they fed energy into long chains; but with the
+  // ground on, whose push-out they take back (docs/math/step_guard.md, "The sub-step law").
   const int velocity_iterations =
-      ws_.dt == settings_.options.dt ? settings_.options.velocity_iterations : 0;
+      ws_.dt == settings_.options.dt || ws_.contacts_active ? settings_.options.velocity_iterations
+                                                            : 0;
   for (int it = 0; it < velocity_iterations; ++it) sweep(phase);
   if (physx())  // prismatic_limits.cpp
     clamp_prismatic_positions(*model_, settings_.lower_limit, settings_.upper_limit, ws_.q);

@@ -45,6 +45,9 @@ void Workspace::size_guard(const Model& model) {
   guard_q1 = VecX::Zero(nq);
   for (VecX& v : guard_impulse) v = VecX::Zero(nv);
   guard_rows.assign(static_cast<size_t>(nv), GuardRow{});
+  guard_anchors.assign(model.shapes.size(), FrictionAnchors{});
+  guard_link_contact_force.assign(static_cast<size_t>(model.num_links()), Vec3::Zero());
+  guard_link_velocity.assign(static_cast<size_t>(model.num_links()), Vec6::Zero());
   guard_e1_valid = false;
 }
 
@@ -102,6 +105,7 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
     }
   }
   guard_energy(ws_.q, ws_.qd, e1);
+  if (ws_.contacts_active) work += guard_contact_work();
   // eq. (G-4), (G-5); a NaN anywhere fails.
   const double excess = (e1[0] + e1[1]) - (e0[0] + e0[1]) - work;
   const double scale = e0[0] + e1[0] + std::abs(work) + std::abs(e1[1] - e0[1]);
@@ -122,6 +126,21 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
   // forgives it (eq. G-9), so that the debt shrinks and old debts do not fail every sub-step.
   const bool account_ok = next.created <= budget || created <= (1.0 - leak) * budget;
   return !moved_too_far && excess <= allowed && account_ok;
+}
+
+// Eq. (G-3a): the ground rows' impulses times their points' end velocities, J . V with V each
+// link's end velocity (guard_energy's kinematics) in frame 0 about the rows' origin, as a floating
+// base's impulses are taken times its end velocity in (G-3).
+double Stepper::guard_contact_work() {
+  const Data& end = *ws_.guard_data;
+  const Vec3& origin = ws_.data.frame_origin;  // the rows' (set up from the step's start)
+  for (int i = 0; i < model_->num_links(); ++i) {
+    const Mat3& R = end.world_rotation[i];
+    const Vec3 w = R * end.velocity[i].head<3>();
+    ws_.guard_link_velocity[static_cast<size_t>(i)] << w,
+        R * end.velocity[i].tail<3>() + w.cross(origin - end.world_position[i]);
+  }
+  return ws_.contact_rows.work(ws_.guard_link_velocity);
 }
 
 // Eq. (G-10): a force or acceleration drive's work beyond what its spring released and its damper
@@ -228,6 +247,8 @@ void Stepper::guard_redo() {
   double e0[2], e1[2];
   const double* e_start = ws_.guard_e0;
   ++ws_.guard_triggers;
+  const bool contacts = ws_.contacts_active || ws_.self_contacts_active;
+  if (ws_.contacts_active) ws_.guard_anchors = ws_.contact_rows.anchors();  // not yet concluded
   for (int n = 2;; n = std::min(2 * n, most)) {
     load_state();  // the step's start again
     for (VecX& v : ws_.guard_impulse) v.setZero();
@@ -236,6 +257,9 @@ void Stepper::guard_redo() {
     e0[0] = e_start[0];
     e0[1] = e_start[1];
     ws_.guard_account_next = ws_.guard_account;
+    if (ws_.contacts_active) ws_.contact_rows.set_anchors(ws_.guard_anchors);
+    std::fill(ws_.guard_link_contact_force.begin(), ws_.guard_link_contact_force.end(),
+              Vec3::Zero());
     bool passed = true;
     // A failing sub-step ends this n, unless n is the last one there is: that one is kept.
     for (int i = 1; i <= n && (passed || n == most); ++i) {
@@ -252,6 +276,13 @@ void Stepper::guard_redo() {
         ws_.guard_impulse[1][d] += r.low_impulse + r.high_impulse;
         ws_.guard_impulse[2][d] += r.friction_impulse + r.transmission_friction_applied;
         ws_.guard_impulse[3][d] += r.velocity_limit_impulse;
+      }
+      // A sub-step of dt / n as a step of its own: its impulses summed, its anchors the next's.
+      if (contacts) {
+        report_contacts();
+        for (size_t l = 0; l < ws_.guard_link_contact_force.size(); ++l)
+          ws_.guard_link_contact_force[l] += ws_.link_contact_force[l];
+        if (ws_.contacts_active) ws_.contact_rows.conclude();
       }
       const bool ok = guard_passes(tau, e0, e1);
       passed = passed && ok;
@@ -276,9 +307,27 @@ void Stepper::guard_redo() {
       }
       ws_.dt = dt;
       ws_.target_lead = 0.0;
+      if (contacts) guard_contact_forces(n);
       keep_guard_end(e1);
       return;
     }
+  }
+}
+
+// The last sub-step's points, their impulses times n (the step's rate: exact at rest); each link's
+// force the step's summed impulses / dt. A redo that diverged keeps the step-start's anchors.
+void Stepper::guard_contact_forces(int n) {
+  for (int k = 0; k < ws_.num_contacts; ++k) {
+    ContactReport& c = ws_.contacts[static_cast<size_t>(k)];
+    c.normal_impulse *= n;
+    c.friction_impulse *= n;
+  }
+  ws_.link_contact_force = ws_.guard_link_contact_force;
+  try {
+    check_finite_or_throw();
+  } catch (const DivergenceError&) {
+    if (ws_.contacts_active) ws_.contact_rows.set_anchors(ws_.guard_anchors);
+    throw;
   }
 }
 

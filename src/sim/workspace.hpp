@@ -123,10 +123,12 @@ struct Workspace {
   VecX guard_q1, guard_qd1;
   double guard_e1[2] = {0.0, 0.0};
   bool guard_e1_valid = false;
-  /// The contact reports and link forces at the step's start: Batch's lanes report the step they
-  /// advance, a redone step keeps these (lane_guard.cpp).
-  std::vector<ContactReport> guard_contacts;
+  /// A redone step's contacts: the anchors at its start (each n starts from them), the links'
+  /// contact impulses / dt summed over its sub-steps, the links' end velocities (frame 0) the
+  /// contacts' work reads (eq. G-3a).
+  std::vector<FrictionAnchors> guard_anchors;
   std::vector<Vec3> guard_link_contact_force;
+  std::vector<Vec6> guard_link_velocity;
   GuardAccount guard_account;  ///< test (iii): committed with the step
   GuardAccount guard_account_next;  ///< the account after the (sub-)step being tested
   int guard_substeps = 1;
@@ -193,11 +195,17 @@ class Stepper {
   void track_contacts(double h);
   void contact_link_velocities();
   void contact_forces();
+  void report_contacts();
+  void conclude_contacts();
   // The guard (step_guard.cpp).
   void guard_rows_from_step();
   /// Tests (i) and (ii) of the advance just made from guard_q0, guard_qd0 (energies e0);
   /// leaves the end's energies in e1.
   bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);
+  /// The contact rows' work over the (sub-)step at the end velocities in guard_data (eq. G-3a).
+  double guard_contact_work();
+  /// A redone step's contacts: the last sub-step's points at the step's rate, the summed forces.
+  void guard_contact_forces(int n);
   void guard_energy(const VecX& q, const VecX& qd, double e[2]);  ///< kinetic, potential
   const VecX& guard_substep_force();
   void keep_guard_end(const double e1[2]);

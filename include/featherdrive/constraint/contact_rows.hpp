@@ -19,6 +19,9 @@ struct ContactPhase {
   bool tgs = false;
   bool velocity_iteration = false;
   double elapsed = 0.0;  ///< TGS: time from the step's start to this sub-step's start
+  /// PGS: the time a penetration is pushed out over (C3), dt but a guard sub-step's: the whole
+  /// step's (docs/math/step_guard.md, eq. G-3b); 0: dt.
+  double push_dt = 0.0;
 };
 
 struct ContactNormalRow {
@@ -94,6 +97,9 @@ class ContactRows {
 
   /// The impulses of the step into the reports, and each link's contact force (sum / dt).
   void report(double dt, std::vector<ContactReport>& reports, std::vector<Vec3>& link_force) const;
+  /// The work of the step's impulses at link velocities V (frame 0, about the set-up's origin):
+  /// sum over rows of impulse J . V (docs/math/step_guard.md, eq. G-3a).
+  double work(const std::vector<Vec6>& link_velocity) const;
   /// The step's end: the anchors of the patches that stuck are kept for the next step, the others
   /// dropped (C9).
   void conclude();
