@@ -885,14 +885,11 @@ std::string Batch::step_path() {
   prepare_lanes();
   const simd::LaneGroups& l = *lanes_;
   if (l.groups.size() == 1) return std::string(to_string(l.groups.front().isa)) + " lanes";
-  auto plural = [](size_t k, const char* what) {
-    return std::to_string(k) + " " + what + (k == 1 ? "" : "s");
-  };
   bool one_isa = true;
   for (const simd::LaneGroup& g : l.groups) one_isa = one_isa && g.isa == l.groups.front().isa;
   std::string path =
       one_isa ? std::string(to_string(l.groups.front().isa)) + " lanes: " : "lanes: ";
-  path += plural(l.groups.size(), "group") + " (";
+  path += std::to_string(l.groups.size()) + " groups (";
   for (size_t g = 0; g < l.groups.size(); ++g) {
     if (g > 0) path += ", ";
     if (!one_isa) path += std::string(to_string(l.groups[g].isa)) + " ";
@@ -1074,14 +1071,12 @@ void Batch::step(int count) {
   if (lanes) step_lanes(count);
   // Without lanes every environment is its Simulation.
   const int n = size();
-  const int scalar = lanes ? 0 : n;
   // One slot per environment: environments never share anything a step writes.
   std::vector<std::exception_ptr>& failed = failed_;
   failed.resize(static_cast<size_t>(n));
-  if (scalar > 0)
-    parallel(scalar, 1, [&](int begin, int end) {
-      for (int k = begin; k < end; ++k) {
-        const int i = k;
+  if (!lanes)
+    parallel(n, 1, [&](int begin, int end) {
+      for (int i = begin; i < end; ++i) {
         Simulation& s = sims_[static_cast<size_t>(i)];
         try {
           s.step(count);
