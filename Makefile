@@ -16,7 +16,7 @@ CMAKE_FLAGS ?=
 # BUILD_TYPE=RelWithDebInfo for a debugger.
 BUILD_TYPE ?= Release
 
-.PHONY: all deps configure build run test test-asan test-main fuzz fuzz-build fuzz-run bench clean format physx
+.PHONY: all deps configure build run test test-asan test-fuzz test-main fuzz fuzz-build fuzz-run bench clean format physx
 
 all: build
 
@@ -26,9 +26,9 @@ deps:
 # The main build: clang (a third less compile time than gcc 12 on this code); every test runs
 # here, against the optimised library (docs/testing.md).
 MAIN_FLAGS ?= -DCMAKE_CXX_COMPILER=clang++
-# The tests the sanitizer build compiles and runs: hostile (the command's tests and the regression
-# replay, beside the fuzzers: what CI runs) or all (every test but the peers' and Python's, under
-# ASan and UBSan: about 20 times slower than the main build; make test-asan ASAN_TESTS=all).
+# The tests `make test-asan` compiles and runs in the sanitizer build (not part of `make test`):
+# hostile (the command's tests and the regression replay) or all (every test but the peers' and
+# Python's, under ASan and UBSan: about 20 times slower than the main build).
 ASAN_TESTS ?= hostile
 
 $(BUILD)/CMakeCache.txt: | deps
@@ -67,7 +67,6 @@ $(ASAN_BUILD)/CMakeCache.txt: | deps
 	  -DFEATHERDRIVE_SANITIZE=ON -DFEATHERDRIVE_FUZZ=ON -DFEATHERDRIVE_PEER_TESTS=OFF \
 	  -DFEATHERDRIVE_TEST_SET=$(ASAN_TESTS) $(CMAKE_FLAGS)
 
-# The sanitizer build runs first so that the suite's last lines are the main build's ctest summary.
 test-asan: deps $(ASAN_BUILD)/CMakeCache.txt
 	@grep -q '^FEATHERDRIVE_TEST_SET:STRING=$(ASAN_TESTS)$$' $(ASAN_BUILD)/CMakeCache.txt || \
 	  cmake -S . -B $(ASAN_BUILD) -DFEATHERDRIVE_TEST_SET=$(ASAN_TESTS)
@@ -78,8 +77,16 @@ test-asan: deps $(ASAN_BUILD)/CMakeCache.txt
 test-main: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+# The sanitizers' half of `make test`: the fuzz targets replay their seed corpus and the inputs
+# fuzzing once found wrong (tests/regression/inputs/), then TEST_FUZZ_RUNS inputs each from seed 1,
+# the same every run (docs/testing.md, "Where CI's time goes").
+TEST_FUZZ_RUNS ?= 15000
+test-fuzz: fuzz-build
+	@$(MAKE) --no-print-directory fuzz-run FUZZ_RUNS=$(TEST_FUZZ_RUNS) FUZZ_SEED=1
+
+# The fuzzers first, so that the suite's last lines are the main build's ctest summary.
 test: deps
-	@$(MAKE) --no-print-directory test-asan
+	@$(MAKE) --no-print-directory test-fuzz
 	@$(MAKE) --no-print-directory test-main
 
 # libFuzzer targets (tests/fuzz), built in the sanitizer build $(FUZZ_BUILD); each runs for
@@ -110,7 +117,8 @@ fuzz-run-%:
 	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$* $(FUZZ_LENGTH) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$*- \
-	    $(FUZZ_BUILD)/corpus/$* tests/fuzz/corpus/$* 2>$(FUZZ_BUILD)/fuzz_$*.log \
+	    $(FUZZ_BUILD)/corpus/$* tests/fuzz/corpus/$* $(wildcard tests/regression/inputs/$*) \
+	    2>$(FUZZ_BUILD)/fuzz_$*.log \
 	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$*.log; \
 	       tail -n 8 $(FUZZ_BUILD)/fuzz_$*.log; echo "fuzz_$* FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
 	@grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$*.log || true
