@@ -71,8 +71,10 @@ std::size_t scratch_doubles(const Plan& p) {
   return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
 }
 
-// Groups of fewer environments step in one-lane blocks (docs/simd_batch.md, "One-lane blocks").
-constexpr int kOneLaneBelow = 3;
+// Groups of fewer environments step in one-lane blocks: one environment's one-lane block was
+// 1.5 to 1.9 times as fast as an SSE2 block of two vectors, two environments' 0.66 to 0.92 times
+// (docs/benchmarks.md, "One-lane blocks").
+constexpr int kOneLaneBelow = 2;
 
 SimdIsa lane_isa(int count) {
   SimdIsa isa = default_simd_isa();

