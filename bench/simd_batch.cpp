@@ -6,6 +6,7 @@
 // off), simd_<isa> (lanes of that width, Batch::set_isa), mujoco.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -140,6 +141,30 @@ void lanes_batch(benchmark::State& state, const BenchRobot& robot, int count, in
   run(state, batch, robot.q0, count);
 }
 
+// Small lane groups (docs/simd_batch.md, "One-lane blocks"): `count` environments as one group in
+// one-lane blocks (FEATHERDRIVE_SIMD=one while it runs) or in SSE2 blocks of two vectors
+// (set_isa), and Batch(sim, 1) as it comes against the Simulation stepped alone. Names:
+// lane_small_groups/<robot>/<one_lane|sse2>/envs:<N>/threads:1,
+// lane_one/<robot>/<simulation|batch>/envs:1/threads:1.
+void small_group(benchmark::State& state, const Simulation& prototype, int count, bool one_lane) {
+  const char* was = std::getenv("FEATHERDRIVE_SIMD");
+  const std::string before = was ? was : "";
+  if (one_lane) setenv("FEATHERDRIVE_SIMD", "one", 1);
+  {
+    Batch batch(prototype, count);
+    batch.set_num_threads(1);
+    if (!one_lane) batch.set_isa(SimdIsa::sse2);
+    const std::string path = batch.step_path();
+    state.SetLabel(path);
+    if (one_lane != (path.find("at one lane") != std::string::npos))
+      state.SkipWithError(path.c_str());
+    else
+      run(state, batch, prototype.q(), count);
+  }
+  if (!was) unsetenv("FEATHERDRIVE_SIMD");
+  else setenv("FEATHERDRIVE_SIMD", before.c_str(), 1);
+}
+
 // MuJoCo's humanoid with its free joint removed (the torso welded where the file puts it).
 std::string welded_humanoid_xml() {
   std::ifstream in("/usr/share/mujoco/model/humanoid/humanoid.xml");
@@ -193,6 +218,26 @@ void register_simd_batch() {
                                    [=](benchmark::State& s) { grouped_batch(s, *prototype, k, lanes); })
           ->UseRealTime();
     }
+  static const std::vector<std::pair<std::string, Simulation>> small = {
+      loaded.front(), {"chain16", bench_simulation(make_chain(16))},
+      {"chain256", bench_simulation(make_chain(256))}};
+  for (const auto& [name, sim] : small) {
+    const Simulation* prototype = &sim;
+    for (int n = 1; n <= 4 && name != "chain256"; ++n)
+      for (const bool one : {true, false})
+        benchmark::RegisterBenchmark(
+            ("lane_small_groups/" + name + (one ? "/one_lane" : "/sse2") + "/envs:" +
+             std::to_string(n) + "/threads:1")
+                .c_str(),
+            [=](benchmark::State& s) { small_group(s, *prototype, n, one); })
+            ->UseRealTime();
+    benchmark::RegisterBenchmark(("lane_one/" + name + "/simulation/envs:1/threads:1").c_str(),
+                                 [=](benchmark::State& s) { as_loaded_simulation(s, *prototype); })
+        ->UseRealTime();
+    benchmark::RegisterBenchmark(("lane_one/" + name + "/batch/envs:1/threads:1").c_str(),
+                                 [=](benchmark::State& s) { as_loaded_batch(s, *prototype, 1, 1); })
+        ->UseRealTime();
+  }
   static std::vector<BenchRobot> robots = {make_arm7(), make_chain(16), humanoid_hold()};
   robots[1].name = "chain16";
   static const std::string humanoid_xml = welded_humanoid_xml();

@@ -115,7 +115,9 @@ void featherdrive::python::bind_batch(py::module_& m) {
       .def_property_readonly(
           "step_path", [](Batch& b) { return locked(b, [&] { return b.step_path(); }); },
           "How the next step() runs: 'avx2 lanes' (one lane group), 'avx2 lanes: 2 groups (6, 2 "
-          "environments)', or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar).")
+          "environments)', the environments in one-lane blocks (a group of one) counted last "
+          "('sse2 lanes (1 at one lane)', 'avx2 lanes: 2 groups (6, 1 environments; 1 at one "
+          "lane)'), or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar).")
       .def(
           "env_path",
           [](Batch& b, py::handle i) {
@@ -123,7 +125,8 @@ void featherdrive::python::bind_batch(py::module_& m) {
             return locked(b, [&] { return b.env_path(index); });
           },
           py::arg("i"),
-          "How the next step() runs environment i: 'avx2 lanes, group 1' or 'scalar: ' and why.")
+          "How the next step() runs environment i: 'avx2 lanes, group 1', 'sse2 lanes, group 1 "
+          "(one lane)' or 'scalar: ' and why.")
       .def_property(
           "isa",
           [](const Batch& b) { return locked(b, [&] { return std::string(to_string(b.isa())); }); },

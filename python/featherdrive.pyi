@@ -620,10 +620,12 @@ class Batch:
     @property
     def step_path(self) -> str:
         """How the next step() runs: 'avx2 lanes' (one lane group), 'avx2 lanes: 2 groups (6, 2
-        environments)', or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar)."""
+        environments)', the environments in one-lane blocks (a group of one) counted last
+        ('sse2 lanes (1 at one lane)', 'avx2 lanes: 2 groups (6, 1 environments; 1 at one
+        lane)'), or 'scalar: ' and why (lanes off, FEATHERDRIVE_SIMD=scalar)."""
     def env_path(self, i: Int) -> str:
-        """How the next step() runs environment i: 'avx2 lanes, group 1' or 'scalar: ' and
-        why."""
+        """How the next step() runs environment i: 'avx2 lanes, group 1', 'sse2 lanes, group 1
+        (one lane)' or 'scalar: ' and why."""
     @property
     def width(self) -> int:
         """Environments per vector of isa: 2, 4 or 8."""

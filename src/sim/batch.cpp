@@ -844,7 +844,8 @@ bool Batch::prepare_lanes() {
         if (fits(k)) g = k;
       if (g < 0) {
         g = static_cast<int>(lanes->groups.size());
-        lanes->groups.push_back({simd::PlanKey(s.options(), s.mimic_joints(), shapes), {}, {}, {}});
+        lanes->groups.push_back(
+            {simd::PlanKey(s.options(), s.mimic_joints(), shapes), {}, {}, {}, {}});
       }
       simd::LaneGroup& group = lanes->groups[static_cast<size_t>(g)];
       lanes->group_of[static_cast<size_t>(i)] = g;
@@ -864,6 +865,7 @@ bool Batch::prepare_lanes() {
     // The group's own width: narrowed for a small group as for a small batch (every width
     // gives the same bits).
     group.isa = isa_ ? *isa_ : simd::lane_isa(static_cast<int>(group.members.size()));
+    group.one_lane = !isa_ && simd::one_lane_blocks(static_cast<int>(group.members.size()));
     for (size_t j = 0; j < group.members.size(); ++j) {
       const int i = group.members[j];
       unsigned char& what = repack_[static_cast<size_t>(i)];
@@ -884,7 +886,14 @@ std::string Batch::step_path() {
   if (!off.empty()) return "scalar: " + off;
   prepare_lanes();
   const simd::LaneGroups& l = *lanes_;
-  if (l.groups.size() == 1) return std::string(to_string(l.groups.front().isa)) + " lanes";
+  int one_lane = 0;  // environments in one-lane blocks
+  for (const simd::LaneGroup& g : l.groups)
+    if (g.one_lane) one_lane += static_cast<int>(g.members.size());
+  const std::string at_one = std::to_string(one_lane) + " at one lane";
+  if (l.groups.size() == 1) {
+    const std::string path = std::string(to_string(l.groups.front().isa)) + " lanes";
+    return one_lane > 0 ? path + " (" + at_one + ")" : path;
+  }
   bool one_isa = true;
   for (const simd::LaneGroup& g : l.groups) one_isa = one_isa && g.isa == l.groups.front().isa;
   std::string path =
@@ -895,7 +904,7 @@ std::string Batch::step_path() {
     if (!one_isa) path += std::string(to_string(l.groups[g].isa)) + " ";
     path += std::to_string(l.groups[g].members.size());
   }
-  return path + " environments)";
+  return path + " environments" + (one_lane > 0 ? "; " + at_one : std::string()) + ")";
 }
 
 std::string Batch::env_path(int i) {
@@ -904,8 +913,9 @@ std::string Batch::env_path(int i) {
   if (!off.empty()) return "scalar: " + off;
   prepare_lanes();
   const int g = lanes_->group_of[static_cast<size_t>(i)];
-  return std::string(to_string(lanes_->groups[static_cast<size_t>(g)].isa)) + " lanes, group " +
-         std::to_string(g);
+  const simd::LaneGroup& group = lanes_->groups[static_cast<size_t>(g)];
+  return std::string(to_string(group.isa)) + " lanes, group " + std::to_string(g) +
+         (group.one_lane ? " (one lane)" : "");
 }
 
 // Every lane group's environments through its lanes (all groups' blocks on one pool of
@@ -980,7 +990,8 @@ void Batch::step_lanes(int count) {
     simd::Block b = a;
     b.rows = g.members.data();
     if (!g.key.guarded) b.guard_rows = nullptr;
-    (control || g.key.guarded ? l.stepwise : l.jobs).push_back({g.engine.get(), b, g.isa});
+    (control || g.key.guarded ? l.stepwise : l.jobs)
+        .push_back({g.engine.get(), b, g.isa, g.one_lane});
   }
   const int threads = effective_num_threads();
   if (!l.jobs.empty()) l.pool.run(l.jobs, count, threads);

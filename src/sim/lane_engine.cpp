@@ -62,7 +62,7 @@ Layout make_layout(const Plan& p) {
   l.contact_vel = take(p.contacts ? 6 * L : 0);
   l.contact_bias = take(p.physx_contacts ? 6 * L : 0);
   l.contact_motion = take(p.physx_contacts ? 6 * L : 0);
-  l.flags = take(2 * n);  // eight doubles a dof (a vector holds at least four)
+  l.flags = take(8 * n);  // eight doubles a dof (a one-lane block's vector is one double)
   l.size = at;
   return l;
 }
@@ -71,6 +71,11 @@ std::size_t scratch_doubles(const Plan& p) {
   return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
 }
 
+// Groups of fewer environments step in one-lane blocks: one environment's one-lane block was
+// 1.5 to 1.9 times as fast as an SSE2 block of two vectors, two environments' 0.66 to 0.92 times
+// (docs/benchmarks.md, "One-lane blocks").
+constexpr int kOneLaneBelow = 2;
+
 SimdIsa lane_isa(int count) {
   SimdIsa isa = default_simd_isa();
   const char* forced = std::getenv("FEATHERDRIVE_SIMD");
@@ -78,6 +83,12 @@ SimdIsa lane_isa(int count) {
     while (isa != SimdIsa::sse2 && simd_width(isa) * 2 > count)
       isa = isa == SimdIsa::avx512 ? SimdIsa::avx2 : SimdIsa::sse2;
   return isa;
+}
+
+bool one_lane_blocks(int count) {
+  const char* forced = std::getenv("FEATHERDRIVE_SIMD");
+  if (forced && *forced) return std::string(forced) == "one";
+  return count < kOneLaneBelow;
 }
 
 PlanKey::PlanKey(const SimulationOptions& o, const std::vector<MimicJoint>& mimic,
@@ -395,15 +406,16 @@ void LaneEngine::begin_run() {
   std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
 }
 
-int LaneEngine::blocks(SimdIsa isa, int threads) const {
+int LaneEngine::blocks(SimdIsa isa, bool one_lane, int threads) const {
+  if (one_lane) return count_;
   const int W = simd_width(isa) * interleave(simd_width(isa), count_, threads);
   return (count_ + W - 1) / W;
 }
 
-void LaneEngine::run_block(const Block& arrays, int block, int steps, SimdIsa isa, int threads,
-                           double* scratch) {
-  const int K = interleave(simd_width(isa), count_, threads);
-  const int W = simd_width(isa) * K;  // lanes of a block
+void LaneEngine::run_block(const Block& arrays, int block, int steps, SimdIsa isa, bool one_lane,
+                           int threads, double* scratch) {
+  const int K = one_lane ? 1 : interleave(simd_width(isa), count_, threads);
+  const int W = one_lane ? 1 : simd_width(isa) * K;  // lanes of a block
   Block b = arrays;
   b.env0 = block * W;
   b.interleave = K;
@@ -412,6 +424,10 @@ void LaneEngine::run_block(const Block& arrays, int block, int steps, SimdIsa is
   b.stop = stops_.data(), b.stopped_now = stopped_now_.get();
   b.contacts = plan_.contacts ? &contacts_ : nullptr;
   b.tables = &tables_;
+  if (one_lane) {
+    run_block_one(plan_, b, scratch, steps);
+    return;
+  }
   switch (isa) {
     case SimdIsa::sse2:
       run_block_sse2(plan_, b, scratch, steps);
@@ -437,7 +453,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
     LaneEngine& e = *jobs[j].engine;
     e.begin_run();
     doubles = std::max(doubles, scratch_doubles(e.plan()) + 8);
-    const int blocks = e.blocks(jobs[j].isa, threads_wanted);
+    const int blocks = e.blocks(jobs[j].isa, jobs[j].one_lane, threads_wanted);
     for (int b = 0; b < blocks; ++b) work_.push_back({static_cast<int>(j), b});
   }
   const int n = static_cast<int>(work_.size());
@@ -449,7 +465,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
   auto run_one = [&](int w, double* scratch) {
     const LaneJob& job = jobs[static_cast<size_t>(work_[static_cast<size_t>(w)].first)];
     job.engine->run_block(job.arrays, work_[static_cast<size_t>(w)].second, steps, job.isa,
-                          threads_wanted, scratch);
+                          job.one_lane, threads_wanted, scratch);
   };
   if (threads <= 1) {
     for (int w = 0; w < n; ++w) run_one(w, scratch_of(0));

@@ -37,6 +37,11 @@ struct ContactLanes {
 /// FEATHERDRIVE_SIMD narrowed while a block of two vectors would hold more lanes than
 /// environments (fewer padding lanes; every width gives the same bits).
 SimdIsa lane_isa(int count);
+/// Whether a lane group of `count` environments steps in one-lane blocks (a plain double a lane,
+/// simd_lane_step_one.cpp) rather than vector blocks of lane_isa(count): a small group, where a
+/// vector block's padding lanes cost more than the vectors save (docs/simd_batch.md, "One-lane
+/// blocks"). Not while FEATHERDRIVE_SIMD names an instruction set.
+bool one_lane_blocks(int count);
 
 /// One environment's rows of the last lane step (Block::guard_rows: nv kGuardFields values) as
 /// the step guard reads them (out: nv entries).
@@ -117,13 +122,13 @@ class LaneEngine {
   void set_parameter(int env, int index, double value) { parameters_[at(env, index)] = value; }
 
   /// A run's blocks (LanePool::run): begin_run() clears stopped_now(); the blocks of W lanes
-  /// (W: the isa's width times the interleave, chosen for `threads`) each make `steps` steps of
-  /// their environments on the state arrays and clocks `arrays` points at (its other fields are
-  /// the engine's to set). An environment stopped earlier (stop(e)) stays.
+  /// (W: the isa's width times the interleave, chosen for `threads`; 1 for one_lane) each make
+  /// `steps` steps of their environments on the state arrays and clocks `arrays` points at (its
+  /// other fields are the engine's to set). An environment stopped earlier (stop(e)) stays.
   void begin_run();
-  int blocks(SimdIsa isa, int threads) const;
-  void run_block(const Block& arrays, int block, int steps, SimdIsa isa, int threads,
-                 double* scratch);
+  int blocks(SimdIsa isa, bool one_lane, int threads) const;
+  void run_block(const Block& arrays, int block, int steps, SimdIsa isa, bool one_lane,
+                 int threads, double* scratch);
   /// Why environment e stopped (quantity 0: it did not), and whether in the last run.
   const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
   bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }
@@ -164,6 +169,7 @@ struct LaneJob {
   LaneEngine* engine = nullptr;
   Block arrays;
   SimdIsa isa = SimdIsa::sse2;
+  bool one_lane = false;  ///< one-lane blocks (one_lane_blocks), not isa's
 };
 
 /// The threads that run the blocks of several engines (Batch's lane groups) together, with a
@@ -205,6 +211,7 @@ struct LaneGroup {
   PlanKey key;
   std::vector<int> members;
   SimdIsa isa = SimdIsa::sse2;
+  bool one_lane = false;  ///< its blocks are of one lane (one_lane_blocks), not isa's
   std::unique_ptr<LaneEngine> engine;
 };
 struct LaneGroups {

@@ -48,14 +48,15 @@ SimdIsa default_simd_isa() {
     const auto cpu = xsimd::available_architectures();
     return cpu.avx512f ? SimdIsa::avx512 : cpu.avx2 ? SimdIsa::avx2 : SimdIsa::sse2;
   }
-  if (std::string(forced) == "scalar") return SimdIsa::sse2;  // the narrowest, for set_isa
+  // the narrowest, for set_isa; one: every lane group in one-lane blocks (lane_engine.hpp)
+  if (std::string(forced) == "scalar" || std::string(forced) == "one") return SimdIsa::sse2;
   for (SimdIsa isa : {SimdIsa::sse2, SimdIsa::avx2, SimdIsa::avx512})
     if (std::string(forced) == to_string(isa)) {
       check_simd_isa(isa, "FEATHERDRIVE_SIMD");
       return isa;
     }
   throw std::invalid_argument(std::string("FEATHERDRIVE_SIMD = '") + forced +
-                              "': expected scalar, sse2, avx2 or avx512");
+                              "': expected scalar, one, sse2, avx2 or avx512");
 }
 
 bool simd_forced_scalar() {

@@ -1,6 +1,7 @@
 // Batch's lane step on one block of W lanes, one environment per lane, written once for any
-// xsimd architecture A and instantiated by simd_lane_step_<isa>.cpp (each compiled for its
-// instruction set, with -ffp-contract=off). It is Simulation's step (step.cpp, aba.cpp,
+// xsimd architecture A, or One (a plain double: one lane), and instantiated by
+// simd_lane_step_<isa>.cpp and simd_lane_step_one.cpp (each compiled for its instruction set,
+// with -ffp-contract=off). It is Simulation's step (step.cpp, aba.cpp,
 // inverse_mass_diagonal.cpp, gauss_seidel.hpp, dof_rows.cpp) for links of 0 or 1 dof on a fixed
 // or floating base, with every branch on lane data turned into a select, so every lane runs the
 // same operations: only + - * /, sqrt (correctly rounded) and exact selects and comparisons, never
@@ -11,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <tuple>
 #include <type_traits>
 #include <utility>
@@ -52,18 +54,68 @@ constexpr SymmetricIndex make_symmetric_index() {
 }
 inline constexpr SymmetricIndex kSym = make_symmetric_index();
 
+// Architecture A's vector of doubles and its mask as the lane step uses them: an xsimd
+// architecture's batch, or One's plain double (one lane, simd_lane_step_one.cpp). The step
+// calls xsimd only through these and the lane_* overloads below, so that it compiles for both.
+template <class A>
+struct LaneVector {
+  using B = xsimd::batch<double, A>;
+  using M = xsimd::batch_bool<double, A>;
+  static constexpr std::size_t size = B::size;
+  static B load_aligned(const double* p) { return B::load_aligned(p); }
+  static B load_unaligned(const double* p) { return B::load_unaligned(p); }
+  static void store_aligned(const B& x, double* p) { x.store_aligned(p); }
+};
+template <class A>
+xsimd::batch<double, A> lane_select(const xsimd::batch_bool<double, A>& c,
+                                    const xsimd::batch<double, A>& x,
+                                    const xsimd::batch<double, A>& y) {
+  return xsimd::select(c, x, y);
+}
+template <class A>
+xsimd::batch<double, A> lane_sqrt(const xsimd::batch<double, A>& x) {
+  return xsimd::sqrt(x);
+}
+template <class A>
+bool lane_any(const xsimd::batch_bool<double, A>& c) {
+  return xsimd::any(c);
+}
+template <class A>
+bool lane_all(const xsimd::batch_bool<double, A>& c) {
+  return xsimd::all(c);
+}
+
+// One lane: a double and a bool, whose operations (+ - * /, sqrt, comparisons) are the same
+// IEEE operations as a vector's lane by lane, so it gives the lanes' bits.
+struct One {};
+template <>
+struct LaneVector<One> {
+  using B = double;
+  using M = bool;
+  static constexpr std::size_t size = 1;
+  static B load_aligned(const double* p) { return *p; }
+  static B load_unaligned(const double* p) { return *p; }
+  static void store_aligned(B x, double* p) { *p = x; }
+};
+inline double lane_select(bool c, double x, double y) { return c ? x : y; }
+using featherdrive::select;  // a plain double's (core/select.hpp), beside the packs' below
+inline double lane_sqrt(double x) { return std::sqrt(x); }
+inline bool lane_any(bool c) { return c; }
+inline bool lane_all(bool c) { return c; }
+
 // K vectors of architecture A as one vector of K W lanes: K independent chains of
 // dependencies per operation, so a sweep's link-to-link latency is paid once for K W lanes.
 // Every operation acts lane by lane, as on one vector.
 template <class A, int K>
 struct PackMask {
-  xsimd::batch_bool<double, A> m[K];
+  typename LaneVector<A>::M m[K];
 };
 
 template <class A, int K>
 struct Pack {
-  using B = xsimd::batch<double, A>;
-  static constexpr std::size_t size = B::size * K;
+  using L = LaneVector<A>;
+  using B = typename L::B;
+  static constexpr std::size_t size = L::size * K;
   B b[K];
   Pack() = default;
   Pack(double x) {  // NOLINT: broadcast, as xsimd's batch
@@ -71,11 +123,11 @@ struct Pack {
   }
   static Pack load_aligned(const double* p) {
     Pack out;
-    for (int k = 0; k < K; ++k) out.b[k] = B::load_aligned(p + k * B::size);
+    for (int k = 0; k < K; ++k) out.b[k] = L::load_aligned(p + k * L::size);
     return out;
   }
   void store_aligned(double* p) const {
-    for (int k = 0; k < K; ++k) b[k].store_aligned(p + k * B::size);
+    for (int k = 0; k < K; ++k) L::store_aligned(b[k], p + k * L::size);
   }
 };
 
@@ -124,19 +176,19 @@ PackMask<A, K> operator!(const PackMask<A, K>& x) {
 template <class A, int K>
 Pack<A, K> select(const PackMask<A, K>& c, const Pack<A, K>& x, const Pack<A, K>& y) {
   Pack<A, K> out;
-  for (int k = 0; k < K; ++k) out.b[k] = xsimd::select(c.m[k], x.b[k], y.b[k]);
+  for (int k = 0; k < K; ++k) out.b[k] = lane_select(c.m[k], x.b[k], y.b[k]);
   return out;
 }
 template <class A, int K>
 bool any(const PackMask<A, K>& c) {
   for (int k = 0; k < K; ++k)
-    if (xsimd::any(c.m[k])) return true;
+    if (lane_any(c.m[k])) return true;
   return false;
 }
 template <class A, int K>
 bool all(const PackMask<A, K>& c) {
   for (int k = 0; k < K; ++k)
-    if (!xsimd::all(c.m[k])) return false;
+    if (!lane_all(c.m[k])) return false;
   return true;
 }
 
@@ -145,9 +197,9 @@ class LaneStep {
  public:
   using V = Pack<A, K>;
   using M = PackMask<A, K>;
-  using B = xsimd::batch<double, A>;
+  using B = typename LaneVector<A>::B;
   static constexpr int kW = static_cast<int>(V::size);
-  static constexpr int kVector = static_cast<int>(xsimd::batch<double, A>::size);
+  static constexpr int kVector = static_cast<int>(LaneVector<A>::size);
 
   LaneStep(const Plan& p, const Block& b, double* scratch)
       : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
@@ -163,7 +215,9 @@ class LaneStep {
   // Scratch and parameters.
   V* at(int base) { return s_ + base; }
   // Entry k of the lanes' parameters: vector j of the pack, or the whole pack.
-  B parameter(int k, int j) const { return B::load_unaligned(parameters_[j] + k * kGroup); }
+  B parameter(int k, int j) const {
+    return LaneVector<A>::load_unaligned(parameters_[j] + k * kGroup);
+  }
   V parameter(int k) const {
     V out;
     for (int j = 0; j < K; ++j) out.b[j] = parameter(k, j);
@@ -307,7 +361,7 @@ class LaneStep {
   }
   static V sqrt_of(const V& x) {  // correctly rounded: the same bits at every width
     V out;
-    for (int k = 0; k < K; ++k) out.b[k] = xsimd::sqrt(x.b[k]);
+    for (int k = 0; k < K; ++k) out.b[k] = lane_sqrt(x.b[k]);
     return out;
   }
   static bool one_dof(const LinkConstants& k) { return k.type == 1 || k.type == 2; }
@@ -780,18 +834,18 @@ template <class A, int K>
                                                                 B* F) const {
   const B zero(0.0), dt(p_.dt), inv_dt(1.0 / p_.dt);
   auto rate = [&](const B& damping) {
-    return xsimd::select(zero < damping, xsimd::select(inv_dt < damping, inv_dt, damping), zero);
+    return lane_select(zero < damping, lane_select(inv_dt < damping, inv_dt, damping), zero);
   };
   auto excess = [&](const B& speed, const B& limit) {
-    return xsimd::select(limit < speed, B(1.0) - limit / speed, zero);
+    return lane_select(limit < speed, B(1.0) - limit / speed, zero);
   };
   const B lin = rate(link_parameter(i, link_linear_damping, j));
   const B ang = rate(link_parameter(i, link_angular_damping, j));
   B v_com[3];
   cross(v, cg, v_com);  // omega x c
   for (int r = 0; r < 3; ++r) v_com[r] = v[3 + r] + v_com[r];
-  const B speed = xsimd::sqrt(v_com[0] * v_com[0] + v_com[1] * v_com[1] + v_com[2] * v_com[2]);
-  const B spin = xsimd::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const B speed = lane_sqrt(v_com[0] * v_com[0] + v_com[1] * v_com[1] + v_com[2] * v_com[2]);
+  const B spin = lane_sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   const B lin_scale = excess(speed, link_parameter(i, link_max_linear_velocity, j));
   const B ang_scale = excess(spin, link_parameter(i, link_max_angular_velocity, j));
   const B fc = -m * (lin + lin_scale / dt), gc = m * lin * dt;
@@ -853,7 +907,7 @@ void LaneStep<A, K>::transmitted_force(int i) {
   const V force2 = F[3] * F[3] + F[4] * F[4] + F[5] * F[5];
   V magnitude;
   for (int k = 0; k < K; ++k)  // sqrt is correctly rounded: the same bits at every width
-    magnitude.b[k] = xsimd::sqrt(torque2.b[k]) + xsimd::sqrt(force2.b[k]);
+    magnitude.b[k] = lane_sqrt(torque2.b[k]) + lane_sqrt(force2.b[k]);
   const LinkConstants& k = p_.links[i];
   for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d)
     row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;
@@ -1232,7 +1286,9 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
     for (int n = 0; n < N; ++n)
       for (int r = 0; r < 6; ++r) lanes[n](pA_end[r]) = pA[n][r];
   };
-  if constexpr (kVectorByVector) {
+  if constexpr (kVectorByVector && K == 1) {  // One
+    leave(std::array<OneVector, 1>{OneVector{0}});
+  } else if constexpr (kVectorByVector) {
     static_assert(K % 2 == 0);
     for (int j = 0; j < K; j += 2) leave(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
   } else {

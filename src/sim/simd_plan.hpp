@@ -311,7 +311,7 @@ struct ActuatorTables;  // lane_engine.hpp: every lane's remotized_pd tables
 struct Block {
   int env0 = 0, valid = 0;
   const int* rows = nullptr;
-  int interleave = 2;  ///< K: vectors of the block (2 or 4)
+  int interleave = 2;  ///< K: vectors of the block (2 or 4; 1 for one lane)
   double* q = nullptr;
   double* qd = nullptr;
   const double* applied = nullptr;
@@ -359,5 +359,7 @@ std::size_t scratch_doubles(const Plan& p);
 void run_block_sse2(const Plan& p, const Block& b, double* scratch, int steps);
 void run_block_avx2(const Plan& p, const Block& b, double* scratch, int steps);
 void run_block_avx512(const Plan& p, const Block& b, double* scratch, int steps);
+/// One lane (Block: W = 1, interleave 1; simd_lane_step_one.cpp): the same bits as any width.
+void run_block_one(const Plan& p, const Block& b, double* scratch, int steps);
 
 }  // namespace featherdrive::simd

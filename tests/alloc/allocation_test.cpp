@@ -322,14 +322,15 @@ TEST(BatchAllocations, LaneGroupsAndAGuardedEnvironmentNoneOnOneThread) {
   const int heavy[] = {1};
   batch.set_gravity(heavy, RowMatrix::Constant(1, 3, -4.0));
   batch.step();
-  ASSERT_NE(batch.step_path().find("3 groups (6, 2, 1 environments)"),
+  ASSERT_NE(batch.step_path().find("3 groups (6, 2, 1 environments; 1 at one lane)"),
             std::string::npos)
       << batch.step_path();
   EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
   EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
   batch.sim(3).set_options(other);  // into the other group: the next step regroups
   batch.step();
-  ASSERT_NE(batch.step_path().find("3 groups (5, 3, 1 environments)"), std::string::npos)
+  ASSERT_NE(batch.step_path().find("3 groups (5, 3, 1 environments; 1 at one lane)"),
+            std::string::npos)
       << batch.step_path();
   EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0);
   EXPECT_EQ(allocations_in([&] { batch.step(40); }), 0);
@@ -472,6 +473,54 @@ TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
       else EXPECT_GT(batch.contacts(10).size(), 0u);
     }
   }
+}
+
+// One-lane blocks (docs/simd_batch.md, "One-lane blocks"): an environment alone in its group
+// (another dt) beside a group of two, a floating tree with spherical joints, mimic rows and
+// ground contacts, unguarded and guarded: none on one thread, per call, not per step, on two.
+TEST(BatchAllocations, OneLaneBlocksNone) {
+  Model m = *test::make_random_tree(5, 8, true, /*spherical=*/true, 0.01);
+  for (int i = 0; i < m.num_links(); ++i) {
+    CollisionShape s;
+    s.link = i;
+    s.type = i % 2 ? ShapeType::sphere : ShapeType::box;
+    s.size = Vec3(0.1, 0.08, 0.06);
+    m.shapes.push_back(s);
+  }
+  auto model = std::make_shared<const Model>(m);
+  std::vector<int> single;  // 1-dof joints' dofs
+  for (const Link& l : model->links)
+    if (l.joint_type == JointType::revolute || l.joint_type == JointType::prismatic)
+      single.push_back(l.v_index);
+  ASSERT_GE(single.size(), 3u);
+  for (const bool guard : {false, true})
+    for (int threads : {1, 2}) {
+      SimulationOptions o;
+      o.guard = {guard, 0.05, 2};
+      Simulation prototype(model, o);
+      for (int d : single)
+        prototype.set_drive(d, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
+      prototype.set_mimic_joints({{single[1], single[0], -1.5, 0.05}});
+      VecX q = prototype.q();
+      q[2] = 0.05;  // the root's box half in the ground
+      prototype.set_q(q);
+      Ground ground;
+      ground.enabled = true;
+      prototype.set_ground(ground);
+      Batch batch(prototype, 3);
+      SimulationOptions other = o;
+      other.dt *= 0.5;
+      batch.sim(1).set_options(other);
+      batch.set_num_threads(threads);
+      batch.step();
+      ASSERT_EQ(batch.step_path(), "sse2 lanes: 2 groups (2, 1 environments; 1 at one lane)");
+      const long one = allocations_in([&] { batch.step(1); });
+      const long many = allocations_in([&] { batch.step(30); });
+      if (threads == 1) EXPECT_EQ(many, 0) << guard;
+      else EXPECT_LE(many, one + 8) << guard << ", 2 threads";
+      EXPECT_EQ(batch.step_count()[1], 32);
+      EXPECT_EQ(batch.step_count()[2], 32);
+    }
 }
 
 // The same with self-collision in the lanes (each environment's SelfContacts, and the response its

@@ -55,7 +55,8 @@ TEST(LaneContact, ShapesOnOtherLinksInLaneGroupsAsSimulation) {
   for (const Compat compat : {Compat::none, Compat::physx})
     for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
       Batch lanes = test::shapes_on_three_link_sets(solver, compat);
-      EXPECT_NE(lanes.step_path().find("3 groups (3, 2, 1 environments)"), std::string::npos)
+      EXPECT_NE(lanes.step_path().find("3 groups (3, 2, 1 environments; 1 at one lane)"),
+                std::string::npos)
           << lanes.step_path();
       const std::string what = std::string("shapes on three link sets, ") + to_string(solver) +
                                (compat == Compat::physx ? ", compat physx" : "");

@@ -307,7 +307,8 @@ TEST(LaneContact, StepPath) {
   Model moved = s.model();
   moved.shapes.erase(moved.shapes.begin() + 1);
   grounded.sim(2).set_model(std::make_shared<const Model>(moved));
-  EXPECT_NE(grounded.step_path().find(" lanes: 2 groups (2, 1 environments)"), std::string::npos)
+  EXPECT_NE(grounded.step_path().find(" lanes: 2 groups (2, 1 environments; 1 at one lane)"),
+            std::string::npos)
       << grounded.step_path();
   Simulation self = s;
   ContactOptions contact;

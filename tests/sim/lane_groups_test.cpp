@@ -136,6 +136,77 @@ TEST(LaneGroups, BitsIndependentOfTheGroupsComposition) {
     }
 }
 
+// Every row kind the lanes have on one floating tree over the ground: a spherical joint, drives,
+// limits, static and viscous friction and velocity limits on some 1-dof joints, two mimic rows
+// between others, ground contacts; compat and the step guard as given.
+Simulation every_row_kind(unsigned seed, SolverType solver, Compat compat, bool guarded) {
+  Simulation sim = test::grounded_tree(seed, solver, /*spherical=*/true, compat);
+  const Model& m = sim.model();
+  std::vector<int> single;  // the dofs of 1-dof joints
+  for (const Link& link : m.links)
+    if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic)
+      single.push_back(link.v_index);
+  EXPECT_GE(single.size(), 6u);
+  for (size_t k = 0; k < single.size(); ++k) {
+    const int d = single[k];
+    if (k % 3 == 0) sim.set_joint_limits(d, -0.3, 0.4);
+    if (k % 3 == 1) sim.set_joint_friction(d, JointFriction{0.3, 0.2, 0.1});
+    if (k % 4 == 2) sim.set_max_joint_velocity(d, 0.3);
+  }
+  sim.set_mimic_joints({{single[1], single[0], -1.5, 0.05},
+                        {single.back(), single[2], -1.0, 0.0, 30.0, 0.7}});
+  SimulationOptions o = sim.options();
+  o.guard.enabled = guarded;
+  sim.set_options(o);
+  return sim;
+}
+
+// One-lane blocks (docs/simd_batch.md, "One-lane blocks"): an environment alone in its group,
+// a plain double a lane, gives the bits it gives among copies of its plan in vector lanes at
+// every width, with every row kind, under compat none and physx, with and without the guard.
+TEST(LaneGroups, OneLaneSameBitsAsVectorLanes) {
+  for (const bool guarded : {false, true})
+    for (const auto& [solver, compat] : {std::pair{SolverType::pgs, Compat::none},
+                                         std::pair{SolverType::tgs, Compat::physx}}) {
+      const std::string what = std::string(to_string(solver)) +
+                               (compat == Compat::physx ? ", physx" : ", none") +
+                               (guarded ? ", guarded" : "");
+      const Simulation proto = every_row_kind(11, solver, compat, guarded);
+      auto dropped = [&](int size) {  // each environment from a height of its own
+        Batch b(proto, size);
+        std::mt19937 rng(11);
+        test::drop_from_own_heights(b, rng);
+        return b;
+      };
+      size_t touched = 0;  // contacts reported after the calls
+      auto bits = [&](Batch& b, int e) {
+        const Simulation& s = static_cast<const Batch&>(b).sim(e);
+        touched = 0;
+        for (int k = 0; k < 19; ++k) {
+          b.step(k < 9 ? 10 : 1);
+          touched += s.contacts().size();
+        }
+        VecX out(s.model().nq + 5 * s.model().nv + 3 * s.model().num_links());
+        out << s.q(), s.qd(), s.drive_force(), s.limit_force(), s.friction_force(),
+            s.velocity_limit_force(), Eigen::Map<const VecX>(s.link_contact_force()[0].data(),
+                                                              3 * s.model().num_links());
+        return out;
+      };
+      const Simulation x = dropped(7).simulation(0);  // environment 0 of seven, the lowest
+      Batch one(x, 1);
+      ASSERT_EQ(one.step_path(), "sse2 lanes (1 at one lane)") << what;
+      ASSERT_EQ(one.env_path(0), "sse2 lanes, group 0 (one lane)") << what;
+      const VecX reference = bits(one, 0);
+      EXPECT_GT(touched, 0u) << what;
+      for (SimdIsa isa : available_simd_isas()) {
+        Batch among = dropped(7);
+        among.set_isa(isa);
+        ASSERT_EQ(among.step_path(), std::string(to_string(isa)) + " lanes") << what;
+        EXPECT_TRUE(test::same_bits(bits(among, 0), reference)) << what << ", " << to_string(isa);
+      }
+    }
+}
+
 // Environments that diverge in two groups stop with their state from before that step and the
 // scalar step's message, the lowest one named; the others make all their steps; a partial reset starts them again.
 TEST(LaneGroups, DivergenceInTwoGroups) {
@@ -185,13 +256,14 @@ TEST(LaneGroups, RegroupedWhenAPlanChanges) {
   EXPECT_EQ(batch.step_path().find("lanes"), batch.step_path().size() - 5) << batch.step_path();
   const SimulationOptions o = proto.options();
   change(3, with(o, 0.004, SolverType::pgs, 4, 1));
-  EXPECT_NE(batch.step_path().find("2 groups (4, 1 environments)"), std::string::npos)
+  EXPECT_NE(batch.step_path().find("2 groups (4, 1 environments; 1 at one lane)"),
+            std::string::npos)
       << batch.step_path();
   step_all(20);
   SimulationOptions guarded = o;
   guarded.guard.enabled = true;
   change(1, guarded);
-  EXPECT_NE(batch.step_path().find("3 groups (3, 1, 1 environments)"),
+  EXPECT_NE(batch.step_path().find("3 groups (3, 1, 1 environments; 2 at one lane)"),
             std::string::npos)
       << batch.step_path();
   step_all(20);
@@ -216,7 +288,8 @@ TEST(LaneGroups, CompatSplitsTheGroups) {
     const Simulation proto = group_prototype(5, solver);
     Batch batch(proto, 4);
     batch.sim(1) = group_prototype(5, solver, Compat::physx);
-    EXPECT_NE(batch.step_path().find("2 groups (3, 1 environments)"), std::string::npos)
+    EXPECT_NE(batch.step_path().find("2 groups (3, 1 environments; 1 at one lane)"),
+              std::string::npos)
         << batch.step_path();
     std::vector<Simulation> alone;
     for (int e = 0; e < batch.size(); ++e) alone.push_back(batch.simulation(e));
@@ -238,7 +311,8 @@ TEST(LaneGroups, CompatSplitsTheGroups) {
 TEST(LaneGroups, ShapesOnOtherLinksInGroupsOfTheirOwn) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Batch batch = test::shapes_on_three_link_sets(solver);
-    EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments)"), std::string::npos)
+    EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments; 1 at one lane)"),
+              std::string::npos)
         << batch.step_path();
     const std::string what = std::string("shapes on other links, ") + to_string(solver);
     const test::LaneFigures f = test::batch_against_alone(batch, 300, 3, what);

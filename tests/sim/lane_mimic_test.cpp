@@ -96,9 +96,11 @@ TEST(LaneMimic, RowsOnOtherDofsStepInAGroupOfTheirOwn) {
   std::vector<MimicJoint> rows = proto.mimic_joints();
   rows.pop_back();
   batch.sim(2).set_mimic_joints(rows);
-  EXPECT_NE(batch.step_path().find(" lanes: 2 groups (3, 1 environments)"), std::string::npos)
+  EXPECT_NE(batch.step_path().find(" lanes: 2 groups (3, 1 environments; 1 at one lane)"),
+            std::string::npos)
       << batch.step_path();
-  EXPECT_NE(batch.env_path(2).find(" lanes, group 1"), std::string::npos) << batch.env_path(2);
+  EXPECT_NE(batch.env_path(2).find(" lanes, group 1 (one lane)"), std::string::npos)
+      << batch.env_path(2);
   Simulation alone = batch.sim(2);
   batch.step(50);
   alone.step(50);

@@ -109,10 +109,12 @@ class Batch {
   void set_lanes(bool allowed) { lanes_allowed_ = allowed; }
   bool lanes() const { return lanes_allowed_; }
   /// How the next step() runs: "avx2 lanes" (one lane group), "avx2 lanes: 2 groups (1021, 3
-  /// environments)", or "scalar: " and why (lanes off, FEATHERDRIVE_SIMD=scalar).
+  /// environments)", the environments in one-lane blocks (a group of one) counted last ("sse2
+  /// lanes (1 at one lane)", "avx2 lanes: 2 groups (1021, 1 environments; 1 at one lane)"), or
+  /// "scalar: " and why (lanes off, FEATHERDRIVE_SIMD=scalar).
   std::string step_path();
-  /// How the next step() runs environment i: "avx2 lanes, group 1" or "scalar: " and why;
-  /// std::invalid_argument for i out of [0, size()).
+  /// How the next step() runs environment i: "avx2 lanes, group 1", "sse2 lanes, group 2 (one
+  /// lane)" or "scalar: " and why; std::invalid_argument for i out of [0, size()).
   std::string env_path(int i);
   /// The lanes' instruction set: one this CPU runs (std::invalid_argument naming it otherwise),
   /// or nullopt (the default) for default_simd_isa(), narrowed while a block of two vectors would

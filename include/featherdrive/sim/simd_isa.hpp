@@ -13,8 +13,9 @@ const char* to_string(SimdIsa isa);
 /// Lanes (doubles) of one vector of the instruction set: 2, 4, 8.
 int simd_width(SimdIsa isa);
 /// The widest one this CPU runs, or the environment variable FEATHERDRIVE_SIMD (sse2, avx2,
-/// avx512) where it names one the CPU has (scalar: sse2, the narrowest); throws
-/// std::invalid_argument naming the value otherwise.
+/// avx512) where it names one the CPU has (scalar: sse2, the narrowest; one: sse2, and Batch
+/// steps every lane group in one-lane blocks); throws std::invalid_argument naming the value
+/// otherwise.
 SimdIsa default_simd_isa();
 /// FEATHERDRIVE_SIMD=scalar: Batch steps every environment as a Simulation, without lanes.
 bool simd_forced_scalar();
