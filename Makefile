@@ -78,11 +78,11 @@ test-main: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # The sanitizers' half of `make test`: the fuzz targets replay their seed corpus and the inputs
-# fuzzing once found wrong (tests/regression/inputs/), then TEST_FUZZ_RUNS inputs each from seed 1,
-# the same every run (docs/testing.md, "Where CI's time goes").
-TEST_FUZZ_RUNS ?= 15000
+# fuzzing once found wrong (tests/regression/inputs/), then fixed inputs from fixed seeds
+# (TEST_FUZZ_JOBS below), the same every run (docs/testing.md, "Where CI's time goes").
 test-fuzz: fuzz-build
-	@$(MAKE) --no-print-directory fuzz-run FUZZ_RUNS=$(TEST_FUZZ_RUNS) FUZZ_SEED=1
+	@$(MAKE) --no-print-directory --output-sync=target -j $(JOBS) \
+	  $(addprefix fuzz-replay-,$(TEST_FUZZ_JOBS))
 
 # The fuzzers first, so that the suite's last lines are the main build's ctest summary.
 test: deps
@@ -101,8 +101,24 @@ else
 FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
 endif
 
+# One fuzzer run: $(1) the target, $(2) its length and seed, $(3) the name of its new-input corpus
+# and log. A crash fails the run.
+define fuzz_one
+	@mkdir -p $(FUZZ_BUILD)/corpus/$(3) $(FUZZ_BUILD)/artifacts
+	@echo "fuzz_$(1): $(2)"
+	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
+	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) -timeout=20 \
+	    -rss_limit_mb=2048 -print_final_stats=1 \
+	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$(3)- \
+	    $(FUZZ_BUILD)/corpus/$(3) tests/fuzz/corpus/$(1) $(wildcard tests/regression/inputs/$(1)) \
+	    2>$(FUZZ_BUILD)/fuzz_$(3).log \
+	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$(3).log; \
+	       tail -n 8 $(FUZZ_BUILD)/fuzz_$(3).log; echo "fuzz_$(1) FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
+	@grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$(3).log || true
+endef
+
 # The targets run side by side, JOBS at a time (each fuzzer is single-threaded). fuzz-run runs the
-# targets already built (what .ci/run starts beside the sanitizer build).
+# targets already built.
 fuzz: fuzz-build
 	@$(MAKE) --no-print-directory fuzz-run
 
@@ -111,17 +127,14 @@ fuzz-run:
 	  $(addprefix fuzz-run-,$(FUZZ_TARGETS))
 
 fuzz-run-%:
-	@mkdir -p $(FUZZ_BUILD)/corpus/$* $(FUZZ_BUILD)/artifacts
-	@echo "fuzz_$*: $(FUZZ_LENGTH)"
-	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
-	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$* $(FUZZ_LENGTH) -timeout=20 \
-	    -rss_limit_mb=2048 -print_final_stats=1 \
-	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$*- \
-	    $(FUZZ_BUILD)/corpus/$* tests/fuzz/corpus/$* $(wildcard tests/regression/inputs/$*) \
-	    2>$(FUZZ_BUILD)/fuzz_$*.log \
-	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$*.log; \
-	       tail -n 8 $(FUZZ_BUILD)/fuzz_$*.log; echo "fuzz_$* FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
-	@grep -E '^stat::number_of_executed_units|^Done' $(FUZZ_BUILD)/fuzz_$*.log || true
+	$(call fuzz_one,$*,$(FUZZ_LENGTH),$*)
+
+# make test's replay, TARGET.SEED.RUNS: fuzz_step's inputs cost eight times the readers', so they
+# run as two halves from two seeds, one per core, each with its own corpus (the same inputs every
+# run: a run reads back only the inputs it wrote itself).
+TEST_FUZZ_JOBS ?= urdf.1.15000 scene.1.15000 step.1.7500 step.2.7500
+fuzz-replay-%:
+	$(call fuzz_one,$(word 1,$(subst ., ,$*)),-runs=$(word 3,$(subst ., ,$*)) -seed=$(word 2,$(subst ., ,$*)),$*)
 
 # Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
 # the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.
