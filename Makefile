@@ -12,6 +12,10 @@ FUZZ_RUNS ?=
 FUZZ_SEED ?= 1
 FUZZ_TARGETS = urdf scene step
 CMAKE_FLAGS ?=
+# New build directories use Ninja, which compiles a target's files while the targets it links are
+# still compiling (the main build: 170 s against 183 s with Makefiles); an existing directory
+# keeps the generator it was made with.
+export CMAKE_GENERATOR ?= Ninja
 # The main build: optimised, without debug information (a third of its compile time); make
 # BUILD_TYPE=RelWithDebInfo for a debugger.
 BUILD_TYPE ?= Release

@@ -3,7 +3,7 @@
 # already installed it only runs dpkg-query and returns.
 set -euo pipefail
 packages=(
-  build-essential cmake make pkg-config
+  build-essential cmake make ninja-build pkg-config
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev liburdfdom-dev libcli11-dev libtbb-dev libxsimd-dev libccd-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
