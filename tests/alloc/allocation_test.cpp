@@ -433,6 +433,16 @@ LaneContactCount lane_contacts_allocating_nothing(const Simulation& prototype, S
   return count;
 }
 
+// The floating root's box half in the ground, the ground on: contact rows from the first step.
+void sink_root_half(Simulation& s) {
+  VecX q = s.q();
+  q[2] = 0.05;
+  s.set_q(q);
+  Ground ground;
+  ground.enabled = true;
+  s.set_ground(ground);
+}
+
 // The same with ground contacts in the lanes (each environment's ContactRows, per lane): a
 // floating tree with a shape of each kind on its links, half sunk into the ground, PGS and TGS,
 // unguarded and guarded (its landing redone, the start's reports kept), at every width, none on
@@ -455,12 +465,7 @@ TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
     o.solver = solver;
     o.guard = {guard, 0.05, 2};
     Simulation prototype(model, o);
-    VecX q = prototype.q();
-    q[2] = 0.05;  // the root's box half in the ground
-    prototype.set_q(q);
-    Ground ground;
-    ground.enabled = true;
-    prototype.set_ground(ground);
+    sink_root_half(prototype);
     for (SimdIsa isa : available_simd_isas()) {
       Batch batch(prototype, 11);
       batch.set_isa(isa);
@@ -501,12 +506,7 @@ TEST(BatchAllocations, OneLaneBlocksNone) {
       for (int d : single)
         prototype.set_drive(d, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
       prototype.set_mimic_joints({{single[1], single[0], -1.5, 0.05}});
-      VecX q = prototype.q();
-      q[2] = 0.05;  // the root's box half in the ground
-      prototype.set_q(q);
-      Ground ground;
-      ground.enabled = true;
-      prototype.set_ground(ground);
+      sink_root_half(prototype);
       Batch batch(prototype, 3);
       SimulationOptions other = o;
       other.dt *= 0.5;
