@@ -140,7 +140,8 @@ TEST_FUZZ_JOBS ?= urdf.1.15000 scene.1.15000 step.1.7500 step.2.7500
 fuzz-replay-%:
 	$(call fuzz_one,$(word 1,$(subst ., ,$*)),-runs=$(word 3,$(subst ., ,$*)) -seed=$(word 2,$(subst ., ,$*)),$*)
 
-# Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md): medians of 5 repetitions,
+# Benchmarks against MuJoCo and Bullet in one run (docs/benchmarks.md), built by the main build's
+# compiler (MAIN_FLAGS: clang; gcc 12's lanes ran up to a third slower): medians of 5 repetitions,
 # the JSON in build-bench/bench.json, the tables printed and the plot in build-bench/.
 # BENCH_ARCH: the -march of the benchmark build; empty (the default) builds for portable x86-64,
 # like every other build and like the peers' Debian packages (x86-64-v3: AVX2 and FMA).
@@ -148,7 +149,7 @@ BENCH_ARCH ?=
 BENCH_FLAGS ?= --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 bench: deps
 	cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DFEATHERDRIVE_BENCH=ON \
-	  -DFEATHERDRIVE_ARCH=$(BENCH_ARCH) $(CMAKE_FLAGS)
+	  -DFEATHERDRIVE_ARCH=$(BENCH_ARCH) $(MAIN_FLAGS) $(CMAKE_FLAGS)
 	cmake --build build-bench -j $(JOBS) --target featherdrive_bench featherdrive_profile \
 	  featherdrive_prototype_ratio
 	./build-bench/bench/featherdrive_bench $(BENCH_FLAGS) \
