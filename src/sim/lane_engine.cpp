@@ -40,6 +40,7 @@ Layout make_layout(const Plan& p) {
   l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.cfm = take(L), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
+  l.chain_pS = take(L), l.chain_pb = take(L), l.chain_pi = take(L), l.chain_base = take(L);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
   l.af = take(n), l.before = take(n), l.change = take(n);
@@ -66,6 +67,21 @@ Layout make_layout(const Plan& p) {
   l.size = at;
   return l;
 }
+
+namespace {
+
+// LinkConstants::parent_one_dof and chain_in, from the joint types and the links with contacts.
+void set_chain_flags(std::vector<LinkConstants>& links) {
+  auto one_dof = [](const LinkConstants& l) { return l.type == 1 || l.type == 2; };
+  for (size_t i = 0; i < links.size(); ++i) {
+    LinkConstants& k = links[i];
+    const LinkConstants* parent = k.parent >= 0 ? &links[static_cast<size_t>(k.parent)] : nullptr;
+    k.parent_one_dof = parent && one_dof(k) && one_dof(*parent);
+    k.chain_in = k.parent_one_dof && k.parent + 1 == static_cast<int>(i) && !parent->contacts;
+  }
+}
+
+}  // namespace
 
 std::size_t scratch_doubles(const Plan& p) {
   return static_cast<std::size_t>(make_layout(p).size) * kGroup * kMaxInterleave;
@@ -155,6 +171,7 @@ LaneEngine::LaneEngine(const Simulation& prototype, int count) : count_(count) {
     k.finish_on_leave = (k.type == 1 || k.type == 2) && !k.later;
     if (!k.finish_on_leave && (k.type != 0 || k.later)) finish_after_.push_back(i);
   }
+  set_chain_flags(links_);
   // The mimic rows and the dofs they couple, in MimicSolver's order.
   mimic_joints_ = prototype.mimic_joints();
   for (const MimicJoint& mj : mimic_joints_) {
@@ -232,6 +249,7 @@ void LaneEngine::set_contacts(bool on, const std::vector<char>& shape_links) {
     // pA they started.
     k.first_child = first_child_free_[i] && !(k.parent >= 0 && links_[static_cast<size_t>(k.parent)].contacts);
   }
+  set_chain_flags(links_);
   plan_.layout = make_layout(plan_);
 }
 

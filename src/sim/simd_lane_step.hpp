@@ -387,10 +387,20 @@ class LaneStep {
       y[r] = sum;
     }
   }
+  // a^T b summed left to right (as the lanes always have: a tree's other rounding moved them
+  // past 1e-12 of the scalar step in the lane tests). Every dot6 sums so.
+  template <class T>
+  [[gnu::always_inline]] static T sum6(const T& p0, const T& p1, const T& p2, const T& p3,
+                                       const T& p4, const T& p5) {
+    return p0 + p1 + p2 + p3 + p4 + p5;
+  }
   [[gnu::always_inline]] static B dot6(const B* a, const B* b) {
-    B sum = a[0] * b[0];
-    for (int r = 1; r < 6; ++r) sum = sum + a[r] * b[r];
-    return sum;
+    return sum6(a[0] * b[0], a[1] * b[1], a[2] * b[2], a[3] * b[3], a[4] * b[4], a[5] * b[5]);
+  }
+  template <class T, class L>  // T: what lane returns
+  [[gnu::always_inline]] static T dot6(const L& lane, const V* a, const T* x) {
+    return sum6(lane(a[0]) * x[0], lane(a[1]) * x[1], lane(a[2]) * x[2], lane(a[3]) * x[3],
+                lane(a[4]) * x[4], lane(a[5]) * x[5]);
   }
   // Entries 0-5 of vector j of the packs at p.
   [[gnu::always_inline]] static void take6(const V* p, int j, B* out) {
@@ -418,8 +428,8 @@ class LaneStep {
   };
   template <class L>
   static auto dot6(const L& lane, const V* a, const V* b) {
-    return lane(a[0]) * lane(b[0]) + lane(a[1]) * lane(b[1]) + lane(a[2]) * lane(b[2]) +
-           lane(a[3]) * lane(b[3]) + lane(a[4]) * lane(b[4]) + lane(a[5]) * lane(b[5]);
+    return sum6(lane(a[0]) * lane(b[0]), lane(a[1]) * lane(b[1]), lane(a[2]) * lane(b[2]),
+                lane(a[3]) * lane(b[3]), lane(a[4]) * lane(b[4]), lane(a[5]) * lane(b[5]));
   }
   template <class T>  // V or B
   static void cross(const T* a, const T* b, T* out) {
@@ -948,12 +958,27 @@ template <class A, int K>
       Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
       G[e].b[j] = Gj[e];
     }
+    B Lj[21];  // the parent's read whole before any is stored (L and T might overlap)
+    for (int e = 0; e < 21; ++e) Lj[e] = T[e].b[j];
     for (int a = 0; a < 6; ++a)
       for (int b = a; b < 6; ++b) {
         const int e = kSym.at[a][b];
-        L[e].b[j] = (T[e].b[j] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
+        Lj[e] = (Lj[e] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
       }
+    for (int e = 0; e < 21; ++e) L[e].b[j] = Lj[e];
     at(l_.inverse_mass)[i].b[j] = r_ii;
+    if (k.parent_one_dof) {  // the sweep's chain constants (implicit_drives.md, eq. GS1-GS3)
+      const int p = k.parent;
+      B Sp[6], Wp[6];
+      take6(at(l_.S + 6 * p), j, Sp);
+      take6(at(l_.W + 6 * p), j, Wp);
+      const B pS = dot6(Uj, Sp);
+      const B pb = -D_inv * pS;
+      at(l_.chain_pS)[i].b[j] = pS;
+      at(l_.chain_pb)[i].b[j] = pb;
+      at(l_.chain_pi)[i].b[j] =
+          at(l_.D_inv)[p].b[j] * (D_inv * dot6(Uj, Wp)) + at(l_.inverse_mass)[p].b[j] * pb;
+    }
   }
 }
 
@@ -1260,23 +1285,30 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
     constexpr int N = static_cast<int>(std::tuple_size_v<Lanes>);
     using T = std::remove_cvref_t<decltype(lanes[0](std::declval<V&>()))>;
     const V* pAk = at(l_.subtree + 6 * k);
-    T pA[N][6];
-    for (int n = 0; n < N; ++n)
+    T pA[N][6], Sp[N];  // Sp: S_i^T pA_i of the link being left
+    for (int n = 0; n < N; ++n) {
       for (int r = 0; r < 6; ++r) pA[n][r] = lanes[n](pAk[r]);
+      Sp[n] = dot6(lanes[n], at(l_.S + 6 * k), pA[n]);
+    }
     for (int i = k; i != end; i = p_.links[i].parent) {
       const LinkConstants& l = p_.links[i];
       const int d = l.v_index;
-      const V* S = at(l_.S + 6 * i);
       const V* G = at(l_.G + 6 * i);
       const V* U = at(l_.U + 6 * i);
+      const V* S_up = at(l_.S + 6 * l.parent);
+      const bool up_in_run = l.parent != end;  // then one dof (in_chain_run)
       for (int n = 0; n < N; ++n) {
         const auto& lane = lanes[n];
         T* x = pA[n];
-        const T Sp = lane(S[0]) * x[0] + lane(S[1]) * x[1] + lane(S[2]) * x[2] + lane(S[3]) * x[3] +
-                     lane(S[4]) * x[4] + lane(S[5]) * x[5];
-        const T Gp = lane(G[0]) * x[0] + lane(G[1]) * x[1] + lane(G[2]) * x[2] + lane(G[3]) * x[3] +
-                     lane(G[4]) * x[4] + lane(G[5]) * x[5];
-        const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp);
+        const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp[n]);
+        // The parent's S^T pA after the hand-over, from this pA and a scalar (implicit_drives.md,
+        // eq. GS3).
+        // Its sums paired: this product is on the run's chain of dependences.
+        if (up_in_run)
+          Sp[n] = ((lane(S_up[0]) * x[0] + lane(S_up[1]) * x[1]) +
+                   (lane(S_up[2]) * x[2] + lane(S_up[3]) * x[3])) +
+                  ((lane(S_up[4]) * x[4] + lane(S_up[5]) * x[5]) + b * lane(at(l_.chain_pS)[i]));
+        const T Gp = dot6(lane, G, x);
         auto& qd = lane(at(l_.qd)[d]);
         qd = qd + (lane(at(l_.entry)[d]) - Gp);
         for (int r = 0; r < 6; ++r) x[r] = x[r] + b * lane(U[r]);
@@ -1398,14 +1430,22 @@ template <class A, int K>
 template <bool kGiven, class L>
 [[gnu::always_inline]] inline void LaneStep<A, K>::enter_link(const L& lane, int i, const V* dvp,
                                                               V* dv) {
-  const int d = p_.links[i].v_index;
+  const LinkConstants& k = p_.links[i];
+  const int d = k.v_index;
   const V* U = at(l_.U + 6 * i);
   const V* S = at(l_.S + 6 * i);
   const V* W = at(l_.W + 6 * i);
   V* rw = row(d);
   const auto D_inv = lane(at(l_.D_inv)[i]);
   using T = std::remove_cv_t<decltype(D_inv)>;
-  const T base = -D_inv * dot6(lane, U, dvp);
+  // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
+  // part that does not wait on this link's impulse is formed before the rows (eq. GS2).
+  const T base = k.chain_in ? lane(at(l_.chain_base)[i]) : -D_inv * dot6(lane, U, dvp);
+  const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
+  T ahead{};
+  if (chain_next)
+    ahead = -lane(at(l_.D_inv)[i + 1]) * dot6(lane, at(l_.U + 6 * (i + 1)), dvp) +
+            base * lane(at(l_.chain_pb)[i + 1]);
   T impulse;
   if constexpr (kGiven) {
     impulse = lane(at(l_.given)[d]);
@@ -1421,10 +1461,13 @@ template <bool kGiven, class L>
     impulse = total;
   }
   lane(at(l_.jimp)[d]) = impulse;
+  if (chain_next) lane(at(l_.chain_base)[i + 1]) = ahead + impulse * lane(at(l_.chain_pi)[i + 1]);
   const T dqd = base + lane(at(l_.inverse_mass)[i]) * impulse;
   lane(at(l_.entry)[d]) = dqd;
   const T h = D_inv * impulse;
-  for (int r = 0; r < 6; ++r) lane(dv[r]) = (lane(dvp[r]) - h * lane(W[r])) + dqd * lane(S[r]);
+  T out[6];  // all read before any is stored: one lane's six then go as pairs (SSE2)
+  for (int r = 0; r < 6; ++r) out[r] = (lane(dvp[r]) - h * lane(W[r])) + dqd * lane(S[r]);
+  for (int r = 0; r < 6; ++r) lane(dv[r]) = out[r];
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows

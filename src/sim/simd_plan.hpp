@@ -117,6 +117,11 @@ struct LinkConstants {
   /// It carries collision shapes and Plan::contacts: its ground contact rows are solved right
   /// after its joint's (the sweep's C15), and its children add to the pA they start.
   bool contacts = false;
+  /// One dof with a one-dof parent: the sweep's hand-over forms (implicit_drives.md, eq. GS1-GS3)
+  /// apply; chain_in when the parent is link i - 1 and has no contacts too, so that the sweep
+  /// enters this link right after it and its base comes from the parent's impulse.
+  bool parent_one_dof = false;
+  bool chain_in = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
   /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which
@@ -195,6 +200,10 @@ struct Layout {
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
       lf = 0, ff = 0, vf = 0, cg = 0, cfm = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
+  /// Per link with a one-dof parent (LinkConstants::parent_one_dof), from the response pass:
+  /// U_i^T S_p, -D_i^-1 U_i^T S_p and the base's change per parent impulse; chain_base, the
+  /// base a chained link is entered with (implicit_drives.md, eq. GS1-GS3).
+  int chain_pS = 0, chain_pb = 0, chain_pi = 0, chain_base = 0;
 };
 
 struct Plan {

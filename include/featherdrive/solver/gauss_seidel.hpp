@@ -242,7 +242,8 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
         const int d = links[i].v_index;
         const bool next = links[i].chain_next;
         // next base = ahead + impulse * per_impulse, both formed before the impulse is known:
-        // the chain of dependencies from one row to the next is one multiply-add.
+        // the chain of dependencies from one row to the next is one multiply-add
+        // (docs/math/implicit_drives.md, eq. GS1-GS2).
         double ahead = 0.0, per_impulse = 0.0;
         if (next) {
           const Data::OneDof& C = one_dof[i + 1];
