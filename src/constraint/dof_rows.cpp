@@ -49,7 +49,7 @@ double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
   if (rows.has_limit)
     apply(row_law::limit(rows.low_impulse, rows.high_impulse, v, rows.recip_response,
                          rows.error_low, rows.error_high, phase.delta_x,
-                         {phase.h, phase.limit_erp, phase.velocity_iteration}));
+                         {phase.h, phase.recip_h, phase.limit_erp, phase.velocity_iteration}));
   if (row_law::beyond(v, rows.max_velocity))
     apply(row_law::velocity_limit(rows.velocity_limit_impulse, v, rows.recip_response,
                                   rows.max_velocity));

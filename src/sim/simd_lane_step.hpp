@@ -446,7 +446,7 @@ class LaneStep {
   V* const s_;
   const double* parameters_[K];  // per vector of the pack
   // Where in the step a sweep runs (RowPhase).
-  double h_ = 0.0, time_to_step_end_ = 0.0;
+  double h_ = 0.0, recip_h_ = 0.0, time_to_step_end_ = 0.0;
   double h_solve_ = 0.0;  // the step of one solve, for the rows' set-up
   bool velocity_iteration_ = false;
   M stopped_ = none();
@@ -1227,7 +1227,7 @@ auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
     const M limited = rw[Layout::has_limit] != zero;
     V low = rw[Layout::low], high = rw[Layout::high];
     const V delta = row_law::limit(low, high, v, recip, rw[Layout::err_low], rw[Layout::err_high],
-                                   dx, {h_, p_.limit_erp, velocity_iteration_});
+                                   dx, {h_, recip_h_, p_.limit_erp, velocity_iteration_});
     rw[Layout::low] = select(limited, low, rw[Layout::low]);
     rw[Layout::high] = select(limited, high, rw[Layout::high]);
     apply(limited, delta);
@@ -2881,6 +2881,7 @@ void LaneStep<A, K>::step() {
   V* const change = at(l_.change);
   if (!p_.tgs) {
     h_ = dt;
+    recip_h_ = 1.0 / dt;
     for (int it = 0; it < p_.position_iterations; ++it) {
       if (b_.drive_change && it == p_.position_iterations - 1)
         for (int d = 0; d < p_.nv; ++d) at(l_.before)[d] = row(d)[Layout::dimp];
@@ -2899,6 +2900,7 @@ void LaneStep<A, K>::step() {
     const int n = p_.position_iterations;
     const double rho = dt / n;
     h_ = rho;
+    recip_h_ = 1.0 / rho;
     if (b_.drive_change)
       for (int d = 0; d < p_.nv; ++d) change[d] = select(stopped_, change[d], V(0.0));
     if (p_.physx_floating)

@@ -350,6 +350,7 @@ void Stepper::solve_pgs() {
   RowPhase phase;
   phase.dt = dt;
   phase.h = dt;
+  phase.recip_h = 1.0 / dt;
   phase.limit_erp = limit_erp(SolverType::pgs, settings_.options.position_iterations);
   if (ws_.contacts_active || ws_.self_contacts_active) setup_contacts(phase);
   const int last = settings_.options.position_iterations - 1;
@@ -388,6 +389,7 @@ void Stepper::solve_tgs() {
   RowPhase phase;
   phase.dt = dt;
   phase.h = rho;
+  phase.recip_h = 1.0 / rho;
   phase.tgs = true;
   phase.limit_erp = limit_erp(SolverType::tgs, n);
   if (ws_.contacts_active || ws_.self_contacts_active) setup_contacts(phase);

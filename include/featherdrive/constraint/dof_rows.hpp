@@ -71,6 +71,7 @@ struct DofRows {
 struct RowPhase {
   double dt = 0.0;              ///< the whole step tau
   double h = 0.0;               ///< the step of one solve: tau (PGS) or rho = tau / n (TGS)
+  double recip_h = 0.0;         ///< 1 / h
   bool tgs = false;
   bool velocity_iteration = false;
   double delta_x = 0.0;         ///< TGS: position change accumulated over the sub-steps

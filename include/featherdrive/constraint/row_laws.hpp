@@ -29,6 +29,7 @@ T friction(T& accumulated, const T& v, const T& recip, const T& static_, const T
 /// Where in the step a position limit is solved.
 struct LimitPhase {
   double h = 0.0;                  ///< the step of one solve: tau (PGS) or rho (TGS)
+  double recip_h = 0.0;            ///< 1 / h (PhysX's recipDt: a product, not a division)
   double erp = 0.8;                ///< share of a violation corrected per (sub-)step
   bool velocity_iteration = false; ///< no Baumgarte correction in velocity iterations
 };
@@ -40,7 +41,7 @@ struct LimitPhase {
 template <class T>
 T limit(T& low, T& high, const T& v, const T& recip, const T& error_low, const T& error_high,
         const T& dx, const LimitPhase& phase) {
-  const T zero(0.0), h(phase.h), erp(phase.erp);
+  const T zero(0.0), h(phase.h), recip_h(phase.recip_h), erp(phase.erp);
   const T future = dx + v * h;
   const T low_now = error_low + dx, low_next = error_low + future;
   const T high_now = error_high - dx, high_next = error_high - future;
@@ -48,12 +49,12 @@ T limit(T& low, T& high, const T& v, const T& recip, const T& error_low, const T
   const auto high_case = (high_now < zero) | (high_next < zero);
   // Beyond the lower limit (hold it, or pull back by erp of the violation) or about to cross it
   // (arrive exactly at it); likewise the upper.
-  const T hold_low = phase.velocity_iteration ? v : -low_now / h * erp;
-  const T target_low = select(low_now < zero, hold_low, -low_now / h);
+  const T hold_low = phase.velocity_iteration ? v : -low_now * recip_h * erp;
+  const T target_low = select(low_now < zero, hold_low, -low_now * recip_h);
   const T push_low = low + (target_low - v) * recip;
   const T delta_low = select(push_low < zero, zero, push_low) - low;
-  const T hold_high = phase.velocity_iteration ? v : high_now / h * erp;
-  const T target_high = select(high_now < zero, hold_high, high_now / h);
+  const T hold_high = phase.velocity_iteration ? v : high_now * recip_h * erp;
+  const T target_high = select(high_now < zero, hold_high, high_now * recip_h);
   const T push_high = high + (target_high - v) * recip;
   const T delta_high = select(zero < push_high, zero, push_high) - high;
   // Inside both: a limit that pushed in an earlier iteration gives back what it overshot, at most
