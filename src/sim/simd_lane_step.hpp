@@ -774,12 +774,17 @@ void LaneStep<A, K>::articulated_pass() {
       take6(c, j, cj);
       const B beta = D_inv * (u - dot6(Uj, cj));
       sym_times(IA, j, cj, IAc);
-      for (int r = 0; r < 6; ++r) pAp[r].b[j] = pAp[r].b[j] + ((pAj[r] + IAc[r]) + beta * Uj[r]);
+      // Everything read before anything is stored (the parent's arrays might overlap the
+      // link's): one lane's entries then go as pairs.
+      B pa[6], ia[21];
+      for (int r = 0; r < 6; ++r) pa[r] = pAp[r].b[j] + ((pAj[r] + IAc[r]) + beta * Uj[r]);
       for (int a = 0; a < 6; ++a)
         for (int b = a; b < 6; ++b) {
           const int e = kSym.at[a][b];
-          IAp[e].b[j] = IAp[e].b[j] + (IA[e].b[j] - (D_inv * Uj[b]) * Uj[a]);
+          ia[e] = IAp[e].b[j] + (IA[e].b[j] - (D_inv * Uj[b]) * Uj[a]);
         }
+      for (int r = 0; r < 6; ++r) pAp[r].b[j] = pa[r];
+      for (int e = 0; e < 21; ++e) IAp[e].b[j] = ia[e];
     }
   }
 }
@@ -816,20 +821,19 @@ template <class A, int K>
   const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
   const V* c = at(l_.c + 6 * i);
   V* a = at(l_.acc + 6 * i);
-  for (int r = 0; r < 6; ++r) a[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
-  if (k.type == 0) return;
-  if (k.type == 3) {
-    root_acceleration(a, dt);
-    return;
-  }
-  if (k.type == 4) {
-    ball_acceleration(i, a, dt);
+  V acc[6];  // read whole before it is stored (a might overlap ap or c)
+  for (int r = 0; r < 6; ++r) acc[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
+  if (!one_dof(k)) {
+    for (int r = 0; r < 6; ++r) a[r] = acc[r];
+    if (k.type == 3) root_acceleration(a, dt);
+    if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
   const V* U = at(l_.U + 6 * i);
   const V* S = at(l_.S + 6 * i);
-  const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, a));
-  for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
+  const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, acc));
+  for (int r = 0; r < 6; ++r) acc[r] = acc[r] + qdd * S[r];
+  for (int r = 0; r < 6; ++r) a[r] = acc[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;
 }
