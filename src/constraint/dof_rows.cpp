@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "featherdrive/constraint/row_laws.hpp"
+#include "featherdrive/constraint/row_sequence.hpp"
 
 namespace featherdrive {
 
@@ -14,46 +15,61 @@ double clamp_to_envelope(const ActuatorEnvelope& e, double unclamped, double acc
                                    unclamped, accumulated, v, r, external, dt);
 }
 
-double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
-  double total = 0.0;
-  auto apply = [&](double delta) {
-    total += delta;
-    v += rows.response * delta;
-  };
-  if (rows.has_transmission_friction) {
-    // PhysX re-applies it whole in every TGS solve (solveInternalJointConstraintRecursive).
-    const double applied = phase.tgs ? 0.0 : rows.transmission_friction_impulse;
-    const double next = row_law::transmission_friction(applied, v, rows.recip_response,
-                                                       rows.transmission_friction_bound);
-    rows.transmission_friction_impulse = next;
-    rows.transmission_friction_applied += next - applied;
-    apply(next - applied);
+namespace {
+
+// A DofRows as row_sequence::solve reads it: one dof, so any row it has is on every "lane".
+struct ScalarRows {
+  using Row = row_sequence::Row;
+  DofRows& rows;
+  const RowPhase& phase;
+  bool any(Row k) const {
+    switch (k) {
+      case Row::transmission_friction: return rows.has_transmission_friction;
+      case Row::drive: return rows.has_drive;
+      case Row::friction: return rows.has_friction;
+      case Row::limit: return rows.has_limit;
+      case Row::velocity_limit: return rows.max_velocity < DofRows::kNoVelocityLimit;
+    }
+    return false;
   }
-  if (rows.has_drive && !(phase.tgs && phase.velocity_iteration)) {  // TGS freezes the drive
-    double next = drive_impulse(rows.drive, v, rows.drive_impulse, phase.delta_x,
-                                phase.time_to_step_end);
+  static bool all(Row) { return true; }
+  static bool has(Row) { return true; }
+  static bool any_of(bool mask) { return mask; }
+  double response() const { return rows.response; }
+  double recip() const { return rows.recip_response; }
+  double& tf_impulse() const { return rows.transmission_friction_impulse; }
+  double& tf_applied() const { return rows.transmission_friction_applied; }
+  double tf_bound() const { return rows.transmission_friction_bound; }
+  const DriveRow& drive() const { return rows.drive; }
+  double& drive_impulse() const { return rows.drive_impulse; }
+  double clip_drive(double next, double accumulated, double v, double dx) const {
     if (rows.has_envelope)
-      next = clamp_to_envelope(rows.envelope, next, rows.drive_impulse, v, rows.response,
+      next = clamp_to_envelope(rows.envelope, next, accumulated, v, rows.response,
                                rows.external_impulse, phase.dt);
     if (rows.actuator)
-      next = clip_actuator_impulse(*rows.actuator, next, rows.drive_impulse, v, rows.response,
-                                   rows.actuator_x0, phase.delta_x, phase.h, phase.dt);
-    const double delta = next - rows.drive_impulse;
-    rows.drive_impulse = next;
-    apply(delta);
+      next = clip_actuator_impulse(*rows.actuator, next, accumulated, v, rows.response,
+                                   rows.actuator_x0, dx, phase.h, phase.dt);
+    return next;
   }
-  if (rows.has_friction)
-    apply(row_law::friction(rows.friction_impulse, v, rows.recip_response,
-                            rows.static_friction_impulse, rows.dynamic_friction_impulse,
-                            rows.viscous_friction));
-  if (rows.has_limit)
-    apply(row_law::limit(rows.low_impulse, rows.high_impulse, v, rows.recip_response,
-                         rows.error_low, rows.error_high, phase.delta_x,
-                         {phase.h, phase.recip_h, phase.limit_erp, phase.velocity_iteration}));
-  if (row_law::beyond(v, rows.max_velocity))
-    apply(row_law::velocity_limit(rows.velocity_limit_impulse, v, rows.recip_response,
-                                  rows.max_velocity));
-  return total;
+  double& friction_impulse() const { return rows.friction_impulse; }
+  double friction_static() const { return rows.static_friction_impulse; }
+  double friction_dynamic() const { return rows.dynamic_friction_impulse; }
+  double friction_viscous() const { return rows.viscous_friction; }
+  double& low() const { return rows.low_impulse; }
+  double& high() const { return rows.high_impulse; }
+  double error_low() const { return rows.error_low; }
+  double error_high() const { return rows.error_high; }
+  double max_velocity() const { return rows.max_velocity; }
+  double& velocity_limit() const { return rows.velocity_limit_impulse; }
+};
+
+}  // namespace
+
+double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase) {
+  ScalarRows scalar{rows, phase};
+  return row_sequence::solve(scalar, v, phase.delta_x,
+                             {phase.tgs, phase.velocity_iteration, phase.time_to_step_end,
+                              {phase.h, phase.recip_h, phase.limit_erp, phase.velocity_iteration}});
 }
 
 }  // namespace featherdrive

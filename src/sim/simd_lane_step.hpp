@@ -23,6 +23,7 @@
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
+#include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "simd_plan.hpp"
 
@@ -272,8 +273,12 @@ class LaneStep {
   void setup_link_rows(int i);
   void setup_dof_row(int i, int d, const V& r, const V& x0, const V& x0_drive);
   V solve_row(int d, V v, const V& dx);
-  template <class T, class Fields>
-  void drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v);
+  template <class L>
+  struct LaneRows;
+  row_sequence::Phase row_phase() const {
+    return {p_.tgs, velocity_iteration_, time_to_step_end_,
+            {h_, recip_h_, p_.limit_erp, velocity_iteration_}};
+  }
   V clip_actuator(int d, const V* rw, const V& lambda, const V& accumulated, const V& v,
                   const V& r, const V& dx);
   template <bool kGiven, class L>
@@ -420,12 +425,6 @@ class LaneStep {
     const B& operator()(const V& x) const { return x.b[j]; }
   };
   static constexpr bool kVectorByVector = kVector < 8;
-  template <class L>
-  struct RowOf {  // a dof's row fields, as the lanes lane picks
-    V* rw;
-    L lane;
-    auto& operator[](int f) const { return lane(rw[f]); }
-  };
   template <class L>
   static auto dot6(const L& lane, const V* a, const V* b) {
     return sum6(lane(a[0]) * lane(b[0]), lane(a[1]) * lane(b[1]), lane(a[2]) * lane(b[2]),
@@ -1127,44 +1126,6 @@ template <class A, int K>
   rw[Layout::response] = r;
 }
 
-// The drive row of a dof (drive.hpp) at joint velocity v, on the lanes its fields give: adds its
-// impulse's change to total and its effect to v.
-template <class A, int K>
-template <class T, class Fields>
-void LaneStep<A, K>::drive_row(int d, const Fields& rw, const T& r, const T& dx, T& total, T& v) {
-  if (p_.tgs && velocity_iteration_) return;  // TGS freezes the drive in velocity iterations
-  const T dimp = rw[Layout::dimp];
-  const DriveRowOf<T> row{rw[Layout::tvb],   rw[Layout::velm], rw[Layout::impm],
-                          rw[Layout::biasc], rw[Layout::tpb],  rw[Layout::maxi]};
-  T lambda = p_.tgs ? drive_law::impulse(row, v, dimp, dx, T(time_to_step_end_))
-                    : drive_law::impulse_pgs(row, v, dimp);
-  if constexpr (std::is_same_v<T, V>) {  // one vector at a time serves only dofs without one
-    if (any_row(d)[5] != 0.0) {
-      const row_law::EnvelopeOf<V> e{
-          dof_parameter(d, envelope_max_effort), dof_parameter(d, envelope_max_velocity),
-          dof_parameter(d, envelope_gradient), dof_parameter(d, envelope_resistance)};
-      lambda = select(rw[Layout::has_envelope] != V(0.0),
-                      row_law::envelope(e, lambda, dimp, v, r, rw[Layout::external], p_.dt),
-                      lambda);
-    }
-    if (has_bit(any_row(d)[7], kMotorClip) || has_bit(any_row(d)[7], kTableClip))
-      lambda = clip_actuator(d, rw, lambda, dimp, v, r, dx);
-  }
-  const bool all_driven = any_row(d)[2] != 0.0;
-  if (all_driven) {  // every lane driven: the selects below would keep each result
-    rw[Layout::dimp] = lambda;
-    const T delta = lambda - dimp;
-    total = total + delta;
-    v = v + r * delta;
-  } else {
-    const auto driven = rw[Layout::driven] != T(0.0);
-    rw[Layout::dimp] = select(driven, lambda, dimp);
-    const T delta = lambda - dimp;
-    total = select(driven, total + delta, total);
-    v = select(driven, v + r * delta, v);
-  }
-}
-
 // An implicit actuator's clip that depends on the state (actuator_row.hpp, dof_rows.cpp): on
 // dc_motor lanes the torque-speed line's (eq. I8-I11), on remotized_pd lanes the table's at the
 // iterate's end-of-(sub-)step position (eq. I13), read lane by lane out of line; lambda elsewhere.
@@ -1194,55 +1155,87 @@ auto LaneStep<A, K>::clip_actuator(int d, const V* rw, const V& lambda, const V&
   return out;
 }
 
-// All rows of dof d at joint velocity v (dof_rows.cpp): the drive, the joint friction, the
-// position limit. A lane without a row keeps total and v exactly (a select, not + 0), so its bits
-// do not depend on whether a neighbour has that row.
+// Dof d's rows in the packed layout, as row_sequence::solve reads them, on the lanes lane picks:
+// the whole pack, or one vector for a lone drive (which has no other row, envelope or clip).
+template <class A, int K>
+template <class L>
+struct LaneStep<A, K>::LaneRows {
+  using Row = row_sequence::Row;
+  LaneStep& s;
+  int d;
+  V* rw;
+  L lane;
+  using T = std::remove_cvref_t<decltype(std::declval<L>()(std::declval<V&>()))>;
+  auto& f(int field) const { return lane(rw[field]); }
+  bool any(Row k) const {
+    const double* has = s.any_row(d);
+    switch (k) {
+      case Row::transmission_friction: return has[6] != 0.0;
+      case Row::drive: return true;  // every dof's row runs; undriven lanes keep theirs (driven)
+      case Row::friction: return has[0] != 0.0;
+      case Row::limit: return has[1] != 0.0;
+      case Row::velocity_limit: return has[3] != 0.0;
+    }
+    return false;
+  }
+  bool all(Row k) const { return k == Row::drive && s.any_row(d)[2] != 0.0; }
+  template <class Mask>
+  static bool any_of(const Mask& m) {
+    if constexpr (std::is_same_v<T, V>) return simd::any(m);
+    else return lane_any(m);
+  }
+  auto has(Row k) const {
+    const int field = k == Row::transmission_friction ? Layout::has_tf
+                      : k == Row::drive               ? Layout::driven
+                      : k == Row::friction            ? Layout::has_friction
+                                                      : Layout::has_limit;
+    return f(field) != T(0.0);
+  }
+  T response() const { return f(Layout::response); }
+  T recip() const { return f(Layout::recip); }
+  T& tf_impulse() const { return f(Layout::tf_imp); }
+  T& tf_applied() const { return f(Layout::tf_applied); }
+  T tf_bound() const { return f(Layout::tf_bound); }
+  DriveRowOf<T> drive() const {
+    return {f(Layout::tvb), f(Layout::velm), f(Layout::impm),
+            f(Layout::biasc), f(Layout::tpb), f(Layout::maxi)};
+  }
+  T& drive_impulse() const { return f(Layout::dimp); }
+  T clip_drive(T next, const T& accumulated, const T& v, const T& dx) const {
+    if constexpr (std::is_same_v<T, V>) {
+      const double* has = s.any_row(d);
+      if (has[5] != 0.0) {
+        const row_law::EnvelopeOf<V> e{s.dof_parameter(d, envelope_max_effort),
+                                       s.dof_parameter(d, envelope_max_velocity),
+                                       s.dof_parameter(d, envelope_gradient),
+                                       s.dof_parameter(d, envelope_resistance)};
+        next = select(rw[Layout::has_envelope] != V(0.0),
+                      row_law::envelope(e, next, accumulated, v, rw[Layout::response],
+                                        rw[Layout::external], s.p_.dt),
+                      next);
+      }
+      if (has_bit(has[7], kMotorClip) || has_bit(has[7], kTableClip))
+        next = s.clip_actuator(d, rw, next, accumulated, v, rw[Layout::response], dx);
+    }
+    return next;
+  }
+  T& friction_impulse() const { return f(Layout::fimp); }
+  T friction_static() const { return f(Layout::fstat); }
+  T friction_dynamic() const { return f(Layout::fdyn); }
+  T friction_viscous() const { return f(Layout::fvisc); }
+  T& low() const { return f(Layout::low); }
+  T& high() const { return f(Layout::high); }
+  T error_low() const { return f(Layout::err_low); }
+  T error_high() const { return f(Layout::err_high); }
+  T max_velocity() const { return f(Layout::vmax); }
+  T& velocity_limit() const { return f(Layout::vlimp); }
+};
+
+// All rows of dof d at joint velocity v, the whole pack (row_sequence.hpp).
 template <class A, int K>
 auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
-  V* rw = row(d);
-  const V zero(0.0);
-  V total = zero;
-  const V r = rw[Layout::response];
-  auto apply = [&](const M& present, const V& delta) {
-    total = select(present, total + delta, total);
-    v = select(present, v + r * delta, v);
-  };
-  const V recip = rw[Layout::recip];
-  if (any_row(d)[6] != 0.0) {  // transmitted-force friction, before the drive
-    const M transmitting = rw[Layout::has_tf] != zero;
-    // PhysX re-applies it whole in every TGS solve (dof_rows.cpp).
-    const V applied = p_.tgs ? zero : rw[Layout::tf_imp];
-    const V next = row_law::transmission_friction(applied, v, recip, rw[Layout::tf_bound]);
-    rw[Layout::tf_imp] = select(transmitting, next, rw[Layout::tf_imp]);
-    rw[Layout::tf_applied] =
-        select(transmitting, rw[Layout::tf_applied] + (next - applied), rw[Layout::tf_applied]);
-    apply(transmitting, next - applied);
-  }
-  drive_row(d, rw, r, dx, total, v);
-  if (any_row(d)[0] != 0.0) {
-    const M rubbing = rw[Layout::has_friction] != zero;
-    V fi = rw[Layout::fimp];
-    const V delta = row_law::friction(fi, v, recip, rw[Layout::fstat], rw[Layout::fdyn],
-                                      rw[Layout::fvisc]);
-    rw[Layout::fimp] = select(rubbing, fi, rw[Layout::fimp]);
-    apply(rubbing, delta);
-  }
-  if (any_row(d)[1] != 0.0) {
-    const M limited = rw[Layout::has_limit] != zero;
-    V low = rw[Layout::low], high = rw[Layout::high];
-    const V delta = row_law::limit(low, high, v, recip, rw[Layout::err_low], rw[Layout::err_high],
-                                   dx, {h_, recip_h_, p_.limit_erp, velocity_iteration_});
-    rw[Layout::low] = select(limited, low, rw[Layout::low]);
-    rw[Layout::high] = select(limited, high, rw[Layout::high]);
-    apply(limited, delta);
-  }
-  if (any_row(d)[3] != 0.0) {  // the velocity limit
-    V vl = rw[Layout::vlimp];
-    const M beyond = row_law::beyond(v, rw[Layout::vmax]);
-    apply(beyond, row_law::velocity_limit(vl, v, recip, rw[Layout::vmax]));
-    rw[Layout::vlimp] = vl;
-  }
-  return total;
+  LaneRows<WholePack> rows{*this, d, row(d), WholePack{}};
+  return row_sequence::solve(rows, v, dx, row_phase());
 }
 
 // Link k's part of leaving (the lanes lane picks): beta = D^-1 (impulse - S^T pA), its joint's
@@ -1458,11 +1451,10 @@ template <bool kGiven, class L>
     const V v = p_.physx_prismatic ? at(l_.qd)[d] + base + row_bias(d) : at(l_.qd)[d] + base;
     impulse = solve_row(d, v, rw[Layout::delta_x]);
   } else {
-    T total(0.0), v = lane(at(l_.qd)[d]) + base;
+    T v = lane(at(l_.qd)[d]) + base;
     if (p_.physx_prismatic) v = v + lane(at(l_.row_bias)[d]);
-    drive_row(d, RowOf<L>{rw, lane}, lane(rw[Layout::response]),
-              lane(rw[Layout::delta_x]), total, v);
-    impulse = total;
+    LaneRows<L> rows{*this, d, rw, lane};
+    impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
   lane(at(l_.jimp)[d]) = impulse;
   if (chain_next) lane(at(l_.chain_base)[i + 1]) = ahead + impulse * lane(at(l_.chain_pi)[i + 1]);

@@ -1,7 +1,7 @@
-// All rows of one dof, solved together in PhysX's order (../shared/physx/NOTES.md, "Several rows
-// on one dof"): transmitted-force friction -> drive -> friction -> position limit -> velocity limit. Each sees the joint velocity
-// the previous one left (v += r * impulse), and their impulse changes are applied as one.
-// docs/math/joint_constraints.md.
+// All rows of one dof, solved together in PhysX's order: transmitted-force friction -> drive ->
+// friction -> position limit -> velocity limit (docs/math/joint_constraints.md). Each sees the
+// joint velocity the previous one left (v += r * impulse), and their impulse changes are applied
+// as one.
 #pragma once
 
 #include "featherdrive/constraint/actuator_row.hpp"
@@ -79,7 +79,8 @@ struct RowPhase {
   double limit_erp = 0.8;       ///< share of a limit violation corrected per (sub-)step
 };
 
-/// Updates every row of the dof at joint velocity v; returns the impulse change to apply.
+/// Updates every row of the dof at joint velocity v; returns the impulse change to apply
+/// (row_sequence::solve, constraint/row_sequence.hpp, the lanes' sequence too).
 double solve_all_dof_rows(DofRows& rows, double v, const RowPhase& phase);
 
 /// solve_all_dof_rows, with a dof whose only row is its drive solved inline (the common case in
