@@ -71,6 +71,20 @@ T limit(T& low, T& high, const T& v, const T& recip, const T& error_low, const T
   return select(on_low, d_low, d_high);
 }
 
+/// Where limit() can change anything: the joint is past a limit or would cross one by the end of
+/// the (sub-)step, or an earlier iteration of the step left an impulse. Elsewhere limit() gives
+/// -0 or +0 and leaves low and high as they are (J4 with l = u = 0), which changes no sum it
+/// enters, so a solver may skip it.
+template <class T>
+auto limit_may_act(const T& low, const T& high, const T& v, const T& error_low,
+                   const T& error_high, const T& dx, const LimitPhase& phase) {
+  const T zero(0.0);
+  const T future = dx + v * T(phase.h);
+  return ((error_low + dx < zero) | (error_low + future < zero)) |
+         ((error_high - dx < zero) | (error_high - future < zero)) |
+         ((low != zero) | (high != zero));
+}
+
 /// The joint velocity limit (J5): back to +-max_velocity when beyond it, else nothing.
 template <class T>
 auto beyond(const T& v, const T& max_velocity) {

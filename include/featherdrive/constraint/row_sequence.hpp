@@ -80,13 +80,17 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
     apply(rubbing, delta);
   }
   if (rows.any(Row::limit)) {
-    const auto limited = rows.has(Row::limit);
     T low = rows.low(), high = rows.high();
-    const T delta = row_law::limit(low, high, v, recip, rows.error_low(), rows.error_high(), dx,
-                                   phase.limit);
-    rows.low() = select(limited, low, rows.low());
-    rows.high() = select(limited, high, rows.high());
-    apply(limited, delta);
+    // Far inside both limits with nothing accumulated the law changes nothing (J4).
+    if (rows.any_of(row_law::limit_may_act(low, high, v, rows.error_low(), rows.error_high(), dx,
+                                            phase.limit))) {
+      const auto limited = rows.has(Row::limit);
+      const T delta = row_law::limit(low, high, v, recip, rows.error_low(), rows.error_high(), dx,
+                                     phase.limit);
+      rows.low() = select(limited, low, rows.low());
+      rows.high() = select(limited, high, rows.high());
+      apply(limited, delta);
+    }
   }
   if (rows.any(Row::velocity_limit)) {
     const auto beyond = row_law::beyond(v, rows.max_velocity());
