@@ -273,7 +273,7 @@ class LaneStep {
   void setup_link_rows(int i);
   void setup_dof_row(int i, int d, const V& r, const V& x0, const V& x0_drive);
   V solve_row(int d, V v, const V& dx);
-  template <class L>
+  template <class L, bool kLoneDrive = false>
   struct LaneRows;
   row_sequence::Phase row_phase() const {
     return {p_.tgs, velocity_iteration_, time_to_step_end_,
@@ -1156,9 +1156,10 @@ auto LaneStep<A, K>::clip_actuator(int d, const V* rw, const V& lambda, const V&
 }
 
 // Dof d's rows in the packed layout, as row_sequence::solve reads them, on the lanes lane picks:
-// the whole pack, or one vector for a lone drive (which has no other row, envelope or clip).
+// the whole pack, or one vector for a lone drive (kLoneDrive: the sweep checked that no lane has
+// another row, an envelope or a clip).
 template <class A, int K>
-template <class L>
+template <class L, bool kLoneDrive>
 struct LaneStep<A, K>::LaneRows {
   using Row = row_sequence::Row;
   LaneStep& s;
@@ -1168,6 +1169,7 @@ struct LaneStep<A, K>::LaneRows {
   using T = std::remove_cvref_t<decltype(std::declval<L>()(std::declval<V&>()))>;
   auto& f(int field) const { return lane(rw[field]); }
   bool any(Row k) const {
+    if constexpr (kLoneDrive) return k == Row::drive;
     const double* has = s.any_row(d);
     switch (k) {
       case Row::transmission_friction: return has[6] != 0.0;
@@ -1453,7 +1455,7 @@ template <bool kGiven, class L>
   } else {
     T v = lane(at(l_.qd)[d]) + base;
     if (p_.physx_prismatic) v = v + lane(at(l_.row_bias)[d]);
-    LaneRows<L> rows{*this, d, rw, lane};
+    LaneRows<L, true> rows{*this, d, rw, lane};
     impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
   lane(at(l_.jimp)[d]) = impulse;
