@@ -1679,19 +1679,30 @@ void LaneStep<A, K>::solve_mimic() {
   for (int s = 0; s < k; ++s)
     velocity[s] = p_.physx_prismatic ? qd[p_.mimic_dofs[s]] + row_bias(p_.mimic_dofs[s])
                                      : qd[p_.mimic_dofs[s]];
-  for (int j = 0; j < p_.num_mimic; ++j) {
-    const MimicConstants& m = p_.mimic[j];
-    const V gear = mimic_parameter(j, mimic_gear_ratio);
-    const V error = q[m.q_a] + gear * q[m.q_b] + mimic_parameter(j, mimic_offset);
-    const V v = velocity[m.slot_a] + gear * velocity[m.slot_b];
-    const V* rw = at(l_.mimic_row) + 3 * j;
-    const V lambda =
-        mimic_law::impulse(MimicRowOf<V>{rw[0], rw[1], rw[2]}, error, v, velocity_iteration_);
-    given[m.dof_a] = given[m.dof_a] + lambda;
-    given[m.dof_b] = given[m.dof_b] + gear * lambda;
-    for (int s = 0; s < k; ++s)
-      velocity[s] = velocity[s] + lambda * at(l_.mimic_change)[j * k + s];
-  }
+  struct Rows {  // the packed mimic rows, as mimic_law::solve_rows reads them
+    LaneStep& s;
+    V* q;
+    V* velocity_;
+    V* given_;
+    int k;
+    const MimicConstants& m(int j) const { return s.p_.mimic[j]; }
+    MimicRowOf<V> row(int j) const {
+      const V* rw = s.at(s.l_.mimic_row) + 3 * j;
+      return {rw[0], rw[1], rw[2]};
+    }
+    V gear(int j) const { return s.mimic_parameter(j, mimic_gear_ratio); }
+    V offset(int j) const { return s.mimic_parameter(j, mimic_offset); }
+    V q_a(int j) const { return q[m(j).q_a]; }
+    V q_b(int j) const { return q[m(j).q_b]; }
+    int slot_a(int j) const { return m(j).slot_a; }
+    int slot_b(int j) const { return m(j).slot_b; }
+    int dof_a(int j) const { return m(j).dof_a; }
+    int dof_b(int j) const { return m(j).dof_b; }
+    const V* change(int j) const { return s.at(s.l_.mimic_change) + j * k; }
+    V* velocity() const { return velocity_; }
+    V& given(int dof) const { return given_[dof]; }
+  } rows{*this, q, velocity, given, k};
+  mimic_law::solve_rows<V>(rows, p_.num_mimic, k, velocity_iteration_);
   sweep_links<true>();
   for (int s = 0; s < k; ++s) given[p_.mimic_dofs[s]] = V(0.0);
 }

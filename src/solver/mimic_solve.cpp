@@ -49,16 +49,27 @@ void MimicSolver::solve(const Model& model, const Data& data, const VecX& q, con
   const size_t k = dofs_.size();
   for (size_t s = 0; s < k; ++s)
     velocity_[s] = qd[dofs_[s]] + (row_bias ? row_bias[dofs_[s]] : 0.0);
-  for (size_t j = 0; j < joints_.size(); ++j) {
-    const MimicJoint& m = joints_[j];
-    const size_t a = static_cast<size_t>(slot_a_[j]), b = static_cast<size_t>(slot_b_[j]);
-    const double error = q[q_index_[a]] + m.gear_ratio * q[q_index_[b]] + m.offset;
-    const double velocity = velocity_[a] + m.gear_ratio * velocity_[b];
-    const double lambda = mimic_impulse(rows_[j], error, velocity, velocity_iteration);
-    impulse_[m.dof_a] += lambda;
-    impulse_[m.dof_b] += m.gear_ratio * lambda;
-    for (size_t s = 0; s < k; ++s) velocity_[s] += lambda * velocity_change_[j * k + s];
-  }
+  struct Rows {  // this solver's rows, as mimic_law::solve_rows reads them
+    MimicSolver& m;
+    const VecX& q;
+    const MimicJoint& joint(int j) const { return m.joints_[static_cast<size_t>(j)]; }
+    const MimicRow& row(int j) const { return m.rows_[static_cast<size_t>(j)]; }
+    double gear(int j) const { return joint(j).gear_ratio; }
+    double offset(int j) const { return joint(j).offset; }
+    int slot_a(int j) const { return m.slot_a_[static_cast<size_t>(j)]; }
+    int slot_b(int j) const { return m.slot_b_[static_cast<size_t>(j)]; }
+    double q_a(int j) const { return q[m.q_index_[static_cast<size_t>(slot_a(j))]]; }
+    double q_b(int j) const { return q[m.q_index_[static_cast<size_t>(slot_b(j))]]; }
+    int dof_a(int j) const { return joint(j).dof_a; }
+    int dof_b(int j) const { return joint(j).dof_b; }
+    const double* change(int j) const {
+      return m.velocity_change_.data() + static_cast<size_t>(j) * m.dofs_.size();
+    }
+    double* velocity() const { return m.velocity_.data(); }
+    double& given(int dof) const { return m.impulse_[dof]; }
+  } rows{*this, q};
+  mimic_law::solve_rows<double>(rows, static_cast<int>(joints_.size()), static_cast<int>(k),
+                                velocity_iteration);
   gauss_seidel_sweep(model, data, *sweep_, qd, [this](int dof, double) { return impulse_[dof]; });
   for (const int dof : dofs_) impulse_[dof] = 0.0;
 }

@@ -43,6 +43,29 @@ T impulse(const MimicRowOf<T>& row, const T& error, const T& velocity, bool velo
   return -(row.bias_per_error * error + velocity) * row.effective_mass;
 }
 
+/// Every mimic row once, in order, as PhysX solves them before a sweep (mimic_joints.md): row j
+/// sees the velocities of the k coupled dofs that the rows before it left, moves them by its
+/// impulse times its k entries of M^-1 J^T (change(j)), and adds its impulses to its two dofs'
+/// (given, then applied by one sweep). Rows gives, for row j over the number type T: row(j),
+/// gear(j), offset(j), q_a(j), q_b(j), slot_a(j), slot_b(j), dof_a(j), dof_b(j), change(j);
+/// velocity() (k entries) and given(dof).
+template <class T, class Rows>
+void solve_rows(Rows& rows, int count, int k, bool velocity_iteration) {
+  T* velocity = rows.velocity();
+  for (int j = 0; j < count; ++j) {
+    const T gear = rows.gear(j);
+    const T error = rows.q_a(j) + gear * rows.q_b(j) + rows.offset(j);
+    const T v = velocity[rows.slot_a(j)] + gear * velocity[rows.slot_b(j)];
+    const T lambda = impulse(rows.row(j), error, v, velocity_iteration);
+    T& a = rows.given(rows.dof_a(j));
+    a = a + lambda;
+    T& b = rows.given(rows.dof_b(j));
+    b = b + gear * lambda;
+    const T* change = rows.change(j);
+    for (int s = 0; s < k; ++s) velocity[s] = velocity[s] + lambda * change[s];
+  }
+}
+
 }  // namespace mimic_law
 
 }  // namespace featherdrive

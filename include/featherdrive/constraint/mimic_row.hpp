@@ -39,9 +39,4 @@ inline MimicRow setup_mimic_row(const MimicJoint& mimic, double r, double h,
   return mimic_law::setup(mimic.natural_frequency, mimic.damping_ratio, r, h, bias_coefficient);
 }
 
-inline double mimic_impulse(const MimicRow& row, double error, double velocity,
-                            bool velocity_iteration) {
-  return mimic_law::impulse(row, error, velocity, velocity_iteration);
-}
-
 }  // namespace featherdrive
