@@ -1,8 +1,8 @@
 #include "featherdrive/sim/revolute_wrap.hpp"
 
-#include <algorithm>
-#include <numbers>
 #include <stdexcept>
+
+#include "featherdrive/sim/revolute_wrap_law.hpp"
 
 namespace featherdrive {
 
@@ -16,14 +16,7 @@ RevoluteWrap parse_revolute_wrap(const std::string& text) {
   throw std::invalid_argument("revolute = '" + text + "' must be wrapped or unwrapped");
 }
 
-double wrap_revolute_position(double q) {
-  constexpr double two_pi = 2.0 * std::numbers::pi;
-  if (q > two_pi)
-    q -= 2.0 * two_pi;
-  else if (q < -two_pi)
-    q += 2.0 * two_pi;
-  return std::clamp(q, -2.0 * two_pi, 2.0 * two_pi);
-}
+double wrap_revolute_position(double q) { return wrap_law::wrapped(q); }
 
 void wrap_revolute_positions(const Model& model, const std::vector<RevoluteWrap>& wrap, VecX& q) {
   for (int d = 0; d < model.nv; ++d)

@@ -25,6 +25,7 @@
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
+#include "featherdrive/sim/revolute_wrap_law.hpp"
 #include "simd_plan.hpp"
 
 namespace featherdrive::simd {
@@ -2837,17 +2838,14 @@ void LaneStep<A, K>::finish_ball(int i, const V* E) {
 }
 
 // A wrapped revolute joint's position back into [-2 pi, 2 pi] by one turn of 4 pi, then clamped
-// to [-4 pi, 4 pi] (revolute_wrap.cpp, docs/math/revolute_wrap.md eq. 1).
+// to [-4 pi, 4 pi] (wrap_law, docs/math/revolute_wrap.md eq. 1).
 template <class A, int K>
 void LaneStep<A, K>::wrap_positions() {
-  const V two_pi(2.0 * 3.14159265358979323846), four_pi = V(2.0) * two_pi;
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
     if (k.type != 1 || any_row(k.v_index)[4] == 0.0) continue;
     V& q = at(l_.q)[k.q_index];
-    V x = select(q > two_pi, q - four_pi, select(q < -two_pi, q + four_pi, q));
-    x = select(x < -four_pi, -four_pi, select(four_pi < x, four_pi, x));
-    q = select(dof_parameter(k.v_index, wrapped) != V(0.0), x, q);
+    q = select(dof_parameter(k.v_index, wrapped) != V(0.0), wrap_law::wrapped(q), q);
   }
 }
 
