@@ -10,7 +10,7 @@ FUZZ_SECONDS ?= 60
 # (what .ci/run does, so CI never fails on a random draw; exploration is `make fuzz`).
 FUZZ_RUNS ?=
 FUZZ_SEED ?= 1
-FUZZ_TARGETS = urdf scene step
+FUZZ_TARGETS = urdf mjcf scene step
 CMAKE_FLAGS ?=
 # New build directories use Ninja, which compiles a target's files while the targets it links are
 # still compiling (the main build: 170 s against 183 s with Makefiles); an existing directory
@@ -105,16 +105,23 @@ else
 FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
 endif
 
+# Seeds kept elsewhere in the repository, copied to $(FUZZ_BUILD)/seeds/<run>/ for a run (a corpus
+# is a folder): fuzz_mjcf starts from the malformed-file tests' MJCF files too.
+FUZZ_SEEDS_mjcf = $(wildcard tests/data/malformed/*.xml)
+
 # One fuzzer run: $(1) the target, $(2) its length and seed, $(3) the name of its new-input corpus
 # and log. A crash fails the run.
 define fuzz_one
 	@mkdir -p $(FUZZ_BUILD)/corpus/$(3) $(FUZZ_BUILD)/artifacts
+	$(if $(FUZZ_SEEDS_$(1)),@rm -rf $(FUZZ_BUILD)/seeds/$(3) && mkdir -p $(FUZZ_BUILD)/seeds/$(3) \
+	  && cp $(FUZZ_SEEDS_$(1)) $(FUZZ_BUILD)/seeds/$(3)/)
 	@echo "fuzz_$(1): $(2)"
 	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
 	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$(3)- \
 	    $(FUZZ_BUILD)/corpus/$(3) tests/fuzz/corpus/$(1) $(wildcard tests/regression/inputs/$(1)) \
+	    $(if $(FUZZ_SEEDS_$(1)),$(FUZZ_BUILD)/seeds/$(3)) \
 	    2>$(FUZZ_BUILD)/fuzz_$(3).log \
 	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$(3).log; \
 	       tail -n 8 $(FUZZ_BUILD)/fuzz_$(3).log; echo "fuzz_$(1) FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
