@@ -143,7 +143,7 @@ fuzz-run-%:
 # make test's replay, TARGET.SEED.RUNS: fuzz_step's inputs cost eight times the readers', so they
 # run as two halves from two seeds, one per core, each with its own corpus (the same inputs every
 # run: a run reads back only the inputs it wrote itself).
-TEST_FUZZ_JOBS ?= urdf.1.15000 scene.1.15000 step.1.7500 step.2.7500
+TEST_FUZZ_JOBS ?= urdf.1.15000 mjcf.1.1500 scene.1.15000 step.1.7500 step.2.7500
 fuzz-replay-%:
 	$(call fuzz_one,$(word 1,$(subst ., ,$*)),-runs=$(word 3,$(subst ., ,$*)) -seed=$(word 2,$(subst ., ,$*)),$*)
 
