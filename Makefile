@@ -109,6 +109,10 @@ endif
 # is a folder): fuzz_mjcf starts from the malformed-file tests' MJCF files too.
 FUZZ_SEEDS_mjcf = $(wildcard tests/data/malformed/*.xml)
 
+# Options of one target's runs: fuzz_mjcf's dictionary of MJCF names (MuJoCo's compiler, in
+# Debian's library, gives libFuzzer no coverage to learn them from).
+FUZZ_FLAGS_mjcf = -dict=tests/fuzz/mjcf.dict
+
 # One fuzzer run: $(1) the target, $(2) its length and seed, $(3) the name of its new-input corpus
 # and log. A crash fails the run.
 define fuzz_one
@@ -117,7 +121,7 @@ define fuzz_one
 	  && cp $(FUZZ_SEEDS_$(1)) $(FUZZ_BUILD)/seeds/$(3)/)
 	@echo "fuzz_$(1): $(2)"
 	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
-	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) -timeout=20 \
+	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) $(FUZZ_FLAGS_$(1)) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$(3)- \
 	    $(FUZZ_BUILD)/corpus/$(3) tests/fuzz/corpus/$(1) $(wildcard tests/regression/inputs/$(1)) \

@@ -107,7 +107,8 @@ struct Checker {
   // mj_findFileVFS(vfs, name). MuJoCo's own mju_error (MujocoError here, through its parser's
   // frames when it reads an include) takes a name whose part after the last '/' or '\' is empty
   // or mjMAXVFSNAME long: refused first, `what` naming the element and attribute.
-  int find_in_vfs(const std::string& name, const std::string& where, const std::string& what) const {
+  int find_in_vfs(const std::string& name, const std::string& where,
+                  const std::string& what) const {
     const size_t slash = name.find_last_of("/\\");
     const size_t length = name.size() - (slash == std::string::npos ? 0 : slash + 1);
     if (length == 0) fail(where, what + " = '" + name + "': names no file");

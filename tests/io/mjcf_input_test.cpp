@@ -191,8 +191,9 @@ TEST(MjcfInput, FileNamesMujocosVfsCannotHoldAreRefusedNotFatal) {
   // MuJoCo's VFS lookup calls its fatal error for a name with nothing after its last '/' or a
   // last part of 1000 characters or more (fuzz_mjcf: <mesh file="../collada/">, MujocoError then).
   const std::string body = "<joint/><geom size=\"0.1\"/>";
-  EXPECT_EQ(parse_error(model(body, "", "<asset>\n<mesh name=\"m\" file=\"../collada/\"/></asset>")),
-            "m.xml: line 2: <mesh> file = '../collada/': names no file");
+  EXPECT_EQ(
+      parse_error(model(body, "", "<asset>\n<mesh name=\"m\" file=\"../collada/\"/></asset>")),
+      "m.xml: line 2: <mesh> file = '../collada/': names no file");
   EXPECT_EQ(parse_error(model(body, "", "<compiler strippath=\"true\"/><asset><texture "
                                         "name=\"t\" type=\"cube\" fileup=\"a/\"/></asset>")),
             "m.xml: line 1: <texture> fileup = '': names no file");
