@@ -10,7 +10,7 @@ FUZZ_SECONDS ?= 60
 # (what .ci/run does, so CI never fails on a random draw; exploration is `make fuzz`).
 FUZZ_RUNS ?=
 FUZZ_SEED ?= 1
-FUZZ_TARGETS = urdf scene step
+FUZZ_TARGETS = urdf mjcf scene step
 CMAKE_FLAGS ?=
 # New build directories use Ninja, which compiles a target's files while the targets it links are
 # still compiling (the main build: 170 s against 183 s with Makefiles); an existing directory
@@ -105,16 +105,27 @@ else
 FUZZ_LENGTH = -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED)
 endif
 
+# Seeds kept elsewhere in the repository, copied to $(FUZZ_BUILD)/seeds/<run>/ for a run (a corpus
+# is a folder): fuzz_mjcf starts from the malformed-file tests' MJCF files too.
+FUZZ_SEEDS_mjcf = $(wildcard tests/data/malformed/*.xml)
+
+# Options of one target's runs: fuzz_mjcf's dictionary of MJCF names (MuJoCo's compiler, in
+# Debian's library, gives libFuzzer no coverage to learn them from).
+FUZZ_FLAGS_mjcf = -dict=tests/fuzz/mjcf.dict
+
 # One fuzzer run: $(1) the target, $(2) its length and seed, $(3) the name of its new-input corpus
 # and log. A crash fails the run.
 define fuzz_one
 	@mkdir -p $(FUZZ_BUILD)/corpus/$(3) $(FUZZ_BUILD)/artifacts
+	$(if $(FUZZ_SEEDS_$(1)),@rm -rf $(FUZZ_BUILD)/seeds/$(3) && mkdir -p $(FUZZ_BUILD)/seeds/$(3) \
+	  && cp $(FUZZ_SEEDS_$(1)) $(FUZZ_BUILD)/seeds/$(3)/)
 	@echo "fuzz_$(1): $(2)"
 	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp \
-	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) -timeout=20 \
+	  ./$(FUZZ_BUILD)/tests/fuzz/fuzz_$(1) $(2) $(FUZZ_FLAGS_$(1)) -timeout=20 \
 	    -rss_limit_mb=2048 -print_final_stats=1 \
 	    -artifact_prefix=$(FUZZ_BUILD)/artifacts/$(3)- \
 	    $(FUZZ_BUILD)/corpus/$(3) tests/fuzz/corpus/$(1) $(wildcard tests/regression/inputs/$(1)) \
+	    $(if $(FUZZ_SEEDS_$(1)),$(FUZZ_BUILD)/seeds/$(3)) \
 	    2>$(FUZZ_BUILD)/fuzz_$(3).log \
 	  || { grep -m1 -A30 -E '==ERROR|runtime error|deadly signal|fuzz bug' $(FUZZ_BUILD)/fuzz_$(3).log; \
 	       tail -n 8 $(FUZZ_BUILD)/fuzz_$(3).log; echo "fuzz_$(1) FAILED: see $(FUZZ_BUILD)/artifacts/"; exit 1; }
@@ -136,7 +147,7 @@ fuzz-run-%:
 # make test's replay, TARGET.SEED.RUNS: fuzz_step's inputs cost eight times the readers', so they
 # run as two halves from two seeds, one per core, each with its own corpus (the same inputs every
 # run: a run reads back only the inputs it wrote itself).
-TEST_FUZZ_JOBS ?= urdf.1.15000 scene.1.15000 step.1.7500 step.2.7500
+TEST_FUZZ_JOBS ?= urdf.1.15000 mjcf.1.1500 scene.1.15000 step.1.7500 step.2.7500
 fuzz-replay-%:
 	$(call fuzz_one,$(word 1,$(subst ., ,$*)),-runs=$(word 3,$(subst ., ,$*)) -seed=$(word 2,$(subst ., ,$*)),$*)
 

@@ -104,13 +104,24 @@ struct Checker {
     throw InputError(shown + ": " + where + what);
   }
 
+  // mj_findFileVFS(vfs, name). MuJoCo's own mju_error (MujocoError here, through its parser's
+  // frames when it reads an include) takes a name whose part after the last '/' or '\' is empty
+  // or mjMAXVFSNAME long: refused first, `what` naming the element and attribute.
+  int find_in_vfs(const std::string& name, const std::string& where,
+                  const std::string& what) const {
+    const size_t slash = name.find_last_of("/\\");
+    const size_t length = name.size() - (slash == std::string::npos ? 0 : slash + 1);
+    if (length == 0) fail(where, what + " = '" + name + "': names no file");
+    if (length >= mjMAXVFSNAME)
+      fail(where, what + " = '" + name + "': the file name is longer than " +
+                      std::to_string(mjMAXVFSNAME - 1) + " characters (MuJoCo's bound)");
+    return mj_findFileVFS(vfs, name.c_str());
+  }
+
   // The text of `name` as MuJoCo reads it: from the VFS when it holds the name, else the file.
   std::string read(const std::string& name, const char* what, const std::string& where) {
     if (vfs) {
-      const size_t slash = name.find_last_of("/\\");
-      if (name.size() - (slash == std::string::npos ? 0 : slash + 1) >= mjMAXVFSNAME)
-        fail(where, "file name '" + name + "' is too long");
-      const int id = mj_findFileVFS(vfs, name.c_str());
+      const int id = find_in_vfs(name, where, "file");
       if (id >= 0)
         return std::string(static_cast<const char*>(vfs->filedata[id]),
                            static_cast<size_t>(vfs->filesize[id]));
@@ -326,7 +337,7 @@ struct Checker {
       if (!dir.empty() && dir.back() != '/' && dir.back() != '\\') dir += '/';
       const std::string path =
           absolute(file) ? file : absolute(dir) ? dir + file : folder + dir + file;
-      if (vfs && mj_findFileVFS(vfs, path.c_str()) >= 0) continue;
+      if (vfs && find_in_vfs(path, a.where, "<" + a.element + "> " + a.attribute) >= 0) continue;
       struct stat st {};
       if (::stat(path.c_str(), &st) != 0) continue;
       const std::string what = "<" + a.element + "> " + a.attribute + " '" + path + "' ";

@@ -187,6 +187,25 @@ TEST(MjcfInput, NonRegularFilesAreRefusedWhereverNamed) {
                                      "' is not a regular file");
 }
 
+TEST(MjcfInput, FileNamesMujocosVfsCannotHoldAreRefusedNotFatal) {
+  // MuJoCo's VFS lookup calls its fatal error for a name with nothing after its last '/' or a
+  // last part of 1000 characters or more (fuzz_mjcf: <mesh file="../collada/">, MujocoError then).
+  const std::string body = "<joint/><geom size=\"0.1\"/>";
+  EXPECT_EQ(
+      parse_error(model(body, "", "<asset>\n<mesh name=\"m\" file=\"../collada/\"/></asset>")),
+      "m.xml: line 2: <mesh> file = '../collada/': names no file");
+  EXPECT_EQ(parse_error(model(body, "", "<compiler strippath=\"true\"/><asset><texture "
+                                        "name=\"t\" type=\"cube\" fileup=\"a/\"/></asset>")),
+            "m.xml: line 1: <texture> fileup = '': names no file");
+  EXPECT_EQ(parse_error(model(body + "<include file=\"x\\\"/>")),
+            "m.xml: line 1: <include> file = 'x\\': names no file");
+  const std::string long_name = "dir/" + std::string(999, 'a') + ".stl";
+  EXPECT_EQ(parse_error(model(body, "", "<asset><hfield name=\"h\" file=\"" + long_name +
+                                        "\"/></asset>")),
+            "m.xml: line 1: <hfield> file = '" + long_name +
+                "': the file name is longer than 999 characters (MuJoCo's bound)");
+}
+
 TEST(MjcfInput, InputFilesListEveryFileTheLoadReads) {
   const fs::path dir = fresh_dir("inputs");
   fs::create_directories(dir / "meshes");
