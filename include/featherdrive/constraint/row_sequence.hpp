@@ -51,7 +51,8 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
     const T applied = phase.tgs ? zero : rows.tf_impulse();
     const T next = row_law::transmission_friction(applied, v, recip, rows.tf_bound());
     rows.tf_impulse() = select(transmitting, next, rows.tf_impulse());
-    rows.tf_applied() = select(transmitting, rows.tf_applied() + (next - applied), rows.tf_applied());
+    rows.tf_applied() =
+        select(transmitting, rows.tf_applied() + (next - applied), rows.tf_applied());
     apply(transmitting, next - applied);
   }
   if (rows.any(Row::drive) && !(phase.tgs && phase.velocity_iteration)) {  // TGS freezes it
