@@ -1954,10 +1954,7 @@ void LaneStep<A, K>::scale_to_velocity_limits() {
   V ratio = one;
   for (int d = 0; d < p_.nv; ++d) {
     if (any_row(d)[3] == 0.0) continue;
-    const V qd = at(l_.qd)[d], vmax = row(d)[Layout::vmax];
-    const V speed = select(qd < V(0.0), -qd, qd);
-    const V candidate = vmax / speed;  // only read where speed > vmax >= 0
-    ratio = select((speed > vmax) & (candidate < ratio), candidate, ratio);
+    ratio = row_law::velocity_scale(ratio, at(l_.qd)[d], row(d)[Layout::vmax]);
   }
   const M scaled = ratio < one;
   if (!any(scaled)) return;

@@ -7,6 +7,7 @@
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/constraint/row_laws.hpp"
 #include "physx_stages.hpp"
 #include "workspace.hpp"
 
@@ -130,8 +131,7 @@ void Stepper::end_step() {
 void Stepper::scale_to_velocity_limits() {
   double ratio = 1.0;
   for (int d = 0; d < model_->nv; ++d)
-    if (std::abs(ws_.qd[d]) > settings_.max_joint_velocity[d])
-      ratio = std::min(ratio, settings_.max_joint_velocity[d] / std::abs(ws_.qd[d]));
+    ratio = row_law::velocity_scale(ratio, ws_.qd[d], settings_.max_joint_velocity[d]);
   if (ratio < 1.0) ws_.qd *= ratio;
 }
 

@@ -85,6 +85,16 @@ auto limit_may_act(const T& low, const T& high, const T& v, const T& error_low,
          ((low != zero) | (high != zero));
 }
 
+/// The step's velocity scale (joint_constraints.md, "Velocity limits"): ratio lowered to
+/// max_velocity / |v| where the dof is beyond its limit and that is lower (std::min's choice).
+/// Where it is not beyond, the quotient (inf or NaN at v = 0) is never chosen.
+template <class T>
+T velocity_scale(const T& ratio, const T& v, const T& max_velocity) {
+  const T speed = magnitude(v);
+  const T candidate = max_velocity / speed;
+  return select((max_velocity < speed) & (candidate < ratio), candidate, ratio);
+}
+
 /// The joint velocity limit (J5): back to +-max_velocity when beyond it, else nothing.
 template <class T>
 auto beyond(const T& v, const T& max_velocity) {
