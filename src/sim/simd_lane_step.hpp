@@ -26,6 +26,7 @@
 #include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
+#include "featherdrive/spatial/sincos.hpp"
 #include "simd_plan.hpp"
 
 namespace featherdrive::simd {
@@ -474,36 +475,11 @@ void LaneStep<A, K>::scatter(V x, double* rows, int stride, int k) const {
   for (int l = 0; l < b_.valid; ++l) rows[row_of(b_.env0 + l) * stride + k] = t[l];
 }
 
-// sin and cos from + - * / only: the quadrant j = round(2 x / pi) (by adding and subtracting
-// 1.5 * 2^52), x - j pi / 2 in three parts (Cody and Waite; j times the first part is exact), then
-// Cephes's minimax polynomials on [-pi/4, pi/4] (sin.c). Within 2 ulp of glibc's.
+// sin and cos from + - * / only, the kinematics' own (sincos_law, docs/math/sincos.md): within
+// 2 ulp of glibc's for |x| <= 1e5.
 template <class A, int K>
 void LaneStep<A, K>::sincos(V x, V& s, V& c) {
-  const V round(6755399441055744.0);
-  const V j = (x * V(0.63661977236758134308) + round) - round;
-  const V r = ((x - j * V(1.57079625129699707031)) - j * V(7.54978941586159635336e-8)) -
-              j * V(5.39030285815811905290e-15);
-  const V z = r * r;
-  V ps = V(1.58962301576546568060e-10);
-  ps = ps * z + V(-2.50507477628578072866e-8);
-  ps = ps * z + V(2.75573136213857245213e-6);
-  ps = ps * z + V(-1.98412698295895385996e-4);
-  ps = ps * z + V(8.33333333332211858878e-3);
-  ps = ps * z + V(-1.66666666666666307295e-1);
-  V pc = V(-1.13585365213876817300e-11);
-  pc = pc * z + V(2.08757008419747316778e-9);
-  pc = pc * z + V(-2.75573141792967388112e-7);
-  pc = pc * z + V(2.48015872888517045348e-5);
-  pc = pc * z + V(-1.38888888888730564116e-3);
-  pc = pc * z + V(4.16666666666665929218e-2);
-  const V sr = r + r * z * ps;
-  const V cr = (V(1.0) - V(0.5) * z) + z * z * pc;
-  // j mod 4, exactly: floor(j / 4) = round((j - 1.5) / 4) for an integer j.
-  const V quadrant = j - V(4.0) * (((j - V(1.5)) * V(0.25) + round) - round);
-  const M odd = (quadrant == V(1.0)) | (quadrant == V(3.0));
-  const V sin_r = select(odd, cr, sr), cos_r = select(odd, sr, cr);
-  s = select(quadrant >= V(2.0), -sin_r, sin_r);
-  c = select((quadrant == V(1.0)) | (quadrant == V(2.0)), -cos_r, cos_r);
+  sincos_law::sincos(x, s, c);
 }
 
 template <class A, int K>
