@@ -40,7 +40,7 @@ Layout make_layout(const Plan& p) {
   l.ff = take(n), l.vf = take(n), l.cg = take(3 * L), l.cfm = take(L), l.row = take(Layout::kRowFields * n);
   l.jimp = take(n), l.entry = take(n), l.saved = take(n), l.saved_tgs = take(n);
   l.zero = take(21);
-  l.chain_pS = take(L), l.chain_pb = take(L), l.chain_pi = take(L), l.chain_base = take(L);
+  l.chain_pS = take(L), l.chain_pi = take(L), l.chain_base = take(L);
   l.mimic_row = take(3 * p.num_mimic), l.mimic_change = take(p.num_mimic * p.num_mimic_dofs);
   l.mimic_velocity = take(p.num_mimic_dofs), l.given = take(n);
   l.af = take(n), l.before = take(n), l.change = take(n);

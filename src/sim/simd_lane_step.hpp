@@ -955,7 +955,6 @@ template <class A, int K>
       const B pS = dot6(Uj, Sp);
       const B pb = -D_inv * pS;
       at(l_.chain_pS)[i].b[j] = pS;
-      at(l_.chain_pb)[i].b[j] = pb;
       at(l_.chain_pi)[i].b[j] =
           at(l_.D_inv)[p].b[j] * (D_inv * dot6(Uj, Wp)) + at(l_.inverse_mass)[p].b[j] * pb;
     }
@@ -1419,9 +1418,11 @@ template <bool kGiven, class L>
   const T base = k.chain_in ? lane(at(l_.chain_base)[i]) : -D_inv * dot6(lane, U, dvp);
   const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
   T ahead{};
-  if (chain_next)
-    ahead = -lane(at(l_.D_inv)[i + 1]) * dot6(lane, at(l_.U + 6 * (i + 1)), dvp) +
-            base * lane(at(l_.chain_pb)[i + 1]);
+  if (chain_next) {
+    const T D_next = lane(at(l_.D_inv)[i + 1]);  // its b^b = -D^-1 U^T S_i, formed as in the pass
+    ahead = -D_next * dot6(lane, at(l_.U + 6 * (i + 1)), dvp) +
+            base * (-D_next * lane(at(l_.chain_pS)[i + 1]));
+  }
   T impulse;
   if constexpr (kGiven) {
     impulse = lane(at(l_.given)[d]);

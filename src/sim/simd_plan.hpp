@@ -201,9 +201,9 @@ struct Layout {
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
       lf = 0, ff = 0, vf = 0, cg = 0, cfm = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
   /// Per link with a one-dof parent (LinkConstants::parent_one_dof), from the response pass:
-  /// U_i^T S_p, -D_i^-1 U_i^T S_p and the base's change per parent impulse; chain_base, the
-  /// base a chained link is entered with (implicit_drives.md, eq. GS1-GS3).
-  int chain_pS = 0, chain_pb = 0, chain_pi = 0, chain_base = 0;
+  /// U_i^T S_p and the base's change per parent impulse; chain_base, the base a chained link is
+  /// entered with (implicit_drives.md, eq. GS1-GS3).
+  int chain_pS = 0, chain_pi = 0, chain_base = 0;
 };
 
 struct Plan {
