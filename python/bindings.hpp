@@ -67,6 +67,8 @@ void bind_check(py::module_& m);
 /// An instruction set by name ('sse2', 'avx2', 'avx512'), None for the default (bind_batch.cpp).
 std::optional<SimdIsa> to_isa(py::handle obj);  // bind_check.cpp: fd.check
 void bind_contact(py::module_& m);  // bind_contact.cpp: after bind_io (UrdfRobot, Scene)
+/// bind_settings_value.cpp: fd.Settings and what takes or gives one; after every class it names.
+void bind_settings_value(py::module_& m);
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

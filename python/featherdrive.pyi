@@ -186,6 +186,31 @@ class SimulationOptions:
 def validate_options(options: SimulationOptions) -> None:
     """Raises ValueError naming the field and value for bad options."""
 
+class Settings:
+    """Every setting of a simulation as one value. Vectors write into the value; lists are
+    copies: assign a whole list to change one."""
+    options: SimulationOptions
+    drives: list[Drive]
+    lower_limit: Vector
+    upper_limit: Vector
+    max_joint_velocity: Vector
+    friction: list[JointFriction]
+    envelopes: list[ActuatorEnvelope]
+    friction_coefficient: Vector
+    revolute_wrap: list[str]
+    drive_delay: list[int]
+    actuators: list[ExplicitActuator]
+    actuator_feedforward: Vector
+    link_parameters: list[LinkParameters]
+    mimic_joints: list[MimicJoint]
+    ground: Ground
+    contact: ContactOptions
+    @staticmethod
+    def defaults(model: Model, options: SimulationOptions | None = None) -> Settings: ...
+    def validate(self, model: Model) -> None:
+        """ValueError with the message of the first setting a Simulation setter would refuse."""
+    def copy(self) -> Settings: ...
+
 class Link:
     """A link of a Model and its inbound joint (read-only)."""
     @property
@@ -390,6 +415,12 @@ class ModelBuilder:
 
 class Simulation:
     """One simulation of a Model: state, drives, joint settings and the last step's forces."""
+    @overload
+    def __init__(self, model: Model, options: SimulationOptions) -> None: ...
+    @overload
+    def __init__(self, model: Model, settings: Settings) -> None:
+        """ValueError as set_settings."""
+    @overload
     def __init__(self, model: Model, dt: float = 1.0 / 60.0, solver: Union[str, SolverType] = "pgs",
                  position_iterations: Int = 4, velocity_iterations: Int = 1,
                  compat: Union[str, Compat] = "none",
@@ -407,6 +438,11 @@ class Simulation:
     def options(self) -> SimulationOptions:
         """A copy; set_options changes them."""
     def set_options(self, options: SimulationOptions) -> None: ...
+    @property
+    def settings(self) -> Settings:
+        """Every setting as one value (a copy)."""
+    def set_settings(self, settings: Settings) -> None:
+        """Replaces every setting; ValueError naming the first bad one (nothing changes then)."""
     @property
     def q(self) -> Vector:
         """Configuration (nq,), a read-only view."""
@@ -644,6 +680,8 @@ class Batch:
                  drive_type: Union[str, DriveType] = "force") -> None: ...
     @overload
     def __init__(self, prototype: Simulation, count: Int) -> None: ...
+    @overload
+    def __init__(self, model: Model, count: Int, settings: Settings) -> None: ...
     def __len__(self) -> int: ...
     def size(self) -> int: ...
     @property
@@ -884,6 +922,11 @@ def load_scene(path: PathLike) -> Scene:
     """Raises InputError (a ValueError) naming the file, key and value."""
 def parse_scene(text: str, path: PathLike) -> Scene: ...
 def make_simulation(scene: Scene) -> Simulation: ...
+def scene_settings(scene: Scene) -> Settings:
+    """Every setting the scene gives; InputError naming the scene and the first bad value."""
+def robot_settings(robot: UrdfRobot, options: SimulationOptions | None = None) -> Settings:
+    """Defaults with options, the file's mimic rows, an MJCF file's actuators, the effort
+    limits as robot.options.effort says."""
 def apply_targets(scene: Scene, sim: Simulation, step_index: Int) -> None:
     """0 <= step_index <= 2**31 - 2."""
 def sweep(scene: PathLike, grid: str | dict[str, ArrayLike], joint: str | None = None,

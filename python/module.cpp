@@ -61,4 +61,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_simd(m);
   bind_check(m);
   bind_contact(m);
+  bind_settings_value(m);
 }

@@ -690,7 +690,8 @@ MjcfRobot parse_mjcf(const std::string& xml, const std::string& name,
   return robot;
 }
 
-void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim) {
+// Each dof's actuator: a position and a velocity actuator on one joint become one.
+static std::map<int, ExplicitActuator> actuators_by_dof(const MjcfRobot& robot) {
   std::map<int, ExplicitActuator> by_dof;
   for (const MjcfActuator& a : robot.actuators) {
     if (a.actuator.kind == ActuatorKind::none) continue;
@@ -701,7 +702,22 @@ void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim) {
     both.damping += a.actuator.damping;
     both.effort_limit += a.actuator.effort_limit;
   }
-  for (const auto& [dof, actuator] : by_dof) sim.set_actuator(dof, actuator);
+  return by_dof;
+}
+
+void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim) {
+  for (const auto& [dof, actuator] : actuators_by_dof(robot)) sim.set_actuator(dof, actuator);
+}
+
+Settings robot_settings(const MjcfRobot& robot, const SimulationOptions& options) {
+  validate_options(options);
+  Settings settings = Settings::defaults(*robot.model, options);
+  settings.mimic_joints = robot.mimic_joints;
+  for (const auto& [dof, actuator] : actuators_by_dof(robot))
+    settings.actuators[static_cast<size_t>(dof)] = actuator;
+  apply_urdf_effort_limits(robot, settings);
+  settings.validate(*robot.model);
+  return settings;
 }
 
 std::string describe_actuators(const MjcfRobot& robot) {

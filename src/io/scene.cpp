@@ -974,51 +974,106 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   return scene;
 }
 
-Simulation make_simulation(const Scene& scene) {
+// Each value is checked where it is given, in the order the scene's keys apply, by the checks the
+// Simulation setters use (settings.hpp), so a scene's first error is the one a setter would name.
+Settings scene_settings(const Scene& scene) {
   try {
-    Simulation sim(scene.model(), scene.options);
-    sim.set_q(scene.q0);
-    sim.set_qd(scene.qd0);
-    for (int i = 0; i < sim.model().num_links(); ++i) {
-      LinkParameters p = sim.link_parameters(i);
+    const Model& model = *scene.model();
+    validate_options(scene.options);
+    Settings s = Settings::defaults(model, scene.options);
+    for (int i = 0; i < model.num_links(); ++i) {
+      LinkParameters& p = s.link_parameters[static_cast<size_t>(i)];
       if (scene.link_defaults) scene.link_defaults->apply_to(p);
       for (const LinkSettings& ls : scene.links)
         if (ls.index == i) ls.apply_to(p);
-      sim.set_link_parameters(i, p);
+      check_link_parameters_of(model, i, p);
     }
     if (scene.joint_defaults) {
-      const Model& model = sim.model();
+      const JointSettings& jd = *scene.joint_defaults;
       for (int d = 0; d < model.nv; ++d) {  // every revolute, prismatic and spherical dof
         const JointType type = model.links[model.dof_link[d]].joint_type;
         if (type != JointType::revolute && type != JointType::prismatic &&
             type != JointType::spherical)
           continue;
-        const JointSettings& jd = *scene.joint_defaults;
-        if (jd.revolute && type == JointType::revolute) sim.set_revolute_wrap(d, *jd.revolute);
-        if (jd.friction_coefficient) sim.set_friction_coefficient(d, *jd.friction_coefficient);
-        if (jd.max_velocity && !std::isfinite(model.velocity_limit[d]))
-          sim.set_max_joint_velocity(d, *jd.max_velocity);
+        if (jd.revolute && type == JointType::revolute) {
+          check_revolute_wrap(model, d, *jd.revolute);
+          s.revolute_wrap[static_cast<size_t>(d)] = *jd.revolute;
+        }
+        if (jd.friction_coefficient) {
+          check_friction_coefficient(model, d, *jd.friction_coefficient);
+          s.friction_coefficient[d] = *jd.friction_coefficient;
+        }
+        if (jd.max_velocity && !std::isfinite(model.velocity_limit[d])) {
+          check_max_joint_velocity(model, d, *jd.max_velocity);
+          s.max_joint_velocity[d] = *jd.max_velocity;
+        }
       }
     }
     for (const JointSettings& js : scene.joints) {
-      if (js.lower || js.upper)
-        sim.set_joint_limits(js.dof, js.lower.value_or(sim.lower_limit(js.dof)),
-                             js.upper.value_or(sim.upper_limit(js.dof)));
-      if (js.max_velocity) sim.set_max_joint_velocity(js.dof, *js.max_velocity);
-      if (js.friction) sim.set_joint_friction(js.dof, *js.friction);
-      if (js.friction_coefficient) sim.set_friction_coefficient(js.dof, *js.friction_coefficient);
-      if (js.revolute) sim.set_revolute_wrap(js.dof, *js.revolute);
+      const int d = js.dof;
+      if (js.lower || js.upper) {
+        const double lower = js.lower.value_or(s.lower_limit[d]);
+        const double upper = js.upper.value_or(s.upper_limit[d]);
+        check_joint_limits(model, d, lower, upper);
+        s.lower_limit[d] = lower;
+        s.upper_limit[d] = upper;
+      }
+      if (js.max_velocity) {
+        check_max_joint_velocity(model, d, *js.max_velocity);
+        s.max_joint_velocity[d] = *js.max_velocity;
+      }
+      if (js.friction) {
+        check_joint_friction(model, d, *js.friction);
+        s.friction[static_cast<size_t>(d)] = *js.friction;
+      }
+      if (js.friction_coefficient) {
+        check_friction_coefficient(model, d, *js.friction_coefficient);
+        s.friction_coefficient[d] = *js.friction_coefficient;
+      }
+      if (js.revolute) {
+        check_revolute_wrap(model, d, *js.revolute);
+        s.revolute_wrap[static_cast<size_t>(d)] = *js.revolute;
+      }
     }
-    sim.set_mimic_joints(scene.mimic);
-    sim.set_contact_options(scene.contact);
-    sim.set_ground(scene.ground);
-    for (const DriveSpec& d : scene.drives) {
-      sim.set_drive(d.dof, d.drive);
-      if (d.delay > 0 && d.drive.type != DriveType::none) sim.set_drive_delay(d.dof, d.delay);
-      if (d.envelope) sim.set_actuator_envelope(d.dof, *d.envelope);
-      if (d.actuator) sim.set_actuator(d.dof, *d.actuator);
+    validate_mimic_joints(model, scene.mimic);
+    s.mimic_joints = scene.mimic;
+    check_contact_options(scene.contact);
+    s.contact = scene.contact;
+    check_ground(scene.ground);
+    check_ground_supported(model, scene.ground);
+    s.ground = scene.ground;
+    for (const DriveSpec& spec : scene.drives) {
+      const auto d = static_cast<size_t>(spec.dof);
+      check_drive(model, spec.dof, spec.drive, s.actuators[d].kind);
+      s.drives[d] = spec.drive;
+      if (spec.delay > 0 && spec.drive.type != DriveType::none) {
+        check_drive_delay(model, spec.dof, spec.delay, s.drives[d], s.actuators[d].kind);
+        s.drive_delay[d] = spec.delay;
+      }
+      if (spec.envelope) {
+        check_actuator_envelope(model, spec.dof, *spec.envelope);
+        s.envelopes[d] = *spec.envelope;
+      }
+      if (spec.actuator) {
+        check_actuator(model, spec.dof, *spec.actuator, s.drives[d]);
+        s.actuators[d] = *spec.actuator;
+      }
     }
-    apply_urdf_effort_limits(scene.robot, sim);
+    apply_urdf_effort_limits(scene.robot, s);
+    s.validate(model);
+    return s;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(scene.path.string() + ": " + e.what());
+  }
+}
+
+Simulation make_simulation(const Scene& scene) {
+  Simulation sim(scene.model(), scene_settings(scene));
+  try {
+    sim.set_q(scene.q0);
+    sim.set_qd(scene.qd0);
     apply_targets(scene, sim, 0);
     return sim;
   } catch (const InputError&) {

@@ -712,26 +712,44 @@ const char* to_string(UrdfEffort effort) {
   return "unknown";
 }
 
-void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim) {
+void apply_urdf_effort_limits(const UrdfRobot& robot, Settings& settings) {
   if (robot.options.effort == UrdfEffort::none) return;
-  const Model& model = sim.model();
-  for (const Link& link : model.links) {
+  for (const Link& link : robot.model->links) {
     const auto it = robot.effort_limits.find(link.joint_name);
     if (link.nv != 1 || it == robot.effort_limits.end() || !std::isfinite(it->second)) continue;
-    const int dof = link.v_index;
+    const auto dof = static_cast<size_t>(link.v_index);
     if (robot.options.effort == UrdfEffort::max_force) {
-      Drive drive = sim.drive(dof);
-      if (drive.type == DriveType::none || std::isfinite(drive.max_force) ||
-          std::isfinite(drive.max_impulse))
-        continue;
-      drive.max_force = it->second;
-      sim.set_drive(dof, drive);
-    } else if (sim.has_actuator(dof) && !std::isfinite(sim.actuator(dof).effort_limit)) {
-      ExplicitActuator actuator = sim.actuator(dof);
-      actuator.effort_limit = it->second;
-      sim.set_actuator(dof, actuator);
+      Drive& drive = settings.drives[dof];
+      if (drive.type != DriveType::none && !std::isfinite(drive.max_force) &&
+          !std::isfinite(drive.max_impulse))
+        drive.max_force = it->second;
+    } else {
+      ExplicitActuator& actuator = settings.actuators[dof];
+      if (actuator.kind != ActuatorKind::none && !std::isfinite(actuator.effort_limit))
+        actuator.effort_limit = it->second;
     }
   }
+}
+
+// Through the setters, one changed dof at a time (an actuator's delay history starts over).
+void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim) {
+  Settings settings = sim.settings();
+  apply_urdf_effort_limits(robot, settings);
+  for (int d = 0; d < sim.model().nv; ++d) {
+    const auto k = static_cast<size_t>(d);
+    if (settings.drives[k].max_force != sim.drive(d).max_force) sim.set_drive(d, settings.drives[k]);
+    if (!(settings.actuators[k] == sim.settings().actuators[k]))
+      sim.set_actuator(d, settings.actuators[k]);
+  }
+}
+
+Settings robot_settings(const UrdfRobot& robot, const SimulationOptions& options) {
+  validate_options(options);
+  Settings settings = Settings::defaults(*robot.model, options);
+  settings.mimic_joints = robot.mimic_joints;
+  apply_urdf_effort_limits(robot, settings);
+  settings.validate(*robot.model);
+  return settings;
 }
 
 }  // namespace featherdrive

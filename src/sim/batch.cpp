@@ -163,6 +163,9 @@ RowMatrix per_dof_matrix(const std::vector<Simulation>& sims, F value) {
 Batch::Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options)
     : Batch(Simulation(std::move(model), options), count) {}
 
+Batch::Batch(std::shared_ptr<const Model> model, int count, const Settings& settings)
+    : Batch(Simulation(std::move(model), settings), count) {}
+
 Batch::Batch(const Simulation& prototype, int count) {
   if (count < 1 || count > kMaxSize)
     throw std::invalid_argument("Batch: count = " + std::to_string(count) + " must be in [1, " +

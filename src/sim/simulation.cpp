@@ -107,6 +107,11 @@ Simulation::Simulation(std::shared_ptr<const Model> model, const SimulationOptio
   stepper().load_state();  // sizes the working copies, so that a step allocates nothing
 }
 
+Simulation::Simulation(std::shared_ptr<const Model> model, const Settings& settings)
+    : Simulation(std::move(model), settings.options) {
+  set_settings(settings);
+}
+
 Simulation::Simulation(const Simulation& other) = default;
 Simulation::Simulation(Simulation&& other) noexcept = default;
 Simulation& Simulation::operator=(const Simulation& other) = default;

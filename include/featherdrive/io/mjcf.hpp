@@ -93,6 +93,11 @@ class Simulation;
 /// std::invalid_argument when a dof already has an implicit drive.
 void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim);
 
+/// The file's settings (urdf.hpp's robot_settings: defaults with `options`, the mimic rows) with
+/// the actuators as apply_mjcf_actuators gives them, and the effort limits as
+/// robot.options.effort says.
+Settings robot_settings(const MjcfRobot& robot, const SimulationOptions& options = {});
+
 /// The actuators as `featherdrive info` lists them: per actuator its joint, kind, gains, ranges
 /// and the featherdrive actuator it maps to (empty when there are none).
 std::string describe_actuators(const MjcfRobot& robot);

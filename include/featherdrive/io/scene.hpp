@@ -127,8 +127,15 @@ Scene load_scene(const std::filesystem::path& path);
 /// The same from text; `path` names the file in messages and anchors the relative model path.
 Scene parse_scene(const std::string& text, const std::filesystem::path& path);
 
-/// A simulation in the scene's initial state with its drives and joint settings; the drives'
-/// targets are those of the first step.
+/// Every setting the scene gives (options, drives, delays, envelopes, actuators, joint and link
+/// settings, mimic rows, ground, contact options, the URDF's effort limits as its urdf.effort
+/// says) over Settings::defaults of its model: what make_simulation's simulation holds, and
+/// what Batch(scene.model(), N, settings) gives every environment. Throws InputError naming the
+/// scene and the first bad value, as a Simulation setter would word it.
+Settings scene_settings(const Scene& scene);
+
+/// A simulation of scene_settings in the scene's initial state; the drives' targets are those of
+/// the first step.
 Simulation make_simulation(const Scene& scene);
 
 /// The applied force of step k (0-based), every joint the scene names (nv; 0 elsewhere).

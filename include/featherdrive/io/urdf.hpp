@@ -15,6 +15,7 @@
 #include "featherdrive/constraint/mimic_row.hpp"
 #include "featherdrive/io/error.hpp"
 #include "featherdrive/model/model_builder.hpp"
+#include "featherdrive/sim/settings.hpp"
 
 namespace featherdrive {
 
@@ -136,6 +137,15 @@ class Simulation;
 /// without its own effort_limit gets effort_limit (set again: its delay history starts over).
 /// Call it after setting the drives and actuators, before stepping.
 void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim);
+/// The same on settings of robot.model.
+void apply_urdf_effort_limits(const UrdfRobot& robot, Settings& settings);
+
+/// What the file says beyond the Model, as the settings a simulation starts from
+/// (Simulation(robot.model, settings), Batch(robot.model, N, settings)): Settings::defaults with
+/// `options` (limits, friction, damping and velocity limits are the model's), the <mimic> rows,
+/// and the effort limits as robot.options.effort says (apply_urdf_effort_limits). Throws
+/// std::invalid_argument for invalid options.
+Settings robot_settings(const UrdfRobot& robot, const SimulationOptions& options = {});
 
 /// Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (the inverse of rotation_from_rpy), for
 /// joint origins composed through merged fixed joints.

@@ -62,6 +62,9 @@ class Batch {
   static constexpr int kMaxSize = 1 << 24;
   /// `count` in [1, kMaxSize] environments, each a new Simulation of `model` with `options`.
   Batch(std::shared_ptr<const Model> model, int count, const SimulationOptions& options = {});
+  /// `count` environments, each a new Simulation of `model` with `settings` (throws
+  /// std::invalid_argument as Simulation::set_settings does).
+  Batch(std::shared_ptr<const Model> model, int count, const Settings& settings);
   /// `count` in [1, kMaxSize] copies of `prototype`: state, drives, limits and all other settings.
   Batch(const Simulation& prototype, int count);
   Batch(const Batch& other);  ///< environments with their own rows

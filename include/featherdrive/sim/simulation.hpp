@@ -68,6 +68,9 @@ class StateStorage {
 class Simulation {
  public:
   explicit Simulation(std::shared_ptr<const Model> model, const SimulationOptions& options = {});
+  /// A simulation with these settings (an importer's robot_settings, scene_settings, another's
+  /// settings()): throws std::invalid_argument as set_settings does.
+  Simulation(std::shared_ptr<const Model> model, const Settings& settings);
   Simulation(const Simulation& other);
   Simulation(Simulation&& other) noexcept;
   Simulation& operator=(const Simulation& other);
