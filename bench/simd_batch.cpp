@@ -6,6 +6,8 @@
 // off), simd_<isa> (lanes of that width, Batch::set_isa), mujoco.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -100,6 +102,57 @@ void as_loaded_batch(benchmark::State& state, const Simulation& prototype, int c
   batch.set_num_threads(threads);
   state.SetLabel(batch.step_path());
   run(state, batch, prototype.q(), count);
+}
+
+// Batch(sim, N) against one Simulation in turns (batch_as_loaded/<robot>/paired/...): each
+// iteration times kStepsPerIteration batch steps, then as many times N / 8 steps of the
+// Simulation (each turn some milliseconds), so that this VM's slowdowns (+-25 % over seconds)
+// fall on both alike. `ratio` is the batch's
+// environment-steps per second over the Simulation's, both summed over the same run.
+void as_loaded_paired(benchmark::State& state, const Simulation& prototype, int count,
+                      int threads) {
+  using Clock = std::chrono::steady_clock;
+  Batch batch(prototype, count);
+  batch.set_num_threads(threads);
+  state.SetLabel(batch.step_path());
+  Simulation sim = prototype;
+  const VecX q0 = prototype.q();
+  RowMatrix q(1, q0.size());
+  q.row(0) = q0.transpose();
+  std::vector<int> all(static_cast<size_t>(count));
+  for (int e = 0; e < count; ++e) all[static_cast<size_t>(e)] = e;
+  const int batch_steps = kStepsPerIteration;
+  const int sim_chunk = std::max(1, count / 8);  // the Simulation's steps per batch step
+  double batch_seconds = 0.0, sim_seconds = 0.0;
+  long batch_env_steps = 0, sim_env_steps = 0;
+  for (auto _ : state) {
+    const Clock::time_point t0 = Clock::now();
+    batch.step(batch_steps);
+    const double b = std::chrono::duration<double>(Clock::now() - t0).count();
+    double m = 0.0;
+    for (int c = 0; c < batch_steps; ++c) {
+      const Clock::time_point t1 = Clock::now();
+      sim.step(sim_chunk);
+      m += std::chrono::duration<double>(Clock::now() - t1).count();
+      // Each restarts every kResetInterval of its own steps, untimed.
+      if ((sim_env_steps + sim_chunk) / kResetInterval != sim_env_steps / kResetInterval) {
+        sim.set_q(q0);
+        sim.set_qd(VecX::Zero(sim.model().nv));
+      }
+      sim_env_steps += sim_chunk;
+    }
+    const long before = batch_env_steps / count;
+    batch_env_steps += static_cast<long>(count) * batch_steps;
+    if ((batch_env_steps / count) / kResetInterval != before / kResetInterval) batch.reset(all, q);
+    batch_seconds += b;
+    sim_seconds += m;
+    state.SetIterationTime(b + m);
+  }
+  const double batch_rate = static_cast<double>(batch_env_steps) / batch_seconds;
+  const double sim_rate = static_cast<double>(sim_env_steps) / sim_seconds;
+  state.counters["batch_env_steps_per_second"] = batch_rate;
+  state.counters["simulation_env_steps_per_second"] = sim_rate;
+  state.counters["ratio"] = batch_rate / sim_rate;
 }
 
 // Lane groups (docs/simd_batch.md, "Lane groups"): 1024 arm7 as loaded with gravity of their
@@ -207,6 +260,10 @@ void register_simd_batch() {
           ("batch_as_loaded/" + name + "/batch/envs:1024/threads:" + std::to_string(t)).c_str(),
           [=](benchmark::State& s) { as_loaded_batch(s, *prototype, 1024, t); })
           ->UseRealTime();
+    benchmark::RegisterBenchmark(
+        ("batch_as_loaded/" + name + "/paired/envs:1024/threads:2").c_str(),
+        [=](benchmark::State& s) { as_loaded_paired(s, *prototype, 1024, 2); })
+        ->UseManualTime();
   }
   for (const char* kind : {"gravity", "two_dt", "one_guarded"})
     for (const bool lanes : {true, false}) {
