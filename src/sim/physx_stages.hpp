@@ -22,13 +22,11 @@ bool link_damping_forces(const Model& model, const Data& data,
                          const std::vector<LinkParameters>& parameters, double dt,
                          std::vector<Vec6>& force);
 
-/// transmitted_force.cpp. After aba_from_kinematics (free accelerations): |tau_i| + |f_i| of every
-/// link i, (tau_i, f_i) the torque about the link's centre of mass and the force its inbound joint
-/// transmits to its subtree, external link forces (may be null) included. subtree is scratch
-/// (num_links entries).
-void transmitted_force_magnitudes(const Model& model, const Data& data,
-                                  const std::vector<Vec6>* external_force,
-                                  std::vector<Vec6>& subtree, VecX& magnitude);
+/// transmitted_force.cpp. After articulated_bodies and the free accelerations
+/// (accelerations_and_response): |tau_i| + |f_i| of every link i, (tau_i, f_i) the torque about
+/// the link's centre of mass and the force its inbound joint transmits to its subtree, external
+/// link forces included (articulated_bodies took them).
+void transmitted_force_magnitudes(const Model& model, const Data& data, VecX& magnitude);
 
 /// link_cfm.cpp. After articulated_response: cfm_i = cfm_scale_i x the largest diagonal entry of
 /// the linear block of link i's whole-articulation response at its centre of mass (world axes);

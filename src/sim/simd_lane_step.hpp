@@ -25,6 +25,7 @@
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
+#include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
 #include "simd_plan.hpp"
@@ -180,6 +181,14 @@ template <class A, int K>
 Pack<A, K> select(const PackMask<A, K>& c, const Pack<A, K>& x, const Pack<A, K>& y) {
   Pack<A, K> out;
   for (int k = 0; k < K; ++k) out.b[k] = lane_select(c.m[k], x.b[k], y.b[k]);
+  return out;
+}
+// Correctly rounded lane by lane, as std::sqrt (the laws over the number type find it by
+// argument-dependent lookup: sim/link_laws.hpp).
+template <class A, int K>
+Pack<A, K> sqrt(const Pack<A, K>& x) {
+  Pack<A, K> out;
+  for (int k = 0; k < K; ++k) out.b[k] = lane_sqrt(x.b[k]);
   return out;
 }
 template <class A, int K>
@@ -814,48 +823,28 @@ template <class A, int K>
   qd = qd + dt * qdd;
 }
 
-// PhysX's link damping and link velocity limits on link i, vector j (link_damping.cpp): from
-// the start-of-step velocity, a force on the free velocity as gravity's, [torque about frame 0's
-// origin; force]. c = min(damping, 1 / dt); s = 1 - v_max / |v| beyond the limit, else 0.
+// PhysX's link damping and link velocity limits on link i, vector j: link_law::damping_force
+// (sim/link_laws.hpp, joint_constraints.md J10), as link_damping.cpp, from the start-of-step
+// velocity v (frame 0), a force on the free velocity as gravity's.
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::link_damping(int i, int j, const B* R,
                                                                 const B* RI, const B* cg,
                                                                 const B& m, const B* v,
                                                                 B* F) const {
-  const B zero(0.0), dt(p_.dt), inv_dt(1.0 / p_.dt);
-  auto rate = [&](const B& damping) {
-    return lane_select(zero < damping, lane_select(inv_dt < damping, inv_dt, damping), zero);
-  };
-  auto excess = [&](const B& speed, const B& limit) {
-    return lane_select(limit < speed, B(1.0) - limit / speed, zero);
-  };
-  const B lin = rate(link_parameter(i, link_linear_damping, j));
-  const B ang = rate(link_parameter(i, link_angular_damping, j));
-  B v_com[3];
+  B v_com[3], local[3], g[3];
   cross(v, cg, v_com);  // omega x c
   for (int r = 0; r < 3; ++r) v_com[r] = v[3 + r] + v_com[r];
-  const B speed = lane_sqrt(v_com[0] * v_com[0] + v_com[1] * v_com[1] + v_com[2] * v_com[2]);
-  const B spin = lane_sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  const B lin_scale = excess(speed, link_parameter(i, link_max_linear_velocity, j));
-  const B ang_scale = excess(spin, link_parameter(i, link_max_angular_velocity, j));
-  const B fc = -m * (lin + lin_scale / dt), gc = m * lin * dt;
-  B f[3];
-  for (int r = 0; r < 3; ++r) f[r] = fc * v_com[r] - gc * parameter(gravity_entry(r), j);
-  B local[3], Iw[3];  // I_w omega = (R Ic) (R^T omega)
   for (int r = 0; r < 3; ++r) local[r] = R[r] * v[0] + R[3 + r] * v[1] + R[6 + r] * v[2];
-  for (int r = 0; r < 3; ++r)
-    Iw[r] = RI[3 * r] * local[0] + RI[3 * r + 1] * local[1] + RI[3 * r + 2] * local[2];
-  const B tc = -(ang + ang_scale / dt);
-  B cf[3];
-  cross(cg, f, cf);
-  for (int r = 0; r < 3; ++r) {
-    F[r] = tc * Iw[r] + cf[r];
-    F[3 + r] = f[r];
-  }
+  for (int r = 0; r < 3; ++r) g[r] = parameter(gravity_entry(r), j);
+  const link_law::Damping<B> d{link_parameter(i, link_linear_damping, j),
+                               link_parameter(i, link_angular_damping, j),
+                               link_parameter(i, link_max_linear_velocity, j),
+                               link_parameter(i, link_max_angular_velocity, j)};
+  link_law::damping_force(d, v, local, v_com, RI, cg, m, g, B(p_.dt), F);
 }
 
-// PhysX's constraint force mixing of link i (link_cfm.cpp): cfm_scale times the largest of
-// b_j^T Lambda_i b_j, b_j = [c x e_j; e_j] for the world axes e_j; 0 for the fixed root.
+// PhysX's constraint force mixing of link i: link_law::cfm (sim/link_laws.hpp,
+// joint_constraints.md J8), as link_cfm.cpp; 0 for the fixed root.
 template <class A, int K>
 void LaneStep<A, K>::link_cfm(int i) {
   V& out = at(l_.cfm)[i];
@@ -863,41 +852,17 @@ void LaneStep<A, K>::link_cfm(int i) {
     out = V(0.0);
     return;
   }
-  const V* L = at(l_.Lambda + 21 * i);
-  const V* c = at(l_.cg + 3 * i);
-  V largest(0.0);
-  for (int j = 0; j < 3; ++j) {
-    V b[6], y[6];
-    const V e[3] = {V(j == 0 ? 1.0 : 0.0), V(j == 1 ? 1.0 : 0.0), V(j == 2 ? 1.0 : 0.0)};
-    cross(c, e, b);
-    for (int r = 0; r < 3; ++r) b[3 + r] = e[r];
-    sym_times(L, b, y);
-    const V x = dot6(b, y);
-    largest = select(largest < x, x, largest);  // std::max
-  }
-  const V scale = link_parameter_pack(i, link_cfm_scale);
-  out = select(scale == V(0.0), V(0.0), scale * largest);
+  out = link_law::cfm(at(l_.Lambda + 21 * i), at(l_.cg + 3 * i),
+                      link_parameter_pack(i, link_cfm_scale));
 }
 
-// The bound of link i's transmitted-force friction row (joint_constraints.md J6): the spatial
-// force its joint transmits, IA_i a_i + pA_i (the articulated-body equation: the subtree's
-// Newton-Euler forces summed, as transmitted_force.cpp sums them), as |torque about the link's
-// centre of mass| + |force|. Read before the response takes IA_i's room.
+// The bound of link i's transmitted-force friction row (joint_constraints.md J6): |torque| +
+// |force| its joint transmits, IA_i a_i + pA_i, by link_law::transmitted_force_magnitude
+// (sim/link_laws.hpp, J9), as transmitted_force.cpp. Read before the response takes IA_i's room.
 template <class A, int K>
 void LaneStep<A, K>::transmitted_force(int i) {
-  V F[6];
-  sym_times(at(l_.IA + 21 * i), at(l_.acc + 6 * i), F);
-  const V* pA = at(l_.pA + 6 * i);
-  for (int r = 0; r < 6; ++r) F[r] = F[r] + pA[r];
-  const V* c = at(l_.cg + 3 * i);
-  V cf[3];
-  cross(c, F + 3, cf);
-  const V tx = F[0] - cf[0], ty = F[1] - cf[1], tz = F[2] - cf[2];
-  const V torque2 = tx * tx + ty * ty + tz * tz;
-  const V force2 = F[3] * F[3] + F[4] * F[4] + F[5] * F[5];
-  V magnitude;
-  for (int k = 0; k < K; ++k)  // sqrt is correctly rounded: the same bits at every width
-    magnitude.b[k] = lane_sqrt(torque2.b[k]) + lane_sqrt(force2.b[k]);
+  const V magnitude = link_law::transmitted_force_magnitude(
+      at(l_.IA + 21 * i), at(l_.acc + 6 * i), at(l_.pA + 6 * i), at(l_.cg + 3 * i));
   const LinkConstants& k = p_.links[i];
   for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d)
     row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;

@@ -75,8 +75,7 @@ void Stepper::advance(const VecX& tau) {
   accelerations_and_response(model, ws_.data);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((settings_.friction_coefficient.array() > 0.0).any())
-    transmitted_force_magnitudes(model, ws_.data, link_force, ws_.subtree_force,
-                                 ws_.transmitted_force);
+    transmitted_force_magnitudes(model, ws_.data, ws_.transmitted_force);
   const bool classical_root = !physx() && model.floating_base();
   Vec6 root_qd0 = Vec6::Zero();
   if (classical_root) root_qd0 = ws_.qd.head<6>();

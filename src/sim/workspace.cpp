@@ -19,7 +19,6 @@ Workspace::Workspace(const Model& model, const Settings& settings)
   last_drive_change = VecX::Zero(nv);
   const size_t n = static_cast<size_t>(model.num_links());
   link_force.assign(n, Vec6::Zero());
-  subtree_force.assign(n, Vec6::Zero());
   transmitted_force = VecX::Zero(model.num_links());
   link_cfm = VecX::Zero(model.num_links());
   link_contact_force.assign(n, Vec3::Zero());

@@ -81,7 +81,6 @@ struct Workspace {
   bool any_link_force = false;
   bool link_damping_active = false;  ///< some link has damping or a velocity limit
   bool link_cfm_active = false;      ///< some link has a cfm_scale (else link_cfm stays 0)
-  std::vector<Vec6> subtree_force;  ///< scratch of transmitted_force_magnitudes
   VecX transmitted_force;           ///< |F| through each link's inbound joint
   VecX link_cfm;
   // Explicit actuators: their efforts, the applied force plus them, and the copy for a restore.
