@@ -46,7 +46,7 @@ void integrate_configuration(const Model& model, const VecX& q, const VecX& v, d
         quaternion_law::unit(&q[iq + 3], Q0);
         quaternion_law::rotate(Q0, &v[iv + 3], Rv);
         const double p[3] = {q[iq] + dt * Rv[0], q[iq + 1] + dt * Rv[1], q[iq + 2] + dt * Rv[2]};
-        quaternion_law::integrate_body(&q[iq + 3], &v[iv], dt, &q_out[iq + 3]);
+        quaternion_law::integrate_unit_body(Q0, &v[iv], dt, &q_out[iq + 3]);
         for (int r = 0; r < 3; ++r) q_out[iq + r] = p[r];
         break;
       }

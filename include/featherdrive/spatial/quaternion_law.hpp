@@ -85,16 +85,23 @@ void rotation(const T* q, T* R) {
   R[8] = T(1.0) - (txx + tyy);
 }
 
-/// q advanced by the body-frame angular velocity w over h: unit(unit(q) exp(w h / 2)) (eq. Q-6).
-/// out may alias q.
+/// A unit quaternion Q advanced by the body-frame angular velocity w over h: unit(Q exp(w h / 2))
+/// (eq. Q-6). out may alias Q.
 template <class T>
-void integrate_body(const T* q, const T* w, const T& h, T* out) {
-  T Q[4], d[4], o[4];
-  unit(q, Q);
+void integrate_unit_body(const T* Q, const T* w, const T& h, T* out) {
+  T d[4], o[4];
   const T t[3] = {w[0] * h, w[1] * h, w[2] * h};
   turn(t, d);
   product(Q, d, o);
   unit(o, out);
+}
+
+/// q advanced by w over h: integrate_unit_body of unit(q) (eq. Q-6). out may alias q.
+template <class T>
+void integrate_body(const T* q, const T* w, const T& h, T* out) {
+  T Q[4];
+  unit(q, Q);
+  integrate_unit_body(Q, w, h, out);
 }
 
 /// out = exp(h turn) R: R turned by the angle h |turn| about turn in the world, R when that angle
