@@ -1,5 +1,7 @@
 #include "featherdrive/algorithm/joint_motion.hpp"
 
+#include "featherdrive/spatial/quaternion_law.hpp"
+
 namespace featherdrive {
 namespace {
 
@@ -35,17 +37,17 @@ void integrate_configuration(const Model& model, const VecX& q, const VecX& v, d
       case JointType::fixed: break;
       case JointType::revolute:
       case JointType::prismatic: q_out[iq] = q[iq] + dt * v[iv]; break;
-      case JointType::spherical: {
-        const Quat Q = integrate_body_rotation(quat_at(&q[iq]), v.segment<3>(iv), dt);
-        store_quat(Q, &q_out[iq]);
+      case JointType::spherical:
+        quaternion_law::integrate_body(&q[iq], &v[iv], dt, &q_out[iq]);
         break;
-      }
       case JointType::floating: {
-        const Quat Q0 = quat_at(&q[iq + 3]);
-        const Vec3 p = Vec3(q[iq], q[iq + 1], q[iq + 2]) + dt * (Q0 * Vec3(v.segment<3>(iv + 3)));
-        const Quat Q = integrate_body_rotation(Q0, v.segment<3>(iv), dt);
-        q_out.segment<3>(iq) = p;
-        store_quat(Q, &q_out[iq + 3]);
+        // The origin moves by R v_body, R the rotation at the step's start (eq. Q-6).
+        double Q0[4], Rv[3];
+        quaternion_law::unit(&q[iq + 3], Q0);
+        quaternion_law::rotate(Q0, &v[iv + 3], Rv);
+        const double p[3] = {q[iq] + dt * Rv[0], q[iq + 1] + dt * Rv[1], q[iq + 2] + dt * Rv[2]};
+        quaternion_law::integrate_unit_body(Q0, &v[iv], dt, &q_out[iq + 3]);
+        for (int r = 0; r < 3; ++r) q_out[iq + r] = p[r];
         break;
       }
     }

@@ -27,6 +27,7 @@
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
+#include "featherdrive/spatial/quaternion_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
 #include "simd_plan.hpp"
 
@@ -356,12 +357,14 @@ class LaneStep {
   void world_inertia(int i, const V* Ri, V* I) const;  // (R Ic) R^T of link i at rotation Ri
   void rigid_correction(const V* Iinv, const V* com, const V* C, const V& M, const V* P1,
                         const V* L1, const V& ratio, const V* target, V* dw, V* dv) const;
-  static void rotate(const V* q, const V* v, V* out);  // by the unit quaternion q (w x y z)
-  static void unit_quaternion(const V* q, V* out);    // q / |q|
-  static void quaternion_product(const V* a, const V* b, V* out);  // a b (Hamilton), w x y z
-  // The quaternion of the turn by |t| about t (Eigen's AngleAxis), the identity for t = 0.
-  static void turn_quaternion(const V* t, V* out);
-  static void quaternion_rotation(const V* q, V* R);
+  // Quaternions (w x y z) by spatial/quaternion_law.hpp, as Simulation's.
+  static void rotate(const V* q, const V* v, V* out) { quaternion_law::rotate(q, v, out); }
+  static void unit_quaternion(const V* q, V* out) { quaternion_law::unit(q, out); }
+  static void quaternion_product(const V* a, const V* b, V* out) {
+    quaternion_law::product(a, b, out);
+  }
+  static void quaternion_rotation(const V* q, V* R) { quaternion_law::rotation(q, R); }
+  static void turn_quaternion(const V* t, V* out) { quaternion_law::turn(t, out); }  // exp(t / 2)
   // y = S x and y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
   template <class T>
   static void root_S(const T* R0, const T* x, T* y) {
@@ -1773,14 +1776,8 @@ void LaneStep<A, K>::integrate(double h_step, bool track) {
     if (k.type == 4) {  // q times the quaternion of the body turn w h, normalised
       V* q = &at(l_.q)[k.q_index];
       const V* w = &at(l_.qd)[k.v_index];
-      if (!p_.physx_spherical) {  // compat physx turns it in the world (integrate_balls_physx)
-        V Q[4], d[4], o[4];
-        unit_quaternion(q, Q);
-        const V turn[3] = {w[0] * h, w[1] * h, w[2] * h};
-        turn_quaternion(turn, d);
-        quaternion_product(Q, d, o);
-        unit_quaternion(o, q);
-      }
+      // compat physx turns it in the world (integrate_balls_physx)
+      if (!p_.physx_spherical) quaternion_law::integrate_body(q, w, h, q);
       if (track)
         for (int a = 0; a < 3; ++a) {
           V& dx = row(k.v_index + a)[Layout::delta_x];
@@ -1833,31 +1830,8 @@ void LaneStep<A, K>::integrate_balls_physx(double h_step) {
     V* R = at(l_.now_R + 9 * i);
     const V* bw = at(l_.bias_w + 3 * i);
     const V turn[3] = {w[0] + bw[0], w[1] + bw[1], w[2] + bw[2]};
-    const V norm = sqrt_of(turn[0] * turn[0] + turn[1] * turn[1] + turn[2] * turn[2]);
-    const V angle = h * norm;
-    const M turns = V(0.0) < angle;
-    // Eigen's AngleAxis::toRotationMatrix of (angle, turn / |turn|), then times R.
-    V sn, c;
-    sincos(angle, sn, c);
-    V axis[3], sa[3], ca[3], T[9];
-    for (int r = 0; r < 3; ++r) {
-      axis[r] = turn[r] / norm;
-      sa[r] = sn * axis[r];
-      ca[r] = (V(1.0) - c) * axis[r];
-    }
-    V tmp = ca[0] * axis[1];
-    T[1] = tmp - sa[2], T[3] = tmp + sa[2];
-    tmp = ca[0] * axis[2];
-    T[2] = tmp + sa[1], T[6] = tmp - sa[1];
-    tmp = ca[1] * axis[2];
-    T[5] = tmp - sa[0], T[7] = tmp + sa[0];
-    for (int r = 0; r < 3; ++r) T[4 * r] = ca[r] * axis[r] + c;
-    V Rn[9];
-    for (int r = 0; r < 3; ++r)
-      for (int col = 0; col < 3; ++col)
-        Rn[3 * r + col] = select(turns,
-                                 (T[3 * r] * R[col] + T[3 * r + 1] * R[3 + col]) + T[3 * r + 2] * R[6 + col],
-                                 R[3 * r + col]);
+    V Rn[9];  // exp(h turn) R (quaternion_law::turn_rotation, as integrate_spherical_joints)
+    quaternion_law::turn_rotation(turn, h, R, Rn);
     // The link's rotation in its joint frame: E_T P^T R, P its parent's new rotation.
     V P[9];
     if (k.parent >= 0)
@@ -1922,21 +1896,6 @@ void LaneStep<A, K>::root_pose(V* R) {
     at(l_.root_R)[e] = R[e];
     at(l_.root_Rq)[e] = Rq[e];
   }
-}
-
-// The rotation of the quaternion q (w x y z) normalised, as Eigen's toRotationMatrix.
-template <class A, int K>
-void LaneStep<A, K>::quaternion_rotation(const V* q, V* R) {
-  V u[4];
-  unit_quaternion(q, u);
-  const V w = u[0], x = u[1], y = u[2], z = u[3];
-  const V tx = V(2.0) * x, ty = V(2.0) * y, tz = V(2.0) * z;
-  const V twx = tx * w, twy = ty * w, twz = tz * w, txx = tx * x, txy = ty * x, txz = tz * x;
-  const V tyy = ty * y, tyz = tz * y, tzz = tz * z;
-  const V one(1.0);
-  R[0] = one - (tyy + tzz), R[1] = txy - twz, R[2] = txz + twy;
-  R[3] = txy + twz, R[4] = one - (txx + tzz), R[5] = tyz - twx;
-  R[6] = txz - twy, R[7] = tyz + twx, R[8] = one - (txx + tyy);
 }
 
 // The inverse of a symmetric positive definite N x N matrix (row-major) from its Cholesky factor
@@ -2078,8 +2037,7 @@ void LaneStep<A, K>::root_finish() {
 
 // A floating root moved over h (step.cpp's integrate_positions, compat none): its origin with the
 // world velocity R_q v in the step's start axes, its quaternion by the body rotation w h
-// (spatial.hpp's integrate_body_rotation: q times the quaternion of angle |w h| about w h,
-// normalised).
+// (quaternion_law::integrate_body, as joint_motion.cpp's integrate_configuration).
 template <class A, int K>
 void LaneStep<A, K>::integrate_root(double h_step) {
   const LinkConstants& k = p_.links[0];
@@ -2089,13 +2047,7 @@ void LaneStep<A, K>::integrate_root(double h_step) {
   const V* Rq = at(l_.root_Rq);
   for (int r = 0; r < 3; ++r)
     q[r] = q[r] + h * (Rq[3 * r] * qd[3] + Rq[3 * r + 1] * qd[4] + Rq[3 * r + 2] * qd[5]);
-  V Q[4], d[4];
-  unit_quaternion(q + 3, Q);
-  const V rotation[3] = {qd[0] * h, qd[1] * h, qd[2] * h};
-  turn_quaternion(rotation, d);
-  V o[4];
-  quaternion_product(Q, d, o);
-  unit_quaternion(o, q + 3);
+  quaternion_law::integrate_body(q + 3, qd, h, q + 3);
 }
 
 // compat none, the step's end: a floating root's linear velocity, kept in its start axes R_q
@@ -2349,40 +2301,6 @@ void LaneStep<A, K>::physx_free_momentum() {
     qd[r] = R0[r] * w0[0] + R0[3 + r] * w0[1] + R0[6 + r] * w0[2];
     qd[3 + r] = R0[r] * v0[0] + R0[3 + r] * v0[1] + R0[6 + r] * v0[2];
   }
-}
-
-// out = q v q^-1 for a unit quaternion q (w x y z), as Eigen's _transformVector.
-template <class A, int K>
-void LaneStep<A, K>::rotate(const V* q, const V* v, V* out) {
-  V uv[3], uuv[3];
-  cross(q + 1, v, uv);
-  for (int r = 0; r < 3; ++r) uv[r] = uv[r] + uv[r];
-  cross(q + 1, uv, uuv);
-  for (int r = 0; r < 3; ++r) out[r] = (v[r] + q[0] * uv[r]) + uuv[r];
-}
-
-template <class A, int K>
-void LaneStep<A, K>::unit_quaternion(const V* q, V* out) {
-  const V n = sqrt_of(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (int e = 0; e < 4; ++e) out[e] = q[e] / n;
-}
-
-template <class A, int K>
-void LaneStep<A, K>::quaternion_product(const V* a, const V* b, V* out) {
-  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-  out[2] = a[0] * b[2] + a[2] * b[0] + a[3] * b[1] - a[1] * b[3];
-  out[3] = a[0] * b[3] + a[3] * b[0] + a[1] * b[2] - a[2] * b[1];
-}
-
-template <class A, int K>
-void LaneStep<A, K>::turn_quaternion(const V* t, V* out) {
-  const V angle = sqrt_of(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-  V s, c;
-  sincos(V(0.5) * angle, s, c);
-  const M turns = V(0.0) < angle;  // else the identity (and t / angle is not read)
-  out[0] = select(turns, c, V(1.0));
-  for (int r = 0; r < 3; ++r) out[1 + r] = select_zero(turns, s * (t[r] / angle));
 }
 
 // A floating root's origin in the world from its q: r_T + E_T^T q (kinematics.cpp's X_J X_T).

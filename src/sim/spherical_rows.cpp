@@ -3,6 +3,7 @@
 // in the world. docs/math/spherical_joints.md.
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
+#include "featherdrive/spatial/quaternion_law.hpp"
 #include "physx_stages.hpp"
 
 namespace featherdrive {
@@ -57,8 +58,13 @@ void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& sta
     }
     Vec3 turn = w[i];
     if (link_bias) turn += (*link_bias)[i];
-    const double angle = h * turn.norm();
-    if (angle > 0.0) R[i] = Eigen::AngleAxisd(angle, turn.normalized()).toRotationMatrix() * R[i];
+    // exp(h turn) R (eq. Q-7), the lanes' integrate_balls_physx's law.
+    double before[9], after[9];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) before[3 * a + b] = R[i](a, b);
+    quaternion_law::turn_rotation(turn.data(), h, before, after);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) R[i](a, b) = after[3 * a + b];
     // The link's orientation in its joint frame, whose world rotation is parent * X_T's.
     Quat Q(Mat3(link.tree_transform.E * parent.transpose() * R[i]));
     Q.normalize();

@@ -112,15 +112,4 @@ inline Mat3 rotation_about(const Vec3& unit_axis, double angle) {
   return Eigen::AngleAxisd(angle, unit_axis).toRotationMatrix();
 }
 
-/// q * exp(w dt / 2): a quaternion advanced by a body-frame angular velocity w over dt, normalised.
-inline Quat integrate_body_rotation(const Quat& q, const Vec3& w, double dt) {
-  const Vec3 rotation = w * dt;
-  const double angle = rotation.norm();
-  Quat dq = Quat::Identity();
-  if (angle > 0.0) dq = Quat(Eigen::AngleAxisd(angle, rotation / angle));
-  Quat out = q * dq;
-  out.normalize();
-  return out;
-}
-
 }  // namespace featherdrive
