@@ -1016,6 +1016,7 @@ struct LaneStep<A, K>::LaneDof {
   int i, d;
   V* rw;
   V parameter(DofParameter f) const { return s.dof_parameter(d, f); }
+  static bool any_of(const M& mask) { return simd::any(mask); }
   // Every dof's drive row runs; undriven lanes keep their impulse (LaneRows, Layout::driven).
   static bool any_driven() { return true; }
   M acceleration_drive() const { return parameter(acceleration) != V(0.0); }

@@ -36,6 +36,7 @@ struct ScalarDof {
   const ExplicitActuator* actuator = nullptr;  ///< an implicit actuator's (its row is the drive's)
   const ActuatorCommand* command = nullptr;    ///< the command it sees
 
+  static bool any_of(bool mask) { return mask; }
   bool any_driven() const { return drive.type != DriveType::none; }
   bool acceleration_drive() const { return drive.type == DriveType::acceleration; }
   DriveTermsOf<double> drive_terms() const { return featherdrive::drive_terms(drive); }
