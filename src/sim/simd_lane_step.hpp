@@ -1031,8 +1031,9 @@ struct LaneStep<A, K>::LaneDof {
             parameter(actuator_effort_limit), parameter(command_position),
             parameter(command_velocity), parameter(command_effort)};
   }
-  V cfm_child() const { return s.p_.any_cfm ? s.s_[s.l_.cfm + i] : V(0.0); }
-  V cfm_parent() const { return s.p_.any_cfm ? s.s_[s.l_.cfm + s.p_.links[i].parent] : V(0.0); }
+  bool any_cfm() const { return s.p_.any_cfm; }
+  V cfm_child() const { return s.s_[s.l_.cfm + i]; }
+  V cfm_parent() const { return s.s_[s.l_.cfm + s.p_.links[i].parent]; }
   V applied_force() const { return s.s_[s.l_.tau + d]; }
   V lower_limit() const { return parameter(lower); }
   V upper_limit() const { return parameter(upper); }

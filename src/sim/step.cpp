@@ -45,6 +45,7 @@ struct ScalarDof {
   ActuatorTermsOf<double> actuator_terms() const {
     return featherdrive::actuator_terms(*actuator, *command);
   }
+  static bool any_cfm() { return true; }
   double cfm_child() const { return link_cfm[link]; }
   double cfm_parent() const { return parent >= 0 ? link_cfm[parent] : 0.0; }
   double applied_force() const { return applied; }

@@ -28,6 +28,8 @@ struct Step {
 //            DriveTermsOf<T> drive_terms();
 //            bool any_actuated()         some lane's row is an implicit actuator's;
 //            M actuated(); ActuatorTermsOf<T> actuator_terms();
+//            bool any_cfm()              some lane's link or parent has a cfm (else r + cfm
+//                                        is r: skipped);
 //            T cfm_child(), cfm_parent() the link's and its parent's cfm (link_cfm.cpp);
 //            T applied_force(), lower_limit(), upper_limit();
 //            T static_effort(), dynamic_effort(), viscous()   its friction;
@@ -36,28 +38,30 @@ struct Step {
 //            friction_viscous(), and the accumulators drive_impulse(), tf_impulse(),
 //            tf_applied(), friction_impulse(), low(), high(), velocity_limit().
 // The set-ups are forced inline into the callers' loops, where what the adapter fixes (no
-// actuator on a lone drive, no cfm in the lanes) folds away: out of line, a lone drive's set-up
-// ran 55 % more instructions.
+// actuator on a lone drive) folds away: out of line, a lone drive's set-up ran 55 % more
+// instructions.
 
-/// The cfm a dof's rows read: the larger of its link's and the parent's (joint_constraints.md).
+/// r + cfm, the response every row but a force drive's reads: cfm the larger of the link's and
+/// its parent's (joint_constraints.md); r itself where no lane has one (r + 0 = r).
 template <class T, class Dof>
-T cfm(const Dof& dof) {
+T response_with_cfm(const Dof& dof, const T& r) {
+  if (!dof.any_cfm()) return r;
   const T child = dof.cfm_child(), parent = dof.cfm_parent();
-  return select(child < parent, parent, child);  // std::max(child, parent)
+  return r + select(child < parent, parent, child);  // std::max(child, parent)
 }
 
-/// The drive row of a dof with unit response r, cfm, start-of-step position x0 and x0_drive, the
-/// position its drive's error is taken from (target - error for a spherical axis): a force drive
-/// with response r, an acceleration drive with r + cfm (eq. 32-39), and where an implicit actuator
-/// is, its row in the drive's place at x0 (implicit_actuators.md, I4).
+/// The drive row of a dof with unit response r, r_cfm = r + cfm, start-of-step position x0 and
+/// x0_drive, the position its drive's error is taken from (target - error for a spherical axis):
+/// a force drive with response r, an acceleration drive with r + cfm (eq. 32-39), and where an
+/// implicit actuator is, its row in the drive's place with r at x0 (implicit_actuators.md, I4).
 template <class T, class Dof>
-[[gnu::always_inline]] inline DriveRowOf<T> drive_row(const Dof& dof, const T& r, const T& cfm,
+[[gnu::always_inline]] inline DriveRowOf<T> drive_row(const Dof& dof, const T& r, const T& r_cfm,
                                                      const T& x0, const T& x0_drive,
                                                      const Step& s) {
   DriveRowOf<T> row;
   if (dof.any_driven()) {
     const auto acceleration = dof.acceleration_drive();
-    row = drive_law::setup(dof.drive_terms(), acceleration, select(acceleration, r + cfm, r),
+    row = drive_law::setup(dof.drive_terms(), acceleration, select(acceleration, r_cfm, r),
                            x0_drive, s.h, s.dt, s.tgs);
   }
   if (dof.any_actuated()) {
@@ -98,9 +102,9 @@ template <class T, class Dof>
   dof.drive_impulse() = T(0.0);
   dof.response() = r;
   dof.external() = dof.applied_force() * T(s.dt);
-  // Only an acceleration drive reads cfm (elsewhere the select takes r): read where one is.
-  const T c = dof.any_of(dof.acceleration_drive()) ? cfm<T>(dof) : T(0.0);
-  dof.set_drive(drive_row(dof, r, c, x0, x0, s));
+  // Only an acceleration drive reads r + cfm (elsewhere the select takes r): formed where one is.
+  const T r_cfm = dof.any_of(dof.acceleration_drive()) ? response_with_cfm(dof, r) : r;
+  dof.set_drive(drive_row(dof, r, r_cfm, x0, x0, s));
 }
 
 /// Every per-step field of a dof's rows: the accumulators zeroed, the drive (or implicit
@@ -117,14 +121,14 @@ template <class T, class Dof>
   dof.low() = zero;
   dof.high() = zero;
   dof.velocity_limit() = zero;
-  const T c = cfm<T>(dof);
+  const T r_cfm = response_with_cfm(dof, r);
   dof.response() = r;
-  dof.set_drive(drive_row(dof, r, c, x0, x0_drive, s));
+  dof.set_drive(drive_row(dof, r, r_cfm, x0, x0_drive, s));
   if (dof.any_actuated()) dof.actuator_x0() = x0;  // a remotized_pd clip reads it
   dof.external() = dof.applied_force() * T(s.dt);
   dof.error_low() = x0 - dof.lower_limit();
   dof.error_high() = dof.upper_limit() - x0;
-  dof.recip() = T(1.0) / (r + c);
+  dof.recip() = T(1.0) / r_cfm;
 }
 
 }  // namespace featherdrive::row_setup
