@@ -24,6 +24,7 @@
 #include "featherdrive/constraint/mimic_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/constraint/row_sequence.hpp"
+#include "featherdrive/constraint/row_setup.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
@@ -284,6 +285,7 @@ class LaneStep {
   void setup_row_constants(double h);
   void setup_link_rows(int i);
   void setup_dof_row(int i, int d, const V& r, const V& x0, const V& x0_drive);
+  struct LaneDof;
   V solve_row(int d, V v, const V& dx);
   template <class L, bool kLoneDrive = false>
   struct LaneRows;
@@ -934,7 +936,6 @@ template <class A, int K>
 template <class A, int K>
 void LaneStep<A, K>::setup_row_constants(double h_step) {
   h_solve_ = h_step;
-  const V dt(p_.dt);
   M rows_any = none();
   undriven_ = none();
   for (int i = 0; i < p_.num_links; ++i) {
@@ -966,9 +967,8 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
     // JointFriction::active(): any of the three nonzero.
     const M rubbing = !((fs == V(0.0)) & (fd == V(0.0)) & (fv == V(0.0)));
     rw[Layout::has_friction] = select_zero(rubbing, V(1.0));
-    rw[Layout::fstat] = fs * dt;
-    rw[Layout::fdyn] = fd * dt;
-    rw[Layout::fvisc] = fv * dt;
+    LaneDof dof{*this, i, d, rw};
+    row_setup::constants<V>(dof, p_.dt);
     rw[Layout::driven] = select_zero(driven, V(1.0));
     rw[Layout::vmax] = dof_parameter(d, max_velocity);
     const M speed_limited = rw[Layout::vmax] < inf;
@@ -1011,63 +1011,74 @@ template <class A, int K>
   setup_dof_row(i, k.v_index, at(l_.inverse_mass)[i], x0, x0);
 }
 
+// Dof d of link i as row_setup (constraint/row_setup.hpp) reads and writes it: the lanes'
+// parameters and its packed row.
+template <class A, int K>
+struct LaneStep<A, K>::LaneDof {
+  LaneStep& s;
+  int i, d;
+  V* rw;
+  V parameter(DofParameter f) const { return s.dof_parameter(d, f); }
+  static bool any_of(const M& mask) { return simd::any(mask); }
+  // Every dof's drive row runs; undriven lanes keep their impulse (LaneRows, Layout::driven).
+  static bool any_driven() { return true; }
+  M acceleration_drive() const { return parameter(acceleration) != V(0.0); }
+  DriveTermsOf<V> drive_terms() const {
+    return {parameter(stiffness),       parameter(damping),   parameter(target_position),
+            parameter(target_velocity), parameter(max_force), parameter(max_impulse)};
+  }
+  bool any_actuated() const { return s.any_row(d)[7] != 0.0; }
+  M actuated() const { return parameter(implicit_actuator) != V(0.0); }
+  ActuatorTermsOf<V> actuator_terms() const {
+    return {parameter(actuator_stiffness), parameter(actuator_damping),
+            parameter(actuator_effort_limit), parameter(command_position),
+            parameter(command_velocity), parameter(command_effort)};
+  }
+  bool any_cfm() const { return s.p_.any_cfm; }
+  V cfm_child() const { return s.s_[s.l_.cfm + i]; }
+  V cfm_parent() const { return s.s_[s.l_.cfm + s.p_.links[i].parent]; }
+  V applied_force() const { return s.s_[s.l_.tau + d]; }
+  V lower_limit() const { return parameter(lower); }
+  V upper_limit() const { return parameter(upper); }
+  V static_effort() const { return parameter(static_friction); }
+  V dynamic_effort() const { return parameter(dynamic_friction); }
+  V viscous() const { return parameter(viscous_friction); }
+
+  void set_drive(const DriveRowOf<V>& row) const {
+    rw[Layout::tvb] = row.target_vel_plus_initial_bias;
+    rw[Layout::velm] = row.vel_multiplier;
+    rw[Layout::impm] = row.impulse_multiplier;
+    rw[Layout::biasc] = row.bias_coefficient;
+    rw[Layout::tpb] = row.target_pos_bias;
+    rw[Layout::maxi] = row.max_impulse;
+  }
+  V& response() const { return rw[Layout::response]; }
+  V& recip() const { return rw[Layout::recip]; }
+  V& external() const { return rw[Layout::external]; }
+  V& actuator_x0() const { return rw[Layout::x_start]; }
+  V& error_low() const { return rw[Layout::err_low]; }
+  V& error_high() const { return rw[Layout::err_high]; }
+  V& friction_static() const { return rw[Layout::fstat]; }
+  V& friction_dynamic() const { return rw[Layout::fdyn]; }
+  V& friction_viscous() const { return rw[Layout::fvisc]; }
+  V& drive_impulse() const { return rw[Layout::dimp]; }
+  V& tf_impulse() const { return rw[Layout::tf_imp]; }
+  V& tf_applied() const { return rw[Layout::tf_applied]; }
+  V& friction_impulse() const { return rw[Layout::fimp]; }
+  V& low() const { return rw[Layout::low]; }
+  V& high() const { return rw[Layout::high]; }
+  V& velocity_limit() const { return rw[Layout::vlimp]; }
+};
+
 // Dof d of link i: unit response r, position x0 (a spherical axis's from its quaternion), and
 // x0_drive, the position its drive's error is taken from (target - error for a spherical axis).
+// The TGS position change is zeroed here too (the scalar step keeps it outside its rows).
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::setup_dof_row(int i, int d, const V& r,
                                                                  const V& x0, const V& x0_drive) {
-  const LinkConstants& k = p_.links[i];
-  V* rw = row(d);
-  const DriveTermsOf<V> terms{dof_parameter(d, stiffness),       dof_parameter(d, damping),
-                              dof_parameter(d, target_position), dof_parameter(d, target_velocity),
-                              dof_parameter(d, max_force),       dof_parameter(d, max_impulse)};
-  const M accel = dof_parameter(d, acceleration) != V(0.0);
-  // PhysX's cfm: the larger of the child's and the parent's; an acceleration drive and every
-  // row but a force drive's read 1 / (r + cfm) (joint_constraints.md, cfm).
-  V cfm(0.0);
-  if (p_.any_cfm) {
-    const V child = at(l_.cfm)[i], parent = at(l_.cfm)[k.parent];
-    cfm = select(child < parent, parent, child);
-  }
-  const V r_drive = p_.any_cfm ? select(accel, r + cfm, r) : r;
-  DriveRowOf<V> drive = drive_law::setup(terms, accel, r_drive, x0_drive, h_solve_, p_.dt, p_.tgs);
-  if (any_row(d)[7] != 0.0) {  // an implicit actuator's row in the drive's place (step.cpp)
-    const ActuatorTermsOf<V> a{dof_parameter(d, actuator_stiffness),
-                               dof_parameter(d, actuator_damping),
-                               dof_parameter(d, actuator_effort_limit),
-                               dof_parameter(d, command_position),
-                               dof_parameter(d, command_velocity),
-                               dof_parameter(d, command_effort)};
-    const DriveRowOf<V> act = actuator_row::setup(a, r, x0, h_solve_, p_.dt, p_.tgs);
-    const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
-    drive.target_vel_plus_initial_bias =
-        select(actuated, act.target_vel_plus_initial_bias, drive.target_vel_plus_initial_bias);
-    drive.vel_multiplier = select(actuated, act.vel_multiplier, drive.vel_multiplier);
-    drive.impulse_multiplier = select(actuated, act.impulse_multiplier, drive.impulse_multiplier);
-    drive.bias_coefficient = select(actuated, act.bias_coefficient, drive.bias_coefficient);
-    drive.target_pos_bias = select(actuated, act.target_pos_bias, drive.target_pos_bias);
-    drive.max_impulse = select(actuated, act.max_impulse, drive.max_impulse);
-    rw[Layout::x_start] = x0;
-  }
-  rw[Layout::tvb] = drive.target_vel_plus_initial_bias;
-  rw[Layout::velm] = drive.vel_multiplier;
-  rw[Layout::impm] = drive.impulse_multiplier;
-  rw[Layout::biasc] = drive.bias_coefficient;
-  rw[Layout::tpb] = drive.target_pos_bias;
-  rw[Layout::maxi] = drive.max_impulse;
-  rw[Layout::dimp] = V(0.0);
-  rw[Layout::low] = V(0.0);
-  rw[Layout::high] = V(0.0);
-  rw[Layout::err_low] = x0 - dof_parameter(d, lower);
-  rw[Layout::err_high] = dof_parameter(d, upper) - x0;
-  rw[Layout::fimp] = V(0.0);
-  rw[Layout::vlimp] = V(0.0);
-  rw[Layout::external] = at(l_.tau)[d] * V(p_.dt);
-  rw[Layout::tf_imp] = V(0.0);
-  rw[Layout::tf_applied] = V(0.0);
-  rw[Layout::recip] = V(1.0) / (p_.any_cfm ? r + cfm : r);
-  rw[Layout::delta_x] = V(0.0);
-  rw[Layout::response] = r;
+  const LaneDof dof{*this, i, d, row(d)};
+  row_setup::setup(dof, r, x0, x0_drive, {h_solve_, p_.dt, p_.tgs});
+  dof.rw[Layout::delta_x] = V(0.0);
 }
 
 // An implicit actuator's clip that depends on the state (actuator_row.hpp, dof_rows.cpp): on

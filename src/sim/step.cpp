@@ -8,6 +8,7 @@
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
+#include "featherdrive/constraint/row_setup.hpp"
 #include "physx_stages.hpp"
 #include "workspace.hpp"
 
@@ -19,6 +20,60 @@ namespace {
 double limit_erp(SolverType solver, int position_iterations) {
   return solver == SolverType::pgs ? 0.8 : 2.0 * std::sqrt(1.0 / position_iterations);
 }
+
+// A dof as row_setup (constraint/row_setup.hpp) reads and writes it in the scalar step: its
+// DofRows and settings, every row it has on its one "lane" (each mask a bool). What the lone
+// drives' loop reads comes as raw pointers and values (setup_lone_drives); the rest from
+// settings only where a full set-up asks.
+struct ScalarDof {
+  DofRows& rows;
+  const Drive& drive;
+  const double* link_cfm;
+  int link, parent;
+  double applied;
+  const Settings& settings;
+  int d;
+  const ExplicitActuator* actuator = nullptr;  ///< an implicit actuator's (its row is the drive's)
+  const ActuatorCommand* command = nullptr;    ///< the command it sees
+
+  static bool any_of(bool mask) { return mask; }
+  bool any_driven() const { return drive.type != DriveType::none; }
+  bool acceleration_drive() const { return drive.type == DriveType::acceleration; }
+  DriveTermsOf<double> drive_terms() const { return featherdrive::drive_terms(drive); }
+  bool any_actuated() const { return actuator != nullptr; }
+  static bool actuated() { return true; }
+  ActuatorTermsOf<double> actuator_terms() const {
+    return featherdrive::actuator_terms(*actuator, *command);
+  }
+  static bool any_cfm() { return true; }
+  double cfm_child() const { return link_cfm[link]; }
+  double cfm_parent() const { return parent >= 0 ? link_cfm[parent] : 0.0; }
+  double applied_force() const { return applied; }
+  double lower_limit() const { return settings.lower_limit[d]; }
+  double upper_limit() const { return settings.upper_limit[d]; }
+  const JointFriction& friction() const { return settings.friction[static_cast<size_t>(d)]; }
+  double static_effort() const { return friction().static_effort; }
+  double dynamic_effort() const { return friction().dynamic_effort; }
+  double viscous() const { return friction().viscous; }
+
+  void set_drive(const DriveRow& row) const { rows.drive = row; }
+  double& response() const { return rows.response; }
+  double& recip() const { return rows.recip_response; }
+  double& external() const { return rows.external_impulse; }
+  double& actuator_x0() const { return rows.actuator_x0; }
+  double& error_low() const { return rows.error_low; }
+  double& error_high() const { return rows.error_high; }
+  double& friction_static() const { return rows.static_friction_impulse; }
+  double& friction_dynamic() const { return rows.dynamic_friction_impulse; }
+  double& friction_viscous() const { return rows.viscous_friction; }
+  double& drive_impulse() const { return rows.drive_impulse; }
+  double& tf_impulse() const { return rows.transmission_friction_impulse; }
+  double& tf_applied() const { return rows.transmission_friction_applied; }
+  double& friction_impulse() const { return rows.friction_impulse; }
+  double& low() const { return rows.low_impulse; }
+  double& high() const { return rows.high_impulse; }
+  double& velocity_limit() const { return rows.velocity_limit_impulse; }
+};
 
 }  // namespace
 
@@ -174,9 +229,9 @@ void Stepper::setup_rows(double h, bool tgs) {
   if (ws_.target_lead != 0.0) lead_drive_targets();  // a guard sub-step (step_guard.cpp)
 }
 
-// The lone drives' rows (setup_dof_rows's fields that change from step to step), in one loop
-// over raw pointers: Eigen's stores may alias anything, so the compiler would reload every
-// vector's data pointer after each of them.
+// The lone drives' rows (row_setup::lone_drive: setup_dof_rows's fields that change from step to
+// step), in one loop over raw pointers: Eigen's stores may alias anything, so the compiler would
+// reload every vector's data pointer after each of them.
 void Stepper::setup_lone_drives(double h, bool tgs) {
   const int* const dof_link = model_->dof_link.data();
   const Data::LinkInfo* const info = ws_.data.info.data();
@@ -187,24 +242,18 @@ void Stepper::setup_lone_drives(double h, bool tgs) {
   const Drive* const drives = settings_.drives.data();
   DofRows* const rows = ws_.rows.data();
   const int* const order = ws_.dof_order.data();
-  const double dt = ws_.dt;
+  const row_setup::Step step{h, ws_.dt, tgs};
   for (int k = 0; k < ws_.num_lone_drives; ++k) {
     const int d = order[k];
     const int i = dof_link[d];
     const Data::LinkInfo& link = info[i];
-    const Drive& drive = drives[d];
-    double r = r_of[d];
-    DofRows& row = rows[d];
-    row.drive_impulse = 0.0;
-    row.response = r;
-    row.external_impulse = applied[d] * dt;
-    if (drive.type == DriveType::acceleration)
-      r += std::max(cfm[i], link.parent >= 0 ? cfm[link.parent] : 0.0);
-    row.drive = setup_drive_row(drive, r, q[link.q_index], h, dt, tgs);
+    const ScalarDof dof{rows[d], drives[d], cfm, i, link.parent, applied[d], settings_, d};
+    row_setup::lone_drive(dof, r_of[d], q[link.q_index], step);
   }
 }
 
-// Dof d's rows, every field.
+// Dof d's rows, every field: which rows it has here, their fields by row_setup::constants and
+// row_setup::setup.
 void Stepper::setup_dof_rows(int d, double h, bool tgs) {
   const Model& model = *model_;
   const double dt = ws_.dt;
@@ -220,73 +269,53 @@ void Stepper::setup_dof_rows(int d, double h, bool tgs) {
   };
   DofRows& rows = ws_.rows[static_cast<size_t>(d)];
   // Data's compact copy of the link: a Link spreads over a kilobyte.
-  const Data::LinkInfo& link = ws_.data.info[model.dof_link[d]];
+  const int i = model.dof_link[d];
+  const Data::LinkInfo& link = ws_.data.info[i];
   const bool spherical = link.type == JointType::spherical;
   if (link.type != JointType::revolute && link.type != JointType::prismatic && !spherical) {
     rows = DofRows{};
     ws_.sweep.has_rows[d] = 0;
     return;
   }
-  // Every field is set below; the accumulators start from zero.
-  rows.drive_impulse = 0.0;
-  rows.transmission_friction_impulse = 0.0;
-  rows.transmission_friction_applied = 0.0;
-  rows.friction_impulse = 0.0;
-  rows.low_impulse = 0.0;
-  rows.high_impulse = 0.0;
-  rows.velocity_limit_impulse = 0.0;
   const double r = ws_.data.inverse_mass_diagonal[d];
   // A spherical axis's position is PhysX's, from the quaternion (spherical_rows.cpp).
   const double x0 = spherical ? spherical_axis_position(model, ws_.q, d) : ws_.q[link.q_index];
-  // PhysX's cfm: the larger of the child's and the parent's (link_cfm.cpp).
-  const double cfm =
-      std::max(ws_.link_cfm[model.dof_link[d]], link.parent >= 0 ? ws_.link_cfm[link.parent] : 0.0);
-  rows.response = r;
   const Drive& drive = drive_seen(d);
   const bool driven = drive.type != DriveType::none;
-  rows.has_drive = driven;
-  // An acceleration drive's coefficients carry 1 / (r + cfm), a force drive's r (eq. 32-39).
   // A spherical drive's error is formed from the quaternion: x0 stands for target - error.
   const double x0_drive =
-      spherical && rows.has_drive
+      spherical && driven
           ? drive.target_position - spherical_axis_drive_error(model, ws_.q, d, axis_drives(d))
           : x0;
-  rows.drive = rows.has_drive ? setup_drive_row(drive, drive.type == DriveType::acceleration
-                                                           ? r + cfm : r, x0_drive, h, dt, tgs)
-                              : DriveRow{};
+  ScalarDof dof{rows, drive, ws_.link_cfm.data(), i, link.parent, ws_.applied_force[d],
+                settings_, d};
   // An implicit actuator's law is the row of its (driveless) dof (implicit_actuators.md, I4-I7).
   rows.actuator = nullptr;
   if (ws_.actuators.implicit(d)) {
     const ExplicitActuator& actuator = ws_.actuators.actuator(d);
-    rows.has_drive = true;
-    rows.drive = setup_actuator_row(actuator, ws_.actuators.command_seen(d), r, x0, h, dt, tgs);
+    dof.actuator = &actuator;
+    dof.command = &ws_.actuators.command_seen(d);
     if (actuator_clip_depends_on_state(actuator)) rows.actuator = &actuator;
-    rows.actuator_x0 = x0;
   }
+  row_setup::constants<double>(dof, dt);
+  row_setup::setup(dof, r, x0, x0_drive, {h, dt, tgs});
+  rows.has_drive = driven || dof.actuator;
   const ActuatorEnvelope& envelope = settings_.envelopes[static_cast<size_t>(d)];
   rows.has_envelope = driven && envelope.active();
   rows.envelope = envelope;
-  rows.external_impulse = ws_.applied_force[d] * dt;
   const JointFriction& friction = settings_.friction[static_cast<size_t>(d)];
   rows.has_transmission_friction = settings_.friction_coefficient[d] > 0.0 &&
                                    friction.static_effort == 0.0 && friction.viscous == 0.0;
-  rows.transmission_friction_bound =
-      settings_.friction_coefficient[d] * h * ws_.transmitted_force[model.dof_link[d]];
+  rows.transmission_friction_bound = row_setup::transmission_friction_bound(
+      settings_.friction_coefficient[d], h, ws_.transmitted_force[i]);
   rows.has_friction = friction.active();
-  rows.static_friction_impulse = friction.static_effort * dt;
-  rows.dynamic_friction_impulse = friction.dynamic_effort * dt;
-  rows.viscous_friction = friction.viscous * dt;
   rows.has_limit =
       std::isfinite(settings_.lower_limit[d]) || std::isfinite(settings_.upper_limit[d]);
-  rows.error_low = x0 - settings_.lower_limit[d];  // +inf where unbounded
-  rows.error_high = settings_.upper_limit[d] - x0;
   rows.max_velocity = settings_.max_joint_velocity[d];
   rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.actuator &&
                     !rows.has_transmission_friction &&
                     !rows.has_friction && !rows.has_limit &&
                     !(rows.max_velocity < DofRows::kNoVelocityLimit);
-  // 1 / (r + cfm) is read by every row but a lone drive.
-  rows.recip_response = rows.drive_only ? 0.0 : 1.0 / (r + cfm);
   ws_.sweep.has_rows[d] = rows.active() ? 1 : 0;
 }
 

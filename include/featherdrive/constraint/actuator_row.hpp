@@ -65,13 +65,11 @@ T clip_to_table(const T& lambda, const T& bound, const T& table_limit, double dt
 
 }  // namespace actuator_row
 
-/// The drive row of `actuator` seeing `command` on a dof with unit response r at start-of-step
-/// position x0 (actuator_row::setup).
-inline DriveRow setup_actuator_row(const ExplicitActuator& actuator, const ActuatorCommand& command,
-                                   double r, double x0, double h, double step_dt, bool tgs) {
-  const ActuatorTermsOf<double> terms{actuator.stiffness, actuator.damping, actuator.effort_limit,
-                                      command.position,   command.velocity, command.effort};
-  return actuator_row::setup(terms, r, x0, h, step_dt, tgs);
+/// The terms of `actuator` seeing `command`, for actuator_row::setup.
+inline ActuatorTermsOf<double> actuator_terms(const ExplicitActuator& actuator,
+                                              const ActuatorCommand& command) {
+  return {actuator.stiffness, actuator.damping, actuator.effort_limit,
+          command.position,   command.velocity, command.effort};
 }
 
 /// The clip beyond +-effort_limit * dt depends on the velocity (dc_motor) or position

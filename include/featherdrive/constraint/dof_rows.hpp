@@ -21,8 +21,8 @@ struct DofRows {
   bool drive_only = false;
 
   double response = 0.0;        ///< r = (M^-1)_jj (ERRATA 6)
-  /// 1 / (r + cfm): every row but a force drive's (cfm from the link's cfm_scale, else 0);
-  /// not formed (0) for a lone drive
+  /// 1 / (r + cfm): every row but a force drive's (cfm from the link's cfm_scale, else 0); a
+  /// lone drive's is the last full set-up's (setup_lone_drives leaves it)
   double recip_response = 0.0;
 
   /// PhysX's older friction (frictionCoefficient): |impulse| <= coefficient * h * |F|, F the

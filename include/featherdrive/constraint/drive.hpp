@@ -117,13 +117,18 @@ T impulse_pgs(const DriveRowOf<T>& row, const T& v, const T& accumulated) {
 
 }  // namespace drive_law
 
+/// A drive's terms (all its fields but the type).
+inline DriveTermsOf<double> drive_terms(const Drive& drive) {
+  return {drive.stiffness,       drive.damping,   drive.target_position,
+          drive.target_velocity, drive.max_force, drive.max_impulse};
+}
+
 /// drive_law::setup for one drive (a drive of type none gives the empty row).
 inline DriveRow setup_drive_row(const Drive& drive, double r, double x0, double h,
                                 double step_dt, bool tgs) {
   if (drive.type == DriveType::none) return DriveRow{};
-  const DriveTermsOf<double> terms{drive.stiffness,       drive.damping,   drive.target_position,
-                                   drive.target_velocity, drive.max_force, drive.max_impulse};
-  return drive_law::setup(terms, drive.type == DriveType::acceleration, r, x0, h, step_dt, tgs);
+  return drive_law::setup(drive_terms(drive), drive.type == DriveType::acceleration, r, x0, h,
+                          step_dt, tgs);
 }
 
 /// The new accumulated impulse of the step after one update at joint velocity v.
