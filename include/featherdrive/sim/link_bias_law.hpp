@@ -1,23 +1,16 @@
 // compat physx's link bias at a prismatic joint (docs/math/physx_departures.md, PD-1 to PD-3),
 // written once over the number type: double for Simulation (link_bias.cpp), SIMD packs of
 // environments in the lanes (sim/simd_lane_step.hpp). 3-vectors are T[3] arrays (an Eigen
-// Vec3's data() for double); no include, so that the lanes' units compiled for AVX2 and AVX-512
+// Vec3's data() for double); no other include, so that the lanes' units compiled for AVX2 and AVX-512
 // take in no inline function of the rest of the library.
 #pragma once
 
+#include "featherdrive/spatial/vector3_law.hpp"
+
 namespace featherdrive::link_bias_law {
 
-template <class T>
-void cross(const T* a, const T* b, T* out) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-template <class T>
-T dot(const T* a, const T* b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+using vector3_law::cross;
+using vector3_law::dot;
 
 /// PD-1: link i's bias (b_w, b_v) from its parent's (b_wp, b_vp), the world angular velocities
 /// and centre-of-mass velocities of the two at the step's start (w_p, v_p; w_i, v_i) and

@@ -1,16 +1,17 @@
 // PhysX's per-link stages (docs/math/joint_constraints.md, J8-J10), written once over the number
 // type: double for Simulation (link_cfm.cpp, transmitted_force.cpp, link_damping.cpp), SIMD packs
 // of environments in the lanes (sim/simd_lane_step.hpp). Vectors are T[3] / T[6] arrays, spatial
-// ones [angular; linear] in frame 0 (world axes, origin at the root link's origin); a symmetric
-// 6 x 6 matrix [A, B; B^T, C] is T[21]: A's entries 00 11 22 01 02 12, B's nine row by row, C's
-// as A's (the lanes' layout). Only <cmath> and core/select.hpp, so that the lanes' units compiled
-// for AVX2 and AVX-512 take in no inline function of the rest of the library; sqrt is found by
-// argument-dependent lookup for a pack (correctly rounded, as std::sqrt).
+// ones [angular; linear] in frame 0 (world axes, origin at the root link's origin); a symmetric 6 x
+// 6 matrix [A, B; B^T, C] is T[21]: A's entries 00 11 22 01 02 12, B's nine row by row, C's as A's
+// (the lanes' layout). Only <cmath>, core/select.hpp and spatial/vector3_law.hpp, so that the
+// lanes' units compiled for AVX2 and AVX-512 take in no inline function of the rest of the library;
+// sqrt is found by argument-dependent lookup for a pack (correctly rounded, as std::sqrt).
 #pragma once
 
 #include <cmath>
 
 #include "featherdrive/core/select.hpp"
+#include "featherdrive/spatial/vector3_law.hpp"
 
 namespace featherdrive::link_law {
 
@@ -40,12 +41,7 @@ void symmetric_times(const T* M, const T* x, T* y) {
   }
 }
 
-template <class T>
-void cross(const T* a, const T* b, T* out) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
+using vector3_law::cross;
 
 /// J8: a link's cfm, cfm_scale times the largest b_j^T Lambda b_j over the world axes e_j,
 /// b_j = [c x e_j; e_j], from its whole-articulation response Lambda (packed) and its centre of
