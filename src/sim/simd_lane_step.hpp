@@ -870,7 +870,9 @@ void LaneStep<A, K>::transmitted_force(int i) {
       at(l_.IA + 21 * i), at(l_.acc + 6 * i), at(l_.pA + 6 * i), at(l_.cg + 3 * i));
   const LinkConstants& k = p_.links[i];
   for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d)
-    row(d)[Layout::tf_bound] = dof_parameter(d, friction_coefficient) * V(h_solve_) * magnitude;
+    row(d)[Layout::tf_bound] =
+        row_setup::transmission_friction_bound(dof_parameter(d, friction_coefficient), h_solve_,
+                                               magnitude);
 }
 
 // Link i's whole-articulation response Lambda_i, W_i = Lambda_parent U_i, G_i and (M^-1)_ii
