@@ -2,29 +2,23 @@
 
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
 
 namespace featherdrive {
 namespace {
 
-// R(a, q)^T: the transpose of the rotation by q about the unit axis a (Rodrigues).
+// R(a, q)^T: the transpose of the rotation by q about the unit axis a (eq. JT-1).
 Mat3 rotation_transpose(const Vec3& a, double q) {
   double s, c;
   sincos_inline(q, s, c);
-  const double t = 1.0 - c;
-  const double xy = t * a.x() * a.y(), xz = t * a.x() * a.z(), yz = t * a.y() * a.z();
-  const double sx = s * a.x(), sy = s * a.y(), sz = s * a.z();
-  Mat3 E;
-  E << t * a.x() * a.x() + c, xy + sz, xz - sy,  //
-      xy - sz, t * a.y() * a.y() + c, yz + sx,   //
-      xz + sy, yz - sx, t * a.z() * a.z() + c;
-  return E;
+  Mat3 J;
+  joint_transform_law::axis_rotation(a.x(), a.y(), a.z(), s, c, J);
+  return J.transpose();
 }
 
-// The two coordinate axes after k in cyclic order: a rotation by q about e_k is c = cos q,
-// s = sin q in rows and columns (k1, k2) and 1 at (k, k).
-int next_axis(int k) { return k == 2 ? 0 : k + 1; }
-int previous_axis(int k) { return k == 0 ? 2 : k - 1; }
+using joint_transform_law::next_axis;
+using joint_transform_law::previous_axis;
 
 // X_i = X_J(q) X_T, written into X, with the common joints written out. For a revolute joint
 // about a coordinate axis, (c, s) receive the cosine and sine of its angle (axis sign included).
@@ -50,9 +44,7 @@ void parent_transform_of(const Model& model, const Data& data, int i, const doub
           X.E(a2, a1) = -s;
           X.E(a2, a2) = c;
         } else {
-          X.E.row(a) = T.E.row(a);
-          X.E.row(a1) = c * T.E.row(a1) + s * T.E.row(a2);
-          X.E.row(a2) = c * T.E.row(a2) - s * T.E.row(a1);
+          joint_transform_law::turn_rows(T.E, a, s, c, X.E);
         }
         return;
       }
@@ -87,14 +79,11 @@ void position_link(const Model& model, Data& data, int i, const VecX& q) {
   p.noalias() += Rp * X.r;
   if (link.type == JointType::revolute && link.unit_axis >= 0) {
     // R = Rp X_T^T R(e_k, q): columns k1 and k2 mix. Rp X_T^T is Rp when X_T does not rotate.
-    const int a = link.unit_axis, a1 = next_axis(a), a2 = previous_axis(a);
     Mat3 B;
     if (!link.tree_rotation_identity)
       B.noalias() = Rp * data.constants[i].tree_transform.E.transpose();
     const Mat3& P = link.tree_rotation_identity ? Rp : B;
-    R.col(a) = P.col(a);
-    R.col(a1) = c * P.col(a1) + s * P.col(a2);
-    R.col(a2) = c * P.col(a2) - s * P.col(a1);
+    joint_transform_law::turn_columns(P, link.unit_axis, s, c, R);
     return;
   }
   const bool fixed_rotation = link.type == JointType::fixed || link.type == JointType::prismatic;
@@ -119,11 +108,7 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   const Vec3 r = data.constants[i].tree_transform.r;
   const Mat3& Rp = data.world_rotation[link.parent];
   const Vec3 p = data.world_position[link.parent] + Rp * r;
-  const Vec3 x = Rp.col(A1), y = Rp.col(A2), z = Rp.col(A);
-  Mat3& R = data.world_rotation[i];
-  R.col(A) = z;
-  R.col(A1) = c * x + s * y;
-  R.col(A2) = c * y - s * x;
+  joint_transform_law::turn_columns(Rp, A, s, c, data.world_rotation[i]);
   data.world_position[i] = p;
   if (!kTransform) return;
   Transform& X = data.parent_transform[i];

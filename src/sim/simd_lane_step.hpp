@@ -28,6 +28,7 @@
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
+#include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/quaternion_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
 #include "simd_plan.hpp"
@@ -398,6 +399,11 @@ class LaneStep {
   void finish_step();
 
   static void sincos(V x, V& s, V& c);
+  // A row-major 3 x 3 matrix of constants (double[9]) read as packs, for joint_transform_law.
+  struct Broadcast {
+    const double* m;
+    V operator()(int r, int c) const { return V(m[3 * r + c]); }
+  };
   static V dot6(const V* a, const V* b) { return dot6(WholePack{}, a, b); }
   static void sym_times(const V* m, const V* x, V* y);  // y = M x, M symmetric 6 x 6
   // y = M x for vector j of the packs of M (x, y: that vector's entries, kept in registers).
@@ -550,10 +556,8 @@ template <bool kStart>
     if (k.tree_rotation_identity) {
       P = Rp;
     } else {
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          frame[3 * r + c] = Rp[3 * r] * V(k.E[3 * c]) + Rp[3 * r + 1] * V(k.E[3 * c + 1]) +
-                             Rp[3 * r + 2] * V(k.E[3 * c + 2]);
+      joint_transform_law::joint_frame(joint_transform_law::rows(Rp), Broadcast{k.E},
+                                       joint_transform_law::rows(frame));
     }
   }
   if (k.type == 4) {
@@ -569,25 +573,16 @@ template <bool kStart>
   if (k.type == 1) {
     V s, c;
     sincos(V(k.axis_sign) * x, s, c);
+    // R = P R(a, angle) (spatial/joint_transform_law.hpp, as kinematics.cpp).
     if (k.unit_axis >= 0) {
-      // R = P R(e_a, angle): columns a1 and a2 of P mix.
-      const int a = k.unit_axis, a1 = a == 2 ? 0 : a + 1, a2 = a == 0 ? 2 : a - 1;
-      for (int r = 0; r < 3; ++r) {
-        R[3 * r + a] = P[3 * r + a];
-        R[3 * r + a1] = c * P[3 * r + a1] + s * P[3 * r + a2];
-        R[3 * r + a2] = c * P[3 * r + a2] - s * P[3 * r + a1];
-      }
+      joint_transform_law::turn_columns(joint_transform_law::rows(P), k.unit_axis, s, c,
+                                        joint_transform_law::rows(R));
     } else {
-      // Rodrigues: R(a, x) = c 1 + s [a]x + (1 - c) a a^T.
-      const V t = V(1.0) - c;
-      const V ax(k.axis[0]), ay(k.axis[1]), az(k.axis[2]);
-      const V J[9] = {t * ax * ax + c,      t * ax * ay - s * az, t * ax * az + s * ay,
-                      t * ax * ay + s * az, t * ay * ay + c,      t * ay * az - s * ax,
-                      t * ax * az - s * ay, t * ay * az + s * ax, t * az * az + c};
-      for (int r = 0; r < 3; ++r)
-        for (int col = 0; col < 3; ++col)
-          R[3 * r + col] =
-              P[3 * r] * J[col] + P[3 * r + 1] * J[3 + col] + P[3 * r + 2] * J[6 + col];
+      V J[9];
+      joint_transform_law::axis_rotation(V(k.axis[0]), V(k.axis[1]), V(k.axis[2]), s, c,
+                                         joint_transform_law::rows(J));
+      joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(J),
+                                   joint_transform_law::rows(R));
     }
   } else {
     for (int e = 0; e < 9; ++e) R[e] = P[e];
@@ -2467,9 +2462,8 @@ template <class A, int K>
 void LaneStep<A, K>::ball_pose(int i, const V* P, V* R, const V* pos, bool start) {
   V Rq[9];
   quaternion_rotation(&at(l_.q)[p_.links[i].q_index], Rq);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      R[3 * r + c] = P[3 * r] * Rq[c] + P[3 * r + 1] * Rq[3 + c] + P[3 * r + 2] * Rq[6 + c];
+  joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(Rq),
+                               joint_transform_law::rows(R));
   if (!start) return;
   V* S3 = at(l_.ball_S + 18 * i);
   for (int a = 0; a < 3; ++a) {

@@ -1,0 +1,94 @@
+// joint_transform_law for double against Eigen's angle-axis rotations and matrix products (a
+// second implementation) and against closed forms (docs/math/joint_transform.md).
+#include "featherdrive/spatial/joint_transform_law.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "featherdrive/spatial/types.hpp"
+
+namespace featherdrive {
+namespace {
+
+Mat3 random_rotation(std::mt19937_64& rng) {
+  std::normal_distribution<double> n;
+  return Quat(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+}
+
+void expect_near(const Mat3& a, const Mat3& b, double tol) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(a(r, c), b(r, c), tol) << r << ", " << c;
+}
+
+TEST(JointTransformLaw, AxisRotationIsEigensAngleAxis) {  // JT-1
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> angle(-10.0, 10.0);
+  std::normal_distribution<double> n;
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 a = Vec3(n(rng), n(rng), n(rng)).normalized();
+    const double x = angle(rng);
+    Mat3 J;
+    joint_transform_law::axis_rotation(a.x(), a.y(), a.z(), std::sin(x), std::cos(x), J);
+    expect_near(J, Eigen::AngleAxisd(x, a).toRotationMatrix(), 1e-15);
+    // Row-major storage through rows(): the same matrix.
+    double m[9];
+    joint_transform_law::axis_rotation(a.x(), a.y(), a.z(), std::sin(x), std::cos(x),
+                                       joint_transform_law::rows(m));
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(m[3 * r + c], J(r, c));
+  }
+}
+
+TEST(JointTransformLaw, AxisRotationFixesTheAxisAndTurnsAPerpendicular) {  // JT-1, closed form
+  const Vec3 a = Vec3(1.0, 2.0, 2.0) / 3.0;
+  const Vec3 u = Vec3(2.0, -1.0, 0.0) / std::sqrt(5.0);  // a . u = 0
+  const double x = 0.7;
+  Mat3 J;
+  joint_transform_law::axis_rotation(a.x(), a.y(), a.z(), std::sin(x), std::cos(x), J);
+  EXPECT_NEAR((J * a - a).norm(), 0.0, 1e-15);
+  // Rodrigues for u perpendicular to a: cos x u + sin x (a x u).
+  EXPECT_NEAR((J * u - (std::cos(x) * u + std::sin(x) * a.cross(u))).norm(), 0.0, 1e-15);
+}
+
+TEST(JointTransformLaw, CoordinateTurnsAreTheAxisRotation) {  // JT-2 to JT-4
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> angle(-4.0, 4.0);
+  for (int k = 0; k < 60; ++k) {
+    const int axis = k % 3;
+    const double x = angle(rng), s = std::sin(x), c = std::cos(x);
+    const Mat3 P = random_rotation(rng);
+    const Mat3 Re = Eigen::AngleAxisd(x, Vec3::Unit(axis)).toRotationMatrix();
+    Mat3 R, E;
+    joint_transform_law::turn_columns(P, axis, s, c, R);
+    expect_near(R, P * Re, 1e-15);
+    joint_transform_law::turn_rows(P, axis, s, c, E);
+    expect_near(E, Re.transpose() * P, 1e-15);
+    // A row-major array turned by rows() is the same matrix, to the bit.
+    double p[9], r[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) p[3 * i + j] = P(i, j);
+    joint_transform_law::turn_columns(joint_transform_law::rows(p), axis, s, c,
+                                      joint_transform_law::rows(r));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) EXPECT_EQ(r[3 * i + j], R(i, j));
+  }
+}
+
+TEST(JointTransformLaw, FrameAndCompositionAreMatrixProducts) {  // JT-5, JT-6
+  std::mt19937_64 rng(13);
+  for (int k = 0; k < 50; ++k) {
+    const Mat3 Rp = random_rotation(rng), E = random_rotation(rng), J = random_rotation(rng);
+    Mat3 P, R;
+    joint_transform_law::joint_frame(Rp, E, P);
+    expect_near(P, Rp * E.transpose(), 1e-15);
+    joint_transform_law::compose(P, J, R);
+    expect_near(R, P * J, 1e-15);
+    // The link's rotation is the parent's times X_i's E transposed, X_i = X_J X_T.
+    expect_near(R, Rp * (J.transpose() * E).transpose(), 1e-14);
+  }
+}
+
+}  // namespace
+}  // namespace featherdrive
