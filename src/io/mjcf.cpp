@@ -539,7 +539,10 @@ MjcfRobot convert(const mjModel* m, const std::string& file, const UrdfOptions& 
   std::map<std::string, int> link_of_joint;
   for (int i = 0; i < model.num_links(); ++i) link_of_joint.emplace(model.links[i].joint_name, i);
   for (int j = 0; j < m->njnt; ++j) {
-    const auto it = link_of_joint.find(names.joint[static_cast<size_t>(j)]);
+    auto it = link_of_joint.find(names.joint[static_cast<size_t>(j)]);
+    // An unnamed free joint is the floating root's, named root_joint here.
+    if (m->jnt_type[j] == mjJNT_FREE && model.floating_base())
+      it = link_of_joint.find(robot.root_joint);
     if (it == link_of_joint.end()) continue;
     const Link& link = model.links[static_cast<size_t>(it->second)];
     if (link.nq > 0)

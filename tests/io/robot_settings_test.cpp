@@ -89,6 +89,24 @@ TEST(RobotSettings, MjcfGivesItsActuators) {
   }
 }
 
+// An unnamed <freejoint/> (the usual MJCF idiom) is the floating root: q0 is where the file puts
+// the body (pos 0 0 1, no rotation), and the settings step from it with its ball joint.
+TEST(RobotSettings, UnnamedFreeJointStartsWhereTheFilePutsItsBody) {
+  const char* const xml = R"(<mujoco><worldbody>
+  <body name="torso" pos="0 0 1"><freejoint/><geom size=".1"/>
+    <body name="arm"><joint name="ball" type="ball"/><geom size=".05"/></body>
+  </body></worldbody></mujoco>)";
+  UrdfOptions floating;
+  floating.fixed_base = false;
+  const MjcfRobot robot = parse_mjcf(xml, "free.xml", floating);
+  ASSERT_TRUE(robot.model->floating_base());
+  EXPECT_EQ(robot.q0.head<7>(), (VecX(7) << 0, 0, 1, 1, 0, 0, 0).finished());
+  Simulation sim(robot.model, robot_settings(robot));
+  sim.set_q(robot.q0);
+  sim.step(10);
+  EXPECT_LT(sim.q()[2], 1.0);  // it falls
+}
+
 // A scene's values, as written in its text, are the settings; make_simulation holds them.
 TEST(SceneSettings, AreTheScenesValues) {
   const Scene scene = parse_scene(R"(model: slider.urdf
