@@ -974,10 +974,22 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   return scene;
 }
 
+// Runs f, an invalid_argument from it becoming the scene's InputError.
+template <class F>
+static auto naming_the_scene(const Scene& scene, F&& f) {
+  try {
+    return f();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(scene.path.string() + ": " + e.what());
+  }
+}
+
 // Each value is checked where it is given, in the order the scene's keys apply, by the checks the
 // Simulation setters use (settings.hpp), so a scene's first error is the one a setter would name.
 Settings scene_settings(const Scene& scene) {
-  try {
+  return naming_the_scene(scene, [&] {
     const Model& model = *scene.model();
     validate_options(scene.options);
     Settings s = Settings::defaults(model, scene.options);
@@ -1062,25 +1074,17 @@ Settings scene_settings(const Scene& scene) {
     apply_urdf_effort_limits(scene.robot, s);
     s.validate(model);
     return s;
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::invalid_argument& e) {
-    throw InputError(scene.path.string() + ": " + e.what());
-  }
+  });
 }
 
 Simulation make_simulation(const Scene& scene) {
   Simulation sim(scene.model(), scene_settings(scene));
-  try {
+  naming_the_scene(scene, [&] {
     sim.set_q(scene.q0);
     sim.set_qd(scene.qd0);
     apply_targets(scene, sim, 0);
-    return sim;
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::invalid_argument& e) {
-    throw InputError(scene.path.string() + ": " + e.what());
-  }
+  });
+  return sim;
 }
 
 VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index) {
