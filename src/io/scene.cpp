@@ -608,6 +608,8 @@ std::pair<double, double> DriveSpec::target_at(double t) const {
   return {drive.target_position, drive.target_velocity};
 }
 
+static void check_scene_start(const Scene& scene);
+
 Scene load_scene(const std::filesystem::path& path) {
   return parse_scene(read_input_file(path), path);
 }
@@ -968,8 +970,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     scene.applied_forces = read_applied_forces(r, root["applied_force"], scene.robot);
   scene.mimic = root["mimic"] ? read_mimic(r, root["mimic"], scene.robot)
                               : scene.robot.mimic_joints;
-  // A last check with the simulation's own rules, so a scene that loads also runs.
-  (void)make_simulation(scene);
+  check_scene_start(scene);
   if (root["fit"]) scene.fit = read_fit_spec(r, root["fit"], scene);
   return scene;
 }
@@ -1087,9 +1088,10 @@ Simulation make_simulation(const Scene& scene) {
   return sim;
 }
 
-VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index) {
-  VecX tau = VecX::Zero(sim.model().nv);
-  const double t = static_cast<double>(step_index) * sim.options().dt;
+// The applied force of step k at time step dt (applied_force_at), finite or an InputError.
+static VecX applied_force_of_step(const Scene& scene, int nv, double dt, int step_index) {
+  VecX tau = VecX::Zero(nv);
+  const double t = static_cast<double>(step_index) * dt;
   for (const AppliedForceSpec& f : scene.applied_forces) {
     tau[f.dof] = f.at(t);
     if (!std::isfinite(tau[f.dof]))
@@ -1100,16 +1102,21 @@ VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index)
   return tau;
 }
 
-void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
-  if (!scene.applied_forces.empty())
-    sim.set_applied_force(applied_force_at(scene, sim, step_index));
+VecX applied_force_at(const Scene& scene, const Simulation& sim, int step_index) {
+  return applied_force_of_step(scene, sim.model().nv, sim.options().dt, step_index);
+}
+
+// Calls f(drive, position, velocity) with each sine drive's targets for step k at time step dt
+// (apply_targets), each finite or an InputError.
+template <class F>
+static void for_each_sine_target(const Scene& scene, double dt, int step_index, F&& f) {
   // Control step m, sub-step j of k; times in double: (m + 1) k in int overflows for INT_MAX.
   const ControlStep& control = scene.control;
   const int k = control.substeps;
   const long m = (step_index >= 0 ? step_index : static_cast<long>(step_index) - (k - 1)) / k;
   const int j = static_cast<int>(step_index - m * k) + 1;  // m rounded down: j in [1, k]
-  const double t = (static_cast<double>(m) + 1.0) * k * sim.options().dt;
-  const double t_prev = static_cast<double>(m) * k * sim.options().dt;
+  const double t = (static_cast<double>(m) + 1.0) * k * dt;
+  const double t_prev = static_cast<double>(m) * k * dt;
   const bool linear = control.targets == TargetInterpolation::linear && j < k;
   for (const DriveSpec& d : scene.drives) {
     if (!d.sine) continue;
@@ -1121,9 +1128,38 @@ void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
       throw InputError(scene.path.string() + ": drives." + d.joint +
                        ".target.sine: the target at t = " + format_double(t) +
                        " s is not finite (2 pi frequency t overflows)");
-    sim.set_drive_target(d.dof, substep_target(prev_position, position, j, k, control.targets),
-                         substep_target(prev_velocity, velocity, j, k, control.targets));
+    f(d, substep_target(prev_position, position, j, k, control.targets),
+      substep_target(prev_velocity, velocity, j, k, control.targets));
   }
+}
+
+void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
+  if (!scene.applied_forces.empty())
+    sim.set_applied_force(applied_force_at(scene, sim, step_index));
+  for_each_sine_target(scene, sim.options().dt, step_index,
+                       [&](const DriveSpec& d, double position, double velocity) {
+                         sim.set_drive_target(d.dof, position, velocity);
+                       });
+}
+
+// What make_simulation refuses (the settings, the start state, step 0's targets and applied
+// force), checked on values: a scene that loads also runs.
+static void check_scene_start(const Scene& scene) {
+  const Settings settings = scene_settings(scene);
+  const Model& model = *scene.model();
+  naming_the_scene(scene, [&] {
+    (void)checked_configuration(model, scene.q0);
+    check_state_vector(scene.qd0, model.nv, "qd");
+    const double dt = settings.options.dt;
+    if (!scene.applied_forces.empty()) (void)applied_force_of_step(scene, model.nv, dt, 0);
+    for_each_sine_target(scene, dt, 0, [&](const DriveSpec& d, double position, double velocity) {
+      const auto dof = static_cast<size_t>(d.dof);
+      Drive drive = settings.drives[dof];
+      drive.target_position = position;
+      drive.target_velocity = velocity;
+      check_drive(model, d.dof, drive, settings.actuators[dof].kind);
+    });
+  });
 }
 
 Simulation run_scene(const Scene& scene,
