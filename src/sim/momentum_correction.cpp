@@ -7,6 +7,8 @@
 
 #include <cmath>
 
+#include "featherdrive/sim/integration_law.hpp"
+
 namespace featherdrive {
 namespace {
 
@@ -80,35 +82,23 @@ void correct_free_velocity_momentum(const Model& model, const Data& data, const 
   store_root_twist(model, s.R[0], w0, v0, qd);
 }
 
+// The lanes' integrate_root_physx calls the same law (quaternion_update.md, eq. Q-8).
 void integrate_root_about_com(const Model& model, const VecX& qd, double h, PhysxDepartures& dep,
                               VecX& q) {
   const Link& root = model.links[0];
-  const int iq = root.q_index, iv = root.v_index;
-  // The root's joint frame in the world (usually the world itself).
-  const Mat3 RT = root.tree_transform.E.transpose();
-  const Vec3& pT = root.tree_transform.r;
-  const Quat QT(RT);
-  const Quat QJ = Quat(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]).normalized();
-  const Quat Qw = QT * QJ;
-  const Vec3 p = pT + RT * Vec3(q[iq], q[iq + 1], q[iq + 2]);
-  // World velocities of the step's start frame: angular, and of the root's COM.
-  const Mat3& R0 = dep.root_rotation_start;
-  const Vec3 wb = qd.segment<3>(iv);
-  const Vec3 w = R0 * wb;
-  const Vec3 vcom = R0 * (qd.segment<3>(iv + 3) + wb.cross(root.com));
-  const Vec3 com = p + Qw * root.com + h * vcom;
-  const Vec3 turn = h * w;
-  const double angle = turn.norm();
-  Quat dq = Quat::Identity();
-  if (angle > 0.0) dq = Quat(Eigen::AngleAxisd(angle, turn / angle));
-  const Quat Qnew = (dq * Qw).normalized();
-  const Vec3 pnew = com - Qnew * root.com;
-  const Quat QJnew = (QT.conjugate() * Qnew).normalized();
-  q.segment<3>(iq) = RT.transpose() * (pnew - pT);
-  q[iq + 3] = QJnew.w();
-  q[iq + 4] = QJnew.x();
-  q[iq + 5] = QJnew.y();
-  q[iq + 6] = QJnew.z();
+  const Mat3& E = root.tree_transform.E;
+  double E_rows[9], R0[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      E_rows[3 * a + b] = E(a, b);
+      R0[3 * a + b] = dep.root_rotation_start(a, b);
+    }
+  const Quat QT(Mat3(E.transpose()));  // the joint frame's world rotation
+  const double QT_wxyz[4] = {QT.w(), QT.x(), QT.y(), QT.z()};
+  const integration_law::RootFrame frame{E_rows, root.tree_transform.r.data(), QT_wxyz,
+                                         E == Mat3::Identity()};
+  integration_law::root_about_com(frame, root.com.data(), R0, &qd[root.v_index], h,
+                                  &q[root.q_index]);
 }
 
 void correct_end_of_step_momentum(const Model& model, double dt, PhysxDepartures& dep, VecX& q,

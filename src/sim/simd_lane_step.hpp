@@ -26,6 +26,7 @@
 #include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/constraint/row_setup.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
+#include "featherdrive/sim/integration_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
@@ -367,7 +368,6 @@ class LaneStep {
     quaternion_law::product(a, b, out);
   }
   static void quaternion_rotation(const V* q, V* R) { quaternion_law::rotation(q, R); }
-  static void turn_quaternion(const V* t, V* out) { quaternion_law::turn(t, out); }  // exp(t / 2)
   // y = S x and y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
   template <class T>
   static void root_S(const T* R0, const T* x, T* y) {
@@ -2322,57 +2322,16 @@ void LaneStep<A, K>::root_origin(const V* q, V* p) {
 }
 
 // compat physx: a floating root moved over h about its centre of mass with the world velocities
-// of the step's start axes, its turn exp(h w) applied in the world, its joint frame's turn Q_T
-// taken off after (momentum_correction.cpp's integrate_root_about_com).
+// of the step's start axes (integration_law::root_about_com, as momentum_correction.cpp's
+// integrate_root_about_com).
 template <class A, int K>
 void LaneStep<A, K>::integrate_root_physx(double h_step) {
   const LinkConstants& k = p_.links[0];
-  const V h(h_step);
-  V* q = &at(l_.q)[k.q_index];
-  const V* qd = &at(l_.qd)[k.v_index];
-  const V* R0 = at(l_.start_R);
   V c[3];
   for (int r = 0; r < 3; ++r) c[r] = link_parameter_pack(0, com_x + r);
-  const V QT[4] = {V(k.frame_q[0]), V(k.frame_q[1]), V(k.frame_q[2]), V(k.frame_q[3])};
-  V Q[4];
-  unit_quaternion(q + 3, Q);
-  if (!k.tree_rotation_identity) {  // Q_T Q_J
-    const V QJ[4] = {Q[0], Q[1], Q[2], Q[3]};
-    quaternion_product(QT, QJ, Q);
-  }
-  V p[3], wc[3], vb[3], w[3], vcom[3], Qc[3], com[3];
-  root_origin(q, p);
-  cross(qd, c, wc);
-  for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
-  for (int r = 0; r < 3; ++r) {
-    w[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
-    vcom[r] = R0[3 * r] * vb[0] + R0[3 * r + 1] * vb[1] + R0[3 * r + 2] * vb[2];
-  }
-  rotate(Q, c, Qc);
-  for (int r = 0; r < 3; ++r) com[r] = (p[r] + Qc[r]) + h * vcom[r];
-  const V turn[3] = {h * w[0], h * w[1], h * w[2]};
-  V d[4];
-  turn_quaternion(turn, d);
-  // d Q, normalised twice (PhysX's root pose is then taken back to the joint's: Q_T^-1 first)
-  V dQ[4], once[4], o[4], oc[3];
-  quaternion_product(d, Q, dQ);
-  unit_quaternion(dQ, once);
-  if (k.tree_rotation_identity) {
-    unit_quaternion(once, o);
-    rotate(o, c, oc);
-    for (int r = 0; r < 3; ++r) q[r] = (com[r] - oc[r]) - V(k.r[r]);
-  } else {
-    rotate(once, c, oc);
-    const V back[4] = {QT[0], V(0.0) - QT[1], V(0.0) - QT[2], V(0.0) - QT[3]};
-    V joint[4], d_world[3];
-    quaternion_product(back, once, joint);
-    unit_quaternion(joint, o);
-    for (int r = 0; r < 3; ++r) d_world[r] = (com[r] - oc[r]) - V(k.r[r]);
-    for (int a = 0; a < 3; ++a)  // E_T (p - r_T)
-      q[a] = (V(k.E[3 * a]) * d_world[0] + V(k.E[3 * a + 1]) * d_world[1]) +
-             V(k.E[3 * a + 2]) * d_world[2];
-  }
-  for (int e = 0; e < 4; ++e) q[3 + e] = o[e];
+  const integration_law::RootFrame frame{k.E, k.r, k.frame_q, k.tree_rotation_identity};
+  integration_law::root_about_com(frame, c, at(l_.start_R), &at(l_.qd)[k.v_index], V(h_step),
+                                  &at(l_.q)[k.q_index]);
 }
 
 // compat physx, the step's end (momentum_correction.cpp's correct_end_of_step_momentum): targets

@@ -1,6 +1,6 @@
 // Unit quaternions and rotations on raw arrays, written once over the number type
-// (docs/math/quaternion_update.md): double for Simulation (joint_motion.cpp, spherical_rows.cpp),
-// SIMD packs of environments in the lanes
+// (docs/math/quaternion_update.md): double for Simulation (joint_motion.cpp,
+// momentum_correction.cpp, spherical_rows.cpp), SIMD packs of environments in the lanes
 // (sim/simd_lane_step.hpp), so that both move a quaternion with the same operations. A quaternion
 // is T[4], w x y z; a rotation matrix T[9], row-major. Only <cmath>, core/select.hpp and
 // spatial/sincos.hpp, so that the lanes' units compiled for AVX2 and AVX-512 take in no inline
