@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -89,7 +90,7 @@ inline double lanes_against_alone(const Simulation& sim, int steps, const std::s
 /// what a last-bit change of the start does; contact rows amplify either by orders of magnitude
 /// (docs/simd_batch.md, "Contacts"), so each environment's ratio is bounded (kSensitivityFactor),
 /// not the difference.
-/// How far past an environment's own sampled sensitivity its lanes may be: the four last-bit
+/// How far past an environment's own sampled sensitivity its lanes may be: the eight last-bit
 /// changes sample a chaotic run's spread, they do not bound it (ratios up to 6.7 seen over the
 /// contact cases of docs/simd_batch.md, "Contacts").
 inline constexpr double kSensitivityFactor = 30.0;
@@ -101,12 +102,15 @@ struct LaneFigures {
 };
 
 /// Steps every environment of `lanes` (asserting it runs in lanes), a copy of each stepped alone
-/// as a Simulation and four more started with every q, or every qd, a last bit up or down, `steps` times in
-/// `chunks` calls; returns the largest differences after any call (the contacts of several steps
-/// compared), printed as "what: ...".
+/// as a Simulation and eight more started a last bit off: every q, or every qd, up or down, and
+/// four with each entry of q and qd up or down at random, `steps` times in `chunks` calls; returns
+/// the largest differences after any call (the contacts of several steps compared), printed as
+/// "what: ...". Eight, not four: where a contact switches on or off, a run's last-bit outcomes
+/// fall into a few groups far apart, and four changes missed a group a third of the runs reach
+/// (docs/simd_batch.md, "Contacts").
 inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
                                        const std::string& what) {
-  constexpr size_t kNudges = 4;
+  constexpr size_t kNudges = 8;
   EXPECT_NE(lanes.step_path().find("lanes"), std::string::npos) << what << lanes.step_path();
   const Batch& view = lanes;
   const auto n = static_cast<size_t>(lanes.size());
@@ -115,14 +119,26 @@ inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
     alone.push_back(view.sim(static_cast<int>(e)));
     // q up, down; qd up, down: by the last bit of max(1, |x|), the scale the differences are
     // measured in (a zero's own last bit, a denormal, would change nothing).
+    const auto last_bit = [](double v) {
+      return std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
+    };
+    std::mt19937 signs(static_cast<unsigned>(e) + 1);
     for (size_t k = 0; k < kNudges; ++k) {
       nudged.push_back(alone.back());
-      const double way = k % 2 == 0 ? 1.0 : -1.0;
-      VecX x = k < 2 ? VecX(alone.back().q()) : VecX(alone.back().qd());
-      for (double& v : x)
-        v += way * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
-      if (k < 2) nudged.back().set_q(x);
-      else nudged.back().set_qd(x);
+      Simulation& s = nudged.back();
+      if (k < 4) {
+        const double way = k % 2 == 0 ? 1.0 : -1.0;
+        VecX x = k < 2 ? VecX(s.q()) : VecX(s.qd());
+        for (double& v : x) v += way * last_bit(v);
+        if (k < 2) s.set_q(x);
+        else s.set_qd(x);
+        continue;
+      }
+      VecX q = s.q(), qd = s.qd();
+      for (double& v : q) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
+      for (double& v : qd) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
+      s.set_q(q);
+      s.set_qd(qd);
     }
   }
   // At least 1e-11: without contacts the lanes' own order already parts from the scalar step's
