@@ -8,6 +8,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "joint_acceleration.hpp"
 
@@ -147,21 +148,38 @@ void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& 
   D_inv = D.llt().solve(MatNN::Identity(S.cols(), S.cols()));
 }
 
-// IA_parent += IA - U D^-1 U^T for a 1-dof joint, in one pass over the parent's inertia. With
-// AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else whole columns, which Eigen
-// knows are aligned, so SSE2 folds their loads into the arithmetic (split, they were loaded
-// unaligned). Each is the fewer instructions on its own instruction set (docs/benchmarks.md).
-inline void add_to_parent(const Mat6& IA, double D_inv, const Vec6& U, Mat6& IA_parent) {
-  for (int j = 0; j < 6; ++j) {
-#ifdef __AVX__
-    const double k = D_inv * U[j];
-    IA_parent.col(j).head<4>() += IA.col(j).head<4>() - k * U.head<4>();
-    IA_parent.col(j).tail<2>() += IA.col(j).tail<2>() - k * U.tail<2>();
-#else
-    IA_parent.col(j) += IA.col(j) - (D_inv * U[j]) * U;
-#endif
-  }
+// The base of a Data array of Mat6, Vec6 or OneDof, which Eigen aligns to 16 bytes: said so, the
+// compiler knows every element's entry pairs are aligned (the element sizes are multiples of 16)
+// and SSE2 folds their loads into the arithmetic, as Eigen's own column operations did (42
+// instructions a link fewer in pass 2 on chain256, docs/benchmarks.md).
+template <class X>
+X* aligned(X* p) {
+  static_assert(alignof(X) >= 16 && sizeof(X) % 16 == 0);
+  return static_cast<X*>(__builtin_assume_aligned(p, 16));
 }
+
+// A Mat6 as articulated_law reads it (entry a, b).
+struct Entries {
+  const double* m;
+  explicit Entries(const Mat6& IA) : m(IA.data()) {}
+  double operator()(int a, int b) const { return m[a + 6 * b]; }
+};
+
+// A parent's Mat6 as articulated_law accumulates it: all 36 entries, column by column, each
+// column's addends formed before any is stored, so that the compiler pairs rows into SSE2 (or
+// AVX) operations (a store between the reads would have to be assumed to alias them).
+struct Accumulated {
+  double* m;
+  explicit Accumulated(Mat6& IA) : m(IA.data()) {}
+  template <class F>
+  [[gnu::always_inline]] void accumulate(const F& f) {
+    for (int b = 0; b < 6; ++b) {
+      double add[6];
+      for (int a = 0; a < 6; ++a) add[a] = f(a, b);
+      for (int a = 0; a < 6; ++a) m[a + 6 * b] = m[a + 6 * b] + add[a];
+    }
+  }
+};
 
 }  // namespace
 
@@ -175,14 +193,19 @@ void articulated_inertias(const Model& model, Data& data) {
     write_inertia(b, data.articulated_inertia[i]);
     subspace_in_frame0(model, data, i, R, p);
   }
+  Mat6* const inertia = aligned(data.articulated_inertia.data());  // as in articulated_bodies
+  Data::OneDof* const one_dof = aligned(data.one_dof.data());
   for (int i = n - 1; i >= 0; --i) {
     const Data::LinkInfo& link = data.info[i];
-    const Mat6& IA = data.articulated_inertia[i];
-    if (link.nv == 1) {
-      Data::OneDof& J = data.one_dof[i];
-      J.U.noalias() = IA * J.S;
-      J.D_inv = 1.0 / (J.S.dot(J.U) + model.armature[link.v_index]);
-      if (link.parent >= 0) add_to_parent(IA, J.D_inv, J.U, data.articulated_inertia[link.parent]);
+    const Mat6& IA = inertia[i];
+    if (link.nv == 1) {  // docs/math/unit_response.md, eq. AP1 and AP3
+      Data::OneDof& J = one_dof[i];
+      const Entries IA_i(IA);
+      J.D_inv = articulated_law::joint_inertia(IA_i, J.S.data(), model.armature[link.v_index],
+                                               J.U.data());
+      if (link.parent < 0) continue;
+      Accumulated parent(inertia[link.parent]);
+      articulated_law::project_inertia(IA_i, J.U.data(), J.D_inv, parent);
       continue;
     }
     if (link.nv > 0)
@@ -243,28 +266,29 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     set_halves(w.cross(h_top) + vo.cross(h_bottom), w.cross(h_bottom), pA);
     if (external_force) pA -= (*external_force)[static_cast<size_t>(i)];
   }
-  // Pass 2: articulated inertias and bias forces, leaves to root.
+  // Pass 2: articulated inertias and bias forces, leaves to root. The arrays' bases said aligned,
+  // so that every link's and parent's entries are (aligned()).
+  Mat6* const inertia = aligned(data.articulated_inertia.data());
+  Vec6* const bias = aligned(data.articulated_bias.data());
+  const Vec6* const c_all = aligned(data.bias_acceleration0.data());
+  Data::OneDof* const one_dof = aligned(data.one_dof.data());
   for (int i = n - 1; i >= 0; --i) {
     const Data::LinkInfo& link = data.info[i];
-    const Mat6& IA = data.articulated_inertia[i];
-    const Vec6& pA = data.articulated_bias[i];
-    if (link.nv == 1) {
-      // No 6-vector temporaries (GCC keeps them on the stack and copies them): J's are read.
-      Data::OneDof& J = data.one_dof[i];
-      J.U.noalias() = IA * J.S;
-      const double D_inv = 1.0 / (J.S.dot(J.U) + model.armature[link.v_index]);
+    const Mat6& IA = inertia[i];
+    const Vec6& pA = bias[i];
+    if (link.nv == 1) {  // docs/math/unit_response.md, eq. AP1-AP4
+      Data::OneDof& J = one_dof[i];
+      const Entries IA_i(IA);
+      const double D_inv = articulated_law::joint_inertia(IA_i, J.S.data(),
+                                                          model.armature[link.v_index], J.U.data());
       J.D_inv = D_inv;
-      const double u = tau[link.v_index] - J.S.dot(pA);
+      const double u = articulated_law::joint_force(tau[link.v_index], J.S.data(), pA.data());
       data.u[link.v_index] = u;
       if (link.parent < 0) continue;
-      // Ia = IA - U D^-1 U^T; pa = pA + Ia c + U D^-1 u = pA + IA c + U D^-1 (u - U.c)
-      const Vec6& c = data.bias_acceleration0[i];
-      // Column by column: Eigen's product went out of line (+= IA * c would broadcast c's entries
-      // once per row pair).
-      Vec6 IAc = c[0] * IA.col(0);
-      for (int j = 1; j < 6; ++j) IAc += c[j] * IA.col(j);
-      data.articulated_bias[link.parent] += pA + IAc + (D_inv * (u - J.U.dot(c))) * J.U;
-      add_to_parent(IA, D_inv, J.U, data.articulated_inertia[link.parent]);
+      articulated_law::project_bias(IA_i, pA.data(), c_all[i].data(), J.U.data(), D_inv, u,
+                                    bias[link.parent].data());
+      Accumulated parent(inertia[link.parent]);
+      articulated_law::project_inertia(IA_i, J.U.data(), D_inv, parent);
       continue;
     }
     const Vec6& c = data.bias_acceleration0[i];

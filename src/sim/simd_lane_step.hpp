@@ -19,6 +19,7 @@
 
 #include <xsimd/xsimd.hpp>
 
+#include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
@@ -414,6 +415,27 @@ class LaneStep {
       y[r] = sum;
     }
   }
+  // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law reads it.
+  struct SymmetricVector {
+    const V* m;
+    int j;
+    [[gnu::always_inline]] B operator()(int a, int b) const { return m[kSym.at[a][b]].b[j]; }
+  };
+  // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law accumulates it: the
+  // upper triangle row by row, entry (a, b) for b >= a, each stored as it is summed (formed
+  // first and stored together, the sums spilled: 7 % more instructions in articulated_pass).
+  struct SymmetricSum {
+    V* m;
+    int j;
+    template <class F>
+    [[gnu::always_inline]] void accumulate(const F& f) const {
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) {
+          const int k = kSym.at[a][b];
+          m[k].b[j] = m[k].b[j] + f(a, b);
+        }
+    }
+  };
   // a^T b summed left to right (as the lanes always have: a tree's other rounding moved them
   // past 1e-12 of the scalar step in the lane tests). Every dot6 sums so.
   template <class T>
@@ -743,33 +765,26 @@ void LaneStep<A, K>::articulated_pass() {
     const V armature = dof_parameter(k.v_index, simd::armature);
     V* pAp = k.parent >= 0 ? at(l_.pA + 6 * k.parent) : nullptr;
     V* IAp = k.parent >= 0 ? at(l_.IA + 21 * k.parent) : nullptr;
-    // One vector of the pack at a time, so that U, D^-1 and the like stay in registers.
+    // One vector of the pack at a time, so that U, D^-1 and the like stay in registers;
+    // articulated_law (docs/math/unit_response.md, eq. AP1-AP4) as Simulation's.
     for (int j = 0; j < K; ++j) {
+      const SymmetricVector IAj{IA, j};
       B Sj[6], Uj[6], pAj[6];
       take6(S, j, Sj);
-      sym_times(IA, j, Sj, Uj);
+      const B D_inv = articulated_law::joint_inertia(IAj, Sj, armature.b[j], Uj);
       for (int r = 0; r < 6; ++r) U[r].b[j] = Uj[r];
-      const B D_inv = B(1.0) / (dot6(Sj, Uj) + armature.b[j]);
       at(l_.D_inv)[i].b[j] = D_inv;
       take6(pA, j, pAj);
-      const B u = at(l_.tau)[k.v_index].b[j] - dot6(Sj, pAj);
+      const B u = articulated_law::joint_force(at(l_.tau)[k.v_index].b[j], Sj, pAj);
       at(l_.u)[k.v_index].b[j] = u;
       if (!pAp) continue;
-      B cj[6], IAc[6];
+      B cj[6], pa[6];
       take6(c, j, cj);
-      const B beta = D_inv * (u - dot6(Uj, cj));
-      sym_times(IA, j, cj, IAc);
-      // Everything read before anything is stored (the parent's arrays might overlap the
-      // link's): one lane's entries then go as pairs.
-      B pa[6], ia[21];
-      for (int r = 0; r < 6; ++r) pa[r] = pAp[r].b[j] + ((pAj[r] + IAc[r]) + beta * Uj[r]);
-      for (int a = 0; a < 6; ++a)
-        for (int b = a; b < 6; ++b) {
-          const int e = kSym.at[a][b];
-          ia[e] = IAp[e].b[j] + (IA[e].b[j] - (D_inv * Uj[b]) * Uj[a]);
-        }
+      take6(pAp, j, pa);
+      articulated_law::project_bias(IAj, pAj, cj, Uj, D_inv, u, pa);
+      const SymmetricSum ia{IAp, j};
+      articulated_law::project_inertia(IAj, Uj, D_inv, ia);
       for (int r = 0; r < 6; ++r) pAp[r].b[j] = pa[r];
-      for (int e = 0; e < 21; ++e) IAp[e].b[j] = ia[e];
     }
   }
 }
