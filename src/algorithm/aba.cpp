@@ -10,50 +10,43 @@
 
 #include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "joint_acceleration.hpp"
 
 namespace featherdrive {
 namespace {
 
-// A link's rigid-body inertia in frame 0, by its parts: I = [A, m c x; m c x^T, m 1] with
-// A = Ic + m c x c x^T, c the centre of mass and Ic the inertia about it, both in frame 0.
+// A link's rigid-body inertia in frame 0 by its parts, I = [A, m c x; m c x^T, m 1]
+// (link_motion_law::body_inertia, eq. P1-2): A's six distinct entries, m c and m.
 struct BodyInertia {
-  Mat3 A;
-  Vec3 mc;  ///< m c
+  double A[6];
+  double mc[3];  ///< m c
   double m;
 };
 
-// The inertia of a link with orientation R at p (relative to the frame origin). Ic = R Ic_link R^T
-// and A are formed on their six distinct entries. Forced inline: out of line, b returns through
-// memory (20 instructions a link more in pass 1).
+// The inertia of a link with orientation R at p (relative to the frame origin). Forced inline:
+// out of line, b returns through memory (20 instructions a link more in pass 1).
 [[gnu::always_inline]] inline BodyInertia body_inertia(const Data::LinkConstants& link,
                                                        bool diagonal, const Mat3& R,
                                                        const Vec3& p) {
   BodyInertia b;
   b.m = link.mass;
-  const Vec3 c = p + R * link.com;
-  b.mc = b.m * c;
-  Mat3 RI;  // R Ic_link, or R's columns scaled by the principal moments
-  if (diagonal) RI = R * link.inertia_com.diagonal().asDiagonal();
-  else RI.noalias() = R * link.inertia_com;
-  const double mcc = b.mc.dot(c);
-  for (int r = 0; r < 3; ++r)
-    for (int k = r; k < 3; ++k) {
-      double a = RI(r, 0) * R(k, 0) + RI(r, 1) * R(k, 1) + RI(r, 2) * R(k, 2) - b.mc[r] * c[k];
-      if (r == k) a += mcc;
-      b.A(r, k) = a;
-      b.A(k, r) = a;
-    }
+  Mat3 RI;  // R Ic_link, or R's columns scaled by the principal moments (eq. P1-1)
+  const Mat3& Ic = link.inertia_com;
+  if (diagonal) link_motion_law::rotate_principal(R, Ic(0, 0), Ic(1, 1), Ic(2, 2), RI);
+  else link_motion_law::rotate_full(R, Ic, RI);
+  double c[3];
+  link_motion_law::body_inertia(R, RI, p.data(), link.com.data(), b.m, c, b.mc, b.A);
   return b;
 }
 
 // The 6 x 6 matrix of b, column by column.
 inline void write_inertia(const BodyInertia& b, Mat6& I) {
-  const Mat3& A = b.A;
-  const double x = b.mc.x(), y = b.mc.y(), z = b.mc.z(), m = b.m;
-  I.col(0) << A(0, 0), A(1, 0), A(2, 0), 0.0, -z, y;
-  I.col(1) << A(0, 1), A(1, 1), A(2, 1), z, 0.0, -x;
-  I.col(2) << A(0, 2), A(1, 2), A(2, 2), -y, x, 0.0;
+  const double* A = b.A;
+  const double x = b.mc[0], y = b.mc[1], z = b.mc[2], m = b.m;
+  I.col(0) << A[0], A[3], A[4], 0.0, -z, y;
+  I.col(1) << A[3], A[1], A[5], z, 0.0, -x;
+  I.col(2) << A[4], A[5], A[2], -y, x, 0.0;
   I.col(3) << 0.0, z, -y, m, 0.0, 0.0;
   I.col(4) << -z, 0.0, x, 0.0, m, 0.0;
   I.col(5) << y, -x, 0.0, 0.0, 0.0, m;
@@ -233,7 +226,9 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     else subspace_in_frame0(model, data, i, R, p);
   }
   // Then velocities v_i = v_parent + S qd, velocity-product accelerations c_i = v_i x S qd and bias
-  // forces v_i x* I_i v_i, root to leaves.
+  // forces v_i x* I_i v_i, root to leaves (eq. P1-3 to P1-5). The lanes take these from
+  // link_motion_law; here Eigen's product sums A w's third row as a0 + (a1 + a2), where the law
+  // sums left to right (docs/math/unit_response.md, "Pass 1").
   for (int i = 0; i < n; ++i) {
     const Data::LinkInfo& link = data.info[i];
     Vec3 wJ = Vec3::Zero(), vJ = Vec3::Zero();  // S qd

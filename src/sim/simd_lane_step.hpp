@@ -20,6 +20,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include "featherdrive/algorithm/articulated_law.hpp"
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
@@ -624,8 +625,8 @@ template <bool kStart>
   }
 }
 
-// Link i's rigid-body inertia in frame 0 (aba.cpp's body_inertia), velocity, velocity-product
-// acceleration c_i and bias force v x* I v; one vector of the pack at a time, so that its
+// Link i's rigid-body inertia in frame 0, velocity, velocity-product acceleration c_i and bias
+// force v x* I v (link_motion_law, as aba.cpp); one vector of the pack at a time, so that its
 // rotation, centre of mass and velocity stay in registers (sym_times).
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::link_velocity_and_bias(int i) {
@@ -645,40 +646,25 @@ template <class A, int K>
     for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
     for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = link_parameter(i, com_x + r, j);
     const B m = link_parameter(i, mass, j);
-    B cg[3], mc[3];
-    for (int r = 0; r < 3; ++r) {
-      cg[r] = pos[r] + (R[3 * r] * com[0] + R[3 * r + 1] * com[1] + R[3 * r + 2] * com[2]);
-      mc[r] = m * cg[r];
-    }
-    if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
-      for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym.
     B RI[9];  // R Ic
+    const auto Rm = joint_transform_law::rows(R);
+    const auto RIm = joint_transform_law::rows(RI);
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
             zz = link_parameter(i, inertia_zz, j);
     if (k.diagonal_inertia) {
-      for (int r = 0; r < 3; ++r) {
-        RI[3 * r] = R[3 * r] * xx;
-        RI[3 * r + 1] = R[3 * r + 1] * yy;
-        RI[3 * r + 2] = R[3 * r + 2] * zz;
-      }
+      link_motion_law::rotate_principal(Rm, xx, yy, zz, RIm);
     } else {
       const B xy = link_parameter(i, inertia_xy, j), xz = link_parameter(i, inertia_xz, j),
               yz = link_parameter(i, inertia_yz, j);
-      const B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          RI[3 * r + c] = R[3 * r] * Ic[c] + R[3 * r + 1] * Ic[3 + c] + R[3 * r + 2] * Ic[6 + c];
+      B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+      link_motion_law::rotate_full(Rm, joint_transform_law::rows(Ic), RIm);
     }
-    const B mcc = mc[0] * cg[0] + mc[1] * cg[1] + mc[2] * cg[2];
-    B Ia[6];  // A's entries, stored at kSym
-    for (int r = 0; r < 3; ++r)
-      for (int c = r; c < 3; ++c) {
-        B a = RI[3 * r] * R[3 * c] + RI[3 * r + 1] * R[3 * c + 1] + RI[3 * r + 2] * R[3 * c + 2] -
-              mc[r] * cg[c];
-        if (r == c) a = a + mcc;
-        Ia[kSym.at[r][c]] = a;
-        Iv[kSym.at[r][c]].b[j] = a;
-      }
+    B cg[3], mc[3], Ia[6];
+    link_motion_law::body_inertia(Rm, RIm, pos, com, m, cg, mc, Ia);
+    if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
+      for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    for (int e = 0; e < 6; ++e) Iv[e].b[j] = Ia[e];
     // B = [mc]x, C = m 1.
     const B zero(0.0);
     Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
@@ -702,30 +688,20 @@ template <class A, int K>
       for (int r = 0; r < 6; ++r) qd[r] = qdv[r].b[j];
       root_S(R0j, qd, J);
     }
-    B v[6];
-    for (int r = 0; r < 6; ++r) v[r] = vp ? vp[r].b[j] + J[r] : J[r];
-    for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
-    B c[6], t1[3], t2[3];
-    cross(v, J, c);
-    cross(v, J + 3, t1);
-    cross(v + 3, J, t2);
-    for (int r = 0; r < 3; ++r) c[3 + r] = t1[r] + t2[r];
-    for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
-    // h = I v from the rigid body's blocks (A, [mc]x; [mc]x^T, m 1): 42 operations, not 66.
-    B h[6], mw[3], mvv[3];
-    cross(mc, v + 3, mvv);
-    cross(mc, v, mw);
-    for (int r = 0; r < 3; ++r) {
-      h[r] =
-          (Ia[kSym.at[r][0]] * v[0] + Ia[kSym.at[r][1]] * v[1] + Ia[kSym.at[r][2]] * v[2]) + mvv[r];
-      h[3 + r] = m * v[3 + r] - mw[r];
+    // v, c and the bias force (link_motion_law, eq. P1-3 to P1-5).
+    B v[6], c[6], pA[6];
+    if (vp) {
+      B vpj[6];
+      take6(vp, j, vpj);
+      link_motion_law::velocity(vpj, J, v);
+    } else {
+      link_motion_law::velocity<B>(nullptr, J, v);
     }
-    cross(v, h, t1);
-    cross(v + 3, h + 3, t2);
-    for (int r = 0; r < 3; ++r) pAv[r].b[j] = t1[r] + t2[r];
-    B pl[3];
-    cross(v, h + 3, pl);
-    for (int r = 0; r < 3; ++r) pAv[3 + r].b[j] = pl[r];
+    for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
+    link_motion_law::velocity_product(v, J, c);
+    for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
+    link_motion_law::bias_force(v, Ia, mc, m, pA);
+    for (int r = 0; r < 6; ++r) pAv[r].b[j] = pA[r];
     if (p_.any_link_damping) {  // an external force: the bias less it
       B F[6];
       link_damping(i, j, R, RI, cg, m, v, F);
