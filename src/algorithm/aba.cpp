@@ -17,7 +17,7 @@ namespace featherdrive {
 namespace {
 
 // A link's rigid-body inertia in frame 0 by its parts, I = [A, m c x; m c x^T, m 1]
-// (link_motion_law::body_inertia, eq. P1-2): A's six distinct entries, m c and m.
+// (link_motion_law, eq. P1-2): A's six distinct entries, m c and m.
 struct BodyInertia {
   double A[6];
   double mc[3];  ///< m c
@@ -36,7 +36,8 @@ struct BodyInertia {
   if (diagonal) link_motion_law::rotate_principal(R, Ic(0, 0), Ic(1, 1), Ic(2, 2), RI);
   else link_motion_law::rotate_full(R, Ic, RI);
   double c[3];
-  link_motion_law::body_inertia(R, RI, p.data(), link.com.data(), b.m, c, b.mc, b.A);
+  link_motion_law::centre_of_mass(R, p.data(), link.com.data(), b.m, c, b.mc);
+  link_motion_law::rotational_block(R, RI, c, b.mc, b.A);
   return b;
 }
 

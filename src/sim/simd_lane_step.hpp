@@ -647,8 +647,12 @@ template <class A, int K>
     for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = link_parameter(i, com_x + r, j);
     const B m = link_parameter(i, mass, j);
     // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym.
-    B RI[9];  // R Ic
     const auto Rm = joint_transform_law::rows(R);
+    B cg[3], mc[3];
+    link_motion_law::centre_of_mass(Rm, pos, com, m, cg, mc);
+    if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
+      for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    B RI[9];  // R Ic
     const auto RIm = joint_transform_law::rows(RI);
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
             zz = link_parameter(i, inertia_zz, j);
@@ -660,10 +664,8 @@ template <class A, int K>
       B Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
       link_motion_law::rotate_full(Rm, joint_transform_law::rows(Ic), RIm);
     }
-    B cg[3], mc[3], Ia[6];
-    link_motion_law::body_inertia(Rm, RIm, pos, com, m, cg, mc, Ia);
-    if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
-      for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    B Ia[6];
+    link_motion_law::rotational_block(Rm, RIm, cg, mc, Ia);
     for (int e = 0; e < 6; ++e) Iv[e].b[j] = Ia[e];
     // B = [mc]x, C = m 1.
     const B zero(0.0);

@@ -74,7 +74,8 @@ void law_inertia(const Body& b, bool diagonal, double* c, double* mc, double* A)
   Mat3 RI;
   if (diagonal) link_motion_law::rotate_principal(b.R, b.Ic(0, 0), b.Ic(1, 1), b.Ic(2, 2), RI);
   else link_motion_law::rotate_full(b.R, b.Ic, RI);
-  link_motion_law::body_inertia(b.R, RI, b.p.data(), b.com.data(), b.m, c, mc, A);
+  link_motion_law::centre_of_mass(b.R, b.p.data(), b.com.data(), b.m, c, mc);
+  link_motion_law::rotational_block(b.R, RI, c, mc, A);
 }
 
 Mat6 assemble(const double* A, const double* mc, double m) {
@@ -115,8 +116,10 @@ TEST(LinkMotionLaw, RowMajorArraysGiveTheSameBits) {  // the lanes' storage
       for (int q = 0; q < 3; ++q) R[3 * r + q] = b.R(r, q), Ic[3 * r + q] = b.Ic(r, q);
     link_motion_law::rotate_full(joint_transform_law::rows(R), joint_transform_law::rows(Ic),
                                  joint_transform_law::rows(RI));
-    link_motion_law::body_inertia(joint_transform_law::rows(R), joint_transform_law::rows(RI),
-                                  b.p.data(), b.com.data(), b.m, c2, mc2, A2);
+    link_motion_law::centre_of_mass(joint_transform_law::rows(R), b.p.data(), b.com.data(), b.m,
+                                    c2, mc2);
+    link_motion_law::rotational_block(joint_transform_law::rows(R), joint_transform_law::rows(RI),
+                                      c2, mc2, A2);
     for (int r = 0; r < 3; ++r) {
       EXPECT_EQ(c2[r], c[r]);
       EXPECT_EQ(mc2[r], mc[r]);

@@ -35,16 +35,21 @@ void rotate_full(const M& R, const N& Ic, O&& RI) {
       RI(r, c) = R(r, 0) * Ic(0, c) + R(r, 1) * Ic(1, c) + R(r, 2) * Ic(2, c);
 }
 
-/// The body's inertia [A, m c x; m c x^T, m 1] in frame 0 by its parts (eq. P1-2), for a link
-/// with orientation R at p, centre of mass com in its own frame and RI = R Ic: the centre of mass
-/// c = p + R com, mc = m c and A = RI R^T + (mc . c) 1 - mc c^T on its six distinct entries.
-template <class T, class M, class N>
-void body_inertia(const M& R, const N& RI, const T* p, const T* com, const T& m, T* c, T* mc,
-                  T* A) {
+/// The body's centre of mass in frame 0, c = p + R com, and m c (eq. P1-2), for a link with
+/// orientation R at p and centre of mass com in its own frame.
+template <class T, class M>
+void centre_of_mass(const M& R, const T* p, const T* com, const T& m, T* c, T* mc) {
   for (int r = 0; r < 3; ++r) {
     c[r] = p[r] + (R(r, 0) * com[0] + R(r, 1) * com[1] + R(r, 2) * com[2]);
     mc[r] = m * c[r];
   }
+}
+
+/// The top-left block of the body's inertia [A, m c x; m c x^T, m 1] in frame 0 (eq. P1-2),
+/// A = RI R^T + (mc . c) 1 - mc c^T on its six distinct entries, from RI = R Ic and
+/// centre_of_mass's c and mc.
+template <class T, class M, class N>
+void rotational_block(const M& R, const N& RI, const T* c, const T* mc, T* A) {
   const T mcc = vector3_law::dot(mc, c);
   for (int r = 0; r < 3; ++r)
     for (int k = r; k < 3; ++k) {
