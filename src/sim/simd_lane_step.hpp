@@ -842,10 +842,9 @@ template <class A, int K>
     if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
-  const V* U = at(l_.U + 6 * i);
-  const V* S = at(l_.S + 6 * i);
-  const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, acc));
-  for (int r = 0; r < 6; ++r) acc[r] = acc[r] + qdd * S[r];
+  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6).
+  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.S + 6 * i),
+                                                    at(l_.D_inv)[i], at(l_.u)[k.v_index], acc);
   for (int r = 0; r < 6; ++r) a[r] = acc[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;
