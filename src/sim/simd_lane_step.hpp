@@ -842,9 +842,10 @@ template <class A, int K>
     if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
-  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6).
-  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.S + 6 * i),
-                                                    at(l_.D_inv)[i], at(l_.u)[k.v_index], acc);
+  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's.
+  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.D_inv)[i],
+                                                    at(l_.u)[k.v_index], acc);
+  articulated_law::add_joint_motion(qdd, at(l_.S + 6 * i), acc);
   for (int r = 0; r < 6; ++r) a[r] = acc[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;

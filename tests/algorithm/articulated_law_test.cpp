@@ -195,8 +195,8 @@ TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
     }
     Vec6 a = a0;
     for (int k = 0; k < links; ++k) {
-      const double qdd =
-          articulated_law::joint_acceleration(U[k].data(), S[k].data(), D_inv[k], u[k], a.data());
+      const double qdd = articulated_law::joint_acceleration(U[k].data(), D_inv[k], u[k], a.data());
+      articulated_law::add_joint_motion(qdd, S[k].data(), a.data());
       EXPECT_NEAR(qdd, expected[k], 1e-9 * (1.0 + expected.norm())) << trial << ", " << k;
     }
   }
