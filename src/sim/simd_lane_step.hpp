@@ -938,8 +938,8 @@ template <class A, int K>
       B Sp[6], Wp[6];
       take6(at(l_.S + 6 * p), j, Sp);
       take6(at(l_.W + 6 * p), j, Wp);
-      const response_law::Chain<B> c = response_law::chain(
-          Uj, D_inv, Sp, Wp, at(l_.D_inv)[p].b[j], at(l_.inverse_mass)[p].b[j]);
+      const response_law::Chain<B> c =
+          response_law::chain(Uj, D_inv, Sp, Wp, at(l_.D_inv)[p].b[j], at(l_.inverse_mass)[p].b[j]);
       at(l_.chain_pS)[i].b[j] = c.parent_S;
       at(l_.chain_pi)[i].b[j] = c.base_per_parent_impulse;
     }

@@ -109,7 +109,7 @@ TEST(ResponseLaw, IsTheProjectedParentResponse) {  // R1-R4 against Lambda = S D
 
 // A chain of one-dof joints in frame 0 (random S_i, inertias, armatures): ABA pass 2 by
 // articulated_law, then response_law root to tip, against the dense J_k M^-1 J_k^T, with
-// M = sum_k J_k^T I_k J_k + diag(armature) and J_k = [S_0 ... S_k 0 ...] (v_k = sum_{j<=k} S_j qd_j).
+// M = sum_k J_k^T I_k J_k + diag(armature), J_k = [S_0 ... S_k 0 ...] (v_k = sum_{j<=k} S_j qd_j).
 TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
   std::mt19937_64 rng(22);
   for (int trial = 0; trial < 20; ++trial) {
@@ -153,9 +153,8 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
       if (k == 0) continue;
       // R5: an impulse lambda at joint k-1 alone changes qd_k by M^-1(k, k-1) lambda, which is
       // the sweep's b^lambda (implicit_drives.md, GS2, with nothing else applied).
-      const response_law::Chain<double> c =
-          response_law::chain(U[k].data(), D_inv[k], S[k - 1].data(), W[k - 1].data(),
-                              D_inv[k - 1], r[k - 1]);
+      const response_law::Chain<double> c = response_law::chain(
+          U[k].data(), D_inv[k], S[k - 1].data(), W[k - 1].data(), D_inv[k - 1], r[k - 1]);
       EXPECT_NEAR(c.parent_S, U[k].dot(S[k - 1]), 1e-12 * U[k].norm() * S[k - 1].norm());
       EXPECT_EQ(c.base_per_parent_base, -D_inv[k] * c.parent_S);
       EXPECT_NEAR(c.base_per_parent_impulse, M_inv(k, k - 1),

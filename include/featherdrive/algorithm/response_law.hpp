@@ -40,8 +40,8 @@ struct Chain {
   T base_per_parent_impulse;  ///< D_p^-1 (D_i^-1 U_i^T W_p) + r_p base_per_parent_base
 };
 template <class T>
-[[gnu::always_inline]] inline Chain<T> chain(const T* U, const T& D_inv, const T* S_p,
-                                             const T* W_p, const T& D_inv_p, const T& r_p) {
+[[gnu::always_inline]] inline Chain<T> chain(const T* U, const T& D_inv, const T* S_p, const T* W_p,
+                                             const T& D_inv_p, const T& r_p) {
   Chain<T> c;
   c.parent_W = articulated_law::dot6(U, W_p);
   c.parent_S = articulated_law::dot6(U, S_p);
