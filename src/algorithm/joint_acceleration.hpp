@@ -1,8 +1,10 @@
 // ABA's third pass at one link, shared by aba.cpp and accelerations_and_response
 // (inverse_mass_diagonal.cpp): a_i = a_parent + c_i, qdd = D^-1 (u - U^T a_i), a_i += S qdd, in
-// frame 0 with gravity as an upward acceleration of the world (Featherstone 2008, table 7.1).
+// frame 0 with gravity as an upward acceleration of the world (Featherstone 2008, table 7.1); at a
+// one-dof joint by articulated_law (docs/math/unit_response.md, eq. AP5-AP6).
 #pragma once
 
+#include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/data.hpp"
 
 namespace featherdrive::detail {
@@ -25,10 +27,13 @@ template <int N>
   const Data::LinkInfo& link = data.info[i];
   Vec6 a =
       (link.parent >= 0 ? data.acceleration0[link.parent] : a_world) + data.bias_acceleration0[i];
-  if (link.nv == 1) {
+  if (link.nv == 1) {  // docs/math/unit_response.md, eq. AP5-AP6
     const Data::OneDof& J = data.one_dof[i];
-    const double qdd = J.D_inv * (data.u[link.v_index] - J.U.dot(a));
+    const double qdd =
+        articulated_law::joint_acceleration(J.U.data(), J.D_inv, data.u[link.v_index], a.data());
     data.qdd[link.v_index] = qdd;
+    // AP6 as Eigen's pairs, the same operations as add_joint_motion's: after the dot product's
+    // scalar sum clang does add_joint_motion in six scalar steps (18 instructions a link more).
     a += qdd * J.S;
   } else if (link.nv == 6) {
     joint_acceleration_fixed<6>(data, i, link.v_index, a);

@@ -21,6 +21,7 @@
 
 #include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/link_motion_law.hpp"
+#include "featherdrive/algorithm/response_law.hpp"
 #include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/mimic_law.hpp"
@@ -437,6 +438,18 @@ class LaneStep {
         }
     }
   };
+  // Vector j of the packs of a symmetric 6 x 6 (kSym), as response_law writes it: the upper
+  // triangle row by row, each entry stored as it is formed (formed first and stored together,
+  // they spill: 2 % more instructions in a Batch step with SSE2).
+  struct SymmetricAssign {
+    V* m;
+    int j;
+    template <class F>
+    [[gnu::always_inline]] void assign(const F& f) const {
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) m[kSym.at[a][b]].b[j] = f(a, b);
+    }
+  };
   // a^T b summed left to right (as the lanes always have: a tree's other rounding moved them
   // past 1e-12 of the scalar step in the lane tests). Every dot6 sums so.
   template <class T>
@@ -807,10 +820,10 @@ template <class A, int K>
     if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
-  const V* U = at(l_.U + 6 * i);
-  const V* S = at(l_.S + 6 * i);
-  const V qdd = at(l_.D_inv)[i] * (at(l_.u)[k.v_index] - dot6(U, acc));
-  for (int r = 0; r < 6; ++r) acc[r] = acc[r] + qdd * S[r];
+  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's.
+  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.D_inv)[i],
+                                                    at(l_.u)[k.v_index], acc);
+  articulated_law::add_joint_motion(qdd, at(l_.S + 6 * i), acc);
   for (int r = 0; r < 6; ++r) a[r] = acc[r];
   V& qd = at(l_.qd)[k.v_index];
   qd = qd + dt * qdd;
@@ -886,37 +899,27 @@ template <class A, int K>
   const V* S = at(l_.S + 6 * i);
   V* W = at(l_.W + 6 * i);
   V* G = at(l_.G + 6 * i);
-  for (int j = 0; j < K; ++j) {  // one vector of the pack at a time (articulated_pass)
+  // One vector of the pack at a time (articulated_pass), by response_law
+  // (docs/math/unit_response.md, eq. R1-R5).
+  for (int j = 0; j < K; ++j) {
     B Uj[6], Sj[6], Wj[6], Gj[6];
     take6(U, j, Uj);
     take6(S, j, Sj);
-    sym_times(T, j, Uj, Wj);
-    for (int r = 0; r < 6; ++r) W[r].b[j] = Wj[r];
     const B D_inv = at(l_.D_inv)[i].b[j];
-    const B r_ii = D_inv + D_inv * D_inv * dot6(Uj, Wj);
-    for (int e = 0; e < 6; ++e) {
-      Gj[e] = r_ii * Sj[e] - D_inv * Wj[e];
-      G[e].b[j] = Gj[e];
-    }
-    B Lj[21];  // the parent's read whole before any is stored (L and T might overlap)
-    for (int e = 0; e < 21; ++e) Lj[e] = T[e].b[j];
-    for (int a = 0; a < 6; ++a)
-      for (int b = a; b < 6; ++b) {
-        const int e = kSym.at[a][b];
-        Lj[e] = (Lj[e] + Gj[b] * Sj[a]) - (Sj[b] * D_inv) * Wj[a];
-      }
-    for (int e = 0; e < 21; ++e) L[e].b[j] = Lj[e];
-    at(l_.inverse_mass)[i].b[j] = r_ii;
+    const SymmetricAssign Lj{L, j};
+    const B r = response_law::response(SymmetricVector{T, j}, Sj, Uj, D_inv, Wj, Gj, Lj);
+    for (int e = 0; e < 6; ++e) W[e].b[j] = Wj[e];
+    for (int e = 0; e < 6; ++e) G[e].b[j] = Gj[e];
+    at(l_.inverse_mass)[i].b[j] = r;
     if (k.parent_one_dof) {  // the sweep's chain constants (implicit_drives.md, eq. GS1-GS3)
       const int p = k.parent;
       B Sp[6], Wp[6];
       take6(at(l_.S + 6 * p), j, Sp);
       take6(at(l_.W + 6 * p), j, Wp);
-      const B pS = dot6(Uj, Sp);
-      const B pb = -D_inv * pS;
-      at(l_.chain_pS)[i].b[j] = pS;
-      at(l_.chain_pi)[i].b[j] =
-          at(l_.D_inv)[p].b[j] * (D_inv * dot6(Uj, Wp)) + at(l_.inverse_mass)[p].b[j] * pb;
+      const response_law::Chain<B> c =
+          response_law::chain(Uj, D_inv, Sp, Wp, at(l_.D_inv)[p].b[j], at(l_.inverse_mass)[p].b[j]);
+      at(l_.chain_pS)[i].b[j] = c.parent_S;
+      at(l_.chain_pi)[i].b[j] = c.base_per_parent_impulse;
     }
   }
 }

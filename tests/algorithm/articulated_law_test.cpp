@@ -1,12 +1,16 @@
-// articulated_law (ABA pass 2 at a one-dof joint, docs/math/unit_response.md eq. AP1-AP4) for
-// double against Eigen's dense products on random symmetric positive definite inertias, read and
-// accumulated both as a full 6 x 6 (Simulation's Mat6) and as the packed 21 entries (the lanes').
+// articulated_law (ABA passes 2 and 3 at a one-dof joint, docs/math/unit_response.md eq. AP1-AP6)
+// for double against Eigen's dense products on random symmetric positive definite inertias, read
+// and accumulated both as a full 6 x 6 (Simulation's Mat6) and as the packed 21 entries (the
+// lanes'), and on random chains against the dense M^-1 (tau - gravity's force).
 #include "featherdrive/algorithm/articulated_law.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 #include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
 
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/spatial/types.hpp"
@@ -144,6 +148,57 @@ TEST(ArticulatedLaw, ProjectionRemovesTheJointsDirection) {  // AP3: (IA - U U^T
     Full projected{Mat6::Zero()};
     articulated_law::project_inertia(Full{IA}, U.data(), D_inv, projected);
     EXPECT_LT((projected.m * S).norm(), 1e-12 * IA.norm() * S.norm()) << k;
+  }
+}
+
+// AP5, AP6 with AP1-AP4 on random chains of one-dof joints in frame 0 at rest, gravity as the
+// world's upward acceleration a0: qdd against the dense M^-1 (tau - sum_k J_k^T I_k a0), with
+// M = sum_k J_k^T I_k J_k + diag(armature) and J_k = [S_0 ... S_k 0 ...].
+TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
+  std::mt19937_64 rng(14);
+  std::normal_distribution<double> n;
+  for (int trial = 0; trial < 20; ++trial) {
+    const int links = 2 + trial % 9;
+    std::vector<Mat6> I(links);
+    std::vector<Vec6> S(links);
+    std::vector<double> armature(links), tau(links);
+    for (int k = 0; k < links; ++k) {
+      I[k] = random_spd(rng);
+      S[k] = random_vector(rng);
+      armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
+      tau[k] = n(rng);
+    }
+    const Vec6 a0(0.0, 0.0, 0.0, 0.1 * n(rng), 0.2 * n(rng), 9.81);
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(links, links);
+    Eigen::VectorXd rhs = Eigen::Map<const Eigen::VectorXd>(tau.data(), links);
+    for (int k = 0; k < links; ++k) {
+      Eigen::Matrix<double, 6, Eigen::Dynamic> J = Eigen::MatrixXd::Zero(6, links);
+      for (int j = 0; j <= k; ++j) J.col(j) = S[j];
+      M += J.transpose() * I[k] * J;
+      M(k, k) += armature[k];
+      rhs -= J.transpose() * (I[k] * a0);
+    }
+    const Eigen::VectorXd expected = M.ldlt().solve(rhs);
+
+    std::vector<Full> IA(links);
+    for (int k = 0; k < links; ++k) IA[k].m = I[k];
+    std::vector<Vec6> U(links), pA(links, Vec6::Zero());
+    std::vector<double> D_inv(links), u(links);
+    const Vec6 c = Vec6::Zero();  // at rest
+    for (int k = links - 1; k >= 0; --k) {
+      D_inv[k] = articulated_law::joint_inertia(IA[k], S[k].data(), armature[k], U[k].data());
+      u[k] = articulated_law::joint_force(tau[k], S[k].data(), pA[k].data());
+      if (k == 0) continue;
+      articulated_law::project_bias(IA[k], pA[k].data(), c.data(), U[k].data(), D_inv[k], u[k],
+                                    pA[k - 1].data());
+      articulated_law::project_inertia(IA[k], U[k].data(), D_inv[k], IA[k - 1]);
+    }
+    Vec6 a = a0;
+    for (int k = 0; k < links; ++k) {
+      const double qdd = articulated_law::joint_acceleration(U[k].data(), D_inv[k], u[k], a.data());
+      articulated_law::add_joint_motion(qdd, S[k].data(), a.data());
+      EXPECT_NEAR(qdd, expected[k], 1e-9 * (1.0 + expected.norm())) << trial << ", " << k;
+    }
   }
 }
 

@@ -1,7 +1,8 @@
-// ABA pass 2 at a one-dof (revolute or prismatic) joint, written once over the number type T and
-// over how a symmetric 6 x 6 matrix is stored (docs/math/unit_response.md, eq. AP1-AP4): double
-// and Eigen's Mat6 for Simulation (algorithm/aba.cpp), one vector of a SIMD pack and the packed
-// 21 entries in the lanes (sim/simd_lane_step.hpp's articulated_pass). Vectors are T[6] arrays
+// ABA passes 2 and 3 at a one-dof (revolute or prismatic) joint, written once over the number type
+// T and over how a symmetric 6 x 6 matrix is stored (docs/math/unit_response.md, eq. AP1-AP6):
+// double and Eigen's Mat6 for Simulation (algorithm/aba.cpp, algorithm/joint_acceleration.hpp),
+// one vector of a SIMD pack and the packed 21 entries in the lanes (sim/simd_lane_step.hpp's
+// articulated_pass; pass 3 on whole packs in link_acceleration). Vectors are T[6] arrays
 // [angular; linear] in frame 0. A matrix is read through an adapter m(a, b) (entry a, b) and
 // accumulated through one with accumulate(f), which adds f(a, b) to every entry it stores, in the
 // order and grouping its storage is fastest at. Sums run left to right, the lanes' order. No
@@ -66,6 +67,19 @@ template <class T, class M>
   T out[6];
   for (int r = 0; r < 6; ++r) out[r] = pA_parent[r] + ((pA[r] + IAc[r]) + beta * U[r]);
   for (int r = 0; r < 6; ++r) pA_parent[r] = out[r];
+}
+
+/// AP5 (pass 3): qdd = D^-1 (u - U^T a), a the parent's acceleration plus c.
+template <class T>
+[[gnu::always_inline]] inline T joint_acceleration(const T* U, const T& D_inv, const T& u,
+                                                   const T* a) {
+  return D_inv * (u - dot6(U, a));
+}
+
+/// AP6: a += qdd S, entry by entry.
+template <class T>
+[[gnu::always_inline]] inline void add_joint_motion(const T& qdd, const T* S, T* a) {
+  for (int r = 0; r < 6; ++r) a[r] = a[r] + qdd * S[r];
 }
 
 }  // namespace featherdrive::articulated_law

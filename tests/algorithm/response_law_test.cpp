@@ -1,0 +1,168 @@
+// response_law (the whole-articulation response at a one-dof joint, docs/math/unit_response.md
+// eq. R1-R5) for double: against its definition Lambda_i = S D^-1 S^T + P T P^T on random
+// matrices, and on random chains against J_k M^-1 J_k^T with M formed densely from the links'
+// Jacobians; the full 6 x 6 (Simulation's Mat6) and the packed 21 entries (the lanes') give the
+// same bits.
+#include "featherdrive/algorithm/response_law.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "featherdrive/sim/link_laws.hpp"
+#include "featherdrive/spatial/types.hpp"
+
+namespace featherdrive {
+namespace {
+
+struct Full {  // all 36 entries, column-major
+  Mat6 m;
+  double operator()(int a, int b) const { return m(a, b); }
+  template <class F>
+  void accumulate(const F& f) {
+    for (int b = 0; b < 6; ++b)
+      for (int a = 0; a < 6; ++a) m(a, b) = m(a, b) + f(a, b);
+  }
+  template <class F>
+  void assign(const F& f) {
+    for (int b = 0; b < 6; ++b)
+      for (int a = 0; a < 6; ++a) m(a, b) = f(a, b);
+  }
+};
+
+// The packed 21 (link_law::pack_symmetric's layout, the lanes' kSym), upper triangle only.
+int packed_index(int a, int b) {
+  if (a > b) std::swap(a, b);
+  if (b < 3) return a == b ? a : (a == 0 ? (b == 1 ? 3 : 4) : 5);
+  if (a < 3) return 6 + 3 * a + (b - 3);
+  return packed_index(a - 3, b - 3) + 15;
+}
+struct Packed {
+  double e[21];
+  double operator()(int a, int b) const { return e[packed_index(a, b)]; }
+  template <class F>
+  void assign(const F& f) {
+    for (int a = 0; a < 6; ++a)
+      for (int b = a; b < 6; ++b) e[packed_index(a, b)] = f(a, b);
+  }
+};
+Packed pack(const Mat6& m) {
+  Packed p;
+  link_law::pack_symmetric(m.data(), p.e);
+  return p;
+}
+
+Mat6 random_spd(std::mt19937_64& rng) {
+  std::normal_distribution<double> n;
+  Mat6 A;
+  for (int c = 0; c < 6; ++c)
+    for (int r = 0; r < 6; ++r) A(r, c) = n(rng);
+  const Mat6 M = A * A.transpose() + 0.1 * Mat6::Identity();
+  return 0.5 * (M + M.transpose());  // symmetric to the bit
+}
+Vec6 random_vector(std::mt19937_64& rng) {
+  std::normal_distribution<double> n;
+  return Vec6(n(rng), n(rng), n(rng), n(rng), n(rng), n(rng));
+}
+
+TEST(ResponseLaw, IsTheProjectedParentResponse) {  // R1-R4 against Lambda = S D^-1 S^T + P T P^T
+  std::mt19937_64 rng(21);
+  for (int k = 0; k < 200; ++k) {
+    const Mat6 IA = random_spd(rng);
+    const Mat6 T = k % 10 == 0 ? Mat6::Zero() : random_spd(rng);  // the world's, or a parent's
+    const Vec6 S = random_vector(rng);
+    const double armature = 0.01 * (k % 7);
+    const Vec6 U = IA * S;
+    const double D = S.dot(U) + armature;
+    const Mat6 P = Mat6::Identity() - S * U.transpose() / D;
+    const Mat6 expected = S * S.transpose() / D + P * T * P.transpose();
+    const double expected_r = 1.0 / D + U.dot(T * U) / (D * D);
+    const Vec6 expected_W = T * U;
+    const double scale = expected.norm() + T.norm();
+
+    Vec6 W, G;
+    Full L{Mat6::Zero()};
+    const double r =
+        response_law::response(Full{T}, S.data(), U.data(), 1.0 / D, W.data(), G.data(), L);
+    EXPECT_LT((L.m - expected).norm(), 1e-12 * scale) << k;
+    EXPECT_NEAR(r, expected_r, 1e-12 * expected_r) << k;
+    EXPECT_LE((W - expected_W).norm(), 1e-12 * (T.norm() * U.norm())) << k;
+    EXPECT_LT((G - (expected_r * S - expected_W / D)).norm(), 1e-12 * scale * S.norm()) << k;
+
+    // The packed 21 take the same operations on the upper triangle: the same bits.
+    Packed packed;
+    Vec6 W_packed, G_packed;
+    const double r_packed = response_law::response(pack(T), S.data(), U.data(), 1.0 / D,
+                                                   W_packed.data(), G_packed.data(), packed);
+    EXPECT_EQ(r_packed, r);
+    for (int a = 0; a < 6; ++a) {
+      EXPECT_EQ(W_packed[a], W[a]);
+      EXPECT_EQ(G_packed[a], G[a]);
+      for (int b = a; b < 6; ++b) EXPECT_EQ(packed(a, b), L.m(a, b)) << a << ", " << b;
+    }
+  }
+}
+
+// A chain of one-dof joints in frame 0 (random S_i, inertias, armatures): ABA pass 2 by
+// articulated_law, then response_law root to tip, against the dense J_k M^-1 J_k^T, with
+// M = sum_k J_k^T I_k J_k + diag(armature), J_k = [S_0 ... S_k 0 ...] (v_k = sum_{j<=k} S_j qd_j).
+TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
+  std::mt19937_64 rng(22);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 2 + trial % 9;
+    std::vector<Mat6> I(n);
+    std::vector<Vec6> S(n);
+    std::vector<double> armature(n);
+    for (int k = 0; k < n; ++k) {
+      I[k] = random_spd(rng);
+      S[k] = random_vector(rng);
+      armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
+    }
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
+    std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> J(n);
+    for (int k = 0; k < n; ++k) {
+      J[k] = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n);
+      for (int j = 0; j <= k; ++j) J[k].col(j) = S[j];
+      M += J[k].transpose() * I[k] * J[k];
+      M(k, k) += armature[k];
+    }
+    const Eigen::MatrixXd M_inv = M.inverse();
+
+    std::vector<Full> IA(n);
+    for (int k = 0; k < n; ++k) IA[k].m = I[k];
+    std::vector<Vec6> U(n);
+    std::vector<double> D_inv(n);
+    for (int k = n - 1; k >= 0; --k) {
+      D_inv[k] = articulated_law::joint_inertia(IA[k], S[k].data(), armature[k], U[k].data());
+      if (k > 0) articulated_law::project_inertia(IA[k], U[k].data(), D_inv[k], IA[k - 1]);
+    }
+    std::vector<Full> L(n);
+    std::vector<Vec6> W(n), G(n);
+    std::vector<double> r(n);
+    for (int k = 0; k < n; ++k) {
+      const Full parent{k > 0 ? L[k - 1].m : Mat6::Zero()};
+      r[k] = response_law::response(parent, S[k].data(), U[k].data(), D_inv[k], W[k].data(),
+                                    G[k].data(), L[k]);
+      const Mat6 expected = J[k] * M_inv * J[k].transpose();
+      EXPECT_LT((L[k].m - expected).norm(), 1e-10 * expected.norm()) << trial << ", " << k;
+      EXPECT_NEAR(r[k], M_inv(k, k), 1e-10 * M_inv(k, k)) << trial << ", " << k;
+      if (k == 0) continue;
+      // R5: an impulse lambda at joint k-1 alone changes qd_k by M^-1(k, k-1) lambda, which is
+      // the sweep's b^lambda (implicit_drives.md, GS2, with nothing else applied).
+      const response_law::Chain<double> c = response_law::chain(
+          U[k].data(), D_inv[k], S[k - 1].data(), W[k - 1].data(), D_inv[k - 1], r[k - 1]);
+      EXPECT_NEAR(c.parent_S, U[k].dot(S[k - 1]), 1e-12 * U[k].norm() * S[k - 1].norm());
+      EXPECT_EQ(c.base_per_parent_base, -D_inv[k] * c.parent_S);
+      EXPECT_NEAR(c.base_per_parent_impulse, M_inv(k, k - 1),
+                  1e-10 * std::sqrt(M_inv(k, k) * M_inv(k - 1, k - 1)))
+          << trial << ", " << k;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace featherdrive
