@@ -83,6 +83,31 @@ inline double lanes_against_alone(const Simulation& sim, int steps, const std::s
   return worst;
 }
 
+/// How many starts a last bit off sample the scalar step's own sensitivity (nudge_start).
+inline constexpr size_t kLastBitStarts = 8;
+
+/// Start k of kLastBitStarts a last bit (of max(1, |x|), the scale differences are measured in)
+/// off: k = 0-3 every q up, down, every qd up, down; k >= 4 each entry of q and qd up or down as
+/// `signs` draws.
+inline void nudge_start(Simulation& s, size_t k, std::mt19937& signs) {
+  const auto last_bit = [](double v) {
+    return std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
+  };
+  if (k < 4) {
+    const double way = k % 2 == 0 ? 1.0 : -1.0;
+    VecX x = k < 2 ? VecX(s.q()) : VecX(s.qd());
+    for (double& v : x) v += way * last_bit(v);
+    if (k < 2) s.set_q(x);
+    else s.set_qd(x);
+    return;
+  }
+  VecX q = s.q(), qd = s.qd();
+  for (double& v : q) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
+  for (double& v : qd) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
+  s.set_q(q);
+  s.set_qd(qd);
+}
+
 /// batch_against_alone's figures: the lanes' largest lane_difference from each environment
 /// stepped alone, the scalar step's own from a start changed in its last bits, and the
 /// largest ratio of the two of one environment (its nudged difference taken as at least 1e-11).
@@ -110,7 +135,6 @@ struct LaneFigures {
 /// (docs/simd_batch.md, "Contacts").
 inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
                                        const std::string& what) {
-  constexpr size_t kNudges = 8;
   EXPECT_NE(lanes.step_path().find("lanes"), std::string::npos) << what << lanes.step_path();
   const Batch& view = lanes;
   const auto n = static_cast<size_t>(lanes.size());
@@ -119,26 +143,10 @@ inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
     alone.push_back(view.sim(static_cast<int>(e)));
     // q up, down; qd up, down: by the last bit of max(1, |x|), the scale the differences are
     // measured in (a zero's own last bit, a denormal, would change nothing).
-    const auto last_bit = [](double v) {
-      return std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(v));
-    };
     std::mt19937 signs(static_cast<unsigned>(e) + 1);
-    for (size_t k = 0; k < kNudges; ++k) {
+    for (size_t k = 0; k < kLastBitStarts; ++k) {
       nudged.push_back(alone.back());
-      Simulation& s = nudged.back();
-      if (k < 4) {
-        const double way = k % 2 == 0 ? 1.0 : -1.0;
-        VecX x = k < 2 ? VecX(s.q()) : VecX(s.qd());
-        for (double& v : x) v += way * last_bit(v);
-        if (k < 2) s.set_q(x);
-        else s.set_qd(x);
-        continue;
-      }
-      VecX q = s.q(), qd = s.qd();
-      for (double& v : q) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
-      for (double& v : qd) v += (signs() % 2 == 0 ? 1.0 : -1.0) * last_bit(v);
-      s.set_q(q);
-      s.set_qd(qd);
+      nudge_start(nudged.back(), k, signs);
     }
   }
   // At least 1e-11: without contacts the lanes' own order already parts from the scalar step's
@@ -149,7 +157,7 @@ inline LaneFigures batch_against_alone(Batch& lanes, int steps, int chunks,
     for (size_t e = 0; e < n; ++e) {
       alone[e].step(steps / chunks);
       apart[e] = std::max(apart[e], lane_difference(view, static_cast<int>(e), alone[e]));
-      for (size_t k = kNudges * e; k < kNudges * (e + 1); ++k) {
+      for (size_t k = kLastBitStarts * e; k < kLastBitStarts * (e + 1); ++k) {
         nudged[k].step(steps / chunks);
         own[e] = std::max(own[e], simulation_difference(nudged[k], alone[e]));
       }
@@ -233,6 +241,47 @@ struct LaneWorst {
   double change = 0.0;  ///< last_drive_impulse_change (convergence tracking)
 };
 
+/// The largest relative difference of every output force, the actuators' too.
+inline double force_difference(const Simulation& a, const Simulation& b) {
+  return std::max({relative_difference(a.drive_force(), b.drive_force()),
+                   relative_difference(a.limit_force(), b.limit_force()),
+                   relative_difference(a.friction_force(), b.friction_force()),
+                   relative_difference(a.velocity_limit_force(), b.velocity_limit_force()),
+                   relative_difference(a.actuator_force(), b.actuator_force())});
+}
+
+/// The scalar step's own spread of the output forces: `starts` stepped `steps` times with
+/// step_with_commands' calls and commands, against kLastBitStarts copies of each a last bit off
+/// (nudge_start); the largest force_difference at the end. Where two rows' large forces cancel
+/// (a velocity limit holding a drive back), their split moves by more than q and qd do.
+template <class Command>
+double own_force_spread(const std::vector<Simulation>& starts, int steps, Command command) {
+  std::vector<Simulation> reference = starts, nudged;
+  for (size_t e = 0; e < starts.size(); ++e) {
+    std::mt19937 signs(static_cast<unsigned>(e) + 1);
+    for (size_t k = 0; k < kLastBitStarts; ++k) {
+      nudged.push_back(starts[e]);
+      nudge_start(nudged.back(), k, signs);
+    }
+  }
+  for (int k = 0, done = 0; done < steps; ++k) {
+    const int n = std::min(1 + k % 9, steps - done);
+    for (size_t e = 0; e < starts.size(); ++e) {
+      command(reference[e], static_cast<int>(e), k);
+      reference[e].step(n);
+      for (size_t j = kLastBitStarts * e; j < kLastBitStarts * (e + 1); ++j) {
+        command(nudged[j], static_cast<int>(e), k);
+        nudged[j].step(n);
+      }
+    }
+    done += n;
+  }
+  double spread = 0.0;
+  for (size_t j = 0; j < nudged.size(); ++j)
+    spread = std::max(spread, force_difference(nudged[j], reference[j / kLastBitStarts]));
+  return spread;
+}
+
 /// Environment e of the batch against `alone` (its settings, stepped alone): q, qd, every output
 /// force and the tracked drive changes into `worst` (|a - b| / max(1, |b|)); the clock and the
 /// delay and actuator histories (what a checkpoint of sim(e) writes) exactly.
@@ -241,12 +290,7 @@ inline void compare_with_alone(const Batch& batch, int e, const Simulation& alon
   const Simulation& s = batch.sim(e);
   worst.state = std::max({worst.state, relative_difference(s.q(), alone.q()),
                           relative_difference(s.qd(), alone.qd())});
-  worst.force =
-      std::max({worst.force, relative_difference(s.drive_force(), alone.drive_force()),
-                relative_difference(s.limit_force(), alone.limit_force()),
-                relative_difference(s.friction_force(), alone.friction_force()),
-                relative_difference(s.velocity_limit_force(), alone.velocity_limit_force()),
-                relative_difference(s.actuator_force(), alone.actuator_force())});
+  worst.force = std::max(worst.force, force_difference(s, alone));
   worst.change = std::max(worst.change, relative_difference(s.last_drive_impulse_change(),
                                                             alone.last_drive_impulse_change()));
   // relative_difference passes NaN over: every compared value must be finite.
