@@ -227,40 +227,31 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     else subspace_in_frame0(model, data, i, R, p);
   }
   // Then velocities v_i = v_parent + S qd, velocity-product accelerations c_i = v_i x S qd and bias
-  // forces v_i x* I_i v_i, root to leaves (eq. P1-3 to P1-5). The lanes take these from
-  // link_motion_law; here Eigen's product sums A w's third row as a0 + (a1 + a2), where the law
-  // sums left to right (docs/math/unit_response.md, "Pass 1").
+  // forces v_i x* I_i v_i, root to leaves (eq. P1-3 to P1-5), as the lanes form them.
   for (int i = 0; i < n; ++i) {
     const Data::LinkInfo& link = data.info[i];
-    Vec3 wJ = Vec3::Zero(), vJ = Vec3::Zero();  // S qd
+    double J[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // S qd
     if (link.nv == 1) {
       const double qd = v[link.v_index];
-      wJ = qd * data.one_dof[i].S.head<3>();
-      vJ = qd * data.one_dof[i].S.tail<3>();
+      for (int r = 0; r < 6; ++r) J[r] = qd * data.one_dof[i].S[r];
     } else if (link.nv > 0) {
       const Vec6 sJ = data.motion_subspace[i] * v.segment(link.v_index, link.nv);
-      wJ = sJ.head<3>();
-      vJ = sJ.tail<3>();
+      for (int r = 0; r < 6; ++r) J[r] = sJ[r];
     }
-    Vec6 vi;
-    if (link.parent >= 0) {
-      vi.head<3>() = data.velocity0[link.parent].head<3>() + wJ;
-      vi.tail<3>() = data.velocity0[link.parent].tail<3>() + vJ;
-    } else {
-      set_halves(wJ, vJ, vi);
-    }
-    data.velocity0[i] = vi;
-    const Vec3 w = vi.head<3>(), vo = vi.tail<3>();
-    set_halves(w.cross(wJ), w.cross(vJ) + vo.cross(wJ), data.bias_acceleration0[i]);
-    // h = I_i v_i = [A w + m c x vo; m vo - m c x w] from the parts write_inertia laid out (I_i
-    // is still the body's inertia here): a third of the multiplies of the 6 x 6 product.
+    double vi[6], c[6], pA[6];
+    link_motion_law::velocity(link.parent >= 0 ? data.velocity0[link.parent].data() : nullptr, J,
+                              vi);
+    link_motion_law::velocity_product(vi, J, c);
+    // I_i is still the body's inertia here, laid out by write_inertia: A, m c x, m.
     const Mat6& I = data.articulated_inertia[i];
-    const Vec3 mc(I(2, 4), -I(2, 3), I(1, 3));
-    const Vec3 h_top = I.topLeftCorner<3, 3>() * w + mc.cross(vo);
-    const Vec3 h_bottom = I(3, 3) * vo - mc.cross(w);
-    Vec6& pA = data.articulated_bias[i];
-    set_halves(w.cross(h_top) + vo.cross(h_bottom), w.cross(h_bottom), pA);
-    if (external_force) pA -= (*external_force)[static_cast<size_t>(i)];
+    const double A[6] = {I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2)};
+    const double mc[3] = {I(2, 4), -I(2, 3), I(1, 3)};
+    link_motion_law::bias_force(vi, A, mc, I(3, 3), pA);
+    for (int r = 0; r < 6; ++r) data.velocity0[i][r] = vi[r];
+    for (int r = 0; r < 6; ++r) data.bias_acceleration0[i][r] = c[r];
+    Vec6& bias = data.articulated_bias[i];
+    for (int r = 0; r < 6; ++r) bias[r] = pA[r];
+    if (external_force) bias -= (*external_force)[static_cast<size_t>(i)];
   }
   // Pass 2: articulated inertias and bias forces, leaves to root. The arrays' bases said aligned,
   // so that every link's and parent's entries are (aligned()).

@@ -117,7 +117,7 @@ TEST_P(LaneControl, DelaysAndActuatorsWithinTolOfSimulation) {
   EXPECT_NE(batch.step_path().find(" lanes"), std::string::npos) << batch.step_path();
   // Where a velocity limit holds a drive back, the two rows' forces are large and opposite and
   // their split carries any order's last bits: the scalar step started a last bit off moves them
-  // by 0.4e-12 to 2.6e-12 where q, qd move by 1e-13. So the forces are bounded by twice that
+  // by 0.4e-12 to 3.3e-12 where q, qd move by 1e-13. So the forces are bounded by twice that
   // spread of their own (at least 1e-12), q and qd by 1e-12.
   const double own = std::max(1e-12, test::own_force_spread(alone, 1000, command));
   test::LaneWorst worst;

@@ -1,8 +1,8 @@
 // ABA pass 1 for one link in frame 0 (docs/math/unit_response.md, "Pass 1", eq. P1-1 to P1-5),
 // over the number type: the body's inertia for Simulation (algorithm/aba.cpp, double) and the
 // lanes (sim/simd_lane_step.hpp's link_velocity_and_bias, one vector of a pack), so that both
-// form it with the same operations; the velocity, velocity-product acceleration and bias force
-// for the lanes (aba.cpp keeps Eigen's form of them: unit_response.md, "Pass 1"). A 3 x 3
+// form it with the same operations, and so the velocity, velocity-product acceleration and bias
+// force (each engine forms S qd itself: one column, a ball's three, a root's six). A 3 x 3
 // matrix is anything with m(r, c) (Eigen's Mat3, or a row-major T[9] through
 // joint_transform_law::rows); spatial vectors are T[6], [angular; linear]; the symmetric block A
 // is T[6]: 00 11 22 01 02 12 (link_laws.hpp's packed layout, its first six). Only
