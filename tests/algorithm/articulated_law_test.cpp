@@ -14,60 +14,22 @@
 
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/spatial/types.hpp"
+#include "support/symmetric6.hpp"
 
 namespace featherdrive {
 namespace {
 
-struct Full {  // all 36 entries, column-major
-  Mat6 m;
-  double operator()(int a, int b) const { return m(a, b); }
-  template <class F>
-  void accumulate(const F& f) {
-    for (int b = 0; b < 6; ++b)
-      for (int a = 0; a < 6; ++a) m(a, b) = m(a, b) + f(a, b);
-  }
-};
-
-// The packed 21 (link_law::pack_symmetric's layout, the lanes' kSym), upper triangle only.
-int packed_index(int a, int b) {
-  if (a > b) std::swap(a, b);
-  if (b < 3) return a == b ? a : (a == 0 ? (b == 1 ? 3 : 4) : 5);
-  if (a < 3) return 6 + 3 * a + (b - 3);
-  return packed_index(a - 3, b - 3) + 15;
-}
-struct Packed {
-  double e[21];
-  double operator()(int a, int b) const { return e[packed_index(a, b)]; }
-  template <class F>
-  void accumulate(const F& f) {
-    for (int a = 0; a < 6; ++a)
-      for (int b = a; b < 6; ++b) e[packed_index(a, b)] = e[packed_index(a, b)] + f(a, b);
-  }
-};
-Packed pack(const Mat6& m) {
-  Packed p;
-  link_law::pack_symmetric(m.data(), p.e);
-  return p;
-}
-
-Mat6 random_spd(std::mt19937_64& rng) {
-  std::normal_distribution<double> n;
-  Mat6 A;
-  for (int c = 0; c < 6; ++c)
-    for (int r = 0; r < 6; ++r) A(r, c) = n(rng);
-  const Mat6 M = A * A.transpose() + 0.1 * Mat6::Identity();
-  return 0.5 * (M + M.transpose());  // symmetric to the bit
-}
-Vec6 random_vector(std::mt19937_64& rng) {
-  std::normal_distribution<double> n;
-  return Vec6(n(rng), n(rng), n(rng), n(rng), n(rng), n(rng));
-}
+using test::FullSymmetric;
+using test::PackedSymmetric;
+using test::pack;
+using test::packed_index;
+using test::random_spd;
 
 TEST(ArticulatedLaw, PackedIndexIsLinkLawsLayout) {
   Mat6 m;
   for (int c = 0; c < 6; ++c)
     for (int r = 0; r < 6; ++r) m(r, c) = r <= c ? 10 * r + c : 10 * c + r;
-  const Packed p = pack(m);
+  const PackedSymmetric p = pack(m);
   for (int a = 0; a < 6; ++a)
     for (int b = 0; b < 6; ++b) EXPECT_EQ(p(a, b), m(a, b)) << a << ", " << b;
 }
@@ -76,7 +38,7 @@ TEST(ArticulatedLaw, JointInertiaAndForceAreTheDenseProducts) {  // AP1, AP2
   std::mt19937_64 rng(11);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng);
-    const Vec6 S = random_vector(rng), pA = random_vector(rng);
+    const Vec6 S = test::random_vec6(rng), pA = test::random_vec6(rng);
     const double armature = 0.01 * k, tau = 0.5 - 0.003 * k;
     const Vec6 U_dense = IA * S;
     const double D = S.dot(IA * S) + armature;
@@ -84,7 +46,7 @@ TEST(ArticulatedLaw, JointInertiaAndForceAreTheDenseProducts) {  // AP1, AP2
       Vec6 U;
       const double D_inv =
           packed ? articulated_law::joint_inertia(pack(IA), S.data(), armature, U.data())
-                 : articulated_law::joint_inertia(Full{IA}, S.data(), armature, U.data());
+                 : articulated_law::joint_inertia(FullSymmetric{IA}, S.data(), armature, U.data());
       EXPECT_LT((U - U_dense).norm(), 1e-13 * U_dense.norm()) << k;
       EXPECT_NEAR(D_inv * D, 1.0, 1e-13) << k;
     }
@@ -97,8 +59,8 @@ TEST(ArticulatedLaw, ProjectionIsEigensDenseForm) {  // AP3, AP4
   std::mt19937_64 rng(12);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng), IA_parent = random_spd(rng);
-    const Vec6 S = random_vector(rng), pA = random_vector(rng), c = random_vector(rng);
-    const Vec6 pA_parent = random_vector(rng);
+    const Vec6 S = test::random_vec6(rng), pA = test::random_vec6(rng), c = test::random_vec6(rng);
+    const Vec6 pA_parent = test::random_vec6(rng);
     const double armature = 0.02 * k, tau = 1.0 - 0.01 * k;
     // The unsimplified form: Ia = IA - U U^T / D, pa = pA + Ia c + U u / D.
     const Vec6 U_dense = IA * S;
@@ -110,18 +72,18 @@ TEST(ArticulatedLaw, ProjectionIsEigensDenseForm) {  // AP3, AP4
     const double scale = IA.norm() + IA_parent.norm();
 
     Vec6 U;
-    Full full{IA_parent};
-    const double D_inv = articulated_law::joint_inertia(Full{IA}, S.data(), armature, U.data());
+    FullSymmetric full{IA_parent};
+    const double D_inv = articulated_law::joint_inertia(FullSymmetric{IA}, S.data(), armature, U.data());
     const double u = articulated_law::joint_force(tau, S.data(), pA.data());
-    articulated_law::project_inertia(Full{IA}, U.data(), D_inv, full);
+    articulated_law::project_inertia(FullSymmetric{IA}, U.data(), D_inv, full);
     Vec6 bias = pA_parent;
-    articulated_law::project_bias(Full{IA}, pA.data(), c.data(), U.data(), D_inv, u, bias.data());
+    articulated_law::project_bias(FullSymmetric{IA}, pA.data(), c.data(), U.data(), D_inv, u, bias.data());
     EXPECT_LT((full.m - expected_inertia).norm(), 1e-12 * scale) << k;
     EXPECT_LT((bias - expected_bias).norm(), 1e-12 * (scale + expected_bias.norm())) << k;
 
     // The packed 21 take the same operations on the upper triangle: the same bits.
-    Packed packed = pack(IA_parent);
-    const Packed IA_packed = pack(IA);
+    PackedSymmetric packed = pack(IA_parent);
+    const PackedSymmetric IA_packed = pack(IA);
     Vec6 U_packed;
     const double D_inv_packed =
         articulated_law::joint_inertia(IA_packed, S.data(), armature, U_packed.data());
@@ -142,11 +104,11 @@ TEST(ArticulatedLaw, ProjectionRemovesTheJointsDirection) {  // AP3: (IA - U U^T
   std::mt19937_64 rng(13);
   for (int k = 0; k < 100; ++k) {
     const Mat6 IA = random_spd(rng);
-    const Vec6 S = random_vector(rng);
+    const Vec6 S = test::random_vec6(rng);
     Vec6 U;
-    const double D_inv = articulated_law::joint_inertia(Full{IA}, S.data(), 0.0, U.data());
-    Full projected{Mat6::Zero()};
-    articulated_law::project_inertia(Full{IA}, U.data(), D_inv, projected);
+    const double D_inv = articulated_law::joint_inertia(FullSymmetric{IA}, S.data(), 0.0, U.data());
+    FullSymmetric projected{Mat6::Zero()};
+    articulated_law::project_inertia(FullSymmetric{IA}, U.data(), D_inv, projected);
     EXPECT_LT((projected.m * S).norm(), 1e-12 * IA.norm() * S.norm()) << k;
   }
 }
@@ -164,7 +126,7 @@ TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
     std::vector<double> armature(links), tau(links);
     for (int k = 0; k < links; ++k) {
       I[k] = random_spd(rng);
-      S[k] = random_vector(rng);
+      S[k] = test::random_vec6(rng);
       armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
       tau[k] = n(rng);
     }
@@ -180,7 +142,7 @@ TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
     }
     const Eigen::VectorXd expected = M.ldlt().solve(rhs);
 
-    std::vector<Full> IA(links);
+    std::vector<FullSymmetric> IA(links);
     for (int k = 0; k < links; ++k) IA[k].m = I[k];
     std::vector<Vec6> U(links), pA(links, Vec6::Zero());
     std::vector<double> D_inv(links), u(links);

@@ -15,66 +15,23 @@
 
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/spatial/types.hpp"
+#include "support/symmetric6.hpp"
 
 namespace featherdrive {
 namespace {
 
-struct Full {  // all 36 entries, column-major
-  Mat6 m;
-  double operator()(int a, int b) const { return m(a, b); }
-  template <class F>
-  void accumulate(const F& f) {
-    for (int b = 0; b < 6; ++b)
-      for (int a = 0; a < 6; ++a) m(a, b) = m(a, b) + f(a, b);
-  }
-  template <class F>
-  void assign(const F& f) {
-    for (int b = 0; b < 6; ++b)
-      for (int a = 0; a < 6; ++a) m(a, b) = f(a, b);
-  }
-};
-
-// The packed 21 (link_law::pack_symmetric's layout, the lanes' kSym), upper triangle only.
-int packed_index(int a, int b) {
-  if (a > b) std::swap(a, b);
-  if (b < 3) return a == b ? a : (a == 0 ? (b == 1 ? 3 : 4) : 5);
-  if (a < 3) return 6 + 3 * a + (b - 3);
-  return packed_index(a - 3, b - 3) + 15;
-}
-struct Packed {
-  double e[21];
-  double operator()(int a, int b) const { return e[packed_index(a, b)]; }
-  template <class F>
-  void assign(const F& f) {
-    for (int a = 0; a < 6; ++a)
-      for (int b = a; b < 6; ++b) e[packed_index(a, b)] = f(a, b);
-  }
-};
-Packed pack(const Mat6& m) {
-  Packed p;
-  link_law::pack_symmetric(m.data(), p.e);
-  return p;
-}
-
-Mat6 random_spd(std::mt19937_64& rng) {
-  std::normal_distribution<double> n;
-  Mat6 A;
-  for (int c = 0; c < 6; ++c)
-    for (int r = 0; r < 6; ++r) A(r, c) = n(rng);
-  const Mat6 M = A * A.transpose() + 0.1 * Mat6::Identity();
-  return 0.5 * (M + M.transpose());  // symmetric to the bit
-}
-Vec6 random_vector(std::mt19937_64& rng) {
-  std::normal_distribution<double> n;
-  return Vec6(n(rng), n(rng), n(rng), n(rng), n(rng), n(rng));
-}
+using test::FullSymmetric;
+using test::PackedSymmetric;
+using test::pack;
+using test::packed_index;
+using test::random_spd;
 
 TEST(ResponseLaw, IsTheProjectedParentResponse) {  // R1-R4 against Lambda = S D^-1 S^T + P T P^T
   std::mt19937_64 rng(21);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng);
     const Mat6 T = k % 10 == 0 ? Mat6::Zero() : random_spd(rng);  // the world's, or a parent's
-    const Vec6 S = random_vector(rng);
+    const Vec6 S = test::random_vec6(rng);
     const double armature = 0.01 * (k % 7);
     const Vec6 U = IA * S;
     const double D = S.dot(U) + armature;
@@ -85,16 +42,16 @@ TEST(ResponseLaw, IsTheProjectedParentResponse) {  // R1-R4 against Lambda = S D
     const double scale = expected.norm() + T.norm();
 
     Vec6 W, G;
-    Full L{Mat6::Zero()};
+    FullSymmetric L{Mat6::Zero()};
     const double r =
-        response_law::response(Full{T}, S.data(), U.data(), 1.0 / D, W.data(), G.data(), L);
+        response_law::response(FullSymmetric{T}, S.data(), U.data(), 1.0 / D, W.data(), G.data(), L);
     EXPECT_LT((L.m - expected).norm(), 1e-12 * scale) << k;
     EXPECT_NEAR(r, expected_r, 1e-12 * expected_r) << k;
     EXPECT_LE((W - expected_W).norm(), 1e-12 * (T.norm() * U.norm())) << k;
     EXPECT_LT((G - (expected_r * S - expected_W / D)).norm(), 1e-12 * scale * S.norm()) << k;
 
     // The packed 21 take the same operations on the upper triangle: the same bits.
-    Packed packed;
+    PackedSymmetric packed;
     Vec6 W_packed, G_packed;
     const double r_packed = response_law::response(pack(T), S.data(), U.data(), 1.0 / D,
                                                    W_packed.data(), G_packed.data(), packed);
@@ -119,7 +76,7 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
     std::vector<double> armature(n);
     for (int k = 0; k < n; ++k) {
       I[k] = random_spd(rng);
-      S[k] = random_vector(rng);
+      S[k] = test::random_vec6(rng);
       armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
     }
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
@@ -132,7 +89,7 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
     }
     const Eigen::MatrixXd M_inv = M.inverse();
 
-    std::vector<Full> IA(n);
+    std::vector<FullSymmetric> IA(n);
     for (int k = 0; k < n; ++k) IA[k].m = I[k];
     std::vector<Vec6> U(n);
     std::vector<double> D_inv(n);
@@ -140,11 +97,11 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
       D_inv[k] = articulated_law::joint_inertia(IA[k], S[k].data(), armature[k], U[k].data());
       if (k > 0) articulated_law::project_inertia(IA[k], U[k].data(), D_inv[k], IA[k - 1]);
     }
-    std::vector<Full> L(n);
+    std::vector<FullSymmetric> L(n);
     std::vector<Vec6> W(n), G(n);
     std::vector<double> r(n);
     for (int k = 0; k < n; ++k) {
-      const Full parent{k > 0 ? L[k - 1].m : Mat6::Zero()};
+      const FullSymmetric parent{k > 0 ? L[k - 1].m : Mat6::Zero()};
       r[k] = response_law::response(parent, S[k].data(), U[k].data(), D_inv[k], W[k].data(),
                                     G[k].data(), L[k]);
       const Mat6 expected = J[k] * M_inv * J[k].transpose();
