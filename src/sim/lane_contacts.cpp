@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
+#include "featherdrive/sim/link_laws.hpp"
 
 #include "lane_engine.hpp"
 #include "workspace.hpp"
@@ -12,25 +13,6 @@
 namespace featherdrive::simd {
 namespace {
 
-// Entry (a, b) of a symmetric 6 x 6 matrix in the lanes' storage (simd_lane_step.hpp's
-// sym_index): A's (00, 11, 22, 01, 02, 12), B's nine row-major, C's six; as a table, column by
-// column (Mat6's order).
-constexpr int symmetric_entry(int a, int b) {
-  if (a > b) return symmetric_entry(b, a);
-  if (a < 3 && b >= 3) return 6 + 3 * a + (b - 3);
-  const int base = a < 3 ? 0 : 15, r = a % 3, c = b % 3;
-  return base + (r == c ? r : r + c + 2);
-}
-struct SymmetricEntries {
-  int at[36];
-};
-constexpr SymmetricEntries make_entries() {
-  SymmetricEntries t{};
-  for (int c = 0; c < 6; ++c)
-    for (int r = 0; r < 6; ++r) t.at[6 * c + r] = symmetric_entry(r, c);
-  return t;
-}
-constexpr SymmetricEntries kEntries = make_entries();
 
 // A lane's entries of the scratch.
 struct LaneEntries {
@@ -103,7 +85,9 @@ void contact_setup(ContactLanes& c, const Plan& p, int env, const double* s, int
   for (int L = 0; L < p.num_links; ++L) {
     if (!shaped[static_cast<size_t>(L)]) continue;
     double* response = ws.data.response[L].data();
-    for (int k = 0; k < 36; ++k) response[k] = x(l.Lambda + 21 * L + kEntries.at[k]);
+    for (int c = 0; c < 6; ++c)  // column by column (Mat6's order) from the packed layout
+      for (int r = 0; r < 6; ++r)
+        response[6 * c + r] = x(l.Lambda + 21 * L + link_law::kPacked[r][c]);
     ws.link_cfm[L] = p.any_cfm ? x(l.cfm + L) : 0.0;
     ws.contact_link_velocity[static_cast<size_t>(L)] = x.six(l.contact_vel + 6 * L);
   }

@@ -40,30 +40,9 @@
 namespace featherdrive::simd {
 namespace {
 
-// The index of entry (a, b) of a symmetric 6 x 6 matrix [A, B; B^T, C] stored as A's six
-// distinct entries (00, 11, 22, 01, 02, 12), B's nine (row-major), C's six.
-constexpr int sym_index(int a, int b) {
-  if (a >= 3 && b < 3) return sym_index(b, a);
-  if (a < 3 && b >= 3) return 6 + 3 * a + (b - 3);
-  const int base = a < 3 ? 0 : 15;
-  const int r = a < 3 ? a : a - 3, c = b < 3 ? b : b - 3;
-  if (r == c) return base + r;
-  const int lo = r < c ? r : c, hi = r < c ? c : r;
-  return base + (lo == 0 ? (hi == 1 ? 3 : 4) : 5);
-}
-
-// sym_index as a table: loops index it with their counters, where a recursive constexpr function
-// is not always folded (it showed as 5 % of the step's time on arm7).
-struct SymmetricIndex {
-  int at[6][6];
-};
-constexpr SymmetricIndex make_symmetric_index() {
-  SymmetricIndex t{};
-  for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) t.at[a][b] = sym_index(a, b);
-  return t;
-}
-inline constexpr SymmetricIndex kSym = make_symmetric_index();
+// A symmetric 6 x 6 matrix [A, B; B^T, C] is stored as A's six distinct entries (00, 11, 22, 01,
+// 02, 12), B's nine (row-major), C's six: entry (a, b) at kSym[a][b] (link_law's packed layout).
+constexpr const auto& kSym = link_law::kPacked;
 
 // Architecture A's vector of doubles and its mask as the lane step uses them: an xsimd
 // architecture's batch, or One's plain double (one lane, simd_lane_step_one.cpp). The step
@@ -412,8 +391,8 @@ class LaneStep {
   // y = M x for vector j of the packs of M (x, y: that vector's entries, kept in registers).
   [[gnu::always_inline]] static void sym_times(const V* m, int j, const B* x, B* y) {
     for (int r = 0; r < 6; ++r) {
-      B sum = m[kSym.at[r][0]].b[j] * x[0];
-      for (int k = 1; k < 6; ++k) sum = sum + m[kSym.at[r][k]].b[j] * x[k];
+      B sum = m[kSym[r][0]].b[j] * x[0];
+      for (int k = 1; k < 6; ++k) sum = sum + m[kSym[r][k]].b[j] * x[k];
       y[r] = sum;
     }
   }
@@ -421,7 +400,7 @@ class LaneStep {
   struct SymmetricVector {
     const V* m;
     int j;
-    [[gnu::always_inline]] B operator()(int a, int b) const { return m[kSym.at[a][b]].b[j]; }
+    [[gnu::always_inline]] B operator()(int a, int b) const { return m[kSym[a][b]].b[j]; }
   };
   // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law accumulates it: the
   // upper triangle row by row, entry (a, b) for b >= a, each stored as it is summed (formed
@@ -433,7 +412,7 @@ class LaneStep {
     [[gnu::always_inline]] void accumulate(const F& f) const {
       for (int a = 0; a < 6; ++a)
         for (int b = a; b < 6; ++b) {
-          const int k = kSym.at[a][b];
+          const int k = kSym[a][b];
           m[k].b[j] = m[k].b[j] + f(a, b);
         }
     }
@@ -447,7 +426,7 @@ class LaneStep {
     template <class F>
     [[gnu::always_inline]] void assign(const F& f) const {
       for (int a = 0; a < 6; ++a)
-        for (int b = a; b < 6; ++b) m[kSym.at[a][b]].b[j] = f(a, b);
+        for (int b = a; b < 6; ++b) m[kSym[a][b]].b[j] = f(a, b);
     }
   };
   // a^T b summed left to right (as the lanes always have: a tree's other rounding moved them
@@ -1949,8 +1928,8 @@ void LaneStep<A, K>::root_articulated() {
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) {
       const int h = c < 3 ? 0 : 3, col = c % 3;
-      U[6 * r + c] = IA[kSym.at[r][h]] * R0[col] + IA[kSym.at[r][h + 1]] * R0[3 + col] +
-                     IA[kSym.at[r][h + 2]] * R0[6 + col];
+      U[6 * r + c] = IA[kSym[r][h]] * R0[col] + IA[kSym[r][h + 1]] * R0[3 + col] +
+                     IA[kSym[r][h + 2]] * R0[6 + col];
     }
   V D[36];
   for (int a = 0; a < 6; ++a)
@@ -2016,7 +1995,7 @@ void LaneStep<A, K>::root_response() {
   for (int a = 0; a < 6; ++a)
     for (int b = a; b < 6; ++b) {
       const int h = b < 3 ? 0 : 3, r = b % 3;
-      L[kSym.at[a][b]] = SD[6 * a + h] * R0[3 * r] + SD[6 * a + h + 1] * R0[3 * r + 1] +
+      L[kSym[a][b]] = SD[6 * a + h] * R0[3 * r] + SD[6 * a + h + 1] * R0[3 * r + 1] +
                          SD[6 * a + h + 2] * R0[3 * r + 2];
     }
 }
@@ -2441,8 +2420,8 @@ void LaneStep<A, K>::ball_articulated(int i) {
   V* Di = at(l_.ball_D_inv + 9 * i);
   for (int a = 0; a < 3; ++a)
     for (int r = 0; r < 6; ++r) {
-      V x = IA[kSym.at[r][0]] * S3[6 * a];
-      for (int m = 1; m < 6; ++m) x = x + IA[kSym.at[r][m]] * S3[6 * a + m];
+      V x = IA[kSym[r][0]] * S3[6 * a];
+      for (int m = 1; m < 6; ++m) x = x + IA[kSym[r][m]] * S3[6 * a + m];
       U3[6 * a + r] = x;
     }
   V D[9];
@@ -2465,7 +2444,7 @@ void LaneStep<A, K>::ball_articulated(int i) {
   for (int r = 0; r < 6; ++r)
     for (int c = r; c < 6; ++c) {
       const V x = (UD[r] * U3[c] + UD[6 + r] * U3[6 + c]) + UD[12 + r] * U3[12 + c];
-      Ia[kSym.at[r][c]] = IA[kSym.at[r][c]] - x;
+      Ia[kSym[r][c]] = IA[kSym[r][c]] - x;
     }
   const V* c = at(l_.c + 6 * i);
   V pa[6], Iac[6];
@@ -2522,7 +2501,7 @@ void LaneStep<A, K>::ball_response(int i) {
   };
   for (int r = 0; r < 6; ++r)
     for (int c = r; c < 6; ++c) {
-      const int e = kSym.at[r][c];
+      const int e = kSym[r][c];
       L[e] = (((T[e] - row3(SD, r, W3, c)) - row3(W3, r, SD, c)) + row3(SDU, r, SD, c)) +
              row3(SD, r, S3, c);
     }

@@ -28,15 +28,19 @@ void pack_symmetric(const T* m, T* out) {
   out[18] = m[3 + 6 * 4], out[19] = m[3 + 6 * 5], out[20] = m[4 + 6 * 5];
 }
 
+/// Where entry (r, c) of a symmetric 6 x 6 is in the packed T[21] (pack_symmetric's layout), as a
+/// table: loops index it with their counters, where a recursive constexpr function is not always
+/// folded (it showed as 5 % of the lanes' step on arm7).
+inline constexpr int kPacked[6][6] = {{0, 3, 4, 6, 7, 8},     {3, 1, 5, 9, 10, 11},
+                                      {4, 5, 2, 12, 13, 14},  {6, 9, 12, 15, 18, 19},
+                                      {7, 10, 13, 18, 16, 20}, {8, 11, 14, 19, 20, 17}};
+
 /// y = M x for a packed symmetric M, each row summed left to right.
 template <class T>
 void symmetric_times(const T* M, const T* x, T* y) {
-  constexpr int kIndex[6][6] = {{0, 3, 4, 6, 7, 8},     {3, 1, 5, 9, 10, 11},
-                                {4, 5, 2, 12, 13, 14},  {6, 9, 12, 15, 18, 19},
-                                {7, 10, 13, 18, 16, 20}, {8, 11, 14, 19, 20, 17}};
   for (int r = 0; r < 6; ++r) {
-    T sum = M[kIndex[r][0]] * x[0];
-    for (int k = 1; k < 6; ++k) sum = sum + M[kIndex[r][k]] * x[k];
+    T sum = M[kPacked[r][0]] * x[0];
+    for (int k = 1; k < 6; ++k) sum = sum + M[kPacked[r][k]] * x[k];
     y[r] = sum;
   }
 }
