@@ -16,14 +16,8 @@
 #include "featherdrive/spatial/types.hpp"
 #include "support/symmetric6.hpp"
 
-namespace featherdrive {
+namespace featherdrive::test {  // support/symmetric6.hpp's adapters and inputs
 namespace {
-
-using test::FullSymmetric;
-using test::PackedSymmetric;
-using test::pack;
-using test::packed_index;
-using test::random_spd;
 
 TEST(ArticulatedLaw, PackedIndexIsLinkLawsLayout) {
   Mat6 m;
@@ -38,7 +32,7 @@ TEST(ArticulatedLaw, JointInertiaAndForceAreTheDenseProducts) {  // AP1, AP2
   std::mt19937_64 rng(11);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng);
-    const Vec6 S = test::random_vec6(rng), pA = test::random_vec6(rng);
+    const Vec6 S = random_vec6(rng), pA = random_vec6(rng);
     const double armature = 0.01 * k, tau = 0.5 - 0.003 * k;
     const Vec6 U_dense = IA * S;
     const double D = S.dot(IA * S) + armature;
@@ -59,8 +53,8 @@ TEST(ArticulatedLaw, ProjectionIsEigensDenseForm) {  // AP3, AP4
   std::mt19937_64 rng(12);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng), IA_parent = random_spd(rng);
-    const Vec6 S = test::random_vec6(rng), pA = test::random_vec6(rng), c = test::random_vec6(rng);
-    const Vec6 pA_parent = test::random_vec6(rng);
+    const Vec6 S = random_vec6(rng), pA = random_vec6(rng), c = random_vec6(rng);
+    const Vec6 pA_parent = random_vec6(rng);
     const double armature = 0.02 * k, tau = 1.0 - 0.01 * k;
     // The unsimplified form: Ia = IA - U U^T / D, pa = pA + Ia c + U u / D.
     const Vec6 U_dense = IA * S;
@@ -104,7 +98,7 @@ TEST(ArticulatedLaw, ProjectionRemovesTheJointsDirection) {  // AP3: (IA - U U^T
   std::mt19937_64 rng(13);
   for (int k = 0; k < 100; ++k) {
     const Mat6 IA = random_spd(rng);
-    const Vec6 S = test::random_vec6(rng);
+    const Vec6 S = random_vec6(rng);
     Vec6 U;
     const double D_inv = articulated_law::joint_inertia(FullSymmetric{IA}, S.data(), 0.0, U.data());
     FullSymmetric projected{Mat6::Zero()};
@@ -126,7 +120,7 @@ TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
     std::vector<double> armature(links), tau(links);
     for (int k = 0; k < links; ++k) {
       I[k] = random_spd(rng);
-      S[k] = test::random_vec6(rng);
+      S[k] = random_vec6(rng);
       armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
       tau[k] = n(rng);
     }
@@ -165,4 +159,4 @@ TEST(ArticulatedLaw, ChainAccelerationsAreTheDenseSolution) {
 }
 
 }  // namespace
-}  // namespace featherdrive
+}  // namespace featherdrive::test

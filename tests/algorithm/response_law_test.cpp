@@ -17,21 +17,15 @@
 #include "featherdrive/spatial/types.hpp"
 #include "support/symmetric6.hpp"
 
-namespace featherdrive {
+namespace featherdrive::test {  // support/symmetric6.hpp's adapters and inputs
 namespace {
-
-using test::FullSymmetric;
-using test::PackedSymmetric;
-using test::pack;
-using test::packed_index;
-using test::random_spd;
 
 TEST(ResponseLaw, IsTheProjectedParentResponse) {  // R1-R4 against Lambda = S D^-1 S^T + P T P^T
   std::mt19937_64 rng(21);
   for (int k = 0; k < 200; ++k) {
     const Mat6 IA = random_spd(rng);
     const Mat6 T = k % 10 == 0 ? Mat6::Zero() : random_spd(rng);  // the world's, or a parent's
-    const Vec6 S = test::random_vec6(rng);
+    const Vec6 S = random_vec6(rng);
     const double armature = 0.01 * (k % 7);
     const Vec6 U = IA * S;
     const double D = S.dot(U) + armature;
@@ -76,7 +70,7 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
     std::vector<double> armature(n);
     for (int k = 0; k < n; ++k) {
       I[k] = random_spd(rng);
-      S[k] = test::random_vec6(rng);
+      S[k] = random_vec6(rng);
       armature[k] = trial % 2 ? 0.05 * (k + 1) : 0.0;
     }
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
@@ -122,4 +116,4 @@ TEST(ResponseLaw, ChainResponsesAreTheDenseOperationalSpaceInverses) {
 }
 
 }  // namespace
-}  // namespace featherdrive
+}  // namespace featherdrive::test
