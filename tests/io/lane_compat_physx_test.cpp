@@ -18,7 +18,7 @@
 namespace featherdrive {
 namespace {
 
-using test::lanes_against_alone;
+using test::expect_lanes_as_alone;
 
 // DART's KUKA KR5 and Barrett WAM as loaded (their URDF velocity and effort limits), compat physx
 // with PhysX's defaults for the rest, force drives towards a pose 0.5 rad away, PGS and TGS.
@@ -40,8 +40,7 @@ TEST(LaneCompatPhysx, DartArmsAsSimulation) {
         sim.set_drive(d, Drive{DriveType::force, 2e3, 100.0, effort > 0.0 ? effort : test::kInf,
                                d % 2 ? 0.5 : -0.5, 0.0});
       }
-      EXPECT_LE(lanes_against_alone(sim, 1000, file + ", compat physx, " + to_string(solver)),
-                1e-12);
+      expect_lanes_as_alone(sim, 1000, file + ", compat physx, " + to_string(solver));
     }
   }
 }
@@ -50,8 +49,7 @@ TEST(LaneCompatPhysx, DartArmsAsSimulation) {
 TEST(LaneCompatPhysx, HumanoidHoldAsSimulation) {
   Scene scene = load_scene(test::kExamples + "humanoid_hold.yaml");
   scene.options.compat = Compat::physx;
-  EXPECT_LE(lanes_against_alone(make_simulation(scene), 1000, "humanoid_hold, compat physx"),
-            1e-12);
+  expect_lanes_as_alone(make_simulation(scene), 1000, "humanoid_hold, compat physx");
 }
 
 }  // namespace

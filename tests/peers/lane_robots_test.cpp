@@ -17,7 +17,7 @@
 namespace featherdrive {
 namespace {
 
-using test::lanes_against_alone;
+using test::expect_lanes_as_alone;
 
 // DART's Atlas (v3, no head) and DRC-Hubo as loaded (their URDF velocity limits on), fixed and
 // floating (no ground: a floating robot falls), every dof driven to hold its start pose with
@@ -38,10 +38,8 @@ TEST(LaneFloatingRobots, AtlasAndDrcHuboAsSimulation) {
           if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic)
             sim.set_drive(link.v_index, Drive{DriveType::force, 800.0, 40.0, test::kInf,
                                               0.1 * ((link.v_index % 3) - 1), 0.0});
-        EXPECT_LE(lanes_against_alone(sim, 1000,
-                                      file + (fixed ? ", fixed, " : ", floating, ") +
-                                          to_string(solver)),
-                  1e-12);
+        expect_lanes_as_alone(sim, 1000,
+                              file + (fixed ? ", fixed, " : ", floating, ") + to_string(solver));
       }
 }
 
@@ -53,7 +51,7 @@ TEST(LaneFloatingRobots, MujocoHumanoidFreeAsSimulation) {
     scene.options.solver = solver;
     const Simulation sim = make_simulation(scene);
     ASSERT_TRUE(sim.model().floating_base());
-    EXPECT_LE(lanes_against_alone(sim, 1000, std::string("humanoid, free, ") + to_string(solver)), 1e-12);
+    expect_lanes_as_alone(sim, 1000, std::string("humanoid, free, ") + to_string(solver));
   }
 }
 
@@ -74,15 +72,13 @@ TEST(LaneFloatingRobots, CompatPhysxAsSimulation) {
       if (link.joint_type == JointType::revolute)
         sim.set_drive(link.v_index, Drive{DriveType::force, 800.0, 40.0, test::kInf,
                                           0.1 * ((link.v_index % 3) - 1), 0.0});
-    EXPECT_LE(lanes_against_alone(sim, 1000, "atlas, floating, compat physx, " +
-                                                 std::string(to_string(solver))),
-              1e-12);
+    expect_lanes_as_alone(sim, 1000,
+                          "atlas, floating, compat physx, " + std::string(to_string(solver)));
     Scene scene = load_scene(test::kSourceDir + "/tests/data/humanoid_free.yaml");
     scene.options.solver = solver;
     scene.options.compat = Compat::physx;
-    EXPECT_LE(lanes_against_alone(make_simulation(scene), 1000,
-                                  "humanoid, free, compat physx, " + std::string(to_string(solver))),
-              1e-12);
+    expect_lanes_as_alone(make_simulation(scene), 1000,
+                          "humanoid, free, compat physx, " + std::string(to_string(solver)));
   }
 }
 

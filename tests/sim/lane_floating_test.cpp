@@ -16,7 +16,7 @@
 namespace featherdrive {
 namespace {
 
-using test::lanes_against_alone;
+using test::expect_lanes_as_alone;
 
 // A random tree of revolute and prismatic joints on a floating root, no gravity's ground to stop
 // it: drives on every joint, limits and viscous friction on some, the root tumbling (its start
@@ -52,9 +52,8 @@ TEST(LaneFloating, RandomTreeAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     const Simulation proto = floating_prototype(7, solver);
     ASSERT_TRUE(proto.model().floating_base());
-    EXPECT_LE(lanes_against_alone(proto, 1000,
-                                  std::string("random floating tree, ") + to_string(solver), 7),
-              1e-12);
+    expect_lanes_as_alone(proto, 1000, std::string("random floating tree, ") + to_string(solver),
+                          7);
   }
 }
 
@@ -101,10 +100,8 @@ TEST(LaneFloating, RandomTreeWithMimicRowsAsSimulation) {
     Simulation proto = floating_prototype(13, solver);
     const int nv = proto.model().nv;
     proto.set_mimic_joints({{7, 6, -1.5, 0.05}, {nv - 1, 8, -1.0, 0.0, 30.0, 0.7}});
-    EXPECT_LE(lanes_against_alone(proto, 1000,
-                                  std::string("random floating tree, mimic rows, ") +
-                                      to_string(solver)),
-              1e-12);
+    expect_lanes_as_alone(proto, 1000,
+                          std::string("random floating tree, mimic rows, ") + to_string(solver));
   }
 }
 
@@ -137,10 +134,8 @@ Simulation physx_prototype(SolverType solver, const Transform* frame = nullptr) 
 // in 1000 steps (measured, docs/simd_batch.md).
 TEST(LaneFloating, RandomTreeCompatPhysxAsSimulation) {
   for (SolverType solver : {SolverType::pgs, SolverType::tgs})
-    EXPECT_LE(lanes_against_alone(physx_prototype(solver), 1000,
-                                  std::string("random floating tree, compat physx, ") +
-                                      to_string(solver)),
-              1e-12);
+    expect_lanes_as_alone(physx_prototype(solver), 1000,
+                          std::string("random floating tree, compat physx, ") + to_string(solver));
 }
 
 // The same with the root's joint frame turned (0.7 rad about a skew axis) and moved: compat
@@ -152,11 +147,10 @@ TEST(LaneFloating, TurnedRootFrameCompatPhysxAsSimulation) {
   frame.E = rotation_about(Vec3(0.2, -0.6, 0.77).normalized(), 0.7);
   frame.r = Vec3(0.3, -0.2, 0.1);
   for (SolverType solver : {SolverType::pgs, SolverType::tgs})
-    EXPECT_LE(lanes_against_alone(physx_prototype(solver, &frame), 1000,
-                                  std::string("random floating tree, turned root frame, compat "
-                                              "physx, ") +
-                                      to_string(solver)),
-              1e-12);
+    expect_lanes_as_alone(physx_prototype(solver, &frame), 1000,
+                          std::string("random floating tree, turned root frame, compat "
+                                      "physx, ") +
+                              to_string(solver));
 }
 
 }  // namespace
