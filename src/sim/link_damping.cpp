@@ -5,6 +5,7 @@
 // too. The gravity term is PhysX's: it scales the link's weight by (1 - c_lin dt).
 #include <cmath>
 
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "physx_stages.hpp"
 
@@ -28,9 +29,12 @@ bool link_damping_forces(const Model& model, const Data& data,
     const Vec3 omega = R * v.head<3>();
     const Vec3 v_com = R * (v.tail<3>() + v.head<3>().cross(k.com));
     const Vec3 c = data.world_position[i] + R * k.com - origin;
-    RowMajor3 RI;  // R Ic
-    if (data.info[i].inertia_diagonal) RI = R * k.inertia_com.diagonal().asDiagonal();
-    else RI.noalias() = R * k.inertia_com;
+    RowMajor3 RI;  // R Ic, as ABA's pass 1 forms it (unit_response.md, P1-1)
+    if (data.info[i].inertia_diagonal)
+      link_motion_law::rotate_principal(R, k.inertia_com(0, 0), k.inertia_com(1, 1),
+                                        k.inertia_com(2, 2), RI);
+    else
+      link_motion_law::rotate_full(R, k.inertia_com, RI);
     const link_law::Damping<double> d{p.linear_damping, p.angular_damping, p.max_linear_velocity,
                                       p.max_angular_velocity};
     link_law::damping_force(d, omega.data(), v.data(), v_com.data(), RI.data(), c.data(), k.mass,
