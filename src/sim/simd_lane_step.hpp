@@ -28,10 +28,11 @@
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/constraint/row_sequence.hpp"
 #include "featherdrive/constraint/row_setup.hpp"
-#include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/integration_law.hpp"
+#include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
+#include "featherdrive/solver/sweep_law.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/quaternion_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
@@ -429,8 +430,8 @@ class LaneStep {
         for (int b = a; b < 6; ++b) m[kSym[a][b]].b[j] = f(a, b);
     }
   };
-  // a^T b summed left to right (as the lanes always have: a tree's other rounding moved them
-  // past 1e-12 of the scalar step in the lane tests). Every dot6 sums so.
+  // a^T b summed left to right. The sweep's one-dof operations sum in sweep_law's order (SW0,
+  // the scalar step's) instead.
   template <class T>
   [[gnu::always_inline]] static T sum6(const T& p0, const T& p1, const T& p2, const T& p3,
                                        const T& p4, const T& p5) {
@@ -462,6 +463,17 @@ class LaneStep {
     const B& operator()(const V& x) const { return x.b[j]; }
   };
   static constexpr bool kVectorByVector = kVector < 8;
+  // Six entries at p as `lane` reads them, for sweep_law: p[r] of the pack, or of one vector.
+  template <class P, class L>
+  struct Six {
+    P* p;
+    L lane;
+    [[gnu::always_inline]] decltype(auto) operator[](int r) const { return lane(p[r]); }
+  };
+  template <class P, class L>
+  [[gnu::always_inline]] static Six<P, L> six(const L& lane, P* p) {
+    return {p, lane};
+  }
   template <class L>
   static auto dot6(const L& lane, const V* a, const V* b) {
     return sum6(lane(a[0]) * lane(b[0]), lane(a[1]) * lane(b[1]), lane(a[2]) * lane(b[2]),
@@ -1177,10 +1189,13 @@ void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& b
   const V* pAk = at(l_.subtree + 6 * k);
   const V* U = at(l_.U + 6 * k);
   auto& b = lane(beta);
-  b = lane(at(l_.D_inv)[k]) * (lane(at(l_.jimp)[d]) - dot6(lane, at(l_.S + 6 * k), pAk));
+  using T = std::remove_cvref_t<decltype(b)>;
+  b = sweep_law::leave_beta(lane(at(l_.D_inv)[k]), lane(at(l_.jimp)[d]),
+                            sweep_law::dot6<T>(six(lane, at(l_.S + 6 * k)), six(lane, pAk)));
   if (lk.finish_on_leave) {
     auto& qd = lane(at(l_.qd)[d]);
-    qd = qd + (lane(at(l_.entry)[d]) - dot6(lane, at(l_.G + 6 * k), pAk));
+    qd = sweep_law::finished_velocity(qd, lane(at(l_.entry)[d]), six(lane, at(l_.G + 6 * k)),
+                                      six(lane, pAk));
   }
   if (!to_parent) return;
   V* pAp = at(l_.subtree + 6 * lk.parent);
@@ -1214,7 +1229,7 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
     T pA[N][6], Sp[N];  // Sp: S_i^T pA_i of the link being left
     for (int n = 0; n < N; ++n) {
       for (int r = 0; r < 6; ++r) pA[n][r] = lanes[n](pAk[r]);
-      Sp[n] = dot6(lanes[n], at(l_.S + 6 * k), pA[n]);
+      Sp[n] = sweep_law::dot6<T>(six(lanes[n], at(l_.S + 6 * k)), pA[n]);
     }
     for (int i = k; i != end; i = p_.links[i].parent) {
       const LinkConstants& l = p_.links[i];
@@ -1226,17 +1241,13 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
       for (int n = 0; n < N; ++n) {
         const auto& lane = lanes[n];
         T* x = pA[n];
-        const T b = lane(at(l_.D_inv)[i]) * (lane(at(l_.jimp)[d]) - Sp[n]);
+        const T b = sweep_law::leave_beta(lane(at(l_.D_inv)[i]), lane(at(l_.jimp)[d]), Sp[n]);
         // The parent's S^T pA after the hand-over, from this pA and a scalar (implicit_drives.md,
         // eq. GS3).
-        // Its sums paired: this product is on the run's chain of dependences.
         if (up_in_run)
-          Sp[n] = ((lane(S_up[0]) * x[0] + lane(S_up[1]) * x[1]) +
-                   (lane(S_up[2]) * x[2] + lane(S_up[3]) * x[3])) +
-                  ((lane(S_up[4]) * x[4] + lane(S_up[5]) * x[5]) + b * lane(at(l_.chain_pS)[i]));
-        const T Gp = dot6(lane, G, x);
+          Sp[n] = sweep_law::parent_S_pA(six(lane, S_up), x, b, lane(at(l_.chain_pS)[i]));
         auto& qd = lane(at(l_.qd)[d]);
-        qd = qd + (lane(at(l_.entry)[d]) - Gp);
+        qd = sweep_law::finished_velocity(qd, lane(at(l_.entry)[d]), six(lane, G), x);
         for (int r = 0; r < 6; ++r) x[r] = x[r] + b * lane(U[r]);
       }
     }
@@ -1338,10 +1349,10 @@ void LaneStep<A, K>::finish_link(int i) {
     return;
   }
   const int d = lk.v_index;
-  V dqd = at(l_.entry)[d] - dot6(at(l_.G + 6 * i), at(l_.subtree + 6 * i));
+  V dqd = at(l_.entry)[d] - sweep_law::dot6<V>(at(l_.G + 6 * i), at(l_.subtree + 6 * i));
   if (lk.later) {
     const V* S = at(l_.S + 6 * i);
-    const V later = -at(l_.D_inv)[i] * dot6(at(l_.U + 6 * i), E);
+    const V later = sweep_law::later(at(l_.D_inv)[i], at(l_.U + 6 * i), E);
     dqd = dqd + later;
     for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r] + later * S[r];
   }
@@ -1366,13 +1377,14 @@ template <bool kGiven, class L>
   using T = std::remove_cv_t<decltype(D_inv)>;
   // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
   // part that does not wait on this link's impulse is formed before the rows (eq. GS2).
-  const T base = k.chain_in ? lane(at(l_.chain_base)[i]) : -D_inv * dot6(lane, U, dvp);
+  const T base = k.chain_in ? lane(at(l_.chain_base)[i])
+                            : sweep_law::base(D_inv, six(lane, U), six(lane, dvp));
   const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
   T ahead{};
   if (chain_next) {
     const T D_next = lane(at(l_.D_inv)[i + 1]);  // its b^b = -D^-1 U^T S_i, formed as in the pass
-    ahead = -D_next * dot6(lane, at(l_.U + 6 * (i + 1)), dvp) +
-            base * (-D_next * lane(at(l_.chain_pS)[i + 1]));
+    ahead = sweep_law::ahead(D_next, six(lane, at(l_.U + 6 * (i + 1))), six(lane, dvp), base,
+                             T(-D_next * lane(at(l_.chain_pS)[i + 1])));
   }
   T impulse;
   if constexpr (kGiven) {
@@ -1388,13 +1400,13 @@ template <bool kGiven, class L>
     impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
   lane(at(l_.jimp)[d]) = impulse;
-  if (chain_next) lane(at(l_.chain_base)[i + 1]) = ahead + impulse * lane(at(l_.chain_pi)[i + 1]);
-  const T dqd = base + lane(at(l_.inverse_mass)[i]) * impulse;
-  lane(at(l_.entry)[d]) = dqd;
-  const T h = D_inv * impulse;
-  T out[6];  // all read before any is stored: one lane's six then go as pairs (SSE2)
-  for (int r = 0; r < 6; ++r) out[r] = (lane(dvp[r]) - h * lane(W[r])) + dqd * lane(S[r]);
-  for (int r = 0; r < 6; ++r) lane(dv[r]) = out[r];
+  if (chain_next)
+    lane(at(l_.chain_base)[i + 1]) =
+        sweep_law::chained_base(ahead, impulse, T(lane(at(l_.chain_pi)[i + 1])));
+  // dv's entries all read before any is stored: one lane's six then go as pairs (SSE2).
+  lane(at(l_.entry)[d]) =
+      sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv, six(lane, dvp),
+                            six(lane, W), six(lane, S), six(lane, dv));
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows

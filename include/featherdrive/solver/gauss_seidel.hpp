@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/solver/sweep_law.hpp"
 
 namespace featherdrive {
 
@@ -110,14 +111,14 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
       // stays in registers and is stored once, for the link where the run ends (no link of the
       // run reads its own again).
       Vec6 pA = subtree_impulse[k];
-      if (!have_x) x = one_dof[k].S.dot(pA);
+      if (!have_x) x = sweep_law::dot6<double>(one_dof[k].S, pA);
       for (;;) {
         const Data::OneDof& J = one_dof[k];
         const int d = links[k].v_index;
         const int up = links[k].parent;
-        const double beta = J.D_inv * (joint_impulse[d] - x);
-        qd[d] += entry_velocity_change[d] - J.G.dot(pA);
-        x = one_dof[up].S.dot(pA) + beta * J.parent_S;
+        const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse[d], x);
+        qd[d] = sweep_law::finished_velocity(qd[d], entry_velocity_change[d], J.G, pA);
+        x = sweep_law::parent_S_pA(one_dof[up].S, pA, beta, J.parent_S);
         pA = pA + beta * J.U;
         k = up;
         if (!links[k].chain_up || links[k].parent == stop) break;
@@ -135,11 +136,12 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
     }
     const Data::OneDof& J = one_dof[k];
     const Vec6& pA = subtree_impulse[k];
-    if (!have_x) x = J.S.dot(pA);
+    if (!have_x) x = sweep_law::dot6<double>(J.S, pA);
     const int d = link.v_index;
-    const double beta = J.D_inv * (joint_impulse[d] - x);
+    const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse[d], x);
     // Its velocity change: what it had when entered, plus what its subtree's impulses do to it.
-    if (link.finish_on_leave) qd[d] += entry_velocity_change[d] - J.G.dot(pA);
+    if (link.finish_on_leave)
+      qd[d] = sweep_law::finished_velocity(qd[d], entry_velocity_change[d], J.G, pA);
     if (p < 0) return;
     // S_p^T of the parent's pA after this hand-over (pA_p so far + pA + beta U).
     have_x = link.parent_one_dof && p != stop;
@@ -147,8 +149,8 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
     Vec6& pA_parent = subtree_impulse[p];
     if (have_x) {
       const Vec6& S_p = one_dof[p].S;
-      x = S_p.dot(pA) + beta * J.parent_S;
-      if (!first) x += S_p.dot(pA_parent);
+      x = sweep_law::parent_S_pA(S_p, pA, beta, J.parent_S);
+      if (!first) x += sweep_law::dot6<double>(S_p, pA_parent);
     }
     if (first) pA_parent = pA + beta * J.U;
     else pA_parent += pA + beta * J.U;
@@ -174,10 +176,10 @@ inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k,
   if (link.nv == 1) {
     const Data::OneDof& J = data.one_dof[i];
     const int d = link.v_index;
-    double dqd = ws.entry_velocity_change[d] - J.G.dot(pA);
+    double dqd = ws.entry_velocity_change[d] - sweep_law::dot6<double>(J.G, pA);
     if (link.later) {
       const Vec6 E_hat = parent_later();
-      const double later = -J.D_inv * J.U.dot(E_hat);
+      const double later = sweep_law::later(J.D_inv, J.U, E_hat);
       dqd += later;
       ws.later_velocity_change[i] = E_hat + later * J.S;
     }
@@ -236,7 +238,7 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
       // The next link's base, -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S) with
       // h = D^-1 impulse, is affine in the impulse.
       const Vec6* dv_parent = &from_parent;
-      double base = -one_dof[i].D_inv * one_dof[i].U.dot(from_parent);
+      double base = sweep_law::base(one_dof[i].D_inv, one_dof[i].U, from_parent);
       for (;;) {
         const Data::OneDof& J = one_dof[i];
         const int d = links[i].v_index;
@@ -247,22 +249,20 @@ void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws
         double ahead = 0.0, per_impulse = 0.0;
         if (next) {
           const Data::OneDof& C = one_dof[i + 1];
-          ahead = -C.D_inv * C.U.dot(*dv_parent) + base * C.base_per_parent_base;
+          ahead = sweep_law::ahead(C.D_inv, C.U, *dv_parent, base, C.base_per_parent_base);
           per_impulse = C.base_per_parent_impulse;
         }
         double impulse = 0.0;
         if (has_rows[d]) impulse = solve_row(d, v[d] + base);
         joint_impulse[d] = impulse;
-        const double dqd = base + J.inverse_mass * impulse;
-        const double h = J.D_inv * impulse;
-        entry_velocity_change[d] = dqd;
         Vec6& dv = velocity_change[i];
-        dv = *dv_parent - h * J.W + dqd * J.S;
+        entry_velocity_change[d] =
+            sweep_law::after_rows(base, impulse, J.inverse_mass, J.D_inv, *dv_parent, J.W, J.S, dv);
         if (!next) {  // a link with contacts ends its run (set_contact_links)
           if (links[i].contacts) ws.subtree_impulse[i] = -solve_contacts(i, dv);
           break;
         }
-        base = ahead + impulse * per_impulse;
+        base = sweep_law::chained_base(ahead, impulse, per_impulse);
         dv_parent = &dv;
         previous = ++i;
       }
