@@ -126,9 +126,9 @@ struct Sqrt {
 
 // ABA pass 2 at a joint of N dofs (multi_dof_law, docs/math/unit_response.md, eq. AP7-AP11):
 // U, D^-1 and the parent's I^A; with kBias also u and the parent's p^A. S: the joint's
-// (detail::Subspace).
+// (detail::Subspace). Out of line: inlined, it costs the 1-dof path registers.
 template <int N, bool kBias>
-void multi_dof_pass(const Model& model, Data& data, int i, const VecX* tau) {
+[[gnu::noinline]] void multi_dof_pass(const Model& model, Data& data, int i, const VecX* tau) {
   const Data::LinkInfo& link = data.info[i];
   Mat6* const inertia = aligned(data.articulated_inertia.data());
   const Entries IA(inertia[i]);
