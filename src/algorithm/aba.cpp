@@ -6,11 +6,10 @@
 
 #include <cmath>
 
-#include <Eigen/Cholesky>
-
 #include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/link_motion_law.hpp"
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "joint_acceleration.hpp"
 
 namespace featherdrive {
@@ -87,61 +86,6 @@ void subspace_in_frame0(const Model& model, Data& data, int i, const Mat3& R, co
     data.motion_subspace[i].col(c) = motion_to_frame0(R, p, S_link.col(c));
 }
 
-// The inverse of a symmetric positive definite N x N matrix from its Cholesky factor L:
-// D^-1 = L^-T L^-1. Written out for fixed sizes, where Eigen's LLT::solve takes a blocked
-// triangular solve meant for large matrices.
-template <int N>
-Eigen::Matrix<double, N, N> spd_inverse(const Eigen::Matrix<double, N, N>& D) {
-  using MatKK = Eigen::Matrix<double, N, N>;
-  MatKK L = MatKK::Zero();
-  for (int j = 0; j < N; ++j) {
-    double d = D(j, j);
-    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
-    L(j, j) = std::sqrt(d);
-    for (int i = j + 1; i < N; ++i) {
-      double x = D(i, j);
-      for (int k = 0; k < j; ++k) x -= L(i, k) * L(j, k);
-      L(i, j) = x / L(j, j);
-    }
-  }
-  MatKK L_inv = MatKK::Zero();  // lower triangular, column by column (forward substitution)
-  for (int j = 0; j < N; ++j) {
-    L_inv(j, j) = 1.0 / L(j, j);
-    for (int i = j + 1; i < N; ++i) {
-      double x = 0.0;
-      for (int k = j; k < i; ++k) x -= L(i, k) * L_inv(k, j);
-      L_inv(i, j) = x / L(i, i);
-    }
-  }
-  return L_inv.transpose() * L_inv;
-}
-
-// U, D^-1 of a joint with N dofs, on fixed-size matrices (Eigen runs the dynamic-size products
-// through its general matrix product).
-template <int N>
-void joint_inertia_fixed(const Model& model, int v_index, const Mat6N& S_dyn, const Mat6& IA,
-                         Mat6N& U_out, MatNN& D_inv) {
-  using Mat6K = Eigen::Matrix<double, 6, N>;
-  using MatKK = Eigen::Matrix<double, N, N>;
-  const Mat6K S = S_dyn;
-  const Mat6K U = IA * S;
-  MatKK D = S.transpose() * U;
-  D.diagonal() += model.armature.segment<N>(v_index);
-  U_out = U;
-  D_inv = spd_inverse<N>(D);
-}
-
-// U, D^-1 of a joint with several dofs.
-void joint_inertia(const Model& model, int v_index, const Mat6N& S, const Mat6& IA, Mat6N& U,
-                   MatNN& D_inv) {
-  if (S.cols() == 6) return joint_inertia_fixed<6>(model, v_index, S, IA, U, D_inv);
-  if (S.cols() == 3) return joint_inertia_fixed<3>(model, v_index, S, IA, U, D_inv);
-  U.noalias() = IA * S;
-  MatNN D = S.transpose() * U;
-  D.diagonal() += model.armature.segment(v_index, S.cols());
-  D_inv = D.llt().solve(MatNN::Identity(S.cols(), S.cols()));
-}
-
 // The base of a Data array of Mat6, Vec6 or OneDof, which Eigen aligns to 16 bytes: said so, the
 // compiler knows every element's entry pairs are aligned (the element sizes are multiples of 16)
 // and SSE2 folds their loads into the arithmetic, as Eigen's own column operations did (42
@@ -175,6 +119,36 @@ struct Accumulated {
   }
 };
 
+// A correctly rounded square root, for multi_dof_law::spd_inverse.
+struct Sqrt {
+  double operator()(double x) const { return std::sqrt(x); }
+};
+
+// ABA pass 2 at a joint of N dofs (multi_dof_law, docs/math/unit_response.md, eq. AP7-AP11):
+// U, D^-1 and the parent's I^A; with kBias also u and the parent's p^A. S: the joint's
+// (detail::Subspace). Out of line: inlined, it costs the 1-dof path registers.
+template <int N, bool kBias>
+[[gnu::noinline]] void multi_dof_pass(const Model& model, Data& data, int i, const VecX* tau) {
+  const Data::LinkInfo& link = data.info[i];
+  Mat6* const inertia = aligned(data.articulated_inertia.data());
+  const Entries IA(inertia[i]);
+  const typename detail::Subspace<N>::type S = detail::Subspace<N>::of(data, i);
+  double* const U = data.U[i].data();
+  double* const D_inv = data.D_inv[i].data();
+  const double* const armature = model.armature.data() + link.v_index;
+  multi_dof_law::joint_inertia<N>(IA, S, [&](int a) { return armature[a]; }, Sqrt{}, U, D_inv);
+  double* const u = data.u.data() + link.v_index;
+  const double* const pA = data.articulated_bias[i].data();
+  if (kBias) multi_dof_law::joint_force<N>(tau->data() + link.v_index, S, pA, u);
+  if (link.parent < 0) return;
+  double UD[6 * N], Ia[36];
+  Accumulated parent(inertia[link.parent]);
+  multi_dof_law::project_inertia<N>(IA, U, D_inv, parent, UD, Ia);
+  if (kBias)
+    multi_dof_law::project_bias<N>(Ia, UD, pA, u, data.bias_acceleration0[i].data(),
+                                   data.articulated_bias[link.parent].data());
+}
+
 }  // namespace
 
 void articulated_inertias(const Model& model, Data& data) {
@@ -202,12 +176,9 @@ void articulated_inertias(const Model& model, Data& data) {
       articulated_law::project_inertia(IA_i, J.U.data(), J.D_inv, parent);
       continue;
     }
-    if (link.nv > 0)
-      joint_inertia(model, link.v_index, data.motion_subspace[i], IA, data.U[i], data.D_inv[i]);
-    if (link.parent < 0) continue;
-    Mat6& IA_parent = data.articulated_inertia[link.parent];
-    IA_parent += IA;
-    if (link.nv > 0) IA_parent.noalias() -= data.U[i] * data.D_inv[i] * data.U[i].transpose();
+    if (link.nv == 3) multi_dof_pass<3, false>(model, data, i, nullptr);
+    else if (link.nv == 6) multi_dof_pass<6, false>(model, data, i, nullptr);
+    else if (link.parent >= 0) inertia[link.parent] += IA;  // a fixed joint
   }
 }
 
@@ -278,26 +249,19 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
       articulated_law::project_inertia(IA_i, J.U.data(), D_inv, parent);
       continue;
     }
-    const Vec6& c = data.bias_acceleration0[i];
-    auto u = data.u.segment(link.v_index, link.nv);
-    if (link.nv > 0) {
-      const Mat6N& S = data.motion_subspace[i];
-      joint_inertia(model, link.v_index, S, IA, data.U[i], data.D_inv[i]);
-      // In two statements: assigned in one, the product would go through a heap temporary.
-      u = tau.segment(link.v_index, link.nv);
-      u.noalias() -= S.transpose() * pA;
+    if (link.nv == 3) {  // docs/math/unit_response.md, eq. AP7-AP11
+      multi_dof_pass<3, true>(model, data, i, &tau);
+      continue;
     }
-    if (link.parent < 0) continue;
-    Mat6 Ia = IA;
+    if (link.nv == 6) {
+      multi_dof_pass<6, true>(model, data, i, &tau);
+      continue;
+    }
+    if (link.parent < 0) continue;  // a fixed joint: I^A and p^A + I^A c to the parent
     Vec6 pa = pA;
-    if (link.nv > 0) {
-      const Mat6N UD = data.U[i] * data.D_inv[i];
-      Ia.noalias() -= UD * data.U[i].transpose();
-      pa.noalias() += UD * u;
-    }
-    pa.noalias() += Ia * c;
-    data.articulated_inertia[link.parent] += Ia;
-    data.articulated_bias[link.parent] += pa;
+    pa.noalias() += IA * c_all[i];
+    inertia[link.parent] += IA;
+    bias[link.parent] += pa;
   }
 }
 

@@ -6,20 +6,33 @@
 
 #include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/data.hpp"
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 
 namespace featherdrive::detail {
 
-// At a joint with N dofs, on fixed sizes. Out of line: inlined, it costs the 1-dof path
-// registers.
+// S of a joint of N dofs as multi_dof_law reads it: a spherical joint's dense, a floating root's
+// diag(R, R) from its rotation (the root's origin is frame 0's: the same values as
+// motion_subspace's, with half the products).
+template <int N>
+struct Subspace {
+  using type = multi_dof_law::DenseSubspace<double, N>;
+  static type of(const Data& data, int i) { return {data.motion_subspace[i].data()}; }
+};
+template <>
+struct Subspace<6> {
+  using type = multi_dof_law::RotationPair<double, true>;
+  static type of(const Data& data, int i) { return {data.world_rotation[i].data()}; }
+};
+
+// At a joint with N dofs (multi_dof_law, eq. AP12-AP13). Out of line: inlined, it costs the
+// 1-dof path registers.
 template <int N>
 [[gnu::noinline]] void joint_acceleration_fixed(Data& data, int i, int v_index, Vec6& a) {
-  using Mat6K = Eigen::Matrix<double, 6, N>;
-  using VecK = Eigen::Matrix<double, N, 1>;
-  const Mat6K U = data.U[i];
-  const Eigen::Matrix<double, N, N> D_inv = data.D_inv[i];
-  const VecK qdd = D_inv * (data.u.template segment<N>(v_index) - U.transpose() * a);
-  data.qdd.template segment<N>(v_index) = qdd;
-  a.noalias() += Mat6K(data.motion_subspace[i]) * qdd;
+  double qdd[N];
+  multi_dof_law::joint_acceleration<N>(data.U[i].data(), data.D_inv[i].data(),
+                                       data.u.data() + v_index, a.data(), qdd);
+  for (int d = 0; d < N; ++d) data.qdd[v_index + d] = qdd[d];
+  multi_dof_law::add_joint_motion(Subspace<N>::of(data, i), qdd, a.data());
 }
 
 // Link i's qdd and acceleration0 (its parent's are done; a_world for the root).
@@ -39,13 +52,6 @@ template <int N>
     joint_acceleration_fixed<6>(data, i, link.v_index, a);
   } else if (link.nv == 3) {
     joint_acceleration_fixed<3>(data, i, link.v_index, a);
-  } else if (link.nv > 0) {
-    auto qdd = data.qdd.segment(link.v_index, link.nv);
-    Vec6 r = Vec6::Zero();  // u - U^T a in the first nv entries, on the stack
-    r.head(link.nv) = data.u.segment(link.v_index, link.nv);
-    r.head(link.nv).noalias() -= data.U[i].transpose() * a;
-    qdd.noalias() = data.D_inv[i] * r.head(link.nv);
-    a.noalias() += data.motion_subspace[i] * qdd;
   }
   data.acceleration0[i] = a;
 }

@@ -21,6 +21,7 @@
 
 #include "featherdrive/algorithm/articulated_law.hpp"
 #include "featherdrive/algorithm/link_motion_law.hpp"
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "featherdrive/algorithm/response_law.hpp"
 #include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
@@ -327,8 +328,6 @@ class LaneStep {
   void enter_ball(int i, const V* dvp, V* dv);
   void leave_ball(int k, V* pa);
   void finish_ball(int i, const V* E);
-  template <int N>
-  static void spd_inverse(const V* D, V* out);
   void end_classical_root();
   // compat physx on a floating root (physx_departures.md, section 2).
   void physx_start();
@@ -402,6 +401,23 @@ class LaneStep {
     const V* m;
     int j;
     [[gnu::always_inline]] B operator()(int a, int b) const { return m[kSym[a][b]].b[j]; }
+  };
+  // Whole packs of a symmetric 6 x 6 (kSym), as multi_dof_law reads it and accumulates it (the
+  // upper triangle).
+  struct SymmetricPack {
+    const V* m;
+    [[gnu::always_inline]] V operator()(int a, int b) const { return m[kSym[a][b]]; }
+  };
+  struct SymmetricPackSum {
+    V* m;
+    template <class F>
+    [[gnu::always_inline]] void accumulate(const F& f) const {
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) m[kSym[a][b]] = m[kSym[a][b]] + f(a, b);
+    }
+  };
+  struct PackSqrt {
+    V operator()(const V& x) const { return sqrt_of(x); }
   };
   // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law accumulates it: the
   // upper triangle row by row, entry (a, b) for b >= a, each stored as it is summed (formed
@@ -1893,96 +1909,29 @@ void LaneStep<A, K>::root_pose(V* R) {
   }
 }
 
-// The inverse of a symmetric positive definite N x N matrix (row-major) from its Cholesky factor
-// L: L^-T L^-1 (aba.cpp's spd_inverse, in its order).
-template <class A, int K>
-template <int N>
-void LaneStep<A, K>::spd_inverse(const V* D, V* out) {
-  V L[N * N], Li[N * N];
-  for (int e = 0; e < N * N; ++e) L[e] = Li[e] = V(0.0);
-  for (int j = 0; j < N; ++j) {
-    V d = D[N * j + j];
-    for (int k = 0; k < j; ++k) d = d - L[N * j + k] * L[N * j + k];
-    L[N * j + j] = sqrt_of(d);
-    for (int i = j + 1; i < N; ++i) {
-      V x = D[N * i + j];
-      for (int k = 0; k < j; ++k) x = x - L[N * i + k] * L[N * j + k];
-      L[N * i + j] = x / L[N * j + j];
-    }
-  }
-  for (int j = 0; j < N; ++j) {  // L^-1, lower triangular, column by column
-    Li[N * j + j] = V(1.0) / L[N * j + j];
-    for (int i = j + 1; i < N; ++i) {
-      V x(0.0);
-      for (int k = j; k < i; ++k) x = x - L[N * i + k] * Li[N * k + j];
-      Li[N * i + j] = x / L[N * i + i];
-    }
-  }
-  for (int a = 0; a < N; ++a)
-    for (int b = a; b < N; ++b) {
-      const int k0 = b;  // Li[k][a] Li[k][b] is 0 for k < max(a, b) = b
-      V sum = Li[N * k0 + a] * Li[N * k0 + b];
-      for (int k = k0 + 1; k < N; ++k) sum = sum + Li[N * k + a] * Li[N * k + b];
-      out[N * a + b] = out[N * b + a] = sum;
-    }
-}
-
-// ABA pass 2 at a floating root (aba.cpp's joint_inertia on S = diag(R0, R0)): U = IA S,
-// D = S^T U + armature, D^-1, u = tau - S^T pA. Column c of S is R0's column c % 3 in the upper
-// (c < 3) or the lower half.
+// ABA pass 2 at a floating root: multi_dof_law (docs/math/unit_response.md, eq. AP7-AP9) on
+// S = diag(R0, R0), as Simulation's.
 template <class A, int K>
 void LaneStep<A, K>::root_articulated() {
   const LinkConstants& k = p_.links[0];
-  const V* IA = at(l_.IA);
-  const V* pA = at(l_.pA);
-  const V* R0 = at(l_.root_R);
-  V* U = at(l_.root_U);
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) {
-      const int h = c < 3 ? 0 : 3, col = c % 3;
-      U[6 * r + c] = IA[kSym[r][h]] * R0[col] + IA[kSym[r][h + 1]] * R0[3 + col] +
-                     IA[kSym[r][h + 2]] * R0[6 + col];
-    }
-  V D[36];
-  for (int a = 0; a < 6; ++a)
-    for (int c = 0; c < 6; ++c) {
-      const int h = a < 3 ? 0 : 3, col = a % 3;
-      D[6 * a + c] = R0[col] * U[6 * h + c] + R0[3 + col] * U[6 * (h + 1) + c] +
-                     R0[6 + col] * U[6 * (h + 2) + c];
-    }
-  for (int a = 0; a < 6; ++a)
-    D[6 * a + a] = D[6 * a + a] + dof_parameter(k.v_index + a, simd::armature);
-  spd_inverse<6>(D, at(l_.root_D_inv));
-  V SpA[6];
-  root_St(R0, pA, SpA);
-  for (int c = 0; c < 6; ++c) at(l_.u)[k.v_index + c] = at(l_.tau)[k.v_index + c] - SpA[c];
+  const multi_dof_law::RotationPair<V> S{at(l_.root_R)};
+  auto armature = [&](int a) { return dof_parameter(k.v_index + a, simd::armature); };
+  multi_dof_law::joint_inertia<6>(SymmetricPack{at(l_.IA)}, S, armature, PackSqrt{},
+                                  at(l_.root_U), at(l_.root_D_inv));
+  multi_dof_law::joint_force<6>(&at(l_.tau)[k.v_index], S, at(l_.pA), &at(l_.u)[k.v_index]);
 }
 
-// ABA pass 3 at a floating root: qdd = D^-1 (u - U^T a), a += S qdd, and the free velocity
+// ABA pass 3 at a floating root: multi_dof_law (eq. AP12-AP13), and the free velocity
 // qd += dt qdd, to which compat none adds dt (w x v) of the root's velocity before it (step.cpp's
 // begin_classical_root; docs/math/contact.md, C26).
 template <class A, int K>
 void LaneStep<A, K>::root_acceleration(V* a, const V& dt) {
   const LinkConstants& k = p_.links[0];
-  const V* U = at(l_.root_U);
-  const V* Di = at(l_.root_D_inv);
-  const V* R0 = at(l_.root_R);
   V* qd = &at(l_.qd)[k.v_index];
-  const V* u = &at(l_.u)[k.v_index];
-  V r6[6], qdd[6];
-  for (int c = 0; c < 6; ++c) {
-    V Ua = U[c] * a[0];
-    for (int m = 1; m < 6; ++m) Ua = Ua + U[6 * m + c] * a[m];
-    r6[c] = u[c] - Ua;
-  }
-  for (int d = 0; d < 6; ++d) {
-    V sum = Di[6 * d] * r6[0];
-    for (int c = 1; c < 6; ++c) sum = sum + Di[6 * d + c] * r6[c];
-    qdd[d] = sum;
-  }
-  V Sqdd[6];
-  root_S(R0, qdd, Sqdd);
-  for (int r = 0; r < 6; ++r) a[r] = a[r] + Sqdd[r];
+  V qdd[6];
+  multi_dof_law::joint_acceleration<6>(at(l_.root_U), at(l_.root_D_inv), &at(l_.u)[k.v_index], a,
+                                       qdd);
+  multi_dof_law::add_joint_motion(multi_dof_law::RotationPair<V>{at(l_.root_R)}, qdd, a);
   V wv[3];
   cross(qd, qd + 3, wv);
   for (int d = 0; d < 6; ++d) qd[d] = qd[d] + dt * qdd[d];
@@ -2419,67 +2368,35 @@ void LaneStep<A, K>::ball_pose(int i, const V* P, V* R, const V* pos, bool start
   }
 }
 
-// ABA pass 2 at a spherical joint (aba.cpp, joint_inertia and the multi-dof hand-over):
-// U = IA S, D = S^T U + armature, D^-1, u = tau - S^T pA; to the parent IA - U D^-1 U^T and
-// pA + U D^-1 u + (IA - U D^-1 U^T) c.
+// ABA passes 2 and 3 at a spherical joint: multi_dof_law (docs/math/unit_response.md, eq.
+// AP7-AP13) on S = ball_S's three columns, as Simulation's; pass 3 also does qd += dt qdd.
 template <class A, int K>
 void LaneStep<A, K>::ball_articulated(int i) {
   const LinkConstants& k = p_.links[i];
-  const V* IA = at(l_.IA + 21 * i);
+  const SymmetricPack IA{at(l_.IA + 21 * i)};
   const V* pA = at(l_.pA + 6 * i);
-  const V* S3 = at(l_.ball_S + 18 * i);
+  const multi_dof_law::DenseSubspace<V, 3> S{at(l_.ball_S + 18 * i)};
   V* U3 = at(l_.ball_U + 18 * i);
   V* Di = at(l_.ball_D_inv + 9 * i);
-  for (int a = 0; a < 3; ++a)
-    for (int r = 0; r < 6; ++r) {
-      V x = IA[kSym[r][0]] * S3[6 * a];
-      for (int m = 1; m < 6; ++m) x = x + IA[kSym[r][m]] * S3[6 * a + m];
-      U3[6 * a + r] = x;
-    }
-  V D[9];
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) D[3 * a + b] = dot6(S3 + 6 * a, U3 + 6 * b);
-  for (int a = 0; a < 3; ++a)
-    D[4 * a] = D[4 * a] + dof_parameter(k.v_index + a, simd::armature);
-  spd_inverse<3>(D, Di);
-  V u[3];
-  for (int a = 0; a < 3; ++a) {
-    u[a] = at(l_.tau)[k.v_index + a] - dot6(S3 + 6 * a, pA);
-    at(l_.u)[k.v_index + a] = u[a];
-  }
+  V* u = &at(l_.u)[k.v_index];
+  auto armature = [&](int a) { return dof_parameter(k.v_index + a, simd::armature); };
+  multi_dof_law::joint_inertia<3>(IA, S, armature, PackSqrt{}, U3, Di);
+  multi_dof_law::joint_force<3>(&at(l_.tau)[k.v_index], S, pA, u);
   if (k.parent < 0) return;
-  V UD[18];  // U D^-1, column by column
-  for (int b = 0; b < 3; ++b)
-    for (int r = 0; r < 6; ++r)
-      UD[6 * b + r] = (U3[r] * Di[b] + U3[6 + r] * Di[3 + b]) + U3[12 + r] * Di[6 + b];
-  V Ia[21];
-  for (int r = 0; r < 6; ++r)
-    for (int c = r; c < 6; ++c) {
-      const V x = (UD[r] * U3[c] + UD[6 + r] * U3[6 + c]) + UD[12 + r] * U3[12 + c];
-      Ia[kSym[r][c]] = IA[kSym[r][c]] - x;
-    }
-  const V* c = at(l_.c + 6 * i);
-  V pa[6], Iac[6];
-  for (int r = 0; r < 6; ++r) pa[r] = pA[r] + ((UD[r] * u[0] + UD[6 + r] * u[1]) + UD[12 + r] * u[2]);
-  sym_times(Ia, c, Iac);
-  V* IAp = at(l_.IA + 21 * k.parent);
-  V* pAp = at(l_.pA + 6 * k.parent);
-  for (int r = 0; r < 6; ++r) pAp[r] = pAp[r] + (pa[r] + Iac[r]);
-  for (int e = 0; e < 21; ++e) IAp[e] = IAp[e] + Ia[e];
+  V UD[18], Ia[36];
+  SymmetricPackSum parent{at(l_.IA + 21 * k.parent)};
+  multi_dof_law::project_inertia<3>(IA, U3, Di, parent, UD, Ia);
+  multi_dof_law::project_bias<3>(Ia, UD, pA, u, at(l_.c + 6 * i), at(l_.pA + 6 * k.parent));
 }
 
-// ABA pass 3 at a spherical joint: qdd = D^-1 (u - U^T a), a += S qdd, qd += dt qdd.
 template <class A, int K>
 void LaneStep<A, K>::ball_acceleration(int i, V* a, const V& dt) {
   const LinkConstants& k = p_.links[i];
-  const V* S3 = at(l_.ball_S + 18 * i);
-  const V* U3 = at(l_.ball_U + 18 * i);
-  const V* Di = at(l_.ball_D_inv + 9 * i);
-  V r3[3], qdd[3];
-  for (int b = 0; b < 3; ++b) r3[b] = at(l_.u)[k.v_index + b] - dot6(U3 + 6 * b, a);
-  for (int b = 0; b < 3; ++b) qdd[b] = (Di[3 * b] * r3[0] + Di[3 * b + 1] * r3[1]) + Di[3 * b + 2] * r3[2];
-  for (int r = 0; r < 6; ++r)
-    a[r] = a[r] + ((S3[r] * qdd[0] + S3[6 + r] * qdd[1]) + S3[12 + r] * qdd[2]);
+  V qdd[3];
+  multi_dof_law::joint_acceleration<3>(at(l_.ball_U + 18 * i), at(l_.ball_D_inv + 9 * i),
+                                       &at(l_.u)[k.v_index], a, qdd);
+  multi_dof_law::add_joint_motion(multi_dof_law::DenseSubspace<V, 3>{at(l_.ball_S + 18 * i)},
+                                  qdd, a);
   for (int b = 0; b < 3; ++b) {
     V& qd = at(l_.qd)[k.v_index + b];
     qd = qd + dt * qdd[b];
