@@ -17,6 +17,14 @@ Mat3 rotation_transpose(const Vec3& a, double q) {
   return J.transpose();
 }
 
+// A joint's unit axis in the axes P of its joint frame (eq. JT-8).
+template <class M>
+Vec3 joint_axis_in(const M& P, const Data::LinkInfo& link, const Vec3& axis) {
+  Vec3 a;
+  joint_transform_law::joint_axis(P, link.unit_axis, link.axis_sign, axis, a);
+  return a;
+}
+
 using joint_transform_law::next_axis;
 using joint_transform_law::previous_axis;
 
@@ -52,9 +60,11 @@ void parent_transform_of(const Model& model, const Data& data, int i, const doub
       else X.E.noalias() = rotation_transpose(k.axis, q[0]) * T.E;
       return;
     case JointType::prismatic:
+      // r_T + a_p x, a_p = E_T^T a the axis in the parent's coordinates: the world position's
+      // law (eq. JT-8, JT-9) on the joint frame's axes in the parent, E_T^T.
       X.E = T.E;
-      if (info.tree_rotation_identity) X.r = T.r + k.axis * q[0];
-      else X.r = T.r + T.E.transpose() * (k.axis * q[0]);
+      X.r = T.r;
+      joint_transform_law::slide(joint_axis_in(T.E.transpose(), info, k.axis), q[0], X.r);
       return;
     default: X = joint_transform(model.links[i], q) * T; return;
   }
@@ -75,8 +85,10 @@ void position_link(const Model& model, Data& data, int i, const VecX& q) {
   const Vec3& pp = has_parent ? data.world_position[link.parent] : kZero3;
   Mat3& R = data.world_rotation[i];
   Vec3& p = data.world_position[i];
-  p = pp;
-  p.noalias() += Rp * X.r;
+  // p = p_p + R_p r (eq. JT-7); a prismatic joint's slide is added along its world axis.
+  const bool prismatic = link.type == JointType::prismatic;
+  joint_transform_law::link_position(pp, Rp, prismatic ? data.constants[i].tree_transform.r : X.r,
+                                     p);
   if (link.type == JointType::revolute && link.unit_axis >= 0) {
     // R = Rp X_T^T R(e_k, q): columns k1 and k2 mix. Rp X_T^T is Rp when X_T does not rotate.
     Mat3 B;
@@ -86,11 +98,13 @@ void position_link(const Model& model, Data& data, int i, const VecX& q) {
     joint_transform_law::turn_columns(P, link.unit_axis, s, c, R);
     return;
   }
-  const bool fixed_rotation = link.type == JointType::fixed || link.type == JointType::prismatic;
-  if (link.tree_rotation_identity && fixed_rotation)
-    R = Rp;
-  else
-    R.noalias() = Rp * X.E.transpose();
+  const bool fixed_rotation = link.type == JointType::fixed || prismatic;
+  if (link.tree_rotation_identity && fixed_rotation) R = Rp;
+  else if (fixed_rotation) joint_transform_law::joint_frame(Rp, X.E, R);  // X.E = E_T (eq. JT-5)
+  else R.noalias() = Rp * X.E.transpose();
+  if (!prismatic) return;
+  // p += (R_p E_T^T a) q (eq. JT-8, JT-9), R_p E_T^T being R.
+  joint_transform_law::slide(joint_axis_in(R, link, data.constants[i].axis), q[link.q_index], p);
 }
 
 // The common case (LinkInfo::coordinate_revolute) about e_A, inline: X_i = [R(e_A, q)^T, r_T],
@@ -107,7 +121,8 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   sincos_inline(angle, s, c);
   const Vec3 r = data.constants[i].tree_transform.r;
   const Mat3& Rp = data.world_rotation[link.parent];
-  const Vec3 p = data.world_position[link.parent] + Rp * r;
+  Vec3 p;
+  joint_transform_law::link_position(data.world_position[link.parent], Rp, r, p);
   joint_transform_law::turn_columns(Rp, A, s, c, data.world_rotation[i]);
   data.world_position[i] = p;
   if (!kTransform) return;

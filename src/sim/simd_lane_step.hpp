@@ -565,9 +565,9 @@ template <bool kStart>
   } else {
     const V* Rp = at(R_base + 9 * k.parent);
     const V* pp = at(pos_base + 3 * k.parent);
-    for (int r = 0; r < 3; ++r)
-      pos[r] =
-          pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
+    // p = p_p + R_p r_T (spatial/joint_transform_law.hpp, as kinematics.cpp).
+    const V r_T[3] = {V(k.r[0]), V(k.r[1]), V(k.r[2])};
+    joint_transform_law::link_position(pp, joint_transform_law::rows(Rp), r_T, pos);
     if (k.tree_rotation_identity) {
       P = Rp;
     } else {
@@ -580,10 +580,8 @@ template <bool kStart>
     return;
   }
   V aw[3];  // the joint axis in world axes
-  for (int r = 0; r < 3; ++r)
-    aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
-                             : P[3 * r] * V(k.axis[0]) + P[3 * r + 1] * V(k.axis[1]) +
-                                   P[3 * r + 2] * V(k.axis[2]);
+  joint_transform_law::joint_axis(joint_transform_law::rows(P), k.unit_axis, V(k.axis_sign),
+                                  k.axis, aw);
   const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
   if (k.type == 1) {
     V s, c;
@@ -601,8 +599,7 @@ template <bool kStart>
     }
   } else {
     for (int e = 0; e < 9; ++e) R[e] = P[e];
-    if (k.type == 2 && k.parent >= 0)
-      for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
+    if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
   }
   if (k.type == 0 || !kStart) return;
   V* S = at(l_.S + 6 * i);
