@@ -123,5 +123,29 @@ TEST(JointTransformLaw, PrismaticSlideMovesTheOriginAlongTheAxis) {  // JT-7 to 
   }
 }
 
+TEST(JointTransformLaw, OneDofSubspaceMovesTheLinkAboutOrAlongItsAxis) {  // JT-10
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> n;
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 a = Vec3(n(rng), n(rng), n(rng)).normalized(), p(n(rng), n(rng), n(rng));
+    Vec6 S;
+    joint_transform_law::one_dof_subspace(a.data(), p, true, S);
+    // A revolute joint's twist [w; v_O] turns frame 0 about the line through p along a: every
+    // point p + t a on it stands still (v_O + w x x = 0), a point off it moves by w x (x - p).
+    const Vec3 w = S.head<3>(), v0 = S.tail<3>();
+    EXPECT_EQ(w, a);
+    for (const double t : {-1.5, 0.0, 2.0}) {
+      const Vec3 x = p + t * a;
+      EXPECT_NEAR((v0 + w.cross(x)).norm(), 0.0, 1e-14);
+    }
+    const Vec3 off(n(rng), n(rng), n(rng));
+    EXPECT_NEAR((v0 + w.cross(off) - a.cross(off - p)).norm(), 0.0, 1e-14);
+    // A prismatic joint's moves every point along a.
+    joint_transform_law::one_dof_subspace(a.data(), p, false, S);
+    EXPECT_EQ(S.head<3>(), Vec3::Zero());
+    EXPECT_EQ(S.tail<3>(), a);
+  }
+}
+
 }  // namespace
 }  // namespace featherdrive

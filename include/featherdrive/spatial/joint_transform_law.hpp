@@ -101,4 +101,22 @@ void slide(const W& a_w, const T& x, O&& p) {
   for (int r = 0; r < 3; ++r) p[r] = p[r] + a_w[r] * x;
 }
 
+/// S = [a_w; p x a_w] (revolute) or [0; a_w] (prismatic): a 1-dof joint's motion subspace in
+/// frame 0 from its world axis a_w (joint_axis) and the link's origin p relative to frame 0's
+/// (eq. JT-10).
+template <class T, class W, class O>
+void one_dof_subspace(const T* a_w, const W& p, bool revolute, O&& S) {
+  if (revolute) {
+    for (int r = 0; r < 3; ++r) S[r] = a_w[r];
+    S[3] = p[1] * a_w[2] - p[2] * a_w[1];
+    S[4] = p[2] * a_w[0] - p[0] * a_w[2];
+    S[5] = p[0] * a_w[1] - p[1] * a_w[0];
+  } else {
+    for (int r = 0; r < 3; ++r) {
+      S[r] = T(0.0);
+      S[3 + r] = a_w[r];
+    }
+  }
+}
+
 }  // namespace featherdrive::joint_transform_law
