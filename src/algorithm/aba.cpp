@@ -10,6 +10,7 @@
 #include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/algorithm/multi_dof_law.hpp"
+#include "featherdrive/spatial/joint_transform_law.hpp"
 #include "joint_acceleration.hpp"
 
 namespace featherdrive {
@@ -52,12 +53,6 @@ inline void write_inertia(const BodyInertia& b, Mat6& I) {
   I.col(5) << y, -x, 0.0, 0.0, 0.0, m;
 }
 
-// out = [top; bottom] (Eigen's comma initializer trips GCC's -Warray-bounds here).
-inline void set_halves(const Vec3& top, const Vec3& bottom, Vec6& out) {
-  out.head<3>() = top;
-  out.tail<3>() = bottom;
-}
-
 // A motion vector of a link frame (orientation R, origin p) in frame 0.
 Vec6 motion_to_frame0(const Mat3& R, const Vec3& p, const Vec6& s) {
   Vec6 out;
@@ -67,14 +62,15 @@ Vec6 motion_to_frame0(const Mat3& R, const Vec3& p, const Vec6& s) {
   return out;
 }
 
-// S_i in frame 0: [R a; p x R a] (revolute) or [0; R a] (prismatic) for a 1-dof joint, R a being
-// a column of R when the axis is a coordinate axis; motion_subspace[i] for the others.
+// S_i in frame 0 of a 1-dof joint (eq. JT-10) from its axis in the world, R a = P a: P's column
+// k for a coordinate axis (R keeps it, eq. JT-8), else Eigen's product (the law's left-to-right
+// sum moved the lanes-vs-scalar difference of BatchLanes' random trees to 1.6e-12);
+// motion_subspace[i] for the others.
 inline void one_dof_subspace(const Data& data, int i, const Mat3& R, const Vec3& p, Vec6& S) {
   const Data::LinkInfo& link = data.info[i];
   const Vec3 a = link.unit_axis >= 0 ? Vec3(link.axis_sign * R.col(link.unit_axis))
                                      : Vec3(R * data.constants[i].axis);
-  if (link.type == JointType::revolute) set_halves(a, p.cross(a), S);
-  else set_halves(Vec3::Zero(), a, S);
+  joint_transform_law::one_dof_subspace(a.data(), p, link.type == JointType::revolute, S);
 }
 void subspace_in_frame0(const Model& model, Data& data, int i, const Mat3& R, const Vec3& p) {
   if (data.info[i].nv == 1) {

@@ -16,14 +16,20 @@ void store_quat(const Quat& Q, double* q) {
 
 }  // namespace
 
+Mat3 quaternion_rotation(const double* q) {
+  double R[9];
+  quaternion_law::rotation(q, R);
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(R);
+}
+
 Transform joint_transform(const Link& link, const double* q) {
   switch (link.joint_type) {
     case JointType::fixed: return Transform::identity();
     case JointType::revolute: return {rotation_about(link.axis, q[0]).transpose(), Vec3::Zero()};
     case JointType::prismatic: return {Mat3::Identity(), link.axis * q[0]};
-    case JointType::spherical: return Transform::from_pose(quat_at(q).toRotationMatrix(), Vec3::Zero());
+    case JointType::spherical: return Transform::from_pose(quaternion_rotation(q), Vec3::Zero());
     case JointType::floating:
-      return Transform::from_pose(quat_at(q + 3).toRotationMatrix(), Vec3(q[0], q[1], q[2]));
+      return Transform::from_pose(quaternion_rotation(q + 3), Vec3(q[0], q[1], q[2]));
   }
   return Transform::identity();
 }

@@ -8,22 +8,23 @@
 namespace featherdrive {
 namespace {
 
-// R(a, q)^T: the transpose of the rotation by q about the unit axis a (eq. JT-1).
-Mat3 rotation_transpose(const Vec3& a, double q) {
-  double s, c;
-  sincos_inline(q, s, c);
-  Mat3 J;
-  joint_transform_law::axis_rotation(a.x(), a.y(), a.z(), s, c, J);
-  return J.transpose();
+// A joint's unit axis in the axes P of its joint frame (eq. JT-8).
+template <class M>
+Vec3 joint_axis_in(const M& P, const Data::LinkInfo& link, const Vec3& axis) {
+  Vec3 a;
+  joint_transform_law::joint_axis(P, link.unit_axis, link.axis_sign, axis, a);
+  return a;
 }
 
 using joint_transform_law::next_axis;
 using joint_transform_law::previous_axis;
 
-// X_i = X_J(q) X_T, written into X, with the common joints written out. For a revolute joint
-// about a coordinate axis, (c, s) receive the cosine and sine of its angle (axis sign included).
-void parent_transform_of(const Model& model, const Data& data, int i, const double* q,
-                         Transform& X, double& c, double& s) {
+// X_i = X_J(q) X_T, written into X. For a revolute joint about a coordinate axis, (c, s) receive
+// the cosine and sine of its angle (axis sign included); for one about another axis, a spherical
+// joint and a floating root, J receives the joint's rotation R_J (eq. JT-1, Q-5), and X_i's
+// rotation is R_J^T E_T.
+void parent_transform_of(const Data& data, int i, const double* q, Transform& X, double& c,
+                         double& s, Mat3& J) {
   const Data::LinkInfo& info = data.info[i];
   const Data::LinkConstants& k = data.constants[i];
   const Transform& T = k.tree_transform;
@@ -48,49 +49,67 @@ void parent_transform_of(const Model& model, const Data& data, int i, const doub
         }
         return;
       }
-      if (info.tree_rotation_identity) X.E = rotation_transpose(k.axis, q[0]);
-      else X.E.noalias() = rotation_transpose(k.axis, q[0]) * T.E;
-      return;
+      sincos_inline(q[0], s, c);
+      joint_transform_law::axis_rotation(k.axis.x(), k.axis.y(), k.axis.z(), s, c, J);
+      break;
     case JointType::prismatic:
+      // r_T + a_p x, a_p = E_T^T a the axis in the parent's coordinates: the world position's
+      // law (eq. JT-8, JT-9) on the joint frame's axes in the parent, E_T^T.
       X.E = T.E;
-      if (info.tree_rotation_identity) X.r = T.r + k.axis * q[0];
-      else X.r = T.r + T.E.transpose() * (k.axis * q[0]);
+      X.r = T.r;
+      joint_transform_law::slide(joint_axis_in(T.E.transpose(), info, k.axis), q[0], X.r);
       return;
-    default: X = joint_transform(model.links[i], q) * T; return;
+    case JointType::spherical:
+      J = quaternion_rotation(q);
+      X.r = T.r;
+      break;
+    case JointType::floating:
+      J = quaternion_rotation(q + 3);
+      X.r = T.r + T.E.transpose() * Vec3(q[0], q[1], q[2]);
+      break;
   }
+  if (info.tree_rotation_identity) X.E = J.transpose();
+  else X.E.noalias() = J.transpose() * T.E;
 }
 
 const Mat3 kIdentity3 = Mat3::Identity();  // the world's pose, the root's parent
 const Vec3 kZero3 = Vec3::Zero();
 
 // Link i's X_i, world rotation and world position (its parent's are done; the world's for the
-// root): any joint.
-void position_link(const Model& model, Data& data, int i, const VecX& q) {
+// root): any joint, in the lanes' operations (LaneStep::link_pose).
+void position_link(Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
+  const Data::LinkConstants& k = data.constants[i];
   Transform& X = data.parent_transform[i];
   double c = 1.0, s = 0.0;
-  parent_transform_of(model, data, i, q.data() + link.q_index, X, c, s);
+  Mat3 J;
+  parent_transform_of(data, i, q.data() + link.q_index, X, c, s, J);
   const bool has_parent = link.parent >= 0;
   const Mat3& Rp = has_parent ? data.world_rotation[link.parent] : kIdentity3;
   const Vec3& pp = has_parent ? data.world_position[link.parent] : kZero3;
   Mat3& R = data.world_rotation[i];
   Vec3& p = data.world_position[i];
-  p = pp;
-  p.noalias() += Rp * X.r;
-  if (link.type == JointType::revolute && link.unit_axis >= 0) {
-    // R = Rp X_T^T R(e_k, q): columns k1 and k2 mix. Rp X_T^T is Rp when X_T does not rotate.
-    Mat3 B;
-    if (!link.tree_rotation_identity)
-      B.noalias() = Rp * data.constants[i].tree_transform.E.transpose();
-    const Mat3& P = link.tree_rotation_identity ? Rp : B;
-    joint_transform_law::turn_columns(P, link.unit_axis, s, c, R);
-    return;
+  // p = p_p + R_p r_T (eq. JT-7); a floating root's r is X_i's, r_T + E_T^T q.
+  const bool floating = link.type == JointType::floating;
+  joint_transform_law::link_position(pp, Rp, floating ? X.r : k.tree_transform.r, p);
+  // The joint frame's axes P = R_p E_T^T (eq. JT-5), R_p itself where X_T does not rotate.
+  Mat3 B;
+  if (!link.tree_rotation_identity) joint_transform_law::joint_frame(Rp, k.tree_transform.E, B);
+  const Mat3& P = link.tree_rotation_identity ? Rp : B;
+  switch (link.type) {
+    case JointType::fixed: R = P; return;
+    case JointType::prismatic:
+      // p += (P a) q (eq. JT-8, JT-9).
+      R = P;
+      joint_transform_law::slide(joint_axis_in(P, link, k.axis), q[link.q_index], p);
+      return;
+    case JointType::revolute:
+      // R = P R(e_k, q): columns k1 and k2 mix (eq. JT-3).
+      if (link.unit_axis >= 0)
+        return joint_transform_law::turn_columns(P, link.unit_axis, s, c, R);
+      [[fallthrough]];
+    default: joint_transform_law::compose(P, J, R); return;  // R = P R_J (eq. JT-6)
   }
-  const bool fixed_rotation = link.type == JointType::fixed || link.type == JointType::prismatic;
-  if (link.tree_rotation_identity && fixed_rotation)
-    R = Rp;
-  else
-    R.noalias() = Rp * X.E.transpose();
 }
 
 // The common case (LinkInfo::coordinate_revolute) about e_A, inline: X_i = [R(e_A, q)^T, r_T],
@@ -107,7 +126,8 @@ void position_coordinate_revolute(Data& data, int i, const VecX& q) {
   sincos_inline(angle, s, c);
   const Vec3 r = data.constants[i].tree_transform.r;
   const Mat3& Rp = data.world_rotation[link.parent];
-  const Vec3 p = data.world_position[link.parent] + Rp * r;
+  Vec3 p;
+  joint_transform_law::link_position(data.world_position[link.parent], Rp, r, p);
   joint_transform_law::turn_columns(Rp, A, s, c, data.world_rotation[i]);
   data.world_position[i] = p;
   if (!kTransform) return;
@@ -153,9 +173,9 @@ Vec6 velocity_from_parent(const Data& data, int i) {
 
 // Either of the above.
 template <bool kTransform = true>
-inline void position_any(const Model& model, Data& data, int i, const VecX& q) {
+inline void position_any(Data& data, int i, const VecX& q) {
   const Data::LinkInfo& link = data.info[i];
-  if (!link.coordinate_revolute) position_link(model, data, i, q);
+  if (!link.coordinate_revolute) position_link(data, i, q);
   else if (link.unit_axis == 0) position_coordinate_revolute<0, kTransform>(data, i, q);
   else if (link.unit_axis == 1) position_coordinate_revolute<1, kTransform>(data, i, q);
   else position_coordinate_revolute<2, kTransform>(data, i, q);
@@ -165,18 +185,18 @@ inline void position_any(const Model& model, Data& data, int i, const VecX& q) {
 
 void world_poses(const Model& model, Data& data, const VecX& q) {
   const int n = model.num_links();
-  for (int i = 0; i < n; ++i) position_any<false>(model, data, i, q);
+  for (int i = 0; i < n; ++i) position_any<false>(data, i, q);
 }
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q) {
   const int n = model.num_links();
-  for (int i = 0; i < n; ++i) position_any(model, data, i, q);
+  for (int i = 0; i < n; ++i) position_any(data, i, q);
 }
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q, const VecX& v) {
   const int n = model.num_links();
   for (int i = 0; i < n; ++i) {
-    position_any(model, data, i, q);
+    position_any(data, i, q);
     const Data::LinkInfo& link = data.info[i];
     const Vec3& axis = data.constants[i].axis;
     Vec6 vi = link.parent >= 0 ? velocity_from_parent(data, i) : Vec6::Zero();

@@ -386,6 +386,10 @@ class LaneStep {
     const double* m;
     V operator()(int r, int c) const { return V(m[3 * r + c]); }
   };
+  struct BroadcastTransposed {  // the transpose of Broadcast's matrix
+    const double* m;
+    V operator()(int r, int c) const { return V(m[3 * c + r]); }
+  };
   static V dot6(const V* a, const V* b) { return dot6(WholePack{}, a, b); }
   static void sym_times(const V* m, const V* x, V* y);  // y = M x, M symmetric 6 x 6
   // y = M x for vector j of the packs of M (x, y: that vector's entries, kept in registers).
@@ -593,9 +597,9 @@ template <bool kStart>
   } else {
     const V* Rp = at(R_base + 9 * k.parent);
     const V* pp = at(pos_base + 3 * k.parent);
-    for (int r = 0; r < 3; ++r)
-      pos[r] =
-          pp[r] + (Rp[3 * r] * V(k.r[0]) + Rp[3 * r + 1] * V(k.r[1]) + Rp[3 * r + 2] * V(k.r[2]));
+    // p = p_p + R_p r_T (spatial/joint_transform_law.hpp, as kinematics.cpp).
+    const V r_T[3] = {V(k.r[0]), V(k.r[1]), V(k.r[2])};
+    joint_transform_law::link_position(pp, joint_transform_law::rows(Rp), r_T, pos);
     if (k.tree_rotation_identity) {
       P = Rp;
     } else {
@@ -608,10 +612,8 @@ template <bool kStart>
     return;
   }
   V aw[3];  // the joint axis in world axes
-  for (int r = 0; r < 3; ++r)
-    aw[r] = k.unit_axis >= 0 ? V(k.axis_sign) * P[3 * r + k.unit_axis]
-                             : P[3 * r] * V(k.axis[0]) + P[3 * r + 1] * V(k.axis[1]) +
-                                   P[3 * r + 2] * V(k.axis[2]);
+  joint_transform_law::joint_axis(joint_transform_law::rows(P), k.unit_axis, V(k.axis_sign),
+                                  k.axis, aw);
   const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
   if (k.type == 1) {
     V s, c;
@@ -629,20 +631,11 @@ template <bool kStart>
     }
   } else {
     for (int e = 0; e < 9; ++e) R[e] = P[e];
-    if (k.type == 2 && k.parent >= 0)
-      for (int r = 0; r < 3; ++r) pos[r] = pos[r] + aw[r] * x;
+    if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
   }
   if (k.type == 0 || !kStart) return;
-  V* S = at(l_.S + 6 * i);
-  if (k.type == 1) {
-    for (int r = 0; r < 3; ++r) S[r] = aw[r];
-    cross(pos, aw, S + 3);
-  } else {
-    for (int r = 0; r < 3; ++r) {
-      S[r] = V(0.0);
-      S[3 + r] = aw[r];
-    }
-  }
+  // S_i = [a_w; pos x a_w] or [0; a_w] (joint_transform_law, as aba.cpp).
+  joint_transform_law::one_dof_subspace(aw, pos, k.type == 1, at(l_.S + 6 * i));
 }
 
 // Link i's rigid-body inertia in frame 0, velocity, velocity-product acceleration c_i and bias
@@ -1897,11 +1890,12 @@ void LaneStep<A, K>::root_pose(V* R) {
   const LinkConstants& k = p_.links[0];
   V Rq[9];
   quaternion_rotation(&at(l_.q)[k.q_index + 3], Rq);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      R[3 * r + c] = k.tree_rotation_identity ? Rq[3 * r + c]
-                                              : V(k.E[r]) * Rq[c] + V(k.E[3 + r]) * Rq[3 + c] +
-                                                    V(k.E[6 + r]) * Rq[6 + c];
+  // R0 = P R_q with P = E_T^T, the world being the root's parent (joint_transform_law, eq. JT-6).
+  if (k.tree_rotation_identity)
+    for (int e = 0; e < 9; ++e) R[e] = Rq[e];
+  else
+    joint_transform_law::compose(BroadcastTransposed{k.E}, joint_transform_law::rows(Rq),
+                                 joint_transform_law::rows(R));
   if (!kStart) return;
   for (int e = 0; e < 9; ++e) {
     at(l_.root_R)[e] = R[e];

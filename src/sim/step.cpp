@@ -458,11 +458,11 @@ void Stepper::solve_tgs() {
 void Stepper::begin_classical_root(const Vec6& root_qd0, double dt) {
   const Vec3 w = root_qd0.head<3>(), v = root_qd0.tail<3>();
   ws_.qd.segment<3>(3) += dt * w.cross(v);
-  ws_.root_rotation0 = Quat(ws_.q[3], ws_.q[4], ws_.q[5], ws_.q[6]).normalized().toRotationMatrix();
+  ws_.root_rotation0 = quaternion_rotation(&ws_.q[3]);
 }
 
 void Stepper::end_classical_root() {
-  const Mat3 R1 = Quat(ws_.q[3], ws_.q[4], ws_.q[5], ws_.q[6]).normalized().toRotationMatrix();
+  const Mat3 R1 = quaternion_rotation(&ws_.q[3]);
   ws_.qd.segment<3>(3) = R1.transpose() * (ws_.root_rotation0 * ws_.qd.segment<3>(3));
 }
 

@@ -90,5 +90,62 @@ TEST(JointTransformLaw, FrameAndCompositionAreMatrixProducts) {  // JT-5, JT-6
   }
 }
 
+TEST(JointTransformLaw, PrismaticSlideMovesTheOriginAlongTheAxis) {  // JT-7 to JT-9
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> n;
+  for (int k = 0; k < 50; ++k) {
+    const Mat3 Rp = random_rotation(rng), E = random_rotation(rng);
+    const Vec3 a = Vec3(n(rng), n(rng), n(rng)).normalized();
+    const Vec3 r_T(n(rng), n(rng), n(rng)), pp(n(rng), n(rng), n(rng));
+    const double x = 2.0 * n(rng);
+    Mat3 P;
+    joint_transform_law::joint_frame(Rp, E, P);
+    Vec3 a_w, p, p0;
+    joint_transform_law::joint_axis(P, -1, 1.0, a, a_w);
+    EXPECT_NEAR((a_w - Rp * E.transpose() * a).norm(), 0.0, 1e-15);
+    joint_transform_law::link_position(pp, Rp, r_T, p0);
+    p = p0;
+    joint_transform_law::slide(a_w, x, p);
+    // Eigen's products of X_i = X_J(x) X_T: the origin is r_T + E_T^T (a x) in the parent.
+    EXPECT_NEAR((p - (pp + Rp * (r_T + E.transpose() * (a * x)))).norm(), 0.0, 1e-14);
+    // Closed form: the origin moves by |x| along the axis.
+    EXPECT_NEAR((p - p0).norm(), std::abs(x), 1e-14);
+    // A coordinate axis -e_k: minus P's column k, the product's value.
+    const int c = k % 3;
+    joint_transform_law::joint_axis(P, c, -1.0, a, a_w);
+    EXPECT_NEAR((a_w - P * (-Vec3::Unit(c))).norm(), 0.0, 1e-16);
+    // The same bits on a row-major rotation.
+    double m[9], q[3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[3 * i + j] = Rp(i, j);
+    joint_transform_law::link_position(pp, joint_transform_law::rows(m), r_T, q);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(q[i], p0[i]);
+  }
+}
+
+TEST(JointTransformLaw, OneDofSubspaceMovesTheLinkAboutOrAlongItsAxis) {  // JT-10
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> n;
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 a = Vec3(n(rng), n(rng), n(rng)).normalized(), p(n(rng), n(rng), n(rng));
+    Vec6 S;
+    joint_transform_law::one_dof_subspace(a.data(), p, true, S);
+    // A revolute joint's twist [w; v_O] turns frame 0 about the line through p along a: every
+    // point p + t a on it stands still (v_O + w x x = 0), a point off it moves by w x (x - p).
+    const Vec3 w = S.head<3>(), v0 = S.tail<3>();
+    EXPECT_EQ(w, a);
+    for (const double t : {-1.5, 0.0, 2.0}) {
+      const Vec3 x = p + t * a;
+      EXPECT_NEAR((v0 + w.cross(x)).norm(), 0.0, 1e-14);
+    }
+    const Vec3 off(n(rng), n(rng), n(rng));
+    EXPECT_NEAR((v0 + w.cross(off) - a.cross(off - p)).norm(), 0.0, 1e-14);
+    // A prismatic joint's moves every point along a.
+    joint_transform_law::one_dof_subspace(a.data(), p, false, S);
+    EXPECT_EQ(S.head<3>(), Vec3::Zero());
+    EXPECT_EQ(S.tail<3>(), a);
+  }
+}
+
 }  // namespace
 }  // namespace featherdrive

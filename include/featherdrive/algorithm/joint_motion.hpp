@@ -5,6 +5,10 @@
 
 namespace featherdrive {
 
+/// The rotation matrix of the unit quaternion q / |q| (w x y z): quaternion_law::rotation
+/// (docs/math/quaternion_update.md, eq. Q-5), the lanes' form.
+Mat3 quaternion_rotation(const double* q);
+
 /// X_J(q): joint frame -> link frame, from this joint's slice of q (quaternions are normalised).
 Transform joint_transform(const Link& link, const double* q);
 

@@ -1,8 +1,9 @@
-// A revolute joint's rotation and its composition with the joint frame, written once over the
-// number type (docs/math/joint_transform.md): double for Simulation (algorithm/kinematics.cpp),
-// SIMD packs of environments in the lanes (sim/simd_lane_step.hpp's link_pose), so that both turn
-// a link with the same operations. A matrix is anything with m(r, c): Eigen's Mat3, or a row-major
-// T[9] through rows(). No include, so that the lanes' units compiled for AVX2 and AVX-512 take in
+// A revolute joint's rotation, a prismatic joint's offset and their composition into the link's
+// pose, written once over the number type (docs/math/joint_transform.md): double for Simulation
+// (algorithm/kinematics.cpp), SIMD packs of environments in the lanes (sim/simd_lane_step.hpp's
+// link_pose), so that both place a link with the same operations. A matrix is anything with
+// m(r, c): Eigen's Mat3, or a row-major T[9] through rows(); a vector anything with v[k]. No
+// include, so that the lanes' units compiled for AVX2 and AVX-512 take in
 // no inline function of the rest of the library.
 #pragma once
 
@@ -75,6 +76,47 @@ template <class M, class N, class O>
 void compose(const M& P, const N& J, O&& R) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) R(r, c) = P(r, 0) * J(0, c) + P(r, 1) * J(1, c) + P(r, 2) * J(2, c);
+}
+
+/// p = p_p + R_p r, the world position of the offset r in the parent's coordinates (the tree
+/// transform's r_T: the link's origin, eq. JT-7), summed left to right. p must not alias r.
+template <class U, class M, class W, class O>
+void link_position(const U& p_p, const M& Rp, const W& r, O&& p) {
+  for (int k = 0; k < 3; ++k) p[k] = p_p[k] + ((Rp(k, 0) * r[0] + Rp(k, 1) * r[1]) + Rp(k, 2) * r[2]);
+}
+
+/// a_w = P a, a joint's unit axis a (joint frame) in world axes from its joint frame's axes P;
+/// for a = sign e_k (unit_axis k >= 0) P's column k times the sign (eq. JT-8).
+template <class T, class M, class U, class O>
+void joint_axis(const M& P, int unit_axis, const T& sign, const U& a, O&& a_w) {
+  for (int r = 0; r < 3; ++r)
+    a_w[r] = unit_axis >= 0 ? sign * P(r, unit_axis)
+                            : (P(r, 0) * T(a[0]) + P(r, 1) * T(a[1])) + P(r, 2) * T(a[2]);
+}
+
+/// p += a_w x: a prismatic joint at x moves the link's origin along its world axis a_w
+/// (joint_axis) from where the tree transform puts it (eq. JT-9).
+template <class T, class W, class O>
+void slide(const W& a_w, const T& x, O&& p) {
+  for (int r = 0; r < 3; ++r) p[r] = p[r] + a_w[r] * x;
+}
+
+/// S = [a_w; p x a_w] (revolute) or [0; a_w] (prismatic): a 1-dof joint's motion subspace in
+/// frame 0 from its world axis a_w (joint_axis) and the link's origin p relative to frame 0's
+/// (eq. JT-10).
+template <class T, class W, class O>
+void one_dof_subspace(const T* a_w, const W& p, bool revolute, O&& S) {
+  if (revolute) {
+    for (int r = 0; r < 3; ++r) S[r] = a_w[r];
+    S[3] = p[1] * a_w[2] - p[2] * a_w[1];
+    S[4] = p[2] * a_w[0] - p[0] * a_w[2];
+    S[5] = p[0] * a_w[1] - p[1] * a_w[0];
+  } else {
+    for (int r = 0; r < 3; ++r) {
+      S[r] = T(0.0);
+      S[3 + r] = a_w[r];
+    }
+  }
 }
 
 }  // namespace featherdrive::joint_transform_law
