@@ -2,7 +2,9 @@
 
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/response_law.hpp"
 #include "joint_acceleration.hpp"
+#include "mat6_storage.hpp"
 
 namespace featherdrive {
 namespace {
@@ -17,36 +19,23 @@ const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
   const Data::LinkInfo& link = data.info[i];
   const Mat6& T = link.parent >= 0 ? data.response[link.parent] : kZero;
   Mat6& L = data.response[i];
-  if (link.nv == 1) {
-    // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
-    //          = T + S g^T - h S^T, g = r S - h (G_i).
-    // No 6-vector temporaries: GCC keeps them on the stack and copies them; J's are read instead.
+  if (link.nv == 1) {  // by response_law (docs/math/unit_response.md, eq. R1-R5)
     Data::OneDof& J = data.one_dof[i];
-    J.W.noalias() = T * J.U;
     const double D_inv = J.D_inv;
-    const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
-    J.G = r * J.S - D_inv * J.W;
-    // Column by column: with AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else
-    // whole columns, aligned, so SSE2 folds their loads into the arithmetic (as in aba.cpp's
-    // add_to_parent).
-    for (int j = 0; j < 6; ++j) {
-      const double g = J.G[j], sh = J.S[j] * D_inv;
-#ifdef __AVX__
-      L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
-      L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
-#else
-      L.col(j) = T.col(j) + g * J.S - sh * J.W;
-#endif
-    }
+    detail::Mat6Assigned Lambda(L);
+    const double r = response_law::response(
+        detail::Mat6Entries(T), detail::aligned16(J.S.data()), detail::aligned16(J.U.data()), D_inv,
+        detail::aligned16(J.W.data()), detail::aligned16(J.G.data()), Lambda);
     J.inverse_mass = r;
     if (link.parent >= 0 && data.info[link.parent].nv == 1) {
       const Data::OneDof& P = data.one_dof[link.parent];
-      J.parent_W = J.U.dot(P.W);
-      J.parent_S = J.U.dot(P.S);
-      // Folded once here, not in each sweep.
-      J.base_per_parent_base = -D_inv * J.parent_S;
-      J.base_per_parent_impulse =
-          P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
+      const response_law::Chain<double> c =
+          response_law::chain(detail::aligned16(J.U.data()), D_inv, detail::aligned16(P.S.data()),
+                              detail::aligned16(P.W.data()), P.D_inv, P.inverse_mass);
+      J.parent_W = c.parent_W;
+      J.parent_S = c.parent_S;
+      J.base_per_parent_base = c.base_per_parent_base;
+      J.base_per_parent_impulse = c.base_per_parent_impulse;
     }
     data.inverse_mass_block[i](0, 0) = r;
     data.inverse_mass_diagonal[link.v_index] = r;

@@ -1,9 +1,8 @@
 // The whole-articulation response at a one-dof (revolute or prismatic) joint, written once over
 // the number type T and over how a symmetric 6 x 6 matrix is stored (docs/math/unit_response.md,
-// eq. R1-R5): one vector of a SIMD pack and the packed 21 entries in the lanes
-// (sim/simd_lane_step.hpp's link_response). Simulation's link_response (inverse_mass_diagonal.cpp)
-// writes the same equations with Eigen's products, whose paired sums cost fewer instructions
-// than these left-to-right ones (unit_response.md, after R5). Vectors, matrix adapters and sums as
+// eq. R1-R5): double and Eigen's Mat6 for Simulation (algorithm/inverse_mass_diagonal.cpp's
+// link_response), one vector of a SIMD pack and the packed 21 entries in the lanes
+// (sim/simd_lane_step.hpp's link_response). Vectors, matrix adapters and sums as
 // in articulated_law.hpp; Lambda_i is written through an adapter with assign(f), which sets every
 // entry (a, b) it stores to f(a, b).
 #pragma once
@@ -15,7 +14,7 @@ namespace featherdrive::response_law {
 /// R1-R4 at link i with the parent's response T (zero for the world): W = T U, returns
 /// r = (M^-1)_ii = D^-1 + D^-1 D^-1 U^T W, G = r S - D^-1 W and Lambda_i, entry (a, b) as
 /// (T_ab + G_b S_a) - (S_b D^-1) W_a. W, G and Lambda's storage must not overlap the parent's
-/// matrix: W and G are stored before Lambda is formed from them.
+/// matrix: W and G are stored before Lambda reads it.
 template <class T, class M, class Out>
 [[gnu::always_inline]] inline T response(const M& parent, const T* S, const T* U, const T& D_inv,
                                          T* W, T* G, Out& Lambda) {
@@ -23,10 +22,11 @@ template <class T, class M, class Out>
   articulated_law::times(parent, U, w);
   const T r = D_inv + D_inv * D_inv * articulated_law::dot6(U, w);
   for (int e = 0; e < 6; ++e) W[e] = w[e];
-  for (int e = 0; e < 6; ++e) G[e] = r * S[e] - D_inv * w[e];
-  T sd[6];
+  T g[6], sd[6];  // Lambda reads w and g, not W and G: its stores cannot change them
+  for (int e = 0; e < 6; ++e) g[e] = r * S[e] - D_inv * w[e];
+  for (int e = 0; e < 6; ++e) G[e] = g[e];
   for (int e = 0; e < 6; ++e) sd[e] = S[e] * D_inv;
-  Lambda.assign([&](int a, int b) { return (parent(a, b) + G[b] * S[a]) - sd[b] * W[a]; });
+  Lambda.assign([&](int a, int b) { return (parent(a, b) + g[b] * S[a]) - sd[b] * w[a]; });
   return r;
 }
 
