@@ -11,6 +11,29 @@ namespace {
 
 const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
 
+// At a joint of N dofs (spherical, floating) by response_law (docs/math/unit_response.md,
+// eq. R6-R10). Out of line: inlined, it costs the 1-dof path registers.
+template <int N>
+[[gnu::noinline]] void multi_dof_response(Data& data, int i, const Mat6& T, Mat6& L) {
+  const Data::LinkInfo& link = data.info[i];
+  const response_law::Columns<double> S{data.motion_subspace[i].data()};
+  const detail::ColumnMajor<N> D_inv{data.D_inv[i].data()};
+  detail::Mat6Assigned Lambda(L);
+  MatNN& block = data.inverse_mass_block[i];
+  if (link.parent < 0) {  // T = 0: W = 0, (M^-1)_ii = D^-1
+    response_law::world_response<N, double>(S, D_inv, Lambda);
+    data.parent_coupling[i].setZero();
+    block = data.D_inv[i];
+  } else {
+    double Minv[N * N];
+    response_law::response_n<N>(detail::Mat6Entries(T), S, data.U[i].data(), D_inv,
+                                data.parent_coupling[i].data(), Minv, Lambda);
+    for (int a = 0; a < N; ++a)
+      for (int b = 0; b < N; ++b) block(a, b) = Minv[N * a + b];
+  }
+  data.inverse_mass_diagonal.segment(link.v_index, N) = block.diagonal();
+}
+
 // Link i's Lambda_i, W_i and (M^-1)_ii, its parent's being done. In frame 0, where a link's and
 // its parent's spatial vectors share coordinates: Lambda_i = S D^-1 S^T + P T P^T with
 // T = Lambda_p and P = I - S D^-1 U^T; (M^-1)_ii = D^-1 + D^-1 U^T T U D^-1
@@ -45,32 +68,8 @@ const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
     L = T;
     return;
   }
-  const Mat6N& S = data.motion_subspace[i];
-  const Mat6N& U = data.U[i];
-  const MatNN& Dinv = data.D_inv[i];
-  if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
-    if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
-      const Mat6 S6 = S;
-      L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
-    } else {
-      L.noalias() = S * Dinv * S.transpose();
-    }
-    data.parent_coupling[i].setZero();
-    data.inverse_mass_block[i] = Dinv;
-    data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
-    return;
-  }
-  const Mat6N W = T * U;
-  const MatNN UtW = U.transpose() * W;
-  const Mat6N SDinv = S * Dinv;
-  L = T;
-  L.noalias() -= SDinv * W.transpose();
-  L.noalias() -= W * SDinv.transpose();
-  L.noalias() += SDinv * UtW * SDinv.transpose();
-  L.noalias() += SDinv * S.transpose();
-  data.parent_coupling[i] = W;
-  data.inverse_mass_block[i] = Dinv + Dinv * UtW * Dinv;
-  data.inverse_mass_diagonal.segment(link.v_index, link.nv) = data.inverse_mass_block[i].diagonal();
+  if (link.nv == 3) return multi_dof_response<3>(data, i, T, L);
+  multi_dof_response<6>(data, i, T, L);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Simulation's Mat6 (all 36 entries, column-major) as the laws written once over a symmetric
-// 6 x 6's storage read and write it (articulated_law.hpp, response_law.hpp).
+// Simulation's Mat6 (all 36 entries, column-major) and MatNN as the laws written once over a
+// symmetric 6 x 6's storage read and write it (articulated_law.hpp, response_law.hpp).
 #pragma once
 
 #include "featherdrive/spatial/types.hpp"
@@ -34,6 +34,13 @@ struct Mat6Assigned {
       for (int a = 0; a < 6; ++a) m[a + 6 * b] = col[a];
     }
   }
+};
+
+// An N x N MatNN (column-major, N rows) read entry by entry.
+template <int N>
+struct ColumnMajor {
+  const double* m;
+  double operator()(int a, int b) const { return m[a + N * b]; }
 };
 
 }  // namespace featherdrive::detail
