@@ -2,12 +2,37 @@
 
 #include "featherdrive/algorithm/aba.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/response_law.hpp"
 #include "joint_acceleration.hpp"
+#include "mat6_storage.hpp"
 
 namespace featherdrive {
 namespace {
 
 const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
+
+// At a joint of N dofs (spherical, floating) by response_law (docs/math/unit_response.md,
+// eq. R6-R10). Out of line: inlined, it costs the 1-dof path registers.
+template <int N>
+[[gnu::noinline]] void multi_dof_response(Data& data, int i, const Mat6& T, Mat6& L) {
+  const Data::LinkInfo& link = data.info[i];
+  const response_law::Columns<double> S{data.motion_subspace[i].data()};
+  const detail::ColumnMajor<N> D_inv{data.D_inv[i].data()};
+  detail::Mat6Assigned Lambda(L);
+  MatNN& block = data.inverse_mass_block[i];
+  if (link.parent < 0) {  // T = 0: W = 0, (M^-1)_ii = D^-1
+    response_law::world_response<N, double>(S, D_inv, Lambda);
+    data.parent_coupling[i].setZero();
+    block = data.D_inv[i];
+  } else {
+    double Minv[N * N];
+    response_law::response_n<N>(detail::Mat6Entries(T), S, data.U[i].data(), D_inv,
+                                data.parent_coupling[i].data(), Minv, Lambda);
+    for (int a = 0; a < N; ++a)
+      for (int b = 0; b < N; ++b) block(a, b) = Minv[N * a + b];
+  }
+  data.inverse_mass_diagonal.segment(link.v_index, N) = block.diagonal();
+}
 
 // Link i's Lambda_i, W_i and (M^-1)_ii, its parent's being done. In frame 0, where a link's and
 // its parent's spatial vectors share coordinates: Lambda_i = S D^-1 S^T + P T P^T with
@@ -17,36 +42,23 @@ const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
   const Data::LinkInfo& link = data.info[i];
   const Mat6& T = link.parent >= 0 ? data.response[link.parent] : kZero;
   Mat6& L = data.response[i];
-  if (link.nv == 1) {
-    // Lambda_i = T - h S^T - S h^T + r S S^T with h = D^-1 W, r = (M^-1)_ii
-    //          = T + S g^T - h S^T, g = r S - h (G_i).
-    // No 6-vector temporaries: GCC keeps them on the stack and copies them; J's are read instead.
+  if (link.nv == 1) {  // by response_law (docs/math/unit_response.md, eq. R1-R5)
     Data::OneDof& J = data.one_dof[i];
-    J.W.noalias() = T * J.U;
     const double D_inv = J.D_inv;
-    const double r = D_inv + D_inv * D_inv * J.U.dot(J.W);
-    J.G = r * J.S - D_inv * J.W;
-    // Column by column: with AVX rows 0-3 and 4-5 apart (a 4-wide and a 2-wide operation); else
-    // whole columns, aligned, so SSE2 folds their loads into the arithmetic (as in aba.cpp's
-    // add_to_parent).
-    for (int j = 0; j < 6; ++j) {
-      const double g = J.G[j], sh = J.S[j] * D_inv;
-#ifdef __AVX__
-      L.col(j).head<4>() = T.col(j).head<4>() + g * J.S.head<4>() - sh * J.W.head<4>();
-      L.col(j).tail<2>() = T.col(j).tail<2>() + g * J.S.tail<2>() - sh * J.W.tail<2>();
-#else
-      L.col(j) = T.col(j) + g * J.S - sh * J.W;
-#endif
-    }
+    detail::Mat6Assigned Lambda(L);
+    const double r = response_law::response(
+        detail::Mat6Entries(T), detail::aligned16(J.S.data()), detail::aligned16(J.U.data()), D_inv,
+        detail::aligned16(J.W.data()), detail::aligned16(J.G.data()), Lambda);
     J.inverse_mass = r;
     if (link.parent >= 0 && data.info[link.parent].nv == 1) {
       const Data::OneDof& P = data.one_dof[link.parent];
-      J.parent_W = J.U.dot(P.W);
-      J.parent_S = J.U.dot(P.S);
-      // Folded once here, not in each sweep.
-      J.base_per_parent_base = -D_inv * J.parent_S;
-      J.base_per_parent_impulse =
-          P.D_inv * (D_inv * J.parent_W) + P.inverse_mass * J.base_per_parent_base;
+      const response_law::Chain<double> c =
+          response_law::chain(detail::aligned16(J.U.data()), D_inv, detail::aligned16(P.S.data()),
+                              detail::aligned16(P.W.data()), P.D_inv, P.inverse_mass);
+      J.parent_W = c.parent_W;
+      J.parent_S = c.parent_S;
+      J.base_per_parent_base = c.base_per_parent_base;
+      J.base_per_parent_impulse = c.base_per_parent_impulse;
     }
     data.inverse_mass_block[i](0, 0) = r;
     data.inverse_mass_diagonal[link.v_index] = r;
@@ -56,32 +68,8 @@ const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
     L = T;
     return;
   }
-  const Mat6N& S = data.motion_subspace[i];
-  const Mat6N& U = data.U[i];
-  const MatNN& Dinv = data.D_inv[i];
-  if (link.parent < 0) {  // T = 0 (a floating root): Lambda = S D^-1 S^T, W = 0, (M^-1)_ii = D^-1
-    if (link.nv == 6) {  // fixed sizes: Eigen runs dynamic ones through its general product
-      const Mat6 S6 = S;
-      L.noalias() = S6 * Mat6(Dinv) * S6.transpose();
-    } else {
-      L.noalias() = S * Dinv * S.transpose();
-    }
-    data.parent_coupling[i].setZero();
-    data.inverse_mass_block[i] = Dinv;
-    data.inverse_mass_diagonal.segment(link.v_index, link.nv) = Dinv.diagonal();
-    return;
-  }
-  const Mat6N W = T * U;
-  const MatNN UtW = U.transpose() * W;
-  const Mat6N SDinv = S * Dinv;
-  L = T;
-  L.noalias() -= SDinv * W.transpose();
-  L.noalias() -= W * SDinv.transpose();
-  L.noalias() += SDinv * UtW * SDinv.transpose();
-  L.noalias() += SDinv * S.transpose();
-  data.parent_coupling[i] = W;
-  data.inverse_mass_block[i] = Dinv + Dinv * UtW * Dinv;
-  data.inverse_mass_diagonal.segment(link.v_index, link.nv) = data.inverse_mass_block[i].diagonal();
+  if (link.nv == 3) return multi_dof_response<3>(data, i, T, L);
+  multi_dof_response<6>(data, i, T, L);
 }
 
 }  // namespace

@@ -406,8 +406,8 @@ class LaneStep {
     int j;
     [[gnu::always_inline]] B operator()(int a, int b) const { return m[kSym[a][b]].b[j]; }
   };
-  // Whole packs of a symmetric 6 x 6 (kSym), as multi_dof_law reads it and accumulates it (the
-  // upper triangle).
+  // Whole packs of a symmetric 6 x 6 (kSym), as multi_dof_law and response_law read it and
+  // multi_dof_law accumulates it (the upper triangle).
   struct SymmetricPack {
     const V* m;
     [[gnu::always_inline]] V operator()(int a, int b) const { return m[kSym[a][b]]; }
@@ -449,6 +449,30 @@ class LaneStep {
       for (int a = 0; a < 6; ++a)
         for (int b = a; b < 6; ++b) m[kSym[a][b]].b[j] = f(a, b);
     }
+  };
+  // Whole packs of a symmetric 6 x 6 (kSym), as response_law's multi-dof law writes it (the upper
+  // triangle row by row; it reads through SymmetricPack).
+  struct SymmetricPacksAssign {
+    V* m;
+    template <class F>
+    [[gnu::always_inline]] void assign(const F& f) const {
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) m[kSym[a][b]] = f(a, b);
+    }
+  };
+  // An N x N of packs stored row by row (D^-1).
+  template <int N>
+  struct RowMajorPacks {
+    const V* m;
+    [[gnu::always_inline]] const V& operator()(int a, int b) const { return m[N * a + b]; }
+  };
+  // A floating root's S = diag(R0, R0) from R0 (row-major): zero off its two blocks.
+  struct RootSubspace {
+    const V* R0;
+    [[gnu::always_inline]] const V& operator()(int r, int c) const {
+      return R0[3 * (r % 3) + c % 3];
+    }
+    static constexpr bool nonzero(int r, int c) { return (r < 3) == (c < 3); }
   };
   // a^T b summed left to right. The sweep's one-dof operations sum in sweep_law's order (SW0,
   // the scalar step's) instead.
@@ -1933,26 +1957,13 @@ void LaneStep<A, K>::root_acceleration(V* a, const V& dt) {
   for (int r = 0; r < 3; ++r) qd[3 + r] = qd[3 + r] + dt * wv[r];
 }
 
-// A floating root's whole-articulation response Lambda = S D^-1 S^T (inverse_mass_diagonal.cpp:
-// its parent is the world, T = 0), in the symmetric storage.
+// A floating root's whole-articulation response Lambda = S D^-1 S^T (its parent is the world),
+// by response_law (docs/math/unit_response.md, eq. R10) over S = diag(R0, R0).
 template <class A, int K>
 void LaneStep<A, K>::root_response() {
-  const V* Di = at(l_.root_D_inv);
-  const V* R0 = at(l_.root_R);
-  V* L = at(l_.Lambda);
-  V SD[36];  // S D^-1
-  for (int a = 0; a < 6; ++a)
-    for (int e = 0; e < 6; ++e) {
-      const int h = a < 3 ? 0 : 3, r = a % 3;
-      SD[6 * a + e] = R0[3 * r] * Di[6 * h + e] + R0[3 * r + 1] * Di[6 * (h + 1) + e] +
-                      R0[3 * r + 2] * Di[6 * (h + 2) + e];
-    }
-  for (int a = 0; a < 6; ++a)
-    for (int b = a; b < 6; ++b) {
-      const int h = b < 3 ? 0 : 3, r = b % 3;
-      L[kSym[a][b]] = SD[6 * a + h] * R0[3 * r] + SD[6 * a + h + 1] * R0[3 * r + 1] +
-                         SD[6 * a + h + 2] * R0[3 * r + 2];
-    }
+  SymmetricPacksAssign Lambda{at(l_.Lambda)};
+  response_law::world_response<6, V>(RootSubspace{at(l_.root_R)},
+                                     RowMajorPacks<6>{at(l_.root_D_inv)}, Lambda);
 }
 
 // The end of a sweep at a floating root (gauss_seidel.hpp's finish_link: no rows, W = 0):
@@ -2397,45 +2408,18 @@ void LaneStep<A, K>::ball_acceleration(int i, V* a, const V& dt) {
   }
 }
 
-// A spherical joint's response (inverse_mass_diagonal.cpp, several dofs): W = T U with T its
-// parent's Lambda, Lambda = T - S D^-1 W^T - W (S D^-1)^T + S D^-1 U^T W (S D^-1)^T + S D^-1 S^T,
-// and the unit-response block D^-1 + D^-1 U^T W D^-1.
+// A spherical joint's response by response_law (docs/math/unit_response.md, eq. R6-R9): W = T U
+// with T its parent's Lambda (zero for the world), Lambda and the unit-response block
+// (M^-1)_ii.
 template <class A, int K>
 void LaneStep<A, K>::ball_response(int i) {
   const LinkConstants& k = p_.links[i];
   const V* T = k.parent >= 0 ? at(l_.Lambda + 21 * k.parent) : at(l_.zero);
-  V* L = at(l_.Lambda + 21 * i);
-  const V* S3 = at(l_.ball_S + 18 * i);
-  const V* U3 = at(l_.ball_U + 18 * i);
-  const V* Di = at(l_.ball_D_inv + 9 * i);
-  V* W3 = at(l_.ball_W + 18 * i);
-  for (int b = 0; b < 3; ++b) sym_times(T, U3 + 6 * b, W3 + 6 * b);
-  V UtW[9], SD[18], SDU[18], DU[9];
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) UtW[3 * a + b] = dot6(U3 + 6 * a, W3 + 6 * b);
-  for (int b = 0; b < 3; ++b)
-    for (int r = 0; r < 6; ++r)
-      SD[6 * b + r] = (S3[r] * Di[b] + S3[6 + r] * Di[3 + b]) + S3[12 + r] * Di[6 + b];
-  for (int b = 0; b < 3; ++b)  // (S D^-1) U^T W
-    for (int r = 0; r < 6; ++r)
-      SDU[6 * b + r] = (SD[r] * UtW[b] + SD[6 + r] * UtW[3 + b]) + SD[12 + r] * UtW[6 + b];
-  auto row3 = [](const V* X, int r, const V* Y, int c) {  // sum_b X(r, b) Y(c, b), 6 x 3 each
-    return (X[r] * Y[c] + X[6 + r] * Y[6 + c]) + X[12 + r] * Y[12 + c];
-  };
-  for (int r = 0; r < 6; ++r)
-    for (int c = r; c < 6; ++c) {
-      const int e = kSym[r][c];
-      L[e] = (((T[e] - row3(SD, r, W3, c)) - row3(W3, r, SD, c)) + row3(SDU, r, SD, c)) +
-             row3(SD, r, S3, c);
-    }
-  for (int a = 0; a < 3; ++a)  // D^-1 U^T W
-    for (int b = 0; b < 3; ++b)
-      DU[3 * a + b] = (Di[3 * a] * UtW[b] + Di[3 * a + 1] * UtW[3 + b]) + Di[3 * a + 2] * UtW[6 + b];
-  V* Minv = at(l_.ball_response + 9 * i);
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      Minv[3 * a + b] =
-          Di[3 * a + b] + ((DU[3 * a] * Di[b] + DU[3 * a + 1] * Di[3 + b]) + DU[3 * a + 2] * Di[6 + b]);
+  SymmetricPacksAssign Lambda{at(l_.Lambda + 21 * i)};
+  response_law::response_n<3>(SymmetricPack{T}, response_law::Columns<V>{at(l_.ball_S + 18 * i)},
+                              at(l_.ball_U + 18 * i),
+                              RowMajorPacks<3>{at(l_.ball_D_inv + 9 * i)}, at(l_.ball_W + 18 * i),
+                              at(l_.ball_response + 9 * i), Lambda);
 }
 
 // A spherical joint's three rows (step.cpp's setup_dof_rows): each axis's position and its drive's
