@@ -12,6 +12,7 @@
 #include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
 #include "joint_acceleration.hpp"
+#include "mat6_storage.hpp"
 
 namespace featherdrive {
 namespace {
@@ -92,29 +93,6 @@ X* aligned(X* p) {
   return static_cast<X*>(__builtin_assume_aligned(p, 16));
 }
 
-// A Mat6 as articulated_law reads it (entry a, b).
-struct Entries {
-  const double* m;
-  explicit Entries(const Mat6& IA) : m(IA.data()) {}
-  double operator()(int a, int b) const { return m[a + 6 * b]; }
-};
-
-// A parent's Mat6 as articulated_law accumulates it: all 36 entries, column by column, each
-// column's addends formed before any is stored, so that the compiler pairs rows into SSE2 (or
-// AVX) operations (a store between the reads would have to be assumed to alias them).
-struct Accumulated {
-  double* m;
-  explicit Accumulated(Mat6& IA) : m(IA.data()) {}
-  template <class F>
-  [[gnu::always_inline]] void accumulate(const F& f) {
-    for (int b = 0; b < 6; ++b) {
-      double add[6];
-      for (int a = 0; a < 6; ++a) add[a] = f(a, b);
-      for (int a = 0; a < 6; ++a) m[a + 6 * b] = m[a + 6 * b] + add[a];
-    }
-  }
-};
-
 // A correctly rounded square root, for multi_dof_law::spd_inverse.
 struct Sqrt {
   double operator()(double x) const { return std::sqrt(x); }
@@ -127,7 +105,7 @@ template <int N, bool kBias>
 [[gnu::noinline]] void multi_dof_pass(const Model& model, Data& data, int i, const VecX* tau) {
   const Data::LinkInfo& link = data.info[i];
   Mat6* const inertia = aligned(data.articulated_inertia.data());
-  const Entries IA(inertia[i]);
+  const detail::Mat6Entries IA(inertia[i]);
   const typename detail::Subspace<N>::type S = detail::Subspace<N>::of(data, i);
   double* const U = data.U[i].data();
   double* const D_inv = data.D_inv[i].data();
@@ -138,7 +116,7 @@ template <int N, bool kBias>
   if (kBias) multi_dof_law::joint_force<N>(tau->data() + link.v_index, S, pA, u);
   if (link.parent < 0) return;
   double UD[6 * N], Ia[36];
-  Accumulated parent(inertia[link.parent]);
+  detail::Mat6Accumulated parent(inertia[link.parent]);
   multi_dof_law::project_inertia<N>(IA, U, D_inv, parent, UD, Ia);
   if (kBias)
     multi_dof_law::project_bias<N>(Ia, UD, pA, u, data.bias_acceleration0[i].data(),
@@ -164,11 +142,11 @@ void articulated_inertias(const Model& model, Data& data) {
     const Mat6& IA = inertia[i];
     if (link.nv == 1) {  // docs/math/unit_response.md, eq. AP1 and AP3
       Data::OneDof& J = one_dof[i];
-      const Entries IA_i(IA);
+      const detail::Mat6Entries IA_i(IA);
       J.D_inv = articulated_law::joint_inertia(IA_i, J.S.data(), model.armature[link.v_index],
                                                J.U.data());
       if (link.parent < 0) continue;
-      Accumulated parent(inertia[link.parent]);
+      detail::Mat6Accumulated parent(inertia[link.parent]);
       articulated_law::project_inertia(IA_i, J.U.data(), J.D_inv, parent);
       continue;
     }
@@ -232,7 +210,7 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     const Vec6& pA = bias[i];
     if (link.nv == 1) {  // docs/math/unit_response.md, eq. AP1-AP4
       Data::OneDof& J = one_dof[i];
-      const Entries IA_i(IA);
+      const detail::Mat6Entries IA_i(IA);
       const double D_inv = articulated_law::joint_inertia(IA_i, J.S.data(),
                                                           model.armature[link.v_index], J.U.data());
       J.D_inv = D_inv;
@@ -241,7 +219,7 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
       if (link.parent < 0) continue;
       articulated_law::project_bias(IA_i, pA.data(), c_all[i].data(), J.U.data(), D_inv, u,
                                     bias[link.parent].data());
-      Accumulated parent(inertia[link.parent]);
+      detail::Mat6Accumulated parent(inertia[link.parent]);
       articulated_law::project_inertia(IA_i, J.U.data(), D_inv, parent);
       continue;
     }

@@ -1,5 +1,6 @@
 // Simulation's Mat6 (all 36 entries, column-major) and MatNN as the laws written once over a
-// symmetric 6 x 6's storage read and write it (articulated_law.hpp, response_law.hpp).
+// symmetric 6 x 6's storage read, accumulate and write it (articulated_law.hpp,
+// multi_dof_law.hpp, response_law.hpp; aba.cpp, inverse_mass_diagonal.cpp).
 #pragma once
 
 #include "featherdrive/spatial/types.hpp"
@@ -32,6 +33,22 @@ struct Mat6Assigned {
       double col[6];
       for (int a = 0; a < 6; ++a) col[a] = f(a, b);
       for (int a = 0; a < 6; ++a) m[a + 6 * b] = col[a];
+    }
+  }
+};
+
+// A parent's Mat6 as articulated_law accumulates it: all 36 entries, column by column, each
+// column's addends formed before any is stored, so that the compiler pairs rows into SSE2 (or
+// AVX) operations.
+struct Mat6Accumulated {
+  double* m;
+  explicit Mat6Accumulated(Mat6& M) : m(aligned16(M.data())) {}
+  template <class F>
+  [[gnu::always_inline]] void accumulate(const F& f) {
+    for (int b = 0; b < 6; ++b) {
+      double add[6];
+      for (int a = 0; a < 6; ++a) add[a] = f(a, b);
+      for (int a = 0; a < 6; ++a) m[a + 6 * b] = m[a + 6 * b] + add[a];
     }
   }
 };
