@@ -466,14 +466,6 @@ class LaneStep {
     const V* m;
     [[gnu::always_inline]] const V& operator()(int a, int b) const { return m[N * a + b]; }
   };
-  // A floating root's S = diag(R0, R0) from R0 (row-major): zero off its two blocks.
-  struct RootSubspace {
-    const V* R0;
-    [[gnu::always_inline]] const V& operator()(int r, int c) const {
-      return R0[3 * (r % 3) + c % 3];
-    }
-    static constexpr bool nonzero(int r, int c) { return (r < 3) == (c < 3); }
-  };
   // a^T b summed left to right. The sweep's one-dof operations sum in sweep_law's order (SW0,
   // the scalar step's) instead.
   template <class T>
@@ -1962,7 +1954,7 @@ void LaneStep<A, K>::root_acceleration(V* a, const V& dt) {
 template <class A, int K>
 void LaneStep<A, K>::root_response() {
   SymmetricPacksAssign Lambda{at(l_.Lambda)};
-  response_law::world_response<6, V>(RootSubspace{at(l_.root_R)},
+  response_law::world_response<6, V>(multi_dof_law::RotationPair<V>{at(l_.root_R)},
                                      RowMajorPacks<6>{at(l_.root_D_inv)}, Lambda);
 }
 

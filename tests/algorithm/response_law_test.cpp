@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
 #include "featherdrive/spatial/types.hpp"
 #include "support/symmetric6.hpp"
@@ -122,14 +123,6 @@ struct RowMajor {
   double operator()(int a, int b) const { return m[N * a + b]; }
 };
 
-// A floating root's S = diag(R, R) from R alone (the lanes' root_response): entries off the two
-// blocks are zero and its sums skip them.
-struct RootSubspace {
-  const double* R;  // row-major 3 x 3
-  double operator()(int r, int c) const { return R[3 * (r % 3) + c % 3]; }
-  static constexpr bool nonzero(int r, int c) { return (r < 3) == (c < 3); }
-};
-
 template <int N>
 using Mat6K = Eigen::Matrix<double, 6, N>;
 template <int N>
@@ -215,8 +208,9 @@ TEST(ResponseLaw, FloatingRootSkipsTheZeroBlocks) {
     MatK<6> D_inv = random_spd(rng).inverse();
     D_inv = (0.5 * (D_inv + D_inv.transpose())).eval();
     FullSymmetric skipped{Mat6::Zero()}, dense{Mat6::Zero()};
-    response_law::world_response<6, double>(RootSubspace{R.data()}, RowMajor<6>{D_inv.data()},
-                                             skipped);
+    // diag(R, R) from R alone, as the lanes' root_response reads it: its sums skip the zeros.
+    response_law::world_response<6, double>(multi_dof_law::RotationPair<double>{R.data()},
+                                            RowMajor<6>{D_inv.data()}, skipped);
     response_law::world_response<6, double>(response_law::Columns<double>{S.data()},
                                              RowMajor<6>{D_inv.data()}, dense);
     EXPECT_TRUE(skipped.m == dense.m) << k;

@@ -38,6 +38,8 @@ struct RotationPair {
   static int end_row(int c) { return c < 3 ? 3 : 6; }
   static int first_col(int r) { return r < 3 ? 0 : 3; }
   static int end_col(int r) { return r < 3 ? 3 : 6; }
+  /// As response_law's sums skip zeros.
+  static constexpr bool nonzero(int r, int c) { return (r < 3) == (c < 3); }
 };
 
 /// (S^T x)_c, over column c's entries.
