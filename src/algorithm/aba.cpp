@@ -179,9 +179,10 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     if (link.nv == 1) {
       const double qd = v[link.v_index];
       for (int r = 0; r < 6; ++r) J[r] = qd * data.one_dof[i].S[r];
-    } else if (link.nv > 0) {
-      const Vec6 sJ = data.motion_subspace[i] * v.segment(link.v_index, link.nv);
-      for (int r = 0; r < 6; ++r) J[r] = sJ[r];
+    } else if (link.nv == 3) {  // multi_dof_law, eq. AP14, as the lanes
+      multi_dof_law::joint_motion(detail::Subspace<3>::of(data, i), v.data() + link.v_index, J);
+    } else if (link.nv == 6) {
+      multi_dof_law::joint_motion(detail::Subspace<6>::of(data, i), v.data() + link.v_index, J);
     }
     double vi[6], c[6], pA[6];
     link_motion_law::velocity(link.parent >= 0 ? data.velocity0[link.parent].data() : nullptr, J,

@@ -708,16 +708,17 @@ template <class A, int K>
     if (Sv) {
       const B qd = qdv->b[j];
       for (int r = 0; r < 6; ++r) J[r] = qd * Sv[r].b[j];
-    } else if (k.type == 4) {  // S qd, S = ball_S's three columns
+    } else if (k.type == 4) {  // S qd, S = ball_S's three columns (multi_dof_law, eq. AP14)
       const V* S3 = at(l_.ball_S + 18 * i);
-      for (int r = 0; r < 6; ++r)
-        J[r] = (S3[r].b[j] * qdv[0].b[j] + S3[6 + r].b[j] * qdv[1].b[j]) +
-               S3[12 + r].b[j] * qdv[2].b[j];
+      B S3j[18], qd[3];
+      for (int e = 0; e < 18; ++e) S3j[e] = S3[e].b[j];
+      for (int r = 0; r < 3; ++r) qd[r] = qdv[r].b[j];
+      multi_dof_law::joint_motion(multi_dof_law::DenseSubspace<B, 3>{S3j}, qd, J);
     } else if (R0) {
       B R0j[9], qd[6];
       for (int e = 0; e < 9; ++e) R0j[e] = R0[e].b[j];
       for (int r = 0; r < 6; ++r) qd[r] = qdv[r].b[j];
-      root_S(R0j, qd, J);
+      multi_dof_law::joint_motion(multi_dof_law::RotationPair<B>{R0j}, qd, J);
     }
     // v, c and the bias force (link_motion_law, eq. P1-3 to P1-5).
     B v[6], c[6], pA[6];

@@ -1,5 +1,5 @@
 // ABA passes 2 and 3 at a joint of N dofs (3: spherical, 6: floating root), written once over the
-// number type T (docs/math/unit_response.md, eq. AP7-AP13): double for Simulation
+// number type T (docs/math/unit_response.md, eq. AP7-AP14): double for Simulation
 // (algorithm/aba.cpp, algorithm/joint_acceleration.hpp), whole SIMD packs in the lanes
 // (sim/simd_lane_step.hpp's root_articulated, ball_articulated, root_acceleration,
 // ball_acceleration). Vectors are T[6] arrays [angular; linear] in frame 0; U and U D^-1 are
@@ -196,21 +196,28 @@ template <int N, class T>
   }
 }
 
-/// AP13: a += S qdd, row r over its entries.
+/// AP14: y = S x, row r over its entries left to right: a joint's S qd in pass 1 (unit_response.md,
+/// P1-3) and AP13's S qdd.
 template <class T, class S>
-[[gnu::always_inline]] inline void add_joint_motion(const S& s, const T* qdd, T* a) {
-  T out[6];
-  #pragma GCC unroll 6
+[[gnu::always_inline]] inline void joint_motion(const S& s, const T* x, T* y) {
+#pragma GCC unroll 6
   for (int r = 0; r < 6; ++r) {
     const int k0 = s.first_col(r), k1 = s.end_col(r);
-    T x = s(r, k0) * qdd[k0];
-    #pragma GCC unroll 6
+    T sum = s(r, k0) * x[k0];
+#pragma GCC unroll 6
     for (int k = 1; k < 6; ++k)
-      if (k > k0 && k < k1) x = x + s(r, k) * qdd[k];
-    out[r] = a[r] + x;
+      if (k > k0 && k < k1) sum = sum + s(r, k) * x[k];
+    y[r] = sum;
   }
-  #pragma GCC unroll 6
-  for (int r = 0; r < 6; ++r) a[r] = out[r];
+}
+
+/// AP13: a += S qdd (AP14's sums).
+template <class T, class S>
+[[gnu::always_inline]] inline void add_joint_motion(const S& s, const T* qdd, T* a) {
+  T sq[6];
+  joint_motion(s, qdd, sq);
+#pragma GCC unroll 6
+  for (int r = 0; r < 6; ++r) a[r] = a[r] + sq[r];
 }
 
 }  // namespace featherdrive::multi_dof_law
