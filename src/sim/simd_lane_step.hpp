@@ -350,13 +350,7 @@ class LaneStep {
     quaternion_law::product(a, b, out);
   }
   static void quaternion_rotation(const V* q, V* R) { quaternion_law::rotation(q, R); }
-  // y = S x and y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
-  template <class T>
-  static void root_S(const T* R0, const T* x, T* y) {
-    for (int h = 0; h < 6; h += 3)
-      for (int r = 0; r < 3; ++r)
-        y[h + r] = R0[3 * r] * x[h] + R0[3 * r + 1] * x[h + 1] + R0[3 * r + 2] * x[h + 2];
-  }
+  // y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
   template <class T>
   static void root_St(const T* R0, const T* x, T* y) {
     for (int h = 0; h < 6; h += 3)
@@ -475,11 +469,6 @@ class LaneStep {
   }
   [[gnu::always_inline]] static B dot6(const B* a, const B* b) {
     return sum6(a[0] * b[0], a[1] * b[1], a[2] * b[2], a[3] * b[3], a[4] * b[4], a[5] * b[5]);
-  }
-  template <class T, class L>  // T: what lane returns
-  [[gnu::always_inline]] static T dot6(const L& lane, const V* a, const T* x) {
-    return sum6(lane(a[0]) * x[0], lane(a[1]) * x[1], lane(a[2]) * x[2], lane(a[3]) * x[3],
-                lane(a[4]) * x[4], lane(a[5]) * x[5]);
   }
   // Entries 0-5 of vector j of the packs at p.
   [[gnu::always_inline]] static void take6(const V* p, int j, B* out) {
@@ -1501,12 +1490,13 @@ void LaneStep<A, K>::contact_velocities() {
     if (one_dof(k)) {
       const V* S = at(l_.S + 6 * i);
       for (int r = 0; r < 6; ++r) v[r] = vp[r] + S[r] * qd[0];
-    } else if (k.type == 3) {
-      root_S(at(l_.root_R), qd, v);
+    } else if (k.type == 3) {  // S qd by multi_dof_law (AP14), as in ABA's pass 1
+      multi_dof_law::joint_motion(multi_dof_law::RotationPair<V>{at(l_.root_R)}, qd, v);
     } else if (k.type == 4) {
-      const V* S3 = at(l_.ball_S + 18 * i);
-      for (int r = 0; r < 6; ++r)
-        v[r] = vp[r] + ((S3[r] * qd[0] + S3[6 + r] * qd[1]) + S3[12 + r] * qd[2]);
+      V Sqd[6];
+      multi_dof_law::joint_motion(multi_dof_law::DenseSubspace<V, 3>{at(l_.ball_S + 18 * i)}, qd,
+                                  Sqd);
+      for (int r = 0; r < 6; ++r) v[r] = vp[r] + Sqd[r];
     } else {
       for (int r = 0; r < 6; ++r) v[r] = vp[r];
     }
