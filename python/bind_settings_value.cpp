@@ -112,7 +112,8 @@ void featherdrive::python::bind_settings_value(py::module_& m) {
   // The MJCF overload first: pybind11 takes the first that accepts the robot.
   const char* const robot_doc =
       "What the robot file says beyond the Model, as Settings: the defaults with options, its "
-      "mimic rows, an MJCF file's actuators (as apply_mjcf_actuators), the effort limits as "
+      "mimic rows, an MJCF file's actuators (as apply_mjcf_actuators) and joint springs (its "
+      "hinges' and slides' stiffness), the effort limits as "
       "robot.options.effort says.";
   m.def(
       "robot_settings",

@@ -69,6 +69,7 @@ std::optional<SimdIsa> to_isa(py::handle obj);  // bind_check.cpp: fd.check
 void bind_contact(py::module_& m);  // bind_contact.cpp: after bind_io (UrdfRobot, Scene)
 /// bind_settings_value.cpp: fd.Settings and what takes or gives one; after every class it names.
 void bind_settings_value(py::module_& m);
+void bind_row_kinds(py::module_& m);  // after bind_settings_value: it extends Settings
 
 using ModelPtr = std::shared_ptr<Model>;
 constexpr long long kIntMax = std::numeric_limits<int>::max();

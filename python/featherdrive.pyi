@@ -183,6 +183,9 @@ class SimulationOptions:
                  compat: Union[str, Compat] = "none") -> None:
         """ValueError for dt <= 0, position_iterations < 1 or velocity_iterations < 0."""
 
+def row_kinds() -> list[dict]:
+    """The row kinds besides drives, limits and friction (e.g. 'joint_spring'): each a dict of
+    name, force (its output's name) and fields (name, default, doc)."""
 def validate_options(options: SimulationOptions) -> None:
     """Raises ValueError naming the field and value for bad options."""
 
@@ -205,6 +208,8 @@ class Settings:
     mimic_joints: list[MimicJoint]
     ground: Ground
     contact: ContactOptions
+    row_parameters: Vector
+    """(nv, the row kinds' fields), kind after kind (row_kinds())."""
     @staticmethod
     def defaults(model: Model, options: SimulationOptions | None = None) -> Settings: ...
     def validate(self, model: Model) -> None:
@@ -501,6 +506,13 @@ class Simulation:
     def foot_contact_force(self, links: Union[str, Int, Sequence[Union[str, Int]]]) -> Vector:
         """The sum of link_contact_force over links (a foot's), world axes, N (3,)."""
     def max_joint_velocity(self, joint: Joint) -> float: ...
+    def set_row_parameters(self, kind: str, joint: Joint, **fields: float) -> None:
+        """A row kind's fields on a joint by keyword (row_kinds()), e.g.
+        set_row_parameters('joint_spring', 'knee', stiffness=240.0, reference=0.1); the fields
+        not given keep their values."""
+    def row_parameters(self, kind: str, joint: Joint) -> dict[str, float]: ...
+    def row_force(self, kind: str) -> Vector:
+        """The force a row kind applied on each dof in the last step (nv,), a copy."""
     def set_actuator_envelope(self, joint: Joint, envelope: ActuatorEnvelope) -> None: ...
     def actuator_envelope(self, joint: Joint) -> ActuatorEnvelope: ...
     def set_actuator(self, joint: Joint, actuator: ExplicitActuator) -> None:
@@ -736,6 +748,12 @@ class Batch:
     def set_joint_friction(self, static: ArrayLike, dynamic: ArrayLike | None = None,
                            viscous: ArrayLike = 0.0, env_ids: EnvIds = None) -> None: ...
     def set_max_joint_velocity(self, values: ArrayLike, env_ids: EnvIds = None) -> None: ...
+    def set_row_parameter(self, kind: str, field: str, values: ArrayLike,
+                          env_ids: EnvIds = None) -> None:
+        """One field of a row kind on env_ids (None: all): a scalar, (nv,) or (k, nv)."""
+    def row_parameter(self, kind: str, field: str) -> Vector: ...
+    def row_force(self, kind: str) -> Vector:
+        """A row kind's forces of the last step (N, nv), a copy."""
     def set_link_mass(self, link: Union[str, Int], mass: ArrayLike, env_ids: EnvIds = None,
                       scale_inertia: bool = True) -> None: ...
     def set_link_com(self, link: Union[str, Int], com: ArrayLike,

@@ -62,4 +62,5 @@ PYBIND11_MODULE(featherdrive, m) {
   bind_check(m);
   bind_contact(m);
   bind_settings_value(m);
+  bind_row_kinds(m);
 }

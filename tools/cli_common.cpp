@@ -109,3 +109,15 @@ void run_plot_script(const std::string& script, const std::vector<std::string>& 
   }
   out.commit();
 }
+
+bool clear_row_kinds(Simulation& sim, int d) {
+  bool had = false;
+  for (const RowKindInfo& kind : row_kinds()) {
+    if (!kind.active(sim.row_parameters(kind.name, d))) continue;
+    std::vector<double> defaults;
+    for (const RowField& f : kind.fields) defaults.push_back(f.default_value);
+    sim.set_row_parameters(kind.name, d, defaults);
+    had = true;
+  }
+  return had;
+}

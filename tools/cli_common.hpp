@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "featherdrive/sim/simulation.hpp"
+
 // Failures that are not the input's fault (files that cannot be written, the plot script).
 struct RunError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -59,3 +61,8 @@ void make_parent_folders(const std::filesystem::path& path);
 void run_plot_script(const std::string& script, const std::vector<std::string>& inputs,
                      const std::filesystem::path& png, const std::string& title,
                      const PrivateTempDir& tmp);
+
+/// Sets dof d's row kinds (constraint/row_kinds.hpp) to their defaults, for a peer that has
+/// none; returns whether the dof had one.
+bool clear_row_kinds(featherdrive::Simulation& sim, int d);
+

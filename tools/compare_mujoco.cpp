@@ -187,9 +187,10 @@ int compare_mujoco(const CompareMujocoArgs& args) {
   Simulation start = make_simulation(scene);
   // MuJoCo's frictionloss is another law and it has no joint velocity limits: both sides run
   // without them, and the output says so.
-  std::string friction_off, velocity_limits_off;
+  std::string friction_off, velocity_limits_off, kinds_off;
   for (const Link& l : model.links) {
     if (l.nv != 1) continue;
+    if (clear_row_kinds(start, l.v_index)) kinds_off += " " + l.joint_name;
     if (start.joint_friction(l.v_index).active() || start.friction_coefficient(l.v_index) > 0.0) {
       start.set_joint_friction(l.v_index, JointFriction{});
       start.set_friction_coefficient(l.v_index, 0.0);
@@ -239,6 +240,10 @@ int compare_mujoco(const CompareMujocoArgs& args) {
   if (!velocity_limits_off.empty())
     std::printf("  joint velocity limits off on both sides (MuJoCo has none):%s\n",
                 velocity_limits_off.c_str());
+  if (!kinds_off.empty())
+    std::printf("  joint springs off on both sides (MuJoCo's passive spring is explicit, "
+                "featherdrive's row implicit):%s\n",
+                kinds_off.c_str());
   for (const std::string& note : runs.front().mjcf.notes) std::printf("  note: %s\n", note.c_str());
   for (const Compared& r : runs) {
     const DriveMapping mapping = &r == &runs.front() && !args.literal_only

@@ -50,12 +50,14 @@ int compare_physx(const ComparePhysxArgs& args) {
   Simulation sim = make_simulation(scene);
   // The harness cannot set PhysX's static/dynamic/viscous friction (URDF <dynamics> gives the
   // arm some): both sides run without it, and the output says so.
-  std::string friction_off;
-  for (int d = 0; d < model.nv; ++d)  // a spherical joint's axes by their dof names
+  std::string friction_off, kinds_off;
+  for (int d = 0; d < model.nv; ++d) {  // a spherical joint's axes by their dof names
     if (sim.joint_friction(d).active()) {
       sim.set_joint_friction(d, JointFriction{});
       friction_off += " " + model.dof_names[d];
     }
+    if (clear_row_kinds(sim, d)) kinds_off += " " + model.dof_names[d];
+  }
 
   // The targets of every step as the harness takes them (entry k before step k + 1), from the
   // scene's own rule on a copy.
@@ -126,6 +128,8 @@ int compare_physx(const ComparePhysxArgs& args) {
   if (!friction_off.empty())
     std::printf("  joint friction off on both sides (PhysX's cannot be set):%s\n",
                 friction_off.c_str());
+  if (!kinds_off.empty())
+    std::printf("  joint springs off on both sides (PhysX has none):%s\n", kinds_off.c_str());
   if (model.floating_base()) std::printf("  the floating root's pose is not compared\n");
   print_difference_table(c, "PhysX");
   if (!px.contact_links.empty()) {

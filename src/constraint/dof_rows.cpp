@@ -61,6 +61,10 @@ struct ScalarRows {
   double error_high() const { return rows.error_high; }
   double max_velocity() const { return rows.max_velocity; }
   double& velocity_limit() const { return rows.velocity_limit_impulse; }
+  bool any_kinds() const { return rows.kinds != 0; }
+  bool any_kind(int i) const { return (rows.kinds >> i & 1u) != 0; }
+  static bool has_kind(int) { return true; }
+  double* kind_slots(int offset) const { return rows.kind_slots.data() + offset; }
 };
 
 }  // namespace

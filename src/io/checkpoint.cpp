@@ -85,6 +85,13 @@ class ByteReader {
   }
   std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
   double f64() { return std::bit_cast<double>(u64()); }
+  std::string text() {
+    const std::uint64_t n = u64();
+    need(n);
+    std::string out = data_.substr(pos_, n);
+    pos_ += n;
+    return out;
+  }
   VecX vec(int n) {
     VecX v(n);
     for (int i = 0; i < n; ++i) v[i] = f64();
@@ -246,6 +253,67 @@ void read_contact_settings(ByteReader& r, Settings& settings) {
 }
 
 // Version 5: per dof its revolute wrap (1: wrapped), then the mimic joints.
+// The row kinds (constraint/row_kinds.hpp), each by name with its fields' names, so that a
+// checkpoint reads in a build whose kinds or fields differ: count; per kind its name, its
+// fields' count and names, each dof's values (nv x fields) and forces (nv).
+void write_row_kinds(Writer& w, const Settings& settings, const State& state) {
+  const auto kinds = row_kinds();
+  const Eigen::Index nv = settings.row_parameters.rows();
+  w.u32(static_cast<std::uint32_t>(kinds.size()));
+  for (const RowKindInfo& kind : kinds) {
+    w.text(std::string(kind.name));
+    w.u32(static_cast<std::uint32_t>(kind.fields.size()));
+    for (const RowField& f : kind.fields) w.text(std::string(f.name));
+    for (Eigen::Index d = 0; d < nv; ++d)
+      for (size_t j = 0; j < kind.fields.size(); ++j)
+        w.f64(settings.row_parameters(d, kind.offset + static_cast<Eigen::Index>(j)));
+    w.vec(state.row_force.segment(kind.index * nv, nv));
+  }
+}
+
+// A kind or field this build does not know is refused (its row would be lost); one the checkpoint
+// lacks keeps its default.
+void read_row_kinds(ByteReader& r, const Model& model, Settings& settings, State& state,
+                    const std::string& name) {
+  const int nv = model.nv;
+  for (const RowKindInfo& kind : row_kinds())
+    for (size_t j = 0; j < kind.fields.size(); ++j)
+      settings.row_parameters.col(kind.offset + static_cast<Eigen::Index>(j))
+          .setConstant(kind.fields[j].default_value);
+  const std::uint32_t count = r.u32();
+  std::vector<bool> seen(row_kinds().size(), false);
+  for (std::uint32_t k = 0; k < count; ++k) {
+    const std::string kind_name = r.text();
+    const RowKindInfo* kind = nullptr;
+    for (const RowKindInfo& known : row_kinds())
+      if (known.name == kind_name) kind = &known;
+    if (!kind)
+      fail_checkpoint(name, "the checkpoint has row kind '" + kind_name +
+                                "', which this build does not know (row kinds: " +
+                                row_kind_names() + ")");
+    if (seen[static_cast<size_t>(kind->index)])
+      fail_checkpoint(name, "corrupt checkpoint: row kind '" + kind_name + "' twice");
+    seen[static_cast<size_t>(kind->index)] = true;
+    const std::uint32_t fields = r.u32();
+    if (fields > 1024)
+      fail_checkpoint(name, "corrupt checkpoint: row kind '" + kind_name + "' with " +
+                                std::to_string(fields) + " fields");
+    std::vector<int> column(fields);
+    for (std::uint32_t j = 0; j < fields; ++j) {
+      const std::string field = r.text();
+      column[j] = -1;
+      for (size_t f = 0; f < kind->fields.size(); ++f)
+        if (kind->fields[f].name == field) column[j] = kind->offset + static_cast<int>(f);
+      if (column[j] < 0)
+        fail_checkpoint(name, "the checkpoint's row kind '" + kind_name + "' has field '" +
+                                  field + "', which this build does not know");
+    }
+    for (int d = 0; d < nv; ++d)
+      for (std::uint32_t j = 0; j < fields; ++j) settings.row_parameters(d, column[j]) = r.f64();
+    state.row_force.segment(kind->index * nv, nv) = r.vec(nv);
+  }
+}
+
 void write_joint_coupling(Writer& p, const Settings& settings) {
   for (const RevoluteWrap wrap : settings.revolute_wrap)
     p.u8(wrap == RevoluteWrap::wrapped ? 1 : 0);
@@ -376,6 +444,7 @@ std::string checkpoint_bytes(const Simulation& sim) {
   write_contact_settings(p, settings);  // version 8
   write_friction_anchors(p, state);
   p.u8(settings.contact.self_collision ? 1 : 0);  // version 9
+  write_row_kinds(p, settings, state);            // version 10
 
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
@@ -587,6 +656,9 @@ void restore_checkpoint(const std::string& bytes, Simulation& sim, const std::st
       read_friction_anchors(r, model, state);
     }
     if (version >= 9) settings.contact.self_collision = r.u8() != 0;  // before, off
+    // Before version 10, the simulation's own row kind settings and no row kind forces.
+    state.row_force = VecX::Zero(RowKinds::size * model.nv);
+    if (version >= 10) read_row_kinds(r, model, settings, state, name);
     if (r.pos() != bytes.size() - 8)
       fail_checkpoint(name, "corrupt checkpoint: " + std::to_string(bytes.size() - 8 - r.pos()) +
                                 " bytes left over after the payload");

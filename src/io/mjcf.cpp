@@ -319,7 +319,12 @@ struct Converter {
       } else if (m->jnt_limited[j]) {
         ball_ranges.push_back(joint);
       }
-      if (m->jnt_stiffness[j] != 0.0) springs.push_back(joint);
+      if (m->jnt_stiffness[j] != 0.0 && nv == 1) {
+        robot.springs.push_back({joint, m->jnt_stiffness[j], m->qpos_spring[m->jnt_qposadr[j]]});
+        springs.push_back(joint);
+      } else if (m->jnt_stiffness[j] != 0.0) {
+        ball_springs.push_back(joint);
+      }
       if (js.damping != 0.0 || js.friction != 0.0) passive.push_back(joint);
       robot.joint_order.push_back(joint);
       spec.name = k + 1 == n ? body : body + "/" + joint;
@@ -343,7 +348,7 @@ struct Converter {
     add(spec);
   }
 
-  std::vector<std::string> springs, passive, ball_ranges;
+  std::vector<std::string> springs, ball_springs, passive, ball_ranges;
 };
 
 const char* geom_type_name(int type) {
@@ -463,8 +468,12 @@ void warn_about_ignored(const mjModel* m, const Converter& c, const UrdfOptions&
                        "MuJoCo; featherdrive's shapes collide with each other only with contact: " +
                        "{self_collision: true} (off by default; parent and child links never)");
   if (!c.springs.empty())
-    warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on joints " +
+    warnings.push_back("joint stiffness becomes a joint spring toward springref, solved as an "
+                       "implicit row, not MuJoCo's explicit passive force, on joints " +
                        joined(c.springs));
+  if (!c.ball_springs.empty())
+    warnings.push_back("joint stiffness (MuJoCo's passive spring) is not simulated on ball "
+                       "joints " + joined(c.ball_springs));
   if (!c.passive.empty())
     warnings.push_back("joint damping and frictionloss become joint friction (viscous = damping, "
                        "static = dynamic = frictionloss), solved as rows, not MuJoCo's passive "
@@ -718,6 +727,7 @@ Settings robot_settings(const MjcfRobot& robot, const SimulationOptions& options
   settings.mimic_joints = robot.mimic_joints;
   for (const auto& [dof, actuator] : actuators_by_dof(robot))
     settings.actuators[static_cast<size_t>(dof)] = actuator;
+  apply_robot_springs(robot, settings);
   apply_urdf_effort_limits(robot, settings);
   settings.validate(*robot.model);
   return settings;

@@ -411,7 +411,7 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
   extras.text.resize(static_cast<size_t>(model.nv));
   std::ostringstream actuators;
   int actuator = 0;
-  std::string friction, velocity_limited, envelopes, clamped, limited;
+  std::string friction, velocity_limited, envelopes, clamped, limited, sprung;
   for (const Link& link : model.links) {
     if (link.nv != 1) continue;
     const int d = link.v_index;
@@ -470,9 +470,23 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
       text += " limited=\"true\" range=\"" +
               nums({std::isfinite(lo) ? lo : -far, std::isfinite(hi) ? hi : far}) + "\"";
     }
+    // A joint spring as MuJoCo's passive spring toward springref, its damper in the joint's.
+    const std::vector<double> spring = sim.row_parameters(JointSpring::name, d);
+    if (JointSpring::active(spring)) {
+      sprung += " " + link.joint_name;
+      if (spring[JointSpring::stiffness] > 0.0)
+        text += " stiffness=\"" + format_double(spring[JointSpring::stiffness]) +
+                "\" springref=\"" + format_double(spring[JointSpring::reference]) + "\"";
+      damping += spring[JointSpring::damping];
+    }
     if (damping > 0.0) text += " damping=\"" + format_double(damping) + "\"";
     if (armature > 0.0) text += " armature=\"" + format_double(armature) + "\"";
   }
+  for (const Link& link : model.links)  // PhysX's axis positions have no MuJoCo counterpart
+    for (int d = link.v_index; link.joint_type == JointType::spherical && d < link.v_index + 3; ++d)
+      if (JointSpring::active(sim.row_parameters(JointSpring::name, d)))
+        out.notes.push_back("joint spring of spherical axis " + model.dof_names[d] +
+                            " not exported (MuJoCo's ball stiffness acts on the whole rotation)");
   // Every translated drive of a TGS scene has the same sub-steps (the position iterations).
   out.timestep = o.dt / out.substeps;
   const std::string equality = mimic_equalities(model, sim.mimic_joints(), out.timestep, out.notes);
@@ -509,6 +523,11 @@ MjcfExport export_mjcf(const Simulation& sim, const MjcfExportOptions& options) 
         "solver row; they differ where a joint reaches its limit:" +
         limited);
   if (!envelopes.empty()) out.notes.push_back("actuator envelopes not exported:" + envelopes);
+  if (!sprung.empty())
+    out.notes.push_back(
+        "joint springs as MuJoCo's stiffness and springref, an explicit passive force where "
+        "featherdrive's row is implicit: they part by O(k dt^2 / m) per step:" +
+        sprung);
   if (o.guard.enabled)
     out.notes.push_back(
         "step guard not exported: MuJoCo steps unguarded, featherdrive redoes the steps the guard "

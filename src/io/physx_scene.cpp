@@ -69,6 +69,13 @@ std::string dof_fields(const Simulation& sim, int d, const std::string& name) {
                                 to_string(sim.actuator(d).integration) + " " +
                                 to_string(sim.actuator(d).kind) +
                                 " actuator, which the harness cannot set (give it a drive)");
+  for (const RowKindInfo& kind : row_kinds()) {
+    const std::vector<double> values = sim.row_parameters(kind.name, d);
+    if (kind.active(values))
+      throw std::invalid_argument("physx export: joint '" + name + "' has a " +
+                                  std::string(kind.name) +
+                                  ", which PhysX has no counterpart for (clear it to compare)");
+  }
   std::ostringstream js;
   js << "\"armature\": " << json_num(sim.model().armature[d]);
   if (sim.applied_force()[d] != 0.0)

@@ -742,6 +742,28 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     }
   }
 
+  // The keys of a joint's settings and of joint_defaults: their own, then each row kind's name.
+  auto with_row_kinds = [](std::vector<std::string> keys) {
+    for (const RowKindInfo& k : row_kinds()) keys.emplace_back(k.name);
+    return keys;
+  };
+  // Each row kind given under `j` (a map of its fields; each a number, checked with the others
+  // by the kind's own check when the settings are made).
+  auto read_row_kinds = [&](const YAML::Node& j, const std::string& path, JointSettings& js) {
+    for (const RowKindInfo& k : row_kinds()) {
+      const YAML::Node node = j[std::string(k.name)];
+      if (!node) continue;
+      const std::string p = path + "." + std::string(k.name);
+      std::vector<std::string> names;
+      for (const RowField& f : k.fields) names.emplace_back(f.name);
+      r.map(node, p, names);
+      std::vector<std::optional<double>> values(k.fields.size());
+      for (size_t f = 0; f < k.fields.size(); ++f)
+        if (const YAML::Node v = node[names[f]]) values[f] = r.number(v, p + "." + names[f]);
+      js.row_kinds[k.index] = values;
+    }
+  };
+
   // Joint settings first: armature changes the model.
   std::map<int, JointSettings> settings;
   if (const YAML::Node joints = root["joints"]) {
@@ -754,8 +776,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       js.dof = joint_dof(r, scene.robot, name, path_j);
       const YAML::Node j = kv.second;
       r.map(j, path_j,
-            {"lower", "upper", "max_velocity", "friction", "friction_coefficient", "armature",
-             "revolute"});
+            with_row_kinds({"lower", "upper", "max_velocity", "friction",
+                            "friction_coefficient", "armature", "revolute"}));
+      read_row_kinds(j, path_j, js);
       if (j["revolute"]) js.revolute = read_revolute(r, j["revolute"], path_j + ".revolute");
       if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
       if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
@@ -835,8 +858,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   }
 
   if (const YAML::Node jd = root["joint_defaults"]) {
-    r.map(jd, "joint_defaults", {"friction_coefficient", "max_velocity", "revolute"});
+    r.map(jd, "joint_defaults", with_row_kinds({"friction_coefficient", "max_velocity", "revolute"}));
     JointSettings js;
+    read_row_kinds(jd, "joint_defaults", js);
     if (jd["revolute"]) js.revolute = read_revolute(r, jd["revolute"], "joint_defaults.revolute");
     if (jd["friction_coefficient"])
       js.friction_coefficient =
@@ -987,6 +1011,20 @@ static auto naming_the_scene(const Scene& scene, F&& f) {
   }
 }
 
+// A joint's row kinds into dof d's row parameters: the fields given, the others as they are,
+// checked together (check_row_parameters).
+static void apply_row_kinds(const Model& model, int d, const JointSettings& js, Settings& s) {
+  for (const auto& [index, given] : js.row_kinds) {
+    const RowKindInfo& kind = row_kinds()[static_cast<size_t>(index)];
+    std::vector<double> values(kind.fields.size());
+    for (size_t f = 0; f < values.size(); ++f)
+      values[f] = given[f].value_or(s.row_parameters(d, kind.offset + static_cast<Eigen::Index>(f)));
+    check_row_parameters(model, d, kind, values);
+    for (size_t f = 0; f < values.size(); ++f)
+      s.row_parameters(d, kind.offset + static_cast<Eigen::Index>(f)) = values[f];
+  }
+}
+
 // Each value is checked where it is given, in the order the scene's keys apply, by the checks the
 // Simulation setters use (settings.hpp), so a scene's first error is the one a setter would name.
 Settings scene_settings(const Scene& scene) {
@@ -994,6 +1032,7 @@ Settings scene_settings(const Scene& scene) {
     const Model& model = *scene.model();
     validate_options(scene.options);
     Settings s = Settings::defaults(model, scene.options);
+    apply_robot_springs(scene.robot, s);  // the file's own, before the scene's joint settings
     for (int i = 0; i < model.num_links(); ++i) {
       LinkParameters& p = s.link_parameters[static_cast<size_t>(i)];
       if (scene.link_defaults) scene.link_defaults->apply_to(p);
@@ -1020,6 +1059,7 @@ Settings scene_settings(const Scene& scene) {
           check_max_joint_velocity(model, d, *jd.max_velocity);
           s.max_joint_velocity[d] = *jd.max_velocity;
         }
+        apply_row_kinds(model, d, jd, s);
       }
     }
     for (const JointSettings& js : scene.joints) {
@@ -1047,6 +1087,7 @@ Settings scene_settings(const Scene& scene) {
         check_revolute_wrap(model, d, *js.revolute);
         s.revolute_wrap[static_cast<size_t>(d)] = *js.revolute;
       }
+      apply_row_kinds(model, d, js, s);
     }
     validate_mimic_joints(model, scene.mimic);
     s.mimic_joints = scene.mimic;

@@ -743,10 +743,20 @@ void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim) {
   }
 }
 
+void apply_robot_springs(const UrdfRobot& robot, Settings& settings) {
+  const RowKindInfo& kind = row_kind(JointSpring::name);
+  for (const UrdfRobot::Spring& s : robot.springs) {
+    const int dof = robot.model->dof_index(s.joint);
+    settings.row_parameters(dof, kind.offset + JointSpring::stiffness) = s.stiffness;
+    settings.row_parameters(dof, kind.offset + JointSpring::reference) = s.reference;
+  }
+}
+
 Settings robot_settings(const UrdfRobot& robot, const SimulationOptions& options) {
   validate_options(options);
   Settings settings = Settings::defaults(*robot.model, options);
   settings.mimic_joints = robot.mimic_joints;
+  apply_robot_springs(robot, settings);
   apply_urdf_effort_limits(robot, settings);
   settings.validate(*robot.model);
   return settings;

@@ -481,6 +481,58 @@ void Batch::set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix
       [](const Simulation& s, int d, const double* x) { return x[0] == s.max_joint_velocity(d); });
 }
 
+void Batch::set_row_parameter(std::string_view kind, std::string_view field,
+                              std::span<const int> env_ids, const RowMatrix& values) {
+  const RowKindInfo& k = row_kind(kind);
+  const int column = row_field_column(k, field);
+  const std::vector<int> envs = check_env_ids(env_ids);
+  const std::string what = std::string(kind) + "." + std::string(field);
+  check_values(values, envs.size(), model().nv, what.c_str());
+  // The dof's fields with this one replaced: what the setter and its check see.
+  auto fields = [&](const Simulation& s, int d, double x) {
+    std::vector<double> v(k.fields.size());
+    for (size_t j = 0; j < v.size(); ++j)
+      v[j] = s.settings().row_parameters(d, k.offset + static_cast<Eigen::Index>(j));
+    v[static_cast<size_t>(column - k.offset)] = x;
+    return v;
+  };
+  // Checked against each environment's own other fields.
+  for (size_t j = 0; j < envs.size(); ++j) {
+    const Simulation& sim = sims_[static_cast<size_t>(envs[j])];
+    for (int d = 0; d < model().nv; ++d) {
+      const double x = row_of(values, j)[d];
+      try {
+        if (dof_has_rows(model(), d)) check_row_parameters(model(), d, k, fields(sim, d, x));
+        else if (!(x == sim.settings().row_parameters(d, column)))
+          throw std::invalid_argument(what + ": dof " + std::to_string(d) + " of joint '" +
+                                      model().links[model().dof_link[d]].joint_name +
+                                      "' takes no such setting and must be given the value it "
+                                      "has, not " + format_double(x));
+      } catch (const std::invalid_argument& e) {
+        rethrow_for(envs[j], e);
+      }
+    }
+  }
+  for (size_t j = 0; j < envs.size(); ++j) {
+    Simulation& sim = sims_[static_cast<size_t>(envs[j])];
+    for (int d = 0; d < model().nv; ++d)
+      if (dof_has_rows(model(), d)) sim.set_row_parameters(kind, d, fields(sim, d, row_of(values, j)[d]));
+  }
+  mark(envs, repack_joints);
+}
+
+RowMatrix Batch::row_parameter(std::string_view kind, std::string_view field) const {
+  const int column = row_field_column(row_kind(kind), field);
+  return per_dof_matrix(sims_, [&](const Simulation& s, int d) {
+    return s.settings().row_parameters(d, column);
+  });
+}
+
+RowMatrix Batch::row_force(std::string_view kind) const {
+  const int nv = model().nv;
+  return rows_[StateStorage::row_force].middleCols(row_kind(kind).index * nv, nv);
+}
+
 void Batch::set_drive_delay(std::span<const int> env_ids, const RowMatrix& delay) {
   const std::vector<int> envs = check_env_ids(env_ids);
   check_values(delay, envs.size(), model().nv, "drive delay");
@@ -959,6 +1011,7 @@ void Batch::step_lanes(int count) {
   a.limit_force = rows_[StateStorage::limit_force].data();
   a.friction_force = rows_[StateStorage::friction_force].data();
   a.velocity_limit_force = rows_[StateStorage::velocity_limit_force].data();
+  a.row_force = rows_[StateStorage::row_force].data();
   a.step_count = lane_steps_.data(), a.time = lane_time_.data();
   const int nv = model().nv;
   // The implicit actuators' forces and the tracked drive changes, copied into each Simulation's

@@ -63,7 +63,8 @@ Layout make_layout(const Plan& p) {
   l.contact_vel = take(p.contacts ? 6 * L : 0);
   l.contact_bias = take(p.physx_contacts ? 6 * L : 0);
   l.contact_motion = take(p.physx_contacts ? 6 * L : 0);
-  l.flags = take(8 * n);  // eight doubles a dof (a one-lane block's vector is one double)
+  l.rk = take(RowKinds::size * n), l.old_rk = take(RowKinds::size * n);
+  l.flags = take(16 * n);  // 16 doubles a dof (a one-lane block's vector is one double)
   l.size = at;
   return l;
 }
@@ -322,6 +323,19 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
     const double coefficient = sim.friction_coefficient(d);
     set_parameter(env, x + friction_coefficient, coefficient);
     plan_.any_transmission_friction = plan_.any_transmission_friction || coefficient > 0.0;
+    // The row kinds: whether the dof has each (K::active, here, not in the lane units), their
+    // fields.
+    const MatX& kinds = sim.settings().row_parameters;
+    for (int f = 0; f < RowKinds::fields; ++f)
+      set_parameter(env, x + row_kind_fields + f, kinds(d, f));
+    for (const RowKindInfo& kind : row_kinds()) {
+      std::array<double, RowKinds::fields> values{};
+      for (size_t j = 0; j < kind.fields.size(); ++j)
+        values[j] = kinds(d, kind.offset + static_cast<Eigen::Index>(j));
+      set_parameter(env, x + row_kind_on + kind.index,
+                    dof_has_rows(sim.model(), d) &&
+                        kind.active({values.data(), kind.fields.size()}));
+    }
   }
   for (int i = 0; i < plan_.num_links; ++i) {
     const LinkParameters& lp = sim.link_parameters(i);
@@ -382,6 +396,7 @@ void unpack_guard_rows(const double* rows, int nv, std::vector<GuardRow>& out) {
     g.max_impulse = x[guard_max_impulse];
     g.has_drive = x[guard_has_drive] != 0.0;
     g.has_envelope = x[guard_has_envelope] != 0.0;
+    for (int k = 0; k < RowKinds::size; ++k) g.kind_impulse[static_cast<size_t>(k)] = x[guard_row_kinds + k];
   }
 }
 
@@ -511,7 +526,10 @@ std::string LaneEngine::divergence_message(int e, const Model& model, long step_
   std::ostringstream m;
   m.precision(6);
   m << "simulation diverged at step " << step_count + 1 << " (t = " << time << " s): ";
-  if (s.quantity == 7)  // as Stepper::check_finite_or_throw words it
+  if (s.quantity >= 10)  // a row kind's force, as Stepper::check_finite_or_throw words it
+    m << "joint '" << model.links[static_cast<size_t>(model.dof_link[s.dof])].joint_name << "' "
+      << row_kinds()[static_cast<size_t>(s.quantity - 10)].name << " force = ";
+  else if (s.quantity == 7)  // as Stepper::check_finite_or_throw words it
     m << "link '" << model.links[static_cast<size_t>(s.dof / 3)].name << "' contact force f"
       << "xyz"[s.dof % 3] << " = ";
   else

@@ -46,6 +46,7 @@ void Batch::lane_guard_start() {
     ws.limit_force = s.state_[StateStorage::limit_force];
     ws.friction_force = s.state_[StateStorage::friction_force];
     ws.velocity_limit_force = s.state_[StateStorage::velocity_limit_force];
+    ws.row_force = s.state_[StateStorage::row_force];
     guard_steps_[i] = lane_steps_[i];
     guard_time_[i] = lane_time_[i];
   }
@@ -85,6 +86,7 @@ void Batch::lane_guard_finish(RowMatrix* drive_change) {
     s.state_[StateStorage::limit_force] = ws.limit_force;
     s.state_[StateStorage::friction_force] = ws.friction_force;
     s.state_[StateStorage::velocity_limit_force] = ws.velocity_limit_force;
+    s.state_[StateStorage::row_force] = ws.row_force;
     lane_steps_[i] = guard_steps_[i];
     lane_time_[i] = guard_time_[i];
     // The redo reports its contacts and keeps its anchors (Stepper::guard_redo) from the start's

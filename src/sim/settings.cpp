@@ -103,6 +103,11 @@ Settings Settings::defaults(const Model& model, const SimulationOptions& options
   s.drive_delay.assign(n, 0);
   s.actuators.assign(n, ExplicitActuator{});
   s.actuator_feedforward = VecX::Zero(nv);
+  s.row_parameters.resize(nv, RowKinds::fields);
+  for (const RowKindInfo& kind : row_kinds())
+    for (size_t j = 0; j < kind.fields.size(); ++j)
+      s.row_parameters.col(kind.offset + static_cast<Eigen::Index>(j))
+          .setConstant(kind.fields[j].default_value);
   s.link_parameters.assign(static_cast<size_t>(model.num_links()), LinkParameters{});
   const bool physx = options.compat == Compat::physx;
   // PhysX 5.6.1's defaults for everything nobody set; a model's velocity limit counts as set.
@@ -135,6 +140,9 @@ void Settings::validate(const Model& model) const {
   check_size(actuators.size(), nv, "actuators", "nv");
   check_size(static_cast<size_t>(actuator_feedforward.size()), nv, "actuator_feedforward", "nv");
   check_size(link_parameters.size(), model.num_links(), "link_parameters", "num_links");
+  check_size(static_cast<size_t>(row_parameters.rows()), nv, "row_parameters", "nv");
+  check_size(static_cast<size_t>(row_parameters.cols()), RowKinds::fields, "row_parameters' columns",
+             "the row kinds' fields");
   // What equals the default passes (a model may hold values no setter takes, e.g. a velocity
   // limit of 0); anything else must pass its setter's check.
   const Settings base = defaults(model, options);
@@ -157,6 +165,15 @@ void Settings::validate(const Model& model) const {
     if (actuator.kind != ActuatorKind::none || actuator_feedforward[d] != 0.0)
       check_actuator_feedforward(model, d, actuator_feedforward[d], actuator.kind);
     check_drive_delay(model, d, drive_delay[k], drive, actuator.kind);
+    for (const RowKindInfo& kind : row_kinds()) {
+      std::array<double, RowKinds::fields> values{};
+      bool changed = false;
+      for (size_t j = 0; j < kind.fields.size(); ++j) {
+        values[j] = row_parameters(d, kind.offset + static_cast<Eigen::Index>(j));
+        changed = changed || !same(values[j], kind.fields[j].default_value);
+      }
+      if (changed) check_row_parameters(model, d, kind, {values.data(), kind.fields.size()});
+    }
   }
   for (int i = 0; i < model.num_links(); ++i)
     check_link_parameters_of(model, i, link_parameters[static_cast<size_t>(i)]);
@@ -303,6 +320,21 @@ void check_drive_delay(const Model& model, int dof, int delay, const Drive& driv
   if (drive.type == DriveType::none)
     throw std::invalid_argument(no_drive_message(model, dof) + "; a drive delay of " +
                                 std::to_string(delay) + " steps would do nothing too");
+}
+
+void check_row_parameters(const Model& model, int dof, const RowKindInfo& kind,
+                          std::span<const double> values) {
+  check_dof_index(model, dof);
+  if (values.size() != kind.fields.size())
+    throw std::invalid_argument(std::string(kind.name) + ": expected " +
+                                std::to_string(kind.fields.size()) + " values, got " +
+                                std::to_string(values.size()));
+  const Link& link = link_of(model, dof);
+  if (!dof_has_rows(model, dof))
+    throw std::invalid_argument("joint '" + link.joint_name + "' is " + to_string(link.joint_type) +
+                                ": " + std::string(kind.name) +
+                                " acts on revolute, prismatic and spherical joints only");
+  kind.check(model.dof_names[dof], values);
 }
 
 void check_actuator_feedforward(const Model& model, int dof, double effort,

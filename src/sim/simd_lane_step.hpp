@@ -240,8 +240,8 @@ class LaneStep {
   // Per dof: some lane has friction, some a limit, every lane a drive, some a velocity limit,
   // some a wrapped position, some an envelope, some transmitted friction, and [7] the implicit
   // actuators' kinds (bits: kActuator some lane has one, kMotorClip a dc_motor, kTableClip a
-  // remotized_pd).
-  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 8 * d; }
+  // remotized_pd), [8] the row kinds some lane has (bit k: RowKinds' kind k).
+  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 16 * d; }
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   // The state arrays' row of environment e (Block::rows).
   long row_of(int e) const { return b_.rows ? b_.rows[e] : e; }
@@ -946,7 +946,7 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
         for (int f = 0; f < Layout::kRowFields; ++f) rw[f] = V(0.0);
         rw[Layout::vmax] = dof_parameter(d, max_velocity);
         double* has = any_row(d);
-        for (int f = 0; f < 8; ++f) has[f] = 0.0;
+        for (int f = 0; f < 16; ++f) has[f] = 0.0;
         has[3] = any(rw[Layout::vmax] < V(__builtin_inf())) ? 1.0 : 0.0;
       }
       continue;
@@ -994,6 +994,16 @@ void LaneStep<A, K>::setup_row_constants(double h_step) {
              (any(actuated & (kind == V(2.0))) ? kTableClip : 0.0);
     undriven_ = undriven_ | transmitting;
     rows_any = rows_any | transmitting;
+    // The row kinds (row_kinds.hpp): which lanes have each (LaneEngine::pack_joints decided).
+    double kinds = 0.0;
+    for (int e = 0; e < RowKinds::size; ++e) {
+      const M on = dof_parameter(d, row_kind_on + e) != V(0.0);
+      rw[Layout::kind_masks + e] = select_zero(on, V(1.0));
+      if (any(on)) kinds += static_cast<double>(1 << e);
+      undriven_ = undriven_ | on;  // as the scalar step's any_undriven_rows
+      rows_any = rows_any | on;
+    }
+    has[8] = kinds;
     undriven_ = undriven_ | limited | rubbing | speed_limited;
     rows_any = rows_any | limited | rubbing | driven | speed_limited;
     }
@@ -1078,6 +1088,19 @@ template <class A, int K>
   const LaneDof dof{*this, i, d, row(d)};
   row_setup::setup(dof, r, x0, x0_drive, {h_solve_, p_.dt, p_.tgs});
   dof.rw[Layout::delta_x] = V(0.0);
+  if (const double kinds = any_row(d)[8]; kinds != 0.0) {
+    // Each kind some lane has, on every lane (the solve keeps the others' bits: row_kind.hpp).
+    const RowInputs<V> in{r, row_setup::response_with_cfm(dof, r), x0, h_solve_, p_.dt, p_.tgs};
+    RowKinds::for_each([&]<class E>(E, int field, int slot) {
+      using Kind = typename E::Kind;
+      if (!has_bit(kinds, static_cast<double>(1 << E::index))) return;
+      std::array<V, Kind::fields.size()> values;
+      for (size_t j = 0; j < values.size(); ++j)
+        values[j] = dof_parameter(d, row_kind_fields + field + static_cast<int>(j));
+      V* row = dof.rw + Layout::kind_slots + slot;
+      Kind::setup(row, values, in);
+    });
+  }
 }
 
 // An implicit actuator's clip that depends on the state (actuator_row.hpp, dof_rows.cpp): on
@@ -1185,6 +1208,19 @@ struct LaneStep<A, K>::LaneRows {
   T error_high() const { return f(Layout::err_high); }
   T max_velocity() const { return f(Layout::vmax); }
   T& velocity_limit() const { return f(Layout::vlimp); }
+  bool any_kinds() const {
+    if constexpr (kLoneDrive) return false;
+    return s.any_row(d)[8] != 0.0;
+  }
+  bool any_kind(int e) const { return has_bit(s.any_row(d)[8], static_cast<double>(1 << e)); }
+  auto has_kind(int e) const { return f(Layout::kind_masks + e) != T(0.0); }
+  /// A kind's row as the lanes lane picks see it.
+  struct KindSlots {
+    const LaneRows& rows;
+    int base;
+    T& operator[](int k) const { return rows.f(Layout::kind_slots + base + k); }
+  };
+  KindSlots kind_slots(int offset) const { return {*this, offset}; }
 };
 
 // All rows of dof d at joint velocity v, the whole pack (row_sequence.hpp).
@@ -1467,7 +1503,8 @@ void LaneStep<A, K>::sweep_links() {
       // A lone drive: one vector at a time. With friction or a limit row in the block the whole
       // pack measured faster (the welded humanoid). An actuator's clip on the state needs the pack.
       if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
-          has[5] == 0.0 && has[6] == 0.0 && (has[7] == 0.0 || has[7] == kActuator))
+          has[5] == 0.0 && has[6] == 0.0 && has[8] == 0.0 &&
+          (has[7] == 0.0 || has[7] == kActuator))
         for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
       else
         enter_link<kGiven>(WholePack{}, i, dvp, dv);
@@ -2644,6 +2681,12 @@ void LaneStep<A, K>::step() {
     at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
     at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
     at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
+    // The row kinds' forces (step.cpp's row_kind_forces): 0 on a lane without the row.
+    RowKinds::for_each([&]<class E>(E, int, int slot) {
+      const M on = rw[Layout::kind_masks + E::index] != V(0.0);
+      at(l_.rk)[E::index * p_.nv + d] =
+          select_zero(on, rw[Layout::kind_slots + slot + E::Kind::kImpulse] * inv_dt);
+    });
   }
   if (p_.contacts)  // Stepper::contact_forces: the forces, checked with the state
     for (int l = 0; l < b_.valid; ++l)
@@ -2659,6 +2702,7 @@ void LaneStep<A, K>::finish_step() {
   for (int d = 0; d < p_.nv; ++d)
     z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
              at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
+  for (int k = 0; k < RowKinds::size * p_.nv; ++k) z = z + at(l_.rk)[k] * zero;
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   if (p_.contacts) {
     alignas(64) double forces[kW] = {};
@@ -2689,6 +2733,8 @@ void LaneStep<A, K>::finish_step() {
         check(3, d, lane(at(l_.lf)[d]));
         check(4, d, lane(at(l_.ff)[d]));
         check(5, d, lane(at(l_.vf)[d]));
+        for (int e = 0; e < RowKinds::size; ++e)
+          check(10 + e, d, lane(at(l_.rk)[e * p_.nv + d]));
       }
       for (int i = 0; i < p_.num_links; ++i) {
         const LinkConstants& k = p_.links[i];
@@ -2721,6 +2767,8 @@ void LaneStep<A, K>::finish_step() {
       at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
       at(l_.vf)[d] = select(stopped_, at(l_.old_vf)[d], at(l_.vf)[d]);
     }
+    for (int k = 0; k < RowKinds::size * p_.nv; ++k)
+      at(l_.rk)[k] = select(stopped_, at(l_.old_rk)[k], at(l_.rk)[k]);
   }
   alignas(64) double stopped_lanes[kW];
   select(stopped_, V(1.0), zero).store_aligned(stopped_lanes);
@@ -2748,6 +2796,8 @@ void LaneStep<A, K>::run(int steps) {
     at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
     if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
   }
+  for (int k = 0; k < RowKinds::size * nv; ++k)
+    at(l_.rk)[k] = gather(b_.row_force, RowKinds::size * nv, k);
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
@@ -2773,6 +2823,7 @@ void LaneStep<A, K>::run(int steps) {
       at(l_.old_ff)[d] = at(l_.ff)[d];
       at(l_.old_vf)[d] = at(l_.vf)[d];
     }
+    for (int k = 0; k < RowKinds::size * nv; ++k) at(l_.old_rk)[k] = at(l_.rk)[k];
     step();
     finish_step();
   }
@@ -2788,13 +2839,22 @@ void LaneStep<A, K>::run(int steps) {
     if (b_.actuator_force && p_.any_implicit_actuator)
       scatter(at(l_.af)[d], b_.actuator_force, nv, d);
   }
+  for (int k = 0; k < RowKinds::size * nv; ++k)
+    scatter(at(l_.rk)[k], b_.row_force, RowKinds::size * nv, k);
   if (b_.guard_rows) {  // GuardField's order
-    static constexpr int kField[kGuardFields] = {
+    static constexpr int kField[guard_row_kinds] = {
         Layout::dimp,     Layout::low,  Layout::high,   Layout::fimp,   Layout::tf_applied,
         Layout::vlimp, Layout::response, Layout::maxi, Layout::driven, Layout::has_envelope};
-    for (int d = 0; d < nv; ++d)
-      for (int f = 0; f < kGuardFields; ++f)
+    for (int d = 0; d < nv; ++d) {
+      for (int f = 0; f < guard_row_kinds; ++f)
         scatter(row(d)[kField[f]], b_.guard_rows, nv * kGuardFields, d * kGuardFields + f);
+      // A kind's impulse where the lane has it, 0 elsewhere (the scalar step's GuardRow).
+      RowKinds::for_each([&]<class E>(E, int, int slot) {
+        const M on = row(d)[Layout::kind_masks + E::index] != V(0.0);
+        scatter(select_zero(on, row(d)[Layout::kind_slots + slot + E::Kind::kImpulse]),
+                b_.guard_rows, nv * kGuardFields, d * kGuardFields + guard_row_kinds + E::index);
+      });
+    }
   }
 }
 

@@ -5,6 +5,9 @@
 
 #include <cstddef>
 
+#include "featherdrive/constraint/row_kind.hpp"
+#include "featherdrive/constraint/row_kinds.hpp"
+
 namespace featherdrive::simd {
 
 /// Per-environment parameters are stored in groups of kGroup environments, interleaved: entry k of
@@ -55,7 +58,11 @@ enum DofParameter : int {
   command_position,
   command_velocity,
   command_effort,
-  kDofParameters
+  // The row kinds (constraint/row_kinds.hpp): whether the dof has each (1 or 0, RowKinds' order),
+  // then their fields (Settings::row_parameters' row).
+  row_kind_on,
+  row_kind_fields = row_kind_on + RowKinds::size,
+  kDofParameters = row_kind_fields + RowKinds::fields
 };
 enum LinkParameter : int {
   mass,
@@ -164,7 +171,9 @@ struct Layout {
     tf_imp,        ///< PGS: its accumulated impulse
     tf_applied,    ///< all its impulse changes of the step
     x_start,       ///< the dof's position at the step's start (a remotized_pd clip reads it)
-    kRowFields
+    kind_masks,    ///< per row kind: 1 where the lane's dof has it (RowKinds' order)
+    kind_slots = kind_masks + RowKinds::size,  ///< the kinds' rows (their slot offsets)
+    kRowFields = kind_slots + RowKinds::slots
   };
   // The mimic rows (MimicRowOf's three fields per row), each row's velocity change at the coupled
   // dofs per unit impulse (rows x coupled dofs), those dofs' current velocities, and the joint
@@ -199,7 +208,7 @@ struct Layout {
   int R = 0, pos = 0, S = 0, IA = 0, pA = 0, c = 0, U = 0, D_inv = 0, acc = 0, Lambda = 0, W = 0,
       G = 0, inverse_mass = 0, vel = 0, dv = 0, subtree = 0, after = 0, later = 0, q = 0, qd = 0,
       tau = 0, u = 0, old_q = 0, old_qd = 0, old_df = 0, old_lf = 0, old_ff = 0, old_vf = 0, df = 0,
-      lf = 0, ff = 0, vf = 0, cg = 0, cfm = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
+      lf = 0, ff = 0, vf = 0, rk = 0, old_rk = 0, cg = 0, cfm = 0, row = 0, jimp = 0, entry = 0, saved = 0, saved_tgs = 0, zero = 0, flags = 0, size = 0;
   /// Per link with a one-dof parent (LinkConstants::parent_one_dof), from the response pass:
   /// U_i^T S_p and the base's change per parent impulse; chain_base, the base a chained link is
   /// entered with (implicit_drives.md, eq. GS1-GS3).
@@ -264,14 +273,15 @@ enum GuardField : int {
   guard_max_impulse,
   guard_has_drive,
   guard_has_envelope,
-  kGuardFields
+  guard_row_kinds,  ///< each row kind's impulse (RowKinds' order)
+  kGuardFields = guard_row_kinds + RowKinds::size
 };
 
 /// Why a lane stopped: the first non-finite quantity in Simulation's order.
 struct Stop {
   /// 0 none, 1 velocity qd, 2 drive force, 3 limit force, 4 friction force, 5 velocity limit
   /// force, 6 position q, 7 a link's contact force (dof: 3 link + component), 8 the step guard's
-  /// scalar redo diverged (LaneEngine keeps its message)
+  /// scalar redo diverged (LaneEngine keeps its message), 10 + k row kind k's force
   int quantity = 0;
   int dof = -1;
   double value = 0.0;
@@ -328,6 +338,7 @@ struct Block {
   double* limit_force = nullptr;
   double* friction_force = nullptr;
   double* velocity_limit_force = nullptr;
+  double* row_force = nullptr;  ///< (N, RowKinds::size nv): the row kinds' forces, kind after kind
   const double* parameters = nullptr;  ///< the whole packed array
   long* step_count = nullptr;
   double* time = nullptr;

@@ -55,10 +55,11 @@ void set_delay(Settings& settings, Workspace& ws, int dof, int delay) {
 
 }  // namespace
 
-StateStorage::StateStorage(Eigen::Index nq, Eigen::Index nv) : own_(VecX::Zero(nq + 6 * nv)) {
+StateStorage::StateStorage(Eigen::Index nq, Eigen::Index nv)
+    : own_(VecX::Zero(nq + (6 + RowKinds::size) * nv)) {
   Eigen::Index offset = 0;  // no arithmetic on the null data() of an empty block
   for (int f = 0; f < kFields; ++f) {
-    size_[f] = f == q ? nq : nv;
+    size_[f] = f == q ? nq : f == row_force ? RowKinds::size * nv : nv;
     data_[f] = size_[f] > 0 ? own_.data() + offset : nullptr;
     offset += size_[f];
   }
@@ -205,6 +206,7 @@ State Simulation::state() const {
   s.limit_force = limit_force();
   s.friction_force = friction_force();
   s.velocity_limit_force = velocity_limit_force();
+  s.row_force = state_[StateStorage::row_force];
   s.actuator_force = ws_->actuator_force;
   const auto nv = static_cast<size_t>(model_->nv);
   s.actuator_history.resize(nv);
@@ -254,6 +256,7 @@ void Simulation::set_state(const State& s) {
   check_state_vector(s.limit_force, nv, "limit_force");
   check_state_vector(s.friction_force, nv, "friction_force");
   check_state_vector(s.velocity_limit_force, nv, "velocity_limit_force");
+  check_state_vector(s.row_force, RowKinds::size * nv, "row_force");
   check_guard_account(s.guard_account);
   // Nothing below throws.
   state_[StateStorage::q] = exact;
@@ -261,6 +264,7 @@ void Simulation::set_state(const State& s) {
   state_[StateStorage::limit_force] = s.limit_force;
   state_[StateStorage::friction_force] = s.friction_force;
   state_[StateStorage::velocity_limit_force] = s.velocity_limit_force;
+  state_[StateStorage::row_force] = s.row_force;
   if (s.friction_anchors.empty()) ws_->contact_rows.clear_anchors();
   else ws_->contact_rows.set_anchors(s.friction_anchors);
   state_[StateStorage::qd] = s.qd;
@@ -348,6 +352,31 @@ void Simulation::set_max_joint_velocity(int dof, double max_velocity) {
 }
 void Simulation::set_max_joint_velocity(const std::string& joint, double max_velocity) {
   set_max_joint_velocity(setting_dof(*model_, joint), max_velocity);
+}
+
+void Simulation::set_row_parameters(std::string_view kind, int dof,
+                                    std::span<const double> values) {
+  const RowKindInfo& k = row_kind(kind);
+  check_row_parameters(*model_, dof, k, values);
+  for (size_t j = 0; j < values.size(); ++j)
+    settings_.row_parameters(dof, k.offset + static_cast<Eigen::Index>(j)) = values[j];
+  ws_->row_kinds_changed = true;
+}
+void Simulation::set_row_parameters(std::string_view kind, const std::string& joint,
+                                    std::span<const double> values) {
+  set_row_parameters(kind, setting_dof(*model_, joint), values);
+}
+std::vector<double> Simulation::row_parameters(std::string_view kind, int dof) const {
+  const RowKindInfo& k = row_kind(kind);
+  check_dof_index(*model_, dof);
+  std::vector<double> values(k.fields.size());
+  for (size_t j = 0; j < values.size(); ++j)
+    values[j] = settings_.row_parameters(dof, k.offset + static_cast<Eigen::Index>(j));
+  return values;
+}
+VecView Simulation::row_force(std::string_view kind) const {
+  const int nv = model_->nv;
+  return {state_[StateStorage::row_force].data() + row_kind(kind).index * nv, nv};
 }
 
 void Simulation::set_friction_coefficient(int dof, double coefficient) {

@@ -168,7 +168,22 @@ void Stepper::row_forces() {
     ws_.friction_force[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     ws_.velocity_limit_force[d] = r.velocity_limit_impulse * inv_dt;
   }
+  row_kind_forces(ws_.row_force, inv_dt);
   contact_forces();  // contact.cpp
+}
+
+// Each row kind's force, kind after kind (nv each): its accumulated impulse times inv_dt, 0 on a
+// dof without the row.
+void Stepper::row_kind_forces(VecX& out, double inv_dt) const {
+  const int nv = model_->nv;
+  RowKinds::for_each([&]<class E>(E, int, int slot) {
+    for (int d = 0; d < nv; ++d) {
+      const DofRows& r = ws_.rows[static_cast<size_t>(d)];
+      out[E::index * nv + d] = (r.kinds >> E::index & 1u) != 0
+                                   ? r.kind_slots[slot + E::Kind::kImpulse] * inv_dt
+                                   : 0.0;
+    }
+  });
 }
 
 void Stepper::end_step() {
@@ -300,6 +315,7 @@ void Stepper::setup_dof_rows(int d, double h, bool tgs) {
   row_setup::constants<double>(dof, dt);
   row_setup::setup(dof, r, x0, x0_drive, {h, dt, tgs});
   rows.has_drive = driven || dof.actuator;
+  setup_row_kinds(rows, d, {r, row_setup::response_with_cfm(dof, r), x0, h, dt, tgs});
   const ActuatorEnvelope& envelope = settings_.envelopes[static_cast<size_t>(d)];
   rows.has_envelope = driven && envelope.active();
   rows.envelope = envelope;
@@ -314,9 +330,24 @@ void Stepper::setup_dof_rows(int d, double h, bool tgs) {
   rows.max_velocity = settings_.max_joint_velocity[d];
   rows.drive_only = rows.has_drive && !rows.has_envelope && !rows.actuator &&
                     !rows.has_transmission_friction &&
-                    !rows.has_friction && !rows.has_limit &&
+                    !rows.has_friction && !rows.has_limit && rows.kinds == 0 &&
                     !(rows.max_velocity < DofRows::kNoVelocityLimit);
   ws_.sweep.has_rows[d] = rows.active() ? 1 : 0;
+}
+
+// The row kinds dof d has (its settings leave the row on: K::active) and their rows (K::setup).
+void Stepper::setup_row_kinds(DofRows& rows, int d, const RowInputs<double>& in) {
+  rows.kinds = 0;
+  RowKinds::for_each([&]<class E>(E, int field, int slot) {
+    using K = typename E::Kind;
+    std::array<double, K::fields.size()> values;
+    for (size_t j = 0; j < values.size(); ++j)
+      values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+    if (!K::active(values)) return;
+    rows.kinds |= 1u << E::index;
+    double* row = rows.kind_slots.data() + slot;
+    K::setup(row, values, in);
+  });
 }
 
 // Where a contact solve stands: TGS's elapsed time is the sub-step's start; the velocity
@@ -533,6 +564,7 @@ void Stepper::commit_state() {
   state_[StateStorage::limit_force] = ws_.limit_force;
   state_[StateStorage::friction_force] = ws_.friction_force;
   state_[StateStorage::velocity_limit_force] = ws_.velocity_limit_force;
+  state_[StateStorage::row_force] = ws_.row_force;
 }
 
 void Stepper::check_finite_or_throw() {
@@ -561,7 +593,8 @@ void Stepper::check_finite_or_throw() {
   // overflow where the state stays finite (found by fuzzing: dt = 1e-100).
   double zero = (ws_.qd.array() * 0.0).sum() + (ws_.drive_force.array() * 0.0).sum() +
                 (ws_.limit_force.array() * 0.0).sum() + (ws_.friction_force.array() * 0.0).sum() +
-                (ws_.velocity_limit_force.array() * 0.0).sum() + (ws_.q.array() * 0.0).sum();
+                (ws_.velocity_limit_force.array() * 0.0).sum() + (ws_.q.array() * 0.0).sum() +
+                (ws_.row_force.array() * 0.0).sum();
   if (ws_.contacts_active)
     for (const Vec3& f : ws_.link_contact_force) zero += (f.array() * 0.0).sum();
   if (zero == 0.0 && std::isfinite(time_ + settings_.options.dt)) return;
@@ -574,6 +607,9 @@ void Stepper::check_finite_or_throw() {
     if (!std::isfinite(ws_.friction_force[d])) fail("friction force", d, ws_.friction_force[d]);
     if (!std::isfinite(ws_.velocity_limit_force[d]))
       fail("velocity limit force", d, ws_.velocity_limit_force[d]);
+    for (const RowKindInfo& kind : row_kinds())
+      if (const double f = ws_.row_force[kind.index * model.nv + d]; !std::isfinite(f))
+        fail((std::string(kind.name) + " force").c_str(), d, f);
   }
   for (const Link& link : model.links)
     for (int k = 0; k < link.nq; ++k)

@@ -44,6 +44,7 @@ void Workspace::size_guard(const Model& model) {
   guard_qd0 = guard_force = guard_actuator = guard_qd1 = VecX::Zero(nv);
   guard_q1 = VecX::Zero(nq);
   for (VecX& v : guard_impulse) v = VecX::Zero(nv);
+  guard_row_impulse = VecX::Zero(RowKinds::size * nv);
   guard_rows.assign(static_cast<size_t>(nv), GuardRow{});
   guard_anchors.assign(model.shapes.size(), FrictionAnchors{});
   guard_link_contact_force.assign(static_cast<size_t>(model.num_links()), Vec3::Zero());
@@ -80,8 +81,11 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
     const GuardRow& r = ws_.guard_rows[static_cast<size_t>(d)];
     const double explicit_force =
         actuated ? tau[d] + 0.5 * (ws_.guard_force[d] - (tau[d] - ws_.applied_force[d])) : tau[d];
+    double kinds = 0.0;
+    for (const double k : r.kind_impulse) kinds += k;
     return explicit_force * h + r.drive_impulse + r.low_impulse + r.high_impulse +
-           r.friction_impulse + r.transmission_friction_applied + r.velocity_limit_impulse;
+           r.friction_impulse + r.transmission_friction_applied + r.velocity_limit_impulse +
+           kinds;
   };
   for (const Link& link : model.links) {
     if (link.joint_type == JointType::revolute || link.joint_type == JointType::prismatic) {
@@ -92,7 +96,8 @@ bool Stepper::guard_passes(const VecX& tau, const double e0[2], double e1[2]) {
       moved_too_far = moved_too_far || !(std::abs(dq) <= bound);
       const double force = impulse(link.v_index) / h;
       work += force * dq;
-      bracket += drive_bracket(link.v_index, ws_.guard_q0[link.q_index], dq, h);
+      bracket += drive_bracket(link.v_index, ws_.guard_q0[link.q_index], dq, h) +
+                 row_kind_bracket(link.v_index, ws_.guard_q0[link.q_index], dq, h);
       work_rounding += std::abs(force) * (std::abs(ws_.q[link.q_index]) + std::abs(dq));
     } else if (link.joint_type == JointType::spherical || link.joint_type == JointType::floating) {
       // The rotation's angle (a floating base's translation is not bounded); the work over the
@@ -163,6 +168,23 @@ double Stepper::drive_bracket(int d, double q0, double dq, double h) const {
          kd * (dq / h - drive.target_velocity) * dq - credit;
 }
 
+// Eq. (G-10) for the row kinds a dof has: each kind's own bracket (row_kind.hpp), at the
+// settings the step read.
+double Stepper::row_kind_bracket(int d, double q0, double dq, double h) const {
+  const GuardRow& r = ws_.guard_rows[static_cast<size_t>(d)];
+  const double credit = settings_.options.solver == SolverType::tgs ? kTgsSpringCredit : 0.0;
+  double bracket = 0.0;
+  RowKinds::for_each([&]<class E>(E, int field, int) {
+    using K = typename E::Kind;
+    std::array<double, K::fields.size()> values;
+    for (size_t j = 0; j < values.size(); ++j)
+      values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+    if (K::active(values))
+      bracket += K::guard_bracket(values, r.kind_impulse[E::index], q0, dq, h, credit);
+  });
+  return bracket;
+}
+
 // Eq. (G-7): the power the dampers take out at the end velocity, sum c_d v_d^2: a force drive's
 // (or an actuator's) damping, an acceleration drive's times the dof's effective mass 1 / r,
 // viscous friction. A drive at its force bound is not counted (its damper is not acting).
@@ -177,6 +199,13 @@ double Stepper::damper_power() const {
       const Drive& drive = settings_.drives[static_cast<size_t>(d)];
       c += drive.type == DriveType::acceleration ? drive.damping / r.response : drive.damping;
     }
+    RowKinds::for_each([&]<class E>(E, int field, int) {
+      using K = typename E::Kind;
+      std::array<double, K::fields.size()> values;
+      for (size_t j = 0; j < values.size(); ++j)
+        values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+      if (K::active(values)) c += K::damping_of(values);
+    });
     power += c * ws_.qd[d] * ws_.qd[d];
   }
   return power;
@@ -209,6 +238,11 @@ void Stepper::guard_rows_from_step() {
     g.max_impulse = r.drive.max_impulse;
     g.has_drive = r.has_drive;
     g.has_envelope = r.has_envelope;
+    RowKinds::for_each([&]<class E>(E, int, int slot) {
+      g.kind_impulse[E::index] = (r.kinds >> E::index & 1u) != 0
+                                     ? r.kind_slots[slot + E::Kind::kImpulse]
+                                     : 0.0;
+    });
   }
 }
 
@@ -252,6 +286,7 @@ void Stepper::guard_redo() {
   for (int n = 2;; n = std::min(2 * n, most)) {
     load_state();  // the step's start again
     for (VecX& v : ws_.guard_impulse) v.setZero();
+    ws_.guard_row_impulse.setZero();
     ws_.guard_actuator.setZero();
     ws_.dt = dt / n;
     e0[0] = e_start[0];
@@ -277,6 +312,8 @@ void Stepper::guard_redo() {
         ws_.guard_impulse[2][d] += r.friction_impulse + r.transmission_friction_applied;
         ws_.guard_impulse[3][d] += r.velocity_limit_impulse;
       }
+      row_kind_forces(ws_.row_force, 1.0);  // the sub-step's impulses
+      ws_.guard_row_impulse += ws_.row_force;
       // A sub-step of dt / n as a step of its own: its impulses summed, its anchors the next's.
       if (contacts) {
         report_contacts();
@@ -297,6 +334,7 @@ void Stepper::guard_redo() {
       ws_.limit_force = ws_.guard_impulse[1] * inv_dt;
       ws_.friction_force = ws_.guard_impulse[2] * inv_dt;
       ws_.velocity_limit_force = ws_.guard_impulse[3] * inv_dt;
+      ws_.row_force = ws_.guard_row_impulse * inv_dt;
       if (ws_.actuators.any()) {
         ws_.actuator_force = ws_.guard_actuator / n;  // the explicit ones' mean effort
         for (int d = 0; d < model_->nv; ++d)

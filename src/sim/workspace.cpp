@@ -13,6 +13,7 @@ Workspace::Workspace(const Model& model, const Settings& settings)
   drive_delays = DriveDelays(nv);
   actuator_force = actuator_force_start = joint_force = VecX::Zero(nv);
   drive_force = limit_force = friction_force = velocity_limit_force = VecX::Zero(nv);
+  row_force = VecX::Zero(RowKinds::size * nv);
   rows.assign(static_cast<size_t>(nv), DofRows{});
   dof_order.assign(static_cast<size_t>(nv), 0);
   delta_x = VecX::Zero(nv);

@@ -28,6 +28,8 @@ struct GuardRow {
   double response = 0.0;     ///< r = (M^-1)_jj
   double max_impulse = 0.0;  ///< the drive row's bound
   bool has_drive = false, has_envelope = false;
+  /// Each row kind's accumulated impulse (RowKinds' order; 0 without the row).
+  std::array<double, RowKinds::size> kind_impulse{};
 };
 
 /// The workspace of one simulation: the step's working copies of the state and its scratch, the
@@ -56,6 +58,7 @@ struct Workspace {
   VecX q, qd;
   VecX applied_force;
   VecX drive_force, limit_force, friction_force, velocity_limit_force;
+  VecX row_force;  ///< the row kinds' forces, nv each, kind after kind
   bool track_convergence = false;
   VecX last_drive_change;  ///< see Simulation::last_drive_impulse_change (nv)
 
@@ -116,6 +119,7 @@ struct Workspace {
   double target_lead = 0.0;
   std::optional<Data> guard_data;  ///< for the energies (a second Data: data keeps the step's)
   VecX guard_q0, guard_qd0, guard_force, guard_actuator, guard_impulse[4];
+  VecX guard_row_impulse;  ///< the row kinds' impulses summed over sub-steps, as row_force
   std::vector<GuardRow> guard_rows;  ///< the advance's rows, as the tests read them
   double guard_e0[2] = {0.0, 0.0};  ///< the step's start energies (kinetic, potential)
   /// The last step's end state and energies: the next step's start, unless a setter moved it.
@@ -177,11 +181,13 @@ class Stepper {
   const VecX& apply_actuators();
   void advance(const VecX& tau);
   void row_forces();
+  void row_kind_forces(VecX& out, double inv_dt) const;
   void check_finite_or_throw();
   void commit_state();
   void scale_to_velocity_limits();
   void setup_rows(double h, bool tgs);
   void setup_dof_rows(int dof, double h, bool tgs);
+  void setup_row_kinds(DofRows& rows, int dof, const RowInputs<double>& in);
   void setup_lone_drives(double h, bool tgs);
   void sweep(RowPhase& phase);
   void solve_pgs();
@@ -198,6 +204,7 @@ class Stepper {
   void conclude_contacts();
   // The guard (step_guard.cpp).
   void guard_rows_from_step();
+  double row_kind_bracket(int dof, double q0, double dq, double h) const;
   /// Tests (i) and (ii) of the advance just made from guard_q0, guard_qd0 (energies e0);
   /// leaves the end's energies in e1.
   bool guard_passes(const VecX& tau, const double e0[2], double e1[2]);

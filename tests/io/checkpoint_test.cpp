@@ -38,6 +38,8 @@ void expect_same_state(const Simulation& a, const Simulation& b) {
   EXPECT_TRUE(same_bits(a.limit_force(), b.limit_force()));
   EXPECT_TRUE(same_bits(a.friction_force(), b.friction_force()));
   EXPECT_TRUE(same_bits(a.velocity_limit_force(), b.velocity_limit_force()));
+  for (const RowKindInfo& kind : row_kinds())
+    EXPECT_TRUE(same_bits(a.row_force(kind.name), b.row_force(kind.name))) << kind.name;
 }
 
 fs::path temp_dir(const std::string& name) {
@@ -92,6 +94,8 @@ Simulation busy_simulation(unsigned seed) {
     sim.set_joint_friction(d, {0.02, 0.01, 0.003});
     sim.set_max_joint_velocity(d, 4.0 + d);
     sim.set_actuator_envelope(d, {30.0, 9.0, 0.5, 0.01});
+    const double spring[] = {20.0 + d, 0.5, -0.1 * d};
+    sim.set_row_parameters("joint_spring", d, spring);
   }
   return sim;
 }
@@ -280,7 +284,7 @@ TEST(Checkpoint, AnotherFormatVersionIsRefused) {
   bytes[8] = 1;  // the version, little-endian, right after the magic
   EXPECT_EQ(error_of(bytes, a),
             "state.ckpt: checkpoint format version 1 is not supported (this build reads versions 3 "
-            "to 9)");
+            "to 10)");
 }
 
 TEST(Checkpoint, AnotherModelIsRefused) {
@@ -349,12 +353,32 @@ std::uint64_t bits(double v) {
 }
 
 // Version 8's ground and contact options (a byte and 10 doubles), then (the model has no shapes)
-// version 9's self_collision byte, last before the checksum.
+// version 9's self_collision byte, then version 10's row kinds, last before the checksum.
 constexpr size_t kContactBytes = 1 + 10 * 8;
 constexpr size_t kSelfCollisionBytes = 1;
 
-// The checkpoint as an older version wrote it: the last `tail` bytes of the payload dropped.
+// Version 10's row kinds of a model of nv dofs, as checkpoint.hpp lays them out: their count, then
+// each kind's name, field names, values (nv x fields) and forces (nv).
+size_t row_kind_bytes(size_t nv) {
+  size_t n = 4;
+  for (const RowKindInfo& kind : row_kinds()) {
+    n += 8 + kind.name.size() + 4;
+    for (const RowField& f : kind.fields) n += 8 + f.name.size();
+    n += 8 * nv * (kind.fields.size() + 1);
+  }
+  return n;
+}
+// The header's nv (a u32 at byte 24).
+size_t header_nv(const std::string& bytes) {
+  size_t nv = 0;
+  for (size_t i = 0; i < 4; ++i) nv |= static_cast<size_t>(static_cast<unsigned char>(bytes[24 + i])) << (8 * i);
+  return nv;
+}
+
+// The checkpoint as an older version wrote it: the last `tail` bytes of the payload before
+// version 10's row kinds dropped, and those.
 std::string as_version(std::string bytes, std::uint64_t version, size_t tail) {
+  tail += row_kind_bytes(header_nv(bytes));
   bytes.erase(bytes.size() - 8 - tail, tail);
   std::uint64_t payload = 0;
   for (size_t i = 0; i < 8; ++i)
@@ -613,9 +637,12 @@ constexpr size_t kAccountBytes = 24;
 // bytes plus one zero delay per dof.
 TEST(Checkpoint, VersionThreeIsStillRead) {
   Simulation a = busy_simulation(5);
+  for (int d = 0; d < a.model().nv; ++d)  // not in a version 3 file
+    if (dof_has_rows(a.model(), d)) a.set_row_parameters("joint_spring", d, std::vector<double>(3, 0.0));
   a.step(4);
   std::string bytes = as_version7(checkpoint_bytes(a));
   const size_t delays = 8 * static_cast<size_t>(a.model().nv);
+  ASSERT_EQ(header_nv(bytes), static_cast<size_t>(a.model().nv));
   // Version 5's revolute wrap (a byte per dof) and mimic joints (their count), then version 7's
   // guard account, come last.
   const size_t coupling = static_cast<size_t>(a.model().nv) + 8 + kAccountBytes;
@@ -861,10 +888,11 @@ TEST(Checkpoint, GroundAndContactOptionsAreKept) {
   EXPECT_EQ(c.contact_options().contact_offset, ContactOptions{}.contact_offset);
   expect_same_state(a, c);
   // A forged ground is refused in one line.
-  const size_t height_at = bytes.size() - 8 - kSelfCollisionBytes - kContactBytes + 1;
+  const size_t kinds = row_kind_bytes(header_nv(bytes));
+  const size_t height_at = bytes.size() - 8 - kinds - kSelfCollisionBytes - kContactBytes + 1;
   EXPECT_EQ(error_of(forged(bytes, height_at, bits(std::numeric_limits<double>::infinity())), b),
             "state.ckpt: bad value in the checkpoint: ground.height = inf is not finite");
-  const size_t offset_at = bytes.size() - 8 - kSelfCollisionBytes - 24;
+  const size_t offset_at = bytes.size() - 8 - kinds - kSelfCollisionBytes - 24;
   EXPECT_EQ(error_of(forged(bytes, offset_at, bits(-1.0)), b),
             "state.ckpt: bad value in the checkpoint: contact.contact_offset = -1, rest_offset = "
             "0.001: need 0 <= rest_offset < contact_offset");
@@ -888,6 +916,43 @@ TEST(Checkpoint, ShapesArePartOfTheModelFingerprint) {
             std::string::npos);
   Simulation same(std::make_shared<const Model>(*a));
   restore_checkpoint(checkpoint_bytes(sa), same, "state.ckpt");
+}
+
+// The row kinds go by name (version 10): a kind or a field this build does not know is refused,
+// naming it; the springs' settings and forces resume bit for bit.
+TEST(Checkpoint, RowKindsResumeAndUnknownOnesAreRefused) {
+  Simulation a = busy_simulation(4);
+  a.step(5);
+  ASSERT_NE(a.row_force("joint_spring").norm(), 0.0);
+  const std::string bytes = checkpoint_bytes(a);
+  Simulation b(a.model_ptr(), a.options());
+  restore_checkpoint(bytes, b, "state.ckpt");
+  expect_same_state(a, b);
+  for (int d = 0; d < a.model().nv; ++d)
+    EXPECT_EQ(b.row_parameters("joint_spring", d), a.row_parameters("joint_spring", d));
+  a.step(20);
+  b.step(20);
+  expect_same_state(a, b);
+  const size_t kind = bytes.find("joint_spring");
+  ASSERT_NE(kind, std::string::npos);
+  Simulation c(a.model_ptr(), a.options());
+  EXPECT_EQ(error_of(forged(bytes, kind + 11, 'G', 1), c),
+            "state.ckpt: the checkpoint has row kind 'joint_sprinG', which this build does not "
+            "know (row kinds: joint_spring)");
+  const size_t field = bytes.find("reference", kind);
+  ASSERT_NE(field, std::string::npos);
+  EXPECT_EQ(error_of(forged(bytes, field, 'R', 1), c),
+            "state.ckpt: the checkpoint's row kind 'joint_spring' has field 'Reference', which "
+            "this build does not know");
+  // A forged negative stiffness is refused by the setting's own check, naming the joint.
+  int sprung = -1;
+  for (int d = a.model().nv - 1; d >= 0; --d)
+    if (a.row_parameters("joint_spring", d)[0] != 0.0) sprung = d;
+  ASSERT_GE(sprung, 0);
+  const size_t stiffness_at = field + 9 + 3 * 8 * static_cast<size_t>(sprung);
+  EXPECT_EQ(error_of(forged(bytes, stiffness_at, bits(-1.0)), c),
+            "state.ckpt: bad value in the checkpoint: joint spring of joint '" +
+                a.model().dof_names[sprung] + "': stiffness = -1 must be finite and >= 0");
 }
 
 }  // namespace

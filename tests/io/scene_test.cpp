@@ -152,6 +152,38 @@ drives:
   EXPECT_EQ(sim.drive(j2).type, DriveType::none);
 }
 
+// A row kind's fields by its name under joints.J and joint_defaults (the defaults first, a joint's
+// fields over them, the others kept); a bad value names the joint, the field and the value.
+TEST(Scene, RowKindsByNameReachTheSimulation) {
+  const Scene s = scene_from(R"(
+model: chain3.urdf
+steps: 1
+joint_defaults: {joint_spring: {stiffness: 8, reference: 0.1}}
+joints:
+  joint2: {joint_spring: {damping: 0.5}}
+  joint3: {joint_spring: {stiffness: 0}}
+)");
+  const Model& m = *s.model();
+  const Simulation sim = make_simulation(s);
+  EXPECT_EQ(sim.row_parameters("joint_spring", m.dof_index("joint1")),
+            (std::vector<double>{8.0, 0.0, 0.1}));
+  EXPECT_EQ(sim.row_parameters("joint_spring", m.dof_index("joint2")),
+            (std::vector<double>{8.0, 0.5, 0.1}));
+  EXPECT_EQ(sim.row_parameters("joint_spring", m.dof_index("joint3")),
+            (std::vector<double>{0.0, 0.0, 0.1}));
+  const std::string head = "model: chain3.urdf\nsteps: 1\n";
+  EXPECT_EQ(error_of(head + "joints: {joint1: {joint_spring: {stiffness: -1}}}"),
+            kExamples + "inline.yaml: joint spring of joint 'joint1': stiffness = -1 must be "
+                        "finite and >= 0");
+  EXPECT_NE(error_of(head + "joints: {joint1: {joint_spring: {k: 1}}}")
+                .find("joints.joint1.joint_spring.k: unknown key (expected one of: stiffness, "
+                      "damping, reference)"),
+            std::string::npos);
+  EXPECT_NE(error_of(head + "joints: {joint1: {joint_sprung: {}}}")
+                .find("joints.joint1.joint_sprung: unknown key"),
+            std::string::npos);
+}
+
 TEST(Scene, JsonAndYamlGiveTheSameScene) {
   const Scene yaml = scene_from(
       "model: slider.urdf\ndt: 0.01\nsteps: 5\ndrives: {slide: {type: acceleration, stiffness: 9, "

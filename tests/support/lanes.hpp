@@ -41,6 +41,8 @@ inline double simulation_difference(const Simulation& lane, const Simulation& al
   compare(lane.limit_force(), alone.limit_force());
   compare(lane.friction_force(), alone.friction_force());
   compare(lane.velocity_limit_force(), alone.velocity_limit_force());
+  for (const RowKindInfo& kind : row_kinds())
+    compare(lane.row_force(kind.name), alone.row_force(kind.name));
   auto near = [&](double a, double b) {
     worst = std::max(worst, std::abs(a - b) / std::max(1.0, std::abs(b)));
   };

@@ -7,6 +7,7 @@
 #include "featherdrive/constraint/actuator_row.hpp"
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/joint_constraints.hpp"
+#include "featherdrive/constraint/row_kinds.hpp"
 
 namespace featherdrive {
 
@@ -60,9 +61,14 @@ struct DofRows {
   double high_impulse = 0.0;  ///< <= 0
   double velocity_limit_impulse = 0.0;
 
+  /// The row kinds (constraint/row_kinds.hpp) the dof has: bit i for RowKinds' kind i, whose row
+  /// is kind_slots from its slot offset on.
+  unsigned kinds = 0;
+  std::array<double, RowKinds::slots> kind_slots{};
+
   bool active() const {
     return has_transmission_friction || has_drive || has_friction || has_limit ||
-           max_velocity < kNoVelocityLimit;
+           max_velocity < kNoVelocityLimit || kinds != 0;
   }
   static constexpr double kNoVelocityLimit = std::numeric_limits<double>::infinity();
 };

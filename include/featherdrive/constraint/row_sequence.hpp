@@ -5,6 +5,7 @@
 #pragma once
 
 #include "featherdrive/constraint/drive.hpp"
+#include "featherdrive/constraint/row_kinds.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/core/select.hpp"
 
@@ -22,8 +23,8 @@ struct Phase {
 };
 
 /// Every row of one dof at joint velocity v, dx its TGS position change (0 in PGS): transmitted-
-/// force friction, the drive (clipped by the dof's envelope or actuator), friction, the position
-/// limit, the velocity limit. Each sees the velocity the one before left; returns the dof's
+/// force friction, the drive (clipped by the dof's envelope or actuator), the row kinds
+/// (row_kinds.hpp, in RowKinds' order), friction, the position limit, the velocity limit. Each sees the velocity the one before left; returns the dof's
 /// impulse change. Rows is the dof's rows over T (a double, or a pack and its mask M):
 ///   bool any(Row)   some lane has the row (the row is skipped otherwise);
 ///   bool all(Row)   every lane has it (no select needed);
@@ -32,7 +33,10 @@ struct Phase {
 ///   T response(), recip(): r and 1 / (r + cfm);
 ///   the row's accumulators as T& and its coefficients (tf_*, drive(), drive_impulse(),
 ///   friction_*, low(), high(), error_low(), error_high(), max_velocity(), velocity_limit());
-///   T clip_drive(next, accumulated, v, dx): the envelope's and the actuator's clips.
+///   T clip_drive(next, accumulated, v, dx): the envelope's and the actuator's clips;
+///   bool any_kinds(), any_kind(i)   some lane has a row kind (kind i);
+///   M has_kind(i)                   the lanes that have kind i;
+///   kind_slots(offset)              a kind's row (T& operator[](int)), from its slot offset.
 /// A lane without a row keeps total and v exactly (a select, not + 0), so its bits do not depend
 /// on whether a neighbour has that row.
 template <class T, class Rows>
@@ -71,6 +75,15 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
       rows.drive_impulse() = select(driven, next, accumulated);
       apply(driven, delta);
     }
+  }
+  if (rows.any_kinds()) {
+    const RowKindPhase kind_phase{phase.tgs, phase.velocity_iteration, phase.time_to_step_end};
+    RowKinds::for_each([&]<class E>(E, int, int slot) {
+      if (!rows.any_kind(E::index)) return;
+      const auto present = rows.has_kind(E::index);
+      auto row = rows.kind_slots(slot);
+      apply(present, solve_row_kind<typename E::Kind>(row, present, v, dx, kind_phase));
+    });
   }
   if (rows.any(Row::friction)) {
     const auto rubbing = rows.has(Row::friction);

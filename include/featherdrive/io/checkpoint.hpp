@@ -48,7 +48,10 @@ namespace featherdrive {
 /// Versions 3 to 7 read with the simulation's own. (The comment "keep no state" predates the kept
 /// friction anchors, which follow the settings.)
 /// 9: the contact options's self_collision. Versions 3 to 8 read with it off.
-inline constexpr std::uint32_t kCheckpointVersion = 9;
+/// 10: the row kinds (constraint/row_kinds.hpp) by name, with their fields' names and forces, so
+/// that a kind added later needs no new version. Versions 3 to 9 read with the simulation's own
+/// row kind settings and no row kind forces.
+inline constexpr std::uint32_t kCheckpointVersion = 10;
 inline constexpr std::uint32_t kOldestCheckpointVersion = 3;
 
 /// A checkpoint that cannot be read or does not fit the simulation: the message names the file

@@ -75,7 +75,9 @@ struct MjcfRobot : UrdfRobot {
 /// a mimic joint (refused, naming the element and its name; an active joint equality
 /// q1 = c0 + c1 q2 between hinges or slides, c1 != 0, is the robot's mimic_joints row
 /// q1 - c1 q2 - c0 = 0, as a URDF <mimic> tag), several free bodies, a free joint not alone in its body.
-/// Contacts, joint springs, ball ranges and unsupported actuators are warned about and ignored.
+/// A hinge's or slide's stiffness becomes its spring (UrdfRobot::springs, toward qpos_spring;
+/// implicit: a note says so); contacts, a ball joint's stiffness, ball ranges and unsupported actuators are warned about
+/// and ignored.
 /// Loads from several threads run one at a time (MuJoCo's warning hook is a global).
 MjcfRobot load_mjcf(const std::filesystem::path& path, const UrdfOptions& options = {});
 
@@ -94,8 +96,8 @@ class Simulation;
 void apply_mjcf_actuators(const MjcfRobot& robot, Simulation& sim);
 
 /// The file's settings (urdf.hpp's robot_settings: defaults with `options`, the mimic rows) with
-/// the actuators as apply_mjcf_actuators gives them, and the effort limits as
-/// robot.options.effort says.
+/// the actuators as apply_mjcf_actuators gives them, the springs as joint_spring rows, and the
+/// effort limits as robot.options.effort says.
 Settings robot_settings(const MjcfRobot& robot, const SimulationOptions& options = {});
 
 /// The actuators as `featherdrive info` lists them: per actuator its joint, kind, gains, ranges

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,9 @@ struct JointSettings {
   std::optional<double> lower, upper, max_velocity, armature, friction_coefficient;
   std::optional<JointFriction> friction;
   std::optional<RevoluteWrap> revolute;  ///< key revolute: wrapped | unwrapped
+  /// Row kinds (constraint/row_kinds.hpp) by their index: each field given, or not (the dof's
+  /// own stays); key the kind's name, e.g. joint_spring: {stiffness: 8, reference: 0}.
+  std::map<int, std::vector<std::optional<double>>> row_kinds;
 };
 
 /// applied_force.J: a joint force through every step (Simulation::set_applied_force), constant

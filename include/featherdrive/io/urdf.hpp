@@ -111,6 +111,15 @@ struct UrdfRobot {
   std::vector<std::string> warnings;         ///< for the user (mimic tags ignored, ...)
   /// The URDF effort limit of each moving joint (informative; drives need their own max_force).
   std::map<std::string, double> effort_limits;
+  /// The file's joint springs (MJCF's hinge and slide stiffness toward qpos_spring; URDF has
+  /// none), which robot_settings and a scene's settings give their dofs as joint_spring rows
+  /// (constraint/joint_spring.hpp; apply_robot_springs).
+  struct Spring {
+    std::string joint;
+    double stiffness = 0.0;
+    double reference = 0.0;  ///< featherdrive's q (MJCF: MuJoCo's qpos)
+  };
+  std::vector<Spring> springs;
   /// Every file the loader read or that MuJoCo opens for it: the robot file, and for MJCF its
   /// includes and its mesh, skin, hfield and texture files. No output of a run may replace one
   /// (the CLI's check_outputs).
@@ -139,6 +148,8 @@ class Simulation;
 void apply_urdf_effort_limits(const UrdfRobot& robot, Simulation& sim);
 /// The same on settings of robot.model.
 void apply_urdf_effort_limits(const UrdfRobot& robot, Settings& settings);
+/// The robot's springs (UrdfRobot::springs) into settings' joint_spring rows.
+void apply_robot_springs(const UrdfRobot& robot, Settings& settings);
 
 /// What the file says beyond the Model, as the settings a simulation starts from
 /// (Simulation(robot.model, settings), Batch(robot.model, N, settings)): Settings::defaults with

@@ -138,6 +138,11 @@ class Batch {
   const RowMatrix& velocity_limit_force() const {
     return rows_[StateStorage::velocity_limit_force];
   }
+  /// The row kinds' forces (constraint/row_kinds.hpp), (N, kinds nv), kind after kind: the
+  /// environments' storage itself.
+  const RowMatrix& row_force() const { return rows_[StateStorage::row_force]; }
+  /// One row kind's forces, (N, nv) (a copy).
+  RowMatrix row_force(std::string_view kind) const;
   /// Every environment's step count and time (copies).
   std::vector<long> step_count() const;
   std::vector<double> time() const;
@@ -189,6 +194,10 @@ class Batch {
   void set_joint_friction(std::span<const int> env_ids, const RowMatrix& static_effort,
                           const RowMatrix& dynamic_effort, const RowMatrix& viscous);
   void set_max_joint_velocity(std::span<const int> env_ids, const RowMatrix& max_velocity);
+  /// One field of a row kind (row_kinds.hpp; e.g. "joint_spring", "stiffness"), (k|1, nv), as
+  /// Simulation::set_row_parameters with the dof's other fields as they are.
+  void set_row_parameter(std::string_view kind, std::string_view field,
+                         std::span<const int> env_ids, const RowMatrix& values);
   /// Mass (k values or one) of `link`; scale_inertia: its inertia about the centre of mass scales
   /// with the mass (Isaac Lab's mass randomisation), else it stays.
   void set_link_mass(std::span<const int> env_ids, int link, const VecX& mass,
@@ -216,6 +225,7 @@ class Batch {
   RowMatrix dynamic_friction() const;
   RowMatrix viscous_friction() const;
   RowMatrix max_joint_velocity() const;
+  RowMatrix row_parameter(std::string_view kind, std::string_view field) const;
   RowMatrix drive_delay() const;
   VecX link_mass(int link) const;
   RowMatrix link_com(int link) const;

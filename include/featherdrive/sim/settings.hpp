@@ -12,6 +12,7 @@
 #include "featherdrive/constraint/drive.hpp"
 #include "featherdrive/constraint/joint_constraints.hpp"
 #include "featherdrive/constraint/mimic_row.hpp"
+#include "featherdrive/constraint/row_kinds.hpp"
 #include "featherdrive/model/model.hpp"
 #include "featherdrive/sim/explicit_actuator.hpp"
 #include "featherdrive/sim/link_parameters.hpp"
@@ -85,6 +86,9 @@ struct Settings {
   std::vector<int> drive_delay;   ///< steps, [0, kMaxDelay]; > 0 only on an implicit drive
   std::vector<ExplicitActuator> actuators;  ///< kind none: no actuator (explicit_actuator.hpp)
   VecX actuator_feedforward;      ///< the feed-forward effort of the dof's actuator; 0 without one
+  /// The row kinds' fields (constraint/row_kinds.hpp), nv x RowKinds::fields: row d holds dof
+  /// d's, kind after kind (RowKindInfo::offset); each kind's defaults leave its row off.
+  MatX row_parameters;
 
   std::vector<LinkParameters> link_parameters;  ///< per link (num_links)
   std::vector<MimicJoint> mimic_joints;         ///< docs/math/mimic_joints.md
@@ -128,6 +132,10 @@ void check_actuator(const Model& model, int dof, const ExplicitActuator& actuato
 /// A delay needs an implicit drive (type != none) and no actuator on the dof.
 void check_drive_delay(const Model& model, int dof, int delay, const Drive& drive,
                        ActuatorKind actuator_kind);
+/// A row kind's fields on a dof (values: the kind's fields, in order): a dof with rows, and the
+/// kind's own check.
+void check_row_parameters(const Model& model, int dof, const RowKindInfo& kind,
+                          std::span<const double> values);
 /// An actuator's feed-forward effort: finite, on a dof with an actuator.
 void check_actuator_feedforward(const Model& model, int dof, double effort,
                                 ActuatorKind actuator_kind);

@@ -42,9 +42,10 @@ using VecView = Eigen::Map<const VecX>;
 /// storage in place (the addresses stay; a lent storage refuses other sizes).
 class StateStorage {
  public:
+  /// row_force: the row kinds' forces (row_kinds.hpp), nv each, kind after kind.
   enum Field : int { q, qd, applied_force, drive_force, limit_force, friction_force,
-                     velocity_limit_force };
-  static constexpr int kFields = 7;
+                     velocity_limit_force, row_force };
+  static constexpr int kFields = 8;
   StateStorage() = default;
   StateStorage(Eigen::Index nq, Eigen::Index nv);  ///< an own block of zeros
   StateStorage(const StateStorage& other);
@@ -162,6 +163,13 @@ class Simulation {
   const ActuatorEnvelope& actuator_envelope(int dof) const {
     return settings_.envelopes[static_cast<size_t>(check_dof_index(*model_, dof))];
   }
+  /// A row kind's fields on a dof (constraint/row_kinds.hpp; e.g. "joint_spring": stiffness,
+  /// damping, reference), in the kind's field order. Throws std::invalid_argument for an unknown
+  /// kind, a count other than its fields', or what check_row_parameters refuses.
+  void set_row_parameters(std::string_view kind, int dof, std::span<const double> values);
+  void set_row_parameters(std::string_view kind, const std::string& joint,
+                          std::span<const double> values);
+  std::vector<double> row_parameters(std::string_view kind, int dof) const;
 
   // Explicit actuators (explicit_actuator.hpp), on revolute and prismatic dofs without an implicit
   // drive: the dof's drive targets are their targets. Setting one (kind none clears) empties its
@@ -239,6 +247,8 @@ class Simulation {
   VecView friction_force() const { return state_[StateStorage::friction_force]; }
   /// The force the joint velocity limit applied on each dof (impulse / dt).
   VecView velocity_limit_force() const { return state_[StateStorage::velocity_limit_force]; }
+  /// The force a row kind's rows applied on each dof (nv; impulse / dt), e.g. "joint_spring".
+  VecView row_force(std::string_view kind) const;
 
   /// Diagnostics of the PGS solver's convergence, off by default (a step then stores nothing for
   /// them): with it on, each PGS step keeps how much the last position iteration changed each

@@ -39,6 +39,8 @@ struct State {
   long step_count = 0;
   /// The outputs of the last step (nv each), as Simulation::drive_force() etc. report them.
   VecX drive_force, limit_force, friction_force, velocity_limit_force;
+  /// The row kinds' forces (constraint/row_kinds.hpp), nv each, kind after kind (nv x kinds).
+  VecX row_force;
   VecX actuator_force;  ///< the actuators' efforts in the last step (nv)
   /// Per dof (nv): the actuator's last commands (empty on a dof without one) and the implicit
   /// drive's last targets (empty on a dof without a delay).
