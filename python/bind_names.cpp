@@ -1,4 +1,6 @@
 // Names: the model's and the URDF's joint and link names, sim.joint(name), example_path.
+#include <map>
+
 #include "bindings.hpp"
 
 namespace py = pybind11;
@@ -178,6 +180,53 @@ void featherdrive::python::bind_names(py::module_& m) {
             locked(*j.sim, [&] { j.sim->set_max_joint_velocity(j.dof(), v); });
           },
           "largest |qd| (inf: none)")
+      .def(
+          "row_parameters",
+          [](const JointAccessor& j, const std::string& kind) {
+            const RowKindInfo& k = row_kind(kind);
+            return j.per_dof([&](const Simulation& s, int d) {
+              const std::vector<double> values = s.row_parameters(kind, d);
+              std::map<std::string, double> out;
+              for (size_t f = 0; f < values.size(); ++f)
+                out[std::string(k.fields[f].name)] = values[f];
+              return out;
+            });
+          },
+          py::arg("kind"), "a row kind's fields (fd.row_kinds()) as a dict, one per dof")
+      .def(
+          "set_row_parameters",
+          [](JointAccessor& j, const std::string& kind, const py::kwargs& fields) {
+            const RowKindInfo& k = row_kind(kind);
+            locked(*j.sim, [&] {
+              // Every dof of the joint (a spherical joint's three axes), checked before any
+              // changes.
+              std::vector<std::vector<double>> next;
+              for (int d = j.dof(); d < j.dof() + j.info().nv; ++d) {
+                std::vector<double> values = j.sim->row_parameters(kind, d);
+                for (const auto& [name, value] : fields) {
+                  const std::string field = py::str(name).cast<std::string>();
+                  if (py::isinstance<py::bool_>(value) || py::isinstance<py::str>(value))
+                    throw std::invalid_argument(kind + "." + field + " = " +
+                                                py::repr(value).cast<std::string>() +
+                                                " is not a number");
+                  values[static_cast<size_t>(row_field_column(k, field) - k.offset)] =
+                      value.cast<double>();
+                }
+                check_row_parameters(j.sim->model(), d, k, values);
+                next.push_back(values);
+              }
+              for (int d = j.dof(); d < j.dof() + j.info().nv; ++d)
+                j.sim->set_row_parameters(kind, d, next[static_cast<size_t>(d - j.dof())]);
+            });
+          },
+          py::arg("kind"),
+          "a row kind's fields by keyword on every dof of the joint; the others keep theirs")
+      .def(
+          "row_force",
+          [](const JointAccessor& j, const std::string& kind) {
+            return j.per_dof([&](const Simulation& s, int d) -> double { return s.row_force(kind)[d]; });
+          },
+          py::arg("kind"), "the force the row kind applied in the last step")
       .def("__repr__", [](const JointAccessor& j) {
         return "JointAccessor('" + j.info().joint_name + "', " + to_string(j.info().joint_type) +
                ", dof " + std::to_string(j.info().v_index) + ")";

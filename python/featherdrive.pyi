@@ -615,6 +615,10 @@ class JointAccessor:
     limits: tuple[float, float]
     friction: JointFriction
     max_velocity: float
+    def row_parameters(self, kind: str) -> Union[dict[str, float], list[dict[str, float]]]: ...
+    def set_row_parameters(self, kind: str, **fields: float) -> None:
+        """A row kind's fields by keyword on every dof of the joint."""
+    def row_force(self, kind: str) -> Union[float, list[float]]: ...
     def set_target(self, position: float, velocity: float = 0.0) -> None:
         """ValueError if the joint has no drive."""
 

@@ -110,3 +110,18 @@ def test_mjcf_stiffness_becomes_the_joint_spring():
         "stiffness": 240.0, "damping": 0.0, "reference": 0.0}
     assert sim.row_parameters("joint_spring", "ffoot")["stiffness"] == 60.0
     assert sim.row_parameters("joint_spring", "rootz")["stiffness"] == 0.0
+
+
+def test_the_joint_accessor_reads_and_writes_row_kinds():
+    sim = fd.Simulation(slider(1.0), dt=0.01)
+    joint = sim.joint("slide")
+    joint.set_row_parameters("joint_spring", stiffness=40.0, reference=-0.1)
+    assert joint.row_parameters("joint_spring") == {
+        "stiffness": 40.0, "damping": 0.0, "reference": -0.1}
+    sim.step()
+    # One implicit-Euler step from rest at 0: v1 = h k (x_s - 0) / (m + h^2 k).
+    v1 = 0.01 * 40.0 * -0.1 / (1.0 + 1e-4 * 40.0)
+    assert joint.row_force("joint_spring") == pytest.approx(v1 / 0.01, rel=1e-12)
+    with pytest.raises(ValueError, match="stiffness = -2"):
+        joint.set_row_parameters("joint_spring", stiffness=-2.0)
+    assert joint.row_parameters("joint_spring")["stiffness"] == 40.0
