@@ -148,6 +148,9 @@ std::string describe(const UrdfRobot& robot) {
   for (const UrdfMimic& m : robot.mimics)
     out << "mimic: " << m.joint << " = " << num(m.multiplier) << " * " << m.leader << " + "
         << num(m.offset) << " (a mimic joint in scenes)\n";
+  for (const UrdfRobot::Spring& s : robot.springs)
+    out << "joint spring: " << s.joint << ", stiffness " << num(s.stiffness) << ", reference "
+        << num(s.reference) << " (the joint_spring row in scenes)\n";
   if (!model.shapes.empty())
     out << "\ncollision shapes (" << model.shapes.size() << ", poses in the link frame):\n"
         << describe_shapes(model, "  ");
