@@ -15,9 +15,10 @@ using namespace featherdrive::python;
 void featherdrive::python::bind_fit(py::module_& m) {
   py::class_<FitParameter>(m, "FitParameter", "One entry of a scene's fit.parameters.")
       .def_property_readonly(
-          "quantity", [](const FitParameter& p) { return std::string(to_string(p.quantity)); },
+          "quantity", [](const FitParameter& p) { return p.spelling(); },
           "stiffness, damping, max_force, armature, friction.static, friction.dynamic, "
-          "friction.viscous, friction_coefficient, delay or mass_scale")
+          "friction.viscous, friction_coefficient, delay, mass_scale or a row kind's field "
+          "(joint_spring.stiffness, ...)")
       .def_readonly("names", &FitParameter::names, "joints (links for mass_scale)")
       .def_readonly("indices", &FitParameter::indices, "their dofs (model link indices)")
       .def_readonly("lower", &FitParameter::lower, "lower bound")

@@ -312,6 +312,7 @@ def simulate_batch(job):
     batch.set_num_threads(threads if threads is not None else 1 if N < SMALL_BATCH else 0)
     per_env = np.repeat(values, S, axis=0)  # env e = p S + s
     armature = friction = None
+    rows = {}  # a row kind's field -> (N, nv)
     for u, (quantity, indices) in enumerate(job["unknowns"]):
         v = per_env[:, u]
         if quantity in _DRIVE or quantity == "friction_coefficient":
@@ -336,6 +337,13 @@ def simulate_batch(job):
         elif quantity == "mass_scale":
             for link in indices:
                 batch.set_link_mass(link, v * scene.model.links[link].mass)
+        elif "." in quantity and quantity not in _FRICTION:  # a row kind's field
+            kind, field = quantity.split(".", 1)
+            if quantity not in rows:
+                rows[quantity] = np.array(batch.row_parameter(kind, field))
+            rows[quantity][:, indices] = v[:, None]
+    for quantity, values in rows.items():
+        batch.set_row_parameter(*quantity.split(".", 1), values)
     if armature is not None:
         batch.set_armature(armature)
     if friction is not None:
@@ -604,6 +612,10 @@ def fitted_scene_text(result, scene):
             elif e.quantity in _FRICTION:
                 joint = doc.setdefault("joints", {}).setdefault(name, {})
                 joint.setdefault("friction", {})[e.quantity.split(".")[1]] = e.value
+            elif "." in e.quantity:  # a row kind's field: joints.J.<kind>.<field>
+                kind, field = e.quantity.split(".", 1)
+                joint = doc.setdefault("joints", {}).setdefault(name, {})
+                joint.setdefault(kind, {})[field] = e.value
     if result.delay is not None:
         for p in scene.fit.parameters:
             if p.quantity == "delay":

@@ -133,6 +133,34 @@ def test_recovers_friction(tmp_path):
     assert worst_error(result, truth) < 0.05, result.table()
 
 
+def test_recovers_joint_springs(tmp_path):
+    springs = ("joints: {joint2: {armature: 0.08, joint_spring: {stiffness: 150, reference: 0.2}},\n"
+               "         joint4: {armature: 0.04, joint_spring: {stiffness: 80, damping: 1}}}\n")
+    text = scene_text().replace(
+        "joints: {joint2: {armature: 0.08}, joint4: {armature: 0.04}}\n", springs)
+    logged = make_log(tmp_path / "log.csv", fd.parse_scene(text, str(tmp_path / "truth.yaml")))
+    fit = """fit:
+  parameters:
+    - {quantity: joint_spring.stiffness, joints: [joint2, joint4], bounds: [0, 1000], initial: 300}
+    - {quantity: joint_spring.damping, joints: [joint4], bounds: [0, 10], initial: 2}
+"""
+    scene = write(tmp_path / "fit.yaml", text + fit)
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    truth = {("joint_spring.stiffness", "joint2"): 150, ("joint_spring.stiffness", "joint4"): 80,
+             ("joint_spring.damping", "joint4"): 1}
+    assert worst_error(result, truth) < 1e-6, result.table()
+    # The fitted scene (joints.J.joint_spring written in) replays the log.
+    text = featherdrive_fit.fitted_scene_text(result, fd.load_scene(str(scene)))
+    fitted = fd.parse_scene(text, str(tmp_path / "fitted.yaml"))
+    q, _ = replay(fitted, chirp_targets(fitted.model.nv))
+    assert np.abs(q - logged).max() < 1e-9
+    # Bounds the spring's own check refuses are named with the joint.
+    bad = scene_text() + fit.replace("bounds: [0, 10]", "bounds: [-1, 10]")
+    with pytest.raises(ValueError, match=r"fit.parameters\[1\].bounds = \[-1, 10\]: joint spring "
+                                         r"of joint 'joint4': damping = -1 must be finite and >= 0"):
+        fd.parse_scene(bad, str(tmp_path / "bad.yaml"))
+
+
 def test_recovers_mass_scale_and_max_force(tmp_path):
     """link3 1.3 times heavier (its inertia too, Batch.set_link_mass) and joint4's drive limited
     to 20 Nm, which the chirp reaches; fitted from 2 and 40."""

@@ -56,6 +56,8 @@ double scene_value(FitQuantity quantity, const Simulation& sim, int index) {
       break;
     case FitQuantity::mass_scale:
       return 1.0;
+    case FitQuantity::row_field:
+      break;
   }
   return 0.0;
 }
@@ -74,6 +76,18 @@ FitParameter read_parameter(const Reader& r, const YAML::Node& node, const std::
     list += (list.empty() ? "" : ", ") + std::string(spelling);
     if (name == spelling) p.quantity = q, known = true;
   }
+  // A row kind's field: "<kind>.<field>" (constraint/row_kinds.hpp).
+  for (const RowKindInfo& kind : row_kinds())
+    for (const RowField& f : kind.fields) {
+      const std::string spelling = std::string(kind.name) + "." + std::string(f.name);
+      list += ", " + spelling;
+      if (name != spelling) continue;
+      p.quantity = FitQuantity::row_field;
+      p.row_kind = kind.name;
+      p.row_field_name = f.name;
+      p.row_column = row_field_column(kind, f.name);
+      known = true;
+    }
   if (!known) r.fail(at("quantity"), node["quantity"], "unknown (expected one of: " + list + ")");
 
   const Model& m = *scene.model();
@@ -128,11 +142,25 @@ FitParameter read_parameter(const Reader& r, const YAML::Node& node, const std::
     p.upper = r.finite(b[1], at("bounds") + "[1]");
     const bool positive =
         p.quantity == FitQuantity::mass_scale || p.quantity == FitQuantity::max_force;
-    if (positive ? p.lower <= 0.0 : p.lower < 0.0)
+    // A row kind's field: its own check below (a spring's reference may be negative).
+    if (p.quantity != FitQuantity::row_field && (positive ? p.lower <= 0.0 : p.lower < 0.0))
       r.fail(at("bounds") + "[0]", b[0], positive ? "must be > 0" : "must be >= 0");
   }
   if (!(p.lower < p.upper) && !(p.quantity == FitQuantity::delay && p.lower == p.upper))
     r.fail(at("bounds"), b, "lower must be below upper");
+  if (p.quantity == FitQuantity::row_field) {  // both ends must be values the setter takes
+    const RowKindInfo& kind = row_kind(p.row_kind);
+    for (size_t i = 0; i < p.indices.size(); ++i)
+      for (const double end : {p.lower, p.upper}) {
+        std::vector<double> values = sim.row_parameters(kind.name, p.indices[i]);
+        values[static_cast<size_t>(p.row_column - kind.offset)] = end;
+        try {
+          check_row_parameters(m, p.indices[i], kind, values);
+        } catch (const std::invalid_argument& e) {
+          r.fail(at("bounds"), b, e.what());
+        }
+      }
+  }
 
   p.shared = p.quantity == FitQuantity::delay;
   if (node["shared"]) {
@@ -157,7 +185,9 @@ FitParameter read_parameter(const Reader& r, const YAML::Node& node, const std::
     p.initial.assign(1, p.lower);
   } else {
     for (size_t i = 0; i < unknowns; ++i) {
-      const double v = scene_value(p.quantity, sim, p.indices[i]);
+      const double v = p.quantity == FitQuantity::row_field
+                           ? sim.settings().row_parameters(p.indices[i], p.row_column)
+                           : scene_value(p.quantity, sim, p.indices[i]);
       check(v, std::string("(the scene's ") + name + " of " + p.names[i] + "; give initial:)");
       p.initial.push_back(v);
     }
@@ -187,7 +217,12 @@ FitData read_data(const Reader& r, const YAML::Node& node) {
 const char* to_string(FitQuantity quantity) {
   for (const auto& [q, spelling] : kNames)
     if (q == quantity) return spelling;
-  return "?";
+  return quantity == FitQuantity::row_field ? "row field" : "?";
+}
+
+std::string FitParameter::spelling() const {
+  return quantity == FitQuantity::row_field ? row_kind + "." + row_field_name
+                                            : std::string(to_string(quantity));
 }
 
 int FitSpec::num_unknowns() const {
@@ -205,7 +240,7 @@ FitSpec read_fit_spec(const Reader& r, const YAML::Node& node, const Scene& scen
   if (!ps) r.fail("fit.parameters", "missing: the list of parameters to fit");
   if (!ps.IsSequence() || ps.size() == 0)
     r.fail("fit.parameters", ps, "must be a non-empty list of {quantity, joints, bounds}");
-  std::set<std::pair<FitQuantity, int>> seen;
+  std::set<std::pair<std::string, int>> seen;
   bool delay = false;
   for (size_t i = 0; i < ps.size(); ++i) {
     const std::string key = "fit.parameters[" + std::to_string(i) + "]";
@@ -213,8 +248,8 @@ FitSpec read_fit_spec(const Reader& r, const YAML::Node& node, const Scene& scen
     if (p.quantity == FitQuantity::delay && std::exchange(delay, true))
       r.fail(key, "delay is fitted once (one value for every joint it names)");
     for (size_t j = 0; j < p.names.size(); ++j)
-      if (!seen.insert({p.quantity, p.indices[j]}).second)
-        r.fail(key, std::string(to_string(p.quantity)) + " of " + p.names[j] + " is fitted twice");
+      if (!seen.insert({p.spelling(), p.indices[j]}).second)
+        r.fail(key, p.spelling() + " of " + p.names[j] + " is fitted twice");
     spec.parameters.push_back(std::move(p));
   }
   if (node["data"]) spec.data = read_data(r, node["data"]);

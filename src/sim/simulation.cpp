@@ -265,6 +265,7 @@ void Simulation::set_state(const State& s) {
   state_[StateStorage::friction_force] = s.friction_force;
   state_[StateStorage::velocity_limit_force] = s.velocity_limit_force;
   state_[StateStorage::row_force] = s.row_force;
+  ws_->row_force_live = true;
   if (s.friction_anchors.empty()) ws_->contact_rows.clear_anchors();
   else ws_->contact_rows.set_anchors(s.friction_anchors);
   state_[StateStorage::qd] = s.qd;

@@ -168,7 +168,7 @@ void Stepper::row_forces() {
     ws_.friction_force[d] = (r.friction_impulse + r.transmission_friction_applied) * inv_dt;
     ws_.velocity_limit_force[d] = r.velocity_limit_impulse * inv_dt;
   }
-  row_kind_forces(ws_.row_force, inv_dt);
+  if (ws_.any_row_kinds || ws_.row_force_live) row_kind_forces(ws_.row_force, inv_dt);
   contact_forces();  // contact.cpp
 }
 
@@ -223,6 +223,9 @@ void Stepper::setup_rows(double h, bool tgs) {
     }
     ws_.num_lone_drives = front;
     ws_.row_kinds_changed = false;
+    ws_.any_row_kinds = false;
+    for (const DofRows& rows : ws_.rows) ws_.any_row_kinds = ws_.any_row_kinds || rows.kinds != 0;
+    ws_.row_force_live = true;
   } else {
     setup_lone_drives(h, tgs);
     for (int k = nv - 1; k >= ws_.num_lone_drives; --k) setup_dof_rows(order[k], h, tgs);
@@ -564,7 +567,10 @@ void Stepper::commit_state() {
   state_[StateStorage::limit_force] = ws_.limit_force;
   state_[StateStorage::friction_force] = ws_.friction_force;
   state_[StateStorage::velocity_limit_force] = ws_.velocity_limit_force;
-  state_[StateStorage::row_force] = ws_.row_force;
+  if (ws_.any_row_kinds || ws_.row_force_live) {
+    state_[StateStorage::row_force] = ws_.row_force;
+    ws_.row_force_live = ws_.any_row_kinds;
+  }
 }
 
 void Stepper::check_finite_or_throw() {
@@ -593,8 +599,8 @@ void Stepper::check_finite_or_throw() {
   // overflow where the state stays finite (found by fuzzing: dt = 1e-100).
   double zero = (ws_.qd.array() * 0.0).sum() + (ws_.drive_force.array() * 0.0).sum() +
                 (ws_.limit_force.array() * 0.0).sum() + (ws_.friction_force.array() * 0.0).sum() +
-                (ws_.velocity_limit_force.array() * 0.0).sum() + (ws_.q.array() * 0.0).sum() +
-                (ws_.row_force.array() * 0.0).sum();
+                (ws_.velocity_limit_force.array() * 0.0).sum() + (ws_.q.array() * 0.0).sum();
+  if (ws_.any_row_kinds) zero += (ws_.row_force.array() * 0.0).sum();
   if (ws_.contacts_active)
     for (const Vec3& f : ws_.link_contact_force) zero += (f.array() * 0.0).sum();
   if (zero == 0.0 && std::isfinite(time_ + settings_.options.dt)) return;

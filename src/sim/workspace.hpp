@@ -59,6 +59,10 @@ struct Workspace {
   VecX applied_force;
   VecX drive_force, limit_force, friction_force, velocity_limit_force;
   VecX row_force;  ///< the row kinds' forces, nv each, kind after kind
+  /// Some dof has a row kind (setup_rows' last full set-up); the stored row_force may be nonzero
+  /// (a state was set, kinds changed, the lanes stepped): a step writes row_force while either
+  /// holds, and leaves the stored zeros alone otherwise.
+  bool any_row_kinds = false, row_force_live = true;
   bool track_convergence = false;
   VecX last_drive_change;  ///< see Simulation::last_drive_impulse_change (nv)
 

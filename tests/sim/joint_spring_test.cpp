@@ -225,6 +225,37 @@ TEST(JointSpring, StepGuardCountsTheSpring) {
   EXPECT_TRUE(std::isfinite(sim.q()[0]));
 }
 
+// The reported force is the last step's: 0 once the spring is gone, and after a state whose
+// forces were not (a step without kinds writes them once, then leaves the zeros alone).
+TEST(JointSpring, TheForceIsTheLastSteps) {
+  auto model = test::make_slider(1.0, Vec3(1, 0, 0), Vec3::Zero());
+  Simulation sim(model);
+  set_spring(sim, 0, 100.0, 0.0, 0.5);
+  sim.step();
+  const double first = sim.row_force("joint_spring")[0];
+  EXPECT_GT(first, 0.0);
+  const State with_force = sim.state();
+  set_spring(sim, 0, 0.0, 0.0, 0.5);
+  sim.step();
+  EXPECT_EQ(sim.row_force("joint_spring")[0], 0.0);
+  sim.set_state(with_force);
+  EXPECT_EQ(sim.row_force("joint_spring")[0], first);
+  sim.step(2);
+  EXPECT_EQ(sim.row_force("joint_spring")[0], 0.0);
+  // In a Batch's lanes too, environment by environment.
+  set_spring(sim, 0, 100.0, 0.0, 0.5);
+  Batch lanes(sim, 3);
+  lanes.step(1);
+  EXPECT_EQ(lanes.row_force("joint_spring")(1, 0), lanes.row_force("joint_spring")(0, 0));
+  EXPECT_GT(lanes.row_force("joint_spring")(1, 0), 0.0);
+  const RowMatrix none = RowMatrix::Zero(1, 1);
+  const int second[] = {1};
+  lanes.set_row_parameter("joint_spring", "stiffness", second, none);
+  lanes.step(1);
+  EXPECT_EQ(lanes.row_force("joint_spring")(1, 0), 0.0);
+  EXPECT_GT(lanes.row_force("joint_spring")(0, 0), 0.0);
+}
+
 TEST(JointSpring, SettingsAreChecked) {
   auto model = test::make_random_tree(2, 6, true, true);
   Simulation sim(model);

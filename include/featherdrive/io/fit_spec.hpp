@@ -18,6 +18,7 @@ enum class FitQuantity {
   friction_coefficient,  ///< joints.J.friction_coefficient
   delay,                 ///< drives.J.delay, integer steps; one value for all its joints
   mass_scale,            ///< a factor on a link's mass (its inertia scales with it)
+  row_field,             ///< a row kind's field, "<kind>.<field>" (joints.J.<kind>.<field>)
 };
 
 /// The spelling in scenes: "stiffness", "friction.static", ...
@@ -36,6 +37,12 @@ struct FitParameter {
   /// own value (the first name's if shared; mass_scale 1; delay the lower bound). Within bounds.
   std::vector<double> initial;
   std::string key;  ///< "fit.parameters[i]", for messages
+  /// row_field: the kind's and the field's names and the field's column in
+  /// Settings::row_parameters (constraint/row_kinds.hpp).
+  std::string row_kind, row_field_name;
+  int row_column = -1;
+  /// The spelling in scenes: to_string(quantity), or "<kind>.<field>" for a row kind's field.
+  std::string spelling() const;
 };
 
 /// fit.data: how the log is read.
