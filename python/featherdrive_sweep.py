@@ -16,7 +16,9 @@ the results are gathered in grid order (featherdrive_distributed.map_ordered). E
 gives the same bits whatever the threads and the batch size (docs/conventions.md, "Batch") and
 the errors are reduced per point, so the numbers do not depend on threads, chunks or workers. docs/fitting.md, "Sweeps and Dask".
 
-Grid syntax: ``NAME=SPEC[,NAME=SPEC...]`` with NAME ``stiffness`` or ``damping`` and SPEC
+Grid syntax: ``NAME=SPEC[,NAME=SPEC...]`` with NAME ``stiffness`` or ``damping`` (the drives'), or a
+row kind's field ``KIND.FIELD`` (``joint_spring.stiffness``, ``fd.row_kinds()``) set on the same
+joints as the gains, and SPEC
 ``VALUE`` (one point), ``LO:HI:N`` (N points spaced linearly) or ``LO:HI:N:log`` (N points
 spaced geometrically, LO > 0). The first name varies slowest. A grid has at most MAX_POINTS
 points, refused before any is made.
@@ -35,6 +37,16 @@ import featherdrive_common as common
 __all__ = ["sweep", "parse_grid", "SweepResult", "main"]
 
 PARAMETERS = ("stiffness", "damping")
+
+
+def _row_fields():
+    """The row kinds' fields as grid names, KIND.FIELD."""
+    import featherdrive as fd
+    return [f"{k['name']}.{f['name']}" for k in fd.row_kinds() for f in k["fields"]]
+
+
+def _names():
+    return ", ".join(list(PARAMETERS) + _row_fields())
 # The most points of a grid (each is a simulation); the axes' product is checked before the grid
 # is made. Run locally, the grid is run LOCAL_CHUNK environments at a time.
 MAX_POINTS = 1_000_000
@@ -49,12 +61,12 @@ SETTLING_BAND_ABSOLUTE = 1e-3
 STEP_MIN = 1e-9
 
 
-def _number(text, where):
+def _number(text, where, signed=False):
     try:
         value = float(text)
     except ValueError:
         raise ValueError(f"{where} = {text!r}: must be a number") from None
-    if not math.isfinite(value) or value < 0.0:
+    if not math.isfinite(value) or (value < 0.0 and not signed):
         raise ValueError(f"{where} = {text!r}: must be finite and >= 0")
     return value
 
@@ -63,11 +75,12 @@ def _axis(name, spec):
     """The values of one grid axis from LO:HI:N[:log|:lin] or VALUE."""
     where = f"--grid {name}={spec}"
     parts = spec.split(":")
+    signed = name not in PARAMETERS  # a row kind's field: its own check (a reference may be < 0)
     if len(parts) == 1:
-        return np.array([_number(parts[0], where)]), False
+        return np.array([_number(parts[0], where, signed)]), False
     if len(parts) not in (3, 4):
         raise ValueError(f"{where}: expected VALUE, LO:HI:N or LO:HI:N:log")
-    lo, hi = _number(parts[0], where + " LO"), _number(parts[1], where + " HI")
+    lo, hi = _number(parts[0], where + " LO", signed), _number(parts[1], where + " HI", signed)
     try:
         n = int(parts[2])
     except ValueError:
@@ -94,7 +107,7 @@ def parse_grid(grid):
         for item in grid.split(","):
             if "=" not in item:
                 raise ValueError(f"--grid entry {item!r}: expected NAME=LO:HI:N[:log] "
-                                 f"(NAME one of {', '.join(PARAMETERS)})")
+                                 f"(NAME one of {_names()})")
             name, spec = (s.strip() for s in item.split("=", 1))
             entries.append((name, spec))
     elif isinstance(grid, dict):
@@ -108,9 +121,9 @@ def parse_grid(grid):
         raise ValueError("the grid is empty")
     axes, seen = [], set()
     for name, spec in entries:
-        if name not in PARAMETERS:
+        if name not in PARAMETERS and name not in _row_fields():
             raise ValueError(f"--grid {name}: unknown parameter (expected one of "
-                             f"{', '.join(PARAMETERS)})")
+                             f"{_names()})")
         if name in seen:
             raise ValueError(f"--grid {name}: given twice")
         seen.add(name)
@@ -122,7 +135,8 @@ def parse_grid(grid):
             except (TypeError, ValueError):
                 raise ValueError(f"grid {name}: values must be numbers, not "
                                  f"{type(spec).__name__}") from None
-            if values.size == 0 or not np.all(np.isfinite(values)) or np.any(values < 0):
+            if values.size == 0 or not np.all(np.isfinite(values)) or (
+                    name in PARAMETERS and np.any(values < 0)):
                 raise ValueError(f"grid {name}: values must be finite, >= 0 and not empty")
             log = False
         axes.append((name, values, log))
@@ -346,6 +360,13 @@ def _gain_units(scene, drives, changed):
         for name, unit in zip(kinds, pair):
             if unit not in kinds[name]:
                 kinds[name].append(unit)
+        # The joint spring's: a force law whatever the drive's type; its reference a position.
+        spring = ("N/m", "Ns/m", "m") if linear else ("Nm/rad", "Nms/rad", "rad")
+        for name, unit in zip(("joint_spring.stiffness", "joint_spring.damping",
+                               "joint_spring.reference"), spring):
+            kinds.setdefault(name, [])
+            if unit not in kinds[name]:
+                kinds[name].append(unit)
     return {name: " or ".join(u) for name, u in kinds.items()}
 
 
@@ -367,7 +388,11 @@ def evaluate(item):
         for dof in changed:
             drive = env.drive(dof)
             for name, value in zip(names, row):
-                setattr(drive, name, float(value))
+                if name in PARAMETERS:
+                    setattr(drive, name, float(value))
+                else:  # a row kind's field (the kind's own check refuses a bad value)
+                    kind, field = name.split(".", 1)
+                    env.set_row_parameters(kind, dof, **{field: float(value)})
             env.set_drive(dof, drive)
     # The scene's targets, the same for every environment: a reference simulation takes them
     # from fd.apply_targets (control steps and interpolation included) for set_drive_targets.
@@ -444,6 +469,15 @@ def sweep(scene, grid, joint=None, client=None, num_threads=0, chunk_size=None,
     text = common.read_text(path, "the scene")
     parsed = fd.parse_scene(text, path)  # InputError (a ValueError) for a bad scene
     drives, changed = _drives(parsed, joint)
+    # A row kind's field takes what its kind's check takes: each value tried once, before the run.
+    probe = fd.make_simulation(parsed)
+    for name, values, _ in axes:
+        if name in PARAMETERS:
+            continue
+        kind, field = name.split(".", 1)
+        for value in values:
+            for dof in changed:
+                probe.set_row_parameters(kind, dof, **{field: float(value)})
     points = _points(axes)
     names = [a[0] for a in axes]
     if client is None:

@@ -57,6 +57,30 @@ def test_a_grid_point_is_a_lone_simulation_run():
     assert not result.diverged.any()
 
 
+def test_a_row_kind_s_field_is_swept_on_the_drives_joints():
+    # A spring beside the slider's drive: each point's run is a lone Simulation with the spring.
+    result = fd.sweep(str(SLIDER), "joint_spring.stiffness=0:300:3,joint_spring.reference=-0.1")
+    assert result.names == ["joint_spring.stiffness", "joint_spring.reference"]
+    assert result.gain_units["joint_spring.stiffness"] == "N/m"
+    scene = fd.load_scene(str(SLIDER))
+    for i in range(3):
+        k, reference = result.points[i]
+        sim = fd.make_simulation(scene)
+        for d in scene.drives:
+            sim.set_row_parameters("joint_spring", d.dof, stiffness=k, reference=reference)
+        errors = []
+        for step in range(scene.steps):
+            fd.apply_targets(scene, sim, step)
+            sim.step()
+            t = (step + 1) * scene.options.dt
+            errors.append(scene.drives[0].target_at(t)[0] - sim.q[0])
+        assert result.rms[i][0] == pytest.approx(math.sqrt(np.mean(np.square(errors))),
+                                                 rel=1e-12)
+    assert result.rms[0][0] != result.rms[2][0]  # the spring acts
+    with pytest.raises(ValueError, match="joint spring of joint 'slide': stiffness = -1"):
+        fd.sweep(str(SLIDER), {"joint_spring.stiffness": [-1.0]})
+
+
 def test_joint_changes_one_drive_and_total_is_the_rms_of_the_drives():
     arm = ROOT / "examples" / "arm7_tgs.yaml"
     result = fd.sweep(str(arm), {"damping": [10.0, 60.0]}, joint="joint7")
@@ -117,7 +141,8 @@ BAD_GRIDS = [
     ("stiffness=0:10:3:log", "log spacing needs LO > 0, not 0"),
     ("stiffness=10:1:3", "HI = 1 is below LO = 10"),
     ("stiffness=10:20:3:cubic", "spacing 'cubic' must be lin or log"),
-    ("mass=1:2:3", "--grid mass: unknown parameter (expected one of stiffness, damping)"),
+    ("mass=1:2:3", "--grid mass: unknown parameter (expected one of stiffness, damping, "
+                   "joint_spring.stiffness, joint_spring.damping, joint_spring.reference)"),
     ("stiffness=1,stiffness=2", "--grid stiffness: given twice"),
     ("stiffness", "--grid entry 'stiffness': expected NAME=LO:HI:N[:log]"),
     ("damping=-1", "must be finite and >= 0"),
