@@ -332,9 +332,9 @@ void LaneEngine::pack_joints(int env, const Simulation& sim) {
       std::array<double, RowKinds::fields> values{};
       for (size_t j = 0; j < kind.fields.size(); ++j)
         values[j] = kinds(d, kind.offset + static_cast<Eigen::Index>(j));
-      set_parameter(env, x + row_kind_on + kind.index,
-                    dof_has_rows(sim.model(), d) &&
-                        kind.active({values.data(), kind.fields.size()}));
+      const bool on = dof_has_rows(sim.model(), d) && kind.active({values.data(), kind.fields.size()});
+      set_parameter(env, x + row_kind_on + kind.index, on);
+      plan_.any_row_kinds = plan_.any_row_kinds || on;  // set, never cleared, as the others
     }
   }
   for (int i = 0; i < plan_.num_links; ++i) {

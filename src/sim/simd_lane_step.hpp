@@ -2682,11 +2682,12 @@ void LaneStep<A, K>::step() {
     at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
     at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
     // The row kinds' forces (step.cpp's row_kind_forces): 0 on a lane without the row.
-    RowKinds::for_each([&]<class E>(E, int, int slot) {
-      const M on = rw[Layout::kind_masks + E::index] != V(0.0);
-      at(l_.rk)[E::index * p_.nv + d] =
-          select_zero(on, rw[Layout::kind_slots + slot + E::Kind::kImpulse] * inv_dt);
-    });
+    if (p_.any_row_kinds)
+      RowKinds::for_each([&]<class E>(E, int, int slot) {
+        const M on = rw[Layout::kind_masks + E::index] != V(0.0);
+        at(l_.rk)[E::index * p_.nv + d] =
+            select_zero(on, rw[Layout::kind_slots + slot + E::Kind::kImpulse] * inv_dt);
+      });
   }
   if (p_.contacts)  // Stepper::contact_forces: the forces, checked with the state
     for (int l = 0; l < b_.valid; ++l)
@@ -2702,7 +2703,7 @@ void LaneStep<A, K>::finish_step() {
   for (int d = 0; d < p_.nv; ++d)
     z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
              at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
-  for (int k = 0; k < RowKinds::size * p_.nv; ++k) z = z + at(l_.rk)[k] * zero;
+  for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k) z = z + at(l_.rk)[k] * zero;
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   if (p_.contacts) {
     alignas(64) double forces[kW] = {};
@@ -2733,7 +2734,7 @@ void LaneStep<A, K>::finish_step() {
         check(3, d, lane(at(l_.lf)[d]));
         check(4, d, lane(at(l_.ff)[d]));
         check(5, d, lane(at(l_.vf)[d]));
-        for (int e = 0; e < RowKinds::size; ++e)
+        for (int e = 0; p_.any_row_kinds && e < RowKinds::size; ++e)
           check(10 + e, d, lane(at(l_.rk)[e * p_.nv + d]));
       }
       for (int i = 0; i < p_.num_links; ++i) {
@@ -2767,7 +2768,7 @@ void LaneStep<A, K>::finish_step() {
       at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
       at(l_.vf)[d] = select(stopped_, at(l_.old_vf)[d], at(l_.vf)[d]);
     }
-    for (int k = 0; k < RowKinds::size * p_.nv; ++k)
+    for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k)
       at(l_.rk)[k] = select(stopped_, at(l_.old_rk)[k], at(l_.rk)[k]);
   }
   alignas(64) double stopped_lanes[kW];
@@ -2796,8 +2797,9 @@ void LaneStep<A, K>::run(int steps) {
     at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
     if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
   }
+  // Without a row kind in any lane the forces are 0: written once, at the call's end.
   for (int k = 0; k < RowKinds::size * nv; ++k)
-    at(l_.rk)[k] = gather(b_.row_force, RowKinds::size * nv, k);
+    at(l_.rk)[k] = p_.any_row_kinds ? gather(b_.row_force, RowKinds::size * nv, k) : V(0.0);
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
@@ -2823,7 +2825,7 @@ void LaneStep<A, K>::run(int steps) {
       at(l_.old_ff)[d] = at(l_.ff)[d];
       at(l_.old_vf)[d] = at(l_.vf)[d];
     }
-    for (int k = 0; k < RowKinds::size * nv; ++k) at(l_.old_rk)[k] = at(l_.rk)[k];
+    for (int k = 0; p_.any_row_kinds && k < RowKinds::size * nv; ++k) at(l_.old_rk)[k] = at(l_.rk)[k];
     step();
     finish_step();
   }

@@ -235,6 +235,9 @@ struct Plan {
   bool any_velocity_limit = false;
   /// Some environment has a friction coefficient: steps form the joints' transmitted forces.
   bool any_transmission_friction = false;
+  /// Some environment's dof has a row kind: steps report the kinds' forces (else a call writes
+  /// zeros once, at its end).
+  bool any_row_kinds = false;
   /// Some environment has link damping or a link velocity limit (forces on the free velocity),
   /// some a cfm_scale (the rows' 1 / (r + cfm)).
   bool any_link_damping = false, any_cfm = false;
