@@ -95,7 +95,8 @@ TEST(FitSpec, BadEntriesNameTheKeyAndValue) {
   EXPECT_EQ(bad("{quantity: stifness, joints: [joint2], bounds: [1, 5]}"),
             f + ".quantity = stifness: unknown (expected one of: stiffness, damping, max_force, "
                 "armature, friction.static, friction.dynamic, friction.viscous, "
-                "friction_coefficient, delay, mass_scale)");
+                "friction_coefficient, delay, mass_scale, joint_spring.stiffness, "
+                "joint_spring.damping, joint_spring.reference)");
   EXPECT_EQ(bad("{quantity: stiffness, joints: [joint7], bounds: [1, 5]}"),
             f + ".joints[0] = joint7: the joint has no drive (drives: type none) to fit stiffness");
   EXPECT_EQ(bad("{quantity: delay, joints: all, bounds: [0, 2.5]}"),
