@@ -350,13 +350,6 @@ class LaneStep {
     quaternion_law::product(a, b, out);
   }
   static void quaternion_rotation(const V* q, V* R) { quaternion_law::rotation(q, R); }
-  // y = S^T x for a floating root's S = diag(R0, R0); T: V or B.
-  template <class T>
-  static void root_St(const T* R0, const T* x, T* y) {
-    for (int h = 0; h < 6; h += 3)
-      for (int c = 0; c < 3; ++c)
-        y[h + c] = R0[c] * x[h] + R0[3 + c] * x[h + 1] + R0[6 + c] * x[h + 2];
-  }
   static V sqrt_of(const V& x) {  // correctly rounded: the same bits at every width
     V out;
     for (int k = 0; k < K; ++k) out.b[k] = lane_sqrt(x.b[k]);
@@ -1986,22 +1979,12 @@ void LaneStep<A, K>::root_response() {
                                      RowMajorPacks<6>{at(l_.root_D_inv)}, Lambda);
 }
 
-// The end of a sweep at a floating root (gauss_seidel.hpp's finish_link: no rows, W = 0):
-// qd += -D^-1 S^T pA.
+// The end of a sweep at a floating root (gauss_seidel.hpp's finish_link; sweep_law, eq. SW11).
 template <class A, int K>
 void LaneStep<A, K>::root_finish() {
-  const LinkConstants& k = p_.links[0];
-  const V* Di = at(l_.root_D_inv);
-  const V* R0 = at(l_.root_R);
-  const V* pA = at(l_.subtree);
-  V y[6];
-  root_St(R0, pA, y);
-  V* qd = &at(l_.qd)[k.v_index];
-  for (int d = 0; d < 6; ++d) {
-    V sum = Di[6 * d] * y[0];
-    for (int c = 1; c < 6; ++c) sum = sum + Di[6 * d + c] * y[c];
-    qd[d] = qd[d] - sum;
-  }
+  sweep_law::finish_rowless_root<6>(multi_dof_law::RotationPair<V>{at(l_.root_R)},
+                                    at(l_.root_D_inv), at(l_.subtree),
+                                    &at(l_.qd)[p_.links[0].v_index]);
 }
 
 // A floating root moved over h (step.cpp's integrate_positions, compat none): its origin with the
@@ -2472,93 +2455,53 @@ void LaneStep<A, K>::ball_rows(int i) {
   }
 }
 
-// A spherical joint entered in a sweep (gauss_seidel.hpp, several dofs): its axes' rows in turn,
-// each at the velocity the impulses before it leave (kGiven: the impulses given at its dofs),
-// then its velocity change and its link's.
+// A spherical joint entered in a sweep (gauss_seidel.hpp, several dofs; sweep_law, eq.
+// SW6-SW8): its axes' rows in turn, each at the velocity the impulses before it leave (kGiven: the
+// impulses given at its dofs), then its velocity change and its link's.
 template <class A, int K>
 template <bool kGiven>
 void LaneStep<A, K>::enter_ball(int i, const V* dvp, V* dv) {
   const int v = p_.links[i].v_index;
-  const V* S3 = at(l_.ball_S + 18 * i);
-  const V* U3 = at(l_.ball_U + 18 * i);
-  const V* W3 = at(l_.ball_W + 18 * i);
   const V* Di = at(l_.ball_D_inv + 9 * i);
   const V* Minv = at(l_.ball_response + 9 * i);
-  V Ud[3], base[3], impulse[3] = {V(0.0), V(0.0), V(0.0)};
-  for (int b = 0; b < 3; ++b) Ud[b] = dot6(U3 + 6 * b, dvp);
-  for (int a = 0; a < 3; ++a)
-    base[a] = -((Di[3 * a] * Ud[0] + Di[3 * a + 1] * Ud[1]) + Di[3 * a + 2] * Ud[2]);
+  V base[3], impulse[3] = {V(0.0), V(0.0), V(0.0)};
+  sweep_law::base_n<3>(Di, at(l_.ball_U + 18 * i), dvp, base);
   for (int a = 0; a < 3; ++a) {
     if constexpr (kGiven) {
       impulse[a] = at(l_.given)[v + a];
       continue;
     }
-    V current = (at(l_.qd)[v + a] + base[a]) +
-                ((Minv[3 * a] * impulse[0] + Minv[3 * a + 1] * impulse[1]) +
-                 Minv[3 * a + 2] * impulse[2]);
+    V current = sweep_law::row_velocity<3>(at(l_.qd)[v + a], base[a], Minv, a, impulse);
     if (p_.physx_spherical) current = current + row_bias(v + a);  // S-8
     impulse[a] = impulse[a] + solve_row(v + a, current, row(v + a)[Layout::delta_x]);
   }
-  V t[3], now[6], r3[3];
-  for (int a = 0; a < 3; ++a) {
-    at(l_.jimp)[v + a] = impulse[a];
-    t[a] = (Di[3 * a] * impulse[0] + Di[3 * a + 1] * impulse[1]) + Di[3 * a + 2] * impulse[2];
-  }
-  for (int r = 0; r < 6; ++r)
-    now[r] = dvp[r] - ((W3[r] * t[0] + W3[6 + r] * t[1]) + W3[12 + r] * t[2]);
-  for (int a = 0; a < 3; ++a) r3[a] = impulse[a] - dot6(U3 + 6 * a, now);
-  V dqd[3];
-  for (int a = 0; a < 3; ++a) {
-    dqd[a] = (Di[3 * a] * r3[0] + Di[3 * a + 1] * r3[1]) + Di[3 * a + 2] * r3[2];
-    at(l_.entry)[v + a] = dqd[a];
-  }
-  for (int r = 0; r < 6; ++r)
-    dv[r] = now[r] + ((S3[r] * dqd[0] + S3[6 + r] * dqd[1]) + S3[12 + r] * dqd[2]);
+  for (int a = 0; a < 3; ++a) at(l_.jimp)[v + a] = impulse[a];
+  sweep_law::after_rows_n<3>(impulse, Di, at(l_.ball_W + 18 * i), at(l_.ball_U + 18 * i),
+                             multi_dof_law::DenseSubspace<V, 3>{at(l_.ball_S + 18 * i)}, dvp,
+                             &at(l_.entry)[v], dv);
 }
 
-// The impulse a spherical joint's link hands its parent: pA + U D^-1 (impulse - S^T pA).
+// The impulse a spherical joint's link hands its parent (sweep_law, eq. SW9).
 template <class A, int K>
 void LaneStep<A, K>::leave_ball(int k, V* pa) {
-  const int v = p_.links[k].v_index;
-  const V* pA = at(l_.subtree + 6 * k);
-  const V* S3 = at(l_.ball_S + 18 * k);
-  const V* U3 = at(l_.ball_U + 18 * k);
-  const V* Di = at(l_.ball_D_inv + 9 * k);
-  V t[3], y[3];
-  for (int a = 0; a < 3; ++a) t[a] = at(l_.jimp)[v + a] - dot6(S3 + 6 * a, pA);
-  for (int b = 0; b < 3; ++b) y[b] = (Di[3 * b] * t[0] + Di[3 * b + 1] * t[1]) + Di[3 * b + 2] * t[2];
-  for (int r = 0; r < 6; ++r)
-    pa[r] = pA[r] + ((U3[r] * y[0] + U3[6 + r] * y[1]) + U3[12 + r] * y[2]);
+  sweep_law::hand_over_n<3>(&at(l_.jimp)[p_.links[k].v_index],
+                            multi_dof_law::DenseSubspace<V, 3>{at(l_.ball_S + 18 * k)},
+                            at(l_.ball_U + 18 * k), at(l_.ball_D_inv + 9 * k),
+                            at(l_.subtree + 6 * k), pa);
 }
 
-// A spherical joint after a sweep (gauss_seidel.hpp's finish_link, several dofs): its velocity
-// change from its subtree, entry - M_ii S^T pA + D^-1 W^T pA, and from later subtrees (E).
+// A spherical joint after a sweep (gauss_seidel.hpp's finish_link, several dofs; sweep_law, eq.
+// SW10 and SW5): its velocity change from its subtree and from later subtrees (E).
 template <class A, int K>
 void LaneStep<A, K>::finish_ball(int i, const V* E) {
   const int v = p_.links[i].v_index;
-  const V* pA = at(l_.subtree + 6 * i);
-  const V* S3 = at(l_.ball_S + 18 * i);
+  const multi_dof_law::DenseSubspace<V, 3> S{at(l_.ball_S + 18 * i)};
   const V* U3 = at(l_.ball_U + 18 * i);
-  const V* W3 = at(l_.ball_W + 18 * i);
   const V* Di = at(l_.ball_D_inv + 9 * i);
-  const V* Minv = at(l_.ball_response + 9 * i);
-  V Sp[3], Wp[3], dqd[3];
-  for (int a = 0; a < 3; ++a) Sp[a] = dot6(S3 + 6 * a, pA), Wp[a] = dot6(W3 + 6 * a, pA);
-  for (int a = 0; a < 3; ++a)
-    dqd[a] = (at(l_.entry)[v + a] -
-              ((Minv[3 * a] * Sp[0] + Minv[3 * a + 1] * Sp[1]) + Minv[3 * a + 2] * Sp[2])) +
-             ((Di[3 * a] * Wp[0] + Di[3 * a + 1] * Wp[1]) + Di[3 * a + 2] * Wp[2]);
-  if (E) {
-    V UE[3], later[3];
-    for (int b = 0; b < 3; ++b) UE[b] = dot6(U3 + 6 * b, E);
-    for (int a = 0; a < 3; ++a) {
-      later[a] = -((Di[3 * a] * UE[0] + Di[3 * a + 1] * UE[1]) + Di[3 * a + 2] * UE[2]);
-      dqd[a] = dqd[a] + later[a];
-    }
-    V* out = at(l_.later + 6 * i);
-    for (int r = 0; r < 6; ++r)
-      out[r] = E[r] + ((S3[r] * later[0] + S3[6 + r] * later[1]) + S3[12 + r] * later[2]);
-  }
+  V dqd[3];
+  sweep_law::finished_n<3>(&at(l_.entry)[v], S, at(l_.ball_W + 18 * i),
+                           at(l_.ball_response + 9 * i), Di, at(l_.subtree + 6 * i), dqd);
+  if (E) sweep_law::later_n<3>(Di, U3, S, E, dqd, at(l_.later + 6 * i));
   for (int a = 0; a < 3; ++a) at(l_.qd)[v + a] = at(l_.qd)[v + a] + dqd[a];
 }
 

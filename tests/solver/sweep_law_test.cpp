@@ -1,14 +1,17 @@
-// sweep_law (a one-dof link's part of the Gauss-Seidel sweep, docs/math/implicit_drives.md eq.
-// SW0-SW5, GS1-GS3) and the sweep built on it: SW0's sum against Eigen's 6-vector product, bit
-// for bit (the scalar step's bits rest on it), and every row's velocity in a sweep of given
-// impulses on random trees against the dense joint-space inertia: q̇ + M^-1 (the impulses applied
-// before it), as "Propagating impulses" claims.
+// sweep_law (a link's part of the Gauss-Seidel sweep, docs/math/implicit_drives.md eq. SW0-SW11,
+// GS1-GS3) and the sweep built on it: SW0's sum against Eigen's 6-vector product, bit for bit (the
+// scalar step's bits rest on it), and every row's velocity in a sweep of given impulses on random
+// trees against the dense joint-space inertia: q̇ + M^-1 (the impulses applied before it), as
+// "Propagating impulses" claims; every link's velocity change when entered (SW2, SW8) against
+// the sum of its path's S_j M^-1 (the impulses so far), with external impulses on the links that
+// the leaving (SW3, SW9) and finishing (SW4, SW5, SW10, SW11) must carry.
 #include "featherdrive/solver/sweep_law.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -81,6 +84,77 @@ TEST(SweepLaw, RowsSeeTheDenseResponseToEarlierImpulses) {
       EXPECT_LT((qd - expected).cwiseAbs().maxCoeff() / (1.0 + expected.cwiseAbs().maxCoeff()),
                 1e-12)
           << "seed " << seed << (floating ? ", floating" : ", fixed");
+    }
+}
+
+// Every link's velocity change when its rows are done, Delta v_i = sum over j on its path to the
+// root of S_j (M^-1 applied)_j, and every row's and the final velocities against the dense
+// response, with a random spatial impulse f_i on each link right after its rows (the sweep's
+// contact hook: the generalized impulse J_i^T f_i = S_j^T f_i at each joint j on its path). On
+// random trees with spherical joints, fixed and floating, with and without rows at the floating
+// root's dofs (then its six dofs go the way of a spherical joint's three).
+TEST(SweepLaw, LinkVelocityChangesAreTheDenseResponse) {
+  for (unsigned seed = 1; seed <= 6; ++seed)
+    for (const int root : {0, 1, 2}) {  // fixed; floating, its dofs rowless; floating with rows
+      const bool floating = root > 0;
+      auto model = test::make_random_tree(seed + 10, 12, floating, true, 0.02);
+      std::mt19937 rng(seed);
+      const VecX q = test::random_configuration(*model, rng);
+      Data data(*model);
+      const MatX M = crba(*model, data, q);
+      inverse_mass_diagonal(*model, data, q);
+      const Eigen::LDLT<MatX> M_inv(M);
+      const int n = model->num_links(), nv = model->nv;
+      // S_i in frame 0 as a 6 x nv block of the link's own columns.
+      auto S_of = [&](int i) {
+        MatX S = MatX::Zero(6, nv);
+        const int v0 = model->links[i].v_index, k = model->links[i].nv;
+        if (k == 1)
+          S.col(v0) = data.one_dof[i].S;
+        else if (k > 1)
+          S.middleCols(v0, k) = data.motion_subspace[i];
+        return S;
+      };
+      std::vector<MatX> J(n);  // the link's Jacobian in frame 0: its path's S
+      for (int i = 0; i < n; ++i) {
+        const int p = model->links[i].parent;
+        J[i] = (p >= 0 ? J[p] : MatX::Zero(6, nv)) + S_of(i);
+      }
+      SweepWorkspace ws(*model);
+      ws.set_contact_links(std::vector<char>(n, 1));
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      VecX given(nv), qd0(nv);
+      for (int d = 0; d < nv; ++d) given[d] = u(rng), qd0[d] = u(rng);
+      for (int d = 0; d < nv; ++d) ws.has_rows[d] = !(root == 1 && d < 6);
+      VecX applied = VecX::Zero(nv), qd = qd0;
+      double worst_row = 0.0, worst_link = 0.0;
+      int links = 0;
+      auto relative = [](const VecX& a, const VecX& b) {
+        return (a - b).cwiseAbs().maxCoeff() / (1.0 + b.cwiseAbs().maxCoeff());
+      };
+      gauss_seidel_sweep(
+          *model, data, ws, qd,
+          [&](int d, double current) {
+            const VecX expected = qd0 + M_inv.solve(applied);
+            worst_row = std::max(worst_row,
+                                 std::abs(current - expected[d]) / (1.0 + std::abs(expected[d])));
+            applied[d] += given[d];
+            return given[d];
+          },
+          [&](int i, Vec6& dv) {
+            worst_link = std::max(worst_link, relative(dv, J[i] * M_inv.solve(applied)));
+            Vec6 f;
+            for (int r = 0; r < 6; ++r) f[r] = u(rng);
+            applied += J[i].transpose() * f;
+            dv = J[i] * M_inv.solve(applied);  // its own impulse's change added, as contacts do
+            ++links;
+            return f;
+          });
+      const std::string where = "seed " + std::to_string(seed) + ", root " + std::to_string(root);
+      EXPECT_EQ(links, n) << where;
+      EXPECT_LT(worst_link, 1e-12) << where;
+      EXPECT_LT(worst_row, 1e-12) << where;
+      EXPECT_LT(relative(qd, qd0 + M_inv.solve(applied)), 1e-12) << where;
     }
 }
 

@@ -1,12 +1,18 @@
-// A one-dof link's part of a Gauss-Seidel sweep with exact joint velocities
-// (docs/math/implicit_drives.md, "Propagating impulses", eq. SW0-SW6 and GS1-GS3), over the
+// A link's part of a Gauss-Seidel sweep with exact joint velocities
+// (docs/math/implicit_drives.md, "Propagating impulses", eq. SW0-SW11 and GS1-GS3), over the
 // number type: Simulation's gauss_seidel_sweep (double) and the lanes' sweep
 // (sim/simd_lane_step.hpp: a pack, or one vector of it) form it with the same operations. Each
 // engine keeps its own walk over the links (which link is entered, left or finished when).
-// Spatial vectors are anything with v[r], r < 6, that reads a T (an Eigen Vec6, a T*, the lanes'
-// view of one vector of a pack). No include: the lanes' units compiled for AVX2 and AVX-512 take
-// in no inline function of the rest of the library.
+// A one-dof link's spatial vectors are anything with v[r], r < 6, that reads a T (an Eigen Vec6,
+// a T*, the lanes' view of one vector of a pack). A joint of N dofs (3: spherical, 6: floating
+// root; SW6-SW11) takes T[6] arrays, and multi_dof_law's conventions: U, W 6 x N column-major,
+// D^-1 and (M^-1)_ii N x N (entry (a, b) at N a + b), S through multi_dof_law's adapters; every
+// sum of those runs left to right. Only multi_dof_law is included, itself include-free: the
+// lanes' units compiled for AVX2 and AVX-512 take in no inline function of the rest of the
+// library.
 #pragma once
+
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 
 namespace featherdrive::sweep_law {
 
@@ -88,6 +94,119 @@ template <class T, class S6, class A6>
 template <class T, class U6, class E6>
 [[gnu::always_inline]] inline T later(const T& D_inv, const U6& U, const E6& E_hat) {
   return -D_inv * dot6<T>(U, E_hat);
+}
+
+// ---- A joint of N dofs (eq. SW6-SW11) ----
+
+/// Row a of an N x N matrix m (at N a + b) times x, summed left to right.
+template <int N, class T>
+[[gnu::always_inline]] inline T row_times(const T* m, int a, const T* x) {
+  T sum = m[N * a] * x[0];
+  #pragma GCC unroll 6
+  for (int b = 1; b < N; ++b) sum = sum + m[N * a + b] * x[b];
+  return sum;
+}
+
+/// (X^T y)_c for a dense 6 x N X (U, W): column c's six products left to right.
+template <int N, class T>
+[[gnu::always_inline]] inline T column_dot(const T* X, int c, const T* y) {
+  return multi_dof_law::column_dot(multi_dof_law::DenseSubspace<T, N>{X}, c, y);
+}
+
+/// Entering: the joint's velocity change from outside its subtree, base = -D^-1 U^T dv_p (eq. SW6).
+template <int N, class T>
+[[gnu::always_inline]] inline void base_n(const T* D_inv, const T* U, const T* dvp, T* base) {
+  T Ud[N];
+  #pragma GCC unroll 6
+  for (int b = 0; b < N; ++b) Ud[b] = column_dot<N>(U, b, dvp);
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) base[a] = -row_times<N>(D_inv, a, Ud);
+}
+
+/// The velocity row a of the joint sees: (qd_a + base_a) + ((M^-1)_ii impulse)_a, impulse its
+/// joint's impulses so far in the sweep (eq. SW7).
+template <int N, class T>
+[[gnu::always_inline]] inline T row_velocity(const T& qd, const T& base, const T* inverse_mass,
+                                             int a, const T* impulse) {
+  return (qd + base) + row_times<N>(inverse_mass, a, impulse);
+}
+
+/// After the joint's rows applied `impulse`: the parent side's change now = dv_p - W D^-1 impulse,
+/// the joint's entry change D^-1 (impulse - U^T now) and the link's dv = now + S entry (eq. SW8).
+/// Every entry of dv_p is read before dv is written.
+template <int N, class T, class S>
+[[gnu::always_inline]] inline void after_rows_n(const T* impulse, const T* D_inv, const T* W,
+                                                const T* U, const S& s, const T* dvp, T* entry,
+                                                T* dv) {
+  T t[N], Wt[6], now[6], r[N];
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) t[a] = row_times<N>(D_inv, a, impulse);
+  multi_dof_law::joint_motion(multi_dof_law::DenseSubspace<T, N>{W}, t, Wt);
+  #pragma GCC unroll 6
+  for (int k = 0; k < 6; ++k) now[k] = dvp[k] - Wt[k];
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) r[a] = impulse[a] - column_dot<N>(U, a, now);
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) entry[a] = row_times<N>(D_inv, a, r);
+  multi_dof_law::add_joint_motion(s, entry, now);
+  #pragma GCC unroll 6
+  for (int k = 0; k < 6; ++k) dv[k] = now[k];
+}
+
+/// Leaving: the impulse the subtree hands its parent, pa = pA + U D^-1 (impulse - S^T pA)
+/// (eq. SW9).
+template <int N, class T, class S>
+[[gnu::always_inline]] inline void hand_over_n(const T* impulse, const S& s, const T* U,
+                                               const T* D_inv, const T* pA, T* pa) {
+  T t[N], y[N], Uy[6];
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) t[a] = impulse[a] - multi_dof_law::column_dot(s, a, pA);
+  #pragma GCC unroll 6
+  for (int b = 0; b < N; ++b) y[b] = row_times<N>(D_inv, b, t);
+  multi_dof_law::joint_motion(multi_dof_law::DenseSubspace<T, N>{U}, y, Uy);
+  #pragma GCC unroll 6
+  for (int k = 0; k < 6; ++k) pa[k] = pA[k] + Uy[k];
+}
+
+/// Finishing: the joint's velocity change from its entry and its subtree's impulses,
+/// dqd = (entry - (M^-1)_ii S^T pA) + D^-1 W^T pA (eq. SW10).
+template <int N, class T, class S>
+[[gnu::always_inline]] inline void finished_n(const T* entry, const S& s, const T* W,
+                                              const T* inverse_mass, const T* D_inv, const T* pA,
+                                              T* dqd) {
+  T Sp[N], Wp[N];
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a)
+    Sp[a] = multi_dof_law::column_dot(s, a, pA), Wp[a] = column_dot<N>(W, a, pA);
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a)
+    dqd[a] = (entry[a] - row_times<N>(inverse_mass, a, Sp)) + row_times<N>(D_inv, a, Wp);
+}
+
+/// A later subtree's part: dqd += -D^-1 U^T E_hat and E = E_hat + S (that) (eq. SW5 over N dofs).
+template <int N, class T, class S>
+[[gnu::always_inline]] inline void later_n(const T* D_inv, const T* U, const S& s, const T* E_hat,
+                                           T* dqd, T* E) {
+  T later[N];
+  base_n<N>(D_inv, U, E_hat, later);
+  #pragma GCC unroll 6
+  for (int a = 0; a < N; ++a) dqd[a] = dqd[a] + later[a];
+  T Sl[6];
+  multi_dof_law::joint_motion(s, later, Sl);
+  #pragma GCC unroll 6
+  for (int k = 0; k < 6; ++k) E[k] = E_hat[k] + Sl[k];
+}
+
+/// A joint of the root without rows (a floating root: no entry change, W = 0), finished after
+/// the sweep: qd -= D^-1 S^T pA (eq. SW11).
+template <int N, class T, class S>
+[[gnu::always_inline]] inline void finish_rowless_root(const S& s, const T* D_inv, const T* pA,
+                                                       T* qd) {
+  T y[N];
+  #pragma GCC unroll 6
+  for (int c = 0; c < N; ++c) y[c] = multi_dof_law::column_dot(s, c, pA);
+  #pragma GCC unroll 6
+  for (int d = 0; d < N; ++d) qd[d] = qd[d] - row_times<N>(D_inv, d, y);
 }
 
 }  // namespace featherdrive::sweep_law
