@@ -6,6 +6,7 @@
 #include "featherdrive/sim/physx_departures.hpp"
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 
 namespace featherdrive {
@@ -25,20 +26,15 @@ PhysxDepartures::PhysxDepartures(const Model& model)
   for (const Link& l : model.links) total_mass += l.mass;
 }
 
-void world_pose(const Model& model, const VecX& q, WorldPose& pose) {
+// The kinematics' own poses (world_poses, docs/math/joint_transform.md), as the lanes' link_pose
+// forms them; each centre of mass p + R c summed left to right, as the lanes' link_com.
+void world_pose(const Model& model, const Data& data, const VecX& q, WorldPose& pose) {
   const int n = model.num_links();
+  world_poses(data, q, pose.R.data(), pose.p.data());
   double mass = 0.0;
   pose.total_com.setZero();
   for (int i = 0; i < n; ++i) {
     const Link& link = model.links[i];
-    const Transform X = joint_transform(link, q.data() + link.q_index) * link.tree_transform;
-    if (link.parent < 0) {
-      pose.R[i] = X.E.transpose();
-      pose.p[i] = X.r;
-    } else {
-      pose.R[i].noalias() = pose.R[link.parent] * X.E.transpose();
-      pose.p[i] = pose.p[link.parent] + pose.R[link.parent] * X.r;
-    }
     pose.com[i] = pose.p[i] + pose.R[i] * link.com;
     pose.total_com += link.mass * pose.com[i];
     mass += link.mass;
@@ -157,10 +153,11 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
   (void)qd;
 }
 
-void track_prismatic_position_change(const Model& model, const VecX& q, const VecX& qd, double h,
-                                     PhysxDepartures& dep, VecX& delta_x) {
+void track_prismatic_position_change(const Model& model, const Data& data, const VecX& q,
+                                     const VecX& qd, double h, PhysxDepartures& dep,
+                                     VecX& delta_x) {
   const int n = model.num_links();
-  world_pose(model, q, dep.now);
+  world_pose(model, data, q, dep.now);
   // The sub-step's link angular velocities in the step's frozen start frame, biased.
   Vec3 w0, v0;
   root_world_twist(model, dep.start, qd, w0, v0);

@@ -148,7 +148,7 @@ void Stepper::advance(const VecX& tau) {
   if (settings_.options.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
   if (physx() && model.floating_base())
-    correct_end_of_step_momentum(model, dt, ws_.departures, ws_.q, ws_.qd);
+    correct_end_of_step_momentum(model, ws_.data, dt, ws_.departures, ws_.q, ws_.qd);
   if (classical_root) end_classical_root();
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
   wrap_revolute_positions(model, settings_.revolute_wrap, ws_.q);
@@ -469,7 +469,8 @@ void Stepper::solve_tgs() {
       ws_.delta_x += rho * ws_.departures.row_bias;
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1);
       // the sub-step's poses and turns it leaves are the contacts' too (contact.md, C25a).
-      track_prismatic_position_change(*model_, ws_.q, ws_.qd, rho, ws_.departures, ws_.delta_x);
+      track_prismatic_position_change(*model_, ws_.data, ws_.q, ws_.qd, rho, ws_.departures,
+                                      ws_.delta_x);
       ws_.departures.qd_position += (1.0 / n) * ws_.qd;
     }
     if (ws_.contacts_active || ws_.self_contacts_active) track_contacts(rho);
@@ -503,7 +504,7 @@ void Stepper::integrate_positions(double h) {
   // compat physx turns a spherical joint's link in the world as PhysX does (spherical_rows.cpp):
   // the rotations before the sub-step.
   const bool spherical = physx() && has_spherical_joints(*model_);
-  if (spherical) world_pose(*model_, ws_.q, ws_.departures.now);
+  if (spherical) world_pose(*model_, ws_.data, ws_.q, ws_.departures.now);
   if (!model_->floating_base()) {
     integrate_configuration(*model_, ws_.q, ws_.qd, h, ws_.q);
   } else if (!physx()) {
