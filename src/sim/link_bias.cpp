@@ -7,6 +7,7 @@
 
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 
 namespace featherdrive {
@@ -101,9 +102,11 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
                        PhysxDepartures& dep) {
   const int n = model.num_links();
   WorldPose& s = dep.start;
-  // The start pose and velocities, from the kinematics of the step's start.
+  // The start pose and velocities, from the kinematics of the step's start and ABA's pass 1
+  // (frame 0): each centre of mass's velocity by eq. P1-6 (unit_response.md), as the lanes'.
   double mass = 0.0;
   s.total_com.setZero();
+  const Vec3 origin = data.world_position[0];
   for (int i = 0; i < n; ++i) {
     const Link& link = model.links[i];
     s.R[i] = data.world_rotation[i];
@@ -111,9 +114,12 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
     s.com[i] = s.p[i] + s.R[i] * link.com;
     s.total_com += link.mass * s.com[i];
     mass += link.mass;
-    const Vec6& v = data.velocity[i];  // body frame, link origin
-    dep.vel.w[i] = s.R[i] * v.head<3>();
-    dep.vel.v[i] = s.R[i] * (v.tail<3>() + v.head<3>().cross(link.com));
+    const double* v = data.velocity0[i].data();
+    const Vec3 p0 = s.p[i] - origin;
+    double c[3], mc[3];
+    link_motion_law::centre_of_mass(s.R[i], p0.data(), link.com.data(), link.mass, c, mc);
+    dep.vel.w[i] = data.velocity0[i].head<3>();
+    link_motion_law::point_velocity(v, c, dep.vel.v[i].data());
   }
   if (mass > 0.0) s.total_com /= mass;
   dep.root_rotation_start = s.R[0];

@@ -112,12 +112,10 @@ void Stepper::advance(const VecX& tau) {
   const double dt = ws_.dt;
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
-  // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
-  // bias of compat physx and link damping read the link-frame ones.
-  if (physx() || ws_.link_damping_active)
-    forward_kinematics(model, ws_.data, ws_.q, ws_.qd);
-  else
-    world_poses(model, ws_.data, ws_.q);
+  // Poses at the start of the step; ABA's pass 1 forms the velocities (frame 0) that the link bias
+  // of compat physx and link damping read too.
+  world_poses(model, ws_.data, ws_.q);
+  body_motions(model, ws_.data, ws_.qd);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
   ws_.any_link_force =
       ws_.link_damping_active &&
@@ -126,7 +124,7 @@ void Stepper::advance(const VecX& tau) {
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1);
   // with the accelerations, in the same pass, the unit responses r = (M^-1)_jj and the
   // whole-articulation response, frozen for the step.
-  articulated_bodies(model, ws_.data, ws_.qd, tau, link_force);
+  articulate(model, ws_.data, tau, link_force);
   accelerations_and_response(model, ws_.data);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((settings_.friction_coefficient.array() > 0.0).any())
