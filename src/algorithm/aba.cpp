@@ -156,8 +156,7 @@ void articulated_inertias(const Model& model, Data& data) {
   }
 }
 
-void articulated_bodies(const Model& model, Data& data, const VecX& v, const VecX& tau,
-                        const std::vector<Vec6>* external_force) {
+void body_motions(const Model& model, Data& data, const VecX& v) {
   const int n = model.num_links();
   const Vec3 origin = data.world_position[0];
   data.frame_origin = origin;
@@ -197,8 +196,15 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     for (int r = 0; r < 6; ++r) data.bias_acceleration0[i][r] = c[r];
     Vec6& bias = data.articulated_bias[i];
     for (int r = 0; r < 6; ++r) bias[r] = pA[r];
-    if (external_force) bias -= (*external_force)[static_cast<size_t>(i)];
   }
+}
+
+void articulate(const Model& model, Data& data, const VecX& tau,
+                const std::vector<Vec6>* external_force) {
+  const int n = model.num_links();
+  if (external_force)  // taken off p_i before a child adds to it, as pass 1 did
+    for (int i = 0; i < n; ++i)
+      data.articulated_bias[i] -= (*external_force)[static_cast<size_t>(i)];
   // Pass 2: articulated inertias and bias forces, leaves to root. The arrays' bases said aligned,
   // so that every link's and parent's entries are (aligned()).
   Mat6* const inertia = aligned(data.articulated_inertia.data());
@@ -238,6 +244,12 @@ void articulated_bodies(const Model& model, Data& data, const VecX& v, const Vec
     inertia[link.parent] += IA;
     bias[link.parent] += pa;
   }
+}
+
+void articulated_bodies(const Model& model, Data& data, const VecX& v, const VecX& tau,
+                        const std::vector<Vec6>* external_force) {
+  body_motions(model, data, v);
+  articulate(model, data, tau, external_force);
 }
 
 // Pass 3: accelerations, root to leaves; gravity as an upward acceleration of the world.

@@ -6,6 +6,8 @@
 #include "featherdrive/sim/physx_departures.hpp"
 
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 
 namespace featherdrive {
@@ -25,20 +27,15 @@ PhysxDepartures::PhysxDepartures(const Model& model)
   for (const Link& l : model.links) total_mass += l.mass;
 }
 
-void world_pose(const Model& model, const VecX& q, WorldPose& pose) {
+// The kinematics' own poses (world_poses, docs/math/joint_transform.md), as the lanes' link_pose
+// forms them; each centre of mass p + R c summed left to right, as the lanes' link_com.
+void world_pose(const Model& model, const Data& data, const VecX& q, WorldPose& pose) {
   const int n = model.num_links();
+  world_poses(data, q, pose.R.data(), pose.p.data());
   double mass = 0.0;
   pose.total_com.setZero();
   for (int i = 0; i < n; ++i) {
     const Link& link = model.links[i];
-    const Transform X = joint_transform(link, q.data() + link.q_index) * link.tree_transform;
-    if (link.parent < 0) {
-      pose.R[i] = X.E.transpose();
-      pose.p[i] = X.r;
-    } else {
-      pose.R[i].noalias() = pose.R[link.parent] * X.E.transpose();
-      pose.p[i] = pose.p[link.parent] + pose.R[link.parent] * X.r;
-    }
     pose.com[i] = pose.p[i] + pose.R[i] * link.com;
     pose.total_com += link.mass * pose.com[i];
     mass += link.mass;
@@ -105,9 +102,11 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
                        PhysxDepartures& dep) {
   const int n = model.num_links();
   WorldPose& s = dep.start;
-  // The start pose and velocities, from the kinematics of the step's start.
+  // The start pose and velocities, from the kinematics of the step's start and ABA's pass 1
+  // (frame 0): each centre of mass's velocity by eq. P1-6 (unit_response.md), as the lanes'.
   double mass = 0.0;
   s.total_com.setZero();
+  const Vec3 origin = data.world_position[0];
   for (int i = 0; i < n; ++i) {
     const Link& link = model.links[i];
     s.R[i] = data.world_rotation[i];
@@ -115,9 +114,12 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
     s.com[i] = s.p[i] + s.R[i] * link.com;
     s.total_com += link.mass * s.com[i];
     mass += link.mass;
-    const Vec6& v = data.velocity[i];  // body frame, link origin
-    dep.vel.w[i] = s.R[i] * v.head<3>();
-    dep.vel.v[i] = s.R[i] * (v.tail<3>() + v.head<3>().cross(link.com));
+    const double* v = data.velocity0[i].data();
+    const Vec3 p0 = s.p[i] - origin;
+    double c[3], mc[3];
+    link_motion_law::centre_of_mass(s.R[i], p0.data(), link.com.data(), link.mass, c, mc);
+    dep.vel.w[i] = data.velocity0[i].head<3>();
+    link_motion_law::point_velocity(v, c, dep.vel.v[i].data());
   }
   if (mass > 0.0) s.total_com /= mass;
   dep.root_rotation_start = s.R[0];
@@ -157,10 +159,11 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
   (void)qd;
 }
 
-void track_prismatic_position_change(const Model& model, const VecX& q, const VecX& qd, double h,
-                                     PhysxDepartures& dep, VecX& delta_x) {
+void track_prismatic_position_change(const Model& model, const Data& data, const VecX& q,
+                                     const VecX& qd, double h, PhysxDepartures& dep,
+                                     VecX& delta_x) {
   const int n = model.num_links();
-  world_pose(model, q, dep.now);
+  world_pose(model, data, q, dep.now);
   // The sub-step's link angular velocities in the step's frozen start frame, biased.
   Vec3 w0, v0;
   root_world_twist(model, dep.start, qd, w0, v0);

@@ -1,8 +1,9 @@
 // PhysX's link damping and link velocity limits (computeLinkStates in
 // DyFeatherstoneArticulation.cpp, read in the source): once per step, from the start-of-step
-// velocity, each link gets an external force that enters the free velocity like gravity, by
-// link_law::damping_force (sim/link_laws.hpp, docs/math/joint_constraints.md J10), the lanes' law
-// too. The gravity term is PhysX's: it scales the link's weight by (1 - c_lin dt).
+// velocity (frame 0, ABA's pass 1), each link gets an external force that enters the free
+// velocity like gravity, by link_law::damping_force (sim/link_laws.hpp,
+// docs/math/joint_constraints.md J10), the lanes' law too. The gravity term is PhysX's: it scales
+// the link's weight by (1 - c_lin dt).
 #include <cmath>
 
 #include "featherdrive/algorithm/link_motion_law.hpp"
@@ -25,10 +26,13 @@ bool link_damping_forces(const Model& model, const Data& data,
     const LinkParameters& p = parameters[static_cast<size_t>(i)];
     const Data::LinkConstants& k = data.constants[i];
     const Mat3& R = data.world_rotation[i];
-    const Vec6& v = data.velocity[i];  // link frame
-    const Vec3 omega = R * v.head<3>();
-    const Vec3 v_com = R * (v.tail<3>() + v.head<3>().cross(k.com));
-    const Vec3 c = data.world_position[i] + R * k.com - origin;
+    const double* v = data.velocity0[i].data();  // frame 0, ABA's pass 1 (body_motions)
+    // c (P1-2), v_c (P1-6) and omega in the link's axes (P1-7), as the lanes' link_damping.
+    const Vec3 p0 = data.world_position[i] - origin;
+    double c[3], mc[3], v_com[3], local[3];
+    link_motion_law::centre_of_mass(R, p0.data(), k.com.data(), k.mass, c, mc);
+    link_motion_law::point_velocity(v, c, v_com);
+    link_motion_law::in_link_axes(R, v, local);
     RowMajor3 RI;  // R Ic, as ABA's pass 1 forms it (unit_response.md, P1-1)
     if (data.info[i].inertia_diagonal)
       link_motion_law::rotate_principal(R, k.inertia_com(0, 0), k.inertia_com(1, 1),
@@ -37,8 +41,8 @@ bool link_damping_forces(const Model& model, const Data& data,
       link_motion_law::rotate_full(R, k.inertia_com, RI);
     const link_law::Damping<double> d{p.linear_damping, p.angular_damping, p.max_linear_velocity,
                                       p.max_angular_velocity};
-    link_law::damping_force(d, omega.data(), v.data(), v_com.data(), RI.data(), c.data(), k.mass,
-                            model.gravity.data(), dt, force[static_cast<size_t>(i)].data());
+    link_law::damping_force(d, v, local, v_com, RI.data(), c, k.mass, model.gravity.data(), dt,
+                            force[static_cast<size_t>(i)].data());
   }
   return true;
 }

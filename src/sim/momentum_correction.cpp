@@ -101,8 +101,8 @@ void integrate_root_about_com(const Model& model, const VecX& qd, double h, Phys
                                   &q[root.q_index]);
 }
 
-void correct_end_of_step_momentum(const Model& model, double dt, PhysxDepartures& dep, VecX& q,
-                                  VecX& qd) {
+void correct_end_of_step_momentum(const Model& model, const Data& data, double dt,
+                                  PhysxDepartures& dep, VecX& q, VecX& qd) {
   const WorldPose& s = dep.start;
   const Link& root = model.links[0];
   const double M = dep.total_mass;
@@ -119,7 +119,7 @@ void correct_end_of_step_momentum(const Model& model, double dt, PhysxDepartures
     momentum(model, s, dep.scratch, nullptr, &dep.bias_v, P_position, unused);
   }
   // Velocities in the new pose: the root keeps its world angular velocity and COM velocity.
-  world_pose(model, q, dep.now);
+  world_pose(model, data, q, dep.now);
   const WorldPose& n = dep.now;
   const Vec3 root_com_velocity = v0 + w0.cross(s.com[0] - s.p[0]);
   Vec3 v_origin = root_com_velocity - w0.cross(n.com[0] - n.p[0]);

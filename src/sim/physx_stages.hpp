@@ -14,10 +14,10 @@
 
 namespace featherdrive {
 
-/// link_damping.cpp. After forward_kinematics: the external force PhysX's link damping and link
-/// velocity limits put on each link for the free velocity, in frame 0 (world axes, origin at the
-/// root link's origin), [torque about that origin; force]. Returns false (force untouched) when
-/// no link has damping or a finite velocity limit.
+/// link_damping.cpp. After body_motions (ABA's pass 1, data.velocity0): the external force PhysX's
+/// link damping and link velocity limits put on each link for the free velocity, in frame 0
+/// (world axes, origin at the root link's origin), [torque about that origin; force]. Returns
+/// false (force untouched) when no link has damping or a finite velocity limit.
 bool link_damping_forces(const Model& model, const Data& data,
                          const std::vector<LinkParameters>& parameters, double dt,
                          std::vector<Vec6>& force);

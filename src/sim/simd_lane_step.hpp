@@ -837,9 +837,9 @@ template <class A, int K>
                                                                 const B& m, const B* v,
                                                                 B* F) const {
   B v_com[3], local[3], g[3];
-  cross(v, cg, v_com);  // omega x c
-  for (int r = 0; r < 3; ++r) v_com[r] = v[3 + r] + v_com[r];
-  for (int r = 0; r < 3; ++r) local[r] = R[r] * v[0] + R[3 + r] * v[1] + R[6 + r] * v[2];
+  // v_c and omega in the link's axes (link_motion_law, eq. P1-6, P1-7), as link_damping.cpp.
+  link_motion_law::point_velocity(v, cg, v_com);
+  link_motion_law::in_link_axes(joint_transform_law::rows(R), v, local);
   for (int r = 0; r < 3; ++r) g[r] = parameter(gravity_entry(r), j);
   const link_law::Damping<B> d{link_parameter(i, link_linear_damping, j),
                                link_parameter(i, link_angular_damping, j),
@@ -1710,9 +1710,7 @@ void LaneStep<A, K>::link_bias() {
     V* bw = at(l_.bias_w + 3 * i);
     V* bv = at(l_.bias_v + 3 * i);
     link_com(i, R, pos, c);
-    V wc[3];
-    cross(v, c, wc);
-    for (int r = 0; r < 3; ++r) vc[r] = v[3 + r] + wc[r];
+    link_motion_law::point_velocity(v, c, vc);  // eq. P1-6, as link_bias.cpp
     for (int r = 0; r < 3; ++r) at(l_.turn + 3 * i)[r] = V(0.0);
     if (k.parent < 0) {
       for (int r = 0; r < 3; ++r) bw[r] = bv[r] = V(0.0);

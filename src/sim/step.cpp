@@ -112,12 +112,10 @@ void Stepper::advance(const VecX& tau) {
   const double dt = ws_.dt;
   // Joint velocities above their limits are scaled down together (PhysX 5.6.1).
   scale_to_velocity_limits();
-  // Poses at the start of the step. ABA computes the velocities it needs, in frame 0; the link
-  // bias of compat physx and link damping read the link-frame ones.
-  if (physx() || ws_.link_damping_active)
-    forward_kinematics(model, ws_.data, ws_.q, ws_.qd);
-  else
-    world_poses(model, ws_.data, ws_.q);
+  // Poses at the start of the step; ABA's pass 1 forms the velocities (frame 0) that the link bias
+  // of compat physx and link damping read too.
+  world_poses(model, ws_.data, ws_.q);
+  body_motions(model, ws_.data, ws_.qd);
   // PhysX's link damping and link velocity limits: forces on the free velocity (link_damping.cpp).
   ws_.any_link_force =
       ws_.link_damping_active &&
@@ -126,7 +124,7 @@ void Stepper::advance(const VecX& tau) {
   // Free velocity v* = v + dt M^-1 (tau_applied + gravity - c(q, v)), once per step (NOTES 1);
   // with the accelerations, in the same pass, the unit responses r = (M^-1)_jj and the
   // whole-articulation response, frozen for the step.
-  articulated_bodies(model, ws_.data, ws_.qd, tau, link_force);
+  articulate(model, ws_.data, tau, link_force);
   accelerations_and_response(model, ws_.data);
   // The force each joint transmits, for the friction coefficient (transmitted_force.cpp).
   if ((settings_.friction_coefficient.array() > 0.0).any())
@@ -148,7 +146,7 @@ void Stepper::advance(const VecX& tau) {
   if (settings_.options.solver == SolverType::pgs) solve_pgs();
   else solve_tgs();
   if (physx() && model.floating_base())
-    correct_end_of_step_momentum(model, dt, ws_.departures, ws_.q, ws_.qd);
+    correct_end_of_step_momentum(model, ws_.data, dt, ws_.departures, ws_.q, ws_.qd);
   if (classical_root) end_classical_root();
   // PhysX's eREVOLUTE joints wrap once, at the end of the step (revolute_wrap.cpp).
   wrap_revolute_positions(model, settings_.revolute_wrap, ws_.q);
@@ -472,7 +470,8 @@ void Stepper::solve_tgs() {
       ws_.delta_x += rho * ws_.departures.row_bias;
       // PhysX measures a prismatic row's position change geometrically (NOTES, departure 1);
       // the sub-step's poses and turns it leaves are the contacts' too (contact.md, C25a).
-      track_prismatic_position_change(*model_, ws_.q, ws_.qd, rho, ws_.departures, ws_.delta_x);
+      track_prismatic_position_change(*model_, ws_.data, ws_.q, ws_.qd, rho, ws_.departures,
+                                      ws_.delta_x);
       ws_.departures.qd_position += (1.0 / n) * ws_.qd;
     }
     if (ws_.contacts_active || ws_.self_contacts_active) track_contacts(rho);
@@ -506,7 +505,7 @@ void Stepper::integrate_positions(double h) {
   // compat physx turns a spherical joint's link in the world as PhysX does (spherical_rows.cpp):
   // the rotations before the sub-step.
   const bool spherical = physx() && has_spherical_joints(*model_);
-  if (spherical) world_pose(*model_, ws_.q, ws_.departures.now);
+  if (spherical) world_pose(*model_, ws_.data, ws_.q, ws_.departures.now);
   if (!model_->floating_base()) {
     integrate_configuration(*model_, ws_.q, ws_.qd, h, ws_.q);
   } else if (!physx()) {

@@ -1,6 +1,6 @@
-// forward_kinematics against poses and velocities composed here with Eigen's AngleAxis, on a chain
-// whose joints mix the coordinate-axis fast paths (axes +-e_k, joint frame parallel to the
-// parent's) with general ones (tilted frames, oblique axes).
+// forward_kinematics and world_poses into the caller's arrays against poses and velocities composed
+// here with Eigen's AngleAxis, on a chain whose joints mix the coordinate-axis fast paths (axes
+// +-e_k, joint frame parallel to the parent's) with general ones (tilted frames, oblique axes).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -67,6 +67,11 @@ TEST(ForwardKinematics, CoordinateAndGeneralJointsMatchComposedRotations) {
   forward_kinematics(model, data, q, v);
   Data positions_only(model);
   forward_kinematics(model, positions_only, q);
+  // world_poses into arrays of the caller's (compat physx's world_pose), from an unposed Data.
+  const Data unposed(model);
+  std::vector<Mat3> R_out(model.links.size());
+  std::vector<Vec3> p_out(model.links.size());
+  world_poses(unposed, q, R_out.data(), p_out.data());
 
   Mat3 R = Mat3::Identity();
   Vec3 p = Vec3::Zero(), w = Vec3::Zero(), vel = Vec3::Zero();  // world frame
@@ -92,6 +97,8 @@ TEST(ForwardKinematics, CoordinateAndGeneralJointsMatchComposedRotations) {
     EXPECT_LT((data.world_position[i] - p).norm(), 1e-12);
     EXPECT_LT((positions_only.world_rotation[i] - R).norm(), 1e-12);
     EXPECT_LT((positions_only.world_position[i] - p).norm(), 1e-12);
+    EXPECT_LT((R_out[k + 1] - R).norm(), 1e-12);
+    EXPECT_LT((p_out[k + 1] - p).norm(), 1e-12);
     EXPECT_LT((data.velocity[i].head<3>() - R.transpose() * w).norm(), 1e-11);
     EXPECT_LT((data.velocity[i].tail<3>() - R.transpose() * vel).norm(), 1e-11);
   }
@@ -130,6 +137,10 @@ TEST(ForwardKinematics, SphericalJointsAndFloatingRootMatchQuaternionRotations) 
   for (int e = 0; e < model.nq; ++e) q[e] = 2.0 * u(rng);
   Data data(model);
   forward_kinematics(model, data, q);
+  const Data unposed(model);
+  std::vector<Mat3> R_out(model.links.size());
+  std::vector<Vec3> p_out(model.links.size());
+  world_poses(unposed, q, R_out.data(), p_out.data());
 
   auto quaternion = [&](int at) {
     return Quat(q[at], q[at + 1], q[at + 2], q[at + 3]).normalized().toRotationMatrix();
@@ -139,6 +150,8 @@ TEST(ForwardKinematics, SphericalJointsAndFloatingRootMatchQuaternionRotations) 
   Vec3 p = root_xyz + rpy_rotation(root_rpy) * q.head<3>();
   EXPECT_LT((data.world_rotation[0] - R).norm(), 1e-14);
   EXPECT_LT((data.world_position[0] - p).norm(), 1e-14);
+  EXPECT_LT((R_out[0] - R).norm(), 1e-14);
+  EXPECT_LT((p_out[0] - p).norm(), 1e-14);
   int at = 7;
   for (size_t k = 0; k < joints.size(); ++k) {
     const int i = static_cast<int>(k) + 1;
@@ -153,6 +166,8 @@ TEST(ForwardKinematics, SphericalJointsAndFloatingRootMatchQuaternionRotations) 
     R = R * E_T.transpose() * J;
     EXPECT_LT((data.world_rotation[i] - R).norm(), 1e-14);
     EXPECT_LT((data.world_position[i] - p).norm(), 1e-14);
+    EXPECT_LT((R_out[k + 1] - R).norm(), 1e-14);
+    EXPECT_LT((p_out[k + 1] - p).norm(), 1e-14);
     // X_i = X_J X_T: E = J^T E_T, r = r_T.
     EXPECT_LT((data.parent_transform[i].E - J.transpose() * E_T).norm(), 1e-14);
     EXPECT_LT((data.parent_transform[i].r - origins[k]).norm(), 1e-15);

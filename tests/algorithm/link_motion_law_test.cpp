@@ -1,6 +1,7 @@
 // link_motion_law for double against a second form: the 6 x 6 spatial inertia in frame 0 built
 // from its definition with Eigen's products, and the spatial cross products as 6 x 6 matrices
-// crm(v), crf(v) = -crm(v)^T (docs/math/unit_response.md, eq. P1-1 to P1-5).
+// crm(v), crf(v) = -crm(v)^T (docs/math/unit_response.md, eq. P1-1 to P1-5), and a body's motion
+// given in its own frame (P1-6, P1-7).
 #include "featherdrive/algorithm/link_motion_law.hpp"
 
 #include <gtest/gtest.h>
@@ -173,6 +174,36 @@ TEST(LinkMotionLaw, BiasForceOfASpinAboutAPrincipalAxisThroughTheComIsZero) {  /
   double p[6];
   link_motion_law::bias_force(v.data(), A, mc, b.m, p);
   for (int r = 0; r < 6; ++r) EXPECT_NEAR(p[r], 0.0, 1e-13) << r;
+}
+
+TEST(LinkMotionLaw, CentreOfMassVelocityAndLinkAxesAsTheLinkFrameForms) {  // P1-6, P1-7
+  // A body's motion given in its own frame (angular w_L, origin velocity v_L, Featherstone's
+  // link-frame velocity) carried into frame 0 with Eigen's products: w = R w_L, the velocity of
+  // the body point at frame 0's origin v_O - w x p; the centre of mass moves at R (v_L + w_L x
+  // com) and w in the link's axes is w_L.
+  std::mt19937_64 rng(17);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Body b = random_body(rng, trial % 2 == 0);
+    const Vec3 w_L = random_vector(rng, 4.0), v_L = random_vector(rng, 3.0);
+    const Vec3 w = b.R * w_L;
+    Vec6 v;
+    v << w, b.R * v_L - w.cross(b.p);
+    double c[3], mc[3], v_c[3], local[3];
+    link_motion_law::centre_of_mass(b.R, b.p.data(), b.com.data(), b.m, c, mc);
+    link_motion_law::point_velocity(v.data(), c, v_c);
+    link_motion_law::in_link_axes(b.R, w.data(), local);
+    const Vec3 expected = b.R * (v_L + w_L.cross(b.com));
+    for (int r = 0; r < 3; ++r) {
+      EXPECT_NEAR(v_c[r], expected[r], 1e-13) << trial << " " << r;
+      EXPECT_NEAR(local[r], w_L[r], 1e-14) << trial << " " << r;
+    }
+    // The lanes' storage: R row-major through joint_transform_law::rows, the same bits.
+    double Rrows[9], local_rows[3];
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) Rrows[3 * r + k] = b.R(r, k);
+    link_motion_law::in_link_axes(joint_transform_law::rows(Rrows), w.data(), local_rows);
+    for (int r = 0; r < 3; ++r) EXPECT_EQ(local_rows[r], local[r]);
+  }
 }
 
 }  // namespace

@@ -21,6 +21,13 @@ const VecX& aba_from_kinematics(const Model& model, Data& data, const VecX& v, c
 void articulated_bodies(const Model& model, Data& data, const VecX& v, const VecX& tau,
                         const std::vector<Vec6>* external_force = nullptr);
 
+/// articulated_bodies in two halves, so that forces that read the velocities (PhysX's link
+/// damping) can come between: pass 1 (data.velocity0, c_i, I_i and p_i in frame 0, S_i), then
+/// pass 2 with external_force taken off p_i first, the same bits as articulated_bodies.
+void body_motions(const Model& model, Data& data, const VecX& v);
+void articulate(const Model& model, Data& data, const VecX& tau,
+                const std::vector<Vec6>* external_force = nullptr);
+
 /// ABA's third pass after articulated_bodies: qdd and each link's acceleration. Returns data.qdd.
 const VecX& joint_accelerations(const Model& model, Data& data);
 

@@ -1,4 +1,4 @@
-// ABA pass 1 for one link in frame 0 (docs/math/unit_response.md, "Pass 1", eq. P1-1 to P1-5),
+// ABA pass 1 for one link in frame 0 (docs/math/unit_response.md, "Pass 1", eq. P1-1 to P1-7),
 // over the number type: the body's inertia for Simulation (algorithm/aba.cpp, double) and the
 // lanes (sim/simd_lane_step.hpp's link_velocity_and_bias, one vector of a pack), so that both
 // form it with the same operations, and so the velocity, velocity-product acceleration and bias
@@ -92,6 +92,22 @@ void bias_force(const T* v, const T* A, const T* mc, const T& m, T* p) {
   vector3_law::cross(v + 3, h + 3, t2);
   for (int r = 0; r < 3; ++r) p[r] = t1[r] + t2[r];
   vector3_law::cross(v, h + 3, p + 3);
+}
+
+/// v_c = vo + w x c, the velocity of the link's point at c (frame 0) from its velocity
+/// v = [w; vo] (eq. P1-6): a centre of mass's, for compat physx's link bias and link damping.
+template <class T>
+void point_velocity(const T* v, const T* c, T* vc) {
+  T t[3];
+  vector3_law::cross(v, c, t);
+  for (int r = 0; r < 3; ++r) vc[r] = v[3 + r] + t[r];
+}
+
+/// w_L = R^T w, the angular velocity w (world axes) in the link's axes R (eq. P1-7), each entry
+/// summed left to right.
+template <class T, class M>
+void in_link_axes(const M& R, const T* w, T* w_L) {
+  for (int r = 0; r < 3; ++r) w_L[r] = R(0, r) * w[0] + R(1, r) * w[1] + R(2, r) * w[2];
 }
 
 }  // namespace featherdrive::link_motion_law

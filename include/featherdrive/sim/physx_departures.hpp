@@ -42,8 +42,8 @@ struct PhysxDepartures {
   Mat3 root_rotation_start = Mat3::Identity();
 };
 
-/// Poses from the configuration q (forward kinematics of positions only).
-void world_pose(const Model& model, const VecX& q, WorldPose& pose);
+/// Poses from the configuration q by the kinematics' world_poses (data's constants only).
+void world_pose(const Model& model, const Data& data, const VecX& q, WorldPose& pose);
 
 /// Link velocities for pose, joint rates qd (joints of the non-root links) and the root's world
 /// angular velocity w0 and origin velocity v0.
@@ -65,8 +65,8 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
 
 /// Stage 1, TGS: the geometric position change of every prismatic dof after a sub-step of h, qd the
 /// rates after the sub-step's sweep, q the configuration after it (overwrites delta_x there).
-void track_prismatic_position_change(const Model& model, const VecX& q, const VecX& qd, double h,
-                                     PhysxDepartures& dep, VecX& delta_x);
+void track_prismatic_position_change(const Model& model, const Data& data, const VecX& q,
+                                     const VecX& qd, double h, PhysxDepartures& dep, VecX& delta_x);
 
 /// Stage 2 (momentum_correction.cpp): rescales the angular momentum about the COM after the free
 /// velocity update to its magnitude before the velocity-product terms, and restores the linear
@@ -83,7 +83,7 @@ void integrate_root_about_com(const Model& model, const VecX& qd, double h, Phys
 /// Stage 2, end of step: velocities in the new pose, linear momentum and angular momentum magnitude
 /// of the solver's velocities imposed by a rigid motion, COM moved where the position-iteration
 /// momentum puts it. q: the integrated configuration; qd: the solver's final velocities.
-void correct_end_of_step_momentum(const Model& model, double dt, PhysxDepartures& dep, VecX& q,
-                                  VecX& qd);
+void correct_end_of_step_momentum(const Model& model, const Data& data, double dt,
+                                  PhysxDepartures& dep, VecX& q, VecX& qd);
 
 }  // namespace featherdrive
