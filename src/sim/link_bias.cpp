@@ -50,29 +50,30 @@ void root_world_twist(const Model& model, const WorldPose& pose, const VecX& qd,
     v0.setZero();
     return;
   }
-  w0 = pose.R[0] * qd.segment<3>(root.v_index);
-  v0 = pose.R[0] * qd.segment<3>(root.v_index + 3);
+  link_motion_law::in_world_axes(pose.R[0], &qd[root.v_index], w0.data());
+  link_motion_law::in_world_axes(pose.R[0], &qd[root.v_index + 3], v0.data());
 }
 
+// Eq. PD-6 link by link, as the lanes' world_velocity.
 void world_velocity(const Model& model, const WorldPose& pose, const VecX& qd, const Vec3& w0,
                     const Vec3& v0, WorldVelocity& out) {
+  using link_motion_law::JointRates;
   const int n = model.num_links();
-  out.w[0] = w0;
-  out.v[0] = v0 + w0.cross(pose.com[0] - pose.p[0]);
+  const double* none = nullptr;
+  link_motion_law::world_velocity(w0.data(), v0.data(), none, pose.R[0], pose.p[0].data(),
+                                  pose.com[0].data(), JointRates::none, none, none,
+                                  out.w[0].data(), out.v[0].data());
   for (int i = 1; i < n; ++i) {
     const Link& link = model.links[i];
     const int p = link.parent;
-    Vec3 w = out.w[p];
-    // Origin velocity of the link frame if rigidly attached to the parent.
-    Vec3 v = out.v[p] + out.w[p].cross(pose.p[i] - pose.com[p]);
-    switch (link.joint_type) {
-      case JointType::revolute: w += pose.R[i] * link.axis * qd[link.v_index]; break;
-      case JointType::prismatic: v += pose.R[i] * link.axis * qd[link.v_index]; break;
-      case JointType::spherical: w += pose.R[i] * qd.segment<3>(link.v_index); break;
-      default: break;
-    }
-    out.w[i] = w;
-    out.v[i] = v + w.cross(pose.com[i] - pose.p[i]);
+    const JointRates joint = link.joint_type == JointType::revolute    ? JointRates::about_axis
+                             : link.joint_type == JointType::prismatic ? JointRates::along_axis
+                             : link.joint_type == JointType::spherical ? JointRates::ball
+                                                                       : JointRates::none;
+    link_motion_law::world_velocity(out.w[p].data(), out.v[p].data(), pose.com[p].data(),
+                                    pose.R[i], pose.p[i].data(), pose.com[i].data(), joint,
+                                    link.axis.data(), qd.data() + link.v_index, out.w[i].data(),
+                                    out.v[i].data());
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/sim/integration_law.hpp"
 
 namespace featherdrive {
@@ -35,11 +36,12 @@ void rigid_correction(const Model& model, const WorldPose& pose, const Vec3& P, 
   dv = (target - P1) / mass;
 }
 
-// Writes a root world twist (angular velocity, origin velocity) into qd in the frame R.
+// Writes a root world twist (angular velocity, origin velocity) into qd in the frame R (eq. PD-7
+// inverted: R^T, unit_response.md's P1-7), as the lanes' physx_free_momentum.
 void store_root_twist(const Model& model, const Mat3& R, const Vec3& w, const Vec3& v, VecX& qd) {
   const int iv = model.links[0].v_index;
-  qd.segment<3>(iv) = R.transpose() * w;
-  qd.segment<3>(iv + 3) = R.transpose() * v;
+  link_motion_law::in_link_axes(R, w.data(), &qd[iv]);
+  link_motion_law::in_link_axes(R, v.data(), &qd[iv + 3]);
 }
 
 }  // namespace
@@ -54,8 +56,9 @@ void correct_free_velocity_momentum(const Model& model, const Data& data, const 
   // the external wrench (gravity at the COM; a wrench applied on the root's dofs).
   Vec3 P0, L0;
   momentum(model, s, dep.vel, nullptr, nullptr, P0, L0);
-  const Vec3 n = s.R[0] * applied_force.segment<3>(root.v_index);
-  const Vec3 f = s.R[0] * applied_force.segment<3>(root.v_index + 3);
+  Vec3 n, f;  // the root's wrench in world axes (eq. PD-7), as the lanes' physx_start
+  link_motion_law::in_world_axes(s.R[0], &applied_force[root.v_index], n.data());
+  link_motion_law::in_world_axes(s.R[0], &applied_force[root.v_index + 3], f.data());
   P0 += dt * (M * model.gravity + f);
   L0 += dt * (n + (s.p[0] - s.total_com).cross(f));
   // Link damping and link velocity limits act as external forces too (frame 0: torque about the

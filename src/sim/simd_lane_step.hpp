@@ -2043,12 +2043,10 @@ void LaneStep<A, K>::physx_start() {
   const V dt(p_.dt);
   const V* R0 = at(l_.start_R);
   const V* tau = &at(l_.tau)[p_.links[0].v_index];
-  V n[3], f[3], arm[3], nf[3];
-  for (int r = 0; r < 3; ++r) {
-    n[r] = R0[3 * r] * tau[0] + R0[3 * r + 1] * tau[1] + R0[3 * r + 2] * tau[2];
-    f[r] = R0[3 * r] * tau[3] + R0[3 * r + 1] * tau[4] + R0[3 * r + 2] * tau[5];
-    arm[r] = V(0.0) - C[r];  // the root's origin (frame 0's) less C
-  }
+  V n[3], f[3], arm[3], nf[3];  // the root's wrench in world axes (eq. PD-7)
+  link_motion_law::in_world_axes(joint_transform_law::rows(R0), tau, n);
+  link_motion_law::in_world_axes(joint_transform_law::rows(R0), tau + 3, f);
+  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - C[r];  // the root's origin (frame 0's) less C
   cross(arm, f, nf);
   for (int r = 0; r < 3; ++r) {
     P0[r] = P0[r] + dt * (M * parameter(gravity_entry(r)) + f[r]);
@@ -2070,45 +2068,27 @@ void LaneStep<A, K>::physx_start() {
 }
 
 // Link i's angular velocity and COM velocity (vel_w, vel_v) in the pose (R, pos, com) from the
-// root's world twist (w0, origin velocity v0) and the joint rates qd (link_bias.cpp's
-// world_velocity).
+// root's world twist (w0, origin velocity v0) and the joint rates qd: eq. PD-6 by
+// link_motion_law::world_velocity, as link_bias.cpp's world_velocity.
 template <class A, int K>
 void LaneStep<A, K>::world_velocity(const V* R, const V* pos, const V* com, const V* qd,
                                     const V* w0, const V* v0) {
+  using link_motion_law::JointRates;
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = p_.links[i];
-    V* wi = at(l_.vel_w + 3 * i);
-    V* vi = at(l_.vel_v + 3 * i);
-    V w[3], v[3], t[3];
-    if (k.parent < 0) {
-      for (int r = 0; r < 3; ++r) w[r] = w0[r], v[r] = v0[r];
-    } else {
-      const V* wp = at(l_.vel_w + 3 * k.parent);
-      const V* vp = at(l_.vel_v + 3 * k.parent);
-      V d[3];
-      for (int r = 0; r < 3; ++r) d[r] = pos[3 * i + r] - com[3 * k.parent + r];
-      cross(wp, d, t);
-      for (int r = 0; r < 3; ++r) w[r] = wp[r], v[r] = vp[r] + t[r];
-      if (one_dof(k)) {
-        const V* Ri = R + 9 * i;
-        const V x = qd[k.v_index];
-        for (int r = 0; r < 3; ++r) {
-          const V a = Ri[3 * r] * V(k.axis[0]) + Ri[3 * r + 1] * V(k.axis[1]) +
-                      Ri[3 * r + 2] * V(k.axis[2]);
-          if (k.type == 1) w[r] = w[r] + a * x;
-          else v[r] = v[r] + a * x;
-        }
-      } else if (k.type == 4) {  // R qd: its body-frame angular velocity
-        const V* Ri = R + 9 * i;
-        const V* x = qd + k.v_index;
-        for (int r = 0; r < 3; ++r)
-          w[r] = w[r] + ((Ri[3 * r] * x[0] + Ri[3 * r + 1] * x[1]) + Ri[3 * r + 2] * x[2]);
-      }
-    }
-    V d[3];
-    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - pos[3 * i + r];
-    cross(w, d, t);
-    for (int r = 0; r < 3; ++r) wi[r] = w[r], vi[r] = v[r] + t[r];
+    const bool root = k.parent < 0;
+    const JointRates joint = root ? JointRates::none
+                             : k.type == 1 ? JointRates::about_axis
+                             : k.type == 2 ? JointRates::along_axis
+                             : k.type == 4 ? JointRates::ball
+                                           : JointRates::none;
+    link_motion_law::world_velocity(root ? w0 : at(l_.vel_w + 3 * k.parent),
+                                    root ? v0 : at(l_.vel_v + 3 * k.parent),
+                                    root ? nullptr : com + 3 * k.parent,
+                                    joint_transform_law::rows(R + 9 * i), pos + 3 * i,
+                                    com + 3 * i, joint, k.axis,
+                                    joint == JointRates::none ? qd : qd + k.v_index,
+                                    at(l_.vel_w + 3 * i), at(l_.vel_v + 3 * i));
   }
 }
 
@@ -2227,11 +2207,9 @@ void LaneStep<A, K>::physx_free_momentum() {
   const V* t = at(l_.targets);
   const V* R0 = at(l_.start_R);
   V* qd = &at(l_.qd)[p_.links[0].v_index];
-  V w0[3], v0[3];
-  for (int r = 0; r < 3; ++r) {
-    w0[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
-    v0[r] = R0[3 * r] * qd[3] + R0[3 * r + 1] * qd[4] + R0[3 * r + 2] * qd[5];
-  }
+  V w0[3], v0[3];  // eq. PD-7
+  link_motion_law::in_world_axes(joint_transform_law::rows(R0), qd, w0);
+  link_motion_law::in_world_axes(joint_transform_law::rows(R0), qd + 3, v0);
   world_velocity(at(l_.start_R), at(l_.start_pos), at(l_.start_com), at(l_.qd), w0, v0);
   V P1[3], L1[3];
   momentum(at(l_.start_R), at(l_.start_com), true, true, t + 6, t[9], P1, L1);
@@ -2247,10 +2225,8 @@ void LaneStep<A, K>::physx_free_momentum() {
     w0[r] = w0[r] + dw[r];
     v0[r] = v0[r] + (dv[r] + turn[r]);
   }
-  for (int r = 0; r < 3; ++r) {
-    qd[r] = R0[r] * w0[0] + R0[3 + r] * w0[1] + R0[6 + r] * w0[2];
-    qd[3 + r] = R0[r] * v0[0] + R0[3 + r] * v0[1] + R0[6 + r] * v0[2];
-  }
+  link_motion_law::in_link_axes(joint_transform_law::rows(R0), w0, qd);
+  link_motion_law::in_link_axes(joint_transform_law::rows(R0), v0, qd + 3);
 }
 
 // A floating root's origin in the world from its q: r_T + E_T^T q (kinematics.cpp's X_J X_T).
@@ -2290,13 +2266,11 @@ void LaneStep<A, K>::physx_end_momentum() {
   const V* scom = at(l_.start_com);
   V* qd = &at(l_.qd)[k.v_index];
   const V* qp = &at(l_.qd_position)[k.v_index];
-  V w0[3], v0[3], pw[3], pv[3];
-  for (int r = 0; r < 3; ++r) {
-    w0[r] = sR[3 * r] * qd[0] + sR[3 * r + 1] * qd[1] + sR[3 * r + 2] * qd[2];
-    v0[r] = sR[3 * r] * qd[3] + sR[3 * r + 1] * qd[4] + sR[3 * r + 2] * qd[5];
-    pw[r] = sR[3 * r] * qp[0] + sR[3 * r + 1] * qp[1] + sR[3 * r + 2] * qp[2];
-    pv[r] = sR[3 * r] * qp[3] + sR[3 * r + 1] * qp[4] + sR[3 * r + 2] * qp[5];
-  }
+  V w0[3], v0[3], pw[3], pv[3];  // eq. PD-7
+  link_motion_law::in_world_axes(joint_transform_law::rows(sR), qd, w0);
+  link_motion_law::in_world_axes(joint_transform_law::rows(sR), qd + 3, v0);
+  link_motion_law::in_world_axes(joint_transform_law::rows(sR), qp, pw);
+  link_motion_law::in_world_axes(joint_transform_law::rows(sR), qp + 3, pv);
   V PT[3], LT[3], Ppos[3], unused[3];
   world_velocity(sR, at(l_.start_pos), scom, at(l_.qd), w0, v0);
   momentum(sR, scom, true, true, t + 6, M, PT, LT);
@@ -2350,10 +2324,8 @@ void LaneStep<A, K>::physx_end_momentum() {
                        : (V(k.E[3 * a]) * shift[0] + V(k.E[3 * a + 1]) * shift[1]) +
                              V(k.E[3 * a + 2]) * shift[2]);
   const V* nR = at(l_.now_R);
-  for (int r = 0; r < 3; ++r) {
-    qd[r] = nR[r] * w0[0] + nR[3 + r] * w0[1] + nR[6 + r] * w0[2];
-    qd[3 + r] = nR[r] * vo[0] + nR[3 + r] * vo[1] + nR[6 + r] * vo[2];
-  }
+  link_motion_law::in_link_axes(joint_transform_law::rows(nR), w0, qd);
+  link_motion_law::in_link_axes(joint_transform_law::rows(nR), vo, qd + 3);
 }
 
 // A spherical joint's rotation R = P R(q), P its joint frame's axes, R(q) its normalised

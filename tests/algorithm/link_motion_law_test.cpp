@@ -1,15 +1,20 @@
 // link_motion_law for double against a second form: the 6 x 6 spatial inertia in frame 0 built
 // from its definition with Eigen's products, and the spatial cross products as 6 x 6 matrices
 // crm(v), crf(v) = -crm(v)^T (docs/math/unit_response.md, eq. P1-1 to P1-5), and a body's motion
-// given in its own frame (P1-6, P1-7).
+// given in its own frame (P1-6, P1-7); compat physx's world velocities (physx_departures.md, PD-6,
+// PD-7) against frame_velocity of the same q, qd (the link frames' velocities by the forward
+// kinematics' spatial recursion).
 #include "featherdrive/algorithm/link_motion_law.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "featherdrive/algorithm/frame_kinematics.hpp"
+#include "featherdrive/algorithm/kinematics.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/types.hpp"
+#include "support/models.hpp"
 
 namespace featherdrive {
 namespace {
@@ -203,6 +208,65 @@ TEST(LinkMotionLaw, CentreOfMassVelocityAndLinkAxesAsTheLinkFrameForms) {  // P1
       for (int k = 0; k < 3; ++k) Rrows[3 * r + k] = b.R(r, k);
     link_motion_law::in_link_axes(joint_transform_law::rows(Rrows), w.data(), local_rows);
     for (int r = 0; r < 3; ++r) EXPECT_EQ(local_rows[r], local[r]);
+  }
+}
+
+// PD-6 link by link from the root's twist in world axes (PD-7) against the angular velocity and
+// the centre of mass's velocity that frame_velocity gives in world axes, on random trees of
+// every joint type, fixed and floating; the lanes' row-major R gives the same bits.
+TEST(LinkMotionLaw, WorldVelocityAsFrameVelocity) {
+  using link_motion_law::JointRates;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    const bool floating = seed % 2 == 0;
+    const auto model = test::make_random_tree(seed, 9, floating, true);
+    std::mt19937 rng(seed);
+    const VecX q = test::random_configuration(*model, rng);
+    const VecX qd = test::random_vector(model->nv, rng, 2.0);
+    Data data(*model);
+    forward_kinematics(*model, data, q, qd);
+    const int n = model->num_links();
+    std::vector<Vec3> w(n), v(n), c(n), w_rows(n), v_rows(n);
+    for (int i = 0; i < n; ++i)
+      c[i] = data.world_position[i] + data.world_rotation[i] * model->links[i].com;
+    Vec3 w0 = Vec3::Zero(), v0 = Vec3::Zero();
+    const Link& root = model->links[0];
+    if (floating) {
+      link_motion_law::in_world_axes(data.world_rotation[0], &qd[root.v_index], w0.data());
+      link_motion_law::in_world_axes(data.world_rotation[0], &qd[root.v_index + 3], v0.data());
+    }
+    for (int i = 0; i < n; ++i) {
+      const Link& link = model->links[i];
+      const int p = link.parent;
+      const JointRates joint = i == 0 ? JointRates::none
+                               : link.joint_type == JointType::revolute  ? JointRates::about_axis
+                               : link.joint_type == JointType::prismatic ? JointRates::along_axis
+                               : link.joint_type == JointType::spherical ? JointRates::ball
+                                                                         : JointRates::none;
+      const double* x = joint == JointRates::none ? qd.data() : &qd[link.v_index];
+      const Mat3& R = data.world_rotation[i];
+      link_motion_law::world_velocity(i == 0 ? w0.data() : w[p].data(),
+                                      i == 0 ? v0.data() : v[p].data(),
+                                      i == 0 ? nullptr : c[p].data(), R,
+                                      data.world_position[i].data(), c[i].data(), joint,
+                                      link.axis.data(), x, w[i].data(), v[i].data());
+      double Rrows[9];
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) Rrows[3 * r + k] = R(r, k);
+      link_motion_law::world_velocity(i == 0 ? w0.data() : w_rows[p].data(),
+                                      i == 0 ? v0.data() : v_rows[p].data(),
+                                      i == 0 ? nullptr : c[p].data(),
+                                      joint_transform_law::rows(Rrows),
+                                      data.world_position[i].data(), c[i].data(), joint,
+                                      link.axis.data(), x, w_rows[i].data(), v_rows[i].data());
+      const Vec6 expected =
+          frame_velocity(*model, data, i, link.com, ReferenceFrame::world_aligned);
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_NEAR(w[i][r], expected[r], 1e-12) << seed << " link " << i << " " << r;
+        EXPECT_NEAR(v[i][r], expected[3 + r], 1e-12) << seed << " link " << i << " " << r;
+        EXPECT_EQ(w_rows[i][r], w[i][r]);
+        EXPECT_EQ(v_rows[i][r], v[i][r]);
+      }
+    }
   }
 }
 
