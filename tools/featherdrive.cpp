@@ -319,6 +319,21 @@ int simulate(const SimulateArgs& args) {
   }
   if (sim.contact_options().self_collision)
     std::printf("  self-collision: on (shapes on links that are not parent and child)\n");
+  // Each row kind's dofs, their fields and the last step's force (Simulation::row_force).
+  for (const RowKindInfo& kind : row_kinds()) {
+    std::string dofs;
+    for (int d = 0; d < model.nv; ++d) {
+      const std::vector<double> values = sim.row_parameters(kind.name, d);
+      if (!kind.active(values)) continue;
+      dofs += "\n    " + model.dof_names[d] + ":";
+      for (size_t j = 0; j < values.size(); ++j)
+        dofs += " " + std::string(kind.fields[j].name) + " " + format_double(values[j]);
+      char force[32];
+      std::snprintf(force, sizeof force, "%.6g", sim.row_force(kind.name)[d]);
+      dofs += std::string(", last step's force ") + force;
+    }
+    if (!dofs.empty()) std::printf("  %s:%s\n", std::string(kind.name).c_str(), dofs.c_str());
+  }
   if (!model.shapes.empty())
     std::printf("  collision shapes (%zu):\n%s", model.shapes.size(),
                 describe_shapes(model, "    ").c_str());

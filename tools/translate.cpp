@@ -135,6 +135,10 @@ int translate(const TranslateArgs& args) {
     const double literal_match = map_distance(physx, literal).step_response;
     std::string verdict = t.exact ? "exact" : t.note;
     if (!stable(literal)) verdict += "; literal copy unstable in MuJoCo";
+    // The 1-dof map sees the drive alone: a row kind beside it (the joint spring) is not in it.
+    for (const RowKindInfo& kind : row_kinds())
+      if (kind.active(sim.row_parameters(kind.name, d.dof)))
+        verdict += "; the drive alone: its " + std::string(kind.name) + " is not in the map (note)";
     std::printf("  %-16s %10.4g %10.4g %11.4g %11.4g %11.4g %11.4g %10.2e %10.2e  %s\n",
                 d.joint.c_str(), d.effective_inertia, mj.kp * o.dt * o.dt / d.effective_inertia,
                 mj.kp, mj.damping, mj.armature, mj.ctrl_velocity_gain, t.distance.step_response,

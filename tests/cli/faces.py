@@ -173,6 +173,28 @@ def implicit_actuator(cli, source, out_dir):
               f"f {data['f:slide'][k]} vs {m * (v - v0) / h}")
 
 
+def joint_spring(cli, source, out_dir):
+    """The summary names the spring with its fields and reports the last step's force, which is
+    the spring law at the step's end state, -k (q - x_s) - c qd (docs/math/joint_constraints.md,
+    JS1; PGS without velocity iterations, the spring the slider's only row), from the CSV."""
+    scene = os.path.join(out_dir, "faces_spring.yaml")
+    with open(scene, "w") as f:
+        f.write("model: " + os.path.join(source, "examples", "slider.urdf") + "\nsteps: 40\n"
+                "solver: {type: pgs, position_iterations: 4, velocity_iterations: 0}\n"
+                "joints: {slide: {joint_spring: {stiffness: 300, damping: 2, reference: 0.2}}}\n")
+    out = os.path.join(out_dir, "faces_spring.csv")
+    r = run(cli, "simulate", scene, "--out", out)
+    m = re.search(r"^\s+slide: stiffness 300 damping 2 reference 0.2, last step's force (\S+)$",
+                  r.stdout, re.M)
+    check(r.returncode == 0 and m is not None, "spring: the summary names it", r)
+    if m is None:
+        return
+    columns = read_csv(out)
+    expected = -300 * (columns["q:slide"][-1] - 0.2) - 2 * columns["qd:slide"][-1]
+    check(abs(float(m.group(1)) - expected) <= 1e-5 * max(1.0, abs(expected)),
+          f"spring: last force {m.group(1)} against -k (q - x_s) - c qd = {expected}", r)
+
+
 def convergence(cli, source):
     scene = os.path.join(source, "examples", "arm7_pgs.yaml")
     r = run(cli, "simulate", scene)
@@ -203,6 +225,7 @@ def main():
     shares(cli, source, out_dir)
     convergence(cli, source)
     implicit_actuator(cli, source, out_dir)
+    joint_spring(cli, source, out_dir)
     r = run(cli, "--version")
     check(r.returncode == 0 and r.stdout.startswith("featherdrive "), "--version", r)
     r = run(cli, "simulate", "--help")
@@ -212,7 +235,7 @@ def main():
         print("FAIL:\n" + "\n".join(failures))
         sys.exit(1)
     print("ok: summary = CSV on a ball joint and a floating base, fit reads simulate's log, "
-          "shares at bounds, convergence warning, an implicit actuator")
+          "shares at bounds, convergence warning, an implicit actuator, a joint spring")
 
 
 if __name__ == "__main__":

@@ -209,6 +209,58 @@ TEST(JointSpring, LanesAsAlone) {
     }
 }
 
+// A floating tree with spherical joints, a mimic pair and springs of its own in every environment:
+// the same bits, q, qd and the springs' forces, at every SIMD width the CPU has, in calls of any
+// size (docs/simd_batch.md: an environment's bits do not depend on the batch's layout).
+TEST(JointSpring, SameBitsAtEveryWidth) {
+  std::shared_ptr<const Model> model;
+  for (unsigned seed = 1; !model; ++seed) {
+    auto m = test::make_random_tree(seed, 9, true, true, 0.01);
+    int balls = 0, one_dof = 0;
+    for (const Link& l : m->links) {
+      balls += l.joint_type == JointType::spherical;
+      one_dof += l.nv == 1;
+    }
+    if (balls >= 1 && one_dof >= 2) model = m;
+  }
+  Simulation sim(model, test::lane_test_options(SolverType::pgs));
+  std::vector<int> one_dof, sprung;
+  for (int d = 0; d < model->nv; ++d) {
+    if (!dof_has_rows(*model, d)) continue;
+    sim.set_drive(d, Drive{DriveType::force, 200.0, 15.0, kInf, 0.2, 0.0});
+    sprung.push_back(d);
+    if (model->links[model->dof_link[d]].nv == 1) one_dof.push_back(d);
+  }
+  sim.set_mimic_joints({MimicJoint{one_dof[1], one_dof[0], -0.5, 0.01}});
+  sim.set_qd(VecX::Constant(model->nv, 0.3));
+  const int n = 11;
+  RowMatrix k = RowMatrix::Zero(n, model->nv);
+  RowMatrix reference_position = RowMatrix::Zero(1, model->nv);  // a floating root's dofs: 0
+  for (int d : sprung) reference_position(0, d) = -0.1;
+  for (int e = 0; e < n; ++e)
+    for (int d : sprung) k(e, d) = e % 3 == 0 ? 0.0 : 50.0 + 20.0 * e + d;  // some without
+  std::vector<int> all(n);
+  for (int e = 0; e < n; ++e) all[static_cast<size_t>(e)] = e;
+  auto run = [&](SimdIsa isa, int first_call) {
+    Batch batch(sim, n);
+    batch.set_isa(isa);
+    batch.set_row_parameter("joint_spring", "stiffness", all, k);
+    batch.set_row_parameter("joint_spring", "reference", all, reference_position);
+    EXPECT_EQ(batch.step_path(), std::string(to_string(isa)) + " lanes");
+    batch.step(first_call);
+    for (int s = first_call; s < 100; ++s) batch.step(1);
+    RowMatrix out(n, model->nq + 2 * model->nv);
+    out << batch.q(), batch.qd(), batch.row_force("joint_spring");
+    return out;
+  };
+  const RowMatrix reference = run(SimdIsa::sse2, 100);
+  EXPECT_NE(reference.rightCols(model->nv).norm(), 0.0);
+  for (SimdIsa isa : available_simd_isas())
+    for (int first_call : {100, 37})
+      EXPECT_TRUE(test::same_bits(run(isa, first_call), reference))
+          << to_string(isa) << ", calls after " << first_call << " steps";
+}
+
 // The guard's energy test counts the spring's work and stored energy (JS4): a stiff implicit
 // spring never creates energy, so the guard redoes no step of a pendulum held by one (started
 // close enough to its reference that no step moves more than max_joint_step).
