@@ -205,12 +205,8 @@ void featherdrive::python::bind_names(py::module_& m) {
                 std::vector<double> values = j.sim->row_parameters(kind, d);
                 for (const auto& [name, value] : fields) {
                   const std::string field = py::str(name).cast<std::string>();
-                  if (py::isinstance<py::bool_>(value) || py::isinstance<py::str>(value))
-                    throw std::invalid_argument(kind + "." + field + " = " +
-                                                py::repr(value).cast<std::string>() +
-                                                " is not a number");
                   values[static_cast<size_t>(row_field_column(k, field) - k.offset)] =
-                      value.cast<double>();
+                      row_field_value(value, kind + "." + field);
                 }
                 check_row_parameters(j.sim->model(), d, k, values);
                 next.push_back(values);

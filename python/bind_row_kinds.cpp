@@ -23,16 +23,6 @@ py::list row_kind_list() {
   return kinds;
 }
 
-// A field's value: a real number (a bool or a string is refused, naming the field).
-double field_value(py::handle value, const std::string& what) {
-  if (py::isinstance<py::bool_>(value) ||
-      !(py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value) ||
-        py::hasattr(value, "__float__")))
-    throw std::invalid_argument(what + " = " + py::repr(value).cast<std::string>() +
-                                " is not a number");
-  return value.cast<double>();
-}
-
 }  // namespace
 
 void featherdrive::python::bind_row_kinds(py::module_& m) {
@@ -50,7 +40,8 @@ void featherdrive::python::bind_row_kinds(py::module_& m) {
              for (const auto& [name, value] : fields) {
                const std::string field = py::str(name).cast<std::string>();
                const int column = row_field_column(k, field);
-               values[static_cast<size_t>(column - k.offset)] = field_value(value, kind + "." + field);
+               values[static_cast<size_t>(column - k.offset)] =
+                   row_field_value(value, kind + "." + field);
              }
              s.set_row_parameters(kind, dof, values);
            });

@@ -635,6 +635,17 @@ auto on_joint(const Simulation& s, py::handle joint, F f) {
   return locked(s, [&] { return f(dof_of(s.model(), j)); });
 }
 
+/// A row kind's field value given by keyword: a real number (a bool or a string is refused with
+/// std::invalid_argument naming `what`, the kind and field).
+inline double row_field_value(py::handle value, const std::string& what) {
+  if (py::isinstance<py::bool_>(value) ||
+      !(py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value) ||
+        py::hasattr(value, "__float__")))
+    throw std::invalid_argument(what + " = " + py::repr(value).cast<std::string>() +
+                                " is not a number");
+  return value.cast<double>();
+}
+
 inline std::string fmt(double v) {
   std::ostringstream s;
   s.precision(17);

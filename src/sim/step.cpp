@@ -341,9 +341,7 @@ void Stepper::setup_row_kinds(DofRows& rows, int d, const RowInputs<double>& in)
   rows.kinds = 0;
   RowKinds::for_each([&]<class E>(E, int field, int slot) {
     using K = typename E::Kind;
-    std::array<double, K::fields.size()> values;
-    for (size_t j = 0; j < values.size(); ++j)
-      values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+    const auto values = row_values<K>(settings_, d, field);
     if (!K::active(values)) return;
     rows.kinds |= 1u << E::index;
     double* row = rows.kind_slots.data() + slot;

@@ -176,9 +176,7 @@ double Stepper::row_kind_bracket(int d, double q0, double dq, double h) const {
   double bracket = 0.0;
   RowKinds::for_each([&]<class E>(E, int field, int) {
     using K = typename E::Kind;
-    std::array<double, K::fields.size()> values;
-    for (size_t j = 0; j < values.size(); ++j)
-      values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+    const auto values = row_values<K>(settings_, d, field);
     if (K::active(values))
       bracket += K::guard_bracket(values, r.kind_impulse[E::index], q0, dq, h, credit);
   });
@@ -201,9 +199,7 @@ double Stepper::damper_power() const {
     }
     RowKinds::for_each([&]<class E>(E, int field, int) {
       using K = typename E::Kind;
-      std::array<double, K::fields.size()> values;
-      for (size_t j = 0; j < values.size(); ++j)
-        values[j] = settings_.row_parameters(d, field + static_cast<Eigen::Index>(j));
+      const auto values = row_values<K>(settings_, d, field);
       if (K::active(values)) c += K::damping_of(values);
     });
     power += c * ws_.qd[d] * ws_.qd[d];

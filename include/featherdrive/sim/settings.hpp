@@ -4,6 +4,7 @@
 // setters change one field each and throw the messages of the checks below.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <string>
 #include <vector>
@@ -107,6 +108,15 @@ struct Settings {
   /// not the model's. A setting of a dof or link that no setter can change must keep its default.
   void validate(const Model& model) const;
 };
+
+/// Row kind K's fields on dof d (its columns of row_parameters from `field`, RowKindList's offset).
+template <class K>
+std::array<double, K::fields.size()> row_values(const Settings& settings, int d, int field) {
+  std::array<double, K::fields.size()> values;
+  for (size_t j = 0; j < values.size(); ++j)
+    values[j] = settings.row_parameters(d, field + static_cast<Eigen::Index>(j));
+  return values;
+}
 
 // The checks of one setting, shared by Settings::validate and the Simulation setters: each throws
 // std::invalid_argument naming the joint (or link), the field and the value.
