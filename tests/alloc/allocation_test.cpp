@@ -147,6 +147,10 @@ void constrain_every_joint(Simulation& sim, std::mt19937& rng) {
       sim.set_max_joint_velocity(d, 3.0);
       if (d % 2 == 0) sim.set_actuator_envelope(d, ActuatorEnvelope{50.0, 10.0, 1.0, 0.1});
       if (d % 3 == 1) sim.set_drive_delay(d, 1 + d % 4);  // rings sized here, not in the step
+      if (d % 2 == 1) {  // a row kind (constraint/row_kinds.hpp)
+        const double spring[] = {40.0, 1.0, 0.1};
+        sim.set_row_parameters("joint_spring", d, spring);
+      }
       if (l.joint_type == JointType::revolute && d % 2 == 1)
         sim.set_revolute_wrap(d, RevoluteWrap::wrapped);
     }
@@ -352,6 +356,8 @@ TEST(BatchAllocations, LanesNoneAtEveryWidth) {
     for (int a = 0; a < (ball ? 3 : 1); ++a) {
       prototype.set_drive(l.v_index + a, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
       prototype.set_joint_limits(l.v_index + a, -0.3, 0.4);
+      const double spring[] = {40.0, 1.0, 0.1};  // a row kind
+      if (a == 0) prototype.set_row_parameters("joint_spring", l.v_index + a, spring);
     }
   }
   for (SimdIsa isa : available_simd_isas())
