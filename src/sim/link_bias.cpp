@@ -77,28 +77,6 @@ void world_velocity(const Model& model, const WorldPose& pose, const VecX& qd, c
   }
 }
 
-void momentum(const Model& model, const WorldPose& pose, const WorldVelocity& vel,
-              const std::vector<Vec3>* bias_w, const std::vector<Vec3>* bias_v, Vec3& linear,
-              Vec3& angular) {
-  const int n = model.num_links();
-  linear.setZero();
-  double mass = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double m = model.links[i].mass;
-    linear += m * (bias_v ? Vec3(vel.v[i] + (*bias_v)[i]) : vel.v[i]);
-    mass += m;
-  }
-  const Vec3 vcom = mass > 0.0 ? Vec3(linear / mass) : Vec3::Zero();
-  angular.setZero();
-  for (int i = 0; i < n; ++i) {
-    const Link& link = model.links[i];
-    const Vec3 w = bias_w ? Vec3(vel.w[i] + (*bias_w)[i]) : vel.w[i];
-    const Vec3 v = bias_v ? Vec3(vel.v[i] + (*bias_v)[i]) : vel.v[i];
-    const Mat3 I = pose.R[i] * link.inertia_com * pose.R[i].transpose();
-    angular += I * w + link.mass * (pose.com[i] - pose.total_com).cross(v - vcom);
-  }
-}
-
 void compute_link_bias(const Model& model, const Data& data, const VecX& qd, double dt,
                        PhysxDepartures& dep) {
   const int n = model.num_links();

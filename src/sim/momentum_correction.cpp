@@ -9,31 +9,57 @@
 
 #include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/sim/integration_law.hpp"
+#include "featherdrive/sim/momentum_law.hpp"
 
 namespace featherdrive {
 namespace {
 
-// Inertia of all links about the articulation's COM, world frame.
-Mat3 compound_inertia(const Model& model, const WorldPose& pose) {
-  Mat3 I = Mat3::Zero();
-  for (int i = 0; i < model.num_links(); ++i) {
-    const Link& link = model.links[i];
-    const Vec3 r = pose.com[i] - pose.total_com;
-    I += pose.R[i] * link.inertia_com * pose.R[i].transpose() +
-         link.mass * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+// The links of a pose (and, for momentum, their velocities plus the bias where given) as
+// momentum_law reads them.
+struct PoseLinks {
+  const Model& model;
+  const WorldPose& pose;
+  const WorldVelocity* vel = nullptr;
+  const std::vector<Vec3>* bias_w = nullptr;
+  const std::vector<Vec3>* bias_v = nullptr;
+
+  double mass(int i) const { return model.links[i].mass; }
+  const double* com(int i) const { return pose.com[i].data(); }
+  void world_inertia(int i, double* I) const {
+    momentum_law::world_inertia(pose.R[i], model.links[i].inertia_com, I);
   }
-  return I;
+  void world_inertia_times(int i, const double* w, double* Iw) const {
+    momentum_law::world_inertia_times(pose.R[i], model.links[i].inertia_com, w, Iw);
+  }
+  void velocity(int i, double* w, double* v) const {
+    for (int r = 0; r < 3; ++r) {
+      w[r] = bias_w ? vel->w[i][r] + (*bias_w)[i][r] : vel->w[i][r];
+      v[r] = bias_v ? vel->v[i][r] + (*bias_v)[i][r] : vel->v[i][r];
+    }
+  }
+};
+
+// Linear momentum and angular momentum about pose.total_com of velocities vel + (bw, bv) (eq.
+// PD-10); angular null: the linear only.
+void momentum(const Model& model, const WorldPose& pose, const WorldVelocity& vel,
+              const std::vector<Vec3>* bias_w, const std::vector<Vec3>* bias_v, double mass,
+              Vec3& linear, Vec3* angular) {
+  const PoseLinks links{model, pose, &vel, bias_w, bias_v};
+  momentum_law::momentum(links, model.num_links(), pose.total_com.data(), mass, linear.data(),
+                         angular ? angular->data() : nullptr);
 }
 
 // The rigid rotation dw about the COM that scales |L| by `ratio`, and the uniform linear velocity
 // dv that then makes the linear momentum `target` (eq. PD-4, PD-5). P and L: the current momenta.
 void rigid_correction(const Model& model, const WorldPose& pose, const Vec3& P, const Vec3& L,
                       double ratio, const Vec3& target, double mass, Vec3& dw, Vec3& dv) {
-  dw = compound_inertia(model, pose).inverse() * (L * (ratio - 1.0));
-  Vec3 P1 = P;
-  for (int i = 0; i < model.num_links(); ++i)
-    P1 += model.links[i].mass * dw.cross(pose.com[i] - pose.total_com);
-  dv = (target - P1) / mass;
+  const PoseLinks links{model, pose};
+  const int n = model.num_links();
+  const double* C = pose.total_com.data();
+  double Iinv[9];
+  momentum_law::compound_inverse(links, n, C, Iinv);
+  momentum_law::rigid_correction(links, n, Iinv, C, mass, P.data(), L.data(), ratio,
+                                 target.data(), dw.data(), dv.data());
 }
 
 // Writes a root world twist (angular velocity, origin velocity) into qd in the frame R (eq. PD-7
@@ -55,33 +81,31 @@ void correct_free_velocity_momentum(const Model& model, const Data& data, const 
   // Target: the momentum before the velocity-product terms, i.e. the start momentum plus dt times
   // the external wrench (gravity at the COM; a wrench applied on the root's dofs).
   Vec3 P0, L0;
-  momentum(model, s, dep.vel, nullptr, nullptr, P0, L0);
+  momentum(model, s, dep.vel, nullptr, nullptr, M, P0, &L0);
   Vec3 n, f;  // the root's wrench in world axes (eq. PD-7), as the lanes' physx_start
   link_motion_law::in_world_axes(s.R[0], &applied_force[root.v_index], n.data());
   link_motion_law::in_world_axes(s.R[0], &applied_force[root.v_index + 3], f.data());
-  P0 += dt * (M * model.gravity + f);
-  L0 += dt * (n + (s.p[0] - s.total_com).cross(f));
+  momentum_law::add_root_wrench(dt, M, model.gravity.data(), n.data(), f.data(), s.p[0].data(),
+                                s.total_com.data(), P0.data(), L0.data());
   // Link damping and link velocity limits act as external forces too (frame 0: torque about the
   // root's origin).
   if (link_force) {
     const Vec3 com = s.total_com - data.world_position[0];
-    for (const Vec6& w : *link_force) {
-      P0 += dt * w.tail<3>();
-      L0 += dt * (w.head<3>() - com.cross(w.tail<3>()));
-    }
+    for (const Vec6& w : *link_force)
+      momentum_law::add_link_wrench(dt, w.data(), com.data(), P0.data(), L0.data());
   }
   // The free velocity as PhysX's links carry it: biased.
   Vec3 w0, v0;
   root_world_twist(model, s, qd, w0, v0);
   world_velocity(model, s, qd, w0, v0, dep.scratch);
   Vec3 P1, L1;
-  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, P1, L1);
+  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, M, P1, &L1);
   const double l1 = L1.norm();
   const double ratio = l1 == 0.0 ? 1.0 : L0.norm() / l1;
   Vec3 dw, dv;
   rigid_correction(model, s, P1, L1, ratio, P0, M, dw, dv);
-  w0 += dw;
-  v0 += dv + dw.cross(s.p[0] - s.total_com);
+  momentum_law::move_root(dw.data(), dv.data(), s.p[0].data(), s.total_com.data(), w0.data(),
+                          v0.data());
   store_root_twist(model, s.R[0], w0, v0, qd);
 }
 
@@ -111,33 +135,36 @@ void correct_end_of_step_momentum(const Model& model, const Data& data, double d
   const double M = dep.total_mass;
   // Targets, from the solver's biased velocities in the start pose: the final ones (linear
   // momentum and |angular momentum|) and those the positions moved with (where the COM goes).
-  Vec3 w0, v0, P_target, L_target, P_position, unused;
+  Vec3 w0, v0, P_target, L_target, P_position;
   root_world_twist(model, s, qd, w0, v0);
   world_velocity(model, s, qd, w0, v0, dep.scratch);
-  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, P_target, L_target);
+  momentum(model, s, dep.scratch, &dep.bias_w, &dep.bias_v, M, P_target, &L_target);
   {
     Vec3 pw, pv;
     root_world_twist(model, s, dep.qd_position, pw, pv);
     world_velocity(model, s, dep.qd_position, pw, pv, dep.scratch);
-    momentum(model, s, dep.scratch, nullptr, &dep.bias_v, P_position, unused);
+    momentum(model, s, dep.scratch, nullptr, &dep.bias_v, M, P_position, nullptr);
   }
   // Velocities in the new pose: the root keeps its world angular velocity and COM velocity.
   world_pose(model, data, q, dep.now);
   const WorldPose& n = dep.now;
-  const Vec3 root_com_velocity = v0 + w0.cross(s.com[0] - s.p[0]);
-  Vec3 v_origin = root_com_velocity - w0.cross(n.com[0] - n.p[0]);
+  Vec3 v_origin;
+  momentum_law::keep_root_com_velocity(w0.data(), v0.data(), s.com[0].data(), s.p[0].data(),
+                                       n.com[0].data(), n.p[0].data(), v_origin.data());
   world_velocity(model, n, qd, w0, v_origin, dep.scratch);
   Vec3 P1, L1;
-  momentum(model, n, dep.scratch, nullptr, nullptr, P1, L1);
+  momentum(model, n, dep.scratch, nullptr, nullptr, M, P1, &L1);
   const double l1 = L1.norm();
   const double ratio = l1 == 0.0 ? 0.0 : L_target.norm() / l1;
   Vec3 dw, dv;
   rigid_correction(model, n, P1, L1, ratio, P_target, M, dw, dv);
-  w0 += dw;
-  v_origin += dv + dw.cross(n.p[0] - n.total_com);
+  momentum_law::move_root(dw.data(), dv.data(), n.p[0].data(), n.total_com.data(), w0.data(),
+                          v_origin.data());
   // The COM where the position-iteration momentum puts it: a shift of every link.
-  const Vec3 shift = s.total_com + P_position * (dt / M) - n.total_com;
-  q.segment<3>(root.q_index) += root.tree_transform.E * shift;
+  double shift[3], joint_shift[3];
+  momentum_law::com_shift(s.total_com.data(), P_position.data(), dt / M, n.total_com.data(), shift);
+  link_motion_law::in_world_axes(root.tree_transform.E, shift, joint_shift);
+  for (int r = 0; r < 3; ++r) q[root.q_index + r] += joint_shift[r];
   store_root_twist(model, n.R[0], w0, v_origin, qd);
 }
 

@@ -32,6 +32,7 @@
 #include "featherdrive/sim/integration_law.hpp"
 #include "featherdrive/sim/link_bias_law.hpp"
 #include "featherdrive/sim/link_laws.hpp"
+#include "featherdrive/sim/momentum_law.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
 #include "featherdrive/solver/sweep_law.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
@@ -337,12 +338,33 @@ class LaneStep {
   void physx_end_momentum();
   void world_velocity(const V* R, const V* pos, const V* com, const V* qd, const V* w0,
                       const V* v0);
-  void momentum(const V* R, const V* com, bool bias_w, bool bias_v, const V* C, const V& M, V* P,
-                V* L) const;
-  void compound_inverse(const V* R, const V* com, const V* C, V* out) const;
+  void inertia_com(int i, V* Ic) const;  // link i's about its centre of mass, its axes
   void world_inertia(int i, const V* Ri, V* I) const;  // (R Ic) R^T of link i at rotation Ri
-  void rigid_correction(const V* Iinv, const V* com, const V* C, const V& M, const V* P1,
-                        const V* L1, const V& ratio, const V* target, V* dw, V* dv) const;
+  // momentum_law's view of the links in the pose (R, com, frame 0's origin) with the velocities
+  // vel_w, vel_v, plus the link bias where asked.
+  struct PoseLinks {
+    const LaneStep& step;
+    const V* R;
+    const V* c;
+    bool bias_w = false, bias_v = false;
+    V mass(int i) const { return step.link_parameter_pack(i, LinkParameter::mass); }
+    const V* com(int i) const { return c + 3 * i; }
+    void world_inertia(int i, V* I) const { step.world_inertia(i, R + 9 * i, I); }
+    void world_inertia_times(int i, const V* w, V* Iw) const {
+      V Ic[9];
+      step.inertia_com(i, Ic);
+      momentum_law::world_inertia_times(joint_transform_law::rows(R + 9 * i),
+                                        joint_transform_law::rows(Ic), w, Iw);
+    }
+    void velocity(int i, V* w, V* v) const {
+      const V* s = step.s_;
+      const Layout& l = step.l_;
+      for (int r = 0; r < 3; ++r) {
+        w[r] = bias_w ? s[l.vel_w + 3 * i + r] + s[l.bias_w + 3 * i + r] : s[l.vel_w + 3 * i + r];
+        v[r] = bias_v ? s[l.vel_v + 3 * i + r] + s[l.bias_v + 3 * i + r] : s[l.vel_v + 3 * i + r];
+      }
+    }
+  };
   // Quaternions (w x y z) by spatial/quaternion_law.hpp, as Simulation's.
   static void rotate(const V* q, const V* v, V* out) { quaternion_law::rotate(q, v, out); }
   static void unit_quaternion(const V* q, V* out) { quaternion_law::unit(q, out); }
@@ -2010,15 +2032,15 @@ void LaneStep<A, K>::end_classical_root() {
   const V* Rq = at(l_.root_Rq);
   V* v = &at(l_.qd)[k.v_index + 3];
   V t[3];
-  for (int r = 0; r < 3; ++r) t[r] = Rq[3 * r] * v[0] + Rq[3 * r + 1] * v[1] + Rq[3 * r + 2] * v[2];
-  for (int r = 0; r < 3; ++r) v[r] = R1[r] * t[0] + R1[3 + r] * t[1] + R1[6 + r] * t[2];
+  link_motion_law::in_world_axes(joint_transform_law::rows(Rq), v, t);
+  link_motion_law::in_link_axes(joint_transform_law::rows(R1), t, v);
 }
 
 // compat physx, a floating root, after the kinematics and the link bias: the step's start poses
 // kept (the response takes their room), the centre of mass C and total mass M, and the free
 // velocity's momentum targets: the start momentum plus dt times the external wrench (gravity at
-// C, the force applied on the root's dofs, link damping) (momentum_correction.cpp,
-// physx_departures.md PD-4, PD-5).
+// C, the force applied on the root's dofs, link damping) (momentum_law, as
+// momentum_correction.cpp; physx_departures.md PD-4, PD-5, PD-8 to PD-10).
 template <class A, int K>
 void LaneStep<A, K>::physx_start() {
   const int L = p_.num_links;
@@ -2039,32 +2061,23 @@ void LaneStep<A, K>::physx_start() {
     }
   }
   V P0[3], L0[3];
-  momentum(at(l_.start_R), at(l_.start_com), false, false, C, M, P0, L0);
+  const PoseLinks start{*this, at(l_.start_R), at(l_.start_com)};
+  momentum_law::momentum(start, L, C, M, P0, L0);
   const V dt(p_.dt);
   const V* R0 = at(l_.start_R);
   const V* tau = &at(l_.tau)[p_.links[0].v_index];
-  V n[3], f[3], arm[3], nf[3];  // the root's wrench in world axes (eq. PD-7)
+  V n[3], f[3];  // the root's wrench in world axes (eq. PD-7), at frame 0's origin
   link_motion_law::in_world_axes(joint_transform_law::rows(R0), tau, n);
   link_motion_law::in_world_axes(joint_transform_law::rows(R0), tau + 3, f);
-  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - C[r];  // the root's origin (frame 0's) less C
-  cross(arm, f, nf);
-  for (int r = 0; r < 3; ++r) {
-    P0[r] = P0[r] + dt * (M * parameter(gravity_entry(r)) + f[r]);
-    L0[r] = L0[r] + dt * (n[r] + nf[r]);
-  }
+  const V g[3] = {parameter(gravity_entry(0)), parameter(gravity_entry(1)),
+                  parameter(gravity_entry(2))};
+  const V origin[3] = {V(0.0), V(0.0), V(0.0)};
+  momentum_law::add_root_wrench(dt, M, g, n, f, origin, C, P0, L0);
   if (p_.any_link_damping)  // [torque about frame 0's origin; force]
-    for (int i = 0; i < L; ++i) {
-      const V* F = at(l_.link_force + 6 * i);
-      V cf[3];
-      cross(C, F + 3, cf);
-      for (int r = 0; r < 3; ++r) {
-        P0[r] = P0[r] + dt * F[3 + r];
-        L0[r] = L0[r] + dt * (F[r] - cf[r]);
-      }
-    }
+    for (int i = 0; i < L; ++i) momentum_law::add_link_wrench(dt, at(l_.link_force + 6 * i), C, P0, L0);
   for (int r = 0; r < 3; ++r) t[r] = P0[r], t[3 + r] = L0[r], t[6 + r] = C[r];
   t[9] = M;
-  compound_inverse(at(l_.start_R), at(l_.start_com), C, at(l_.compound_inverse));
+  momentum_law::compound_inverse(start, L, C, at(l_.compound_inverse));
 }
 
 // Link i's angular velocity and COM velocity (vel_w, vel_v) in the pose (R, pos, com) from the
@@ -2092,111 +2105,22 @@ void LaneStep<A, K>::world_velocity(const V* R, const V* pos, const V* com, cons
   }
 }
 
-// Linear momentum P and angular momentum L about C of the velocities vel_w, vel_v (plus the link
-// bias where asked) in the pose (R, com) (link_bias.cpp's momentum).
-template <class A, int K>
-void LaneStep<A, K>::momentum(const V* R, const V* com, bool bias_w, bool bias_v, const V* C,
-                              const V& M, V* P, V* L) const {
-  auto velocity = [&](int i, V* w, V* v) {
-    for (int r = 0; r < 3; ++r) {
-      w[r] = bias_w ? s_[l_.vel_w + 3 * i + r] + s_[l_.bias_w + 3 * i + r] : s_[l_.vel_w + 3 * i + r];
-      v[r] = bias_v ? s_[l_.vel_v + 3 * i + r] + s_[l_.bias_v + 3 * i + r] : s_[l_.vel_v + 3 * i + r];
-    }
-  };
-  for (int r = 0; r < 3; ++r) P[r] = L[r] = V(0.0);
-  for (int i = 0; i < p_.num_links; ++i) {
-    const V m = link_parameter_pack(i, mass);
-    V w[3], v[3];
-    velocity(i, w, v);
-    for (int r = 0; r < 3; ++r) P[r] = P[r] + m * v[r];
-  }
-  V vcom[3];
-  for (int r = 0; r < 3; ++r) vcom[r] = select(V(0.0) < M, P[r] / M, V(0.0));
-  for (int i = 0; i < p_.num_links; ++i) {
-    const V m = link_parameter_pack(i, mass);
-    const V* Ri = R + 9 * i;
-    V w[3], v[3], Iw[3], arm[3], dv[3], h[3];
-    velocity(i, w, v);
-    // I formed, then I w: the operations of momentum_correction.cpp's Eigen products (PD-4
-    // divides this momentum's rounding by the compound inertia).
-    V Iworld[9];
-    world_inertia(i, Ri, Iworld);
-    for (int r = 0; r < 3; ++r)
-      Iw[r] = Iworld[3 * r] * w[0] + Iworld[3 * r + 1] * w[1] + Iworld[3 * r + 2] * w[2];
-    for (int r = 0; r < 3; ++r) arm[r] = com[3 * i + r] - C[r], dv[r] = v[r] - vcom[r];
-    cross(arm, dv, h);
-    for (int r = 0; r < 3; ++r) L[r] = L[r] + (Iw[r] + m * h[r]);
-  }
-}
-
-// Link i's inertia about its centre of mass in world axes, (R Ic) R^T with R Ic formed first, as
-// momentum_correction.cpp's Eigen products are.
+// Link i's inertia about its centre of mass in world axes at rotation Ri (momentum_law's, eq.
+// PD-8).
 template <class A, int K>
 void LaneStep<A, K>::world_inertia(int i, const V* Ri, V* I) const {
+  V Ic[9];
+  inertia_com(i, Ic);
+  momentum_law::world_inertia(joint_transform_law::rows(Ri), joint_transform_law::rows(Ic), I);
+}
+
+template <class A, int K>
+void LaneStep<A, K>::inertia_com(int i, V* Ic) const {
   const V xx = link_parameter_pack(i, inertia_xx), yy = link_parameter_pack(i, inertia_yy),
           zz = link_parameter_pack(i, inertia_zz), xy = link_parameter_pack(i, inertia_xy),
           xz = link_parameter_pack(i, inertia_xz), yz = link_parameter_pack(i, inertia_yz);
-  const V Ic[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
-  V RI[9];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      RI[3 * r + c] = Ri[3 * r] * Ic[c] + Ri[3 * r + 1] * Ic[3 + c] + Ri[3 * r + 2] * Ic[6 + c];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      I[3 * r + c] = RI[3 * r] * Ri[3 * c] + RI[3 * r + 1] * Ri[3 * c + 1] + RI[3 * r + 2] * Ri[3 * c + 2];
-}
-
-// The inverse of the links' inertia about C in the pose (R, com) (momentum_correction.cpp's
-// compound_inertia), by cofactors.
-template <class A, int K>
-void LaneStep<A, K>::compound_inverse(const V* R, const V* com, const V* C, V* out) const {
-  V I[9];
-  for (int e = 0; e < 9; ++e) I[e] = V(0.0);
-  for (int i = 0; i < p_.num_links; ++i) {
-    const V m = link_parameter_pack(i, mass);
-    V Iworld[9];
-    world_inertia(i, R + 9 * i, Iworld);
-    V d[3];
-    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - C[r];
-    const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) {
-        const V par = m * ((r == c ? d2 : V(0.0)) - d[r] * d[c]);
-        I[3 * r + c] = I[3 * r + c] + (Iworld[3 * r + c] + par);
-      }
-  }
-  // Eigen's 3 x 3 inverse: cofactor (i, j) = m(i1, j1) m(i2, j2) - m(i1, j2) m(i2, j1) with
-  // i1, i2 = i + 1, i + 2 (mod 3); det along column 0; out(j, i) = cofactor(i, j) / det.
-  auto cofactor = [&](int i, int j) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-    return I[3 * i1 + j1] * I[3 * i2 + j2] - I[3 * i1 + j2] * I[3 * i2 + j1];
-  };
-  const V c0[3] = {cofactor(0, 0), cofactor(1, 0), cofactor(2, 0)};
-  const V det = c0[0] * I[0] + c0[1] * I[3] + c0[2] * I[6];
-  const V inv = V(1.0) / det;
-  for (int j = 0; j < 3; ++j) out[j] = c0[j] * inv;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 1; j < 3; ++j) out[3 * j + i] = cofactor(i, j) * inv;
-}
-
-// The rigid rotation dw about C that scales |L1| by `ratio`, then the uniform linear velocity dv
-// that makes the linear momentum `target` (PD-4, PD-5; momentum_correction.cpp).
-template <class A, int K>
-void LaneStep<A, K>::rigid_correction(const V* Iinv, const V* com, const V* C, const V& M,
-                                      const V* P1, const V* L1, const V& ratio, const V* target,
-                                      V* dw, V* dv) const {
-  V l[3];
-  for (int r = 0; r < 3; ++r) l[r] = L1[r] * (ratio - V(1.0));
-  for (int r = 0; r < 3; ++r) dw[r] = Iinv[3 * r] * l[0] + Iinv[3 * r + 1] * l[1] + Iinv[3 * r + 2] * l[2];
-  V P[3] = {P1[0], P1[1], P1[2]};
-  for (int i = 0; i < p_.num_links; ++i) {
-    const V m = link_parameter_pack(i, mass);
-    V d[3], t[3];
-    for (int r = 0; r < 3; ++r) d[r] = com[3 * i + r] - C[r];
-    cross(dw, d, t);
-    for (int r = 0; r < 3; ++r) P[r] = P[r] + m * t[r];
-  }
-  for (int r = 0; r < 3; ++r) dv[r] = (target[r] - P[r]) / M;
+  const V m[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+  for (int e = 0; e < 9; ++e) Ic[e] = m[e];
 }
 
 // compat physx, after the free velocity: the root's twist changed by a rigid motion so that the
@@ -2212,19 +2136,17 @@ void LaneStep<A, K>::physx_free_momentum() {
   link_motion_law::in_world_axes(joint_transform_law::rows(R0), qd + 3, v0);
   world_velocity(at(l_.start_R), at(l_.start_pos), at(l_.start_com), at(l_.qd), w0, v0);
   V P1[3], L1[3];
-  momentum(at(l_.start_R), at(l_.start_com), true, true, t + 6, t[9], P1, L1);
+  const int L = p_.num_links;
+  const PoseLinks biased{*this, at(l_.start_R), at(l_.start_com), true, true};
+  momentum_law::momentum(biased, L, t + 6, t[9], P1, L1);
   const V l1 = sqrt_of(L1[0] * L1[0] + L1[1] * L1[1] + L1[2] * L1[2]);
   const V l0 = sqrt_of(t[3] * t[3] + t[4] * t[4] + t[5] * t[5]);
   const V ratio = select(l1 == V(0.0), V(1.0), l0 / l1);
-  V dw[3], dv[3], arm[3], turn[3];
-  rigid_correction(at(l_.compound_inverse), at(l_.start_com), t + 6, t[9], P1, L1, ratio, t, dw,
-                   dv);
-  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - t[6 + r];
-  cross(dw, arm, turn);
-  for (int r = 0; r < 3; ++r) {
-    w0[r] = w0[r] + dw[r];
-    v0[r] = v0[r] + (dv[r] + turn[r]);
-  }
+  V dw[3], dv[3];
+  momentum_law::rigid_correction(biased, L, at(l_.compound_inverse), t + 6, t[9], P1, L1, ratio, t,
+                                 dw, dv);
+  const V origin[3] = {V(0.0), V(0.0), V(0.0)};  // frame 0's
+  momentum_law::move_root(dw, dv, origin, t + 6, w0, v0);
   link_motion_law::in_link_axes(joint_transform_law::rows(R0), w0, qd);
   link_motion_law::in_link_axes(joint_transform_law::rows(R0), v0, qd + 3);
 }
@@ -2233,10 +2155,14 @@ void LaneStep<A, K>::physx_free_momentum() {
 template <class A, int K>
 void LaneStep<A, K>::root_origin(const V* q, V* p) {
   const LinkConstants& k = p_.links[0];
-  for (int r = 0; r < 3; ++r)
-    p[r] = k.tree_rotation_identity
-               ? V(k.r[r]) + q[r]
-               : V(k.r[r]) + ((V(k.E[r]) * q[0] + V(k.E[3 + r]) * q[1]) + V(k.E[6 + r]) * q[2]);
+  if (k.tree_rotation_identity) {
+    for (int r = 0; r < 3; ++r) p[r] = V(k.r[r]) + q[r];
+    return;
+  }
+  V E[9], Eq[3];
+  for (int e = 0; e < 9; ++e) E[e] = V(k.E[e]);
+  link_motion_law::in_link_axes(joint_transform_law::rows(E), q, Eq);
+  for (int r = 0; r < 3; ++r) p[r] = V(k.r[r]) + Eq[r];
 }
 
 // compat physx: a floating root moved over h about its centre of mass with the world velocities
@@ -2271,11 +2197,12 @@ void LaneStep<A, K>::physx_end_momentum() {
   link_motion_law::in_world_axes(joint_transform_law::rows(sR), qd + 3, v0);
   link_motion_law::in_world_axes(joint_transform_law::rows(sR), qp, pw);
   link_motion_law::in_world_axes(joint_transform_law::rows(sR), qp + 3, pv);
-  V PT[3], LT[3], Ppos[3], unused[3];
+  V PT[3], LT[3], Ppos[3];
   world_velocity(sR, at(l_.start_pos), scom, at(l_.qd), w0, v0);
-  momentum(sR, scom, true, true, t + 6, M, PT, LT);
+  momentum_law::momentum(PoseLinks{*this, sR, scom, true, true}, L, t + 6, M, PT, LT);
   world_velocity(sR, at(l_.start_pos), scom, at(l_.qd_position), pw, pv);
-  momentum(sR, scom, false, true, t + 6, M, Ppos, unused);
+  momentum_law::momentum(PoseLinks{*this, sR, scom, false, true}, L, t + 6, M, Ppos,
+                         static_cast<V*>(nullptr));
   // The new pose, from the root's new origin.
   V* ncom = at(l_.now_com);
   V C1[3] = {V(0.0), V(0.0), V(0.0)};
@@ -2286,43 +2213,40 @@ void LaneStep<A, K>::physx_end_momentum() {
     for (int r = 0; r < 3; ++r) C1[r] = C1[r] + m * ncom[3 * i + r];
   }
   for (int r = 0; r < 3; ++r) C1[r] = select(V(0.0) < M, C1[r] / M, C1[r]);
-  // The root keeps its world angular velocity and its COM's velocity.
-  V a[3], b[3], vo[3];
-  cross(w0, scom, a);   // the start root origin is frame 0's
-  cross(w0, ncom, b);
-  for (int r = 0; r < 3; ++r) vo[r] = (v0[r] + a[r]) - b[r];
+  // The root keeps its world angular velocity and its COM's velocity (its origins, start and
+  // now, are frame 0's).
+  const V origin[3] = {V(0.0), V(0.0), V(0.0)};
+  V vo[3];
+  momentum_law::keep_root_com_velocity(w0, v0, scom, origin, ncom, origin, vo);
   world_velocity(at(l_.now_R), at(l_.now_pos), ncom, at(l_.qd), w0, vo);
+  const PoseLinks now{*this, at(l_.now_R), ncom};
   V P1[3], L1[3], Iinv[9];
-  momentum(at(l_.now_R), ncom, false, false, C1, M, P1, L1);
+  momentum_law::momentum(now, L, C1, M, P1, L1);
   const V l1 = sqrt_of(L1[0] * L1[0] + L1[1] * L1[1] + L1[2] * L1[2]);
   const V lt = sqrt_of(LT[0] * LT[0] + LT[1] * LT[1] + LT[2] * LT[2]);
   const V ratio = select(l1 == V(0.0), V(0.0), lt / l1);
-  compound_inverse(at(l_.now_R), ncom, C1, Iinv);
-  V dw[3], dv[3], arm[3], turn[3];
-  rigid_correction(Iinv, ncom, C1, M, P1, L1, ratio, PT, dw, dv);
-  for (int r = 0; r < 3; ++r) arm[r] = V(0.0) - C1[r];
-  cross(dw, arm, turn);
-  for (int r = 0; r < 3; ++r) {
-    w0[r] = w0[r] + dw[r];
-    vo[r] = vo[r] + (dv[r] + turn[r]);
-  }
+  momentum_law::compound_inverse(now, L, C1, Iinv);
+  V dw[3], dv[3];
+  momentum_law::rigid_correction(now, L, Iinv, C1, M, P1, L1, ratio, PT, dw, dv);
+  momentum_law::move_root(dw, dv, origin, C1, w0, vo);
   // The COM shifted to C_start + dt P_pos / M, in world positions (the root's origin at q), the
   // shift into the joint frame's axes (E_T shift).
   V* q = &at(l_.q)[k.q_index];
   const V* q0 = &at(l_.old_q)[k.q_index];
   const V per_mass = V(p_.dt) / M;
-  V o0[3], o1[3], shift[3];
+  V o0[3], o1[3], C_start[3], C_now[3], shift[3];
   root_origin(q0, o0);
   root_origin(q, o1);
-  for (int r = 0; r < 3; ++r) {
-    const V start = o0[r] + t[6 + r], now = o1[r] + C1[r];
-    shift[r] = (start + Ppos[r] * per_mass) - now;
+  for (int r = 0; r < 3; ++r) C_start[r] = o0[r] + t[6 + r], C_now[r] = o1[r] + C1[r];
+  momentum_law::com_shift(C_start, Ppos, per_mass, C_now, shift);
+  if (k.tree_rotation_identity) {
+    for (int a = 0; a < 3; ++a) q[a] = q[a] + shift[a];
+  } else {
+    V E[9], Es[3];
+    for (int e = 0; e < 9; ++e) E[e] = V(k.E[e]);
+    link_motion_law::in_world_axes(joint_transform_law::rows(E), shift, Es);
+    for (int a = 0; a < 3; ++a) q[a] = q[a] + Es[a];
   }
-  for (int a = 0; a < 3; ++a)
-    q[a] = q[a] + (k.tree_rotation_identity
-                       ? shift[a]
-                       : (V(k.E[3 * a]) * shift[0] + V(k.E[3 * a + 1]) * shift[1]) +
-                             V(k.E[3 * a + 2]) * shift[2]);
   const V* nR = at(l_.now_R);
   link_motion_law::in_link_axes(joint_transform_law::rows(nR), w0, qd);
   link_motion_law::in_link_axes(joint_transform_law::rows(nR), vo, qd + 3);

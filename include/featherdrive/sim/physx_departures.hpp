@@ -53,11 +53,6 @@ void world_velocity(const Model& model, const WorldPose& pose, const VecX& qd, c
 /// Root world twist (angular velocity, origin velocity) from its body-frame velocity in qd.
 void root_world_twist(const Model& model, const WorldPose& pose, const VecX& qd, Vec3& w0, Vec3& v0);
 
-/// Linear momentum and angular momentum about pose.total_com of velocities vel + (bw, bv).
-void momentum(const Model& model, const WorldPose& pose, const WorldVelocity& vel,
-              const std::vector<Vec3>* bias_w, const std::vector<Vec3>* bias_v, Vec3& linear,
-              Vec3& angular);
-
 /// Stage 1 (link_bias.cpp): from the start pose and velocities, the bias B_i of every link and the
 /// delta of every prismatic row.
 void compute_link_bias(const Model& model, const Data& data, const VecX& qd, double dt,
