@@ -7,6 +7,7 @@
 #include "featherdrive/algorithm/inverse_mass_diagonal.hpp"
 #include "featherdrive/algorithm/joint_motion.hpp"
 #include "featherdrive/algorithm/kinematics.hpp"
+#include "featherdrive/algorithm/link_motion_law.hpp"
 #include "featherdrive/constraint/row_laws.hpp"
 #include "featherdrive/constraint/row_setup.hpp"
 #include "physx_stages.hpp"
@@ -494,7 +495,9 @@ void Stepper::begin_classical_root(const Vec6& root_qd0, double dt) {
 
 void Stepper::end_classical_root() {
   const Mat3 R1 = quaternion_rotation(&ws_.q[3]);
-  ws_.qd.segment<3>(3) = R1.transpose() * (ws_.root_rotation0 * ws_.qd.segment<3>(3));
+  double v[3];  // R1^T (R_q v), as the lanes' end_classical_root
+  link_motion_law::in_world_axes(ws_.root_rotation0, &ws_.qd[3], v);
+  link_motion_law::in_link_axes(R1, v, &ws_.qd[3]);
 }
 
 // q advanced over h. compat physx moves a floating root about its COM with the world velocity of
