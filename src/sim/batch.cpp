@@ -1080,7 +1080,8 @@ void Batch::step_lanes(int count) {
         s.ws_->last_drive_change = lane_drive_change_.row(i).transpose();
       s.step_count_ = lane_steps_[static_cast<size_t>(i)];
       s.time_ = lane_time_[static_cast<size_t>(i)];
-      s.ws_->row_force_live = true;  // the lanes wrote the row kinds' forces
+      // The lanes wrote the row kinds' forces; without a kind in the group they wrote zeros.
+      if (g.engine->plan().any_row_kinds) s.ws_->row_force_live = true;
       // Stops were cleared above: one now stopped in this call, in Simulation's words at the
       // clock it kept.
       if (g.engine->stop(static_cast<int>(j)).quantity == 0) continue;

@@ -439,15 +439,15 @@ void LaneEngine::begin_run() {
   std::fill(stopped_now_.get(), stopped_now_.get() + count_, false);
 }
 
-int LaneEngine::blocks(SimdIsa isa, bool one_lane, int threads) const {
+int LaneEngine::blocks(SimdIsa isa, bool one_lane) const {
   if (one_lane) return count_;
-  const int W = simd_width(isa) * interleave(simd_width(isa), count_, threads);
+  const int W = simd_width(isa) * interleave(simd_width(isa), count_);
   return (count_ + W - 1) / W;
 }
 
 void LaneEngine::run_block(const Block& arrays, int block, int steps, SimdIsa isa, bool one_lane,
-                           int threads, double* scratch) {
-  const int K = one_lane ? 1 : interleave(simd_width(isa), count_, threads);
+                           double* scratch) {
+  const int K = one_lane ? 1 : interleave(simd_width(isa), count_);
   const int W = one_lane ? 1 : simd_width(isa) * K;  // lanes of a block
   Block b = arrays;
   b.env0 = block * W;
@@ -486,7 +486,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
     LaneEngine& e = *jobs[j].engine;
     e.begin_run();
     doubles = std::max(doubles, scratch_doubles(e.plan()) + 8);
-    const int blocks = e.blocks(jobs[j].isa, jobs[j].one_lane, threads_wanted);
+    const int blocks = e.blocks(jobs[j].isa, jobs[j].one_lane);
     for (int b = 0; b < blocks; ++b) work_.push_back({static_cast<int>(j), b});
   }
   const int n = static_cast<int>(work_.size());
@@ -498,7 +498,7 @@ void LanePool::run(const std::vector<LaneJob>& jobs, int steps, int threads_want
   auto run_one = [&](int w, double* scratch) {
     const LaneJob& job = jobs[static_cast<size_t>(work_[static_cast<size_t>(w)].first)];
     job.engine->run_block(job.arrays, work_[static_cast<size_t>(w)].second, steps, job.isa,
-                          job.one_lane, threads_wanted, scratch);
+                          job.one_lane, scratch);
   };
   if (threads <= 1) {
     for (int w = 0; w < n; ++w) run_one(w, scratch_of(0));

@@ -122,13 +122,13 @@ class LaneEngine {
   void set_parameter(int env, int index, double value) { parameters_[at(env, index)] = value; }
 
   /// A run's blocks (LanePool::run): begin_run() clears stopped_now(); the blocks of W lanes
-  /// (W: the isa's width times the interleave, chosen for `threads`; 1 for one_lane) each make
+  /// (W: the isa's width times its interleave, simd::interleave; 1 for one_lane) each make
   /// `steps` steps of their environments on the state arrays and clocks `arrays` points at (its
   /// other fields are the engine's to set). An environment stopped earlier (stop(e)) stays.
   void begin_run();
-  int blocks(SimdIsa isa, bool one_lane, int threads) const;
+  int blocks(SimdIsa isa, bool one_lane) const;
   void run_block(const Block& arrays, int block, int steps, SimdIsa isa, bool one_lane,
-                 int threads, double* scratch);
+                 double* scratch);
   /// Why environment e stopped (quantity 0: it did not), and whether in the last run.
   const Stop& stop(int e) const { return stops_[static_cast<size_t>(e)]; }
   bool stopped_now(int e) const { return stopped_now_[static_cast<size_t>(e)]; }

@@ -1240,7 +1240,7 @@ struct LaneStep<A, K>::LaneRows {
 
 // All rows of dof d at joint velocity v, the whole pack (row_sequence.hpp).
 template <class A, int K>
-auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
+[[gnu::always_inline]] inline auto LaneStep<A, K>::solve_row(int d, V v, const V& dx) -> V {
   LaneRows<WholePack> rows{*this, d, row(d), WholePack{}};
   return row_sequence::solve(rows, v, dx, row_phase());
 }

@@ -5,10 +5,7 @@
 namespace featherdrive::simd {
 
 void run_block_avx512(const Plan& p, const Block& b, double* scratch, int steps) {
-  if (b.interleave == 4)
-    LaneStep<xsimd::avx512f, 4>(p, b, scratch).run(steps);
-  else
-    LaneStep<xsimd::avx512f, 2>(p, b, scratch).run(steps);
+  LaneStep<xsimd::avx512f, 2>(p, b, scratch).run(steps);  // simd::interleave: always 2
 }
 
 }  // namespace featherdrive::simd
