@@ -12,6 +12,7 @@
 #include "featherdrive/constraint/dof_rows.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/core/format.hpp"
+#include "featherdrive/solver/sweep_walk.hpp"
 #include "workspace.hpp"
 
 namespace featherdrive::simd {
@@ -71,7 +72,8 @@ Layout make_layout(const Plan& p) {
 
 namespace {
 
-// LinkConstants::parent_one_dof and chain_in, from the joint types and the links with contacts.
+// LinkConstants::parent_one_dof, chain_in and chain_up, from the joint types, the links with
+// contacts and the flags set before.
 void set_chain_flags(std::vector<LinkConstants>& links) {
   auto one_dof = [](const LinkConstants& l) { return l.type == 1 || l.type == 2; };
   for (size_t i = 0; i < links.size(); ++i) {
@@ -79,6 +81,8 @@ void set_chain_flags(std::vector<LinkConstants>& links) {
     const LinkConstants* parent = k.parent >= 0 ? &links[static_cast<size_t>(k.parent)] : nullptr;
     k.parent_one_dof = parent && one_dof(k) && one_dof(*parent);
     k.chain_in = k.parent_one_dof && k.parent + 1 == static_cast<int>(i) && !parent->contacts;
+    k.chain_up = sweep_walk::chain_up<false>(k.finish_on_leave, k.parent, k.parent_one_dof,
+                                             k.first_child, k.last_child);
   }
 }
 

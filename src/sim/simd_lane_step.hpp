@@ -35,6 +35,7 @@
 #include "featherdrive/sim/momentum_law.hpp"
 #include "featherdrive/sim/revolute_wrap_law.hpp"
 #include "featherdrive/solver/sweep_law.hpp"
+#include "featherdrive/solver/sweep_walk.hpp"
 #include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/quaternion_law.hpp"
 #include "featherdrive/spatial/sincos.hpp"
@@ -289,6 +290,10 @@ class LaneStep {
   void sweep();
   template <bool kGiven>
   void sweep_links();
+  // The sides of sweep_walk (the walk over the links, shared with Simulation's sweep).
+  template <bool kGiven>
+  struct Entering;
+  struct Leaving;
   void setup_mimic();
   void link_bias();
   void track_prismatic(double h);
@@ -306,9 +311,8 @@ class LaneStep {
     return parameter(p_.nv * kDofParameters + p_.num_links * kLinkParameters +
                      j * kMimicParameters + f);
   }
-  void leave_links(int k, int stop, bool correct);
-  bool in_chain_run(int i, int stop, bool correct) const;
-  int leave_chain_run(int k, int stop, bool correct);
+  void leave_link(int k, bool fix);
+  int leave_chain_run(int k, int stop);
   void finish_link(int i);
   // A floating root, link 0 (docs/simd_batch.md, "Floating bases").
   template <bool kStart>
@@ -1268,23 +1272,13 @@ void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& b
   for (int r = 0; r < 6; ++r) lane(pAp[r]) = lane(pAk[r]) + b * lane(U[r]);
 }
 
-// Is link i on a run of only children that leave_chain_run takes: a moving joint finished on
-// leave, its parent's one child, and not a child of stop whose velocity change is corrected?
+// Leaves the run of only children from k (sweep_walk::in_run; leave_chain_link's operations in
+// its order), the subtree impulse carried up in registers, one vector at a time where
+// kVectorByVector, and stored once where the run ends: in the link returned.
 template <class A, int K>
-bool LaneStep<A, K>::in_chain_run(int i, int stop, bool correct) const {
-  const LinkConstants& l = p_.links[i];
-  return i != stop && one_dof(l) && l.parent >= 0 && l.first_child && l.last_child &&
-         l.finish_on_leave && !(correct && l.parent == stop);
-}
-
-// Leaves a run of only children from k (leave_chain_link's operations in its order), the subtree
-// impulse carried up in registers, one vector at a time where kVectorByVector, and stored once
-// where the run ends: in the link returned (k itself when k starts no run).
-template <class A, int K>
-int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
+int LaneStep<A, K>::leave_chain_run(int k, int stop) {
   int end = k;
-  while (in_chain_run(end, stop, correct)) end = p_.links[end].parent;
-  if (end == k) return k;
+  while (sweep_walk::in_run(p_.links[end], stop)) end = p_.links[end].parent;
   // Two vectors at a time where kVectorByVector: each run is a chain of dependences from link to
   // link, and two of them interleaved keep the core busy while one waits.
   auto leave = [&](const auto& lanes) {
@@ -1303,7 +1297,7 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
       const V* G = at(l_.G + 6 * i);
       const V* U = at(l_.U + 6 * i);
       const V* S_up = at(l_.S + 6 * l.parent);
-      const bool up_in_run = l.parent != end;  // then one dof (in_chain_run)
+      const bool up_in_run = l.parent != end;  // then one dof (LinkConstants::chain_up)
       for (int n = 0; n < N; ++n) {
         const auto& lane = lanes[n];
         T* x = pA[n];
@@ -1332,57 +1326,49 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop, bool correct) {
   return end;
 }
 
-// Leaves the finished links from k up to stop (gauss_seidel.hpp's leave_links).
+// Link k left alone (sweep_walk::leave_links): it hands its subtree's impulse to its parent, and
+// where fix, corrects the parent's velocity change by the parent's response to it.
 template <class A, int K>
-void LaneStep<A, K>::leave_links(int k, int stop, bool correct) {
-  while (k != stop) {
-    if (const int end = leave_chain_run(k, stop, correct); end != k) {
-      k = end;
-      continue;
-    }
-    const LinkConstants& lk = p_.links[k];
-    const int p = lk.parent;
-    const bool first_child = lk.first_child, last_child = lk.last_child;
-    const bool fix = p == stop && correct;
-    // A chain's link hands its impulse straight into the parent's subtree impulse.
-    const bool chain = p >= 0 && first_child && !fix;
-    const V* pAk = at(l_.subtree + 6 * k);
-    const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
-    V beta;
-    V ball_pa[6];  // a spherical joint's hand-over
-    if (lk.type == 4) {
-      leave_ball(k, ball_pa);
-      pAk = ball_pa;
-    }
-    if (one_dof(lk)) {
-      U = at(l_.U + 6 * k);
-      if constexpr (kVectorByVector)
-        for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, k, chain, beta);
-      else
-        leave_chain_link(WholePack{}, k, chain, beta);
-    }
-    if (p < 0) return;
-    V* pAp = at(l_.subtree + 6 * p);
-    if (chain) {
-      if (!U)
-        for (int r = 0; r < 6; ++r) pAp[r] = pAk[r];
-    } else {
-      V pa[6];
-      for (int r = 0; r < 6; ++r) pa[r] = U ? pAk[r] + beta * U[r] : pAk[r];
-      for (int r = 0; r < 6; ++r) pAp[r] = first_child ? pa[r] : pAp[r] + pa[r];
-      if (fix) {
-        V t[6];
-        sym_times(at(l_.Lambda + 21 * p), pa, t);
-        V* dv = at(l_.dv + 6 * p);
-        for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
-      }
-    }
-    if (!last_child)
-      for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
-    k = p;
+void LaneStep<A, K>::leave_link(int k, bool fix) {
+  const LinkConstants& lk = p_.links[k];
+  const int p = lk.parent;
+  const bool first_child = lk.first_child, last_child = lk.last_child;
+  // A chain's link hands its impulse straight into the parent's subtree impulse.
+  const bool chain = p >= 0 && first_child && !fix;
+  const V* pAk = at(l_.subtree + 6 * k);
+  const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
+  V beta;
+  V ball_pa[6];  // a spherical joint's hand-over
+  if (lk.type == 4) {
+    leave_ball(k, ball_pa);
+    pAk = ball_pa;
   }
+  if (one_dof(lk)) {
+    U = at(l_.U + 6 * k);
+    if constexpr (kVectorByVector)
+      for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, k, chain, beta);
+    else
+      leave_chain_link(WholePack{}, k, chain, beta);
+  }
+  if (p < 0) return;
+  V* pAp = at(l_.subtree + 6 * p);
+  if (chain) {
+    if (!U)
+      for (int r = 0; r < 6; ++r) pAp[r] = pAk[r];
+  } else {
+    V pa[6];
+    for (int r = 0; r < 6; ++r) pa[r] = U ? pAk[r] + beta * U[r] : pAk[r];
+    for (int r = 0; r < 6; ++r) pAp[r] = first_child ? pa[r] : pAp[r] + pa[r];
+    if (fix) {
+      V t[6];
+      sym_times(at(l_.Lambda + 21 * p), pa, t);
+      V* dv = at(l_.dv + 6 * p);
+      for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
+    }
+  }
+  if (!last_child)
+    for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
 }
-
 // A joint not finished when left: its velocity change from its subtree and from later subtrees
 // (gauss_seidel.hpp's finish_link).
 template <class A, int K>
@@ -1498,36 +1484,67 @@ void LaneStep<A, K>::sweep() {
     for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
 }
 
-// The sweep's passes over the links: the rows' impulses, or (kGiven) the impulses given.
+// sweep_walk's sides: links entered, contacts solved, links finished, and leaving.
+template <class A, int K>
+struct LaneStep<A, K>::Leaving {
+  LaneStep* s;
+  const LinkConstants& link(int k) const { return s->p_.links[k]; }
+  int leave_run(int k, int stop) const { return s->leave_chain_run(k, stop); }
+  void leave_link(int k, int stop, bool correct) const {
+    s->leave_link(k, correct && s->p_.links[k].parent == stop);
+  }
+};
+
 template <class A, int K>
 template <bool kGiven>
-void LaneStep<A, K>::sweep_links() {
-  int previous = -1;
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
-    if (previous != k.parent) leave_links(previous, k.parent, true);
-    previous = i;
-    const V* dvp = k.parent >= 0 ? at(l_.dv + 6 * k.parent) : at(l_.zero);
-    V* dv = at(l_.dv + 6 * i);
+struct LaneStep<A, K>::Entering {
+  LaneStep* s;
+  int num_links() const { return s->p_.num_links; }
+  const LinkConstants& link(int i) const { return s->p_.links[i]; }
+  void leave(int k, int stop, bool correct) const {
+    sweep_walk::leave_links<Leaving>(k, stop, correct, s);
+  }
+  struct Links {
+    const int *first, *last;
+    const int* begin() const { return first; }
+    const int* end() const { return last; }
+  };
+  Links finish_after() const {
+    return {s->p_.finish_after, s->p_.finish_after + s->p_.num_finish_after};
+  }
+  void finish(int i) const { s->finish_link(i); }
+  // Link i alone: a chained link's base comes from its parent through the scratch (chain_in).
+  [[gnu::always_inline]] void enter(int i) const {
+    LaneStep& t = *s;
+    const LinkConstants& k = t.p_.links[i];
+    const V* dvp = k.parent >= 0 ? t.at(t.l_.dv + 6 * k.parent) : t.at(t.l_.zero);
+    V* dv = t.at(t.l_.dv + 6 * i);
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
       for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
     } else if (k.type == 4) {
-      enter_ball<kGiven>(i, dvp, dv);
+      t.template enter_ball<kGiven>(i, dvp, dv);
     } else {
-      const double* has = any_row(k.v_index);
+      const double* has = t.any_row(k.v_index);
       // A lone drive: one vector at a time. With friction or a limit row in the block the whole
       // pack measured faster (the welded humanoid). An actuator's clip on the state needs the pack.
       if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
           has[5] == 0.0 && has[6] == 0.0 && has[8] == 0.0 &&
           (has[7] == 0.0 || has[7] == kActuator))
-        for (int j = 0; j < K; ++j) enter_link<kGiven>(OneVector{j}, i, dvp, dv);
+        for (int j = 0; j < K; ++j) t.template enter_link<kGiven>(OneVector{j}, i, dvp, dv);
       else
-        enter_link<kGiven>(WholePack{}, i, dvp, dv);
+        t.template enter_link<kGiven>(WholePack{}, i, dvp, dv);
     }
-    if (k.contacts) contact_link<kGiven>(i);  // right after its joint's rows (contact.md, C15)
+    if (k.contacts) t.template contact_link<kGiven>(i);  // right after its joint's rows (C15)
   }
-  leave_links(previous, -1, false);
-  for (int f = 0; f < p_.num_finish_after; ++f) finish_link(p_.finish_after[f]);
+};
+
+// The sweep's passes over the links (sweep_walk::sweep): the rows' impulses, or (kGiven) the
+// impulses given.
+template <class A, int K>
+template <bool kGiven>
+void LaneStep<A, K>::sweep_links() {
+  Entering<kGiven> side{this};
+  sweep_walk::sweep(side);
 }
 
 // Every link's velocity in frame 0 from qd with the step-start subspaces (contact_rows.cpp's

@@ -129,6 +129,8 @@ struct LinkConstants {
   /// enters this link right after it and its base comes from the parent's impulse.
   bool parent_one_dof = false;
   bool chain_in = false;
+  /// Left in a run of only children (sweep_walk::chain_up, its parent of any kind).
+  bool chain_up = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
   /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which

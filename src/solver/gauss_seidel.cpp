@@ -33,7 +33,8 @@ SweepWorkspace::SweepWorkspace(const Model& model)
       later[i] = model.links[link.parent].children.back() != i || later[link.parent];
     l.finish_on_leave = link.nv == 1 && !later[i];
     if (!l.finish_on_leave && (link.nv > 0 || later[i])) finish_after.push_back(i);
-    l.chain_up = l.finish_on_leave && l.parent_one_dof && l.first_child && l.last_child;
+    l.chain_up = sweep_walk::chain_up<true>(l.finish_on_leave, l.parent, l.parent_one_dof,
+                                            l.first_child, l.last_child);
   }
   chain_next_free_.resize(links.size());
   for (size_t i = 0; i < links.size(); ++i) chain_next_free_[i] = links[i].chain_next;
@@ -54,7 +55,8 @@ void SweepWorkspace::set_contact_links(const std::vector<char>& has_contacts) {
     l.first_child = l.parent >= 0 && !parent_contacts && first_child_free_[static_cast<size_t>(i)];
     // A run of 1-dof links stops after a link with contacts: its child must see them.
     l.chain_next = chain_next_free_[static_cast<size_t>(i)] && !l.contacts;
-    l.chain_up = l.finish_on_leave && l.parent_one_dof && l.first_child && l.last_child;
+    l.chain_up = sweep_walk::chain_up<true>(l.finish_on_leave, l.parent, l.parent_one_dof,
+                                            l.first_child, l.last_child);
   }
 }
 

@@ -107,7 +107,7 @@ TEST_P(LoneDriveRows, LoneDrivePathMatchesTheFullSetup) {
 }
 
 // With every row a lone drive's, PGS solves them with solve_lone_drive_pgs and leaves runs of only
-// children in detail::leave_links's tight loop. A velocity limit that never binds puts every dof
+// children in detail::SweepLeaving::leave_run's tight loop. A velocity limit that never binds puts every dof
 // on the general row law (solve_dof_rows) instead: the same bits, on a branching tree.
 TEST(LoneDriveSweep, EqualsTheGeneralRowLawBitForBit) {
   std::mt19937 rng(11);

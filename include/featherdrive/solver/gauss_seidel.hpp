@@ -6,11 +6,13 @@
 // (data.hpp), so nothing is transformed from link to link.
 #pragma once
 
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "featherdrive/algorithm/data.hpp"
 #include "featherdrive/solver/sweep_law.hpp"
+#include "featherdrive/solver/sweep_walk.hpp"
 
 namespace featherdrive {
 
@@ -39,10 +41,10 @@ struct SweepWorkspace {
     bool chain_next = false;
     bool parent_one_dof = false;  ///< its parent has one dof
     /// One dof and no later subtree, so its joint's velocity is final when it is left
-    /// (detail::leave_links); the others, in model order, are finished after the sweep.
+    /// (detail::SweepLeaving); the others, in model order, are finished after the sweep.
     bool finish_on_leave = false;
-    /// One dof, finished on leave, and its one-dof parent's only child: leaving it is the
-    /// tight loop of detail::leave_links.
+    /// One dof, finished on leave, and its one-dof parent's only child: it is left in a run
+    /// (sweep_walk::chain_up), the tight loop of detail::SweepLeaving::leave_run.
     bool chain_up = false;
     /// It has contact rows (docs/math/contact.md, C15): solved right after its joint's rows, their
     /// impulse starts its pA, so its first child adds to pA instead of setting it.
@@ -120,7 +122,7 @@ inline void hand_over(const Data& data, const SweepWorkspace& ws, int k, Vec6& p
                             ws.subtree_impulse[k].data(), pa.data());
 }
 [[gnu::noinline]] inline void leave_multi_dof_link(const Data& data, SweepWorkspace& ws, int k,
-                                                   int stop, bool correct_stop) {
+                                                   bool correct) {
   const Data::LinkInfo& link = data.info[k];
   const int p = link.parent;
   if (p < 0) return;  // the root hands nothing on
@@ -135,82 +137,93 @@ inline void hand_over(const Data& data, const SweepWorkspace& ws, int k, Vec6& p
   if (ws.links[k].first_child) pA_parent = pa;
   else pA_parent += pa;
   if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
-  if (p == stop && correct_stop) correct_velocity_change(data, ws, p, pa);
+  if (correct) correct_velocity_change(data, ws, p, pa);
 }
 
-// Leaves the finished links from k up to `stop` (not included; -1 for all): each hands its
-// subtree's impulse pa = pA + U D^-1 (impulse - S^T pA) to its parent. When a sibling of the last
-// one is entered next (correct_stop), stop's velocity change is corrected by its
-// whole-articulation response to that impulse; no other link's velocity change is read again in
-// the sweep. Along a run of 1-dof links, S_p^T pA_p of the next one is formed from scalars so that
-// the 6-vector products stay off the chain of dependencies. Raw pointers are taken once: Eigen's
-// vector stores may alias anything, which would make the compiler reload every std::vector's
-// data pointer after each of them.
-inline void leave_links(const Data& data, SweepWorkspace& ws, double* qd, int k, int stop,
-                        bool correct_stop) {
-  const SweepWorkspace::Link* const links = ws.links.data();
-  const Data::OneDof* const one_dof = data.one_dof.data();
-  Vec6* const subtree_impulse = ws.subtree_impulse.data();
-  const double* const joint_impulse = ws.joint_impulse.data();
-  const double* const entry_velocity_change = ws.entry_velocity_change.data();
-  bool have_x = false;
-  double x = 0.0;  // S_k^T pA_k when have_x
-  while (k != stop) {
-    const SweepWorkspace::Link& link = links[k];
+// Leaving links for sweep_walk::leave_links: each hands its subtree's impulse
+// pa = pA + U D^-1 (impulse - S^T pA) to its parent. Along a run of 1-dof links, S_p^T pA_p of
+// the next one is formed from scalars (x) so that the 6-vector products stay off the chain of
+// dependencies. Raw pointers are taken once: Eigen's vector stores may alias anything, which
+// would make the compiler reload every std::vector's data pointer after each of them.
+class SweepLeaving {
+ public:
+  SweepLeaving(const Data* data, SweepWorkspace* ws, double* qd)
+      : data_(*data),
+        ws_(*ws),
+        qd_(qd),
+        links_(ws->links.data()),
+        one_dof_(data->one_dof.data()),
+        subtree_impulse_(ws->subtree_impulse.data()),
+        joint_impulse_(ws->joint_impulse.data()),
+        entry_velocity_change_(ws->entry_velocity_change.data()) {}
+  const SweepWorkspace::Link& link(int k) const { return links_[k]; }
+
+  // A run of only children, as leave_link with first = last = true and every flag known: pA
+  // stays in registers and is stored once, for the link where the run ends (no link of the run
+  // reads its own again).
+  [[gnu::always_inline]] int leave_run(int k, int stop) {
+    Vec6 pA = subtree_impulse_[k];
+    if (!have_x_) x_ = sweep_law::dot6<double>(one_dof_[k].S, pA);
+    for (;;) {
+      const Data::OneDof& J = one_dof_[k];
+      const int d = links_[k].v_index;
+      const int up = links_[k].parent;
+      const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse_[d], x_);
+      qd_[d] = sweep_law::finished_velocity(qd_[d], entry_velocity_change_[d], J.G, pA);
+      x_ = sweep_law::parent_S_pA(one_dof_[up].S, pA, beta, J.parent_S);
+      pA = pA + beta * J.U;
+      k = up;
+      if (!sweep_walk::in_run(links_[k], stop)) break;
+    }
+    subtree_impulse_[k] = pA;
+    have_x_ = true;
+    return k;
+  }
+
+  [[gnu::always_inline]] void leave_link(int k, int stop, bool correct) {
+    const SweepWorkspace::Link& link = links_[k];
     const int p = link.parent;
-    if (link.chain_up && p != stop) {
-      // A run of only children, as below with first = last = true and every flag known: pA
-      // stays in registers and is stored once, for the link where the run ends (no link of the
-      // run reads its own again).
-      Vec6 pA = subtree_impulse[k];
-      if (!have_x) x = sweep_law::dot6<double>(one_dof[k].S, pA);
-      for (;;) {
-        const Data::OneDof& J = one_dof[k];
-        const int d = links[k].v_index;
-        const int up = links[k].parent;
-        const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse[d], x);
-        qd[d] = sweep_law::finished_velocity(qd[d], entry_velocity_change[d], J.G, pA);
-        x = sweep_law::parent_S_pA(one_dof[up].S, pA, beta, J.parent_S);
-        pA = pA + beta * J.U;
-        k = up;
-        if (!links[k].chain_up || links[k].parent == stop) break;
-      }
-      subtree_impulse[k] = pA;
-      have_x = true;
-      continue;
-    }
     if (link.nv != 1) {
-      leave_multi_dof_link(data, ws, k, stop, correct_stop);
-      if (p < 0) return;
-      have_x = false;
-      k = p;
-      continue;
+      leave_multi_dof_link(data_, ws_, k, p == stop && correct);
+      have_x_ = false;
+      return;
     }
-    const Data::OneDof& J = one_dof[k];
-    const Vec6& pA = subtree_impulse[k];
-    if (!have_x) x = sweep_law::dot6<double>(J.S, pA);
+    const Data::OneDof& J = one_dof_[k];
+    const Vec6& pA = subtree_impulse_[k];
+    if (!have_x_) x_ = sweep_law::dot6<double>(J.S, pA);
     const int d = link.v_index;
-    const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse[d], x);
+    const double beta = sweep_law::leave_beta(J.D_inv, joint_impulse_[d], x_);
     // Its velocity change: what it had when entered, plus what its subtree's impulses do to it.
     if (link.finish_on_leave)
-      qd[d] = sweep_law::finished_velocity(qd[d], entry_velocity_change[d], J.G, pA);
+      qd_[d] = sweep_law::finished_velocity(qd_[d], entry_velocity_change_[d], J.G, pA);
     if (p < 0) return;
     // S_p^T of the parent's pA after this hand-over (pA_p so far + pA + beta U).
-    have_x = link.parent_one_dof && p != stop;
+    have_x_ = link.parent_one_dof && p != stop;
     const bool first = link.first_child;
-    Vec6& pA_parent = subtree_impulse[p];
-    if (have_x) {
-      const Vec6& S_p = one_dof[p].S;
-      x = sweep_law::parent_S_pA(S_p, pA, beta, J.parent_S);
-      if (!first) x += sweep_law::dot6<double>(S_p, pA_parent);
+    Vec6& pA_parent = subtree_impulse_[p];
+    if (have_x_) {
+      const Vec6& S_p = one_dof_[p].S;
+      x_ = sweep_law::parent_S_pA(S_p, pA, beta, J.parent_S);
+      if (!first) x_ += sweep_law::dot6<double>(S_p, pA_parent);
     }
     if (first) pA_parent = pA + beta * J.U;
     else pA_parent += pA + beta * J.U;
-    if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
-    if (p == stop && correct_stop) correct_velocity_change(data, ws, p, pA + beta * J.U);
-    k = p;
+    if (!link.last_child) ws_.parent_impulse_after[k] = pA_parent;
+    if (p == stop && correct) correct_velocity_change(data_, ws_, p, pA + beta * J.U);
   }
-}
+
+ private:
+  const Data& data_;
+  SweepWorkspace& ws_;
+  double* const qd_;
+  const SweepWorkspace::Link* const links_;
+  const Data::OneDof* const one_dof_;
+  Vec6* const subtree_impulse_;
+  const double* const joint_impulse_;
+  const double* const entry_velocity_change_;
+  bool have_x_ = false;
+  double x_ = 0.0;  // S_k^T pA_k when have_x_
+};
 
 // The end of a sweep for link i with N dofs: its velocity change from its subtree (sweep_law,
 // eq. SW10) and from later subtrees (SW5).
@@ -274,86 +287,119 @@ void finish_multi_dof_link(const Data& data, SweepWorkspace& ws, int i, VecX& qd
     finish_multi_dof_link<6>(data, ws, i, qd, parent_later);
 }
 
-}  // namespace detail
-
-/// One sweep. qd (nv) holds the exact joint velocities on entry and on exit. For every dof with
-/// ws.has_rows set, solve_row(dof, current_qd) returns the impulse to apply there. For every link
-/// marked with contacts, solve_contacts(link, dv) is called right after the link's joint rows
-/// with dv its velocity change of the sweep (frame 0, exact then); it solves the link's contact
-/// rows, adds their velocity change to dv and returns the spatial impulse they applied (frame 0):
-/// the sweep carries it to the rest of the articulation as an external impulse on the link.
+// Entering links for sweep_walk::sweep, and its leaving and finishing.
 template <class RowSolver, class ContactSolver>
-void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
-                        RowSolver&& solve_row, ContactSolver&& solve_contacts) {
-  const int n = model.num_links();
-  const SweepWorkspace::Link* const links = ws.links.data();
-  const Data::OneDof* const one_dof = data.one_dof.data();
-  Vec6* const velocity_change = ws.link_velocity_change.data();
-  double* const joint_impulse = ws.joint_impulse.data();
-  double* const entry_velocity_change = ws.entry_velocity_change.data();
-  const char* const has_rows = ws.has_rows.data();
-  double* const v = qd.data();
-  int previous = -1;
-  for (int i = 0; i < n; ++i) {
-    const SweepWorkspace::Link& link = links[i];
-    if (previous != link.parent) detail::leave_links(data, ws, v, previous, link.parent, true);
-    previous = i;
+class SweepEntering {
+ public:
+  SweepEntering(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
+                RowSolver& solve_row, ContactSolver& solve_contacts)
+      : data_(data),
+        ws_(ws),
+        qd_(qd),
+        solve_row_(solve_row),
+        solve_contacts_(solve_contacts),
+        n_(model.num_links()),
+        links_(ws.links.data()),
+        one_dof_(data.one_dof.data()),
+        velocity_change_(ws.link_velocity_change.data()),
+        joint_impulse_(ws.joint_impulse.data()),
+        entry_velocity_change_(ws.entry_velocity_change.data()),
+        has_rows_(ws.has_rows.data()),
+        v_(qd.data()) {}
+  int num_links() const { return n_; }
+  const SweepWorkspace::Link& link(int i) const { return links_[i]; }
+  void leave(int k, int stop, bool correct) const {
+    sweep_walk::leave_links<SweepLeaving>(k, stop, correct, &data_, &ws_, v_);
+  }
+  const std::vector<int>& finish_after() const { return ws_.finish_after; }
+  // The joints not finished when left: several dofs, or a later subtree whose impulses also move
+  // them.
+  void finish(int i) { finish_link(data_, ws_, i, qd_); }
+
+  // Link i, and after a 1-dof link the run of 1-dof links each the child of the one before.
+  [[gnu::always_inline]] void enter(int& i) {
+    const SweepWorkspace::Link& link = links_[i];
     // Delta v of the parent, exact now.
-    const Vec6& from_parent = link.parent >= 0 ? velocity_change[link.parent] : ws.zero;
+    const Vec6& from_parent = link.parent >= 0 ? velocity_change_[link.parent] : ws_.zero;
     if (link.nv == 1) {
-      // A run of 1-dof links, each the child of the one before. A joint's velocity change from
-      // outside its subtree is base = -D^-1 U^T Delta v_p; its own impulse adds (M^-1)_ii times
-      // it. The link then moves by Delta v_p - W D^-1 impulse + S (base + (M^-1)_ii impulse).
-      // The next link's base, -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S) with
-      // h = D^-1 impulse, is affine in the impulse.
+      // A joint's velocity change from outside its subtree is base = -D^-1 U^T Delta v_p; its
+      // own impulse adds (M^-1)_ii times it. The link then moves by
+      // Delta v_p - W D^-1 impulse + S (base + (M^-1)_ii impulse). The next link's base,
+      // -D_c^-1 (U_c^T Delta v_p - h U_c^T W + dqd U_c^T S) with h = D^-1 impulse, is affine in
+      // the impulse.
       const Vec6* dv_parent = &from_parent;
-      double base = sweep_law::base(one_dof[i].D_inv, one_dof[i].U, from_parent);
+      double base = sweep_law::base(one_dof_[i].D_inv, one_dof_[i].U, from_parent);
       for (;;) {
-        const Data::OneDof& J = one_dof[i];
-        const int d = links[i].v_index;
-        const bool next = links[i].chain_next;
+        const Data::OneDof& J = one_dof_[i];
+        const int d = links_[i].v_index;
+        const bool next = links_[i].chain_next;
         // next base = ahead + impulse * per_impulse, both formed before the impulse is known:
         // the chain of dependencies from one row to the next is one multiply-add
         // (docs/math/implicit_drives.md, eq. GS1-GS2).
         double ahead = 0.0, per_impulse = 0.0;
         if (next) {
-          const Data::OneDof& C = one_dof[i + 1];
+          const Data::OneDof& C = one_dof_[i + 1];
           ahead = sweep_law::ahead(C.D_inv, C.U, *dv_parent, base, C.base_per_parent_base);
           per_impulse = C.base_per_parent_impulse;
         }
         double impulse = 0.0;
-        if (has_rows[d]) impulse = solve_row(d, v[d] + base);
-        joint_impulse[d] = impulse;
-        Vec6& dv = velocity_change[i];
-        entry_velocity_change[d] =
+        if (has_rows_[d]) impulse = solve_row_(d, v_[d] + base);
+        joint_impulse_[d] = impulse;
+        Vec6& dv = velocity_change_[i];
+        entry_velocity_change_[d] =
             sweep_law::after_rows(base, impulse, J.inverse_mass, J.D_inv, *dv_parent, J.W, J.S, dv);
         if (!next) {  // a link with contacts ends its run (set_contact_links)
-          if (links[i].contacts) ws.subtree_impulse[i] = -solve_contacts(i, dv);
-          break;
+          if (links_[i].contacts) contacts(i);
+          return;
         }
         base = sweep_law::chained_base(ahead, impulse, per_impulse);
         dv_parent = &dv;
-        previous = ++i;
+        ++i;
       }
-      continue;
     }
-    if (link.nv == 0) {
-      velocity_change[i] = from_parent;
-      if (link.contacts) ws.subtree_impulse[i] = -solve_contacts(i, velocity_change[i]);
-      continue;
-    }
-    if (detail::rowless_root(ws, link))
-      velocity_change[i] = from_parent;
+    if (link.nv == 0 || rowless_root(ws_, link))
+      velocity_change_[i] = from_parent;
     else if (link.nv == 3)
-      detail::enter_multi_dof_link<3>(data, ws, i, from_parent, v, solve_row);
+      enter_multi_dof_link<3>(data_, ws_, i, from_parent, v_, solve_row_);
     else
-      detail::enter_multi_dof_link<6>(data, ws, i, from_parent, v, solve_row);
-    if (link.contacts) ws.subtree_impulse[i] = -solve_contacts(i, velocity_change[i]);
+      enter_multi_dof_link<6>(data_, ws_, i, from_parent, v_, solve_row_);
+    if (link.contacts) contacts(i);
   }
-  detail::leave_links(data, ws, v, previous, -1, false);
-  // The joints not finished when left: several dofs, or a later subtree whose impulses also move
-  // them (detail::finish_link), root first.
-  for (const int i : ws.finish_after) detail::finish_link(data, ws, i, qd);
+
+ private:
+  // Link i's contact rows, right after its joint's (docs/math/contact.md, C15).
+  void contacts(int i) { ws_.subtree_impulse[i] = -solve_contacts_(i, velocity_change_[i]); }
+
+  const Data& data_;
+  SweepWorkspace& ws_;
+  VecX& qd_;
+  RowSolver& solve_row_;
+  ContactSolver& solve_contacts_;
+  const int n_;
+  const SweepWorkspace::Link* const links_;
+  const Data::OneDof* const one_dof_;
+  Vec6* const velocity_change_;
+  double* const joint_impulse_;
+  double* const entry_velocity_change_;
+  const char* const has_rows_;
+  double* const v_;
+};
+
+}  // namespace detail
+
+/// One sweep (sweep_walk::sweep). qd (nv) holds the exact joint velocities on entry and on exit.
+/// For every dof with ws.has_rows set, solve_row(dof, current_qd) returns the impulse to apply
+/// there. For every link marked with contacts, solve_contacts(link, dv) is called right after the
+/// link's joint rows with dv its velocity change of the sweep (frame 0, exact then); it solves the
+/// link's contact rows, adds their velocity change to dv and returns the spatial impulse they
+/// applied (frame 0): the sweep carries it to the rest of the articulation as an external impulse
+/// on the link.
+template <class RowSolver, class ContactSolver>
+void gauss_seidel_sweep(const Model& model, const Data& data, SweepWorkspace& ws, VecX& qd,
+                        RowSolver&& solve_row, ContactSolver&& solve_contacts) {
+  detail::SweepEntering<std::remove_reference_t<RowSolver>, std::remove_reference_t<ContactSolver>>
+      side(model, data, ws, qd, solve_row, solve_contacts);
+  sweep_walk::sweep(side);
 }
 
 /// The sweep without contact rows.

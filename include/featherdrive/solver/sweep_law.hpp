@@ -1,8 +1,8 @@
 // A link's part of a Gauss-Seidel sweep with exact joint velocities
 // (docs/math/implicit_drives.md, "Propagating impulses", eq. SW0-SW11 and GS1-GS3), over the
 // number type: Simulation's gauss_seidel_sweep (double) and the lanes' sweep
-// (sim/simd_lane_step.hpp: a pack, or one vector of it) form it with the same operations. Each
-// engine keeps its own walk over the links (which link is entered, left or finished when).
+// (sim/simd_lane_step.hpp: a pack, or one vector of it) form it with the same operations. The
+// walk over the links (which link is entered, left or finished when) is sweep_walk.hpp's.
 // A one-dof link's spatial vectors are anything with v[r], r < 6, that reads a T (an Eigen Vec6,
 // a T*, the lanes' view of one vector of a pack). A joint of N dofs (3: spherical, 6: floating
 // root; SW6-SW11) takes T[6] arrays, and multi_dof_law's conventions: U, W 6 x N column-major,
