@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "featherdrive/constraint/contact_laws.hpp"
 
 namespace featherdrive {
@@ -76,12 +77,26 @@ double normal_row_delta(const ContactNormalRow& row, double vn, const ContactPha
   return std::max(row.mass * (row.bias * sigma + row.target - vn), -row.impulse);
 }
 
+// v_i = v_parent + S_i qd_i; a spherical joint's and a floating root's S qd by AP14
+// (multi_dof_law::joint_motion, unit_response.md), as ABA's pass 1 and the lanes'
+// contact_velocities form them (the root's S is diag(R0, R0): its origin is frame 0's).
 void link_velocities0(const Model& model, const Data& data, const VecX& qd, std::vector<Vec6>& V) {
   for (int i = 0; i < model.num_links(); ++i) {
     const Data::LinkInfo& link = data.info[i];
     Vec6 v = link.parent >= 0 ? V[link.parent] : Vec6(Vec6::Zero());
-    if (link.nv == 1) v += data.one_dof[i].S * qd[link.v_index];
-    else if (link.nv > 0) v += data.motion_subspace[i] * qd.segment(link.v_index, link.nv);
+    const double* x = qd.data() + link.v_index;
+    double J[6];
+    if (link.nv == 1) {
+      v += data.one_dof[i].S * qd[link.v_index];
+    } else if (link.nv == 3) {
+      multi_dof_law::joint_motion(
+          multi_dof_law::DenseSubspace<double, 3>{data.motion_subspace[i].data()}, x, J);
+      v += Vec6::Map(J);
+    } else if (link.nv == 6) {
+      multi_dof_law::joint_motion(
+          multi_dof_law::RotationPair<double, true>{data.world_rotation[i].data()}, x, J);
+      v += Vec6::Map(J);
+    }
     V[i] = v;
   }
 }

@@ -77,8 +77,7 @@ void world_velocity(const Model& model, const WorldPose& pose, const VecX& qd, c
   }
 }
 
-void compute_link_bias(const Model& model, const Data& data, const VecX& qd, double dt,
-                       PhysxDepartures& dep) {
+void compute_link_bias(const Model& model, const Data& data, double dt, PhysxDepartures& dep) {
   const int n = model.num_links();
   WorldPose& s = dep.start;
   // The start pose and velocities, from the kinematics of the step's start and ABA's pass 1
@@ -135,7 +134,6 @@ void compute_link_bias(const Model& model, const Data& data, const VecX& qd, dou
         dep.bias_v[i].data(), dep.bias_w[p].data(), dep.bias_v[p].data());
   }
   for (int i = 0; i < n; ++i) dep.turn[i].setZero();
-  (void)qd;
 }
 
 void track_prismatic_position_change(const Model& model, const Data& data, const VecX& q,

@@ -137,7 +137,7 @@ void Stepper::advance(const VecX& tau) {
   if (classical_root) begin_classical_root(root_qd0, dt);
   // compat physx: the rows' link bias; a floating base's momentum kept (NOTES, departures 1, 2).
   if (physx()) {
-    compute_link_bias(model, ws_.data, ws_.qd, dt, ws_.departures);
+    compute_link_bias(model, ws_.data, dt, ws_.departures);
     if (model.floating_base())
       correct_free_velocity_momentum(model, ws_.data, tau, link_force, dt, ws_.departures, ws_.qd);
   }

@@ -55,8 +55,7 @@ void root_world_twist(const Model& model, const WorldPose& pose, const VecX& qd,
 
 /// Stage 1 (link_bias.cpp): from the start pose and velocities, the bias B_i of every link and the
 /// delta of every prismatic row.
-void compute_link_bias(const Model& model, const Data& data, const VecX& qd, double dt,
-                       PhysxDepartures& dep);
+void compute_link_bias(const Model& model, const Data& data, double dt, PhysxDepartures& dep);
 
 /// Stage 1, TGS: the geometric position change of every prismatic dof after a sub-step of h, qd the
 /// rates after the sub-step's sweep, q the configuration after it (overwrites delta_x there).
