@@ -53,11 +53,12 @@ bool has_spherical_joints(const Model& model);
 
 /// spherical_rows.cpp. After a (sub-)step h moved q: every spherical joint moved again as PhysX
 /// moves it (eq. S-7): its link turns by exp(h w) in the world from its rotation before the
-/// sub-step (dep.now.R, world_pose of the q before it), w the link's world angular velocity with
-/// the step's start rotations (start) plus link_bias (if not null); its parent stands where q
+/// sub-step (dep.now.R, world_pose of the q before it), w the link's world angular velocity from
+/// the joints' frame-0 S of the step's start (data, AP14's angular rows) plus link_bias (if not
+/// null); its parent stands where q
 /// puts it. Writes the joint's quaternion into q; dep.now.R ends as the rotations after.
-void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& start,
-                                const VecX& qd, const std::vector<Vec3>* link_bias, double h,
+void integrate_spherical_joints(const Model& model, const Data& data, const VecX& qd,
+                                const std::vector<Vec3>* link_bias, double h,
                                 PhysxDepartures& dep, VecX& q);
 
 }  // namespace featherdrive

@@ -1891,14 +1891,11 @@ void LaneStep<A, K>::integrate_balls_physx(double h_step) {
       for (int r = 0; r < 3; ++r) w[r] = w[r] + at(l_.S + 6 * i)[r] * at(l_.qd)[k.v_index];
     } else if (k.type == 3 || k.type == 4) {
       const V* qd = &at(l_.qd)[k.v_index];
-      V t[3];
-      if (k.type == 3) {
-        const V* R0 = at(l_.root_R);
-        for (int r = 0; r < 3; ++r) t[r] = (R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1]) + R0[3 * r + 2] * qd[2];
-      } else {
-        const V* S3 = at(l_.ball_S + 18 * i);
-        for (int r = 0; r < 3; ++r) t[r] = (S3[r] * qd[0] + S3[6 + r] * qd[1]) + S3[12 + r] * qd[2];
-      }
+      V t[3];  // AP14's angular rows (multi_dof_law::joint_turn), as integrate_spherical_joints
+      if (k.type == 3)
+        multi_dof_law::joint_turn(multi_dof_law::RotationPair<V>{at(l_.root_R)}, qd, t);
+      else
+        multi_dof_law::joint_turn(multi_dof_law::DenseSubspace<V, 3>{at(l_.ball_S + 18 * i)}, qd, t);
       for (int r = 0; r < 3; ++r) w[r] = w[r] + t[r];
     }
     if (k.type != 4) {

@@ -2,6 +2,7 @@
 // (constraint/spherical_axes.hpp) read from the state's quaternion, and PhysX's turn of the link
 // in the world. docs/math/spherical_joints.md.
 #include "featherdrive/algorithm/joint_motion.hpp"
+#include "featherdrive/algorithm/multi_dof_law.hpp"
 #include "featherdrive/constraint/spherical_axes.hpp"
 #include "featherdrive/spatial/quaternion_law.hpp"
 #include "physx_stages.hpp"
@@ -40,8 +41,8 @@ bool has_spherical_joints(const Model& model) {
   return false;
 }
 
-void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& start,
-                                const VecX& qd, const std::vector<Vec3>* link_bias, double h,
+void integrate_spherical_joints(const Model& model, const Data& data, const VecX& qd,
+                                const std::vector<Vec3>* link_bias, double h,
                                 PhysxDepartures& dep, VecX& q) {
   std::vector<Mat3>& R = dep.now.R;     // before the sub-step on entry, after it on return
   std::vector<Vec3>& w = dep.scratch.w;  // world angular velocities, the step's start frames
@@ -49,8 +50,21 @@ void integrate_spherical_joints(const Model& model, const std::vector<Mat3>& sta
     const Link& link = model.links[i];
     const int p = link.parent;
     w[i] = p >= 0 ? w[p] : Vec3::Zero();
-    if (link.nv > 0)
-      w[i] += start[i] * (link.motion_subspace.topRows<3>() * qd.segment(link.v_index, link.nv));
+    // The joint's turn from its frame-0 S of the step's start (AP14's angular rows), as the lanes'
+    // integrate_balls_physx.
+    const double* x = qd.data() + link.v_index;
+    if (link.joint_type == JointType::revolute) {
+      w[i] += data.one_dof[i].S.head<3>() * x[0];
+    } else if (link.nv == 3 || link.nv == 6) {
+      Vec3 t;
+      if (link.nv == 3)
+        multi_dof_law::joint_turn(
+            multi_dof_law::DenseSubspace<double, 3>{data.motion_subspace[i].data()}, x, t.data());
+      else
+        multi_dof_law::joint_turn(
+            multi_dof_law::RotationPair<double, true>{data.world_rotation[i].data()}, x, t.data());
+      w[i] += t;
+    }
     const Mat3 parent = p >= 0 ? R[p] : Mat3::Identity();
     if (link.joint_type != JointType::spherical) {
       R[i] = parent * (joint_transform(link, &q[link.q_index]) * link.tree_transform).E.transpose();

@@ -523,7 +523,7 @@ void Stepper::integrate_positions(double h) {
     integrate_root_about_com(*model_, ws_.qd, h, ws_.departures, ws_.q);
   }
   if (spherical)
-    integrate_spherical_joints(*model_, ws_.data.world_rotation, ws_.qd, &ws_.departures.bias_w, h,
+    integrate_spherical_joints(*model_, ws_.data, ws_.qd, &ws_.departures.bias_w, h,
                                ws_.departures, ws_.q);
 }
 

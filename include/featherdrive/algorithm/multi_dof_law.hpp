@@ -211,6 +211,21 @@ template <class T, class S>
   }
 }
 
+/// AP14's angular rows 0 to 2 alone: w = (S x)_0..2, a joint's turn in compat physx's
+/// integration of spherical joints (integration_law.hpp's users, eq. S-7).
+template <class T, class S>
+[[gnu::always_inline]] inline void joint_turn(const S& s, const T* x, T* w) {
+#pragma GCC unroll 3
+  for (int r = 0; r < 3; ++r) {
+    const int k0 = s.first_col(r), k1 = s.end_col(r);
+    T sum = s(r, k0) * x[k0];
+#pragma GCC unroll 6
+    for (int k = 1; k < 6; ++k)
+      if (k > k0 && k < k1) sum = sum + s(r, k) * x[k];
+    w[r] = sum;
+  }
+}
+
 /// AP13: a += S qdd (AP14's sums).
 template <class T, class S>
 [[gnu::always_inline]] inline void add_joint_motion(const S& s, const T* qdd, T* a) {
