@@ -196,12 +196,11 @@ template <int N, class T>
   }
 }
 
-/// AP14: y = S x, row r over its entries left to right: a joint's S qd in pass 1 (unit_response.md,
-/// P1-3) and AP13's S qdd.
-template <class T, class S>
-[[gnu::always_inline]] inline void joint_motion(const S& s, const T* x, T* y) {
+/// AP14's rows 0 to kRows - 1 of y = S x, each over its entries left to right.
+template <int kRows, class T, class S>
+[[gnu::always_inline]] inline void joint_motion_rows(const S& s, const T* x, T* y) {
 #pragma GCC unroll 6
-  for (int r = 0; r < 6; ++r) {
+  for (int r = 0; r < kRows; ++r) {
     const int k0 = s.first_col(r), k1 = s.end_col(r);
     T sum = s(r, k0) * x[k0];
 #pragma GCC unroll 6
@@ -211,19 +210,17 @@ template <class T, class S>
   }
 }
 
-/// AP14's angular rows 0 to 2 alone: w = (S x)_0..2, a joint's turn in compat physx's
-/// integration of spherical joints (integration_law.hpp's users, eq. S-7).
+/// AP14: y = S x: a joint's S qd in pass 1 (unit_response.md, P1-3) and AP13's S qdd.
+template <class T, class S>
+[[gnu::always_inline]] inline void joint_motion(const S& s, const T* x, T* y) {
+  joint_motion_rows<6>(s, x, y);
+}
+
+/// AP14's angular rows alone: w = (S x)_0..2, a joint's turn in compat physx's integration of
+/// spherical joints (eq. S-7).
 template <class T, class S>
 [[gnu::always_inline]] inline void joint_turn(const S& s, const T* x, T* w) {
-#pragma GCC unroll 3
-  for (int r = 0; r < 3; ++r) {
-    const int k0 = s.first_col(r), k1 = s.end_col(r);
-    T sum = s(r, k0) * x[k0];
-#pragma GCC unroll 6
-    for (int k = 1; k < 6; ++k)
-      if (k > k0 && k < k1) sum = sum + s(r, k) * x[k];
-    w[r] = sum;
-  }
+  joint_motion_rows<3>(s, x, w);
 }
 
 /// AP13: a += S qdd (AP14's sums).
