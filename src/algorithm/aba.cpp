@@ -54,33 +54,53 @@ inline void write_inertia(const BodyInertia& b, Mat6& I) {
   I.col(5) << y, -x, 0.0, 0.0, 0.0, m;
 }
 
-// A motion vector of a link frame (orientation R, origin p) in frame 0.
-Vec6 motion_to_frame0(const Mat3& R, const Vec3& p, const Vec6& s) {
-  Vec6 out;
-  out.head<3>().noalias() = R * s.head<3>();
-  out.tail<3>().noalias() = R * s.tail<3>();
-  out.tail<3>() += p.cross(out.head<3>());
-  return out;
+// Link i's joint frame axes P = R_p E_T^T (eq. JT-5), as kinematics.cpp's position_link forms
+// them: E_T^T at the root (its parent, the world, does not rotate), R_p where X_T does not
+// rotate. Out of line: only a joint about another than a coordinate axis takes it.
+[[gnu::noinline]] Mat3 joint_frame_of(const Data& data, int i) {
+  const Data::LinkInfo& link = data.info[i];
+  const Mat3& E = data.constants[i].tree_transform.E;
+  if (link.parent < 0) return E.transpose();
+  const Mat3& Rp = data.world_rotation[link.parent];
+  if (link.tree_rotation_identity) return Rp;
+  Mat3 P;
+  joint_transform_law::joint_frame(Rp, E, P);
+  return P;
 }
 
-// S_i in frame 0 of a 1-dof joint (eq. JT-10) from its axis in the world, R a = P a: P's column
-// k for a coordinate axis (R keeps it, eq. JT-8), else Eigen's product (the law's left-to-right
-// sum moved the lanes-vs-scalar difference of BatchLanes' random trees to 1.6e-12);
-// motion_subspace[i] for the others.
-inline void one_dof_subspace(const Data& data, int i, const Mat3& R, const Vec3& p, Vec6& S) {
+// S_i in frame 0 of a 1-dof joint (eq. JT-10) from its world axis a_w = P a (eq. JT-8), as the
+// lanes' link_pose forms it: about a coordinate axis from R, whose column k is P's (eq. JT-3),
+// else from P formed again. Forced inline: out of line, chain256's step took 0.6 % more
+// instructions.
+[[gnu::always_inline]] inline void one_dof_subspace(const Data& data, int i, const Mat3& R,
+                                                    const Vec3& p, Vec6& S) {
   const Data::LinkInfo& link = data.info[i];
-  const Vec3 a = link.unit_axis >= 0 ? Vec3(link.axis_sign * R.col(link.unit_axis))
-                                     : Vec3(R * data.constants[i].axis);
-  joint_transform_law::one_dof_subspace(a.data(), p, link.type == JointType::revolute, S);
+  const Vec3& axis = data.constants[i].axis;
+  double a[3];
+  if (link.unit_axis >= 0)
+    joint_transform_law::joint_axis(R, link.unit_axis, link.axis_sign, axis, a);
+  else
+    joint_transform_law::joint_axis(joint_frame_of(data, i), -1, link.axis_sign, axis, a);
+  joint_transform_law::one_dof_subspace(a, p, link.type == JointType::revolute, S);
 }
-void subspace_in_frame0(const Model& model, Data& data, int i, const Mat3& R, const Vec3& p) {
-  if (data.info[i].nv == 1) {
+
+// S_i in frame 0: a 1-dof joint's (above), a spherical joint's [R; p x R] (eq. JT-11), a floating
+// root's diag(R, R) (its origin is frame 0's) entry by entry as the steps read it from R
+// (multi_dof_law::RotationPair).
+void subspace_in_frame0(Data& data, int i, const Mat3& R, const Vec3& p) {
+  const Data::LinkInfo& link = data.info[i];
+  if (link.nv == 1) {
     one_dof_subspace(data, i, R, p, data.one_dof[i].S);
-    return;
+  } else if (link.nv == 3) {
+    joint_transform_law::ball_subspace(
+        R, p, joint_transform_law::columns(data.motion_subspace[i].data()));
+  } else if (link.nv == 6) {
+    using S6 = multi_dof_law::RotationPair<double, true>;
+    const S6 S{R.data()};
+    Mat6N& out = data.motion_subspace[i];
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < 6; ++r) out(r, c) = S6::nonzero(r, c) ? S(r, c) : 0.0;
   }
-  const Mat6N& S_link = model.links[i].motion_subspace;
-  for (int c = 0; c < data.info[i].nv; ++c)
-    data.motion_subspace[i].col(c) = motion_to_frame0(R, p, S_link.col(c));
 }
 
 // The base of a Data array of Mat6, Vec6 or OneDof, which Eigen aligns to 16 bytes: said so, the
@@ -133,7 +153,7 @@ void articulated_inertias(const Model& model, Data& data) {
     const Vec3 p = data.world_position[i] - data.frame_origin;
     const BodyInertia b = body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p);
     write_inertia(b, data.articulated_inertia[i]);
-    subspace_in_frame0(model, data, i, R, p);
+    subspace_in_frame0(data, i, R, p);
   }
   Mat6* const inertia = aligned(data.articulated_inertia.data());  // as in articulated_bodies
   Data::OneDof* const one_dof = aligned(data.one_dof.data());
@@ -168,7 +188,7 @@ void body_motions(const Model& model, Data& data, const VecX& v) {
     write_inertia(body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p),
                   data.articulated_inertia[i]);
     if (data.info[i].nv == 1) one_dof_subspace(data, i, R, p, data.one_dof[i].S);
-    else subspace_in_frame0(model, data, i, R, p);
+    else subspace_in_frame0(data, i, R, p);
   }
   // Then velocities v_i = v_parent + S qd, velocity-product accelerations c_i = v_i x S qd and bias
   // forces v_i x* I_i v_i, root to leaves (eq. P1-3 to P1-5), as the lanes form them.

@@ -2268,7 +2268,7 @@ void LaneStep<A, K>::physx_end_momentum() {
 
 // A spherical joint's rotation R = P R(q), P its joint frame's axes, R(q) its normalised
 // quaternion's (kinematics.cpp's position_link); with start, S's three columns
-// [R e_k; pos x R e_k] (aba.cpp's motion_to_frame0 of the link's [1; 0]).
+// [R e_k; pos x R e_k] (joint_transform_law::ball_subspace, eq. JT-11, as aba.cpp).
 template <class A, int K>
 void LaneStep<A, K>::ball_pose(int i, const V* P, V* R, const V* pos, bool start) {
   V Rq[9];
@@ -2276,12 +2276,8 @@ void LaneStep<A, K>::ball_pose(int i, const V* P, V* R, const V* pos, bool start
   joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(Rq),
                                joint_transform_law::rows(R));
   if (!start) return;
-  V* S3 = at(l_.ball_S + 18 * i);
-  for (int a = 0; a < 3; ++a) {
-    const V col[3] = {R[a], R[3 + a], R[6 + a]};
-    for (int r = 0; r < 3; ++r) S3[6 * a + r] = col[r];
-    cross(pos, col, S3 + 6 * a + 3);
-  }
+  joint_transform_law::ball_subspace(joint_transform_law::rows(R), pos,
+                                     joint_transform_law::columns(at(l_.ball_S + 18 * i)));
 }
 
 // ABA passes 2 and 3 at a spherical joint: multi_dof_law (docs/math/unit_response.md, eq.

@@ -147,5 +147,40 @@ TEST(JointTransformLaw, OneDofSubspaceMovesTheLinkAboutOrAlongItsAxis) {  // JT-
   }
 }
 
+TEST(JointTransformLaw, BallSubspaceTurnsTheLinkAboutItsOrigin) {  // JT-11
+  std::mt19937_64 rng(29);
+  std::normal_distribution<double> n;
+  for (int k = 0; k < 50; ++k) {
+    const Mat3 R = random_rotation(rng);
+    const Vec3 p(n(rng), n(rng), n(rng)), w_link(n(rng), n(rng), n(rng));
+    Mat6N S(6, 3);
+    joint_transform_law::ball_subspace(R, p, joint_transform_law::columns(S.data()));
+    // S w_link is the link turning at w_link (its own axes) about its origin: the angular
+    // velocity R w_link, the origin p standing still, another point x moving by w x (x - p).
+    const Vec6 twist = S * w_link;
+    const Vec3 w = twist.head<3>(), v0 = twist.tail<3>();
+    EXPECT_NEAR((w - R * w_link).norm(), 0.0, 1e-14);
+    EXPECT_NEAR((v0 + w.cross(p)).norm(), 0.0, 1e-14);
+    const Vec3 x(n(rng), n(rng), n(rng));
+    EXPECT_NEAR((v0 + w.cross(x) - (R * w_link).cross(x - p)).norm(), 0.0, 1e-14);
+    // Each column a revolute joint's S about R's column a through p (JT-10), bit for bit; and the
+    // same bits from a row-major rotation (the lanes').
+    double m[9], s[18];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[3 * i + j] = R(i, j);
+    joint_transform_law::ball_subspace(joint_transform_law::rows(m), p,
+                                       joint_transform_law::columns(s));
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 axis = R.col(a);
+      Vec6 S1;
+      joint_transform_law::one_dof_subspace(axis.data(), p, true, S1);
+      for (int r = 0; r < 6; ++r) {
+        EXPECT_EQ(S(r, a), S1[r]);
+        EXPECT_EQ(s[6 * a + r], S1[r]);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace featherdrive

@@ -119,4 +119,28 @@ void one_dof_subspace(const T* a_w, const W& p, bool revolute, O&& S) {
   }
 }
 
+/// A 6 x N matrix stored column by column on a T* (Eigen's Mat6N, the lanes' ball_S), as m(r, c).
+template <class T>
+struct Columns {
+  T* s;
+  T& operator()(int r, int c) const { return s[6 * c + r]; }
+};
+template <class T>
+Columns<T> columns(T* s) {
+  return {s};
+}
+
+/// S = [R; p x R] column by column: a spherical joint's motion subspace in frame 0 from the
+/// link's rotation R and its origin p relative to frame 0's (eq. JT-11), JT-10's cross product on
+/// each column of R. S must not alias R or p.
+template <class M, class W, class O>
+void ball_subspace(const M& R, const W& p, O&& S) {
+  for (int a = 0; a < 3; ++a) {
+    for (int r = 0; r < 3; ++r) S(r, a) = R(r, a);
+    S(3, a) = p[1] * R(2, a) - p[2] * R(1, a);
+    S(4, a) = p[2] * R(0, a) - p[0] * R(2, a);
+    S(5, a) = p[0] * R(1, a) - p[1] * R(0, a);
+  }
+}
+
 }  // namespace featherdrive::joint_transform_law
