@@ -312,6 +312,7 @@ class LaneStep {
                      j * kMimicParameters + f);
   }
   void leave_link(int k, bool fix);
+  [[gnu::noinline]] void correct_parent(int p, const V* pa);
   int leave_chain_run(int k, int stop);
   void finish_link(int i);
   // A floating root, link 0 (docs/simd_batch.md, "Floating bases").
@@ -1267,9 +1268,9 @@ void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& b
     qd = sweep_law::finished_velocity(qd, lane(at(l_.entry)[d]), six(lane, at(l_.G + 6 * k)),
                                       six(lane, pAk));
   }
-  if (!to_parent) return;
-  V* pAp = at(l_.subtree + 6 * lk.parent);
-  for (int r = 0; r < 6; ++r) lane(pAp[r]) = lane(pAk[r]) + b * lane(U[r]);
+  if (to_parent)  // the parent's first child (sweep_law, eq. SW12)
+    sweep_law::hand_over<T>(sweep_law::handed(six(lane, pAk), b, six(lane, U)), true,
+                            six(lane, at(l_.subtree + 6 * lk.parent)));
 }
 
 // Leaves the run of only children from k (sweep_walk::in_run; leave_chain_link's operations in
@@ -1351,24 +1352,30 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
       leave_chain_link(WholePack{}, k, chain, beta);
   }
   if (p < 0) return;
+  // The hand-over (sweep_law, eq. SW12-SW14): a chain's one-dof link did it in leave_chain_link.
   V* pAp = at(l_.subtree + 6 * p);
   if (chain) {
-    if (!U)
-      for (int r = 0; r < 6; ++r) pAp[r] = pAk[r];
+    if (!U) sweep_law::hand_over<V>(pAk, true, pAp);
   } else {
     V pa[6];
-    for (int r = 0; r < 6; ++r) pa[r] = U ? pAk[r] + beta * U[r] : pAk[r];
-    for (int r = 0; r < 6; ++r) pAp[r] = first_child ? pa[r] : pAp[r] + pa[r];
-    if (fix) {
-      V t[6];
-      sym_times(at(l_.Lambda + 21 * p), pa, t);
-      V* dv = at(l_.dv + 6 * p);
-      for (int r = 0; r < 6; ++r) dv[r] = dv[r] - t[r];
-    }
+    for (int r = 0; r < 6; ++r) pa[r] = U ? sweep_law::handed(pAk, beta, U)[r] : pAk[r];
+    sweep_law::hand_over<V>(pa, first_child, pAp);
+    if (fix) correct_parent(p, pa);
   }
-  if (!last_child)
-    for (int r = 0; r < 6; ++r) at(l_.after + 6 * k)[r] = pAp[r];
+  if (!last_child) sweep_law::record_after<V>(pAp, at(l_.after + 6 * k));
 }
+// Link p's velocity change less its response to the impulse pa handed it (sweep_law, eq. SW13),
+// one vector at a time: its six entries of pa stay in registers. Out of line, as Simulation's
+// correct_velocity_change: inlined, it moved the spills of leave_chain_run's loop.
+template <class A, int K>
+void LaneStep<A, K>::correct_parent(int p, const V* pa) {
+  const V* Lambda = at(l_.Lambda + 21 * p);
+  V* dv = at(l_.dv + 6 * p);
+  for (int j = 0; j < K; ++j)
+    sweep_law::correct_parent<B>(SymmetricVector{Lambda, j}, six(OneVector{j}, pa),
+                                 six(OneVector{j}, dv));
+}
+
 // A joint not finished when left: its velocity change from its subtree and from later subtrees
 // (gauss_seidel.hpp's finish_link).
 template <class A, int K>

@@ -1,6 +1,7 @@
-// sweep_law (a link's part of the Gauss-Seidel sweep, docs/math/implicit_drives.md eq. SW0-SW11,
+// sweep_law (a link's part of the Gauss-Seidel sweep, docs/math/implicit_drives.md eq. SW0-SW14,
 // GS1-GS3) and the sweep built on it: SW0's sum against Eigen's 6-vector product, bit for bit (the
-// scalar step's bits rest on it), and every row's velocity in a sweep of given impulses on random
+// scalar step's bits rest on it), the hand-over (SW12-SW14) through Eigen's expressions and entry
+// by entry against the same sums written out, bit for bit, and every row's velocity in a sweep of given impulses on random
 // trees against the dense joint-space inertia: q̇ + M^-1 (the impulses applied before it), as
 // "Propagating impulses" claims; every link's velocity change when entered (SW2, SW8) against
 // the sum of its path's S_j M^-1 (the impulses so far), with external impulses on the links that
@@ -48,6 +49,64 @@ TEST(SweepLaw, SumIsEigensSixVectorProduct) {  // SW0
   }
   // Not vacuous: another order differs in the last bit often.
   EXPECT_GT(differ_from_left_to_right, 1000);
+}
+
+// The hand-over to the parent (SW3, SW12-SW14): the scalar step's Eigen vectors and the lanes'
+// entry-by-entry path (plain arrays here) against the sums written out, rows of Lambda pa left to
+// right.
+TEST(SweepLaw, HandOverIsTheSameSumsEitherWay) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), e(-3.0, 3.0);
+  auto draw = [&] {
+    Vec6 x;
+    for (int r = 0; r < 6; ++r) x[r] = u(rng) * std::pow(10.0, e(rng));
+    return x;
+  };
+  int differ_from_pairs = 0;
+  for (int k = 0; k < 5000; ++k) {
+    const Vec6 pA = draw(), U = draw(), start = draw(), dv0 = draw();
+    const double beta = u(rng);
+    Mat6 Lambda;
+    for (int c = 0; c < 6; ++c) Lambda.col(c) = draw();
+    const bool first = k % 2 == 0;
+    Vec6 pa, parent, dv;  // written out
+    for (int r = 0; r < 6; ++r) pa[r] = pA[r] + beta * U[r];
+    for (int r = 0; r < 6; ++r) parent[r] = first ? pa[r] : start[r] + pa[r];
+    for (int r = 0; r < 6; ++r) {
+      double sum = Lambda(r, 0) * pa[0];
+      for (int c = 1; c < 6; ++c) sum += Lambda(r, c) * pa[c];
+      dv[r] = dv0[r] - sum;
+    }
+    // A pairwise order, as a check that the row order is seen: it differs in the last bit often.
+    const double pairs = (Lambda(0, 0) * pa[0] + Lambda(0, 1) * pa[1]) +
+                         ((Lambda(0, 2) * pa[2] + Lambda(0, 3) * pa[3]) +
+                          (Lambda(0, 4) * pa[4] + Lambda(0, 5) * pa[5]));
+    differ_from_pairs += !same_bits(dv0[0] - pairs, dv[0]);
+    // Eigen's.
+    Vec6 parent_e = start, after_e = Vec6::Zero(), dv_e = dv0;
+    const auto pa_e = sweep_law::handed(pA, beta, U);
+    sweep_law::hand_over<double>(pa_e, first, parent_e);
+    sweep_law::record_after<double>(parent_e, after_e);
+    sweep_law::correct_parent<double>(Lambda, Vec6(pa_e), dv_e);
+    // Entry by entry.
+    double parent_a[6], after_a[6], dv_a[6], pa_a[6];
+    for (int r = 0; r < 6; ++r) parent_a[r] = start[r], dv_a[r] = dv0[r];
+    const auto pa_h = sweep_law::handed(pA.data(), beta, U.data());
+    for (int r = 0; r < 6; ++r) pa_a[r] = pa_h[r];
+    sweep_law::hand_over<double>(pa_h, first, parent_a);
+    sweep_law::record_after<double>(parent_a, after_a);
+    sweep_law::correct_parent<double>([&](int r, int c) { return Lambda(r, c); }, pa_a, dv_a);
+    for (int r = 0; r < 6; ++r) {
+      EXPECT_TRUE(same_bits(pa_a[r], pa[r])) << k;
+      EXPECT_TRUE(same_bits(parent_e[r], parent[r])) << k;
+      EXPECT_TRUE(same_bits(parent_a[r], parent[r])) << k;
+      EXPECT_TRUE(same_bits(after_e[r], parent[r])) << k;
+      EXPECT_TRUE(same_bits(after_a[r], parent[r])) << k;
+      EXPECT_TRUE(same_bits(dv_e[r], dv[r])) << k;
+      EXPECT_TRUE(same_bits(dv_a[r], dv[r])) << k;
+    }
+  }
+  EXPECT_GT(differ_from_pairs, 100);
 }
 
 // A sweep whose rows apply given impulses: each row sees q̇ + M^-1 (the impulses before it in

@@ -3,12 +3,15 @@
 // (joint_motion.cpp's integrate_configuration, momentum_correction.cpp's integrate_root_about_com,
 // spherical_rows.cpp's integrate_spherical_joints), SIMD packs of environments in the lanes
 // (LaneStep::integrate, integrate_root, integrate_root_physx, integrate_balls_physx in
-// sim/simd_lane_step.hpp). A 1-dof joint's q + h qd needs no law. Only spatial/quaternion_law.hpp,
-// so that the lanes' units compiled for AVX2 and AVX-512 take in no inline function of the rest
-// of the library.
+// sim/simd_lane_step.hpp). A 1-dof joint's q + h qd needs no law. Only laws over the number type
+// (quaternion_law, link_motion_law, vector3_law, joint_transform_law's rows), so that the lanes'
+// units compiled for AVX2 and AVX-512 take in no inline function of the rest of the library.
 #pragma once
 
+#include "featherdrive/algorithm/link_motion_law.hpp"
+#include "featherdrive/spatial/joint_transform_law.hpp"
 #include "featherdrive/spatial/quaternion_law.hpp"
+#include "featherdrive/spatial/vector3_law.hpp"
 
 namespace featherdrive::integration_law {
 
@@ -28,9 +31,12 @@ struct RootFrame {
 /// (eq. Q-8, physx_departures.md "Root pose"). q is read, then written.
 template <class T>
 void root_about_com(const RootFrame& f, const T* c, const T* R0, const T* qd, const T& h, T* q) {
+  using link_motion_law::in_link_axes;
+  using link_motion_law::in_world_axes;
   using quaternion_law::product;
   using quaternion_law::rotate;
   using quaternion_law::unit;
+  const auto E = [&f](int r, int c) { return T(f.E[3 * r + c]); };  // row-major, as T
   const T QT[4] = {T(f.QT[0]), T(f.QT[1]), T(f.QT[2]), T(f.QT[3])};
   T Q[4];
   unit(q + 3, Q);
@@ -39,18 +45,17 @@ void root_about_com(const RootFrame& f, const T* c, const T* R0, const T* qd, co
     product(QT, QJ, Q);
   }
   T p[3];  // the root's origin in the world, r_T + E_T^T q
-  for (int r = 0; r < 3; ++r)
-    p[r] = f.identity ? T(f.r[r]) + q[r]
-                      : T(f.r[r]) + ((T(f.E[r]) * q[0] + T(f.E[3 + r]) * q[1]) +
-                                     T(f.E[6 + r]) * q[2]);
-  const T wc[3] = {qd[1] * c[2] - qd[2] * c[1], qd[2] * c[0] - qd[0] * c[2],
-                   qd[0] * c[1] - qd[1] * c[0]};
-  T vb[3], w[3], vcom[3], Qc[3], com[3];
-  for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
-  for (int r = 0; r < 3; ++r) {
-    w[r] = R0[3 * r] * qd[0] + R0[3 * r + 1] * qd[1] + R0[3 * r + 2] * qd[2];
-    vcom[r] = R0[3 * r] * vb[0] + R0[3 * r + 1] * vb[1] + R0[3 * r + 2] * vb[2];
+  if (f.identity) {
+    for (int r = 0; r < 3; ++r) p[r] = T(f.r[r]) + q[r];
+  } else {
+    in_link_axes(E, q, p);
+    for (int r = 0; r < 3; ++r) p[r] = T(f.r[r]) + p[r];
   }
+  T wc[3], vb[3], w[3], vcom[3], Qc[3], com[3];
+  vector3_law::cross(qd, c, wc);
+  for (int r = 0; r < 3; ++r) vb[r] = qd[3 + r] + wc[r];
+  in_world_axes(joint_transform_law::rows(R0), qd, w);
+  in_world_axes(joint_transform_law::rows(R0), vb, vcom);
   rotate(Q, c, Qc);
   for (int r = 0; r < 3; ++r) com[r] = (p[r] + Qc[r]) + h * vcom[r];
   const T t[3] = {h * w[0], h * w[1], h * w[2]};
@@ -72,9 +77,7 @@ void root_about_com(const RootFrame& f, const T* c, const T* R0, const T* qd, co
     product(back, once, joint);
     unit(joint, o);
     for (int r = 0; r < 3; ++r) d_world[r] = (com[r] - oc[r]) - T(f.r[r]);
-    for (int a = 0; a < 3; ++a)  // E_T (p - r_T)
-      q[a] = (T(f.E[3 * a]) * d_world[0] + T(f.E[3 * a + 1]) * d_world[1]) +
-             T(f.E[3 * a + 2]) * d_world[2];
+    in_world_axes(E, d_world, q);  // E_T (p - r_T)
   }
   for (int e = 0; e < 4; ++e) q[3 + e] = o[e];
 }

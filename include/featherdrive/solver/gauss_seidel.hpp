@@ -63,10 +63,10 @@ struct SweepWorkspace {
 namespace detail {
 
 // stop's velocity change corrected by its whole-articulation response to the impulse pa one of
-// its children handed it (out of line: branching only).
+// its children handed it (sweep_law, eq. SW13; out of line: branching only).
 [[gnu::noinline]] inline void correct_velocity_change(const Data& data, SweepWorkspace& ws, int p,
                                                       const Vec6& pa) {
-  ws.link_velocity_change[p].noalias() -= data.response[p] * pa;
+  sweep_law::correct_parent<double>(data.response[p], pa, ws.link_velocity_change[p]);
 }
 
 // S of a joint of N dofs as sweep_law reads it: a spherical joint's dense, a floating root's
@@ -114,9 +114,9 @@ template <int N, class RowSolver>
 }
 
 // Link k, with 0 or several dofs, hands pa = pA + U D^-1 (impulse - S^T pA) to its parent
-// (sweep_law, eq. SW9).
+// (sweep_law, eq. SW9; a fixed joint pA whole).
 template <int N>
-inline void hand_over(const Data& data, const SweepWorkspace& ws, int k, Vec6& pa) {
+inline void handed_n(const Data& data, const SweepWorkspace& ws, int k, Vec6& pa) {
   sweep_law::hand_over_n<N>(ws.joint_impulse.data() + data.info[k].v_index,
                             sweep_subspace<N>(data, k), data.U[k].data(), data.D_inv[k].data(),
                             ws.subtree_impulse[k].data(), pa.data());
@@ -128,15 +128,14 @@ inline void hand_over(const Data& data, const SweepWorkspace& ws, int k, Vec6& p
   if (p < 0) return;  // the root hands nothing on
   Vec6 pa;
   if (link.nv == 3)
-    hand_over<3>(data, ws, k, pa);
+    handed_n<3>(data, ws, k, pa);
   else if (link.nv == 6)
-    hand_over<6>(data, ws, k, pa);
+    handed_n<6>(data, ws, k, pa);
   else
     pa = ws.subtree_impulse[k];
   Vec6& pA_parent = ws.subtree_impulse[p];
-  if (ws.links[k].first_child) pA_parent = pa;
-  else pA_parent += pa;
-  if (!link.last_child) ws.parent_impulse_after[k] = pA_parent;
+  sweep_law::hand_over<double>(pa, ws.links[k].first_child, pA_parent);
+  if (!link.last_child) sweep_law::record_after<double>(pA_parent, ws.parent_impulse_after[k]);
   if (correct) correct_velocity_change(data, ws, p, pa);
 }
 
@@ -206,10 +205,10 @@ class SweepLeaving {
       x_ = sweep_law::parent_S_pA(S_p, pA, beta, J.parent_S);
       if (!first) x_ += sweep_law::dot6<double>(S_p, pA_parent);
     }
-    if (first) pA_parent = pA + beta * J.U;
-    else pA_parent += pA + beta * J.U;
-    if (!link.last_child) ws_.parent_impulse_after[k] = pA_parent;
-    if (p == stop && correct) correct_velocity_change(data_, ws_, p, pA + beta * J.U);
+    const Vec6 pa = sweep_law::handed(pA, beta, J.U);
+    sweep_law::hand_over<double>(pa, first, pA_parent);
+    if (!link.last_child) sweep_law::record_after<double>(pA_parent, ws_.parent_impulse_after[k]);
+    if (p == stop && correct) correct_velocity_change(data_, ws_, p, pa);
   }
 
  private:

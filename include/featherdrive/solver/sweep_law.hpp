@@ -1,5 +1,5 @@
 // A link's part of a Gauss-Seidel sweep with exact joint velocities
-// (docs/math/implicit_drives.md, "Propagating impulses", eq. SW0-SW11 and GS1-GS3), over the
+// (docs/math/implicit_drives.md, "Propagating impulses", eq. SW0-SW14 and GS1-GS3), over the
 // number type: Simulation's gauss_seidel_sweep (double) and the lanes' sweep
 // (sim/simd_lane_step.hpp: a pack, or one vector of it) form it with the same operations. The
 // walk over the links (which link is entered, left or finished when) is sweep_walk.hpp's.
@@ -80,6 +80,66 @@ template <class T, class G6, class A6>
 [[gnu::always_inline]] inline T finished_velocity(const T& qd, const T& entry, const G6& G,
                                                   const A6& pA) {
   return qd + (entry - dot6<T>(G, pA));
+}
+
+// ---- The hand-over to the parent (eq. SW12-SW14) ----
+
+/// Eigen's vectors (the scalar step's): the hand-over's copies, sums and product go through their
+/// own expressions, which keep them in packets; the others entry by entry.
+template <class X>
+concept Dense = requires(X& x) { x.dot(x); };
+
+/// A one-dof joint's p^a = pA + beta U (eq. SW3), each entry formed where it is read.
+template <class T, class A6, class U6>
+struct Handed {
+  A6 pA;
+  T beta;
+  U6 U;
+  [[gnu::always_inline]] T operator[](int r) const { return pA[r] + beta * U[r]; }
+};
+template <class T, class A6, class U6>
+[[gnu::always_inline]] inline auto handed(const A6& pA, const T& beta, const U6& U) {
+  if constexpr (Dense<const A6>) return pA + beta * U;
+  else return Handed<T, A6, U6>{pA, beta, U};
+}
+
+/// Link k hands its subtree's impulse pa to its parent: pA_p = pa when k is the parent's first
+/// child (pA_p needs no clearing between sweeps), else pA_p + pa (eq. SW12).
+template <class T, class Pa6, class P6>
+[[gnu::always_inline]] inline void hand_over(const Pa6& pa, bool first, P6&& pA_parent) {
+  if constexpr (Dense<P6>) {
+    if (first) pA_parent = pa;
+    else pA_parent += pa;
+  } else {
+    for (int r = 0; r < 6; ++r) pA_parent[r] = first ? pa[r] : pA_parent[r] + pa[r];
+  }
+}
+
+/// Where a sibling follows k, pA_p as k left it: its later siblings' p^a at k's finish are pA_p
+/// less this (eq. SW14, for SW5's E_hat).
+template <class T, class P6, class A6>
+[[gnu::always_inline]] inline void record_after(const P6& pA_parent, A6&& after) {
+  if constexpr (Dense<A6>) after = pA_parent;
+  else
+    for (int r = 0; r < 6; ++r) after[r] = pA_parent[r];
+}
+
+/// The parent's velocity change, read again by the sibling entered next, less its whole-
+/// articulation response to the impulse pa handed it: dv - Lambda pa (eq. SW13), Lambda anything
+/// with Lambda(r, c), each row's sum left to right.
+template <class T, class L, class Pa6, class D6>
+[[gnu::always_inline]] inline void correct_parent(const L& Lambda, const Pa6& pa, D6&& dv) {
+  if constexpr (Dense<D6>) {
+    dv.noalias() -= Lambda * pa;
+  } else {
+    T x[6];
+    for (int c = 0; c < 6; ++c) x[c] = pa[c];
+    for (int r = 0; r < 6; ++r) {
+      T sum = Lambda(r, 0) * x[0];
+      for (int c = 1; c < 6; ++c) sum = sum + Lambda(r, c) * x[c];
+      dv[r] = dv[r] - sum;
+    }
+  }
 }
 
 /// Along a run of only children, the one-dof parent's S_p^T pA_p after k hands it its impulse,

@@ -13,7 +13,8 @@
 // returns the link where it ends) and leave_link(k, stop, correct) (k hands its subtree's
 // impulse to its parent, starting the parent's when k is its first child, records the parent's
 // when a sibling follows, and corrects the parent's velocity change when correct and the parent
-// is stop: the side tests it where it costs least).
+// is stop: sweep_law's hand_over, record_after and correct_parent on the side's storage; the
+// side tests correct where it costs least).
 // Include-free: the lanes' AVX2 and AVX-512 units take in no inline function of the library.
 #pragma once
 
