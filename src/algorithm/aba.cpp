@@ -150,7 +150,7 @@ void articulated_inertias(const Model& model, Data& data) {
   data.frame_origin = data.world_position[0];
   for (int i = 0; i < n; ++i) {
     const Mat3& R = data.world_rotation[i];
-    const Vec3 p = data.world_position[i] - data.frame_origin;
+    const Vec3& p = data.frame_position[i];
     const BodyInertia b = body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p);
     write_inertia(b, data.articulated_inertia[i]);
     subspace_in_frame0(data, i, R, p);
@@ -178,13 +178,12 @@ void articulated_inertias(const Model& model, Data& data) {
 
 void body_motions(const Model& model, Data& data, const VecX& v) {
   const int n = model.num_links();
-  const Vec3 origin = data.world_position[0];
-  data.frame_origin = origin;
+  data.frame_origin = data.world_position[0];
   // Pass 1, in two loops (one would keep more values live than there are registers). First S_i
-  // and I_i in frame 0, link by link.
+  // and I_i in frame 0, link by link, at the kinematics' frame 0 positions (as the lanes').
   for (int i = 0; i < n; ++i) {
     const Mat3& R = data.world_rotation[i];
-    const Vec3 p = data.world_position[i] - origin;
+    const Vec3& p = data.frame_position[i];
     write_inertia(body_inertia(data.constants[i], data.info[i].inertia_diagonal, R, p),
                   data.articulated_inertia[i]);
     if (data.info[i].nv == 1) one_dof_subspace(data, i, R, p, data.one_dof[i].S);

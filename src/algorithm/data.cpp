@@ -31,6 +31,7 @@ Data::Data(const Model& model) {
   parent_transform.resize(n);
   world_rotation.assign(n, Mat3::Identity());
   world_position.assign(n, Vec3::Zero());
+  frame_position.assign(n, Vec3::Zero());
   velocity.assign(n, Vec6::Zero());
   bias_acceleration.assign(n, Vec6::Zero());
   velocity0.assign(n, Vec6::Zero());

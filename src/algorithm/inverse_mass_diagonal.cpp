@@ -16,7 +16,12 @@ const Mat6 kZero = Mat6::Zero();  // the world's response: it does not move
 template <int N>
 [[gnu::noinline]] void multi_dof_response(Data& data, int i, const Mat6& T, Mat6& L) {
   const Data::LinkInfo& link = data.info[i];
-  const response_law::Columns<double> S{data.motion_subspace[i].data()};
+  // A spherical joint's dense S, a floating root's diag(R, R) read from R (RotationPair), as the
+  // lanes' ball_response and root_response read them.
+  const auto S = [&] {
+    if constexpr (N == 6) return detail::Subspace<6>::of(data, i);
+    else return response_law::Columns<double>{data.motion_subspace[i].data()};
+  }();
   const detail::ColumnMajor<N> D_inv{data.D_inv[i].data()};
   detail::Mat6Assigned Lambda(L);
   MatNN& block = data.inverse_mass_block[i];

@@ -75,9 +75,11 @@ void parent_transform_of(const Data& data, int i, const double* q, Transform& X,
 const Mat3 kIdentity3 = Mat3::Identity();  // the world's pose, the root's parent
 const Vec3 kZero3 = Vec3::Zero();
 
-// Link i's X_i, world rotation and world position (its parent's are done in Rw, pw; the world's
-// for the root): any joint, in the lanes' operations (LaneStep::link_pose).
-void position_link(const Data& data, int i, const VecX& q, Transform& X, Mat3* Rw, Vec3* pw) {
+// Link i's X_i, world rotation and position in frame 0 (its parent's are done in Rw, pf; the
+// world's pose for the root): any joint, in the lanes' operations (LaneStep::link_pose). The
+// root's frame 0 position is 0 (JT-12); its world one goes into *root.
+void position_link(const Data& data, int i, const VecX& q, Transform& X, Mat3* Rw, Vec3* pf,
+                   Vec3* root) {
   const Data::LinkInfo& link = data.info[i];
   const Data::LinkConstants& k = data.constants[i];
   double c = 1.0, s = 0.0;
@@ -85,9 +87,10 @@ void position_link(const Data& data, int i, const VecX& q, Transform& X, Mat3* R
   parent_transform_of(data, i, q.data() + link.q_index, X, c, s, J);
   const bool has_parent = link.parent >= 0;
   const Mat3& Rp = has_parent ? Rw[link.parent] : kIdentity3;
-  const Vec3& pp = has_parent ? pw[link.parent] : kZero3;
+  const Vec3& pp = has_parent ? pf[link.parent] : kZero3;
   Mat3& R = Rw[i];
-  Vec3& p = pw[i];
+  if (!has_parent) pf[i].setZero();
+  Vec3& p = has_parent ? pf[i] : *root;
   // p = p_p + R_p r_T (eq. JT-7); a floating root's r is X_i's, r_T + E_T^T q.
   const bool floating = link.type == JointType::floating;
   joint_transform_law::link_position(pp, Rp, floating ? X.r : k.tree_transform.r, p);
@@ -112,12 +115,12 @@ void position_link(const Data& data, int i, const VecX& q, Transform& X, Mat3* R
 }
 
 // The common case (LinkInfo::coordinate_revolute) about e_A, inline: X_i = [R(e_A, q)^T, r_T],
-// R_i = R_p R(e_A, q), p_i = p_p + R_p r_T. A is a template argument so that every index is a
-// constant.
+// R_i = R_p R(e_A, q), p_i = p_p + R_p r_T (frame 0's, in pf). A is a template argument so that
+// every index is a constant.
 // Without kTransform, X_i is not written (world_poses).
 template <int A, bool kTransform = true>
 void position_coordinate_revolute(const Data& data, int i, const VecX& q, Transform& X, Mat3* Rw,
-                                  Vec3* pw) {
+                                  Vec3* pf) {
   constexpr int A1 = A == 2 ? 0 : A + 1, A2 = A == 0 ? 2 : A - 1;
   const Data::LinkInfo& link = data.info[i];
   // First, so that nothing computed before it has to survive the call.
@@ -127,9 +130,9 @@ void position_coordinate_revolute(const Data& data, int i, const VecX& q, Transf
   const Vec3 r = data.constants[i].tree_transform.r;
   const Mat3& Rp = Rw[link.parent];
   Vec3 p;
-  joint_transform_law::link_position(pw[link.parent], Rp, r, p);
+  joint_transform_law::link_position(pf[link.parent], Rp, r, p);
   joint_transform_law::turn_columns(Rp, A, s, c, Rw[i]);
-  pw[i] = p;
+  pf[i] = p;
   if (!kTransform) return;
   X.E(A, A) = 1.0;
   X.E(A, A1) = 0.0;
@@ -170,23 +173,28 @@ Vec6 velocity_from_parent(const Data& data, int i) {
   return coordinate_apply_motion<2>(X, vp);
 }
 
-// Either of the above, into the rotations Rw and positions pw, X_i into X. Forced inline: out
-// of line world_poses's loop takes 8 % more instructions (chain256).
+// Either of the above, into the rotations Rw and frame 0's positions pf (the root's world position
+// into *root), X_i into X. Forced inline: out of line world_poses's loop takes 8 % more
+// instructions (chain256).
 template <bool kTransform = true>
 [[gnu::always_inline]] inline void position_any(const Data& data, int i, const VecX& q,
-                                                Transform& X, Mat3* Rw, Vec3* pw) {
+                                                Transform& X, Mat3* Rw, Vec3* pf, Vec3* root) {
   const Data::LinkInfo& link = data.info[i];
-  if (!link.coordinate_revolute) position_link(data, i, q, X, Rw, pw);
-  else if (link.unit_axis == 0) position_coordinate_revolute<0, kTransform>(data, i, q, X, Rw, pw);
-  else if (link.unit_axis == 1) position_coordinate_revolute<1, kTransform>(data, i, q, X, Rw, pw);
-  else position_coordinate_revolute<2, kTransform>(data, i, q, X, Rw, pw);
+  if (!link.coordinate_revolute) position_link(data, i, q, X, Rw, pf, root);
+  else if (link.unit_axis == 0) position_coordinate_revolute<0, kTransform>(data, i, q, X, Rw, pf);
+  else if (link.unit_axis == 1) position_coordinate_revolute<1, kTransform>(data, i, q, X, Rw, pf);
+  else position_coordinate_revolute<2, kTransform>(data, i, q, X, Rw, pf);
 }
 
-// Into data's own poses and X_i.
+// Into data's own poses and X_i: frame 0's position p, then the world's p + p_0 with p_0 the
+// root's origin (docs/math/joint_transform.md, JT-12), as the lanes' contacts form it.
 template <bool kTransform = true>
 [[gnu::always_inline]] inline void position_any(Data& data, int i, const VecX& q) {
-  position_any<kTransform>(data, i, q, data.parent_transform[i], data.world_rotation.data(),
-                           data.world_position.data());
+  Vec3* const pw = data.world_position.data();
+  Vec3* const pf = data.frame_position.data();
+  position_any<kTransform>(data, i, q, data.parent_transform[i], data.world_rotation.data(), pf,
+                           pw);
+  if (i > 0) pw[i] = pf[i] + pw[0];
 }
 
 }  // namespace
@@ -199,7 +207,9 @@ void world_poses(const Model& model, Data& data, const VecX& q) {
 void world_poses(const Data& data, const VecX& q, Mat3* R, Vec3* p) {
   const int n = static_cast<int>(data.info.size());
   Transform X;  // X_i, not kept
-  for (int i = 0; i < n; ++i) position_any<false>(data, i, q, X, R, p);
+  Vec3 root;    // the root's origin in the world
+  for (int i = 0; i < n; ++i) position_any<false>(data, i, q, X, R, p, &root);
+  for (int i = 0; i < n; ++i) p[i] = p[i] + root;  // frame 0's to the world's (JT-12)
 }
 
 void forward_kinematics(const Model& model, Data& data, const VecX& q) {

@@ -84,7 +84,6 @@ void compute_link_bias(const Model& model, const Data& data, double dt, PhysxDep
   // (frame 0): each centre of mass's velocity by eq. P1-6 (unit_response.md), as the lanes'.
   double mass = 0.0;
   s.total_com.setZero();
-  const Vec3 origin = data.world_position[0];
   for (int i = 0; i < n; ++i) {
     const Link& link = model.links[i];
     s.R[i] = data.world_rotation[i];
@@ -93,7 +92,7 @@ void compute_link_bias(const Model& model, const Data& data, double dt, PhysxDep
     s.total_com += link.mass * s.com[i];
     mass += link.mass;
     const double* v = data.velocity0[i].data();
-    const Vec3 p0 = s.p[i] - origin;
+    const Vec3& p0 = data.frame_position[i];  // frame 0's, as the lanes'
     double c[3], mc[3];
     link_motion_law::centre_of_mass(s.R[i], p0.data(), link.com.data(), link.mass, c, mc);
     dep.vel.w[i] = data.velocity0[i].head<3>();

@@ -21,14 +21,13 @@ bool link_damping_forces(const Model& model, const Data& data,
           std::isfinite(p.max_linear_velocity) || std::isfinite(p.max_angular_velocity);
   if (!any) return false;
   using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
-  const Vec3& origin = data.world_position[0];
   for (int i = 0; i < model.num_links(); ++i) {
     const LinkParameters& p = parameters[static_cast<size_t>(i)];
     const Data::LinkConstants& k = data.constants[i];
     const Mat3& R = data.world_rotation[i];
     const double* v = data.velocity0[i].data();  // frame 0, ABA's pass 1 (body_motions)
     // c (P1-2), v_c (P1-6) and omega in the link's axes (P1-7), as the lanes' link_damping.
-    const Vec3 p0 = data.world_position[i] - origin;
+    const Vec3& p0 = data.frame_position[i];
     double c[3], mc[3], v_com[3], local[3];
     link_motion_law::centre_of_mass(R, p0.data(), k.com.data(), k.mass, c, mc);
     link_motion_law::point_velocity(v, c, v_com);

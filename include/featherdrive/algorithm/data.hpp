@@ -54,6 +54,7 @@ struct Data {
   std::vector<Transform> parent_transform;  ///< X_i: parent frame (world for the root) -> link i
   std::vector<Mat3> world_rotation;         ///< link frame orientation in the world
   std::vector<Vec3> world_position;         ///< link frame origin in the world
+  std::vector<Vec3> frame_position;         ///< link frame origin in frame 0 (JT-12)
   std::vector<Vec6> velocity;               ///< spatial velocity v_i, link frame
   std::vector<Vec6> bias_acceleration;      ///< c_i = v_i x (S_i qd_i), link frame
 

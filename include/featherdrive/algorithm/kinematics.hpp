@@ -5,11 +5,12 @@
 
 namespace featherdrive {
 
-/// Fills data.parent_transform, world_rotation, world_position from q (nq).
+/// Fills data.parent_transform, world_rotation, frame_position and world_position from q (nq).
 void forward_kinematics(const Model& model, Data& data, const VecX& q);
 
-/// data.world_rotation and world_position from q; data.parent_transform only where a joint is not
-/// a revolute about a coordinate axis (what the step reads: rnea and crba fill their own).
+/// data.world_rotation, frame_position and world_position from q; data.parent_transform only where
+/// a joint is not a revolute about a coordinate axis (what the step reads: rnea and crba fill their
+/// own).
 void world_poses(const Model& model, Data& data, const VecX& q);
 
 /// The links' world rotations R and positions p (num_links each, the caller's) from q by

@@ -68,6 +68,7 @@ template <int N, class SM, class F>
   int k = 0;
   while (!SM::nonzero(s_row, k)) ++k;
   auto sum = term(k);
+  #pragma GCC unroll 6
   for (++k; k < N; ++k)
     if (SM::nonzero(s_row, k)) sum = sum + term(k);
   return sum;
@@ -80,7 +81,11 @@ template <int N, class SM, class F>
 template <int N, class T, class SM, class DM, class Out>
 [[gnu::always_inline]] inline void world_response(const SM& S, const DM& D_inv, Out& Lambda) {
   T SD[6 * N];  // S D^-1, column b at SD + 6 b
+  // Unrolled, so that S's zeros are known where they are skipped (RotationPair's for a floating
+  // root; rolled, each entry's index and zero test are worked out at run time).
+  #pragma GCC unroll 6
   for (int b = 0; b < N; ++b)
+    #pragma GCC unroll 6
     for (int r = 0; r < 6; ++r)
       SD[6 * b + r] = sum_over<N, SM>(r, [&](int c) { return S(r, c) * D_inv(c, b); });
   Lambda.assign([&](int a, int b) {
