@@ -84,8 +84,8 @@ inline void write_inertia(const BodyInertia& b, Mat6& I) {
   joint_transform_law::one_dof_subspace(a, p, link.type == JointType::revolute, S);
 }
 
-// S_i in frame 0: a 1-dof joint's (above), a spherical joint's [R; p x R] (eq. JT-11), a floating
-// root's diag(R, R) (its origin is frame 0's) entry by entry as the steps read it from R
+// S_i in frame 0: a 1-dof joint's (above), a spherical joint's [R; p x R] (eq. JT-11). A floating
+// root's, diag(R, R) (its origin is frame 0's), is not stored: every reader takes it from R
 // (multi_dof_law::RotationPair).
 void subspace_in_frame0(Data& data, int i, const Mat3& R, const Vec3& p) {
   const Data::LinkInfo& link = data.info[i];
@@ -94,12 +94,6 @@ void subspace_in_frame0(Data& data, int i, const Mat3& R, const Vec3& p) {
   } else if (link.nv == 3) {
     joint_transform_law::ball_subspace(
         R, p, joint_transform_law::columns(data.motion_subspace[i].data()));
-  } else if (link.nv == 6) {
-    using S6 = multi_dof_law::RotationPair<double, true>;
-    const S6 S{R.data()};
-    Mat6N& out = data.motion_subspace[i];
-    for (int c = 0; c < 6; ++c)
-      for (int r = 0; r < 6; ++r) out(r, c) = S6::nonzero(r, c) ? S(r, c) : 0.0;
   }
 }
 

@@ -46,7 +46,8 @@ Data::Data(const Model& model) {
   composite_inertia.assign(n, Mat6::Zero());
   for (const Link& link : model.links) {
     const int k = link.nv == 1 ? 0 : link.nv;  // 1-dof joints use one_dof
-    motion_subspace.push_back(Mat6N::Zero(6, k));
+    // A floating root's S is read from its rotation (multi_dof_law::RotationPair).
+    motion_subspace.push_back(Mat6N::Zero(6, link.joint_type == JointType::floating ? 0 : k));
     U.push_back(Mat6N::Zero(6, k));
     D_inv.push_back(MatNN::Zero(k, k));
     parent_coupling.push_back(Mat6N::Zero(6, k));

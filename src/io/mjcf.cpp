@@ -509,7 +509,11 @@ void check_well_posed(const MjcfRobot& robot, const std::string& file) {
     Mat6 Y = Mat6::Identity();
     Y.bottomLeftCorner<3, 3>() = skew(p);
     const Mat6 IA = Y.transpose() * data.articulated_inertia[i] * Y;
-    MatX S = nv == 1 ? MatX(data.one_dof[i].S) : MatX(data.motion_subspace[i]);
+    // A floating root's S in frame 0 is diag(R, R) (its origin is frame 0's), not stored.
+    MatX S = MatX::Zero(6, nv);
+    if (nv == 1) S = data.one_dof[i].S;
+    else if (nv == 3) S = data.motion_subspace[i];
+    else S.topLeftCorner<3, 3>() = S.bottomRightCorner<3, 3>() = data.world_rotation[i];
     S.bottomRows<3>() -= skew(p) * S.topRows<3>();
     MatX D = S.transpose() * IA * S;
     for (int k = 0; k < nv; ++k) D(k, k) += model.armature[v + k];

@@ -170,8 +170,10 @@ TEST(SweepLaw, LinkVelocityChangesAreTheDenseResponse) {
         const int v0 = model->links[i].v_index, k = model->links[i].nv;
         if (k == 1)
           S.col(v0) = data.one_dof[i].S;
-        else if (k > 1)
+        else if (k == 3)
           S.middleCols(v0, k) = data.motion_subspace[i];
+        else if (k == 6)  // the floating root's diag(R, R): its origin is frame 0's
+          S.block<3, 3>(0, v0) = S.block<3, 3>(3, v0 + 3) = data.world_rotation[i];
         return S;
       };
       std::vector<MatX> J(n);  // the link's Jacobian in frame 0: its path's S

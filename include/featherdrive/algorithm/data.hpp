@@ -62,7 +62,8 @@ struct Data {
   // U, D_inv and parent_coupling are kept for joints with nv_i != 1 only; 1-dof joints (revolute,
   // prismatic) keep theirs in one_dof below.
   Vec3 frame_origin = Vec3::Zero();
-  std::vector<Mat6N> motion_subspace;       ///< S_i in frame 0 (6 x nv_i)
+  std::vector<Mat6N> motion_subspace;       ///< S_i in frame 0 (6 x nv_i); a floating root's 6 x 0
+                                            ///< (diag(R_i, R_i), read from world_rotation)
   std::vector<Vec6> velocity0;              ///< v_i in frame 0 (aba_from_kinematics)
   std::vector<Vec6> bias_acceleration0;     ///< c_i = v_i x (S_i qd_i) in frame 0
   std::vector<Mat6> articulated_inertia;    ///< IA_i, frame 0
