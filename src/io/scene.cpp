@@ -112,10 +112,17 @@ void check_nesting(const std::string& text, const std::string& file) {
   }
 }
 
-const std::vector<std::string> kDriveKeys = {"type",          "stiffness",       "damping",
-                                             "max_force",     "max_impulse",     "target_position",
-                                             "target_velocity", "target",        "envelope",
-                                             "actuator",      "delay"};
+const std::vector<std::string> kDriveKeys = {"type",
+                                             "stiffness",
+                                             "damping",
+                                             "max_force",
+                                             "max_impulse",
+                                             "target_position",
+                                             "target_velocity",
+                                             "target",
+                                             "envelope",
+                                             "actuator",
+                                             "delay"};
 const std::vector<std::string> kLinkKeys = {"cfm_scale", "linear_damping", "angular_damping",
                                             "max_linear_velocity", "max_angular_velocity"};
 
@@ -226,8 +233,8 @@ void check_target_range(const Reader& r, const YAML::Node& node, const std::stri
   if (drive.type == DriveType::none) return;
   if (drive.stiffness > 0.0 && std::abs(position) > kMaxDriveTargetPosition)
     r.fail(path, node,
-           "the target position reaches " + format_double(position) +
-               ", beyond +-1e6 (m or rad)" + why);
+           "the target position reaches " + format_double(position) + ", beyond +-1e6 (m or rad)" +
+               why);
   if (drive.damping > 0.0 && std::abs(velocity) > kMaxDriveTargetVelocity)
     r.fail(path, node,
            "the target velocity reaches " + format_double(velocity) +
@@ -281,10 +288,10 @@ DriveSpec read_drive(const Reader& r, const YAML::Node& node, const std::string&
     r.map(node["target"], tpath, {"sine"});
     if (!node["target"]["sine"]) r.fail(tpath, node["target"], "must name a trajectory (sine)");
     spec.sine = read_sine(r, node["target"]["sine"], tpath + ".sine");
-    check_target_range(r, node["target"]["sine"], tpath + ".sine", spec.drive,
-                       std::abs(spec.sine->offset) + std::abs(spec.sine->amplitude),
-                       2.0 * std::numbers::pi * spec.sine->frequency *
-                           std::abs(spec.sine->amplitude));
+    check_target_range(
+        r, node["target"]["sine"], tpath + ".sine", spec.drive,
+        std::abs(spec.sine->offset) + std::abs(spec.sine->amplitude),
+        2.0 * std::numbers::pi * spec.sine->frequency * std::abs(spec.sine->amplitude));
   }
   if (node["envelope"]) {
     const std::string epath = at("envelope");
@@ -333,8 +340,7 @@ RevoluteWrap read_revolute(const Reader& r, const YAML::Node& node, const std::s
 }
 
 // A material's keys where the node has them (shapes[i], ground).
-void read_material(const Reader& r, const YAML::Node& node, const std::string& path,
-                   Material& m) {
+void read_material(const Reader& r, const YAML::Node& node, const std::string& path, Material& m) {
   const auto at = [&](const char* key) { return Reader::join(path, key); };
   if (node["static_friction"])
     m.static_friction = r.non_negative(node["static_friction"], at("static_friction"));
@@ -349,7 +355,7 @@ void read_material(const Reader& r, const YAML::Node& node, const std::string& p
 
 // ground: {height, normal, static_friction, dynamic_friction, restitution}, or false (none, not
 // even the robot file's floor) or true (the defaults).
-Ground read_ground(const Reader& r, const YAML::Node& node) {
+[[gnu::noinline]] Ground read_ground(const Reader& r, const YAML::Node& node) {
   Ground ground;
   if (node.IsScalar()) {
     ground.enabled = r.boolean(node, "ground");
@@ -371,7 +377,8 @@ Ground read_ground(const Reader& r, const YAML::Node& node) {
 
 // feet: {name: [link, ...]}: a link by its name or the name of a link merged into it; each link
 // must carry shapes (else its force is always 0) and appear once in its foot.
-std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model& model) {
+[[gnu::noinline]] std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node,
+                                              const Model& model) {
   if (!node.IsMap()) r.fail("feet", node, "must be a map {name: [link, ...], ...}");
   r.map(node, "feet", {});
   std::vector<Foot> feet;
@@ -385,8 +392,7 @@ std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model
     for (size_t i = 0; i < list.size(); ++i) {
       const std::string at = p + "[" + std::to_string(i) + "]";
       const std::string name = r.text(list[i], at);
-      if (std::find(foot.link_names.begin(), foot.link_names.end(), name) !=
-          foot.link_names.end())
+      if (std::find(foot.link_names.begin(), foot.link_names.end(), name) != foot.link_names.end())
         r.fail(at, list[i], "appears twice in the foot");
       int link = 0;
       try {
@@ -397,8 +403,9 @@ std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model
       const bool has_shape = std::any_of(model.shapes.begin(), model.shapes.end(),
                                          [&](const CollisionShape& s) { return s.link == link; });
       if (!has_shape)
-        r.fail(at, list[i], "link '" + model.links[static_cast<size_t>(link)].name +
-                                "' has no collision shapes, so its contact force is always 0");
+        r.fail(at, list[i],
+               "link '" + model.links[static_cast<size_t>(link)].name +
+                   "' has no collision shapes, so its contact force is always 0");
       foot.link_names.push_back(name);
       if (std::find(foot.links.begin(), foot.links.end(), link) == foot.links.end())
         foot.links.push_back(link);
@@ -409,7 +416,7 @@ std::vector<Foot> read_feet(const Reader& r, const YAML::Node& node, const Model
 }
 
 // contact: {contact_offset, rest_offset, bounce_threshold, self_collision}.
-ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
+[[gnu::noinline]] ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
   r.map(node, "contact", {"contact_offset", "rest_offset", "bounce_threshold", "self_collision"});
   ContactOptions c;
   if (node["self_collision"])
@@ -421,10 +428,10 @@ ContactOptions read_contact(const Reader& r, const YAML::Node& node) {
   if (node["bounce_threshold"])
     c.bounce_threshold = r.non_negative(node["bounce_threshold"], "contact.bounce_threshold");
   if (!(c.contact_offset > c.rest_offset))
-    r.fail(node["contact_offset"] ? "contact.contact_offset" : "contact",
-           node["contact_offset"] ? node["contact_offset"] : node,
-           "the contact offset must be above the rest offset (" +
-               format_double(c.rest_offset) + ")");
+    r.fail(
+        node["contact_offset"] ? "contact.contact_offset" : "contact",
+        node["contact_offset"] ? node["contact_offset"] : node,
+        "the contact offset must be above the rest offset (" + format_double(c.rest_offset) + ")");
   return c;
 }
 
@@ -442,9 +449,9 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
     const std::string p = "shapes[" + std::to_string(i) + "]";
     const YAML::Node e = node[i];
     const auto at = [&](const char* key) { return Reader::join(p, key); };
-    r.map(e, p, {"link", "type", "radius", "half_length", "half_extents", "radii", "vertices",
-                 "xyz", "rpy", "name",
-                 "static_friction", "dynamic_friction", "restitution"});
+    r.map(e, p,
+          {"link", "type", "radius", "half_length", "half_extents", "radii", "vertices", "xyz",
+           "rpy", "name", "static_friction", "dynamic_friction", "restitution"});
     for (const char* key : {"link", "type"})
       if (!e[key]) r.fail(at(key), "missing");
     CollisionShape shape;
@@ -525,8 +532,9 @@ std::vector<std::pair<std::string, CollisionShape>> read_shapes(const Reader& r,
 }
 
 // applied_force: {joint: force or {sine: ...}}.
-std::vector<AppliedForceSpec> read_applied_forces(const Reader& r, const YAML::Node& node,
-                                                  const UrdfRobot& robot) {
+[[gnu::noinline]] std::vector<AppliedForceSpec> read_applied_forces(const Reader& r,
+                                                                    const YAML::Node& node,
+                                                                    const UrdfRobot& robot) {
   r.map(node, "applied_force", {});
   std::map<int, AppliedForceSpec> by_dof;
   for (const auto& kv : node) {
@@ -552,15 +560,15 @@ std::vector<AppliedForceSpec> read_applied_forces(const Reader& r, const YAML::N
 // mimic: [{follower, leader, gear_ratio, offset, natural_frequency, damping_ratio}], added to the
 // URDF's rows (an entry replaces the URDF's row of its follower); the cycle check is
 // validate_mimic_joints' (make_simulation).
-std::vector<MimicJoint> read_mimic(const Reader& r, const YAML::Node& node,
-                                   const UrdfRobot& robot) {
+[[gnu::noinline]] std::vector<MimicJoint> read_mimic(const Reader& r, const YAML::Node& node,
+                                                     const UrdfRobot& robot) {
   if (!node.IsSequence()) r.fail("mimic", node, "must be a list of {follower, leader, gear_ratio}");
   std::vector<MimicJoint> rows = robot.mimic_joints;
   for (size_t i = 0; i < node.size(); ++i) {
     const std::string p = "mimic[" + std::to_string(i) + "]";
     const YAML::Node e = node[i];
-    r.map(e, p, {"follower", "leader", "gear_ratio", "offset", "natural_frequency",
-                 "damping_ratio"});
+    r.map(e, p,
+          {"follower", "leader", "gear_ratio", "offset", "natural_frequency", "damping_ratio"});
     for (const char* key : {"follower", "leader", "gear_ratio"})
       if (!e[key]) r.fail(p + "." + key, "missing");
     MimicJoint m;
@@ -585,83 +593,12 @@ std::vector<MimicJoint> read_mimic(const Reader& r, const YAML::Node& node,
   return rows;
 }
 
-}  // namespace
+// parse_scene's sections, each a function of its own. These and the readers parse_scene calls
+// once are kept out of line ([[gnu::noinline]]): inlined into one function, they took the
+// optimiser time superlinear in its size (docs/testing.md, "Where CI's time goes").
 
-void LinkSettings::apply_to(LinkParameters& p) const {
-  if (cfm_scale) p.cfm_scale = *cfm_scale;
-  if (linear_damping) p.linear_damping = *linear_damping;
-  if (angular_damping) p.angular_damping = *angular_damping;
-  if (max_linear_velocity) p.max_linear_velocity = *max_linear_velocity;
-  if (max_angular_velocity) p.max_angular_velocity = *max_angular_velocity;
-}
-
-double SineTarget::position(double t) const {
-  return offset + amplitude * std::sin(2.0 * std::numbers::pi * frequency * t + phase);
-}
-double SineTarget::velocity(double t) const {
-  const double w = 2.0 * std::numbers::pi * frequency;
-  return amplitude * w * std::cos(w * t + phase);
-}
-
-std::pair<double, double> DriveSpec::target_at(double t) const {
-  if (sine) return {sine->position(t), sine->velocity(t)};
-  return {drive.target_position, drive.target_velocity};
-}
-
-static void check_scene_start(const Scene& scene);
-
-Scene load_scene(const std::filesystem::path& path) {
-  return parse_scene(read_input_file(path), path);
-}
-
-Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
-  const Reader r(path.string());
-  check_nesting(text, path.string());
-  YAML::Node loaded;
-  try {
-    loaded = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(path.string() + ": line " + std::to_string(e.mark.line + 1) + ", column " +
-                     std::to_string(e.mark.column + 1) + ": malformed YAML: " + e.msg);
-  }
-  const YAML::Node& root = loaded;  // const: lookups must not insert keys
-  if (!root.IsMap())
-    throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
-  r.map(root, "",
-        {"description", "model", "fixed_base", "gravity", "dt", "steps", "solver", "compat", "initial",
-         "drive_defaults", "drives", "joint_defaults", "joints", "link_defaults", "links",
-         "control", "urdf_effort", "fit", "applied_force", "mimic", "guard", "ground", "contact",
-         "shapes", "feet"});
-
-  Scene scene;
-  scene.path = path;
-  if (root["description"]) r.text(root["description"], "description");
-  if (!root["model"]) r.fail("model", "missing: the URDF file of the robot");
-  const std::string model = r.text(root["model"], "model");
-  scene.model_path = std::filesystem::path(model).is_absolute() ? std::filesystem::path(model)
-                                                                : path.parent_path() / model;
-  // A folder, FIFO or device is load_urdf's to refuse ("is not a regular file"); only a name
-  // that is not there at all is this key's fault.
-  std::error_code ec;
-  if (!std::filesystem::exists(scene.model_path, ec))
-    r.fail("model", root["model"],
-           "no such file (looked for " +
-               std::filesystem::absolute(scene.model_path).lexically_normal().string() + ")");
-  UrdfOptions urdf;
-  if (root["fixed_base"]) urdf.fixed_base = r.boolean(root["fixed_base"], "fixed_base");
-  if (root["gravity"]) urdf.gravity = r.vec3(root["gravity"], "gravity");
-  if (root["urdf_effort"]) {
-    const std::string effort = r.text(root["urdf_effort"], "urdf_effort");
-    if (effort == "max_force")
-      urdf.effort = UrdfEffort::max_force;
-    else if (effort == "effort_limit")
-      urdf.effort = UrdfEffort::effort_limit;
-    else if (effort != "none")
-      r.fail("urdf_effort", root["urdf_effort"], "must be none, max_force or effort_limit");
-  }
-  scene.robot = load_robot(scene.model_path, urdf);  // URDF or MJCF
-  const Model* m = scene.robot.model.get();
-
+// dt, steps, compat, solver, control and guard.
+[[gnu::noinline]] void read_options(const Reader& r, const YAML::Node& root, Scene& scene) {
   if (root["dt"]) {
     scene.options.dt = r.number(root["dt"], "dt");
     if (!std::isfinite(scene.options.dt) || scene.options.dt <= 0.0)
@@ -716,8 +653,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
 
   // The step guard (docs/math/step_guard.md): present = on, its bounds default.
   if (const YAML::Node g = root["guard"]) {
-    r.map(g, "guard", {"max_joint_step", "max_substeps", "energy_tolerance",
-                       "dissipation_share"});
+    r.map(g, "guard", {"max_joint_step", "max_substeps", "energy_tolerance", "dissipation_share"});
     scene.options.guard.enabled = true;
     if (g["max_joint_step"]) {
       const double bound = r.number(g["max_joint_step"], "guard.max_joint_step");
@@ -741,99 +677,106 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       scene.options.guard.dissipation_share = share;
     }
   }
+}
 
-  // The keys of a joint's settings and of joint_defaults: their own, then each row kind's name.
-  auto with_row_kinds = [](std::vector<std::string> keys) {
-    for (const RowKindInfo& k : row_kinds()) keys.emplace_back(k.name);
-    return keys;
-  };
-  // Each row kind given under `j` (a map of its fields; each a number, checked with the others
-  // by the kind's own check when the settings are made).
-  auto read_row_kinds = [&](const YAML::Node& j, const std::string& path, JointSettings& js) {
-    for (const RowKindInfo& k : row_kinds()) {
-      const YAML::Node node = j[std::string(k.name)];
-      if (!node) continue;
-      const std::string p = path + "." + std::string(k.name);
-      std::vector<std::string> names;
-      for (const RowField& f : k.fields) names.emplace_back(f.name);
-      r.map(node, p, names);
-      std::vector<std::optional<double>> values(k.fields.size());
-      for (size_t f = 0; f < k.fields.size(); ++f)
-        if (const YAML::Node v = node[names[f]]) values[f] = r.number(v, p + "." + names[f]);
-      js.row_kinds[k.index] = values;
-    }
-  };
+// The keys of a joint's settings and of joint_defaults: their own, then each row kind's name.
+std::vector<std::string> with_row_kinds(std::vector<std::string> keys) {
+  for (const RowKindInfo& k : row_kinds()) keys.emplace_back(k.name);
+  return keys;
+}
 
-  // Joint settings first: armature changes the model.
-  std::map<int, JointSettings> settings;
-  if (const YAML::Node joints = root["joints"]) {
-    r.map(joints, "joints", {});
-    for (const auto& kv : joints) {
-      const std::string name = kv.first.Scalar();
-      const std::string path_j = "joints." + name;
-      JointSettings js;
-      js.joint = name;
-      js.dof = joint_dof(r, scene.robot, name, path_j);
-      const YAML::Node j = kv.second;
-      r.map(j, path_j,
-            with_row_kinds({"lower", "upper", "max_velocity", "friction",
-                            "friction_coefficient", "armature", "revolute"}));
-      read_row_kinds(j, path_j, js);
-      if (j["revolute"]) js.revolute = read_revolute(r, j["revolute"], path_j + ".revolute");
-      if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
-      if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
-      if (js.lower && (std::isnan(*js.lower) || *js.lower == kInf))
-        r.fail(path_j + ".lower", j["lower"], "must be a number below .inf");
-      if (js.upper && (std::isnan(*js.upper) || *js.upper == -kInf))
-        r.fail(path_j + ".upper", j["upper"], "must be a number above -.inf");
-      const double lower = js.lower.value_or(m->lower_limit[js.dof]);
-      const double upper = js.upper.value_or(m->upper_limit[js.dof]);
-      if (lower > upper)
-        r.fail(path_j,
-               "lower = " + format_double(lower) + " is above upper = " + format_double(upper));
-      if (j["max_velocity"])
-        js.max_velocity = r.positive(j["max_velocity"], path_j + ".max_velocity");
-      if (j["armature"]) js.armature = r.non_negative(j["armature"], path_j + ".armature");
-      if (j["friction_coefficient"])
-        js.friction_coefficient =
-            r.non_negative(j["friction_coefficient"], path_j + ".friction_coefficient");
-      if (const YAML::Node f = j["friction"]) {
-        const std::string fp = path_j + ".friction";
-        r.map(f, fp, {"static", "dynamic", "viscous"});
-        JointFriction fr{m->friction[js.dof], m->friction[js.dof], m->damping[js.dof]};
-        if (f["static"]) fr.static_effort = r.non_negative(f["static"], fp + ".static");
-        if (f["dynamic"]) fr.dynamic_effort = r.non_negative(f["dynamic"], fp + ".dynamic");
-        if (f["viscous"]) fr.viscous = r.non_negative(f["viscous"], fp + ".viscous");
-        try {
-          validate_friction(fr, name);
-        } catch (const std::invalid_argument& e) {
-          r.fail(fp, e.what());
-        }
-        js.friction = fr;
-      }
-      settings[js.dof] = js;
-    }
-    bool rebuild = false;
-    for (LinkSpec& link : scene.robot.links)
-      for (const auto& [dof, js] : settings) {
-        if (js.armature && link.joint.name == js.joint) {
-          link.joint.armature = {*js.armature};
-          rebuild = true;
-        }
-        // A spherical joint's axes each have their own (one JointSpec armature per dof).
-        if (js.armature && link.joint.type == JointType::spherical &&
-            m->links[m->dof_link[dof]].joint_name == link.joint.name) {
-          std::vector<double>& armature = link.joint.armature;
-          if (armature.size() != 3) armature.assign(3, armature.empty() ? 0.0 : armature[0]);
-          armature[dof - m->links[m->dof_link[dof]].v_index] = *js.armature;
-          rebuild = true;
-        }
-      }
-    if (rebuild) scene.robot.rebuild();
-    m = scene.robot.model.get();
+// Each row kind given under `j` (a map of its fields; each a number, checked with the others by
+// the kind's own check when the settings are made).
+void read_row_kinds(const Reader& r, const YAML::Node& j, const std::string& path,
+                    JointSettings& js) {
+  for (const RowKindInfo& k : row_kinds()) {
+    const YAML::Node node = j[std::string(k.name)];
+    if (!node) continue;
+    const std::string p = path + "." + std::string(k.name);
+    std::vector<std::string> names;
+    for (const RowField& f : k.fields) names.emplace_back(f.name);
+    r.map(node, p, names);
+    std::vector<std::optional<double>> values(k.fields.size());
+    for (size_t f = 0; f < k.fields.size(); ++f)
+      if (const YAML::Node v = node[names[f]]) values[f] = r.number(v, p + "." + names[f]);
+    js.row_kinds[k.index] = values;
   }
+}
 
-  // Shapes after the armature's rebuild; robot.shapes keeps them for a later rebuild.
+// Joint settings, by dof (the robot rebuilt where one sets an armature).
+[[gnu::noinline]] std::map<int, JointSettings> read_joints(const Reader& r,
+                                                           const YAML::Node& joints, Scene& scene) {
+  const Model* m = scene.robot.model.get();
+  std::map<int, JointSettings> settings;
+  r.map(joints, "joints", {});
+  for (const auto& kv : joints) {
+    const std::string name = kv.first.Scalar();
+    const std::string path_j = "joints." + name;
+    JointSettings js;
+    js.joint = name;
+    js.dof = joint_dof(r, scene.robot, name, path_j);
+    const YAML::Node j = kv.second;
+    r.map(j, path_j,
+          with_row_kinds({"lower", "upper", "max_velocity", "friction", "friction_coefficient",
+                          "armature", "revolute"}));
+    read_row_kinds(r, j, path_j, js);
+    if (j["revolute"]) js.revolute = read_revolute(r, j["revolute"], path_j + ".revolute");
+    if (j["lower"]) js.lower = r.number(j["lower"], path_j + ".lower");
+    if (j["upper"]) js.upper = r.number(j["upper"], path_j + ".upper");
+    if (js.lower && (std::isnan(*js.lower) || *js.lower == kInf))
+      r.fail(path_j + ".lower", j["lower"], "must be a number below .inf");
+    if (js.upper && (std::isnan(*js.upper) || *js.upper == -kInf))
+      r.fail(path_j + ".upper", j["upper"], "must be a number above -.inf");
+    const double lower = js.lower.value_or(m->lower_limit[js.dof]);
+    const double upper = js.upper.value_or(m->upper_limit[js.dof]);
+    if (lower > upper)
+      r.fail(path_j,
+             "lower = " + format_double(lower) + " is above upper = " + format_double(upper));
+    if (j["max_velocity"])
+      js.max_velocity = r.positive(j["max_velocity"], path_j + ".max_velocity");
+    if (j["armature"]) js.armature = r.non_negative(j["armature"], path_j + ".armature");
+    if (j["friction_coefficient"])
+      js.friction_coefficient =
+          r.non_negative(j["friction_coefficient"], path_j + ".friction_coefficient");
+    if (const YAML::Node f = j["friction"]) {
+      const std::string fp = path_j + ".friction";
+      r.map(f, fp, {"static", "dynamic", "viscous"});
+      JointFriction fr{m->friction[js.dof], m->friction[js.dof], m->damping[js.dof]};
+      if (f["static"]) fr.static_effort = r.non_negative(f["static"], fp + ".static");
+      if (f["dynamic"]) fr.dynamic_effort = r.non_negative(f["dynamic"], fp + ".dynamic");
+      if (f["viscous"]) fr.viscous = r.non_negative(f["viscous"], fp + ".viscous");
+      try {
+        validate_friction(fr, name);
+      } catch (const std::invalid_argument& e) {
+        r.fail(fp, e.what());
+      }
+      js.friction = fr;
+    }
+    settings[js.dof] = js;
+  }
+  bool rebuild = false;
+  for (LinkSpec& link : scene.robot.links)
+    for (const auto& [dof, js] : settings) {
+      if (js.armature && link.joint.name == js.joint) {
+        link.joint.armature = {*js.armature};
+        rebuild = true;
+      }
+      // A spherical joint's axes each have their own (one JointSpec armature per dof).
+      if (js.armature && link.joint.type == JointType::spherical &&
+          m->links[m->dof_link[dof]].joint_name == link.joint.name) {
+        std::vector<double>& armature = link.joint.armature;
+        if (armature.size() != 3) armature.assign(3, armature.empty() ? 0.0 : armature[0]);
+        armature[dof - m->links[m->dof_link[dof]].v_index] = *js.armature;
+        rebuild = true;
+      }
+    }
+  if (rebuild) scene.robot.rebuild();
+  return settings;
+}
+
+// Shapes after the armature's rebuild; robot.shapes keeps them for a later rebuild.
+[[gnu::noinline]] void read_contact_parts(const Reader& r, const YAML::Node& root, Scene& scene) {
+  const Model* m = scene.robot.model.get();
   if (root["shapes"]) {
     scene.shapes = read_shapes(r, root["shapes"], *m);
     try {
@@ -856,19 +799,25 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         " is a shape contacts do not support yet (sphere, capsule, box, ellipsoid, cylinder, "
         "convex mesh)");
   }
+}
 
-  if (const YAML::Node jd = root["joint_defaults"]) {
-    r.map(jd, "joint_defaults", with_row_kinds({"friction_coefficient", "max_velocity", "revolute"}));
-    JointSettings js;
-    read_row_kinds(jd, "joint_defaults", js);
-    if (jd["revolute"]) js.revolute = read_revolute(r, jd["revolute"], "joint_defaults.revolute");
-    if (jd["friction_coefficient"])
-      js.friction_coefficient =
-          r.non_negative(jd["friction_coefficient"], "joint_defaults.friction_coefficient");
-    if (jd["max_velocity"])
-      js.max_velocity = r.positive(jd["max_velocity"], "joint_defaults.max_velocity");
-    scene.joint_defaults = js;
-  }
+// joint_defaults: what every joint takes unless its own settings say otherwise.
+[[gnu::noinline]] JointSettings read_joint_defaults(const Reader& r, const YAML::Node& jd) {
+  r.map(jd, "joint_defaults", with_row_kinds({"friction_coefficient", "max_velocity", "revolute"}));
+  JointSettings js;
+  read_row_kinds(r, jd, "joint_defaults", js);
+  if (jd["revolute"]) js.revolute = read_revolute(r, jd["revolute"], "joint_defaults.revolute");
+  if (jd["friction_coefficient"])
+    js.friction_coefficient =
+        r.non_negative(jd["friction_coefficient"], "joint_defaults.friction_coefficient");
+  if (jd["max_velocity"])
+    js.max_velocity = r.positive(jd["max_velocity"], "joint_defaults.max_velocity");
+  return js;
+}
+
+// link_defaults and links (by name, in the model's order).
+[[gnu::noinline]] void read_links(const Reader& r, const YAML::Node& root, Scene& scene) {
+  const Model* m = scene.robot.model.get();
   if (const YAML::Node ld = root["link_defaults"])
     scene.link_defaults = read_link(r, ld, "link_defaults");
   if (const YAML::Node ls = root["links"]) {
@@ -896,7 +845,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     }
     for (const auto& [index, link] : by_index) scene.links.push_back(link);
   }
+}
 
+// The start: the model's neutral pose, then `initial` (joints by name, a floating root's pose).
+[[gnu::noinline]] void read_initial(const Reader& r, const YAML::Node& root, Scene& scene) {
+  const Model* m = scene.robot.model.get();
   scene.q0 = m->neutral_configuration();
   scene.qd0 = VecX::Zero(m->nv);
   if (const YAML::Node init = root["initial"]) {
@@ -915,8 +868,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
         if (std::string(which) == "qd")
           scene.qd0[dof] = v;
         else if (link.joint_type == JointType::spherical)
-          rotation.try_emplace(m->dof_link[dof], Vec3::Zero())
-              .first->second[dof - link.v_index] = v;
+          rotation.try_emplace(m->dof_link[dof], Vec3::Zero()).first->second[dof - link.v_index] =
+              v;
         else
           scene.q0[link.q_index] = v;
       }
@@ -952,7 +905,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       set_base_state(*m, base, scene.q0, scene.qd0);
     }
   }
+}
 
+// drive_defaults and drives; the drives and joint settings the scene keeps, in dof order.
+[[gnu::noinline]] void read_drives(const Reader& r, const YAML::Node& root, Scene& scene,
+                                   const std::map<int, JointSettings>& settings) {
+  const Model* m = scene.robot.model.get();
   std::optional<DriveSpec> defaults;
   if (const YAML::Node d = root["drive_defaults"]) {
     defaults = read_drive(r, d, "drive_defaults", DriveSpec{});
@@ -990,10 +948,99 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
       scene.drives.push_back(it->second);
     if (auto it = settings.find(dof); it != settings.end()) scene.joints.push_back(it->second);
   }
+}
+
+}  // namespace
+
+void LinkSettings::apply_to(LinkParameters& p) const {
+  if (cfm_scale) p.cfm_scale = *cfm_scale;
+  if (linear_damping) p.linear_damping = *linear_damping;
+  if (angular_damping) p.angular_damping = *angular_damping;
+  if (max_linear_velocity) p.max_linear_velocity = *max_linear_velocity;
+  if (max_angular_velocity) p.max_angular_velocity = *max_angular_velocity;
+}
+
+double SineTarget::position(double t) const {
+  return offset + amplitude * std::sin(2.0 * std::numbers::pi * frequency * t + phase);
+}
+double SineTarget::velocity(double t) const {
+  const double w = 2.0 * std::numbers::pi * frequency;
+  return amplitude * w * std::cos(w * t + phase);
+}
+
+std::pair<double, double> DriveSpec::target_at(double t) const {
+  if (sine) return {sine->position(t), sine->velocity(t)};
+  return {drive.target_position, drive.target_velocity};
+}
+
+static void check_scene_start(const Scene& scene);
+
+Scene load_scene(const std::filesystem::path& path) {
+  return parse_scene(read_input_file(path), path);
+}
+
+Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
+  const Reader r(path.string());
+  check_nesting(text, path.string());
+  YAML::Node loaded;
+  try {
+    loaded = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path.string() + ": line " + std::to_string(e.mark.line + 1) + ", column " +
+                     std::to_string(e.mark.column + 1) + ": malformed YAML: " + e.msg);
+  }
+  const YAML::Node& root = loaded;  // const: lookups must not insert keys
+  if (!root.IsMap())
+    throw InputError(path.string() + ": the scene must be a map of keys (model, dt, steps, ...)");
+  r.map(root, "", {"description", "model",          "fixed_base", "gravity",       "dt",
+                   "steps",       "solver",         "compat",     "initial",       "drive_defaults",
+                   "drives",      "joint_defaults", "joints",     "link_defaults", "links",
+                   "control",     "urdf_effort",    "fit",        "applied_force", "mimic",
+                   "guard",       "ground",         "contact",    "shapes",        "feet"});
+
+  Scene scene;
+  scene.path = path;
+  if (root["description"]) r.text(root["description"], "description");
+  if (!root["model"]) r.fail("model", "missing: the URDF file of the robot");
+  const std::string model = r.text(root["model"], "model");
+  scene.model_path = std::filesystem::path(model).is_absolute() ? std::filesystem::path(model)
+                                                                : path.parent_path() / model;
+  // A folder, FIFO or device is load_urdf's to refuse ("is not a regular file"); only a name
+  // that is not there at all is this key's fault.
+  std::error_code ec;
+  if (!std::filesystem::exists(scene.model_path, ec))
+    r.fail("model", root["model"],
+           "no such file (looked for " +
+               std::filesystem::absolute(scene.model_path).lexically_normal().string() + ")");
+  UrdfOptions urdf;
+  if (root["fixed_base"]) urdf.fixed_base = r.boolean(root["fixed_base"], "fixed_base");
+  if (root["gravity"]) urdf.gravity = r.vec3(root["gravity"], "gravity");
+  if (root["urdf_effort"]) {
+    const std::string effort = r.text(root["urdf_effort"], "urdf_effort");
+    if (effort == "max_force")
+      urdf.effort = UrdfEffort::max_force;
+    else if (effort == "effort_limit")
+      urdf.effort = UrdfEffort::effort_limit;
+    else if (effort != "none")
+      r.fail("urdf_effort", root["urdf_effort"], "must be none, max_force or effort_limit");
+  }
+  scene.robot = load_robot(scene.model_path, urdf);  // URDF or MJCF
+
+  read_options(r, root, scene);
+
+  // Joint settings first: armature changes the model.
+  std::map<int, JointSettings> settings;
+  if (const YAML::Node joints = root["joints"]) settings = read_joints(r, joints, scene);
+  read_contact_parts(r, root, scene);
+  if (const YAML::Node jd = root["joint_defaults"])
+    scene.joint_defaults = read_joint_defaults(r, jd);
+  read_links(r, root, scene);
+  read_initial(r, root, scene);
+  read_drives(r, root, scene, settings);
   if (root["applied_force"])
     scene.applied_forces = read_applied_forces(r, root["applied_force"], scene.robot);
-  scene.mimic = root["mimic"] ? read_mimic(r, root["mimic"], scene.robot)
-                              : scene.robot.mimic_joints;
+  scene.mimic =
+      root["mimic"] ? read_mimic(r, root["mimic"], scene.robot) : scene.robot.mimic_joints;
   check_scene_start(scene);
   if (root["fit"]) scene.fit = read_fit_spec(r, root["fit"], scene);
   return scene;
@@ -1018,7 +1065,8 @@ static void apply_row_kinds(const Model& model, int d, const JointSettings& js, 
     const RowKindInfo& kind = row_kinds()[static_cast<size_t>(index)];
     std::vector<double> values(kind.fields.size());
     for (size_t f = 0; f < values.size(); ++f)
-      values[f] = given[f].value_or(s.row_parameters(d, kind.offset + static_cast<Eigen::Index>(f)));
+      values[f] =
+          given[f].value_or(s.row_parameters(d, kind.offset + static_cast<Eigen::Index>(f)));
     check_row_parameters(model, d, kind, values);
     for (size_t f = 0; f < values.size(); ++f)
       s.row_parameters(d, kind.offset + static_cast<Eigen::Index>(f)) = values[f];
@@ -1185,7 +1233,7 @@ void apply_targets(const Scene& scene, Simulation& sim, int step_index) {
 
 // What make_simulation refuses (the settings, the start state, step 0's targets and applied
 // force), checked on values: a scene that loads also runs.
-static void check_scene_start(const Scene& scene) {
+[[gnu::noinline]] static void check_scene_start(const Scene& scene) {
   const Settings settings = scene_settings(scene);
   const Model& model = *scene.model();
   naming_the_scene(scene, [&] {
