@@ -5,10 +5,7 @@
 namespace featherdrive::simd {
 
 void run_block_sse2(const Plan& p, const Block& b, double* scratch, int steps) {
-  if (b.interleave == 4)
-    LaneStep<xsimd::sse2, 4>(p, b, scratch).run(steps);
-  else
-    LaneStep<xsimd::sse2, 2>(p, b, scratch).run(steps);
+  LaneStep<xsimd::sse2, 2>(p, b, scratch).run(steps);  // simd::interleave: always 2
 }
 
 }  // namespace featherdrive::simd

@@ -15,11 +15,12 @@ namespace featherdrive::simd {
 /// lanes reads entry k of its environments as one vector, whatever W.
 inline constexpr int kGroup = 8;
 /// A block holds K vectors of W lanes (simd_lane_step.hpp's Pack): K independent chains of
-/// dependencies per operation. K = 4 with SSE2 and AVX2 where the batch fills such blocks, else 2;
-/// AVX-512 always 2, which measured faster on one thread and on two (docs/simd_batch.md).
+/// dependencies per operation. K = 4 with AVX2 where the batch fills such blocks, else 2; AVX-512
+/// always 2, which measured faster on one thread and on two; SSE2, the fallback of CPUs without
+/// AVX2, always 2, for one instantiation fewer to compile (docs/simd_batch.md).
 inline constexpr int kMaxInterleave = 4;
 constexpr int interleave(int width, int count) {
-  return count >= 4 * width && width < 8 ? 4 : 2;
+  return width == 4 && count >= 4 * width ? 4 : 2;
 }
 
 enum DofParameter : int {

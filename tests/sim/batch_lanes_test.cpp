@@ -333,8 +333,8 @@ TEST(BatchLanes, BitsIndependentOfLaneBatchSizeWidthAndThreads) {
         EXPECT_TRUE(same_bits(x, reference))
             << to_string(isa) << ", " << threads << " threads, shift " << shift;
       }
-  // A batch of 40 fills blocks of four vectors (simd::interleave) at every width, where 13 had
-  // two vectors with AVX2 and AVX-512: its first 13 environments are the same ones.
+  // A batch of 40 fills blocks of four vectors with AVX2 (simd::interleave), where 13 had two:
+  // its first 13 environments are the same ones, at every width.
   for (SimdIsa isa : available_simd_isas())
     for (int threads : {1, 2}) {
       const RowMatrix x = run(40, isa, threads, 0);
