@@ -98,6 +98,8 @@ def main():
     print(f"the page's arrows are the CSV's forces at the shins' contact points "
           f"(frame {STEPS}: total fz {np.array(frames[STEPS]).reshape(-1, 7)[:, 6].sum():.4f} N)")
 
+    # One browser for the four pages (starting Chromium costs more than a page); the console
+    # errors and requests it records are every page's so far.
     browser = Browser(1000, 1200)
     try:
         browser.open(page)
@@ -120,20 +122,17 @@ def main():
         if browser.evaluate("featherdrive.webgl") and drawn < 50:
             fail("the arrows draw nothing")
         no_network_nor_error(browser)
-    finally:
-        browser.close()
-    browser = Browser(1000, 1200)
-    try:
+
         browser.open(csv_page)
         from_csv = set_frame(browser, STEPS)
         print(f"from the CSV: {from_csv} arrows at frame {STEPS}")
         if from_csv != 4:
             fail(f"the page of the CSV shows {from_csv} arrows")
         no_network_nor_error(browser)
+        ant_page(browser, cli, source, out_dir)
+        every_shape_page(browser, cli, source, out_dir)
     finally:
         browser.close()
-    ant_page(cli, source, out_dir)
-    every_shape_page(cli, source, out_dir)
 
 
 def body_geoms(mjcf):
@@ -147,7 +146,7 @@ def body_geoms(mjcf):
     return counts
 
 
-def every_shape_page(cli, source, out_dir):
+def every_shape_page(browser, cli, source, out_dir):
     """One shape of each type (tests/data/every_shape.xml) drawn over a tilted ground."""
     page = os.path.join(out_dir, "view_every_shape.html")
     run([cli, "view", os.path.join(source, "tests", "data", "every_shape.yaml"), "--out", page])
@@ -156,48 +155,41 @@ def every_shape_page(cli, source, out_dir):
     ground = page_data(page)["ground"]
     if np.abs(np.array(ground["normal"]) - normal).max() > 1e-12 or ground["height"] != -0.1:
         fail(f"the page's ground {ground}, every_shape.yaml's normal {normal.tolist()}, -0.1")
-    browser = Browser(1000, 900)
-    try:
-        browser.open(page)
-        drawn = browser.evaluate("[featherdrive.shapeTypes, featherdrive.boxCount, "
-                                 "featherdrive.ground]")
-        print(f"every shape type: {drawn[0]} (every_shape.xml: {expected}), {drawn[1]} boxes, "
-              f"ground {drawn[2]}")
-        if len(expected) != 6 or drawn != [expected, 0, True]:
-            fail(f"the page draws {drawn}, every_shape.xml has {expected}")
-        no_network_nor_error(browser)
-    finally:
-        browser.close()
+    browser.resize(1000, 900)
+    browser.open(page)
+    drawn = browser.evaluate("[featherdrive.shapeTypes, featherdrive.boxCount, "
+                             "featherdrive.ground]")
+    print(f"every shape type: {drawn[0]} (every_shape.xml: {expected}), {drawn[1]} boxes, "
+          f"ground {drawn[2]}")
+    if len(expected) != 6 or drawn != [expected, 0, True]:
+        fail(f"the page draws {drawn}, every_shape.xml has {expected}")
+    no_network_nor_error(browser)
 
 
-def ant_page(cli, source, out_dir):
+def ant_page(browser, cli, source, out_dir):
     """The Ant's shapes and the ground in the page of examples/ant_walk.yaml."""
     page = os.path.join(out_dir, "view_ant.html")
     run([cli, "view", os.path.join(source, "examples", "ant_walk.yaml"), "--steps", "20",
          "--out", page])
     expected = body_geoms(os.path.join(source, "examples", "ant.xml"))
-    browser = Browser(1000, 1200)
-    try:
-        browser.open(page)
-        browser.evaluate("featherdrive.setFrame(20)")
-        drawn = browser.evaluate("[featherdrive.shapeCount, featherdrive.shapeTypes, "
-                                 "featherdrive.boxCount, featherdrive.ground]")
-        left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
-        bottom = browser.screenshot()[top + 3 * height // 4:top + height, left:left + width]
-        white = np.all(bottom >= 250, axis=2).mean()
-        print(f"the Ant: {drawn[0]} shapes {drawn[1]} (ant.xml: {expected}), {drawn[2]} "
-              f"boxes, ground {drawn[3]}; {white:.1%} of the view's bottom quarter white")
-        if expected != {"sphere": 1, "capsule": 12}:  # the parse above found the Ant's geoms
-            fail(f"ant.xml's bodies have the geoms {expected}")
-        if drawn[:3] != [sum(expected.values()), expected, 0]:
-            fail(f"the page draws {drawn[:3]}, ant.xml has {expected} (and no box)")
-        if drawn[3] is not True:
-            fail("the page draws no ground")
-        if browser.evaluate("featherdrive.webgl") and white > 0.2:
-            fail(f"{white:.1%} of the view's bottom quarter is white: the ground is not drawn")
-        no_network_nor_error(browser)
-    finally:
-        browser.close()
+    browser.open(page)
+    browser.evaluate("featherdrive.setFrame(20)")
+    drawn = browser.evaluate("[featherdrive.shapeCount, featherdrive.shapeTypes, "
+                             "featherdrive.boxCount, featherdrive.ground]")
+    left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
+    bottom = browser.screenshot()[top + 3 * height // 4:top + height, left:left + width]
+    white = np.all(bottom >= 250, axis=2).mean()
+    print(f"the Ant: {drawn[0]} shapes {drawn[1]} (ant.xml: {expected}), {drawn[2]} "
+          f"boxes, ground {drawn[3]}; {white:.1%} of the view's bottom quarter white")
+    if expected != {"sphere": 1, "capsule": 12}:  # the parse above found the Ant's geoms
+        fail(f"ant.xml's bodies have the geoms {expected}")
+    if drawn[:3] != [sum(expected.values()), expected, 0]:
+        fail(f"the page draws {drawn[:3]}, ant.xml has {expected} (and no box)")
+    if drawn[3] is not True:
+        fail("the page draws no ground")
+    if browser.evaluate("featherdrive.webgl") and white > 0.2:
+        fail(f"{white:.1%} of the view's bottom quarter is white: the ground is not drawn")
+    no_network_nor_error(browser)
 
 
 if __name__ == "__main__":
