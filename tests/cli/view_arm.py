@@ -212,9 +212,10 @@ def main():
     finally:
         browser.close()
 
-    # A browser without WebGL (--disable-3d-apis, as some headless and remote ones): the page
-    # says so in one line and keeps the timeline and the curves, with no console error.
-    browser = Browser(1000, 1400, extra_args=["--disable-3d-apis"])
+    # A browser without WebGL (--disable-3d-apis, as some headless and remote ones; with no GPU
+    # process either, which would start SwiftShader for nothing): the page says so in one line
+    # and keeps the timeline and the curves, with no console error.
+    browser = Browser(1000, 1400, extra_args=["--disable-3d-apis", "--disable-gpu"])
     try:
         browser.open(page)
         note = browser.evaluate("(() => { const n = document.getElementById('fd-no-webgl'); "
