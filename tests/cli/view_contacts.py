@@ -11,7 +11,13 @@ shape per geom of the Ant's bodies in examples/ant.xml (counted here from the fi
 12 capsules) and no inertia box, and draws the ground (featherdrive.ground; its plane covers the
 bottom of the view, which is white without it). Last, one link with a shape of every type
 (tests/data/every_shape.xml, a convex hull among them) over a tilted ground: one of each drawn,
-the page's ground plane the scene's. Skipped (exit 77) where Chromium is not installed.
+the page's ground plane the scene's. Then a real robot with meshes, DART's KUKA KR5 (dart-doc's
+URDF and its 7 STL meshes) through fd.view (a Simulation and its UrdfRobot): the page reports the
+7 meshes the URDF names as drawn and no inertia box (every link with mass has a visual, or has a
+link merged into it that has), and a fair share of the 3D view is not background. One browser
+opens the five pages; none asks anything of the network or logs a console error. Skipped (exit
+77) where Chromium is not installed; where dart-doc is not, the KR5 is left out and the test
+exits 77 once the other pages have passed.
 
 usage: view_contacts.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
 """
@@ -25,10 +31,11 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-from view_browser import Browser, chromium_or_skip
+from view_browser import SKIP, Browser, chromium_or_skip
 
 STEPS = 40
 LEGS = ("fl", "fr", "hl", "hr")
+KR5 = "/usr/share/doc/dart/data/urdf/KR5/KR5 sixx R650.urdf"
 
 
 def fail(message):
@@ -98,7 +105,7 @@ def main():
     print(f"the page's arrows are the CSV's forces at the shins' contact points "
           f"(frame {STEPS}: total fz {np.array(frames[STEPS]).reshape(-1, 7)[:, 6].sum():.4f} N)")
 
-    # One browser for the four pages (starting Chromium costs more than a page); the console
+    # One browser for the five pages (starting Chromium costs more than a page); the console
     # errors and requests it records are every page's so far.
     browser = Browser(1000, 1200)
     try:
@@ -131,8 +138,14 @@ def main():
         no_network_nor_error(browser)
         ant_page(browser, cli, source, out_dir)
         every_shape_page(browser, cli, source, out_dir)
+        if os.path.exists(KR5):
+            kr5_page(browser, out_dir)
     finally:
         browser.close()
+    if not os.path.exists(KR5):
+        print(f"SKIP: the KR5's page: {KR5} is missing (apt-get install -y dart-doc); "
+              "the other pages passed")
+        sys.exit(SKIP)
 
 
 def body_geoms(mjcf):
@@ -189,6 +202,40 @@ def ant_page(browser, cli, source, out_dir):
         fail("the page draws no ground")
     if browser.evaluate("featherdrive.webgl") and white > 0.2:
         fail(f"{white:.1%} of the view's bottom quarter is white: the ground is not drawn")
+    no_network_nor_error(browser)
+
+
+
+def kr5_page(browser, out_dir):
+    """DART's KR5 through fd.view: its 7 meshes drawn, no inertia box, the robot in the view."""
+    import featherdrive as fd
+    meshes = {m.get("filename") for m in ElementTree.parse(KR5).getroot()
+              .findall("./link/visual/geometry/mesh")}
+    robot = fd.load_urdf(KR5)
+    sim = fd.Simulation(robot.model)
+    q = np.array(sim.q)
+    q[:] = 0.4  # a pose away from the zero one
+    sim.set_q(q)
+    page = fd.view(sim, os.path.join(out_dir, "view_kr5.html"), robot=robot, steps=5)
+    if page.warnings:
+        fail(f"KR5: warnings: {page.warnings}")
+    if "<iframe srcdoc=" not in page._repr_html_():
+        fail("KR5: _repr_html_ is not an iframe")
+    browser.resize(800, 900)
+    browser.open(page.path)
+    counts = browser.evaluate("[featherdrive.meshCount, featherdrive.boxCount]")
+    print(f"KR5: {len(meshes)} meshes in the URDF; the page drew {counts[0]} meshes and "
+          f"{counts[1]} inertia boxes")
+    if counts != [len(meshes), 0] or len(meshes) != 7:
+        fail(f"KR5: meshes and boxes drawn: {counts}")
+    image = browser.screenshot()
+    left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
+    view = image[top:top + height, left:left + width].astype(int)
+    # Background: white, and the grid's light greys.
+    ink = np.any(view < 180, axis=2).mean()
+    print(f"KR5: {100 * ink:.1f}% of the view is robot (darker than the background and grid)")
+    if ink < 0.02:
+        fail("KR5: the robot is not drawn")
     no_network_nor_error(browser)
 
 
