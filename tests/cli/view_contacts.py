@@ -15,9 +15,10 @@ the page's ground plane the scene's. Then a real robot with meshes, DART's KUKA 
 URDF and its 7 STL meshes) through fd.view (a Simulation and its UrdfRobot): the page reports the
 7 meshes the URDF names as drawn and no inertia box (every link with mass has a visual, or has a
 link merged into it that has), and a fair share of the 3D view is not background. One browser
-opens the five pages; none asks anything of the network or logs a console error. Skipped (exit
-77) where Chromium is not installed; where dart-doc is not, the KR5 is left out and the test
-exits 77 once the other pages have passed.
+opens the five pages (ctest's cli.view: tests/cli/view_arm.py's, after the arm's page); none asks
+anything of the network or logs a console error. Skipped (exit 77) where Chromium is not
+installed; where dart-doc is not, the KR5 is left out and the test exits 77 once the other pages
+have passed.
 
 usage: view_contacts.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
 """
@@ -73,6 +74,19 @@ def main():
     chromium_or_skip()
     sys.path.insert(0, python_dir)
     os.makedirs(out_dir, exist_ok=True)
+    browser = Browser(1000, 1200)
+    try:
+        kr5 = pages(browser, cli, source, out_dir)
+    finally:
+        browser.close()
+    if not kr5:
+        sys.exit(SKIP)
+
+
+def pages(browser, cli, source, out_dir):
+    """The five pages in `browser` (tests/cli/view_arm.py passes its own: starting Chromium costs
+    more than a page; the console errors and requests it records are every page's so far).
+    False where dart-doc is missing: the KR5's page is left out, the others checked."""
     scene = os.path.join(source, "tests", "data", "quadruped_ground.yaml")
     run_csv = os.path.join(out_dir, "view_contacts.csv")
     page = os.path.join(out_dir, "view_contacts.html")
@@ -105,47 +119,42 @@ def main():
     print(f"the page's arrows are the CSV's forces at the shins' contact points "
           f"(frame {STEPS}: total fz {np.array(frames[STEPS]).reshape(-1, 7)[:, 6].sum():.4f} N)")
 
-    # One browser for the five pages (starting Chromium costs more than a page); the console
-    # errors and requests it records are every page's so far.
-    browser = Browser(1000, 1200)
-    try:
-        browser.open(page)
-        counts = [set_frame(browser, 0)]
-        left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
-        counts.append(set_frame(browser, STEPS))
-        browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
-                         "false; b.dispatchEvent(new Event('change')); })()")
-        counts.append(browser.evaluate("featherdrive.contactArrows"))
-        hidden = browser.screenshot()[top:top + height, left:left + width].astype(int)
-        browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
-                         "true; b.dispatchEvent(new Event('change')); })()")
-        counts.append(browser.evaluate("featherdrive.contactArrows"))
-        drawn = np.any(np.abs(browser.screenshot()[top:top + height, left:left + width]
-                              .astype(int) - hidden) > 16, axis=2).sum()
-        print(f"arrows at frame 0, frame {STEPS}, unchecked, checked again: {counts}; "
-              f"{drawn} pixels drawn by them")
-        if counts != [0, 4, 0, 4]:
-            fail(f"the page's arrow counts are {counts}, expected [0, 4, 0, 4]")
-        if browser.evaluate("featherdrive.webgl") and drawn < 50:
-            fail("the arrows draw nothing")
-        no_network_nor_error(browser)
+    browser.resize(1000, 1200)
+    browser.open(page)
+    counts = [set_frame(browser, 0)]
+    left, top, width, height = [int(v) for v in browser.evaluate("featherdrive.viewport")]
+    counts.append(set_frame(browser, STEPS))
+    browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
+                     "false; b.dispatchEvent(new Event('change')); })()")
+    counts.append(browser.evaluate("featherdrive.contactArrows"))
+    hidden = browser.screenshot()[top:top + height, left:left + width].astype(int)
+    browser.evaluate("(() => { const b = document.getElementById('fd-contacts'); b.checked = "
+                     "true; b.dispatchEvent(new Event('change')); })()")
+    counts.append(browser.evaluate("featherdrive.contactArrows"))
+    drawn = np.any(np.abs(browser.screenshot()[top:top + height, left:left + width]
+                          .astype(int) - hidden) > 16, axis=2).sum()
+    print(f"arrows at frame 0, frame {STEPS}, unchecked, checked again: {counts}; "
+          f"{drawn} pixels drawn by them")
+    if counts != [0, 4, 0, 4]:
+        fail(f"the page's arrow counts are {counts}, expected [0, 4, 0, 4]")
+    if browser.evaluate("featherdrive.webgl") and drawn < 50:
+        fail("the arrows draw nothing")
+    no_network_nor_error(browser)
 
-        browser.open(csv_page)
-        from_csv = set_frame(browser, STEPS)
-        print(f"from the CSV: {from_csv} arrows at frame {STEPS}")
-        if from_csv != 4:
-            fail(f"the page of the CSV shows {from_csv} arrows")
-        no_network_nor_error(browser)
-        ant_page(browser, cli, source, out_dir)
-        every_shape_page(browser, cli, source, out_dir)
-        if os.path.exists(KR5):
-            kr5_page(browser, out_dir)
-    finally:
-        browser.close()
+    browser.open(csv_page)
+    from_csv = set_frame(browser, STEPS)
+    print(f"from the CSV: {from_csv} arrows at frame {STEPS}")
+    if from_csv != 4:
+        fail(f"the page of the CSV shows {from_csv} arrows")
+    no_network_nor_error(browser)
+    ant_page(browser, cli, source, out_dir)
+    every_shape_page(browser, cli, source, out_dir)
     if not os.path.exists(KR5):
         print(f"SKIP: the KR5's page: {KR5} is missing (apt-get install -y dart-doc); "
               "the other pages passed")
-        sys.exit(SKIP)
+        return False
+    kr5_page(browser, out_dir)
+    return True
 
 
 def body_geoms(mjcf):
