@@ -1,7 +1,7 @@
 """The viewer's Python side (python/featherdrive_view.py, bind_view.cpp; docs/viewer.md): the
 poses it gives the page against fd.link_pose and the URDF's fixed joints composed by hand, the
 equivalent-inertia box against a box's closed-form inertia, the page's targets against the sine,
-and its bad inputs. The page in a browser: tests/cli/view_arm.py, view_kr5.py."""
+and its bad inputs. The page in a browser: tests/cli/view_arm.py, view_contacts.py (cli.view)."""
 import json
 import math
 import os

@@ -8,8 +8,10 @@ within a few pixels of where the page's camera matrices put the tcp's pose compu
 origins); two screenshots differ around the arm and not in the view's corner; the curves' time
 cursor moves linearly with the timeline; a joint sphere's pixel is the colour of the CSV's
 |force| / the scene's max_force; the frames checkbox draws the joint frames; play advances the
-timeline and pause stops it; --serve serves the page until SIGINT (exit 0). Skipped (exit 77)
-where Chromium is not installed.
+timeline and pause stops it; --serve serves the page until SIGINT (exit 0). The same browser
+then opens the pages of tests/cli/view_contacts.py (contacts, shapes, the KR5's meshes): one
+Chromium with WebGL for all (starting one costs more than a page). Skipped (exit 77) where
+Chromium is not installed; where dart-doc is not, after every other check has passed.
 
 usage: view_arm.py FEATHERDRIVE SOURCE_DIR OUT_DIR PYTHON_DIR
 """
@@ -23,7 +25,8 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-from view_browser import Browser, chromium_or_skip, pixels_of, project
+import view_contacts
+from view_browser import SKIP, Browser, chromium_or_skip, pixels_of, project
 
 STEPS = 60
 MARKER = (255, 0, 255)
@@ -209,12 +212,14 @@ def main():
         if problem:
             fail(problem)
         print(f"no console error; {len(browser.requests)} requests, all file:/data:/blob:")
+        kr5 = view_contacts.pages(browser, cli, source, out_dir)
     finally:
         browser.close()
 
-    # A browser without WebGL (--disable-3d-apis, as some headless and remote ones): the page
-    # says so in one line and keeps the timeline and the curves, with no console error.
-    browser = Browser(1000, 1400, extra_args=["--disable-3d-apis"])
+    # A browser without WebGL (--disable-3d-apis, as some headless and remote ones; with no GPU
+    # process either, which would start SwiftShader for nothing): the page says so in one line
+    # and keeps the timeline and the curves, with no console error.
+    browser = Browser(1000, 1400, extra_args=["--disable-3d-apis", "--disable-gpu"])
     try:
         browser.open(page)
         note = browser.evaluate("(() => { const n = document.getElementById('fd-no-webgl'); "
@@ -264,6 +269,8 @@ def main():
         code = server.wait(timeout=30)
     if code != 0:
         fail(f"--serve ended with exit {code} after SIGINT")
+    if not kr5:
+        sys.exit(SKIP)
 
 
 if __name__ == "__main__":

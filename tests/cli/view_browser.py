@@ -64,6 +64,11 @@ class Browser:
                                  flatten=True)["sessionId"]
         for domain in ("Runtime", "Log", "Page", "Network"):
             self.call(f"{domain}.enable", session=True)
+        self.resize(width, height)
+
+    def resize(self, width, height):
+        """The page's size in CSS pixels (a browser can serve several pages of several sizes:
+        starting Chromium costs more than a page)."""
         self.call("Emulation.setDeviceMetricsOverride", session=True, width=width,
                   height=height, deviceScaleFactor=1, mobile=False)
 
@@ -125,13 +130,22 @@ class Browser:
         return result["result"].get("value")
 
     def open(self, path, timeout=30):
-        """Loads a file and waits until the page says it is ready."""
+        """Loads a file and waits until the page says it is ready. The document being left is
+        marked first: a page opened before in this browser says it is ready too."""
+        self.evaluate("window.fdLeft = true")
         self.call("Page.navigate", session=True, url="file://" + os.path.abspath(path))
         deadline = time.monotonic() + timeout
-        while not self.evaluate("!!(window.featherdrive && window.featherdrive.ready)"):
+        while not self._ready():
             if time.monotonic() > deadline:
                 raise TimeoutError(f"{path}: the page never became ready; errors: {self.errors}")
             time.sleep(0.05)
+
+    def _ready(self):
+        try:
+            return self.evaluate("!window.fdLeft && !!(window.featherdrive && "
+                                 "window.featherdrive.ready)")
+        except RuntimeError:  # the context went away under the call: the navigation's commit
+            return False
 
     def screenshot(self):
         """The page as it is now: an (H, W, 3) uint8 array."""
