@@ -514,7 +514,8 @@ def _confidence(J, r, m, n):
 def _delay_search(problem, candidates, delayed, x0, lower, upper, verbose):
     """The delay and the unknowns (x) of the lowest cost: (K, x, converged, cost by delay,
     refined delays). Without a delay to fit (candidates None) one full search at the scene's
-    delays; with one candidate, one full search (docs/fitting.md, "The delay")."""
+    delays; with one candidate or no unknowns, a full search (or the cost) per delay; otherwise
+    a short search per delay and the close ones refined (docs/fitting.md, "The delay")."""
     from scipy.optimize import least_squares
 
     def search(K, x, ftol, max_nfev):
