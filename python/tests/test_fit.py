@@ -19,9 +19,8 @@ from conftest import ARM
 DT = 1.0 / 240.0
 ROWS = 301  # 1.25 s
 # The noiseless fits of the six gains simulate every row at each evaluation, and those that try
-# delays 0, 1 and 2 run least_squares once per delay (the wrong ones to its tolerances or its
-# evaluation limit): they fit a 0.58 s log, which gives the gains back within 1e-12 (measured)
-# as the 1.25 s one does.
+# delays 0, 1 and 2 search once per delay (a short search each, the right one refined): they fit
+# a 0.58 s log, which gives the gains back within 1e-12 (measured) as the 1.25 s one does.
 SHORT_ROWS = 141
 
 
@@ -110,6 +109,10 @@ def test_recovers_gains_armature_and_delay(tmp_path, solver):
     scene = write(tmp_path / "fit.yaml", scene_text(solver, FIT_GAINS, rows=SHORT_ROWS))
     result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
     assert result.delay == 1 and result.converged
+    # The wrong delays' short-search costs are far above the right one's: only it is refined.
+    assert result.refined_delays == [1], result.table()
+    assert re.search(r"cost by delay: 1: \S+; after the short search: 0: \S+, 2: ",
+                     result.table()), result.table()
     assert worst_error(result, TRUTH) < 0.01, result.table()
     assert result.rms < 1e-9
     # The fitted scene (drives.J.delay: 1 written in) replays the log.
@@ -261,7 +264,7 @@ def test_a_log_cut_from_running_motion_with_a_delay(tmp_path):
     write_log(tmp_path / "log.csv", truth_scene.model.dof_names, q, qd, targets[cut:])
     scene = write(tmp_path / "fit.yaml", scene_text("tgs", FIT_GAINS, rows=SHORT_ROWS))
     result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
-    assert result.delay == 2, result.table()
+    assert result.delay == 2 and result.refined_delays == [2], result.table()
     assert worst_error(result, TRUTH) < 0.01, result.table()
     # Rows before the replay's start have no simulated q.
     assert np.isnan(result.q_fitted[:2]).all() and not np.isnan(result.q_fitted[2:]).any()
@@ -271,6 +274,24 @@ def test_a_log_cut_from_running_motion_with_a_delay(tmp_path):
     with pytest.raises(ValueError, match=r"fit\.yaml: the replay starts 2 rows into the log "
                                          r"\(the largest delay\), and the log has 3 rows$"):
         fd.fit(str(scene), str(tmp_path / "short.csv"), threads=1)
+
+
+def test_a_small_cost_gap_refines_every_close_delay(tmp_path):
+    """Noise of 3e-2 rad on q (a tenth of the targets' amplitude) brings the wrong delays' costs
+    within 8 % of the right one's: all are refined, and the log's own delay (1) still wins."""
+    truth_scene = fd.parse_scene(scene_text(delay=1, rows=SHORT_ROWS), str(tmp_path / "t.yaml"))
+    make_log(tmp_path / "log.csv", truth_scene, noise=3e-2, seed=2, rows=SHORT_ROWS)
+    # The stiffnesses alone (3 parameter sets per Jacobian, not 7): the same delay search.
+    fit = ("fit:\n  parameters:\n"
+           "    - {quantity: stiffness, joints: [joint2, joint4], bounds: [50, 5000], "
+           "initial: 1200}\n"
+           "    - {quantity: delay, joints: all, bounds: [0, 2]}\n")
+    scene = write(tmp_path / "fit.yaml", scene_text("pgs", fit, rows=SHORT_ROWS))
+    result = fd.fit(str(scene), str(tmp_path / "log.csv"), threads=1)
+    costs = result.cost_by_delay
+    assert max(costs.values()) < 1.1 * costs[1], result.table()  # the gap is small
+    assert result.refined_delays == [0, 1, 2], result.table()
+    assert result.delay == 1 and result.converged, result.table()
 
 
 def test_a_floating_base_is_refused_and_a_ball_joint_fitted_per_axis(tmp_path, module_dir):
