@@ -249,15 +249,22 @@ class SweepResult:
         common.write_atomically(path, lambda tmp: pathlib.Path(tmp).write_text(text))
 
     def plot(self, path, title):
-        """Writes the PNG; returns the (closed) figure, whose labels can be read."""
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        """Writes the PNG; returns the figure, whose labels can be read."""
+        import matplotlib.colors
+        from matplotlib.figure import Figure  # not pyplot: no backend chosen, no global state
         what = f"{self.label()} [{self.unit()}]"
         axis = [f"{n} [{self.gain_units[n]}]" if n in self.gain_units else n for n in self.names]
-        fig, ax = plt.subplots(figsize=(7, 5.5))
         best = self.best()
         varying = [i for i, a in enumerate(self.axes) if len(a) > 1]
+        # A fixed layout in inches for 10 pt text (tight_layout measures every label first):
+        # left, tick labels and the y label; bottom, the x ones; top, the title; right, the
+        # colour bar (0.3 gap, 0.22 wide) and its tick labels and label.
+        width, height = 7.0, 5.5
+        left, bottom, top = 0.85, 0.6, 0.4
+        right = 0.2 if len(varying) <= 1 else 0.3 + 0.22 + 1.05
+        fig = Figure(figsize=(width, height))
+        ax = fig.add_axes([left / width, bottom / height, 1 - (left + right) / width,
+                           1 - (bottom + top) / height])
         if len(varying) <= 1:
             k = varying[0] if varying else 0
             ax.plot(self.points[:, k], self.objective, "o-")
@@ -274,7 +281,9 @@ class SweepResult:
                                  _edges(self.axes[0], self.log[0]), z, shading="flat",
                                  norm=matplotlib.colors.LogNorm()
                                  if finite.size and finite.min() > 0 else None)
-            fig.colorbar(mesh, ax=ax, label=what)
+            bar = fig.add_axes([1 - (0.22 + 1.05) / width, bottom / height, 0.22 / width,
+                                1 - (bottom + top) / height])
+            fig.colorbar(mesh, cax=bar, label=what)
             ax.plot(self.points[best, 1], self.points[best, 0], "w*", markersize=14)
             ax.set_xlabel(axis[1])
             ax.set_ylabel(axis[0])
@@ -285,11 +294,7 @@ class SweepResult:
         else:
             raise ValueError(f"a plot shows one or two parameters, not {len(varying)}")
         ax.set_title(title)
-        fig.tight_layout()
-        try:
-            common.write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
-        finally:
-            plt.close(fig)
+        common.write_atomically(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
         return fig
 
 

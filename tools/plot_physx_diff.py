@@ -11,12 +11,24 @@ import sys
 
 try:
     import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+    from matplotlib.figure import Figure  # not pyplot: savefig picks Agg for a PNG itself
 except ImportError as e:  # one line for featherdrive to show, not a traceback
     sys.exit(f"plot_physx_diff: {sys.executable} cannot import matplotlib ({e}); "
              "Debian: apt-get install python3-matplotlib, or set FEATHERDRIVE_PYTHON")
+
+
+def stacked_axes(n, title):
+    """n axes sharing t, one above the other, on a 10 x 10 inch figure laid out in inches for
+    10 pt text: tight_layout would measure every label first, as costly as drawing them."""
+    width, height = 10.0, 10.0
+    left, right, top, bottom, gap = 1.0, 0.15, 0.5, 0.6, 0.3  # gap: room for a "1e-5" offset
+    axes_height = (height - top - bottom - (n - 1) * gap) / n
+    fig = Figure(figsize=(width, height))
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False, gridspec_kw=dict(
+        left=left / width, right=1 - right / width, top=1 - top / height, bottom=bottom / height,
+        hspace=gap / axes_height))[:, 0]
+    fig.suptitle(title, y=1 - 0.1 / height, va="top")
+    return fig, axes
 
 
 def main():
@@ -36,8 +48,8 @@ def main():
 
     panels = (("dq:", "q difference [rad or m]"), ("dqd:", "qd difference [rad/s or m/s]"),
               ("df:", "force difference [Nm or N]"))
-    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(10, 10))
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig, axes = stacked_axes(len(panels), args.title)
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, (prefix, label) in zip(axes, panels):
         for i, joint in enumerate(joints):
             ax.plot(col["t"], col[prefix + joint], color=colours[i % len(colours)], label=joint,
@@ -48,8 +60,6 @@ def main():
         ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3), useOffset=False)
     axes[0].legend(loc="upper right", fontsize="small", ncol=2)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(args.title)
-    fig.tight_layout()
     fig.savefig(args.png, dpi=100, format="png")  # the name may be a temporary one
 
 

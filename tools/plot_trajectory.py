@@ -11,12 +11,24 @@ import sys
 
 try:
     import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
+    from matplotlib.figure import Figure  # not pyplot: savefig picks Agg for a PNG itself
 except ImportError as e:  # one line for featherdrive to show, not a traceback
     sys.exit(f"plot_trajectory: {sys.executable} cannot import matplotlib ({e}); "
              "Debian: apt-get install python3-matplotlib, or set FEATHERDRIVE_PYTHON")
+
+
+def stacked_axes(n, title):
+    """n axes sharing t, one above the other, on a 10 x 10 inch figure laid out in inches for
+    10 pt text: tight_layout would measure every label first, as costly as drawing them."""
+    width, height = 10.0, 10.0
+    left, right, top, bottom, gap = 1.0, 0.15, 0.5, 0.6, 0.3  # gap: room for a "1e-5" offset
+    axes_height = (height - top - bottom - (n - 1) * gap) / n
+    fig = Figure(figsize=(width, height))
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False, gridspec_kw=dict(
+        left=left / width, right=1 - right / width, top=1 - top / height, bottom=bottom / height,
+        hspace=gap / axes_height))[:, 0]
+    fig.suptitle(title, y=1 - 0.1 / height, va="top")
+    return fig, axes
 
 
 def read_columns(path):
@@ -42,8 +54,8 @@ def main():
     driven = [c[len("target:"):] for c in targets if c.startswith("target:")]
     joints = driven or [c[2:] for c in traj if c.startswith("q:")]
 
-    fig, (ax_q, ax_e, ax_f) = plt.subplots(3, 1, sharex=True, figsize=(10, 10))
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig, (ax_q, ax_e, ax_f) = stacked_axes(3, args.title)
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for i, joint in enumerate(joints):
         colour = colours[i % len(colours)]
         q = traj["q:" + joint]
@@ -61,8 +73,6 @@ def main():
     ax_q.legend(loc="upper right", fontsize="small", ncol=2)
     for ax in (ax_q, ax_e, ax_f):
         ax.grid(True, alpha=0.3)
-    fig.suptitle(args.title)
-    fig.tight_layout()
     fig.savefig(args.png, dpi=100, format="png")  # the name may be a temporary one
 
 
