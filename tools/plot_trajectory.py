@@ -11,24 +11,10 @@ import sys
 
 try:
     import matplotlib
-    from matplotlib.figure import Figure  # not pyplot: savefig picks Agg for a PNG itself
+    from plot_layout import stacked_axes
 except ImportError as e:  # one line for featherdrive to show, not a traceback
     sys.exit(f"plot_trajectory: {sys.executable} cannot import matplotlib ({e}); "
              "Debian: apt-get install python3-matplotlib, or set FEATHERDRIVE_PYTHON")
-
-
-def stacked_axes(n, title):
-    """n axes sharing t, one above the other, on a 10 x 10 inch figure laid out in inches for
-    10 pt text: tight_layout would measure every label first, as costly as drawing them."""
-    width, height = 10.0, 10.0
-    left, right, top, bottom, gap = 1.0, 0.15, 0.5, 0.6, 0.3  # gap: room for a "1e-5" offset
-    axes_height = (height - top - bottom - (n - 1) * gap) / n
-    fig = Figure(figsize=(width, height))
-    axes = fig.subplots(n, 1, sharex=True, squeeze=False, gridspec_kw=dict(
-        left=left / width, right=1 - right / width, top=1 - top / height, bottom=bottom / height,
-        hspace=gap / axes_height))[:, 0]
-    fig.suptitle(title, y=1 - 0.1 / height, va="top")
-    return fig, axes
 
 
 def read_columns(path):
