@@ -774,7 +774,8 @@ void read_row_kinds(const Reader& r, const YAML::Node& j, const std::string& pat
   return settings;
 }
 
-// Shapes after the armature's rebuild; robot.shapes keeps them for a later rebuild.
+// shapes, feet, contact and ground. Called after read_joints: shapes go onto the model its
+// armature rebuilt, and robot.shapes keeps them for a later rebuild.
 [[gnu::noinline]] void read_contact_parts(const Reader& r, const YAML::Node& root, Scene& scene) {
   const Model* m = scene.robot.model.get();
   if (root["shapes"]) {
