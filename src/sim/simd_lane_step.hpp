@@ -244,6 +244,9 @@ class LaneStep {
   // actuators' kinds (bits: kActuator some lane has one, kMotorClip a dc_motor, kTableClip a
   // remotized_pd), [8] the row kinds some lane has (bit k: RowKinds' kind k).
   double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 16 * d; }
+  // any_row's entries the sweeps set (prepare_sweeps): [9] every lane has friction, [10] some
+  // lane's limit may act whatever its velocity (row_law::limit_held; 1 in TGS, whose dx changes).
+  static constexpr int kAllFriction = 9, kLimitHeld = 10;
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   // The state arrays' row of environment e (Block::rows).
   long row_of(int e) const { return b_.rows ? b_.rows[e] : e; }
@@ -288,6 +291,10 @@ class LaneStep {
   template <class L>
   void leave_chain_link(const L& lane, int k, bool to_parent, V& beta);
   void sweep();
+  void prepare_sweeps();
+  void find_held_limits();
+  bool sweeps_prepared_ = false;  // prepare_sweeps ran in this call
+  int sweep_of_step_ = 0;         // PGS: the sweeps of the step so far
   template <bool kGiven>
   void sweep_links();
   // The sides of sweep_walk (the walk over the links, shared with Simulation's sweep).
@@ -514,6 +521,12 @@ class LaneStep {
     P* p;
     L lane;
     [[gnu::always_inline]] decltype(auto) operator[](int r) const { return lane(p[r]); }
+  };
+  // Six entries written and never read.
+  template <class T>
+  struct Sink {
+    T x;
+    [[gnu::always_inline]] T& operator[](int) { return x; }
   };
   template <class P, class L>
   [[gnu::always_inline]] static Six<P, L> six(const L& lane, P* p) {
@@ -1177,7 +1190,10 @@ struct LaneStep<A, K>::LaneRows {
     }
     return false;
   }
-  bool all(Row k) const { return k == Row::drive && s.any_row(d)[2] != 0.0; }
+  bool all(Row k) const {
+    return (k == Row::drive && s.any_row(d)[2] != 0.0) ||
+           (k == Row::friction && s.any_row(d)[kAllFriction] != 0.0);
+  }
   template <class Mask>
   static bool any_of(const Mask& m) {
     if constexpr (std::is_same_v<T, V>) return simd::any(m);
@@ -1228,6 +1244,17 @@ struct LaneStep<A, K>::LaneRows {
   T error_high() const { return f(Layout::err_high); }
   T max_velocity() const { return f(Layout::vmax); }
   T& velocity_limit() const { return f(Layout::vlimp); }
+  // row_law::limit_may_act for some lane, its terms in v alone where no lane's limit is held.
+  bool limit_may_act(const T& low, const T& high, const T& v, const T& dx,
+                     const row_law::LimitPhase& phase) const {
+    double& held = s.any_row(d)[kLimitHeld];
+    const bool act =
+        held != 0.0
+            ? any_of(row_law::limit_may_act(low, high, v, error_low(), error_high(), dx, phase))
+            : any_of(row_law::limit_crossing(v, error_low(), error_high(), dx, phase));
+    if (act) held = 1.0;  // the law may leave an impulse
+    return act;
+  }
   bool any_kinds() const {
     if constexpr (kLoneDrive) return false;
     return s.any_row(d)[8] != 0.0;
@@ -1385,6 +1412,7 @@ void LaneStep<A, K>::finish_link(int i) {
     root_finish();
     return;
   }
+  if (lk.type == 0 && !lk.later_read) return;  // its E is read by no one
   V E[6];
   if (lk.later) {
     const V* Ep = p_.links[lk.parent].later ? at(l_.later + 6 * lk.parent) : at(l_.zero);
@@ -1413,7 +1441,8 @@ void LaneStep<A, K>::finish_link(int i) {
     const V* S = at(l_.S + 6 * i);
     const V later = sweep_law::later(at(l_.D_inv)[i], at(l_.U + 6 * i), E);
     dqd = dqd + later;
-    for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r] + later * S[r];
+    if (lk.later_read)
+      for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r] + later * S[r];
   }
   V& qd = at(l_.qd)[d];
   qd = qd + dqd;
@@ -1463,15 +1492,24 @@ template <bool kGiven, class L>
     lane(at(l_.chain_base)[i + 1]) =
         sweep_law::chained_base(ahead, impulse, T(lane(at(l_.chain_pi)[i + 1])));
   // dv's entries all read before any is stored: one lane's six then go as pairs (SSE2).
+  auto after_rows = [&](auto&& out) {
+    return sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv,
+                                 six(lane, dvp), six(lane, W), six(lane, S), out);
+  };
+  // A childless link's dv is read by no one: formed into a sink, it is not formed at all.
   lane(at(l_.entry)[d]) =
-      sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv, six(lane, dvp),
-                            six(lane, W), six(lane, S), six(lane, dv));
+      k.leaf && !k.contacts ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows
 // first, as PhysX solves them (mimic_solve.hpp), then the dofs' rows.
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
+  if (!sweeps_prepared_) prepare_sweeps();
+  if (!p_.tgs) {  // step() sweeps position_iterations + velocity_iterations times
+    if (sweep_of_step_ == 0) find_held_limits();
+    if (++sweep_of_step_ == p_.position_iterations + p_.velocity_iterations) sweep_of_step_ = 0;
+  }
   if (p_.num_mimic > 0) solve_mimic();
   if (p_.contacts) {  // Stepper::sweep: its phase, the self rows, the links' velocities then
     LaneContactPhase& c = contact_phase_;
@@ -1489,6 +1527,41 @@ void LaneStep<A, K>::sweep() {
   sweep_links<false>();
   if (keep)
     for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
+}
+
+// What the sweeps read of the rows' constants (setup_row_constants, once a call): whether every
+// lane has friction, so that its row selects nothing (row_sequence::solve).
+template <class A, int K>
+void LaneStep<A, K>::prepare_sweeps() {
+  sweeps_prepared_ = true;
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 1 && k.type != 2 && k.type != 4) continue;
+    for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
+      any_row(d)[kAllFriction] = all(row(d)[Layout::has_friction] != V(0.0)) ? 1.0 : 0.0;
+      any_row(d)[kLimitHeld] = 1.0;
+    }
+  }
+}
+
+// PGS, before a step's first sweep: which dofs' limits may act whatever the velocity. Their
+// errors and dx stay as they are through the step, the impulses change only where the limit's
+// law runs (LaneRows::limit_may_act marks those).
+template <class A, int K>
+void LaneStep<A, K>::find_held_limits() {
+  for (int i = 0; i < p_.num_links; ++i) {
+    const LinkConstants& k = p_.links[i];
+    if (k.type != 1 && k.type != 2 && k.type != 4) continue;
+    for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
+      if (any_row(d)[1] == 0.0) continue;
+      const V* rw = row(d);
+      any_row(d)[kLimitHeld] = any(row_law::limit_held(rw[Layout::low], rw[Layout::high],
+                                                       rw[Layout::err_low], rw[Layout::err_high],
+                                                       rw[Layout::delta_x]))
+                                   ? 1.0
+                                   : 0.0;
+    }
+  }
 }
 
 // sweep_walk's sides: links entered, contacts solved, links finished, and leaving.
@@ -1527,7 +1600,8 @@ struct LaneStep<A, K>::Entering {
     const V* dvp = k.parent >= 0 ? t.at(t.l_.dv + 6 * k.parent) : t.at(t.l_.zero);
     V* dv = t.at(t.l_.dv + 6 * i);
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
-      for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
+      if (!k.leaf || k.contacts)  // a childless link's dv is read by no one
+        for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
     } else if (k.type == 4) {
       t.template enter_ball<kGiven>(i, dvp, dv);
     } else {

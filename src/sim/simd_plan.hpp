@@ -132,6 +132,10 @@ struct LinkConstants {
   bool chain_in = false;
   /// Left in a run of only children (sweep_walk::chain_up, its parent of any kind).
   bool chain_up = false;
+  /// A child's finish after the sweep reads the later-subtree change this link's finish stores
+  /// (implicit_drives.md, eq. SW5): a fixed link's finish does nothing, a one-dof link's stores
+  /// nothing, where none does.
+  bool later_read = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
   /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which

@@ -71,6 +71,23 @@ T limit(T& low, T& high, const T& v, const T& recip, const T& error_low, const T
   return select(on_low, d_low, d_high);
 }
 
+/// limit_may_act's terms that do not depend on v: the joint is past a limit, or an earlier
+/// iteration of the step left an impulse. Where no lane has them, a solver that knows so may test
+/// limit_crossing alone.
+template <class T>
+auto limit_held(const T& low, const T& high, const T& error_low, const T& error_high,
+                const T& dx) {
+  const T zero(0.0);
+  return ((error_low + dx < zero) | (error_high - dx < zero)) | ((low != zero) | (high != zero));
+}
+/// limit_may_act's terms in v: the joint would cross a limit by the end of the (sub-)step.
+template <class T>
+auto limit_crossing(const T& v, const T& error_low, const T& error_high, const T& dx,
+                    const LimitPhase& phase) {
+  const T zero(0.0);
+  const T future = dx + v * T(phase.h);
+  return (error_low + future < zero) | (error_high - future < zero);
+}
 /// Where limit() can change anything: the joint is past a limit or would cross one by the end of
 /// the (sub-)step, or an earlier iteration of the step left an impulse. Elsewhere limit() gives
 /// -0 or +0 and leaves low and high as they are (J4 with l = u = 0), which changes no sum it
@@ -78,11 +95,8 @@ T limit(T& low, T& high, const T& v, const T& recip, const T& error_low, const T
 template <class T>
 auto limit_may_act(const T& low, const T& high, const T& v, const T& error_low,
                    const T& error_high, const T& dx, const LimitPhase& phase) {
-  const T zero(0.0);
-  const T future = dx + v * T(phase.h);
-  return ((error_low + dx < zero) | (error_low + future < zero)) |
-         ((error_high - dx < zero) | (error_high - future < zero)) |
-         ((low != zero) | (high != zero));
+  return limit_held(low, high, error_low, error_high, dx) |
+         limit_crossing(v, error_low, error_high, dx, phase);
 }
 
 /// The step's velocity scale (joint_constraints.md, "Velocity limits"): ratio lowered to

@@ -27,9 +27,11 @@ struct Phase {
 /// (row_kinds.hpp, in RowKinds' order), friction, the position limit, the velocity limit. Each sees the velocity the one before left; returns the dof's
 /// impulse change. Rows is the dof's rows over T (a double, or a pack and its mask M):
 ///   bool any(Row)   some lane has the row (the row is skipped otherwise);
-///   bool all(Row)   every lane has it (no select needed);
+///   bool all(Row)   every lane has it (no select needed; drive and friction ask);
 ///   M has(Row)      the lanes that have it;
 ///   bool any_of(M)  some lane's mask is set;
+///   optionally bool limit_may_act(low, high, v, dx, limit phase): any_of(row_law::limit_may_act)
+///     by the Rows' own means (the lanes': knowing where limit_held is false);
 ///   T response(), recip(): r and 1 / (r + cfm);
 ///   the row's accumulators as T& and its coefficients (tf_*, drive(), drive_impulse(),
 ///   friction_*, low(), high(), error_low(), error_high(), max_velocity(), velocity_limit());
@@ -47,6 +49,10 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
   auto apply = [&](const auto& present, const T& delta) {
     total = select(present, total + delta, total);
     v = select(present, v + r * delta, v);
+  };
+  auto apply_all = [&](const T& delta) {  // apply where every lane has the row: no select
+    total = total + delta;
+    v = v + r * delta;
   };
   const T recip = rows.recip();
   if (rows.any(Row::transmission_friction)) {
@@ -68,8 +74,7 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
     const T delta = next - accumulated;
     if (rows.all(Row::drive)) {
       rows.drive_impulse() = next;
-      total = total + delta;
-      v = v + r * delta;
+      apply_all(delta);
     } else {
       const auto driven = rows.has(Row::drive);
       rows.drive_impulse() = select(driven, next, accumulated);
@@ -86,18 +91,28 @@ T solve(Rows& rows, T v, const T& dx, const Phase& phase) {
     });
   }
   if (rows.any(Row::friction)) {
-    const auto rubbing = rows.has(Row::friction);
     T impulse = rows.friction_impulse();
     const T delta = row_law::friction(impulse, v, recip, rows.friction_static(),
                                       rows.friction_dynamic(), rows.friction_viscous());
-    rows.friction_impulse() = select(rubbing, impulse, rows.friction_impulse());
-    apply(rubbing, delta);
+    if (rows.all(Row::friction)) {
+      rows.friction_impulse() = impulse;
+      apply_all(delta);
+    } else {
+      const auto rubbing = rows.has(Row::friction);
+      rows.friction_impulse() = select(rubbing, impulse, rows.friction_impulse());
+      apply(rubbing, delta);
+    }
   }
   if (rows.any(Row::limit)) {
     T low = rows.low(), high = rows.high();
     // Far inside both limits with nothing accumulated the law changes nothing (J4).
-    if (rows.any_of(row_law::limit_may_act(low, high, v, rows.error_low(), rows.error_high(), dx,
-                                            phase.limit))) {
+    bool may_act;
+    if constexpr (requires { rows.limit_may_act(low, high, v, dx, phase.limit); })
+      may_act = rows.limit_may_act(low, high, v, dx, phase.limit);  // the Rows' own test of it
+    else
+      may_act = rows.any_of(row_law::limit_may_act(low, high, v, rows.error_low(),
+                                                   rows.error_high(), dx, phase.limit));
+    if (may_act) {
       const auto limited = rows.has(Row::limit);
       const T delta = row_law::limit(low, high, v, recip, rows.error_low(), rows.error_high(), dx,
                                      phase.limit);
