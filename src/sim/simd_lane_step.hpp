@@ -288,8 +288,16 @@ class LaneStep {
                   const V& r, const V& dx);
   template <bool kGiven, class L>
   void enter_link(const L& lane, int i, const V* dvp, V* dv);
+  // A one-dof link's arrays as leaving reads and writes them, found once for all its vectors (a
+  // store through a pack may alias the plan: what is found after one is found again).
+  struct LeftLink {
+    const V *D_inv, *jimp, *S, *pA, *U, *G, *entry;
+    V *qd, *pA_parent;
+    bool finish;
+  };
+  LeftLink left_link(int k);
   template <class L>
-  void leave_chain_link(const L& lane, int k, bool to_parent, V& beta);
+  void leave_chain_link(const L& lane, const LeftLink& l, bool to_parent, V& beta);
   void sweep();
   void prepare_sweeps();
   void find_held_limits();
@@ -1176,11 +1184,12 @@ struct LaneStep<A, K>::LaneRows {
   int d;
   V* rw;
   L lane;
+  double* flags = s.any_row(d);  // found once (a store through a pack may alias the plan)
   using T = std::remove_cvref_t<decltype(std::declval<L>()(std::declval<V&>()))>;
   auto& f(int field) const { return lane(rw[field]); }
   bool any(Row k) const {
     if constexpr (kLoneDrive) return k == Row::drive;
-    const double* has = s.any_row(d);
+    const double* has = flags;
     switch (k) {
       case Row::transmission_friction: return has[6] != 0.0;
       case Row::drive: return true;  // every dof's row runs; undriven lanes keep theirs (driven)
@@ -1191,8 +1200,8 @@ struct LaneStep<A, K>::LaneRows {
     return false;
   }
   bool all(Row k) const {
-    return (k == Row::drive && s.any_row(d)[2] != 0.0) ||
-           (k == Row::friction && s.any_row(d)[kAllFriction] != 0.0);
+    return (k == Row::drive && flags[2] != 0.0) ||
+           (k == Row::friction && flags[kAllFriction] != 0.0);
   }
   template <class Mask>
   static bool any_of(const Mask& m) {
@@ -1218,7 +1227,7 @@ struct LaneStep<A, K>::LaneRows {
   T& drive_impulse() const { return f(Layout::dimp); }
   T clip_drive(T next, const T& accumulated, const T& v, const T& dx) const {
     if constexpr (std::is_same_v<T, V>) {
-      const double* has = s.any_row(d);
+      const double* has = flags;
       if (has[5] != 0.0) {
         const row_law::EnvelopeOf<V> e{s.dof_parameter(d, envelope_max_effort),
                                        s.dof_parameter(d, envelope_max_velocity),
@@ -1247,7 +1256,7 @@ struct LaneStep<A, K>::LaneRows {
   // row_law::limit_may_act for some lane, its terms in v alone where no lane's limit is held.
   bool limit_may_act(const T& low, const T& high, const T& v, const T& dx,
                      const row_law::LimitPhase& phase) const {
-    double& held = s.any_row(d)[kLimitHeld];
+    double& held = flags[kLimitHeld];
     const bool act =
         held != 0.0
             ? any_of(row_law::limit_may_act(low, high, v, error_low(), error_high(), dx, phase))
@@ -1257,9 +1266,9 @@ struct LaneStep<A, K>::LaneRows {
   }
   bool any_kinds() const {
     if constexpr (kLoneDrive) return false;
-    return s.any_row(d)[8] != 0.0;
+    return flags[8] != 0.0;
   }
-  bool any_kind(int e) const { return has_bit(s.any_row(d)[8], static_cast<double>(1 << e)); }
+  bool any_kind(int e) const { return has_bit(flags[8], static_cast<double>(1 << e)); }
   auto has_kind(int e) const { return f(Layout::kind_masks + e) != T(0.0); }
   /// A kind's row as the lanes lane picks see it.
   struct KindSlots {
@@ -1280,24 +1289,31 @@ template <class A, int K>
 // Link k's part of leaving (the lanes lane picks): beta = D^-1 (impulse - S^T pA), its joint's
 // velocity finished where it is its last change, and when to_parent, pA_parent = pA + beta U.
 template <class A, int K>
-template <class L>
-void LaneStep<A, K>::leave_chain_link(const L& lane, int k, bool to_parent, V& beta) {
+auto LaneStep<A, K>::left_link(int k) -> LeftLink {
   const LinkConstants& lk = p_.links[k];
   const int d = lk.v_index;
-  const V* pAk = at(l_.subtree + 6 * k);
-  const V* U = at(l_.U + 6 * k);
+  return {at(l_.D_inv) + k,        at(l_.jimp) + d,          at(l_.S + 6 * k),
+          at(l_.subtree + 6 * k),  at(l_.U + 6 * k),         at(l_.G + 6 * k),
+          at(l_.entry) + d,        at(l_.qd) + d,            at(l_.subtree + 6 * lk.parent),
+          lk.finish_on_leave};
+}
+
+template <class A, int K>
+template <class L>
+[[gnu::always_inline]] inline void LaneStep<A, K>::leave_chain_link(const L& lane,
+                                                                    const LeftLink& l,
+                                                                    bool to_parent, V& beta) {
   auto& b = lane(beta);
   using T = std::remove_cvref_t<decltype(b)>;
-  b = sweep_law::leave_beta(lane(at(l_.D_inv)[k]), lane(at(l_.jimp)[d]),
-                            sweep_law::dot6<T>(six(lane, at(l_.S + 6 * k)), six(lane, pAk)));
-  if (lk.finish_on_leave) {
-    auto& qd = lane(at(l_.qd)[d]);
-    qd = sweep_law::finished_velocity(qd, lane(at(l_.entry)[d]), six(lane, at(l_.G + 6 * k)),
-                                      six(lane, pAk));
+  b = sweep_law::leave_beta(lane(*l.D_inv), lane(*l.jimp),
+                            sweep_law::dot6<T>(six(lane, l.S), six(lane, l.pA)));
+  if (l.finish) {
+    auto& qd = lane(*l.qd);
+    qd = sweep_law::finished_velocity(qd, lane(*l.entry), six(lane, l.G), six(lane, l.pA));
   }
   if (to_parent)  // the parent's first child (sweep_law, eq. SW12)
-    sweep_law::hand_over<T>(sweep_law::handed(six(lane, pAk), b, six(lane, U)), true,
-                            six(lane, at(l_.subtree + 6 * lk.parent)));
+    sweep_law::hand_over<T>(sweep_law::handed(six(lane, l.pA), b, six(lane, l.U)), true,
+                            six(lane, l.pA_parent));
 }
 
 // Leaves the run of only children from k (sweep_walk::in_run; leave_chain_link's operations in
@@ -1325,17 +1341,19 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop) {
       const V* G = at(l_.G + 6 * i);
       const V* U = at(l_.U + 6 * i);
       const V* S_up = at(l_.S + 6 * l.parent);
+      const V *D_inv = at(l_.D_inv) + i, *jimp = at(l_.jimp) + d, *pS = at(l_.chain_pS) + i;
+      const V* entry = at(l_.entry) + d;
+      V* qd_d = at(l_.qd) + d;
       const bool up_in_run = l.parent != end;  // then one dof (LinkConstants::chain_up)
       for (int n = 0; n < N; ++n) {
         const auto& lane = lanes[n];
         T* x = pA[n];
-        const T b = sweep_law::leave_beta(lane(at(l_.D_inv)[i]), lane(at(l_.jimp)[d]), Sp[n]);
+        const T b = sweep_law::leave_beta(lane(*D_inv), lane(*jimp), Sp[n]);
         // The parent's S^T pA after the hand-over, from this pA and a scalar (implicit_drives.md,
         // eq. GS3).
-        if (up_in_run)
-          Sp[n] = sweep_law::parent_S_pA(six(lane, S_up), x, b, lane(at(l_.chain_pS)[i]));
-        auto& qd = lane(at(l_.qd)[d]);
-        qd = sweep_law::finished_velocity(qd, lane(at(l_.entry)[d]), six(lane, G), x);
+        if (up_in_run) Sp[n] = sweep_law::parent_S_pA(six(lane, S_up), x, b, lane(*pS));
+        auto& qd = lane(*qd_d);
+        qd = sweep_law::finished_velocity(qd, lane(*entry), six(lane, G), x);
         for (int r = 0; r < 6; ++r) x[r] = x[r] + b * lane(U[r]);
       }
     }
@@ -1373,10 +1391,11 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
   }
   if (one_dof(lk)) {
     U = at(l_.U + 6 * k);
+    const LeftLink l = left_link(k);
     if constexpr (kVectorByVector)
-      for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, k, chain, beta);
+      for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, l, chain, beta);
     else
-      leave_chain_link(WholePack{}, k, chain, beta);
+      leave_chain_link(WholePack{}, l, chain, beta);
   }
   if (p < 0) return;
   // The hand-over (sweep_law, eq. SW12-SW14): a chain's one-dof link did it in leave_chain_link.
@@ -1413,6 +1432,7 @@ void LaneStep<A, K>::finish_link(int i) {
     return;
   }
   if (lk.type == 0 && !lk.later_read) return;  // its E is read by no one
+  V* const later_i = at(l_.later + 6 * i);  // found once: a store through a pack may alias l_
   V E[6];
   if (lk.later) {
     const V* Ep = p_.links[lk.parent].later ? at(l_.later + 6 * lk.parent) : at(l_.zero);
@@ -1428,7 +1448,7 @@ void LaneStep<A, K>::finish_link(int i) {
   }
   if (lk.type == 0) {
     if (lk.later)
-      for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r];
+      for (int r = 0; r < 6; ++r) later_i[r] = E[r];
     return;
   }
   if (lk.type == 4) {
@@ -1442,7 +1462,7 @@ void LaneStep<A, K>::finish_link(int i) {
     const V later = sweep_law::later(at(l_.D_inv)[i], at(l_.U + 6 * i), E);
     dqd = dqd + later;
     if (lk.later_read)
-      for (int r = 0; r < 6; ++r) at(l_.later + 6 * i)[r] = E[r] + later * S[r];
+      for (int r = 0; r < 6; ++r) later_i[r] = E[r] + later * S[r];
   }
   V& qd = at(l_.qd)[d];
   qd = qd + dqd;
@@ -1461,13 +1481,20 @@ template <bool kGiven, class L>
   const V* S = at(l_.S + 6 * i);
   const V* W = at(l_.W + 6 * i);
   V* rw = row(d);
+  // What is written or read after the first store, found before it (it may alias the plan).
+  V* const jimp = at(l_.jimp) + d;
+  V* const entry = at(l_.entry) + d;
+  const V* const inverse_mass = at(l_.inverse_mass) + i;
+  const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
+  V* const chain_base_next = at(l_.chain_base) + i + 1;
+  const V* const chain_pi_next = at(l_.chain_pi) + i + 1;
+  const bool sink = k.leaf && !k.contacts;
   const auto D_inv = lane(at(l_.D_inv)[i]);
   using T = std::remove_cv_t<decltype(D_inv)>;
   // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
   // part that does not wait on this link's impulse is formed before the rows (eq. GS2).
   const T base = k.chain_in ? lane(at(l_.chain_base)[i])
                             : sweep_law::base(D_inv, six(lane, U), six(lane, dvp));
-  const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
   T ahead{};
   if (chain_next) {
     const T D_next = lane(at(l_.D_inv)[i + 1]);  // its b^b = -D^-1 U^T S_i, formed as in the pass
@@ -1487,18 +1514,16 @@ template <bool kGiven, class L>
     LaneRows<L, true> rows{*this, d, rw, lane};
     impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
-  lane(at(l_.jimp)[d]) = impulse;
+  lane(*jimp) = impulse;
   if (chain_next)
-    lane(at(l_.chain_base)[i + 1]) =
-        sweep_law::chained_base(ahead, impulse, T(lane(at(l_.chain_pi)[i + 1])));
+    lane(*chain_base_next) = sweep_law::chained_base(ahead, impulse, T(lane(*chain_pi_next)));
   // dv's entries all read before any is stored: one lane's six then go as pairs (SSE2).
   auto after_rows = [&](auto&& out) {
-    return sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv,
-                                 six(lane, dvp), six(lane, W), six(lane, S), out);
+    return sweep_law::after_rows(base, impulse, T(lane(*inverse_mass)), D_inv, six(lane, dvp),
+                                 six(lane, W), six(lane, S), out);
   };
   // A childless link's dv is read by no one: formed into a sink, it is not formed at all.
-  lane(at(l_.entry)[d]) =
-      k.leaf && !k.contacts ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
+  lane(*entry) = sink ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows
