@@ -1481,14 +1481,7 @@ template <bool kGiven, class L>
   const V* S = at(l_.S + 6 * i);
   const V* W = at(l_.W + 6 * i);
   V* rw = row(d);
-  // What is written or read after the first store, found before it (it may alias the plan).
-  V* const jimp = at(l_.jimp) + d;
-  V* const entry = at(l_.entry) + d;
-  const V* const inverse_mass = at(l_.inverse_mass) + i;
   const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
-  V* const chain_base_next = at(l_.chain_base) + i + 1;
-  const V* const chain_pi_next = at(l_.chain_pi) + i + 1;
-  const bool sink = k.leaf && !k.contacts;
   const auto D_inv = lane(at(l_.D_inv)[i]);
   using T = std::remove_cv_t<decltype(D_inv)>;
   // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
@@ -1514,16 +1507,18 @@ template <bool kGiven, class L>
     LaneRows<L, true> rows{*this, d, rw, lane};
     impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
-  lane(*jimp) = impulse;
+  lane(at(l_.jimp)[d]) = impulse;
   if (chain_next)
-    lane(*chain_base_next) = sweep_law::chained_base(ahead, impulse, T(lane(*chain_pi_next)));
+    lane(at(l_.chain_base)[i + 1]) =
+        sweep_law::chained_base(ahead, impulse, T(lane(at(l_.chain_pi)[i + 1])));
   // dv's entries all read before any is stored: one lane's six then go as pairs (SSE2).
   auto after_rows = [&](auto&& out) {
-    return sweep_law::after_rows(base, impulse, T(lane(*inverse_mass)), D_inv, six(lane, dvp),
-                                 six(lane, W), six(lane, S), out);
+    return sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv,
+                                 six(lane, dvp), six(lane, W), six(lane, S), out);
   };
   // A childless link's dv is read by no one: formed into a sink, it is not formed at all.
-  lane(*entry) = sink ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
+  lane(at(l_.entry)[d]) =
+      k.leaf && !k.contacts ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
 }
 
 // One Gauss-Seidel sweep (gauss_seidel.hpp) with exact joint velocities, O(n): the mimic rows
