@@ -86,13 +86,17 @@ void set_chain_flags(std::vector<LinkConstants>& links) {
   }
   // later_read, children first (they come after their parent): a child finished after the sweep
   // reads its parent's E where both have a later subtree (LaneStep::finish_link).
-  for (LinkConstants& k : links) k.later_read = false;
+  for (LinkConstants& k : links) k.later_read = false, k.finish_down = false;
   for (size_t i = links.size(); i-- > 0;) {
     const LinkConstants& k = links[i];
     const bool finished_after = !k.finish_on_leave && (k.type != 0 || k.later);
     const bool reads = finished_after && k.type != 3 && (k.type != 0 || k.later_read);
     if (reads && k.later && k.parent >= 0 && links[static_cast<size_t>(k.parent)].later)
       links[static_cast<size_t>(k.parent)].later_read = true;
+    if (k.parent < 0) continue;
+    LinkConstants& p = links[static_cast<size_t>(k.parent)];
+    p.finish_down = one_dof(k) && one_dof(p) && k.first_child && k.last_child && k.later &&
+                    !k.finish_on_leave && !p.finish_on_leave && k.parent + 1 == static_cast<int>(i);
   }
 }
 

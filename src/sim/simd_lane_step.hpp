@@ -330,6 +330,7 @@ class LaneStep {
   [[gnu::noinline]] void correct_parent(int p, const V* pa);
   int leave_chain_run(int k, int stop);
   void finish_link(int i);
+  void finish_run(int i, const V* E);
   // A floating root, link 0 (docs/simd_batch.md, "Floating bases").
   template <bool kStart>
   void root_pose(V* R);
@@ -1321,29 +1322,36 @@ template <class L>
 // kVectorByVector, and stored once where the run ends: in the link returned.
 template <class A, int K>
 int LaneStep<A, K>::leave_chain_run(int k, int stop) {
+  const LinkConstants* const links = p_.links;
   int end = k;
-  while (sweep_walk::in_run(p_.links[end], stop)) end = p_.links[end].parent;
+  while (sweep_walk::in_run(links[end], stop)) end = links[end].parent;
+  // The arrays' starts, found once (a store through a pack may alias the plan).
+  const V *const G0 = at(l_.G), *const U0 = at(l_.U), *const S0 = at(l_.S);
+  const V *const D_inv0 = at(l_.D_inv), *const jimp0 = at(l_.jimp), *const pS0 = at(l_.chain_pS);
+  const V* const entry0 = at(l_.entry);
+  V* const qd0 = at(l_.qd);
+  V* const pA0 = at(l_.subtree);
   // Two vectors at a time where kVectorByVector: each run is a chain of dependences from link to
   // link, and two of them interleaved keep the core busy while one waits.
   auto leave = [&](const auto& lanes) {
     using Lanes = std::remove_cvref_t<decltype(lanes)>;
     constexpr int N = static_cast<int>(std::tuple_size_v<Lanes>);
     using T = std::remove_cvref_t<decltype(lanes[0](std::declval<V&>()))>;
-    const V* pAk = at(l_.subtree + 6 * k);
+    const V* pAk = pA0 + 6 * k;
     T pA[N][6], Sp[N];  // Sp: S_i^T pA_i of the link being left
     for (int n = 0; n < N; ++n) {
       for (int r = 0; r < 6; ++r) pA[n][r] = lanes[n](pAk[r]);
-      Sp[n] = sweep_law::dot6<T>(six(lanes[n], at(l_.S + 6 * k)), pA[n]);
+      Sp[n] = sweep_law::dot6<T>(six(lanes[n], S0 + 6 * k), pA[n]);
     }
-    for (int i = k; i != end; i = p_.links[i].parent) {
-      const LinkConstants& l = p_.links[i];
+    for (int i = k; i != end; i = links[i].parent) {
+      const LinkConstants& l = links[i];
       const int d = l.v_index;
-      const V* G = at(l_.G + 6 * i);
-      const V* U = at(l_.U + 6 * i);
-      const V* S_up = at(l_.S + 6 * l.parent);
-      const V *D_inv = at(l_.D_inv) + i, *jimp = at(l_.jimp) + d, *pS = at(l_.chain_pS) + i;
-      const V* entry = at(l_.entry) + d;
-      V* qd_d = at(l_.qd) + d;
+      const V* G = G0 + 6 * i;
+      const V* U = U0 + 6 * i;
+      const V* S_up = S0 + 6 * l.parent;
+      const V *D_inv = D_inv0 + i, *jimp = jimp0 + d, *pS = pS0 + i;
+      const V* entry = entry0 + d;
+      V* qd_d = qd0 + d;
       const bool up_in_run = l.parent != end;  // then one dof (LinkConstants::chain_up)
       for (int n = 0; n < N; ++n) {
         const auto& lane = lanes[n];
@@ -1357,7 +1365,7 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop) {
         for (int r = 0; r < 6; ++r) x[r] = x[r] + b * lane(U[r]);
       }
     }
-    V* pA_end = at(l_.subtree + 6 * end);
+    V* pA_end = pA0 + 6 * end;
     for (int n = 0; n < N; ++n)
       for (int r = 0; r < 6; ++r) lanes[n](pA_end[r]) = pA[n][r];
   };
@@ -1455,6 +1463,10 @@ void LaneStep<A, K>::finish_link(int i) {
     finish_ball(i, lk.later ? E : nullptr);
     return;
   }
+  if (lk.finish_down) {
+    finish_run(i, E);
+    return;
+  }
   const int d = lk.v_index;
   V dqd = at(l_.entry)[d] - sweep_law::dot6<V>(at(l_.G + 6 * i), at(l_.subtree + 6 * i));
   if (lk.later) {
@@ -1466,6 +1478,59 @@ void LaneStep<A, K>::finish_link(int i) {
   }
   V& qd = at(l_.qd)[d];
   qd = qd + dqd;
+}
+
+// finish_link's one-dof part down the run of only children from i (LinkConstants::finish_down),
+// E being i's: each link's E carried to its child in registers, a vector or two at a time where
+// kVectorByVector (as leave_chain_run), stored where the run ends if a child reads it there.
+template <class A, int K>
+void LaneStep<A, K>::finish_run(int i, const V* E) {
+  // The arrays' starts, found once (a store through a pack may alias the plan).
+  const LinkConstants* const links = p_.links;
+  const V *const G0 = at(l_.G), *const pA0 = at(l_.subtree), *const U0 = at(l_.U);
+  const V *const S0 = at(l_.S), *const D_inv0 = at(l_.D_inv), *const entry0 = at(l_.entry);
+  V* const qd0 = at(l_.qd);
+  V* const later0 = at(l_.later);
+  auto finish = [&](const auto& lanes) {
+    using Lanes = std::remove_cvref_t<decltype(lanes)>;
+    constexpr int N = static_cast<int>(std::tuple_size_v<Lanes>);
+    using T = std::remove_cvref_t<decltype(lanes[0](std::declval<V&>()))>;
+    T e[N][6];
+    for (int n = 0; n < N; ++n)
+      for (int r = 0; r < 6; ++r) e[n][r] = lanes[n](E[r]);
+    for (int l = i;; ++l) {
+      const LinkConstants& lk = links[l];
+      const int d = lk.v_index;
+      const V *G = G0 + 6 * l, *pA = pA0 + 6 * l, *U = U0 + 6 * l, *S = S0 + 6 * l;
+      const V *D_inv = D_inv0 + l, *entry = entry0 + d;
+      V* qd_d = qd0 + d;
+      for (int n = 0; n < N; ++n) {
+        const auto& lane = lanes[n];
+        T dqd = lane(*entry) - sweep_law::dot6<T>(six(lane, G), six(lane, pA));
+        const T later = sweep_law::later(lane(*D_inv), six(lane, U), e[n]);
+        dqd = dqd + later;
+        for (int r = 0; r < 6; ++r) e[n][r] = e[n][r] + later * lane(S[r]);
+        auto& qd = lane(*qd_d);
+        qd = qd + dqd;
+      }
+      if (!lk.finish_down) {
+        if (lk.later_read) {
+          V* later_l = later0 + 6 * l;
+          for (int n = 0; n < N; ++n)
+            for (int r = 0; r < 6; ++r) lanes[n](later_l[r]) = e[n][r];
+        }
+        return;
+      }
+    }
+  };
+  if constexpr (kVectorByVector && K == 1) {  // One
+    finish(std::array<OneVector, 1>{OneVector{0}});
+  } else if constexpr (kVectorByVector) {
+    static_assert(K % 2 == 0);
+    for (int j = 0; j < K; j += 2) finish(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
+  } else {
+    finish(std::array<WholePack, 1>{});
+  }
 }
 
 // Link i entered (the lanes lane picks): its joint's velocity from outside its subtree, its
@@ -1612,7 +1677,10 @@ struct LaneStep<A, K>::Entering {
   Links finish_after() const {
     return {s->p_.finish_after, s->p_.finish_after + s->p_.num_finish_after};
   }
-  void finish(int i) const { s->finish_link(i); }
+  void finish(int i) const {
+    const int p = s->p_.links[i].parent;
+    if (p < 0 || !s->p_.links[p].finish_down) s->finish_link(i);  // else finished in p's run
+  }
   // Link i alone: a chained link's base comes from its parent through the scratch (chain_in).
   [[gnu::always_inline]] void enter(int i) const {
     LaneStep& t = *s;

@@ -136,6 +136,9 @@ struct LinkConstants {
   /// (implicit_drives.md, eq. SW5): a fixed link's finish does nothing, a one-dof link's stores
   /// nothing, where none does.
   bool later_read = false;
+  /// One dof, finished after the sweep, and its only child too (link i + 1): the child's E is
+  /// this link's (eq. SW5), carried down in registers (LaneStep::finish_run).
+  bool finish_down = false;
   double E[9] = {};     ///< tree transform rotation, row-major
   double r[3] = {};     ///< tree transform translation (parent frame)
   /// E^T as a unit quaternion (w x y z): a floating root's joint frame in the world, which
