@@ -234,7 +234,7 @@ class LaneStep {
   V link_parameter_pack(int i, int f) const {
     return parameter(p_.nv * kDofParameters + i * kLinkParameters + f);
   }
-  V* row(int d) { return s_ + l_.row + Layout::kRowFields * d; }
+  V* row(int d) { return sa_.row + Layout::kRowFields * d; }
   static constexpr double kActuator = 1.0, kMotorClip = 2.0, kTableClip = 4.0;
   static bool has_bit(double flags, double bit) {
     return (static_cast<int>(flags) & static_cast<int>(bit)) != 0;
@@ -243,7 +243,7 @@ class LaneStep {
   // some a wrapped position, some an envelope, some transmitted friction, and [7] the implicit
   // actuators' kinds (bits: kActuator some lane has one, kMotorClip a dc_motor, kTableClip a
   // remotized_pd), [8] the row kinds some lane has (bit k: RowKinds' kind k).
-  double* any_row(int d) { return reinterpret_cast<double*>(s_ + l_.flags) + 16 * d; }
+  double* any_row(int d) { return sa_.flags + 16 * d; }
   // any_row's entries the sweeps set (prepare_sweeps): [9] every lane has friction, [10] some
   // lane's limit may act whatever its velocity (row_law::limit_held; 1 in TGS, whose dx changes).
   static constexpr int kAllFriction = 9, kLimitHeld = 10;
@@ -573,6 +573,19 @@ class LaneStep {
   bool self_live_[kW] = {};  // per live lane: its self-contact rows run
   Stop contact_stop_[kW] = {};  // per live lane: its first non-finite contact force
   LaneContactPhase contact_phase_;  // the sweep's
+  // The sweep's arrays (and the rows'), found once: at() finds them again after every store
+  // through a pack (it may alias the plan).
+  struct SweepArrays {
+    V *dv, *subtree, *after, *later, *S, *U, *W, *G, *D_inv, *inverse_mass, *qd, *jimp, *entry,
+        *chain_pS, *chain_pi, *chain_base, *Lambda, *zero, *given, *row_bias, *row;
+    double* flags;
+  };
+  const SweepArrays sa_{s_ + l_.dv,       s_ + l_.subtree,    s_ + l_.after,    s_ + l_.later,
+                        s_ + l_.S,        s_ + l_.U,          s_ + l_.W,        s_ + l_.G,
+                        s_ + l_.D_inv,    s_ + l_.inverse_mass, s_ + l_.qd,     s_ + l_.jimp,
+                        s_ + l_.entry,    s_ + l_.chain_pS,   s_ + l_.chain_pi, s_ + l_.chain_base,
+                        s_ + l_.Lambda,   s_ + l_.zero,       s_ + l_.given,    s_ + l_.row_bias,
+                        s_ + l_.row,      reinterpret_cast<double*>(s_ + l_.flags)};
 };
 
 template <class A, int K>
@@ -1293,9 +1306,8 @@ template <class A, int K>
 auto LaneStep<A, K>::left_link(int k) -> LeftLink {
   const LinkConstants& lk = p_.links[k];
   const int d = lk.v_index;
-  return {at(l_.D_inv) + k,        at(l_.jimp) + d,          at(l_.S + 6 * k),
-          at(l_.subtree + 6 * k),  at(l_.U + 6 * k),         at(l_.G + 6 * k),
-          at(l_.entry) + d,        at(l_.qd) + d,            at(l_.subtree + 6 * lk.parent),
+  return {sa_.D_inv + k, sa_.jimp + d, sa_.S + 6 * k, sa_.subtree + 6 * k, sa_.U + 6 * k,
+          sa_.G + 6 * k, sa_.entry + d, sa_.qd + d, sa_.subtree + 6 * lk.parent,
           lk.finish_on_leave};
 }
 
@@ -1326,11 +1338,11 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop) {
   int end = k;
   while (sweep_walk::in_run(links[end], stop)) end = links[end].parent;
   // The arrays' starts, found once (a store through a pack may alias the plan).
-  const V *const G0 = at(l_.G), *const U0 = at(l_.U), *const S0 = at(l_.S);
-  const V *const D_inv0 = at(l_.D_inv), *const jimp0 = at(l_.jimp), *const pS0 = at(l_.chain_pS);
-  const V* const entry0 = at(l_.entry);
-  V* const qd0 = at(l_.qd);
-  V* const pA0 = at(l_.subtree);
+  const V *const G0 = sa_.G, *const U0 = sa_.U, *const S0 = sa_.S;
+  const V *const D_inv0 = sa_.D_inv, *const jimp0 = sa_.jimp, *const pS0 = sa_.chain_pS;
+  const V* const entry0 = sa_.entry;
+  V* const qd0 = sa_.qd;
+  V* const pA0 = sa_.subtree;
   // Two vectors at a time where kVectorByVector: each run is a chain of dependences from link to
   // link, and two of them interleaved keep the core busy while one waits.
   auto leave = [&](const auto& lanes) {
@@ -1389,7 +1401,7 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
   const bool first_child = lk.first_child, last_child = lk.last_child;
   // A chain's link hands its impulse straight into the parent's subtree impulse.
   const bool chain = p >= 0 && first_child && !fix;
-  const V* pAk = at(l_.subtree + 6 * k);
+  const V* pAk = sa_.subtree + 6 * k;
   const V* U = nullptr;  // null for a fixed joint: it passes its subtree's impulse on whole
   V beta;
   V ball_pa[6];  // a spherical joint's hand-over
@@ -1398,7 +1410,7 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
     pAk = ball_pa;
   }
   if (one_dof(lk)) {
-    U = at(l_.U + 6 * k);
+    U = sa_.U + 6 * k;
     const LeftLink l = left_link(k);
     if constexpr (kVectorByVector)
       for (int j = 0; j < K; ++j) leave_chain_link(OneVector{j}, l, chain, beta);
@@ -1407,7 +1419,7 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
   }
   if (p < 0) return;
   // The hand-over (sweep_law, eq. SW12-SW14): a chain's one-dof link did it in leave_chain_link.
-  V* pAp = at(l_.subtree + 6 * p);
+  V* pAp = sa_.subtree + 6 * p;
   if (chain) {
     if (!U) sweep_law::hand_over<V>(pAk, true, pAp);
   } else {
@@ -1416,15 +1428,15 @@ void LaneStep<A, K>::leave_link(int k, bool fix) {
     sweep_law::hand_over<V>(pa, first_child, pAp);
     if (fix) correct_parent(p, pa);
   }
-  if (!last_child) sweep_law::record_after<V>(pAp, at(l_.after + 6 * k));
+  if (!last_child) sweep_law::record_after<V>(pAp, sa_.after + 6 * k);
 }
 // Link p's velocity change less its response to the impulse pa handed it (sweep_law, eq. SW13),
 // one vector at a time: its six entries of pa stay in registers. Out of line, as Simulation's
 // correct_velocity_change: inlined, it moved the spills of leave_chain_run's loop.
 template <class A, int K>
 void LaneStep<A, K>::correct_parent(int p, const V* pa) {
-  const V* Lambda = at(l_.Lambda + 21 * p);
-  V* dv = at(l_.dv + 6 * p);
+  const V* Lambda = sa_.Lambda + 21 * p;
+  V* dv = sa_.dv + 6 * p;
   for (int j = 0; j < K; ++j)
     sweep_law::correct_parent<B>(SymmetricVector{Lambda, j}, six(OneVector{j}, pa),
                                  six(OneVector{j}, dv));
@@ -1440,17 +1452,17 @@ void LaneStep<A, K>::finish_link(int i) {
     return;
   }
   if (lk.type == 0 && !lk.later_read) return;  // its E is read by no one
-  V* const later_i = at(l_.later + 6 * i);  // found once: a store through a pack may alias l_
+  V* const later_i = sa_.later + 6 * i;  // found once: a store through a pack may alias l_
   V E[6];
   if (lk.later) {
-    const V* Ep = p_.links[lk.parent].later ? at(l_.later + 6 * lk.parent) : at(l_.zero);
+    const V* Ep = p_.links[lk.parent].later ? sa_.later + 6 * lk.parent : sa_.zero;
     for (int r = 0; r < 6; ++r) E[r] = Ep[r];
     if (!lk.last_child) {
       V diff[6], t[6];
-      const V* pAp = at(l_.subtree + 6 * lk.parent);
-      const V* after = at(l_.after + 6 * i);
+      const V* pAp = sa_.subtree + 6 * lk.parent;
+      const V* after = sa_.after + 6 * i;
       for (int r = 0; r < 6; ++r) diff[r] = pAp[r] - after[r];
-      sym_times(at(l_.Lambda + 21 * lk.parent), diff, t);
+      sym_times(sa_.Lambda + 21 * lk.parent, diff, t);
       for (int r = 0; r < 6; ++r) E[r] = E[r] - t[r];
     }
   }
@@ -1468,15 +1480,15 @@ void LaneStep<A, K>::finish_link(int i) {
     return;
   }
   const int d = lk.v_index;
-  V dqd = at(l_.entry)[d] - sweep_law::dot6<V>(at(l_.G + 6 * i), at(l_.subtree + 6 * i));
+  V dqd = sa_.entry[d] - sweep_law::dot6<V>(sa_.G + 6 * i, sa_.subtree + 6 * i);
   if (lk.later) {
-    const V* S = at(l_.S + 6 * i);
-    const V later = sweep_law::later(at(l_.D_inv)[i], at(l_.U + 6 * i), E);
+    const V* S = sa_.S + 6 * i;
+    const V later = sweep_law::later(sa_.D_inv[i], sa_.U + 6 * i, E);
     dqd = dqd + later;
     if (lk.later_read)
       for (int r = 0; r < 6; ++r) later_i[r] = E[r] + later * S[r];
   }
-  V& qd = at(l_.qd)[d];
+  V& qd = sa_.qd[d];
   qd = qd + dqd;
 }
 
@@ -1487,10 +1499,10 @@ template <class A, int K>
 void LaneStep<A, K>::finish_run(int i, const V* E) {
   // The arrays' starts, found once (a store through a pack may alias the plan).
   const LinkConstants* const links = p_.links;
-  const V *const G0 = at(l_.G), *const pA0 = at(l_.subtree), *const U0 = at(l_.U);
-  const V *const S0 = at(l_.S), *const D_inv0 = at(l_.D_inv), *const entry0 = at(l_.entry);
-  V* const qd0 = at(l_.qd);
-  V* const later0 = at(l_.later);
+  const V *const G0 = sa_.G, *const pA0 = sa_.subtree, *const U0 = sa_.U;
+  const V *const S0 = sa_.S, *const D_inv0 = sa_.D_inv, *const entry0 = sa_.entry;
+  V* const qd0 = sa_.qd;
+  V* const later0 = sa_.later;
   auto finish = [&](const auto& lanes) {
     using Lanes = std::remove_cvref_t<decltype(lanes)>;
     constexpr int N = static_cast<int>(std::tuple_size_v<Lanes>);
@@ -1542,47 +1554,47 @@ template <bool kGiven, class L>
                                                               V* dv) {
   const LinkConstants& k = p_.links[i];
   const int d = k.v_index;
-  const V* U = at(l_.U + 6 * i);
-  const V* S = at(l_.S + 6 * i);
-  const V* W = at(l_.W + 6 * i);
+  const V* U = sa_.U + 6 * i;
+  const V* S = sa_.S + 6 * i;
+  const V* W = sa_.W + 6 * i;
   V* rw = row(d);
   const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
-  const auto D_inv = lane(at(l_.D_inv)[i]);
+  const auto D_inv = lane(sa_.D_inv[i]);
   using T = std::remove_cv_t<decltype(D_inv)>;
   // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
   // part that does not wait on this link's impulse is formed before the rows (eq. GS2).
-  const T base = k.chain_in ? lane(at(l_.chain_base)[i])
+  const T base = k.chain_in ? lane(sa_.chain_base[i])
                             : sweep_law::base(D_inv, six(lane, U), six(lane, dvp));
   T ahead{};
   if (chain_next) {
-    const T D_next = lane(at(l_.D_inv)[i + 1]);  // its b^b = -D^-1 U^T S_i, formed as in the pass
-    ahead = sweep_law::ahead(D_next, six(lane, at(l_.U + 6 * (i + 1))), six(lane, dvp), base,
-                             T(-D_next * lane(at(l_.chain_pS)[i + 1])));
+    const T D_next = lane(sa_.D_inv[i + 1]);  // its b^b = -D^-1 U^T S_i, formed as in the pass
+    ahead = sweep_law::ahead(D_next, six(lane, sa_.U + 6 * (i + 1)), six(lane, dvp), base,
+                             T(-D_next * lane(sa_.chain_pS[i + 1])));
   }
   T impulse;
   if constexpr (kGiven) {
-    impulse = lane(at(l_.given)[d]);
+    impulse = lane(sa_.given[d]);
   } else if constexpr (std::is_same_v<T, V>) {
     // compat physx: a prismatic row sees the link bias (PD-2).
-    const V v = p_.physx_prismatic ? at(l_.qd)[d] + base + row_bias(d) : at(l_.qd)[d] + base;
+    const V v = p_.physx_prismatic ? sa_.qd[d] + base + row_bias(d) : sa_.qd[d] + base;
     impulse = solve_row(d, v, rw[Layout::delta_x]);
   } else {
-    T v = lane(at(l_.qd)[d]) + base;
-    if (p_.physx_prismatic) v = v + lane(at(l_.row_bias)[d]);
+    T v = lane(sa_.qd[d]) + base;
+    if (p_.physx_prismatic) v = v + lane(sa_.row_bias[d]);
     LaneRows<L, true> rows{*this, d, rw, lane};
     impulse = row_sequence::solve(rows, v, lane(rw[Layout::delta_x]), row_phase());
   }
-  lane(at(l_.jimp)[d]) = impulse;
+  lane(sa_.jimp[d]) = impulse;
   if (chain_next)
-    lane(at(l_.chain_base)[i + 1]) =
-        sweep_law::chained_base(ahead, impulse, T(lane(at(l_.chain_pi)[i + 1])));
+    lane(sa_.chain_base[i + 1]) =
+        sweep_law::chained_base(ahead, impulse, T(lane(sa_.chain_pi[i + 1])));
   // dv's entries all read before any is stored: one lane's six then go as pairs (SSE2).
   auto after_rows = [&](auto&& out) {
-    return sweep_law::after_rows(base, impulse, T(lane(at(l_.inverse_mass)[i])), D_inv,
+    return sweep_law::after_rows(base, impulse, T(lane(sa_.inverse_mass[i])), D_inv,
                                  six(lane, dvp), six(lane, W), six(lane, S), out);
   };
   // A childless link's dv is read by no one: formed into a sink, it is not formed at all.
-  lane(at(l_.entry)[d]) =
+  lane(sa_.entry[d]) =
       k.leaf && !k.contacts ? after_rows(Sink<T>{}) : after_rows(six(lane, dv));
 }
 
@@ -1608,10 +1620,10 @@ void LaneStep<A, K>::sweep() {
   V* saved = at(l_.saved);  // rowless lanes keep their velocities (Simulation skips the sweep)
   const bool keep = any(rowless_);
   if (keep)
-    for (int d = 0; d < p_.nv; ++d) saved[d] = at(l_.qd)[d];
+    for (int d = 0; d < p_.nv; ++d) saved[d] = sa_.qd[d];
   sweep_links<false>();
   if (keep)
-    for (int d = 0; d < p_.nv; ++d) at(l_.qd)[d] = select(rowless_, saved[d], at(l_.qd)[d]);
+    for (int d = 0; d < p_.nv; ++d) sa_.qd[d] = select(rowless_, saved[d], sa_.qd[d]);
 }
 
 // What the sweeps read of the rows' constants (setup_row_constants, once a call): whether every
@@ -1685,8 +1697,8 @@ struct LaneStep<A, K>::Entering {
   [[gnu::always_inline]] void enter(int i) const {
     LaneStep& t = *s;
     const LinkConstants& k = t.p_.links[i];
-    const V* dvp = k.parent >= 0 ? t.at(t.l_.dv + 6 * k.parent) : t.at(t.l_.zero);
-    V* dv = t.at(t.l_.dv + 6 * i);
+    const V* dvp = k.parent >= 0 ? t.sa_.dv + 6 * k.parent : t.sa_.zero;
+    V* dv = t.sa_.dv + 6 * i;
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
       if (!k.leaf || k.contacts)  // a childless link's dv is read by no one
         for (int r = 0; r < 6; ++r) dv[r] = dvp[r];
