@@ -245,8 +245,9 @@ class LaneStep {
   // remotized_pd), [8] the row kinds some lane has (bit k: RowKinds' kind k).
   double* any_row(int d) { return sa_.flags + 16 * d; }
   // any_row's entries the sweeps set (prepare_sweeps): [9] every lane has friction, [10] some
-  // lane's limit may act whatever its velocity (row_law::limit_held; 1 in TGS, whose dx changes).
-  static constexpr int kAllFriction = 9, kLimitHeld = 10;
+  // lane's limit may act whatever its velocity (row_law::limit_held; 1 in TGS, whose dx changes),
+  // [11] its rows are a lone drive's (Entering::enter).
+  static constexpr int kAllFriction = 9, kLimitHeld = 10, kDriveAlone = 11;
   int env_of_lane(int l) const { return b_.env0 + (l < b_.valid ? l : b_.valid - 1); }
   // The state arrays' row of environment e (Block::rows).
   long row_of(int e) const { return b_.rows ? b_.rows[e] : e; }
@@ -579,13 +580,15 @@ class LaneStep {
     V *dv, *subtree, *after, *later, *S, *U, *W, *G, *D_inv, *inverse_mass, *qd, *jimp, *entry,
         *chain_pS, *chain_pi, *chain_base, *Lambda, *zero, *given, *row_bias, *row;
     double* flags;
+    const LinkConstants* links;
   };
   const SweepArrays sa_{s_ + l_.dv,       s_ + l_.subtree,    s_ + l_.after,    s_ + l_.later,
                         s_ + l_.S,        s_ + l_.U,          s_ + l_.W,        s_ + l_.G,
                         s_ + l_.D_inv,    s_ + l_.inverse_mass, s_ + l_.qd,     s_ + l_.jimp,
                         s_ + l_.entry,    s_ + l_.chain_pS,   s_ + l_.chain_pi, s_ + l_.chain_base,
                         s_ + l_.Lambda,   s_ + l_.zero,       s_ + l_.given,    s_ + l_.row_bias,
-                        s_ + l_.row,      reinterpret_cast<double*>(s_ + l_.flags)};
+                        s_ + l_.row,      reinterpret_cast<double*>(s_ + l_.flags),
+                        p_.links};
 };
 
 template <class A, int K>
@@ -1304,7 +1307,7 @@ template <class A, int K>
 // velocity finished where it is its last change, and when to_parent, pA_parent = pA + beta U.
 template <class A, int K>
 auto LaneStep<A, K>::left_link(int k) -> LeftLink {
-  const LinkConstants& lk = p_.links[k];
+  const LinkConstants& lk = sa_.links[k];
   const int d = lk.v_index;
   return {sa_.D_inv + k, sa_.jimp + d, sa_.S + 6 * k, sa_.subtree + 6 * k, sa_.U + 6 * k,
           sa_.G + 6 * k, sa_.entry + d, sa_.qd + d, sa_.subtree + 6 * lk.parent,
@@ -1334,7 +1337,7 @@ template <class L>
 // kVectorByVector, and stored once where the run ends: in the link returned.
 template <class A, int K>
 int LaneStep<A, K>::leave_chain_run(int k, int stop) {
-  const LinkConstants* const links = p_.links;
+  const LinkConstants* const links = sa_.links;
   int end = k;
   while (sweep_walk::in_run(links[end], stop)) end = links[end].parent;
   // The arrays' starts, found once (a store through a pack may alias the plan).
@@ -1396,7 +1399,7 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop) {
 // where fix, corrects the parent's velocity change by the parent's response to it.
 template <class A, int K>
 void LaneStep<A, K>::leave_link(int k, bool fix) {
-  const LinkConstants& lk = p_.links[k];
+  const LinkConstants& lk = sa_.links[k];
   const int p = lk.parent;
   const bool first_child = lk.first_child, last_child = lk.last_child;
   // A chain's link hands its impulse straight into the parent's subtree impulse.
@@ -1446,7 +1449,7 @@ void LaneStep<A, K>::correct_parent(int p, const V* pa) {
 // (gauss_seidel.hpp's finish_link).
 template <class A, int K>
 void LaneStep<A, K>::finish_link(int i) {
-  const LinkConstants& lk = p_.links[i];
+  const LinkConstants& lk = sa_.links[i];
   if (lk.type == 3) {
     root_finish();
     return;
@@ -1455,7 +1458,7 @@ void LaneStep<A, K>::finish_link(int i) {
   V* const later_i = sa_.later + 6 * i;  // found once: a store through a pack may alias l_
   V E[6];
   if (lk.later) {
-    const V* Ep = p_.links[lk.parent].later ? sa_.later + 6 * lk.parent : sa_.zero;
+    const V* Ep = sa_.links[lk.parent].later ? sa_.later + 6 * lk.parent : sa_.zero;
     for (int r = 0; r < 6; ++r) E[r] = Ep[r];
     if (!lk.last_child) {
       V diff[6], t[6];
@@ -1498,7 +1501,7 @@ void LaneStep<A, K>::finish_link(int i) {
 template <class A, int K>
 void LaneStep<A, K>::finish_run(int i, const V* E) {
   // The arrays' starts, found once (a store through a pack may alias the plan).
-  const LinkConstants* const links = p_.links;
+  const LinkConstants* const links = sa_.links;
   const V *const G0 = sa_.G, *const pA0 = sa_.subtree, *const U0 = sa_.U;
   const V *const S0 = sa_.S, *const D_inv0 = sa_.D_inv, *const entry0 = sa_.entry;
   V* const qd0 = sa_.qd;
@@ -1552,13 +1555,13 @@ template <class A, int K>
 template <bool kGiven, class L>
 [[gnu::always_inline]] inline void LaneStep<A, K>::enter_link(const L& lane, int i, const V* dvp,
                                                               V* dv) {
-  const LinkConstants& k = p_.links[i];
+  const LinkConstants& k = sa_.links[i];
   const int d = k.v_index;
   const V* U = sa_.U + 6 * i;
   const V* S = sa_.S + 6 * i;
   const V* W = sa_.W + 6 * i;
   V* rw = row(d);
-  const bool chain_next = i + 1 < p_.num_links && p_.links[i + 1].chain_in;
+  const bool chain_next = i + 1 < p_.num_links && sa_.links[i + 1].chain_in;
   const auto D_inv = lane(sa_.D_inv[i]);
   using T = std::remove_cv_t<decltype(D_inv)>;
   // A chained link's base was formed by its parent (implicit_drives.md, eq. GS1); the next link's
@@ -1627,16 +1630,21 @@ void LaneStep<A, K>::sweep() {
 }
 
 // What the sweeps read of the rows' constants (setup_row_constants, once a call): whether every
-// lane has friction, so that its row selects nothing (row_sequence::solve).
+// lane has friction, so that its row selects nothing (row_sequence::solve), and whether the rows
+// are a lone drive's, solved a vector at a time (Entering::enter).
 template <class A, int K>
 void LaneStep<A, K>::prepare_sweeps() {
   sweeps_prepared_ = true;
   for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
+    const LinkConstants& k = sa_.links[i];
     if (k.type != 1 && k.type != 2 && k.type != 4) continue;
     for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
       any_row(d)[kAllFriction] = all(row(d)[Layout::has_friction] != V(0.0)) ? 1.0 : 0.0;
       any_row(d)[kLimitHeld] = 1.0;
+      double* has = any_row(d);
+      const bool alone = has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0 &&
+                         has[6] == 0.0 && has[8] == 0.0 && (has[7] == 0.0 || has[7] == kActuator);
+      has[kDriveAlone] = alone ? 1.0 : 0.0;
     }
   }
 }
@@ -1647,7 +1655,7 @@ void LaneStep<A, K>::prepare_sweeps() {
 template <class A, int K>
 void LaneStep<A, K>::find_held_limits() {
   for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = p_.links[i];
+    const LinkConstants& k = sa_.links[i];
     if (k.type != 1 && k.type != 2 && k.type != 4) continue;
     for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
       if (any_row(d)[1] == 0.0) continue;
@@ -1665,10 +1673,10 @@ void LaneStep<A, K>::find_held_limits() {
 template <class A, int K>
 struct LaneStep<A, K>::Leaving {
   LaneStep* s;
-  const LinkConstants& link(int k) const { return s->p_.links[k]; }
+  const LinkConstants& link(int k) const { return s->sa_.links[k]; }
   int leave_run(int k, int stop) const { return s->leave_chain_run(k, stop); }
   void leave_link(int k, int stop, bool correct) const {
-    s->leave_link(k, correct && s->p_.links[k].parent == stop);
+    s->leave_link(k, correct && s->sa_.links[k].parent == stop);
   }
 };
 
@@ -1677,7 +1685,7 @@ template <bool kGiven>
 struct LaneStep<A, K>::Entering {
   LaneStep* s;
   int num_links() const { return s->p_.num_links; }
-  const LinkConstants& link(int i) const { return s->p_.links[i]; }
+  const LinkConstants& link(int i) const { return s->sa_.links[i]; }
   void leave(int k, int stop, bool correct) const {
     sweep_walk::leave_links<Leaving>(k, stop, correct, s);
   }
@@ -1690,13 +1698,13 @@ struct LaneStep<A, K>::Entering {
     return {s->p_.finish_after, s->p_.finish_after + s->p_.num_finish_after};
   }
   void finish(int i) const {
-    const int p = s->p_.links[i].parent;
-    if (p < 0 || !s->p_.links[p].finish_down) s->finish_link(i);  // else finished in p's run
+    const int p = s->sa_.links[i].parent;
+    if (p < 0 || !s->sa_.links[p].finish_down) s->finish_link(i);  // else finished in p's run
   }
   // Link i alone: a chained link's base comes from its parent through the scratch (chain_in).
   [[gnu::always_inline]] void enter(int i) const {
     LaneStep& t = *s;
-    const LinkConstants& k = t.p_.links[i];
+    const LinkConstants& k = t.sa_.links[i];
     const V* dvp = k.parent >= 0 ? t.sa_.dv + 6 * k.parent : t.sa_.zero;
     V* dv = t.sa_.dv + 6 * i;
     if (k.type == 0 || k.type == 3) {  // no rows (a floating root's are finished after the sweep)
@@ -1705,12 +1713,9 @@ struct LaneStep<A, K>::Entering {
     } else if (k.type == 4) {
       t.template enter_ball<kGiven>(i, dvp, dv);
     } else {
-      const double* has = t.any_row(k.v_index);
       // A lone drive: one vector at a time. With friction or a limit row in the block the whole
       // pack measured faster (the welded humanoid). An actuator's clip on the state needs the pack.
-      if (!kGiven && kVectorByVector && has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 &&
-          has[5] == 0.0 && has[6] == 0.0 && has[8] == 0.0 &&
-          (has[7] == 0.0 || has[7] == kActuator))
+      if (!kGiven && kVectorByVector && t.any_row(k.v_index)[kDriveAlone] != 0.0)
         for (int j = 0; j < K; ++j) t.template enter_link<kGiven>(OneVector{j}, i, dvp, dv);
       else
         t.template enter_link<kGiven>(WholePack{}, i, dvp, dv);
