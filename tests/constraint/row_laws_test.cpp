@@ -66,6 +66,12 @@ TEST(LimitLaw, SkipTestAgreesWithTheLaw) {
     const double low0 = low, high0 = high;
     const auto phase = phase_of(h, 0.8, k % 7 == 0);
     const bool may_act = row_law::limit_may_act(low, high, v, error_low, error_high, dx, phase);
+    // Its terms apart (the lanes test the ones in v alone where the others hold in no lane): past
+    // a limit or an impulse left, whatever v; else the test is whether v crosses a limit.
+    const bool held = row_law::limit_held(low, high, error_low, error_high, dx);
+    EXPECT_EQ(held, error_low + dx < 0.0 || error_high - dx < 0.0 || low != 0.0 || high != 0.0);
+    if (!held)
+      EXPECT_EQ(may_act, row_law::limit_crossing(v, error_low, error_high, dx, phase)) << k;
     const double delta = row_law::limit(low, high, v, recip, error_low, error_high, dx, phase);
     const bool changed = delta != 0.0 || low != low0 || high != high0;
     if (changed) {
