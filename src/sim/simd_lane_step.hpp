@@ -838,21 +838,31 @@ template <class A, int K>
   const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
   const V* c = at(l_.c + 6 * i);
   V* a = at(l_.acc + 6 * i);
-  V acc[6];  // read whole before it is stored (a might overlap ap or c)
-  for (int r = 0; r < 6; ++r) acc[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
   if (!one_dof(k)) {
+    V acc[6];  // read whole before it is stored (a might overlap ap or c)
+    for (int r = 0; r < 6; ++r) acc[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
     for (int r = 0; r < 6; ++r) a[r] = acc[r];
     if (k.type == 3) root_acceleration(a, dt);
     if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
-  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's.
-  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.D_inv)[i],
-                                                    at(l_.u)[k.v_index], acc);
-  articulated_law::add_joint_motion(qdd, at(l_.S + 6 * i), acc);
-  for (int r = 0; r < 6; ++r) a[r] = acc[r];
+  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's, one vector of the
+  // pack at a time: a whole pack's six entries spill (AVX2: 16 registers).
+  const V* U = at(l_.U + 6 * i);
+  const V* S = at(l_.S + 6 * i);
+  const V& D_inv = at(l_.D_inv)[i];
+  const V& u = at(l_.u)[k.v_index];
   V& qd = at(l_.qd)[k.v_index];
-  qd = qd + dt * qdd;
+  for (int j = 0; j < K; ++j) {
+    B acc[6], Uj[6], Sj[6];  // acc read whole before it is stored (a might overlap ap or c)
+    for (int r = 0; r < 6; ++r) acc[r] = ap[r].b[j] + c[r].b[j];
+    take6(U, j, Uj);
+    take6(S, j, Sj);
+    const B qdd = articulated_law::joint_acceleration(Uj, D_inv.b[j], u.b[j], acc);
+    articulated_law::add_joint_motion(qdd, Sj, acc);
+    for (int r = 0; r < 6; ++r) a[r].b[j] = acc[r];
+    qd.b[j] = qd.b[j] + dt.b[j] * qdd;
+  }
 }
 
 // PhysX's link damping and link velocity limits on link i, vector j: link_law::damping_force
