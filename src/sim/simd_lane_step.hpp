@@ -204,7 +204,9 @@ class LaneStep {
   static constexpr int kVector = static_cast<int>(LaneVector<A>::size);
 
   LaneStep(const Plan& p, const Block& b, double* scratch)
-      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
+      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)),
+        forces_{p.layout.df, p.layout.lf, p.layout.ff, p.layout.vf},
+        old_forces_{p.layout.old_df, p.layout.old_lf, p.layout.old_ff, p.layout.old_vf} {
     for (int k = 0; k < K; ++k) {
       const int e = b.env0 + k * kVector;
       parameters_[k] = b.parameters + (e / kGroup) * p.entries * kGroup + e % kGroup;
@@ -538,6 +540,13 @@ class LaneStep {
   const Layout& l_;
   V* const s_;
   const double* parameters_[K];  // per vector of the pack
+  // The rows' forces of the step (df, lf, ff, vf) and of the one before, which a lane that stops
+  // keeps: two rooms of the scratch that trade places each step, as a step writes every force
+  // without reading it (copied instead, they cost 2 % of a step's instructions).
+  struct Forces {
+    int df, lf, ff, vf;
+  };
+  Forces forces_, old_forces_;
   // Where in the step a sweep runs (RowPhase).
   double h_ = 0.0, recip_h_ = 0.0, time_to_step_end_ = 0.0;
   double h_solve_ = 0.0;  // the step of one solve, for the rows' set-up
@@ -2536,15 +2545,15 @@ void LaneStep<A, K>::step() {
   const V inv_dt(1.0 / dt);
   for (int d = 0; d < p_.nv; ++d) {
     const V* rw = row(d);
-    at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
+    at(forces_.df)[d] = rw[Layout::dimp] * inv_dt;
     if (p_.any_implicit_actuator) {  // the row was the actuator's (step.cpp's row_forces)
       const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
-      at(l_.af)[d] = select_zero(actuated, at(l_.df)[d]);
-      at(l_.df)[d] = select(actuated, V(0.0), at(l_.df)[d]);
+      at(l_.af)[d] = select_zero(actuated, at(forces_.df)[d]);
+      at(forces_.df)[d] = select(actuated, V(0.0), at(forces_.df)[d]);
     }
-    at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
-    at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
-    at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
+    at(forces_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
+    at(forces_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
+    at(forces_.vf)[d] = rw[Layout::vlimp] * inv_dt;
     // The row kinds' forces (step.cpp's row_kind_forces): 0 on a lane without the row.
     if (p_.any_row_kinds)
       RowKinds::for_each([&]<class E>(E, int, int slot) {
@@ -2565,8 +2574,8 @@ void LaneStep<A, K>::finish_step() {
   const V zero(0.0);
   V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
   for (int d = 0; d < p_.nv; ++d)
-    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
-             at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
+    z = z + (at(l_.qd)[d] * zero + at(forces_.df)[d] * zero + at(forces_.lf)[d] * zero +
+             at(forces_.ff)[d] * zero + at(forces_.vf)[d] * zero);
   for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k) z = z + at(l_.rk)[k] * zero;
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   if (p_.contacts) {
@@ -2594,10 +2603,10 @@ void LaneStep<A, K>::finish_step() {
       };
       for (int d = 0; d < p_.nv; ++d) {
         check(1, d, lane(at(l_.qd)[d]));
-        check(2, d, lane(at(l_.df)[d]));
-        check(3, d, lane(at(l_.lf)[d]));
-        check(4, d, lane(at(l_.ff)[d]));
-        check(5, d, lane(at(l_.vf)[d]));
+        check(2, d, lane(at(forces_.df)[d]));
+        check(3, d, lane(at(forces_.lf)[d]));
+        check(4, d, lane(at(forces_.ff)[d]));
+        check(5, d, lane(at(forces_.vf)[d]));
         for (int e = 0; p_.any_row_kinds && e < RowKinds::size; ++e)
           check(10 + e, d, lane(at(l_.rk)[e * p_.nv + d]));
       }
@@ -2627,10 +2636,10 @@ void LaneStep<A, K>::finish_step() {
     for (int k = 0; k < p_.nq; ++k) at(l_.q)[k] = select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
     for (int d = 0; d < p_.nv; ++d) {
       at(l_.qd)[d] = select(stopped_, at(l_.old_qd)[d], at(l_.qd)[d]);
-      at(l_.df)[d] = select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
-      at(l_.lf)[d] = select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
-      at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
-      at(l_.vf)[d] = select(stopped_, at(l_.old_vf)[d], at(l_.vf)[d]);
+      at(forces_.df)[d] = select(stopped_, at(old_forces_.df)[d], at(forces_.df)[d]);
+      at(forces_.lf)[d] = select(stopped_, at(old_forces_.lf)[d], at(forces_.lf)[d]);
+      at(forces_.ff)[d] = select(stopped_, at(old_forces_.ff)[d], at(forces_.ff)[d]);
+      at(forces_.vf)[d] = select(stopped_, at(old_forces_.vf)[d], at(forces_.vf)[d]);
     }
     for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k)
       at(l_.rk)[k] = select(stopped_, at(l_.old_rk)[k], at(l_.rk)[k]);
@@ -2655,10 +2664,10 @@ void LaneStep<A, K>::run(int steps) {
   for (int d = 0; d < nv; ++d) {
     at(l_.qd)[d] = gather(b_.qd, nv, d);
     at(l_.tau)[d] = gather(b_.applied, nv, d);
-    at(l_.df)[d] = gather(b_.drive_force, nv, d);
-    at(l_.lf)[d] = gather(b_.limit_force, nv, d);
-    at(l_.ff)[d] = gather(b_.friction_force, nv, d);
-    at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
+    at(forces_.df)[d] = gather(b_.drive_force, nv, d);
+    at(forces_.lf)[d] = gather(b_.limit_force, nv, d);
+    at(forces_.ff)[d] = gather(b_.friction_force, nv, d);
+    at(forces_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
     if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
   }
   // Without a row kind in any lane the forces are 0: written once, at the call's end.
@@ -2682,13 +2691,8 @@ void LaneStep<A, K>::run(int steps) {
   }
   for (int s = 0; s < steps; ++s) {
     for (int k = 0; k < nq; ++k) at(l_.old_q)[k] = at(l_.q)[k];
-    for (int d = 0; d < nv; ++d) {
-      at(l_.old_qd)[d] = at(l_.qd)[d];
-      at(l_.old_df)[d] = at(l_.df)[d];
-      at(l_.old_lf)[d] = at(l_.lf)[d];
-      at(l_.old_ff)[d] = at(l_.ff)[d];
-      at(l_.old_vf)[d] = at(l_.vf)[d];
-    }
+    for (int d = 0; d < nv; ++d) at(l_.old_qd)[d] = at(l_.qd)[d];
+    std::swap(forces_, old_forces_);
     for (int k = 0; p_.any_row_kinds && k < RowKinds::size * nv; ++k) at(l_.old_rk)[k] = at(l_.rk)[k];
     step();
     finish_step();
@@ -2696,10 +2700,10 @@ void LaneStep<A, K>::run(int steps) {
   for (int k = 0; k < nq; ++k) scatter(at(l_.q)[k], b_.q, nq, k);
   for (int d = 0; d < nv; ++d) {
     scatter(at(l_.qd)[d], b_.qd, nv, d);
-    scatter(at(l_.df)[d], b_.drive_force, nv, d);
-    scatter(at(l_.lf)[d], b_.limit_force, nv, d);
-    scatter(at(l_.ff)[d], b_.friction_force, nv, d);
-    scatter(at(l_.vf)[d], b_.velocity_limit_force, nv, d);
+    scatter(at(forces_.df)[d], b_.drive_force, nv, d);
+    scatter(at(forces_.lf)[d], b_.limit_force, nv, d);
+    scatter(at(forces_.ff)[d], b_.friction_force, nv, d);
+    scatter(at(forces_.vf)[d], b_.velocity_limit_force, nv, d);
     if (b_.drive_change) scatter(at(l_.change)[d], b_.drive_change, nv, d);
     // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
     if (b_.actuator_force && p_.any_implicit_actuator)
