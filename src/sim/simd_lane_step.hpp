@@ -254,8 +254,11 @@ class LaneStep {
     return p_.nv * kDofParameters + p_.num_links * kLinkParameters +
            p_.num_mimic * kMimicParameters + gravity_x + r;
   }
-  V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
+  // Entries 0 .. n - 1 of every lane's row (stride apart) into the packs out[0 .. n - 1], and
+  // back (the lanes still stepping): lane by lane, each row's address formed once.
+  void gather_rows(const double* rows, int stride, int n, V* out) const;
+  void scatter_rows(const V* in, double* rows, int stride, int n) const;
 
   // The stages of a step.
   void step();
@@ -563,17 +566,28 @@ class LaneStep {
 };
 
 template <class A, int K>
-auto LaneStep<A, K>::gather(const double* rows, int stride, int k) const -> V {
-  alignas(64) double t[kW];
-  for (int l = 0; l < kW; ++l) t[l] = rows[row_of(env_of_lane(l)) * stride + k];
-  return V::load_aligned(t);
-}
-
-template <class A, int K>
 void LaneStep<A, K>::scatter(V x, double* rows, int stride, int k) const {
   alignas(64) double t[kW];
   x.store_aligned(t);
   for (int l = 0; l < b_.valid; ++l) rows[row_of(b_.env0 + l) * stride + k] = t[l];
+}
+
+template <class A, int K>
+void LaneStep<A, K>::gather_rows(const double* rows, int stride, int n, V* out) const {
+  double* o = reinterpret_cast<double*>(out);  // pack k's lane l at o[k kW + l]
+  for (int l = 0; l < kW; ++l) {
+    const double* row = rows + row_of(env_of_lane(l)) * stride;
+    for (int k = 0; k < n; ++k) o[k * kW + l] = row[k];
+  }
+}
+
+template <class A, int K>
+void LaneStep<A, K>::scatter_rows(const V* in, double* rows, int stride, int n) const {
+  const double* x = reinterpret_cast<const double*>(in);
+  for (int l = 0; l < b_.valid; ++l) {
+    double* row = rows + row_of(b_.env0 + l) * stride;
+    for (int k = 0; k < n; ++k) row[k] = x[k * kW + l];
+  }
 }
 
 // sin and cos from + - * / only, the kinematics' own (sincos_law, docs/math/sincos.md): within
@@ -2660,19 +2674,19 @@ void LaneStep<A, K>::run(int steps) {
   // so only the world's zeros need setting (clearing the whole scratch cost calls of one step
   // about a tenth of their time).
   for (int e = 0; e < 21; ++e) at(l_.zero)[e] = V(0.0);
-  for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);
-  for (int d = 0; d < nv; ++d) {
-    at(l_.qd)[d] = gather(b_.qd, nv, d);
-    at(l_.tau)[d] = gather(b_.applied, nv, d);
-    at(forces_.df)[d] = gather(b_.drive_force, nv, d);
-    at(forces_.lf)[d] = gather(b_.limit_force, nv, d);
-    at(forces_.ff)[d] = gather(b_.friction_force, nv, d);
-    at(forces_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
-    if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
-  }
+  gather_rows(b_.q, nq, nq, at(l_.q));
+  gather_rows(b_.qd, nv, nv, at(l_.qd));
+  gather_rows(b_.applied, nv, nv, at(l_.tau));
+  gather_rows(b_.drive_force, nv, nv, at(forces_.df));
+  gather_rows(b_.limit_force, nv, nv, at(forces_.lf));
+  gather_rows(b_.friction_force, nv, nv, at(forces_.ff));
+  gather_rows(b_.velocity_limit_force, nv, nv, at(forces_.vf));
+  if (b_.drive_change) gather_rows(b_.drive_change, nv, nv, at(l_.change));
   // Without a row kind in any lane the forces are 0: written once, at the call's end.
-  for (int k = 0; k < RowKinds::size * nv; ++k)
-    at(l_.rk)[k] = p_.any_row_kinds ? gather(b_.row_force, RowKinds::size * nv, k) : V(0.0);
+  if (p_.any_row_kinds)
+    gather_rows(b_.row_force, RowKinds::size * nv, RowKinds::size * nv, at(l_.rk));
+  else
+    for (int k = 0; k < RowKinds::size * nv; ++k) at(l_.rk)[k] = V(0.0);
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
@@ -2697,20 +2711,17 @@ void LaneStep<A, K>::run(int steps) {
     step();
     finish_step();
   }
-  for (int k = 0; k < nq; ++k) scatter(at(l_.q)[k], b_.q, nq, k);
-  for (int d = 0; d < nv; ++d) {
-    scatter(at(l_.qd)[d], b_.qd, nv, d);
-    scatter(at(forces_.df)[d], b_.drive_force, nv, d);
-    scatter(at(forces_.lf)[d], b_.limit_force, nv, d);
-    scatter(at(forces_.ff)[d], b_.friction_force, nv, d);
-    scatter(at(forces_.vf)[d], b_.velocity_limit_force, nv, d);
-    if (b_.drive_change) scatter(at(l_.change)[d], b_.drive_change, nv, d);
-    // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
-    if (b_.actuator_force && p_.any_implicit_actuator)
-      scatter(at(l_.af)[d], b_.actuator_force, nv, d);
-  }
-  for (int k = 0; k < RowKinds::size * nv; ++k)
-    scatter(at(l_.rk)[k], b_.row_force, RowKinds::size * nv, k);
+  scatter_rows(at(l_.q), b_.q, nq, nq);
+  scatter_rows(at(l_.qd), b_.qd, nv, nv);
+  scatter_rows(at(forces_.df), b_.drive_force, nv, nv);
+  scatter_rows(at(forces_.lf), b_.limit_force, nv, nv);
+  scatter_rows(at(forces_.ff), b_.friction_force, nv, nv);
+  scatter_rows(at(forces_.vf), b_.velocity_limit_force, nv, nv);
+  if (b_.drive_change) scatter_rows(at(l_.change), b_.drive_change, nv, nv);
+  // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
+  if (b_.actuator_force && p_.any_implicit_actuator)
+    scatter_rows(at(l_.af), b_.actuator_force, nv, nv);
+  scatter_rows(at(l_.rk), b_.row_force, RowKinds::size * nv, RowKinds::size * nv);
   if (b_.guard_rows) {  // GuardField's order
     static constexpr int kField[guard_row_kinds] = {
         Layout::dimp,     Layout::low,  Layout::high,   Layout::fimp,   Layout::tf_applied,
