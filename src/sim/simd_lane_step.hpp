@@ -818,7 +818,10 @@ void LaneStep<A, K>::articulated_pass() {
       const B u = articulated_law::joint_force(at(l_.tau)[k.v_index].b[j], Sj, pAj);
       at(l_.u)[k.v_index].b[j] = u;
       if (!pAp) continue;
+      // U and pA read again: after the stores above, kept from before they spilled.
       B cj[6], pa[6];
+      take6(U, j, Uj);
+      take6(pA, j, pAj);
       take6(c, j, cj);
       take6(pAp, j, pa);
       articulated_law::project_bias(IAj, pAj, cj, Uj, D_inv, u, pa);
