@@ -964,12 +964,12 @@ template <class A, int K>
   // One vector of the pack at a time (articulated_pass), by response_law
   // (docs/math/unit_response.md, eq. R1-R5).
   for (int j = 0; j < K; ++j) {
-    B Uj[6], Sj[6], Wj[6], Gj[6];
+    B Uj[6], Wj[6], Gj[6];
     take6(U, j, Uj);
-    take6(S, j, Sj);
     const B D_inv = at(l_.D_inv)[i].b[j];
     const SymmetricAssign Lj{L, j};
-    const B r = response_law::response(SymmetricVector{T, j}, Sj, Uj, D_inv, Wj, Gj, Lj);
+    const B r = response_law::response(SymmetricVector{T, j}, six(OneVector{j}, S), Uj, D_inv, Wj,
+                                       Gj, Lj);
     for (int e = 0; e < 6; ++e) W[e].b[j] = Wj[e];
     for (int e = 0; e < 6; ++e) G[e].b[j] = Gj[e];
     at(l_.inverse_mass)[i].b[j] = r;
