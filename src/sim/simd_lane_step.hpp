@@ -419,6 +419,12 @@ class LaneStep {
       y[r] = sum;
     }
   }
+  // Vector j of the packs of a row-major 3 x 3 (a rotation), read where it is stored.
+  struct VectorRows {
+    const V* m;
+    int j;
+    [[gnu::always_inline]] B operator()(int r, int c) const { return m[3 * r + c].b[j]; }
+  };
   // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law reads it.
   struct SymmetricVector {
     const V* m;
@@ -703,16 +709,24 @@ template <class A, int K>
   const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
   const V* R0 = k.type == 3 ? at(l_.root_R) : nullptr;  // a floating root's S: diag(R0, R0)
   for (int j = 0; j < K; ++j) {
-    B R[9], pos[3], com[3];
-    for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
+    B pos[3], com[3];
     for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = link_parameter(i, com_x + r, j);
     const B m = link_parameter(i, mass, j);
-    // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym.
-    const auto Rm = joint_transform_law::rows(R);
+    // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym. R
+    // read where it is stored, and B and C stored before A is formed, so that R's entries are
+    // read again there (kept from before, they spilled).
+    const VectorRows Rm{Rv, j};
     B cg[3], mc[3];
     link_motion_law::centre_of_mass(Rm, pos, com, m, cg, mc);
     if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
       for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    // B = [mc]x, C = m 1.
+    const B zero(0.0);
+    Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
+    Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
+    Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
+    Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
+    Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
     B RI[9];  // R Ic
     const auto RIm = joint_transform_law::rows(RI);
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
@@ -728,13 +742,6 @@ template <class A, int K>
     B Ia[6];
     link_motion_law::rotational_block(Rm, RIm, cg, mc, Ia);
     for (int e = 0; e < 6; ++e) Iv[e].b[j] = Ia[e];
-    // B = [mc]x, C = m 1.
-    const B zero(0.0);
-    Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
-    Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
-    Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
-    Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
-    Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
 
     B J[6] = {zero, zero, zero, zero, zero, zero};  // S qd
     if (Sv) {
@@ -767,7 +774,8 @@ template <class A, int K>
     link_motion_law::bias_force(v, Ia, mc, m, pA);
     for (int r = 0; r < 6; ++r) pAv[r].b[j] = pA[r];
     if (p_.any_link_damping) {  // an external force: the bias less it
-      B F[6];
+      B R[9], F[6];
+      for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
       link_damping(i, j, R, RI, cg, m, v, F);
       for (int r = 0; r < 6; ++r) pAv[r].b[j] = pAv[r].b[j] - F[r];
       if (p_.physx_floating)  // part of the momentum targets (physx_start)
