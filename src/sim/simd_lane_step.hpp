@@ -771,7 +771,7 @@ template <class A, int K>
     for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
     link_motion_law::velocity_product(v, J, c);
     for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
-    link_motion_law::bias_force(v, Ia, mc, m, pA);
+    link_motion_law::bias_force(v, six(OneVector{j}, static_cast<const V*>(Iv)), mc, m, pA);
     for (int r = 0; r < 6; ++r) pAv[r].b[j] = pA[r];
     if (p_.any_link_damping) {  // an external force: the bias less it
       B R[9], F[6];
