@@ -425,6 +425,16 @@ class LaneStep {
     int j;
     [[gnu::always_inline]] B operator()(int r, int c) const { return m[3 * r + c].b[j]; }
   };
+  // f(axis) with a unit axis 0, 1 or 2 as a constant (std::integral_constant), else as it is.
+  template <class F>
+  [[gnu::always_inline]] static void with_unit_axis(int axis, const F& f) {
+    switch (axis) {
+      case 0: f(std::integral_constant<int, 0>{}); return;
+      case 1: f(std::integral_constant<int, 1>{}); return;
+      case 2: f(std::integral_constant<int, 2>{}); return;
+      default: f(axis);
+    }
+  }
   // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law reads it.
   struct SymmetricVector {
     const V* m;
@@ -665,28 +675,31 @@ template <bool kStart>
     ball_pose(i, P, R, pos, kStart);
     return;
   }
+  // The joint's unit axis as a constant where it is one (x, y or z): the laws' entries then sit at
+  // fixed places (worked out per entry at run time, they cost a third of this pass with AVX2).
   V aw[3];  // the joint axis in world axes
-  joint_transform_law::joint_axis(joint_transform_law::rows(P), k.unit_axis, V(k.axis_sign),
-                                  k.axis, aw);
-  const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
-  if (k.type == 1) {
-    V s, c;
-    sincos(V(k.axis_sign) * x, s, c);
-    // R = P R(a, angle) (spatial/joint_transform_law.hpp, as kinematics.cpp).
-    if (k.unit_axis >= 0) {
-      joint_transform_law::turn_columns(joint_transform_law::rows(P), k.unit_axis, s, c,
-                                        joint_transform_law::rows(R));
+  with_unit_axis(k.unit_axis, [&](auto axis) {
+    joint_transform_law::joint_axis(joint_transform_law::rows(P), axis, V(k.axis_sign), k.axis, aw);
+    const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
+    if (k.type == 1) {
+      V s, c;
+      sincos(V(k.axis_sign) * x, s, c);
+      // R = P R(a, angle) (spatial/joint_transform_law.hpp, as kinematics.cpp).
+      if (axis >= 0) {
+        joint_transform_law::turn_columns(joint_transform_law::rows(P), axis, s, c,
+                                          joint_transform_law::rows(R));
+      } else {
+        V J[9];
+        joint_transform_law::axis_rotation(V(k.axis[0]), V(k.axis[1]), V(k.axis[2]), s, c,
+                                           joint_transform_law::rows(J));
+        joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(J),
+                                     joint_transform_law::rows(R));
+      }
     } else {
-      V J[9];
-      joint_transform_law::axis_rotation(V(k.axis[0]), V(k.axis[1]), V(k.axis[2]), s, c,
-                                         joint_transform_law::rows(J));
-      joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(J),
-                                   joint_transform_law::rows(R));
+      for (int e = 0; e < 9; ++e) R[e] = P[e];
+      if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
     }
-  } else {
-    for (int e = 0; e < 9; ++e) R[e] = P[e];
-    if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
-  }
+  });
   if (k.type == 0 || !kStart) return;
   // S_i = [a_w; pos x a_w] or [0; a_w] (joint_transform_law, as aba.cpp).
   joint_transform_law::one_dof_subspace(aw, pos, k.type == 1, at(l_.S + 6 * i));
