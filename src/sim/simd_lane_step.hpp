@@ -707,7 +707,7 @@ template <bool kStart>
 
 // Link i's rigid-body inertia in frame 0, velocity, velocity-product acceleration c_i and bias
 // force v x* I v (link_motion_law, as aba.cpp); one vector of the pack at a time, so that its
-// rotation, centre of mass and velocity stay in registers (sym_times).
+// centre of mass and velocity stay in registers (sym_times).
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::link_velocity_and_bias(int i) {
   const LinkConstants& k = p_.links[i];
