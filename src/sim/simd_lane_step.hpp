@@ -204,7 +204,9 @@ class LaneStep {
   static constexpr int kVector = static_cast<int>(LaneVector<A>::size);
 
   LaneStep(const Plan& p, const Block& b, double* scratch)
-      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)) {
+      : p_(p), b_(b), l_(p.layout), s_(reinterpret_cast<V*>(scratch)),
+        forces_{p.layout.df, p.layout.lf, p.layout.ff, p.layout.vf},
+        old_forces_{p.layout.old_df, p.layout.old_lf, p.layout.old_ff, p.layout.old_vf} {
     for (int k = 0; k < K; ++k) {
       const int e = b.env0 + k * kVector;
       parameters_[k] = b.parameters + (e / kGroup) * p.entries * kGroup + e % kGroup;
@@ -256,8 +258,11 @@ class LaneStep {
     return p_.nv * kDofParameters + p_.num_links * kLinkParameters +
            p_.num_mimic * kMimicParameters + gravity_x + r;
   }
-  V gather(const double* rows, int stride, int k) const;
   void scatter(V x, double* rows, int stride, int k) const;
+  // Entries 0 .. n - 1 of every lane's row (stride apart) into the packs out[0 .. n - 1], and
+  // back (the lanes still stepping): lane by lane, each row's address formed once.
+  void gather_rows(const double* rows, int stride, int n, V* out) const;
+  void scatter_rows(const V* in, double* rows, int stride, int n) const;
 
   // The stages of a step.
   void step();
@@ -431,6 +436,22 @@ class LaneStep {
       y[r] = sum;
     }
   }
+  // Vector j of the packs of a row-major 3 x 3 (a rotation), read where it is stored.
+  struct VectorRows {
+    const V* m;
+    int j;
+    [[gnu::always_inline]] B operator()(int r, int c) const { return m[3 * r + c].b[j]; }
+  };
+  // f(axis) with a unit axis 0, 1 or 2 as a constant (std::integral_constant), else as it is.
+  template <class F>
+  [[gnu::always_inline]] static void with_unit_axis(int axis, const F& f) {
+    switch (axis) {
+      case 0: f(std::integral_constant<int, 0>{}); return;
+      case 1: f(std::integral_constant<int, 1>{}); return;
+      case 2: f(std::integral_constant<int, 2>{}); return;
+      default: f(axis);
+    }
+  }
   // Vector j of the packs of a symmetric 6 x 6 (kSym), as articulated_law reads it.
   struct SymmetricVector {
     const V* m;
@@ -561,6 +582,13 @@ class LaneStep {
   const Layout& l_;
   V* const s_;
   const double* parameters_[K];  // per vector of the pack
+  // The rows' forces of the step (df, lf, ff, vf) and of the one before, which a lane that stops
+  // keeps: two rooms of the scratch that trade places each step, as a step writes every force
+  // without reading it (copied instead, they cost 2 % of a step's instructions).
+  struct Forces {
+    int df, lf, ff, vf;
+  };
+  Forces forces_, old_forces_;
   // Where in the step a sweep runs (RowPhase).
   double h_ = 0.0, recip_h_ = 0.0, time_to_step_end_ = 0.0;
   double h_solve_ = 0.0;  // the step of one solve, for the rows' set-up
@@ -592,17 +620,28 @@ class LaneStep {
 };
 
 template <class A, int K>
-auto LaneStep<A, K>::gather(const double* rows, int stride, int k) const -> V {
-  alignas(64) double t[kW];
-  for (int l = 0; l < kW; ++l) t[l] = rows[row_of(env_of_lane(l)) * stride + k];
-  return V::load_aligned(t);
-}
-
-template <class A, int K>
 void LaneStep<A, K>::scatter(V x, double* rows, int stride, int k) const {
   alignas(64) double t[kW];
   x.store_aligned(t);
   for (int l = 0; l < b_.valid; ++l) rows[row_of(b_.env0 + l) * stride + k] = t[l];
+}
+
+template <class A, int K>
+void LaneStep<A, K>::gather_rows(const double* rows, int stride, int n, V* out) const {
+  double* o = reinterpret_cast<double*>(out);  // pack k's lane l at o[k kW + l]
+  for (int l = 0; l < kW; ++l) {
+    const double* row = rows + row_of(env_of_lane(l)) * stride;
+    for (int k = 0; k < n; ++k) o[k * kW + l] = row[k];
+  }
+}
+
+template <class A, int K>
+void LaneStep<A, K>::scatter_rows(const V* in, double* rows, int stride, int n) const {
+  const double* x = reinterpret_cast<const double*>(in);
+  for (int l = 0; l < b_.valid; ++l) {
+    double* row = rows + row_of(b_.env0 + l) * stride;
+    for (int k = 0; k < n; ++k) row[k] = x[k * kW + l];
+  }
 }
 
 // sin and cos from + - * / only, the kinematics' own (sincos_law, docs/math/sincos.md): within
@@ -674,28 +713,31 @@ template <bool kStart>
     ball_pose(i, P, R, pos, kStart);
     return;
   }
+  // The joint's unit axis as a constant where it is one (x, y or z): the laws' entries then sit at
+  // fixed places (worked out per entry at run time, they cost a third of this pass with AVX2).
   V aw[3];  // the joint axis in world axes
-  joint_transform_law::joint_axis(joint_transform_law::rows(P), k.unit_axis, V(k.axis_sign),
-                                  k.axis, aw);
-  const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
-  if (k.type == 1) {
-    V s, c;
-    sincos(V(k.axis_sign) * x, s, c);
-    // R = P R(a, angle) (spatial/joint_transform_law.hpp, as kinematics.cpp).
-    if (k.unit_axis >= 0) {
-      joint_transform_law::turn_columns(joint_transform_law::rows(P), k.unit_axis, s, c,
-                                        joint_transform_law::rows(R));
+  with_unit_axis(k.unit_axis, [&](auto axis) {
+    joint_transform_law::joint_axis(joint_transform_law::rows(P), axis, V(k.axis_sign), k.axis, aw);
+    const V x = k.type != 0 ? at(l_.q)[k.q_index] : V(0.0);
+    if (k.type == 1) {
+      V s, c;
+      sincos(V(k.axis_sign) * x, s, c);
+      // R = P R(a, angle) (spatial/joint_transform_law.hpp, as kinematics.cpp).
+      if (axis >= 0) {
+        joint_transform_law::turn_columns(joint_transform_law::rows(P), axis, s, c,
+                                          joint_transform_law::rows(R));
+      } else {
+        V J[9];
+        joint_transform_law::axis_rotation(V(k.axis[0]), V(k.axis[1]), V(k.axis[2]), s, c,
+                                           joint_transform_law::rows(J));
+        joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(J),
+                                     joint_transform_law::rows(R));
+      }
     } else {
-      V J[9];
-      joint_transform_law::axis_rotation(V(k.axis[0]), V(k.axis[1]), V(k.axis[2]), s, c,
-                                         joint_transform_law::rows(J));
-      joint_transform_law::compose(joint_transform_law::rows(P), joint_transform_law::rows(J),
-                                   joint_transform_law::rows(R));
+      for (int e = 0; e < 9; ++e) R[e] = P[e];
+      if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
     }
-  } else {
-    for (int e = 0; e < 9; ++e) R[e] = P[e];
-    if (k.type == 2 && k.parent >= 0) joint_transform_law::slide(aw, x, pos);
-  }
+  });
   if (k.type == 0 || !kStart) return;
   // S_i = [a_w; pos x a_w] or [0; a_w] (joint_transform_law, as aba.cpp).
   joint_transform_law::one_dof_subspace(aw, pos, k.type == 1, at(l_.S + 6 * i));
@@ -703,7 +745,7 @@ template <bool kStart>
 
 // Link i's rigid-body inertia in frame 0, velocity, velocity-product acceleration c_i and bias
 // force v x* I v (link_motion_law, as aba.cpp); one vector of the pack at a time, so that its
-// rotation, centre of mass and velocity stay in registers (sym_times).
+// centre of mass and velocity stay in registers (sym_times).
 template <class A, int K>
 [[gnu::always_inline]] inline void LaneStep<A, K>::link_velocity_and_bias(int i) {
   const LinkConstants& k = p_.links[i];
@@ -718,16 +760,24 @@ template <class A, int K>
   const V* qdv = k.type != 0 ? &at(l_.qd)[k.v_index] : nullptr;
   const V* R0 = k.type == 3 ? at(l_.root_R) : nullptr;  // a floating root's S: diag(R0, R0)
   for (int j = 0; j < K; ++j) {
-    B R[9], pos[3], com[3];
-    for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
+    B pos[3], com[3];
     for (int r = 0; r < 3; ++r) pos[r] = posv[r].b[j], com[r] = link_parameter(i, com_x + r, j);
     const B m = link_parameter(i, mass, j);
-    // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym.
-    const auto Rm = joint_transform_law::rows(R);
+    // The body's inertia in frame 0 (link_motion_law, eq. P1-1, P1-2); A's entries at kSym. R
+    // read where it is stored, and B and C stored before A is formed, so that R's entries are
+    // read again there (kept from before, they spilled).
+    const VectorRows Rm{Rv, j};
     B cg[3], mc[3];
     link_motion_law::centre_of_mass(Rm, pos, com, m, cg, mc);
     if (p_.any_transmission_friction || p_.any_cfm)  // the poses' room goes to the response
       for (int r = 0; r < 3; ++r) at(l_.cg + 3 * i)[r].b[j] = cg[r];
+    // B = [mc]x, C = m 1.
+    const B zero(0.0);
+    Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
+    Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
+    Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
+    Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
+    Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
     B RI[9];  // R Ic
     const auto RIm = joint_transform_law::rows(RI);
     const B xx = link_parameter(i, inertia_xx, j), yy = link_parameter(i, inertia_yy, j),
@@ -743,13 +793,6 @@ template <class A, int K>
     B Ia[6];
     link_motion_law::rotational_block(Rm, RIm, cg, mc, Ia);
     for (int e = 0; e < 6; ++e) Iv[e].b[j] = Ia[e];
-    // B = [mc]x, C = m 1.
-    const B zero(0.0);
-    Iv[6].b[j] = zero, Iv[7].b[j] = -mc[2], Iv[8].b[j] = mc[1];
-    Iv[9].b[j] = mc[2], Iv[10].b[j] = zero, Iv[11].b[j] = -mc[0];
-    Iv[12].b[j] = -mc[1], Iv[13].b[j] = mc[0], Iv[14].b[j] = zero;
-    Iv[15].b[j] = m, Iv[16].b[j] = m, Iv[17].b[j] = m;
-    Iv[18].b[j] = zero, Iv[19].b[j] = zero, Iv[20].b[j] = zero;
 
     B J[6] = {zero, zero, zero, zero, zero, zero};  // S qd
     if (Sv) {
@@ -779,10 +822,11 @@ template <class A, int K>
     for (int r = 0; r < 6; ++r) vv[r].b[j] = v[r];
     link_motion_law::velocity_product(v, J, c);
     for (int r = 0; r < 6; ++r) cv[r].b[j] = c[r];
-    link_motion_law::bias_force(v, Ia, mc, m, pA);
+    link_motion_law::bias_force(v, six(OneVector{j}, static_cast<const V*>(Iv)), mc, m, pA);
     for (int r = 0; r < 6; ++r) pAv[r].b[j] = pA[r];
     if (p_.any_link_damping) {  // an external force: the bias less it
-      B F[6];
+      B R[9], F[6];
+      for (int e = 0; e < 9; ++e) R[e] = Rv[e].b[j];
       link_damping(i, j, R, RI, cg, m, v, F);
       for (int r = 0; r < 6; ++r) pAv[r].b[j] = pAv[r].b[j] - F[r];
       if (p_.physx_floating)  // part of the momentum targets (physx_start)
@@ -833,7 +877,10 @@ void LaneStep<A, K>::articulated_pass() {
       const B u = articulated_law::joint_force(at(l_.tau)[k.v_index].b[j], Sj, pAj);
       at(l_.u)[k.v_index].b[j] = u;
       if (!pAp) continue;
+      // U and pA read again: after the stores above, kept from before they spilled.
       B cj[6], pa[6];
+      take6(U, j, Uj);
+      take6(pA, j, pAj);
       take6(c, j, cj);
       take6(pAp, j, pa);
       articulated_law::project_bias(IAj, pAj, cj, Uj, D_inv, u, pa);
@@ -876,21 +923,31 @@ template <class A, int K>
   const V* ap = k.parent >= 0 ? at(l_.acc + 6 * k.parent) : g;
   const V* c = at(l_.c + 6 * i);
   V* a = at(l_.acc + 6 * i);
-  V acc[6];  // read whole before it is stored (a might overlap ap or c)
-  for (int r = 0; r < 6; ++r) acc[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
   if (!one_dof(k)) {
+    V acc[6];  // read whole before it is stored (a might overlap ap or c)
+    for (int r = 0; r < 6; ++r) acc[r] = ap[r] + (k.type != 0 ? c[r] : zero[r]);
     for (int r = 0; r < 6; ++r) a[r] = acc[r];
     if (k.type == 3) root_acceleration(a, dt);
     if (k.type == 4) ball_acceleration(i, a, dt);
     return;
   }
-  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's.
-  const V qdd = articulated_law::joint_acceleration(at(l_.U + 6 * i), at(l_.D_inv)[i],
-                                                    at(l_.u)[k.v_index], acc);
-  articulated_law::add_joint_motion(qdd, at(l_.S + 6 * i), acc);
-  for (int r = 0; r < 6; ++r) a[r] = acc[r];
+  // articulated_law (docs/math/unit_response.md, eq. AP5-AP6) as Simulation's, one vector of the
+  // pack at a time: a whole pack's six entries spill (AVX2: 16 registers).
+  const V* U = at(l_.U + 6 * i);
+  const V* S = at(l_.S + 6 * i);
+  const V& D_inv = at(l_.D_inv)[i];
+  const V& u = at(l_.u)[k.v_index];
   V& qd = at(l_.qd)[k.v_index];
-  qd = qd + dt * qdd;
+  for (int j = 0; j < K; ++j) {
+    B acc[6], Uj[6], Sj[6];  // acc read whole before it is stored (a might overlap ap or c)
+    for (int r = 0; r < 6; ++r) acc[r] = ap[r].b[j] + c[r].b[j];
+    take6(U, j, Uj);
+    take6(S, j, Sj);
+    const B qdd = articulated_law::joint_acceleration(Uj, D_inv.b[j], u.b[j], acc);
+    articulated_law::add_joint_motion(qdd, Sj, acc);
+    for (int r = 0; r < 6; ++r) a[r].b[j] = acc[r];
+    qd.b[j] = qd.b[j] + dt.b[j] * qdd;
+  }
 }
 
 // PhysX's link damping and link velocity limits on link i, vector j: link_law::damping_force
@@ -966,12 +1023,12 @@ template <class A, int K>
   // One vector of the pack at a time (articulated_pass), by response_law
   // (docs/math/unit_response.md, eq. R1-R5).
   for (int j = 0; j < K; ++j) {
-    B Uj[6], Sj[6], Wj[6], Gj[6];
+    B Uj[6], Wj[6], Gj[6];
     take6(U, j, Uj);
-    take6(S, j, Sj);
     const B D_inv = at(l_.D_inv)[i].b[j];
     const SymmetricAssign Lj{L, j};
-    const B r = response_law::response(SymmetricVector{T, j}, Sj, Uj, D_inv, Wj, Gj, Lj);
+    const B r = response_law::response(SymmetricVector{T, j}, six(OneVector{j}, S), Uj, D_inv, Wj,
+                                       Gj, Lj);
     for (int e = 0; e < 6; ++e) W[e].b[j] = Wj[e];
     for (int e = 0; e < 6; ++e) G[e].b[j] = Gj[e];
     at(l_.inverse_mass)[i].b[j] = r;
@@ -2705,15 +2762,15 @@ void LaneStep<A, K>::step() {
   const V inv_dt(1.0 / dt);
   for (int d = 0; d < p_.nv; ++d) {
     const V* rw = row(d);
-    at(l_.df)[d] = rw[Layout::dimp] * inv_dt;
+    at(forces_.df)[d] = rw[Layout::dimp] * inv_dt;
     if (p_.any_implicit_actuator) {  // the row was the actuator's (step.cpp's row_forces)
       const M actuated = dof_parameter(d, implicit_actuator) != V(0.0);
-      at(l_.af)[d] = select_zero(actuated, at(l_.df)[d]);
-      at(l_.df)[d] = select(actuated, V(0.0), at(l_.df)[d]);
+      at(l_.af)[d] = select_zero(actuated, at(forces_.df)[d]);
+      at(forces_.df)[d] = select(actuated, V(0.0), at(forces_.df)[d]);
     }
-    at(l_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
-    at(l_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
-    at(l_.vf)[d] = rw[Layout::vlimp] * inv_dt;
+    at(forces_.lf)[d] = (rw[Layout::low] + rw[Layout::high]) * inv_dt;
+    at(forces_.ff)[d] = (rw[Layout::fimp] + rw[Layout::tf_applied]) * inv_dt;
+    at(forces_.vf)[d] = rw[Layout::vlimp] * inv_dt;
     // The row kinds' forces (step.cpp's row_kind_forces): 0 on a lane without the row.
     if (p_.any_row_kinds)
       RowKinds::for_each([&]<class E>(E, int, int slot) {
@@ -2734,8 +2791,8 @@ void LaneStep<A, K>::finish_step() {
   const V zero(0.0);
   V z = zero;  // x * 0 is 0 for finite x, NaN otherwise
   for (int d = 0; d < p_.nv; ++d)
-    z = z + (at(l_.qd)[d] * zero + at(l_.df)[d] * zero + at(l_.lf)[d] * zero +
-             at(l_.ff)[d] * zero + at(l_.vf)[d] * zero);
+    z = z + (at(l_.qd)[d] * zero + at(forces_.df)[d] * zero + at(forces_.lf)[d] * zero +
+             at(forces_.ff)[d] * zero + at(forces_.vf)[d] * zero);
   for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k) z = z + at(l_.rk)[k] * zero;
   for (int k = 0; k < p_.nq; ++k) z = z + at(l_.q)[k] * zero;
   if (p_.contacts) {
@@ -2763,10 +2820,10 @@ void LaneStep<A, K>::finish_step() {
       };
       for (int d = 0; d < p_.nv; ++d) {
         check(1, d, lane(at(l_.qd)[d]));
-        check(2, d, lane(at(l_.df)[d]));
-        check(3, d, lane(at(l_.lf)[d]));
-        check(4, d, lane(at(l_.ff)[d]));
-        check(5, d, lane(at(l_.vf)[d]));
+        check(2, d, lane(at(forces_.df)[d]));
+        check(3, d, lane(at(forces_.lf)[d]));
+        check(4, d, lane(at(forces_.ff)[d]));
+        check(5, d, lane(at(forces_.vf)[d]));
         for (int e = 0; p_.any_row_kinds && e < RowKinds::size; ++e)
           check(10 + e, d, lane(at(l_.rk)[e * p_.nv + d]));
       }
@@ -2796,10 +2853,10 @@ void LaneStep<A, K>::finish_step() {
     for (int k = 0; k < p_.nq; ++k) at(l_.q)[k] = select(stopped_, at(l_.old_q)[k], at(l_.q)[k]);
     for (int d = 0; d < p_.nv; ++d) {
       at(l_.qd)[d] = select(stopped_, at(l_.old_qd)[d], at(l_.qd)[d]);
-      at(l_.df)[d] = select(stopped_, at(l_.old_df)[d], at(l_.df)[d]);
-      at(l_.lf)[d] = select(stopped_, at(l_.old_lf)[d], at(l_.lf)[d]);
-      at(l_.ff)[d] = select(stopped_, at(l_.old_ff)[d], at(l_.ff)[d]);
-      at(l_.vf)[d] = select(stopped_, at(l_.old_vf)[d], at(l_.vf)[d]);
+      at(forces_.df)[d] = select(stopped_, at(old_forces_.df)[d], at(forces_.df)[d]);
+      at(forces_.lf)[d] = select(stopped_, at(old_forces_.lf)[d], at(forces_.lf)[d]);
+      at(forces_.ff)[d] = select(stopped_, at(old_forces_.ff)[d], at(forces_.ff)[d]);
+      at(forces_.vf)[d] = select(stopped_, at(old_forces_.vf)[d], at(forces_.vf)[d]);
     }
     for (int k = 0; p_.any_row_kinds && k < RowKinds::size * p_.nv; ++k)
       at(l_.rk)[k] = select(stopped_, at(l_.old_rk)[k], at(l_.rk)[k]);
@@ -2820,19 +2877,19 @@ void LaneStep<A, K>::run(int steps) {
   // so only the world's zeros need setting (clearing the whole scratch cost calls of one step
   // about a tenth of their time).
   for (int e = 0; e < 21; ++e) at(l_.zero)[e] = V(0.0);
-  for (int k = 0; k < nq; ++k) at(l_.q)[k] = gather(b_.q, nq, k);
-  for (int d = 0; d < nv; ++d) {
-    at(l_.qd)[d] = gather(b_.qd, nv, d);
-    at(l_.tau)[d] = gather(b_.applied, nv, d);
-    at(l_.df)[d] = gather(b_.drive_force, nv, d);
-    at(l_.lf)[d] = gather(b_.limit_force, nv, d);
-    at(l_.ff)[d] = gather(b_.friction_force, nv, d);
-    at(l_.vf)[d] = gather(b_.velocity_limit_force, nv, d);
-    if (b_.drive_change) at(l_.change)[d] = gather(b_.drive_change, nv, d);
-  }
+  gather_rows(b_.q, nq, nq, at(l_.q));
+  gather_rows(b_.qd, nv, nv, at(l_.qd));
+  gather_rows(b_.applied, nv, nv, at(l_.tau));
+  gather_rows(b_.drive_force, nv, nv, at(forces_.df));
+  gather_rows(b_.limit_force, nv, nv, at(forces_.lf));
+  gather_rows(b_.friction_force, nv, nv, at(forces_.ff));
+  gather_rows(b_.velocity_limit_force, nv, nv, at(forces_.vf));
+  if (b_.drive_change) gather_rows(b_.drive_change, nv, nv, at(l_.change));
   // Without a row kind in any lane the forces are 0: written once, at the call's end.
-  for (int k = 0; k < RowKinds::size * nv; ++k)
-    at(l_.rk)[k] = p_.any_row_kinds ? gather(b_.row_force, RowKinds::size * nv, k) : V(0.0);
+  if (p_.any_row_kinds)
+    gather_rows(b_.row_force, RowKinds::size * nv, RowKinds::size * nv, at(l_.rk));
+  else
+    for (int k = 0; k < RowKinds::size * nv; ++k) at(l_.rk)[k] = V(0.0);
   alignas(64) double stopped[kW];
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
@@ -2851,31 +2908,23 @@ void LaneStep<A, K>::run(int steps) {
   }
   for (int s = 0; s < steps; ++s) {
     for (int k = 0; k < nq; ++k) at(l_.old_q)[k] = at(l_.q)[k];
-    for (int d = 0; d < nv; ++d) {
-      at(l_.old_qd)[d] = at(l_.qd)[d];
-      at(l_.old_df)[d] = at(l_.df)[d];
-      at(l_.old_lf)[d] = at(l_.lf)[d];
-      at(l_.old_ff)[d] = at(l_.ff)[d];
-      at(l_.old_vf)[d] = at(l_.vf)[d];
-    }
+    for (int d = 0; d < nv; ++d) at(l_.old_qd)[d] = at(l_.qd)[d];
+    std::swap(forces_, old_forces_);
     for (int k = 0; p_.any_row_kinds && k < RowKinds::size * nv; ++k) at(l_.old_rk)[k] = at(l_.rk)[k];
     step();
     finish_step();
   }
-  for (int k = 0; k < nq; ++k) scatter(at(l_.q)[k], b_.q, nq, k);
-  for (int d = 0; d < nv; ++d) {
-    scatter(at(l_.qd)[d], b_.qd, nv, d);
-    scatter(at(l_.df)[d], b_.drive_force, nv, d);
-    scatter(at(l_.lf)[d], b_.limit_force, nv, d);
-    scatter(at(l_.ff)[d], b_.friction_force, nv, d);
-    scatter(at(l_.vf)[d], b_.velocity_limit_force, nv, d);
-    if (b_.drive_change) scatter(at(l_.change)[d], b_.drive_change, nv, d);
-    // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
-    if (b_.actuator_force && p_.any_implicit_actuator)
-      scatter(at(l_.af)[d], b_.actuator_force, nv, d);
-  }
-  for (int k = 0; k < RowKinds::size * nv; ++k)
-    scatter(at(l_.rk)[k], b_.row_force, RowKinds::size * nv, k);
+  scatter_rows(at(l_.q), b_.q, nq, nq);
+  scatter_rows(at(l_.qd), b_.qd, nv, nv);
+  scatter_rows(at(forces_.df), b_.drive_force, nv, nv);
+  scatter_rows(at(forces_.lf), b_.limit_force, nv, nv);
+  scatter_rows(at(forces_.ff), b_.friction_force, nv, nv);
+  scatter_rows(at(forces_.vf), b_.velocity_limit_force, nv, nv);
+  if (b_.drive_change) scatter_rows(at(l_.change), b_.drive_change, nv, nv);
+  // A stopped lane's are the diverged step's: Batch reads only those of lanes still stepping.
+  if (b_.actuator_force && p_.any_implicit_actuator)
+    scatter_rows(at(l_.af), b_.actuator_force, nv, nv);
+  scatter_rows(at(l_.rk), b_.row_force, RowKinds::size * nv, RowKinds::size * nv);
   if (b_.guard_rows) {  // GuardField's order
     static constexpr int kField[guard_row_kinds] = {
         Layout::dimp,     Layout::low,  Layout::high,   Layout::fimp,   Layout::tf_applied,

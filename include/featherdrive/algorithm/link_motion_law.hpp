@@ -77,9 +77,10 @@ void velocity_product(const T* v, const T* sqd, T* c) {
 
 /// p = v x* I v, the bias force (eq. P1-5), from the body inertia's parts (A packed, mc, m):
 /// h = I v = [A w + mc x vo; m vo - mc x w] (a third of the 6 x 6 product's multiplies), then
-/// p = [w x h_w + vo x h_v; w x h_v].
-template <class T>
-void bias_force(const T* v, const T* A, const T* mc, const T& m, T* p) {
+/// p = [w x h_w + vo x h_v; w x h_v]. A is anything with A[e] (the lanes read it where it is
+/// stored: kept in registers, it spilled).
+template <class T, class AV>
+void bias_force(const T* v, const AV& A, const T* mc, const T& m, T* p) {
   T h[6], mv[3], mw[3];
   vector3_law::cross(mc, v + 3, mv);
   vector3_law::cross(mc, v, mw);

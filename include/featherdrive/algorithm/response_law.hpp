@@ -17,8 +17,9 @@ namespace featherdrive::response_law {
 /// r = (M^-1)_ii = D^-1 + D^-1 D^-1 U^T W, G = r S - D^-1 W and Lambda_i, entry (a, b) as
 /// (T_ab + G_b S_a) - (S_b D^-1) W_a. W, G and Lambda's storage must not overlap the parent's
 /// matrix: W and G are stored before Lambda reads it.
-template <class T, class M, class Out>
-[[gnu::always_inline]] inline T response(const M& parent, const T* S, const T* U, const T& D_inv,
+/// S is anything with S[e] (the lanes read it where it is stored: kept in registers, it spilled).
+template <class T, class M, class SV, class Out>
+[[gnu::always_inline]] inline T response(const M& parent, const SV& S, const T* U, const T& D_inv,
                                          T* W, T* G, Out& Lambda) {
   T w[6];
   articulated_law::times(parent, U, w);

@@ -32,7 +32,8 @@ DriveRowOf<T> setup(const ActuatorTermsOf<T>& a, const T& r, const T& x0, double
   const T inf(std::numeric_limits<double>::infinity()), h(h_solve), one(1.0);
   const DriveTermsOf<T> drive{a.stiffness, a.damping, a.position, a.velocity, inf, inf};
   DriveRowOf<T> row =
-      drive_law::setup(drive, /*acceleration=*/T(0.0) != T(0.0), r, x0, h_solve, step_dt, tgs);
+      drive_law::setup(drive, /*acceleration=*/T(0.0) != T(0.0), r, x0, h_solve, step_dt, tgs,
+                       /*any_acceleration=*/false);
   // x of implicit_drives.md eq. (15): the impulse a constant effort ff adds per solve is x h ff.
   const T x = one / (h * (h * a.stiffness + a.damping) * r + one);
   row.target_vel_plus_initial_bias = row.target_vel_plus_initial_bias + x * h * a.effort;

@@ -67,18 +67,26 @@ namespace drive_law {
 /// elsewhere, on a dof with unit response r = (M^-1)_jj at start-of-step position x0. h is the
 /// time step of one solve: tau for PGS, rho = tau / n for TGS (ERRATA 4); tgs selects
 /// driveImpulseMultiplier = 1 and the target interpolation. step_dt is the whole step tau (the
-/// impulse limit is max_force * tau for the whole step).
+/// impulse limit is max_force * tau for the whole step). any_acceleration false says that no
+/// lane's drive is an acceleration drive: the force drive's coefficients alone are formed (the
+/// selects would take them).
 template <class T, class Mask>
 DriveRowOf<T> setup(const DriveTermsOf<T>& drive, const Mask& acceleration, const T& r, const T& x0,
-                    double h_solve, double step_dt, bool tgs) {
+                    double h_solve, double step_dt, bool tgs, bool any_acceleration = true) {
   const T h(h_solve), one(1.0);
   const T kp = drive.stiffness, kd = drive.damping;
   const T a = h * (h * kp + kd);               // eq. (13) / (30)
   const T b = h * kd * drive.target_velocity;  // eq. (14) / (31)
   // Force drive: x = 1 / (a r + 1), eq. (15); acceleration drive: x = 1 / (a + 1) and every
   // coefficient carries r^-1, eq. (32)-(39) with ERRATA 1-2.
-  const T x = select(acceleration, one / (a + one), one / (a * r + one));
-  const T scale = select(acceleration, x / r, x);
+  T x, scale;
+  if (any_acceleration) {
+    x = select(acceleration, one / (a + one), one / (a * r + one));
+    scale = select(acceleration, x / r, x);
+  } else {
+    x = one / (a * r + one);
+    scale = x;
+  }
   DriveRowOf<T> row;
   row.target_vel_plus_initial_bias = scale * (b + h * kp * (drive.target_position - x0));
   row.vel_multiplier = -scale * a;

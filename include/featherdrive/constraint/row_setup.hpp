@@ -62,7 +62,7 @@ template <class T, class Dof>
   if (dof.any_driven()) {
     const auto acceleration = dof.acceleration_drive();
     row = drive_law::setup(dof.drive_terms(), acceleration, select(acceleration, r_cfm, r),
-                           x0_drive, s.h, s.dt, s.tgs);
+                           x0_drive, s.h, s.dt, s.tgs, dof.any_of(acceleration));
   }
   if (dof.any_actuated()) {
     const auto actuated = dof.actuated();
