@@ -307,8 +307,6 @@ class LaneStep {
   void sweep();
   void prepare_sweeps();
   void find_held_limits();
-  bool sweeps_prepared_ = false;  // prepare_sweeps ran in this call
-  int sweep_of_step_ = 0;         // PGS: the sweeps of the step so far
   template <bool kGiven>
   void sweep_links();
   // The sides of sweep_walk (the walk over the links, shared with Simulation's sweep).
@@ -1662,11 +1660,6 @@ template <bool kGiven, class L>
 // first, as PhysX solves them (mimic_solve.hpp), then the dofs' rows.
 template <class A, int K>
 void LaneStep<A, K>::sweep() {
-  if (!sweeps_prepared_) prepare_sweeps();
-  if (!p_.tgs) {  // step() sweeps position_iterations + velocity_iterations times
-    if (sweep_of_step_ == 0) find_held_limits();
-    if (++sweep_of_step_ == p_.position_iterations + p_.velocity_iterations) sweep_of_step_ = 0;
-  }
   if (p_.num_mimic > 0) solve_mimic();
   if (p_.contacts) {  // Stepper::sweep: its phase, the self rows, the links' velocities then
     LaneContactPhase& c = contact_phase_;
@@ -1691,7 +1684,6 @@ void LaneStep<A, K>::sweep() {
 // are a lone drive's, solved a vector at a time (Entering::enter).
 template <class A, int K>
 void LaneStep<A, K>::prepare_sweeps() {
-  sweeps_prepared_ = true;
   for (int i = 0; i < p_.num_links; ++i) {
     const LinkConstants& k = sa_.links[i];
     if (k.type != 1 && k.type != 2 && k.type != 4) continue;
@@ -2704,6 +2696,7 @@ void LaneStep<A, K>::step() {
   if (!p_.tgs) {
     h_ = dt;
     recip_h_ = 1.0 / dt;
+    find_held_limits();  // the step's rows are set up; no sweep has run
     for (int it = 0; it < p_.position_iterations; ++it) {
       if (b_.drive_change && it == p_.position_iterations - 1)
         for (int d = 0; d < p_.nv; ++d) at(l_.before)[d] = row(d)[Layout::dimp];
@@ -2894,6 +2887,7 @@ void LaneStep<A, K>::run(int steps) {
   for (int l = 0; l < kW; ++l) stopped[l] = b_.stop[env_of_lane(l)].quantity != 0 ? 1.0 : 0.0;
   stopped_ = V::load_aligned(stopped) != V(0.0);
   setup_row_constants(p_.tgs ? p_.dt / p_.position_iterations : p_.dt);
+  prepare_sweeps();
   if (p_.contacts) {  // a grounded lane sweeps (and iterates) with or without joint rows
     alignas(64) double grounded[kW], colliding[kW];
     for (int l = 0; l < kW; ++l) {
