@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 
 #include "featherdrive/constraint/dof_rows.hpp"
@@ -122,7 +123,7 @@ SimdIsa lane_isa(int count) {
 
 bool one_lane_blocks(int count) {
   const char* forced = std::getenv("FEATHERDRIVE_SIMD");
-  if (forced && *forced) return std::string(forced) == "one";
+  if (forced && *forced) return std::strcmp(forced, "one") == 0;
   return count < kOneLaneBelow;
 }
 

@@ -4,12 +4,23 @@
 
 #include <xsimd/config/xsimd_arch.hpp>
 
-#include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
 namespace featherdrive {
+namespace {
+
+// Without a vector or a string: default_simd_isa runs at every Batch::step, which allocates
+// nothing (tests/alloc), FEATHERDRIVE_SIMD set or not.
+bool cpu_runs(SimdIsa isa) {
+  const auto cpu = xsimd::available_architectures();
+  return isa == SimdIsa::sse2 || (isa == SimdIsa::avx2 && cpu.avx2) ||
+         (isa == SimdIsa::avx512 && cpu.avx512f);
+}
+
+}  // namespace
 
 const char* to_string(SimdIsa isa) {
   switch (isa) {
@@ -36,10 +47,9 @@ std::vector<SimdIsa> available_simd_isas() {
 }
 
 void check_simd_isa(SimdIsa isa, const std::string& where) {
-  const std::vector<SimdIsa> has = available_simd_isas();
-  if (std::find(has.begin(), has.end(), isa) == has.end())
-    throw std::invalid_argument(where + " = " + to_string(isa) + ": this CPU has only up to " +
-                                to_string(has.back()));
+  if (cpu_runs(isa)) return;
+  throw std::invalid_argument(where + " = " + to_string(isa) + ": this CPU has only up to " +
+                              to_string(available_simd_isas().back()));
 }
 
 SimdIsa default_simd_isa() {
@@ -49,10 +59,10 @@ SimdIsa default_simd_isa() {
     return cpu.avx512f ? SimdIsa::avx512 : cpu.avx2 ? SimdIsa::avx2 : SimdIsa::sse2;
   }
   // the narrowest, for set_isa; one: every lane group in one-lane blocks (lane_engine.hpp)
-  if (std::string(forced) == "scalar" || std::string(forced) == "one") return SimdIsa::sse2;
+  if (std::strcmp(forced, "scalar") == 0 || std::strcmp(forced, "one") == 0) return SimdIsa::sse2;
   for (SimdIsa isa : {SimdIsa::sse2, SimdIsa::avx2, SimdIsa::avx512})
-    if (std::string(forced) == to_string(isa)) {
-      check_simd_isa(isa, "FEATHERDRIVE_SIMD");
+    if (std::strcmp(forced, to_string(isa)) == 0) {
+      if (!cpu_runs(isa)) check_simd_isa(isa, "FEATHERDRIVE_SIMD");  // throws
       return isa;
     }
   throw std::invalid_argument(std::string("FEATHERDRIVE_SIMD = '") + forced +
@@ -61,7 +71,7 @@ SimdIsa default_simd_isa() {
 
 bool simd_forced_scalar() {
   const char* forced = std::getenv("FEATHERDRIVE_SIMD");
-  return forced && std::string(forced) == "scalar";
+  return forced && std::strcmp(forced, "scalar") == 0;
 }
 
 }  // namespace featherdrive

@@ -25,6 +25,7 @@
 #include "featherdrive/sim/control_step.hpp"
 #include "featherdrive/sim/simulation.hpp"
 #include "support/lane_contact_models.hpp"
+#include "support/scoped_env.hpp"
 #include "support/models.hpp"
 #include "support/compare.hpp"
 
@@ -309,6 +310,7 @@ TEST(BatchAllocations, LanesNoneOnOneThreadPerCallOnTwo) {
 // environments handed out (looked at before every step): regrouping
 // after a settings change may allocate, the steps after it do not, on one thread.
 TEST(BatchAllocations, LaneGroupsAndAGuardedEnvironmentNoneOnOneThread) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   auto model = test::make_random_tree(7, 10, false, false, 0.01);
   Simulation prototype(model, SimulationOptions{});
   for (int d = 0; d < model->nv; ++d) {
@@ -344,6 +346,27 @@ TEST(BatchAllocations, LaneGroupsAndAGuardedEnvironmentNoneOnOneThread) {
 // Batch's lane step allocates nothing on one thread (its scratch is made by the first call), and
 // per call, not per step, on two (TBB's arena), at every width (set_isa), with drives and limits,
 // on a fixed and on a floating base.
+// FEATHERDRIVE_SIMD read at every step (its name and value compared, the CPU asked) allocates
+// nothing either, at each width it forces and in one-lane blocks.
+TEST(BatchAllocations, ForcedWidthNone) {
+  auto model = test::make_random_tree(7, 6, /*floating=*/false);
+  Simulation prototype(model, SimulationOptions{});
+  for (int d = 0; d < model->nv; ++d)
+    prototype.set_drive(d, Drive{DriveType::force, 200.0, 20.0, kInf, 0.3, 0.0});
+  std::vector<std::string> widths = {"one"};
+  for (SimdIsa isa : available_simd_isas()) widths.push_back(to_string(isa));
+  for (const std::string& width : widths) {
+    const test::ScopedEnv forced("FEATHERDRIVE_SIMD", width);
+    Batch batch(prototype, 19);
+    batch.set_num_threads(1);
+    batch.step();
+    ASSERT_NE(batch.step_path().find(width == "one" ? "at one lane" : width + " lanes"),
+              std::string::npos)
+        << batch.step_path();
+    EXPECT_EQ(allocations_in([&] { batch.step(1); }), 0) << width;
+  }
+}
+
 TEST(BatchAllocations, LanesNoneAtEveryWidth) {
   for (const bool floating : {false, true}) {
   // Spherical joints too (compat none): their axes' positions are read per lane.
@@ -490,6 +513,7 @@ TEST(BatchAllocations, LanesWithGroundContactsNoneAtEveryWidth) {
 // (another dt) beside a group of two, a floating tree with spherical joints, mimic rows and
 // ground contacts, unguarded and guarded: none on one thread, per call, not per step, on two.
 TEST(BatchAllocations, OneLaneBlocksNone) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   Model m = *test::make_random_tree(5, 8, true, /*spherical=*/true, 0.01);
   for (int i = 0; i < m.num_links(); ++i) {
     CollisionShape s;
