@@ -2,6 +2,7 @@
 helpers for the tests that compare states bit for bit."""
 import os
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -36,3 +37,9 @@ def driven(model, solver="tgs"):
 def hexes(a):
     """Every value of a as float.hex(): equal lists mean bit-identical arrays."""
     return [float(x).hex() for x in np.asarray(a).ravel()]
+
+
+def in_lanes(path):
+    """Whether a Batch's step_path says one lane group ("avx2 lanes"), in one-lane blocks too
+    ("sse2 lanes (3 at one lane)": FEATHERDRIVE_SIMD=one steps every group so)."""
+    return re.fullmatch(r"(sse2|avx2|avx512) lanes( \(\d+ at one lane\))?", path) is not None

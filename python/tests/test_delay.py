@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import featherdrive as fd
-from conftest import ROOT, hexes
+from conftest import ROOT, hexes, in_lanes
 
 
 def chain(model, delay):
@@ -62,7 +62,7 @@ def test_batch_environments_equal_simulations_and_checkpoints_resume(arm, tmp_pa
         for s in sims:
             s.set_drive_targets(x)
             s.step()
-    assert batch.step_path.endswith(" lanes") == lanes, batch.step_path
+    assert in_lanes(batch.step_path) == lanes, batch.step_path
     for i, s in enumerate(sims):
         if lanes:
             assert np.abs(batch.q[i] - s.q).max() <= 1e-12, i

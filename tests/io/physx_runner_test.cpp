@@ -16,9 +16,12 @@
 #include "featherdrive/io/trajectory.hpp"
 #include "featherdrive/io/urdf.hpp"
 #include "featherdrive/model/model_builder.hpp"
+#include "support/scoped_env.hpp"
 
 namespace featherdrive {
 namespace {
+
+using test::ScopedEnv;
 
 // A harness-style CSV of `rows` rows for joints b and a (not in name order), with a root column
 // the reader must skip.
@@ -254,27 +257,6 @@ TEST(PhysxRunner, SceneJsonEscapesNamesAsPythonsJsonReadsThem) {
   EXPECT_EQ(run_program(argv), 0) << "python's json module read other names or gravity";
   std::filesystem::remove_all(dir);
 }
-
-// Sets an environment variable for one scope.
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name) {
-    if (const char* old = std::getenv(name)) old_ = old;
-    had_ = std::getenv(name) != nullptr;
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedEnv() {
-    if (had_)
-      ::setenv(name_, old_.c_str(), 1);
-    else
-      ::unsetenv(name_);
-  }
-
- private:
-  const char* name_;
-  std::string old_;
-  bool had_ = false;
-};
 
 std::string find_physx_message(const std::vector<std::filesystem::path>& dirs) {
   try {

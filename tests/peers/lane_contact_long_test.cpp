@@ -23,6 +23,7 @@
 #include "support/lane_contact_models.hpp"
 #include "support/lanes.hpp"
 #include "support/models.hpp"
+#include "support/scoped_env.hpp"
 #include "support/source_tree.hpp"
 
 namespace featherdrive {
@@ -52,6 +53,7 @@ TEST(LaneContact, RandomTreesDroppedOnTheGroundAsSimulation) {
 // Shapes on three sets of links in one batch: three lane groups (docs/simd_batch.md, "Lane
 // groups"), each environment's contacts as its Simulation's, 1000 steps, compat none and physx.
 TEST(LaneContact, ShapesOnOtherLinksInLaneGroupsAsSimulation) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   for (const Compat compat : {Compat::none, Compat::physx})
     for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
       Batch lanes = test::shapes_on_three_link_sets(solver, compat);

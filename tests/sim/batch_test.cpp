@@ -17,6 +17,7 @@
 #include "support/compare.hpp"
 #include "support/contact_models.hpp"
 #include "support/lanes.hpp"
+#include "support/scoped_env.hpp"
 
 namespace featherdrive {
 namespace {
@@ -612,6 +613,7 @@ namespace {
 // environment stays within 1e-12 of a Simulation given the same changes, and a setting the lanes
 // do not simulate sends that environment to the scalar step, named in step_path() and env_path().
 TEST(Batch, LanesFollowEverySetterAndHandedOutSimulations) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   const auto model = test::make_random_tree(13, 7, /*floating=*/false, /*spherical=*/false);
   SimulationOptions options;
   options.dt = 0.005;

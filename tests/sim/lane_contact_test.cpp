@@ -20,6 +20,7 @@
 #include "support/lane_contact_models.hpp"
 #include "support/lanes.hpp"
 #include "support/models.hpp"
+#include "support/scoped_env.hpp"
 
 namespace featherdrive {
 namespace {
@@ -300,6 +301,7 @@ TEST(LaneContact, GuardedOnTheGroundAsSimulation) {
 // too, and with self-collision alone; shapes on other links than environment 0's make a lane
 // group of their own.
 TEST(LaneContact, StepPath) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   Simulation s = test::grounded_tree(5, SolverType::pgs, false);
   Batch grounded(s, 3);
   EXPECT_EQ(grounded.step_path().find("scalar"), std::string::npos) << grounded.step_path();

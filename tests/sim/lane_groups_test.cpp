@@ -15,6 +15,7 @@
 #include "support/drives.hpp"
 #include "support/lane_contact_models.hpp"
 #include "support/lanes.hpp"
+#include "support/scoped_env.hpp"
 #include "support/models.hpp"
 
 namespace featherdrive {
@@ -165,6 +166,7 @@ Simulation every_row_kind(unsigned seed, SolverType solver, Compat compat, bool 
 // a plain double a lane, gives the bits it gives among copies of its plan in vector lanes at
 // every width, with every row kind, under compat none and physx, with and without the guard.
 TEST(LaneGroups, OneLaneSameBitsAsVectorLanes) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   for (const bool guarded : {false, true})
     for (const auto& [solver, compat] : {std::pair{SolverType::pgs, Compat::none},
                                          std::pair{SolverType::tgs, Compat::physx}}) {
@@ -241,6 +243,7 @@ TEST(LaneGroups, DivergenceInTwoGroups) {
 // A settings change moves an environment from group to group (the guard too):
 // the lanes regroup before the next step and it goes on as its Simulation.
 TEST(LaneGroups, RegroupedWhenAPlanChanges) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   const Simulation proto = group_prototype(9, SolverType::pgs);
   Batch batch(proto, 5);
   std::vector<Simulation> alone(5, proto);
@@ -284,6 +287,7 @@ TEST(LaneGroups, RegroupedWhenAPlanChanges) {
 // compat physx (chosen at construction: a Simulation assigned to it) in a batch under none steps
 // in a group of its own, as its Simulation.
 TEST(LaneGroups, CompatSplitsTheGroups) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     const Simulation proto = group_prototype(5, solver);
     Batch batch(proto, 4);
@@ -309,6 +313,7 @@ TEST(LaneGroups, CompatSplitsTheGroups) {
 // of the contact cases (tests/support/lanes.hpp); 300 steps here, 1000 in
 // tests/peers/lane_contact_long_test.cpp.
 TEST(LaneGroups, ShapesOnOtherLinksInGroupsOfTheirOwn) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   for (SolverType solver : {SolverType::pgs, SolverType::tgs}) {
     Batch batch = test::shapes_on_three_link_sets(solver);
     EXPECT_NE(batch.step_path().find("3 groups (3, 2, 1 environments; 1 at one lane)"),

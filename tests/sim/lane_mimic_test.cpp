@@ -12,6 +12,7 @@
 #include "support/drives.hpp"
 #include "support/lanes.hpp"
 #include "support/models.hpp"
+#include "support/scoped_env.hpp"
 
 namespace featherdrive {
 namespace {
@@ -91,6 +92,7 @@ TEST(LaneMimic, BitsIndependentOfLaneAndBatchSize) {
 // Rows on other dofs in one environment: a plan of rows is a lane group's, so that environment
 // steps in a group of its own (docs/simd_batch.md, "Lane groups"), as its Simulation.
 TEST(LaneMimic, RowsOnOtherDofsStepInAGroupOfTheirOwn) {
+  const test::AutomaticSimd automatic;  // the path checked is the automatic one
   const Simulation proto = mimic_prototype(5, SolverType::pgs);
   Batch batch(proto, 4);
   std::vector<MimicJoint> rows = proto.mimic_joints();
