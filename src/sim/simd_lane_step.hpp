@@ -544,6 +544,19 @@ class LaneStep {
     const B& operator()(const V& x) const { return x.b[j]; }
   };
   static constexpr bool kVectorByVector = kVector < 8;
+  // f over the block's lanes, in arrays of one or two `OneVector`s where kVectorByVector (two:
+  // their chains of dependences overlap), else over the whole pack (`WholePack`).
+  template <class F>
+  [[gnu::always_inline]] static void by_vector_pairs(F&& f) {
+    if constexpr (kVectorByVector && K == 1) {  // One
+      f(std::array<OneVector, 1>{OneVector{0}});
+    } else if constexpr (kVectorByVector) {
+      static_assert(K % 2 == 0);
+      for (int j = 0; j < K; j += 2) f(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
+    } else {
+      f(std::array<WholePack, 1>{});
+    }
+  }
   // Six entries at p as `lane` reads them, for sweep_law: p[r] of the pack, or of one vector.
   template <class P, class L>
   struct Six {
@@ -1439,14 +1452,7 @@ int LaneStep<A, K>::leave_chain_run(int k, int stop) {
     for (int n = 0; n < N; ++n)
       for (int r = 0; r < 6; ++r) lanes[n](pA_end[r]) = pA[n][r];
   };
-  if constexpr (kVectorByVector && K == 1) {  // One
-    leave(std::array<OneVector, 1>{OneVector{0}});
-  } else if constexpr (kVectorByVector) {
-    static_assert(K % 2 == 0);
-    for (int j = 0; j < K; j += 2) leave(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
-  } else {
-    leave(std::array<WholePack, 1>{});
-  }
+  by_vector_pairs(leave);
   return end;
 }
 
@@ -1593,14 +1599,7 @@ void LaneStep<A, K>::finish_run(int i, const V* E) {
       }
     }
   };
-  if constexpr (kVectorByVector && K == 1) {  // One
-    finish(std::array<OneVector, 1>{OneVector{0}});
-  } else if constexpr (kVectorByVector) {
-    static_assert(K % 2 == 0);
-    for (int j = 0; j < K; j += 2) finish(std::array<OneVector, 2>{OneVector{j}, OneVector{j + 1}});
-  } else {
-    finish(std::array<WholePack, 1>{});
-  }
+  by_vector_pairs(finish);
 }
 
 // Link i entered (the lanes lane picks): its joint's velocity from outside its subtree, its
