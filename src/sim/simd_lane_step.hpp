@@ -307,6 +307,15 @@ class LaneStep {
   void sweep();
   void prepare_sweeps();
   void find_held_limits();
+  // f(d) for every dof of a one-dof or spherical joint (a floating root's rows are zero).
+  template <class F>
+  void for_each_joint_row_dof(const F& f) const {
+    for (int i = 0; i < p_.num_links; ++i) {
+      const LinkConstants& k = sa_.links[i];
+      if (k.type != 1 && k.type != 2 && k.type != 4) continue;
+      for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) f(d);
+    }
+  }
   template <bool kGiven>
   void sweep_links();
   // The sides of sweep_walk (the walk over the links, shared with Simulation's sweep).
@@ -1683,18 +1692,14 @@ void LaneStep<A, K>::sweep() {
 // are a lone drive's, solved a vector at a time (Entering::enter).
 template <class A, int K>
 void LaneStep<A, K>::prepare_sweeps() {
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = sa_.links[i];
-    if (k.type != 1 && k.type != 2 && k.type != 4) continue;
-    for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
-      any_row(d)[kAllFriction] = all(row(d)[Layout::has_friction] != V(0.0)) ? 1.0 : 0.0;
-      any_row(d)[kLimitHeld] = 1.0;
-      double* has = any_row(d);
-      const bool alone = has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0 &&
-                         has[6] == 0.0 && has[8] == 0.0 && (has[7] == 0.0 || has[7] == kActuator);
-      has[kDriveAlone] = alone ? 1.0 : 0.0;
-    }
-  }
+  for_each_joint_row_dof([&](int d) {
+    double* has = any_row(d);
+    has[kAllFriction] = all(row(d)[Layout::has_friction] != V(0.0)) ? 1.0 : 0.0;
+    has[kLimitHeld] = 1.0;
+    const bool alone = has[0] == 0.0 && has[1] == 0.0 && has[3] == 0.0 && has[5] == 0.0 &&
+                       has[6] == 0.0 && has[8] == 0.0 && (has[7] == 0.0 || has[7] == kActuator);
+    has[kDriveAlone] = alone ? 1.0 : 0.0;
+  });
 }
 
 // PGS, before a step's first sweep: which dofs' limits may act whatever the velocity. Their
@@ -1702,19 +1707,15 @@ void LaneStep<A, K>::prepare_sweeps() {
 // law runs (LaneRows::limit_may_act marks those).
 template <class A, int K>
 void LaneStep<A, K>::find_held_limits() {
-  for (int i = 0; i < p_.num_links; ++i) {
-    const LinkConstants& k = sa_.links[i];
-    if (k.type != 1 && k.type != 2 && k.type != 4) continue;
-    for (int d = k.v_index; d < k.v_index + (k.type == 4 ? 3 : 1); ++d) {
-      if (any_row(d)[1] == 0.0) continue;
-      const V* rw = row(d);
-      any_row(d)[kLimitHeld] = any(row_law::limit_held(rw[Layout::low], rw[Layout::high],
-                                                       rw[Layout::err_low], rw[Layout::err_high],
-                                                       rw[Layout::delta_x]))
-                                   ? 1.0
-                                   : 0.0;
-    }
-  }
+  for_each_joint_row_dof([&](int d) {
+    if (any_row(d)[1] == 0.0) return;
+    const V* rw = row(d);
+    any_row(d)[kLimitHeld] = any(row_law::limit_held(rw[Layout::low], rw[Layout::high],
+                                                     rw[Layout::err_low], rw[Layout::err_high],
+                                                     rw[Layout::delta_x]))
+                                 ? 1.0
+                                 : 0.0;
+  });
 }
 
 // sweep_walk's sides: links entered, contacts solved, links finished, and leaving.
